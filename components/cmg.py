@@ -1,0 +1,165 @@
+"""Cluster of six single-gimbal control-moment gyros (seeds 000/003, §3.2).
+
+Gyro i has gimbal axis g_i, reference spin s_i (its spin direction at δ_i = 0) and
+transverse axis t_i = g_i × s_i.  Its rotor momentum relative to the body, in B, is
+``h_rotor (s_i cos δ_i + t_i sin δ_i)``, so the cluster's (eq. 12 with δ counted from s_i)
+and its body-frame derivative (eq. 13) are::
+
+    h    = h_rotor Σ (s_i cos δ_i + t_i sin δ_i)
+    hdot = h_rotor Σ a_i δ̇_i,   a_i = t_i cos δ_i − s_i sin δ_i   (Jacobian columns)
+    Q    = det(A Aᵀ),           A = [a_1 … a_6]                   (singularity measure)
+
+and the cluster exerts −hdot − w_BI_B × h on the body (DESIGN.md §2).
+
+Gimbal servo: each gimbal rate follows its command, clipped to ±``rate_limit``, as fast
+as ``accel_limit`` allows and exactly otherwise.  With the command held over a step the
+motion is piecewise parabolic and is integrated in closed form.
+
+Default geometry: the paper's five-pyramid cluster (α0 = 63.4°; gimbals 1–5 at azimuths
+90°, 162°, 234°, 306°, 18°; gimbal 6 along z, reference spin x) with the rotor spin
+*reversed* with respect to the printed A_s0: the paper's eq. (14) delivers +ḣ to the
+body, which is physical only if the rotor momentum is −h(A_s cos δ + A_c sin δ); with the
+printed spin the maneuver saturates the cluster (DESIGN.md §4.1).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .model import Model, ModelError
+from .variables import input_, output, parameter
+
+N_GYROS = 6
+PYRAMID_HALF_ANGLE = math.radians(63.4)               # α0
+PYRAMID_AZIMUTHS = np.radians([90.0, 162.0, 234.0, 306.0, 18.0])
+PAPER_DELTA0 = (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0)
+
+
+def five_pyramid(alpha0: float = PYRAMID_HALF_ANGLE, azimuths=PYRAMID_AZIMUTHS):
+    """Gimbal axes G and the paper's printed reference spins S (rows, 6×3).
+
+    Gimbals 1–5 point from the pyramid's base vertices to its apex on +z:
+    g = (−sin α0 cos az, −sin α0 sin az, cos α0), s = (cos α0 cos az, cos α0 sin az,
+    sin α0); gimbal 6 is z with reference spin x.
+    """
+    c, s = math.cos(alpha0), math.sin(alpha0)
+    G = np.array([[-s * math.cos(a), -s * math.sin(a), c] for a in azimuths] + [[0, 0, 1.0]])
+    S = np.array([[c * math.cos(a), c * math.sin(a), s] for a in azimuths] + [[1.0, 0, 0]])
+    return G, S
+
+
+GIMBAL_AXES, PAPER_SPINS = five_pyramid()
+DEFAULT_SPINS = -PAPER_SPINS  # reversed rotor spin (DESIGN.md §4.1)
+
+
+class ClusterGeometry:
+    """h, Jacobian and singularity measure of a cluster, shared by cluster and steering."""
+
+    def __init__(self, h_rotor: float, gimbal_axes, spins):
+        G = np.asarray(gimbal_axes, dtype=float).reshape(N_GYROS, 3)
+        S = np.asarray(spins, dtype=float).reshape(N_GYROS, 3)
+        norms = np.linalg.norm(G, axis=1)
+        if np.any(norms < 1e-9):
+            raise ModelError(f"gimbal axes must be non-zero, got norms {norms}")
+        G = G / norms[:, None]
+        S = S - np.sum(S * G, axis=1)[:, None] * G  # spin must be perpendicular to gimbal
+        spin_norms = np.linalg.norm(S, axis=1)
+        if np.any(spin_norms < 1e-9):
+            raise ModelError("each reference spin must have a component perpendicular to "
+                             "its gimbal axis")
+        self.h_rotor = float(h_rotor)
+        self.G = G
+        self.S = S / spin_norms[:, None]
+        self.T = np.cross(self.G, self.S)
+
+    def momentum(self, delta) -> np.ndarray:
+        """h = h_rotor Σ (s_i cos δ_i + t_i sin δ_i)."""
+        return self.h_rotor * (np.cos(delta) @ self.S + np.sin(delta) @ self.T)
+
+    def spins(self, delta) -> np.ndarray:
+        """Spin direction σ_i = s_i cos δ_i + t_i sin δ_i of each gyro (rows, 6×3)."""
+        return self.S * np.cos(delta)[:, None] + self.T * np.sin(delta)[:, None]
+
+    def jacobian(self, delta) -> np.ndarray:
+        """A (3×6): columns a_i = t_i cos δ_i − s_i sin δ_i; hdot = h_rotor A δ̇."""
+        return (self.T * np.cos(delta)[:, None] - self.S * np.sin(delta)[:, None]).T
+
+    @staticmethod
+    def singularity(A) -> float:
+        """Q = det(A Aᵀ): zero at a singular gimbal configuration."""
+        return float(np.linalg.det(A @ A.T))
+
+
+def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
+    """Gimbal angles and rates after ``dt`` with the rate command held.
+
+    The rate moves toward clip(command, ±rate_limit) at ±accel_limit and then holds it:
+    δ(dt) = δ + δ̇ dt + a τ (dt − τ/2), δ̇(dt) = δ̇ + a τ, with a = ±accel_limit and
+    τ = min(|target − δ̇| / accel_limit, dt).
+    """
+    target = np.clip(command, -rate_limit, rate_limit)
+    gap = target - rate
+    tau = np.minimum(np.abs(gap) / accel_limit, dt)
+    accel = np.sign(gap) * accel_limit
+    return delta + rate * dt + accel * tau * (dt - tau / 2), rate + accel * tau
+
+
+class CmgCluster(Model):
+    """Six single-gimbal CMGs with rate- and acceleration-limited gimbals."""
+
+    VARIABLES = (
+        parameter("h_rotor", 16.65, "N.m.s", "rotor angular momentum of each gyro"),
+        parameter("gimbal_axis", GIMBAL_AXES, "1",
+                  "gimbal axis of each gyro in B (rows; five-pyramid default)", shape=(6, 3)),
+        parameter("spin_ref", DEFAULT_SPINS, "1",
+                  "rotor spin direction of each gyro at zero gimbal angle, in B (rows; "
+                  "default: the paper's A_s0 spin reversed)", shape=(6, 3)),
+        parameter("delta0", PAPER_DELTA0, "rad", "initial gimbal angles", shape=(6,),
+                  display_unit="deg"),
+        parameter("rate_limit", 0.6, "rad/s", "gimbal rate limit", display_unit="deg/s"),
+        parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit",
+                  display_unit="deg/s2"),
+        input_("delta_dot_cmd", "rad/s", "commanded gimbal rates", shape=(6,),
+               display_unit="deg/s"),
+        output("delta", "rad", "gimbal angles", shape=(6,), display_unit="deg"),
+        output("delta_dot", "rad/s", "gimbal rates", shape=(6,), display_unit="deg/s"),
+        output("h", "N.m.s", "cluster angular momentum relative to the body, in B", shape=(3,)),
+        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,)),
+        output("singularity", "1", "singularity measure Q = det(A A^T)"),
+    )
+
+    def initialize(self, t0):
+        p = self.p
+        if not (p.rate_limit > 0 and p.accel_limit > 0):
+            raise ModelError(f"rate_limit ({p.rate_limit}) and accel_limit "
+                             f"({p.accel_limit}) must be positive")
+        self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
+        self.rate_limit, self.accel_limit = p.rate_limit, p.accel_limit
+        self.delta = np.array(p.delta0, dtype=float)
+        self.delta_dot = np.zeros(N_GYROS)
+        self.saturated = False
+        self.t = t0
+
+    def step(self, t, dt):
+        command = self.u.delta_dot_cmd
+        saturated = bool(np.any(np.abs(command) > self.rate_limit))
+        if saturated and not self.saturated:
+            worst = int(np.argmax(np.abs(command)))
+            self.warnings.append(
+                f"t={t:.3f} s: gimbal {worst + 1} rate command {command[worst]:.3f} rad/s "
+                f"exceeds the rate limit {self.rate_limit} rad/s (the cluster cannot deliver "
+                "the commanded torque)")
+        self.saturated = saturated
+        self.delta, self.delta_dot = servo_step(self.delta, self.delta_dot, command, dt,
+                                                self.rate_limit, self.accel_limit)
+        self.t = t + dt
+
+    def output(self):
+        g, y = self.geometry, self.y
+        A = g.jacobian(self.delta)
+        y.delta[:] = self.delta
+        y.delta_dot[:] = self.delta_dot
+        y.h[:] = g.momentum(self.delta)
+        y.hdot[:] = g.h_rotor * (A @ self.delta_dot)
+        y.singularity = g.singularity(A)

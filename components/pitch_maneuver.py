@@ -1,0 +1,144 @@
+"""Five-phase pitch maneuver with a constant-rate scanning phase (seeds 000/003 §2–3.1).
+
+Pitch θ of B relative to O goes from θ0 to θf in T with the imaging phase (t3, t4] at the
+scan rate θ̇0.  With the cruise and imaging fractions f2 = (t2 − t1)/T, f4 = (t4 − t3)/T
+and the paper's condition (t5 − t4) + (t3 − t2) = t1, t5 = T::
+
+    t1 = T (1 − f2 − f4) / 2,   t2 = t1 + f2 T,   t4 = t3 + f4 T
+    θ̈m = (θ_T − θ̇0 (t4 − t3)) / (t1 t2),   θ̇m = θ̈m t1,   θ_T = θf − θ0   (eqs 6–9)
+    t3 = t2 + (θ̇m − θ̇0) / θ̈m,   t5 = t4 + θ̇0 / θ̈m
+
+Errata: the paper's printed closed forms θ̈m = −100θ_T/(3T²) − 20θ̇0/T and θ̇m = −10θ_T/(3T)
+− 2θ̇0 have the wrong leading sign (they give +0.56 °/s², not −0.24), and eq. (11)'s first
+line is garbled and gives the same torque sign in phase 3, which must decelerate.
+
+Control law (eq. 11, corrected): pitch torque I θ̈m in phase 1, −I θ̈m in phase 3, zero in
+phases 2 and 4, and c1 θe + c2 θ̇e with θe = θf − θ, θ̇e = −θ̇ from t4 on (phase 5, held
+after t5).  Phases are half-open on the left, [t_{k−1}, t_k), so a controller sampled at
+t_k already applies the next phase.  Roll and yaw are held at zero by PD laws of our own.
+
+Attitude errors are singularity-free (pitch passes through 90°): q_BO is split into a
+twist about body y, θ = 2 atan2(q2, q0), and the remaining swing q_BR = twist* ⊗ q_BO,
+whose x and z components give the roll and yaw errors e = 2 (q_BR1, q_BR3) (q0 ≥ 0
+chosen, so that θ is in (−180°, 180°]).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .model import Model, ModelError
+from .variables import input_, output, parameter
+
+DEG = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class PitchProfile:
+    """The planned pitch trajectory of eqs 6–9."""
+
+    theta0: float
+    theta_f: float
+    duration: float
+    scan_rate: float
+    cruise_fraction: float = 0.2
+    imaging_fraction: float = 0.6
+
+    def __post_init__(self):
+        T, f2, f4 = self.duration, self.cruise_fraction, self.imaging_fraction
+        if not (T > 0 and f2 >= 0 and f4 >= 0 and f2 + f4 < 1):
+            raise ModelError(f"need duration > 0 and cruise + imaging fractions < 1, got "
+                             f"T={T}, f2={f2}, f4={f4}")
+        t1 = T * (1 - f2 - f4) / 2
+        t2 = t1 + f2 * T
+        accel = (self.theta_f - self.theta0 - self.scan_rate * f4 * T) / (t1 * t2)
+        rate_max = accel * t1
+        t3 = t2 + (rate_max - self.scan_rate) / accel
+        t4 = t3 + f4 * T
+        t5 = t4 + self.scan_rate / accel
+        if not (t1 <= t2 <= t3 <= t4 <= t5 and math.isclose(t5, T, rel_tol=1e-9)):
+            raise ModelError("the scan rate is not reachable with these phase fractions: "
+                             f"phase times {[t1, t2, t3, t4, t5]}")
+        object.__setattr__(self, "times", (t1, t2, t3, t4, t5))
+        object.__setattr__(self, "accel", accel)          # θ̈m
+        object.__setattr__(self, "rate_max", rate_max)    # θ̇m
+
+    def phase(self, t: float) -> int:
+        """Phase 1..5 at time t (half-open on the left; 5 from t4 on)."""
+        for k, tk in enumerate(self.times[:4], start=1):
+            if t < tk:
+                return k
+        return 5
+
+    def reference(self, t: float) -> tuple[float, float]:
+        """Planned (θ, θ̇) at time t: piecewise parabolic, θf after t5."""
+        t1, t2, t3, t4, t5 = self.times
+        a, r, r0 = self.accel, self.rate_max, self.scan_rate
+        theta = self.theta0
+        pieces = ((0.0, t1, 0.0, a), (t1, t2, r, 0.0), (t2, t3, r, -a), (t3, t4, r0, 0.0),
+                  (t4, t5, r0, -a))
+        for start, end, rate, acc in pieces:
+            s = min(max(t - start, 0.0), end - start)
+            theta += rate * s + 0.5 * acc * s * s
+            if t < end:
+                return theta, rate + acc * s
+        return self.theta_f, 0.0
+
+
+class PitchManeuverController(Model):
+    """Five-phase pitch maneuver law (feedforward + terminal PD) with roll/yaw hold."""
+
+    _ATTITUDE = ("q_BO", "w_BO_B")
+    VARIABLES = (
+        parameter("inertia", 956.0, "kg.m2", "pitch-axis inertia I used for the feedforward"),
+        parameter("pitch0", 120 * DEG, "rad", "initial pitch theta0", display_unit="deg"),
+        parameter("pitch_final", 0.0, "rad", "final pitch theta_f", display_unit="deg"),
+        parameter("duration", 100.0, "s", "maneuver time T"),
+        parameter("scan_rate", -0.8 * DEG, "rad/s", "imaging-phase pitch rate",
+                  display_unit="deg/s"),
+        parameter("cruise_fraction", 0.2, "1", "(t2 - t1) / T"),
+        parameter("imaging_fraction", 0.6, "1", "(t4 - t3) / T"),
+        parameter("kp", 0.9, "N.m", "phase-5 pitch gain c1 (per rad)"),
+        parameter("kd", 578.0, "N.m.s", "phase-5 pitch-rate gain c2 (per rad/s)"),
+        parameter("kp_roll", 86.0, "N.m", "roll hold gain (per rad)"),
+        parameter("kd_roll", 574.0, "N.m.s", "roll-rate hold gain (per rad/s)"),
+        parameter("kp_yaw", 86.0, "N.m", "yaw hold gain (per rad)"),
+        parameter("kd_yaw", 574.0, "N.m.s", "yaw-rate hold gain (per rad/s)"),
+        input_("q_BO", "1", "attitude of B relative to O", (1.0, 0.0, 0.0, 0.0), shape=(4,)),
+        input_("w_BO_B", "rad/s", "angular velocity of B relative to O, in B", shape=(3,)),
+        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,),
+               depends=_ATTITUDE),
+        output("phase", "1", "maneuver phase 1..5", type="Integer"),
+        output("pitch_ref", "rad", "planned pitch", display_unit="deg"),
+        output("pitch_rate_ref", "rad/s", "planned pitch rate", display_unit="deg/s"),
+    )
+
+    def initialize(self, t0):
+        p = self.p
+        self.profile = PitchProfile(p.pitch0, p.pitch_final, p.duration, p.scan_rate,
+                                    p.cruise_fraction, p.imaging_fraction)
+        self.inertia = p.inertia
+        self.gains = (p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw)
+        self.t = t0
+
+    def step(self, t, dt):
+        self.t = t + dt
+
+    def output(self):
+        y, profile = self.y, self.profile
+        q0, q1, q2, q3 = self.u.q_BO if self.u.q_BO[0] >= 0 else -self.u.q_BO
+        wx, wy, wz = self.u.w_BO_B
+        kp, kd, kp_roll, kd_roll, kp_yaw, kd_yaw = self.gains
+        n = math.hypot(q0, q2)
+        c, s = q0 / n, q2 / n
+        pitch = 2.0 * math.atan2(q2, q0)
+        roll_error, yaw_error = 2.0 * (c * q1 - s * q3), 2.0 * (c * q3 + s * q1)
+        phase = profile.phase(self.t)
+        if phase == 5:
+            torque_y = kp * (profile.theta_f - pitch) + kd * (0.0 - wy)
+        else:
+            torque_y = {1: 1.0, 3: -1.0}.get(phase, 0.0) * self.inertia * profile.accel
+        y.tau_cmd[:] = (-kp_roll * roll_error - kd_roll * wx, torque_y,
+                        -kp_yaw * yaw_error - kd_yaw * wz)
+        y.phase = phase
+        y.pitch_ref, y.pitch_rate_ref = profile.reference(self.t)

@@ -1,0 +1,112 @@
+"""CMG steering law: gimbal-rate commands that deliver a wanted body torque (seed 003 §3.2).
+
+The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque τ_cmd needs
+ḣ = −τ_cmd − w × h = h_rotor A(δ) δ̇  (eq. 14 with the gyroscopic term kept), solved as
+
+``law = 0`` — pseudo-inverse with null motion (the paper)::
+
+    δ̇ = Aᵀ(AAᵀ)⁻¹ ḣ / h_rotor + ε (1 − Aᵀ(AAᵀ)⁻¹A) ∂Q/∂δ,   Q = det(AAᵀ)
+    ∂Q/∂δ_i = −2 Q a_iᵀ (AAᵀ)⁻¹ σ_i          (σ_i: spin of gyro i, ∂a_i/∂δ_i = −σ_i)
+
+  The null motion moves the gimbals toward larger Q without changing the torque.  At an
+  exact singularity (Q below 1e-12) the inverse is replaced by the SVD pseudo-inverse,
+  which leaves the torque along the singular direction undelivered.
+
+``law = 1`` — singularity-robust inverse (Nakamura & Hanafusa 1986; Bedrossian 1990)::
+
+    δ̇ = Aᵀ(AAᵀ + λ1)⁻¹ ḣ / h_rotor,   λ = λ0 exp(−μ Q)
+
+  which trades a small torque error near singularities for bounded gimbal rates.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .cmg import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry
+from .model import Model, ModelError
+from .variables import input_, output, parameter
+
+SINGULAR_Q = 1e-12
+_INPUTS = ("tau_cmd", "delta", "w_BI_B", "h")
+
+
+class CmgSteering(Model):
+    """Steering law of a six-gyro SGCMG cluster: torque command to gimbal rates."""
+
+    VARIABLES = (
+        parameter("h_rotor", 16.65, "N.m.s", "rotor angular momentum of each gyro"),
+        parameter("gimbal_axis", GIMBAL_AXES, "1", "gimbal axis of each gyro in B (rows)",
+                  shape=(6, 3)),
+        parameter("spin_ref", DEFAULT_SPINS, "1",
+                  "rotor spin direction of each gyro at zero gimbal angle, in B (rows)",
+                  shape=(6, 3)),
+        parameter("law", 0, "1", "0: pseudo-inverse with null motion; 1: singularity-robust "
+                  "inverse", type="Integer"),
+        parameter("null_gain", 0.0, "1", "null-motion gain epsilon (law 0)"),
+        parameter("sr_lambda0", 0.01, "1", "singularity-robust weight lambda0 (law 1)"),
+        parameter("sr_mu", 10.0, "1", "singularity-robust decay mu in lambda0 exp(-mu Q)"),
+        input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
+        input_("delta", "rad", "gimbal angles", shape=(6,), display_unit="deg"),
+        input_("w_BI_B", "rad/s", "body angular velocity relative to I, in B", shape=(3,)),
+        input_("h", "N.m.s", "cluster angular momentum relative to the body, in B",
+               shape=(3,)),
+        output("delta_dot_cmd", "rad/s", "gimbal rate commands", shape=(6,),
+               depends=_INPUTS, display_unit="deg/s"),
+        output("singularity", "1", "singularity measure Q = det(A A^T)", depends=("delta",)),
+    )
+
+    def initialize(self, t0):
+        p = self.p
+        if p.law not in (0, 1):
+            raise ModelError(f"law must be 0 (pseudo-inverse) or 1 (singularity-robust), "
+                             f"got {p.law}")
+        if p.h_rotor == 0:
+            raise ModelError("h_rotor must be non-zero")
+        self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
+        self.law, self.null_gain = p.law, p.null_gain
+        self.sr_lambda0, self.sr_mu = p.sr_lambda0, p.sr_mu
+        self.singular = False
+        self.t = t0
+
+    def step(self, t, dt):
+        self.t = t + dt  # stateless between communication points
+
+    def output(self):
+        u, y, g = self.u, self.y, self.geometry
+        delta = u.delta
+        A = g.jacobian(delta)
+        M = A @ A.T
+        Q = float(np.linalg.det(M))
+        w, h = u.w_BI_B, u.h
+        h_dot = -u.tau_cmd - np.array([w[1] * h[2] - w[2] * h[1],
+                                       w[2] * h[0] - w[0] * h[2],
+                                       w[0] * h[1] - w[1] * h[0]])
+        if self.law == 1:
+            lam = self.sr_lambda0 * math.exp(-self.sr_mu * Q)
+            rates = A.T @ np.linalg.solve(M + lam * np.eye(3), h_dot) / g.h_rotor
+        elif Q > SINGULAR_Q:
+            M_inv = np.linalg.inv(M)
+            rates = A.T @ (M_inv @ h_dot) / g.h_rotor
+            if self.null_gain:
+                rates += self.null_gain * _null_motion(A, M_inv, Q, g.spins(delta))
+        else:
+            rates = np.linalg.pinv(A, rcond=1e-6) @ h_dot / g.h_rotor
+        self._note_singularity(Q)
+        y.delta_dot_cmd[:] = rates
+        y.singularity = Q
+
+    def _note_singularity(self, Q):
+        singular = Q <= SINGULAR_Q
+        if singular and not self.singular:
+            self.warnings.append(f"t={self.t:.3f} s: singular gimbal configuration "
+                                 f"(Q = {Q:.2e}); torque along the singular direction is "
+                                 "not delivered")
+        self.singular = singular
+
+
+def _null_motion(A, M_inv, Q, spins):
+    """(1 − Aᵀ M⁻¹ A) ∂Q/∂δ with ∂Q/∂δ_i = −2 Q a_iᵀ M⁻¹ σ_i."""
+    gradient = -2.0 * Q * np.einsum("ji,jk,ik->i", A, M_inv, spins)
+    return gradient - A.T @ (M_inv @ (A @ gradient))

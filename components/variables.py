@@ -1,0 +1,174 @@
+"""Variable tables: the single source of truth for every model's interface.
+
+Each model module declares ``VARIABLES``, a tuple of :class:`Var`.  From that one table
+the FMU wrapper registers the FMI variables, ``modelDescription.xml`` gets its units,
+start values and output dependencies, the docs get their interface tables and the tests
+get their expectations.  Nothing else restates a name, unit or start value.
+
+Array variables use FMI structured names, 1-based: ``w_BI_B[1]``, ``inertia[2,3]``.
+All values of a model (Real, Integer and Boolean alike) live in one flat float64 array,
+in table order; the offset of a scalar in that array is its FMI value reference.
+String parameters follow the numeric ones and are kept in a dict.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+CAUSALITIES = ("parameter", "input", "output")
+TYPES = ("Real", "Integer", "Boolean", "String")
+
+
+@dataclass(frozen=True)
+class Var:
+    """One row of a variable table.
+
+    ``depends`` (outputs only) names the inputs with direct feedthrough to this output at
+    a communication point; an output that is a function of the state alone leaves it
+    empty.  ``required`` (inputs only): a system must connect it; an optional input keeps
+    its start value (zero, or the identity quaternion) when left open.  ``start`` is a
+    scalar (broadcast) or a nested sequence of ``shape``.
+    """
+
+    name: str
+    causality: str
+    unit: str
+    description: str
+    start: object = 0.0
+    shape: tuple[int, ...] = ()
+    type: str = "Real"
+    display_unit: str | None = None
+    depends: tuple[str, ...] = ()
+    required: bool = False
+
+    def __post_init__(self):
+        if self.causality not in CAUSALITIES:
+            raise ValueError(f"{self.name}: causality {self.causality!r} not in {CAUSALITIES}")
+        if self.type not in TYPES:
+            raise ValueError(f"{self.name}: type {self.type!r} not in {TYPES}")
+        if self.depends and self.causality != "output":
+            raise ValueError(f"{self.name}: only outputs have feedthrough dependencies")
+        if self.required and self.causality != "input":
+            raise ValueError(f"{self.name}: only inputs can be required")
+        if self.type == "String" and (self.shape or self.causality != "parameter"):
+            raise ValueError(f"{self.name}: String variables must be scalar parameters")
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    def scalar_names(self) -> list[str]:
+        """FMI names of the scalars of this variable, in row-major order."""
+        if not self.shape:
+            return [self.name]
+        return [f"{self.name}[{','.join(str(i + 1) for i in idx)}]"
+                for idx in itertools.product(*(range(n) for n in self.shape))]
+
+    def start_array(self) -> np.ndarray:
+        """Start value as a flat float array of length ``size``."""
+        value = np.broadcast_to(np.asarray(self.start, dtype=float), self.shape)
+        return np.array(value, dtype=float).reshape(-1)
+
+
+def parameter(name, start, unit, description, **kw) -> Var:
+    return Var(name, "parameter", unit, description, start, **kw)
+
+
+def input_(name, unit, description, start=0.0, required=True, **kw) -> Var:
+    return Var(name, "input", unit, description, start, required=required, **kw)
+
+
+def output(name, unit, description, depends=(), **kw) -> Var:
+    return Var(name, "output", unit, description, None, depends=tuple(depends), **kw)
+
+
+class Layout:
+    """Offsets of a table's variables in the flat value array (offset = value reference)."""
+
+    def __init__(self, variables: tuple[Var, ...]):
+        names = [v.name for v in variables]
+        duplicates = {n for n in names if names.count(n) > 1}
+        if duplicates:
+            raise ValueError(f"duplicate variable names {sorted(duplicates)}")
+        inputs = {v.name for v in variables if v.causality == "input"}
+        for v in variables:
+            unknown = set(v.depends) - inputs
+            if unknown:
+                raise ValueError(f"{v.name}: depends on unknown inputs {sorted(unknown)}")
+        numeric = [v for v in variables if v.type != "String"]
+        strings = [v for v in variables if v.type == "String"]
+        self.variables = tuple(numeric + strings)
+        self.by_name = {v.name: v for v in self.variables}
+        self.offset: dict[str, int] = {}
+        self._slices: dict[str, slice] = {}
+        position = 0
+        for v in numeric:
+            self.offset[v.name] = position
+            self._slices[v.name] = slice(position, position + v.size)
+            position += v.size
+        self.n_numeric = position
+        for v in strings:
+            self.offset[v.name] = position
+            position += 1
+        self.n_total = position
+        # per value reference: (variable, scalar name)
+        self.scalars = [(v, s) for v in self.variables for s in v.scalar_names()]
+
+    def start_values(self) -> np.ndarray:
+        values = np.zeros(self.n_numeric)
+        for v in self.variables:
+            if v.type != "String" and v.causality != "output":
+                values[self.slice(v.name)] = v.start_array()
+        return values
+
+    def slice(self, name: str) -> slice:
+        return self._slices[name]
+
+    def group(self, causality: str) -> tuple[Var, ...]:
+        return tuple(v for v in self.variables if v.causality == causality)
+
+
+class Bus:
+    """Attribute access to one causality group of a model's values.
+
+    Array variables are numpy views into the flat value array: read ``u.w_BI_B`` and write
+    ``y.h[:] = ...`` (rebinding an array attribute raises, so a write can never be lost).
+    Scalars read and write through to the array and come back as float, int or bool.
+    """
+
+    def __init__(self, values: np.ndarray, layout: Layout, causality: str, strings: dict):
+        object.__setattr__(self, "_values", values)
+        object.__setattr__(self, "_strings", strings)
+        scalars = {}
+        for v in layout.group(causality):
+            if v.type == "String":
+                scalars[v.name] = (None, str)
+            elif v.shape:
+                object.__setattr__(self, v.name, values[layout.slice(v.name)].reshape(v.shape))
+            else:
+                scalars[v.name] = (layout.offset[v.name], _PYTHON_TYPE[v.type])
+        object.__setattr__(self, "_scalars", scalars)
+
+    def __getattr__(self, name):
+        try:
+            offset, kind = self._scalars[name]
+        except KeyError:
+            raise AttributeError(name) from None
+        if offset is None:
+            return self._strings[name]
+        return kind(self._values[offset])
+
+    def __setattr__(self, name, value):
+        if name not in self._scalars:
+            raise AttributeError(f"{name} is an array or unknown: write into it with [:]")
+        offset, kind = self._scalars[name]
+        if offset is None:
+            self._strings[name] = str(value)
+        else:
+            self._values[offset] = float(value)
+
+
+_PYTHON_TYPE = {"Real": float, "Integer": int, "Boolean": bool}

@@ -1,0 +1,12 @@
+"""Thin pythonfmu wrappers, one per component, and the build step that packs them.
+
+``FMUS`` maps each FMU name (= modelIdentifier = class name) to the module in this
+package that holds its slave class.  Nothing here imports pythonfmu at import time.
+"""
+FMUS = {
+    "OrbitEnvironment": "orbit_environment",
+    "SatelliteDynamics": "satellite_dynamics",
+    "CmgCluster": "cmg_cluster",
+    "CmgSteering": "cmg_steering",
+    "PitchManeuverController": "pitch_maneuver_controller",
+}

@@ -1,0 +1,147 @@
+"""``modelDescription.xml`` (FMI 2.0 co-simulation) generated from a model's variable table.
+
+pythonfmu's own generator declares no units, no InitialUnknowns and makes every output
+depend on every input; this one writes UnitDefinitions (SI base-unit exponents, with
+display units), a description and start value for every variable, and the true
+dependencies: an output depends on the inputs its table row lists in ``depends``; at
+initialisation also on the inputs the initial state reads and on the parameters.
+"""
+from __future__ import annotations
+
+import math
+from xml.etree.ElementTree import Element, SubElement, indent, tostring
+
+from ..components.variables import Layout
+
+#: unit name -> (SI base-unit exponents, {display unit: factor}); display = factor * value
+UNITS = {
+    "1": ({}, {}),
+    "s": ({"s": 1}, {}),
+    "m": ({"m": 1}, {"km": 1e-3}),
+    "m/s": ({"m": 1, "s": -1}, {"km/s": 1e-3}),
+    "m3/s2": ({"m": 3, "s": -2}, {}),
+    "rad": ({"rad": 1}, {"deg": 180 / math.pi}),
+    "rad/s": ({"rad": 1, "s": -1}, {"deg/s": 180 / math.pi}),
+    "rad/s2": ({"rad": 1, "s": -2}, {"deg/s2": 180 / math.pi}),
+    "kg": ({"kg": 1}, {}),
+    "kg.m2": ({"kg": 1, "m": 2}, {}),
+    "N.m": ({"kg": 1, "m": 2, "s": -2}, {}),
+    "N.m.s": ({"kg": 1, "m": 2, "s": -1}, {}),
+    "Hz": ({"s": -1}, {}),
+}
+
+LOG_CATEGORIES = {
+    "logStatusWarning": "Messages with status fmi2Warning",
+    "logStatusError": "Messages with status fmi2Error",
+    "logAll": "All messages",
+}
+
+
+def model_description(name: str, model_class, guid: str, description: str,
+                      generation_tool: str) -> bytes:
+    layout = Layout(model_class.VARIABLES)
+    root = Element("fmiModelDescription", {
+        "fmiVersion": "2.0",
+        "modelName": name,
+        "guid": "{" + guid + "}",
+        "description": description,
+        "generationTool": generation_tool,
+        "variableNamingConvention": "structured",
+        "numberOfEventIndicators": "0",
+    })
+    SubElement(root, "CoSimulation", {
+        "modelIdentifier": name,
+        "needsExecutionTool": "true",  # a Python 3 interpreter with numpy
+        "canHandleVariableCommunicationStepSize": "true",
+        "canInterpolateInputs": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canNotUseMemoryManagementFunctions": "true",
+        "canGetAndSetFMUstate": "true",
+        "canSerializeFMUstate": "true",
+    })
+    _unit_definitions(root, layout)
+    categories = SubElement(root, "LogCategories")
+    for category, text in LOG_CATEGORIES.items():
+        SubElement(categories, "Category", {"name": category, "description": text})
+    _required_inputs(root, layout)
+    _model_variables(root, layout)
+    _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
+    indent(root)
+    return tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _unit_definitions(root, layout):
+    used = sorted({v.unit for v in layout.variables if v.type == "Real"})
+    unknown = [u for u in used if u not in UNITS]
+    if unknown:
+        raise ValueError(f"units {unknown} are not in fmus/model_description.py UNITS")
+    definitions = SubElement(root, "UnitDefinitions")
+    for unit in used:
+        exponents, display_units = UNITS[unit]
+        element = SubElement(definitions, "Unit", {"name": unit})
+        SubElement(element, "BaseUnit", {k: str(e) for k, e in exponents.items()})
+        for display, factor in display_units.items():
+            SubElement(element, "DisplayUnit", {"name": display, "factor": repr(factor)})
+
+
+def _required_inputs(root, layout):
+    """Inputs a system must connect, for masters that read it (ours does)."""
+    tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", {"name": "agilesat"})
+    required = SubElement(tool, "RequiredInputs")
+    for var in layout.group("input"):
+        if var.required:
+            for name in var.scalar_names():
+                SubElement(required, "Input", {"name": name})
+
+
+def _model_variables(root, layout):
+    variables = SubElement(root, "ModelVariables")
+    for vr, (var, scalar_name) in enumerate(layout.scalars):
+        attributes = {"name": scalar_name, "valueReference": str(vr),
+                      "description": var.description, "causality": var.causality}
+        continuous = var.type == "Real" and var.causality != "parameter"
+        attributes["variability"] = {"parameter": "fixed"}.get(
+            var.causality, "continuous" if continuous else "discrete")
+        if var.causality == "parameter":
+            attributes["initial"] = "exact"
+        elif var.causality == "output":
+            attributes["initial"] = "calculated"
+        element = SubElement(variables, "ScalarVariable", attributes)
+        type_attributes = {}
+        if var.type == "Real":
+            type_attributes["unit"] = var.unit
+            if var.display_unit:
+                type_attributes["displayUnit"] = var.display_unit
+        if var.causality != "output":
+            type_attributes["start"] = _start_text(var, vr - layout.offset[var.name])
+        SubElement(element, var.type, type_attributes)
+
+
+def _start_text(var, element_index: int) -> str:
+    if var.type == "String":
+        return str(var.start)
+    value = var.start_array()[element_index]
+    if var.type == "Boolean":
+        return "true" if value else "false"
+    if var.type == "Integer":
+        return str(int(value))
+    return repr(float(value))
+
+
+def _model_structure(root, layout, initial_state_depends):
+    index = {}  # variable name -> 1-based indices of its scalars in ModelVariables
+    for position, (var, _) in enumerate(layout.scalars, start=1):
+        index.setdefault(var.name, []).append(position)
+    parameters = [i for v in layout.group("parameter") for i in index[v.name]]
+    structure = SubElement(root, "ModelStructure")
+    outputs = SubElement(structure, "Outputs")
+    initial = SubElement(structure, "InitialUnknowns")
+    for var in layout.group("output"):
+        step_inputs = sorted(i for name in var.depends for i in index[name])
+        init_inputs = sorted(set(step_inputs) | {i for name in initial_state_depends
+                                                 for i in index[name]} | set(parameters))
+        for position in index[var.name]:
+            SubElement(outputs, "Unknown", {"index": str(position),
+                                            "dependencies": " ".join(map(str, step_inputs))})
+            SubElement(initial, "Unknown", {"index": str(position),
+                                            "dependencies": " ".join(map(str, init_inputs))})

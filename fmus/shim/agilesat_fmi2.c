@@ -1,0 +1,366 @@
+/* agilesat FMI 2.0 guard: the binary of every agilesat FMU.
+ *
+ * It forwards each FMI 2.0 co-simulation call to pythonfmu's binary, shipped beside it as
+ * pythonfmu-export.so, and fixes two things pythonfmu 0.7.0 cannot do from Python:
+ *
+ *  - Status.  A Python slave can only return OK or Discard, and any exception becomes
+ *    fmi2Fatal.  Our slave logs bad calls at fmi2Error instead; the shim intercepts the
+ *    logger and returns the worst status logged during the call.
+ *  - Logging.  pythonfmu drops every message, errors included, unless debug logging is on.
+ *    The shim keeps pythonfmu's logging on and applies the host's wish itself: warnings
+ *    and errors always reach the host, OK-level messages only with logging on (and the
+ *    category enabled).
+ *
+ *  - Exit.  At process exit pythonfmu's ELF destructor (onLibraryUnload, run by _dl_fini)
+ *    calls finalizePythonInterpreter(), which resets a static std::shared_ptr that the exit
+ *    handlers have already destroyed: a double free that corrupts the heap at random (the
+ *    library cannot be unloaded earlier: its GNU-unique C++ symbols make it NODELETE).
+ *    The shim calls finalizePythonInterpreter() itself from an exit handler registered
+ *    right after loading the library, so before pythonfmu's own (handlers run in reverse
+ *    order); the later calls then find the pointer already null.
+ *
+ * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
+ */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2_abi.h"
+
+#define EXPORT __attribute__((visibility("default")))
+#define INNER_LIBRARY "pythonfmu-export.so"
+
+/* ---- the forwarded library ------------------------------------------------------- */
+#define FMI2_FUNCTIONS(X)                                                                 \
+    X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment)                         \
+    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate)         \
+    X(fmi2Reset) X(fmi2GetReal) X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString)      \
+    X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean) X(fmi2SetString)                   \
+    X(fmi2GetFMUstate) X(fmi2SetFMUstate) X(fmi2FreeFMUstate)                             \
+    X(fmi2SerializedFMUstateSize) X(fmi2SerializeFMUstate) X(fmi2DeSerializeFMUstate)     \
+    X(fmi2GetDirectionalDerivative) X(fmi2SetRealInputDerivatives)                        \
+    X(fmi2GetRealOutputDerivatives) X(fmi2DoStep) X(fmi2CancelStep) X(fmi2GetStatus)      \
+    X(fmi2GetRealStatus) X(fmi2GetIntegerStatus) X(fmi2GetBooleanStatus)                  \
+    X(fmi2GetStringStatus)
+
+static struct {
+#define DECLARE(name) void *name;
+    FMI2_FUNCTIONS(DECLARE)
+#undef DECLARE
+} inner;
+
+static pthread_once_t load_once = PTHREAD_ONCE_INIT;
+static char load_error[8400];
+static void (*inner_finalize)(void);
+
+/* atexit() in a shared object is tied to it: this runs at process exit and at dlclose. */
+static void finalize_inner(void) {
+    if (inner_finalize) inner_finalize();
+}
+
+static void load_inner(void) {
+    Dl_info info;
+    if (!dladdr((void *)&load_inner, &info) || !info.dli_fname) {
+        snprintf(load_error, sizeof load_error, "cannot locate the FMU binary (dladdr)");
+        return;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s", info.dli_fname);
+    char *slash = strrchr(path, '/');
+    snprintf(slash ? slash + 1 : path, sizeof path - (slash ? (size_t)(slash + 1 - path) : 0),
+             "%s", INNER_LIBRARY);
+    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+        snprintf(load_error, sizeof load_error, "cannot load %s: %s", path, dlerror());
+        return;
+    }
+#define RESOLVE(name)                                                                     \
+    if (!(inner.name = dlsym(handle, #name))) {                                           \
+        snprintf(load_error, sizeof load_error, "%s lacks %s", path, #name);              \
+        return;                                                                           \
+    }
+    FMI2_FUNCTIONS(RESOLVE)
+#undef RESOLVE
+    inner_finalize = (void (*)(void))dlsym(handle, "finalizePythonInterpreter");
+    atexit(finalize_inner);
+}
+
+/* ---- one instance ------------------------------------------------------------------ */
+typedef struct {
+    fmi2Component inner;
+    fmi2CallbackFunctions host;  /* what the host gave us */
+    fmi2CallbackFunctions ours;  /* what pythonfmu sees: our logger, us as environment */
+    char *name;
+    int logging_on;
+    char **categories;
+    size_t n_categories;
+    fmi2Status worst;            /* worst status logged during the current call */
+} Shim;
+
+static int category_enabled(const Shim *s, const char *category) {
+    if (s->n_categories == 0) return 1;
+    for (size_t i = 0; i < s->n_categories; i++)
+        if (category && strcmp(s->categories[i], category) == 0) return 1;
+    return 0;
+}
+
+/* FMI 2.0: the message is a printf format for the host; escape '%' in plain text. */
+static void host_log(const Shim *s, fmi2Status status, const char *category, const char *text) {
+    if (!s->host.logger) return;
+    size_t n = strlen(text), extra = 0;
+    for (size_t i = 0; i < n; i++) extra += text[i] == '%';
+    char *escaped = malloc(n + extra + 1);
+    if (!escaped) return;
+    char *out = escaped;
+    for (size_t i = 0; i < n; i++) {
+        *out++ = text[i];
+        if (text[i] == '%') *out++ = '%';
+    }
+    *out = '\0';
+    s->host.logger(s->host.componentEnvironment, s->name, status, category ? category : "",
+                   escaped);
+    free(escaped);
+}
+
+static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
+                        fmi2String category, fmi2String message, ...) {
+    (void)instance;
+    Shim *s = env;
+    if (status > s->worst && status != fmi2Pending) s->worst = status;
+    if (status == fmi2OK && (!s->logging_on || !category_enabled(s, category))) return;
+    host_log(s, status, category, message ? message : "");
+}
+
+static void free_categories(Shim *s) {
+    for (size_t i = 0; i < s->n_categories; i++) free(s->categories[i]);
+    free(s->categories);
+    s->categories = NULL;
+    s->n_categories = 0;
+}
+
+/* The GUID in <resources>/../modelDescription.xml must be the one the host passes. */
+static int guid_matches(const char *resource_uri, const char *guid, char *why, size_t n) {
+    if (!resource_uri || !guid) return 1;
+    const char *p = resource_uri;
+    if (strncmp(p, "file://", 7) == 0) p += 7;
+    else if (strncmp(p, "file:", 5) == 0) p += 5;
+    char path[4096];
+    size_t k = 0;
+    for (; *p && k + 1 < sizeof path; p++) {  /* percent-decode */
+        if (p[0] == '%' && p[1] && p[2]) {
+            char hex[3] = {p[1], p[2], 0};
+            path[k++] = (char)strtol(hex, NULL, 16);
+            p += 2;
+        } else {
+            path[k++] = *p;
+        }
+    }
+    path[k] = '\0';
+    while (k > 0 && path[k - 1] == '/') path[--k] = '\0';
+    snprintf(path + k, sizeof path - k, "/../modelDescription.xml");
+    FILE *f = fopen(path, "rb");
+    if (!f) return 1; /* cannot check; not an error */
+    char head[8192];
+    size_t got = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[got] = '\0';
+    const char *at = strstr(head, "guid=\"");
+    if (!at) return 1;
+    at += 6;
+    const char *end = strchr(at, '"');
+    if (!end) return 1;
+    if ((size_t)(end - at) == strlen(guid) && strncmp(at, guid, end - at) == 0) return 1;
+    snprintf(why, n, "GUID mismatch: the host passed %s but modelDescription.xml declares %.*s",
+             guid, (int)(end - at), at);
+    return 0;
+}
+
+/* Forward a call to the inner instance (arguments after it) and return the worse of its
+ * status and the worst status logged during the call. */
+#define FORWARD(c, type, fn, ...)                                                         \
+    do {                                                                                  \
+        Shim *s_ = (Shim *)(c);                                                           \
+        if (!s_) return fmi2Error;                                                        \
+        s_->worst = fmi2OK;                                                               \
+        fmi2Status st_ = ((type)inner.fn)(s_->inner, ##__VA_ARGS__);          \
+        return st_ > s_->worst ? st_ : s_->worst;                                         \
+    } while (0)
+
+/* ---- FMI 2.0 API -------------------------------------------------------------------- */
+EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
+EXPORT const char *fmi2GetVersion(void) { return "2.0"; }
+
+EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
+                                     fmi2String resources, const fmi2CallbackFunctions *cb,
+                                     fmi2Boolean visible, fmi2Boolean logging_on) {
+    Shim probe = {0};
+    if (cb) probe.host = *cb;
+    probe.name = (char *)(name ? name : "");
+    if (type != fmi2CoSimulation) {
+        host_log(&probe, fmi2Error, "logStatusError",
+                 "this FMU supports co-simulation only (fmi2CoSimulation)");
+        return NULL;
+    }
+    char why[1024];
+    if (!guid_matches(resources, guid, why, sizeof why)) {
+        host_log(&probe, fmi2Error, "logStatusError", why);
+        return NULL;
+    }
+    pthread_once(&load_once, load_inner);
+    if (load_error[0]) {
+        host_log(&probe, fmi2Fatal, "logStatusFatal", load_error);
+        return NULL;
+    }
+    Shim *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->host = probe.host;
+    s->ours = probe.host;
+    s->ours.logger = shim_logger;
+    s->ours.componentEnvironment = s;
+    s->name = strdup(probe.name);
+    s->logging_on = logging_on;
+    typedef fmi2Component (*F)(fmi2String, fmi2Type, fmi2String, fmi2String,
+                               const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
+    s->inner = ((F)inner.fmi2Instantiate)(name, type, guid, resources, &s->ours, visible,
+                                          fmi2True);
+    if (!s->inner) {
+        free(s->name);
+        free(s);
+        return NULL;
+    }
+    return s;
+}
+
+EXPORT void fmi2FreeInstance(fmi2Component c) {
+    Shim *s = c;
+    if (!s) return;
+    ((void (*)(fmi2Component))inner.fmi2FreeInstance)(s->inner);
+    free_categories(s);
+    free(s->name);
+    free(s);
+}
+
+EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
+                                      const fmi2String categories[]) {
+    Shim *s = c;
+    if (!s) return fmi2Error;
+    free_categories(s);
+    s->logging_on = on;
+    if (n > 0 && categories) {
+        s->categories = calloc(n, sizeof *s->categories);
+        if (!s->categories) return fmi2Error;
+        for (size_t i = 0; i < n; i++) s->categories[i] = strdup(categories[i]);
+        s->n_categories = n;
+    }
+    return fmi2OK;
+}
+
+EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tol_defined, fmi2Real tol,
+                                      fmi2Real start, fmi2Boolean stop_defined, fmi2Real stop) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean,
+                            fmi2Real);
+    FORWARD(c, F, fmi2SetupExperiment, tol_defined, tol, start, stop_defined, stop);
+}
+
+#define FORWARD_NOARGS(fn)                                                                \
+    EXPORT fmi2Status fn(fmi2Component c) {                                               \
+        typedef fmi2Status (*F)(fmi2Component);                                           \
+        FORWARD(c, F, fn);                                                       \
+    }
+FORWARD_NOARGS(fmi2EnterInitializationMode)
+FORWARD_NOARGS(fmi2ExitInitializationMode)
+FORWARD_NOARGS(fmi2Terminate)
+FORWARD_NOARGS(fmi2Reset)
+FORWARD_NOARGS(fmi2CancelStep)
+
+#define FORWARD_ARRAY(fn, type)                                                           \
+    EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
+                         type value[]) {                                                  \
+        typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
+        FORWARD(c, F, fn, vr, n, value);                                         \
+    }
+FORWARD_ARRAY(fmi2GetReal, fmi2Real)
+FORWARD_ARRAY(fmi2GetInteger, fmi2Integer)
+FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean)
+FORWARD_ARRAY(fmi2GetString, fmi2String)
+FORWARD_ARRAY(fmi2SetReal, const fmi2Real)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean)
+FORWARD_ARRAY(fmi2SetString, const fmi2String)
+
+EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate *);
+    FORWARD(c, F, fmi2GetFMUstate, state);
+}
+
+EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate);
+    FORWARD(c, F, fmi2SetFMUstate, state);
+}
+
+EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate *);
+    FORWARD(c, F, fmi2FreeFMUstate, state);
+}
+
+EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *n) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, size_t *);
+    FORWARD(c, F, fmi2SerializedFMUstateSize, state, n);
+}
+
+EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[],
+                                        size_t n) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
+    FORWARD(c, F, fmi2SerializeFMUstate, state, bytes, n);
+}
+
+EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t n,
+                                          fmi2FMUstate *state) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
+    FORWARD(c, F, fmi2DeSerializeFMUstate, bytes, n, state);
+}
+
+EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
+                                               const fmi2ValueReference unknowns[], size_t nu,
+                                               const fmi2ValueReference knowns[], size_t nk,
+                                               const fmi2Real dv_known[], fmi2Real dv_unknown[]) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
+                            const fmi2ValueReference *, size_t, const fmi2Real *, fmi2Real *);
+    FORWARD(c, F, fmi2GetDirectionalDerivative, unknowns, nu, knowns, nk, dv_known,
+                                                dv_unknown);
+}
+
+EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                              size_t n, const fmi2Integer order[],
+                                              const fmi2Real value[]) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
+                            const fmi2Integer *, const fmi2Real *);
+    FORWARD(c, F, fmi2SetRealInputDerivatives, vr, n, order, value);
+}
+
+EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                               size_t n, const fmi2Integer order[],
+                                               fmi2Real value[]) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
+                            const fmi2Integer *, fmi2Real *);
+    FORWARD(c, F, fmi2GetRealOutputDerivatives, vr, n, order, value);
+}
+
+EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_set_prior) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+    FORWARD(c, F, fmi2DoStep, t, h, no_set_prior);
+}
+
+#define FORWARD_STATUS(fn, type)                                                          \
+    EXPORT fmi2Status fn(fmi2Component c, const fmi2StatusKind kind, type *value) {       \
+        typedef fmi2Status (*F)(fmi2Component, fmi2StatusKind, type *);                   \
+        FORWARD(c, F, fn, kind, value);                                          \
+    }
+FORWARD_STATUS(fmi2GetStatus, fmi2Status)
+FORWARD_STATUS(fmi2GetRealStatus, fmi2Real)
+FORWARD_STATUS(fmi2GetIntegerStatus, fmi2Integer)
+FORWARD_STATUS(fmi2GetBooleanStatus, fmi2Boolean)
+FORWARD_STATUS(fmi2GetStringStatus, fmi2String)

@@ -1,0 +1,110 @@
+"""``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
+
+Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
+3 a scenario that ran but did not fly as required (the summary's diagnostics say why).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from . import scenarios
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="agilesat", description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    build = commands.add_parser("build", help="build FMUs into fmus/build/")
+    build.add_argument("names", nargs="*", help="FMU names (default: all)")
+    build.add_argument("--out", type=Path, help="output directory (default fmus/build)")
+    build.add_argument("--force", action="store_true", help="rebuild even if up to date")
+
+    validate = commands.add_parser("validate", help="validate FMUs with fmpy's validator")
+    validate.add_argument("fmus", nargs="*", type=Path,
+                          help="FMU files (default: every FMU in fmus/build)")
+
+    run = commands.add_parser("run", help="run a scenario[:variant] or an .ssd/.ssp file")
+    run.add_argument("target", help=f"one of {', '.join(scenarios.NAMES)} (optionally "
+                     ":variant) or a system file")
+    run.add_argument("--step", type=float, help="macro step [s]")
+    run.add_argument("--stop", type=float, help="stop time [s]")
+    run.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
+    run.add_argument("--set", action="append", default=[], metavar="INSTANCE.VAR=VALUE",
+                     help="override a parameter (scalar names, e.g. A.inertia[1,1]=900)")
+    run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
+    run.add_argument("--no-figures", action="store_true")
+
+    systems = commands.add_parser("systems", help="write the scenarios' .ssd files")
+    systems.add_argument("--check", action="store_true",
+                         help="only check that the committed files are up to date")
+
+    args = parser.parse_args(argv)
+    try:
+        return {"build": _build, "validate": _validate, "run": _run,
+                "systems": _systems}[args.command](args)
+    except (KeyError, ValueError, RuntimeError, OSError) as exc:
+        print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+
+
+def _build(args) -> int:
+    from ..fmus.build import BUILD_DIR, build_all
+    for path in build_all(args.out or BUILD_DIR, args.names or None, force=args.force):
+        print(path)
+    return 0
+
+
+def _validate(args) -> int:
+    from fmpy.validation import validate_fmu
+    from ..fmus.build import BUILD_DIR
+    paths = args.fmus or sorted(BUILD_DIR.glob("*.fmu"))
+    if not paths:
+        print("no FMUs to validate: run `agilesat build` first", file=sys.stderr)
+        return 1
+    bad = 0
+    for path in paths:
+        problems = validate_fmu(str(path))
+        print(f"{path}: {'OK' if not problems else f'{len(problems)} problem(s)'}")
+        for problem in problems:
+            print(f"  {problem}")
+        bad += bool(problems)
+    return 1 if bad else 0
+
+
+def _run(args) -> int:
+    from .runner import format_summary, run
+    overrides = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
+        overrides[key.strip()] = value.strip()
+    out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
+    results, summary = run(args.target, step=args.step, stop=args.stop,
+                           algorithm=args.algorithm, parameters=overrides, out_dir=out,
+                           figures=not args.no_figures,
+                           echo=lambda e: print(f"  FMU: {e}", file=sys.stderr))
+    settings = summary["settings"]
+    print(f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
+          f"{settings['algorithm']}; results in {out}/")
+    print(format_summary(summary))
+    return 3 if summary.get("status") == "failed" else 0
+
+
+def _systems(args) -> int:
+    stale = []
+    for name in scenarios.NAMES:
+        scenario = scenarios.get(name)
+        text = scenario.render_ssd()
+        if args.check:
+            if not scenario.ssd.exists() or scenario.ssd.read_bytes() != text:
+                stale.append(str(scenario.ssd))
+        else:
+            scenario.ssd.write_bytes(text)
+            print(scenario.ssd)
+    if stale:
+        print(f"out of date (run `agilesat systems`): {', '.join(stale)}", file=sys.stderr)
+        return 1
+    return 0

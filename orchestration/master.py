@@ -1,0 +1,371 @@
+"""The co-simulation master: FMI 2.0 co-simulation FMUs wired by an SSP system description.
+
+Run (:func:`simulate`):
+
+1. Load every FMU and check the system against the model descriptions (:func:`check_system`):
+   unknown component or variable, causality, type and unit mismatch, an input driven twice,
+   a required input left open, a parameter that is not one, an algebraic loop.
+2. Instantiate, set up the experiment, set the parameters, enter initialisation mode;
+   propagate the connected inputs in dependency order (FMI 2.0 ``InitialUnknowns``), then
+   set every input once more and exit initialisation mode.
+3. Fixed macro step H, time t_n = t0 + n H from the integer step counter n.
+   Gauss-Seidel: in dependency order, each FMU gets its inputs from the newest outputs,
+   steps, and hands its outputs on.  Jacobi: every FMU steps with the inputs of t_n, then
+   a pass in dependency order sets the inputs of t_{n+1} and reads the outputs.  Either way
+   the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
+   the inputs of t_{n+1}).
+4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
+   call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
+   when an output directory is given).
+
+The dependency order is a topological sort of "B needs A": an output of A feeds an input
+of B on which some output of B depends directly (``ModelStructure``); a cycle is an
+algebraic loop and an error.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .fmu import FmiCallError, Instance, Log, pointer
+from .results import Results, ResultWriter
+from .ssp import ParameterValue, SystemFile, SystemFileError, read_system
+
+ALGORITHMS = ("gauss-seidel", "jacobi")
+_CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+
+
+class SimulationError(RuntimeError):
+    """A run stopped early; ``results`` holds everything recorded up to the failure."""
+
+    def __init__(self, message: str, results: Results | None):
+        super().__init__(message)
+        self.results = results
+
+
+@dataclass
+class _Port:
+    """The inputs or outputs of one type of one instance, with their buffers."""
+
+    type: str
+    names: list[str]
+    vrs: object                      # ctypes array of value references
+    buffer: np.ndarray               # values exchanged with the FMU
+    ptr: object                      # ctypes pointer into buffer
+    index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+
+    @classmethod
+    def make(cls, instance: Instance, type_: str, names: list[str], index=()):
+        ctype = _CTYPE[type_]
+        buffer = np.zeros(len(names), dtype=np.float64 if type_ == "Real" else np.int32)
+        vrs = (ctypes.c_uint * len(names))(*(instance.variables[n].valueReference for n in names))
+        return cls(type_, names, vrs, buffer, buffer.ctypes.data_as(ctypes.POINTER(ctype)),
+                   np.array(index, dtype=np.intp))
+
+
+class _Node:
+    """One instance with its inputs (gathered from the value vector) and outputs."""
+
+    def __init__(self, instance: Instance, inputs: dict, outputs: list, offset: int):
+        self.instance = instance
+        self.inputs = [_Port.make(instance, t, [n for n, _ in pairs], [i for _, i in pairs])
+                       for t, pairs in inputs.items() if pairs]
+        self.outputs = []
+        self.slices = []
+        for type_ in ("Real", "Integer", "Boolean"):
+            names = [n for n in outputs if instance.variables[n].type == type_]
+            if names:
+                self.outputs.append(_Port.make(instance, type_, names))
+                self.slices.append(slice(offset, offset + len(names)))
+                offset += len(names)
+        self.end = offset
+
+    def set_inputs(self, values: np.ndarray) -> None:
+        c = self.instance
+        for port in self.inputs:
+            port.buffer[:] = values[port.index]
+            setter = {"Real": c.fmi2SetReal, "Integer": c.fmi2SetInteger,
+                      "Boolean": c.fmi2SetBoolean}[port.type]
+            status = setter(c.component, port.vrs, len(port.names), port.ptr)
+            if status > 1:
+                c.check(status, f"fmi2Set{port.type}")
+
+    def get_outputs(self, values: np.ndarray) -> None:
+        c = self.instance
+        for port, where in zip(self.outputs, self.slices):
+            getter = {"Real": c.fmi2GetReal, "Integer": c.fmi2GetInteger,
+                      "Boolean": c.fmi2GetBoolean}[port.type]
+            status = getter(c.component, port.vrs, len(port.names), port.ptr)
+            if status > 1:
+                c.check(status, f"fmi2Get{port.type}")
+            values[where] = port.buffer
+
+
+def simulate(system, *, step: float | None = None, stop: float | None = None,
+             algorithm: str | None = None, parameters: dict | None = None,
+             out_dir=None, logging_on: bool = False, echo=None) -> Results:
+    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
+
+    ``parameters`` maps "Instance.variable" (scalar names, e.g. "A.inertia[1,1]") to values
+    that override the system's.  With ``out_dir``, ``results.csv`` is written there as the
+    run goes.  Returns :class:`Results` (``meta`` holds the settings and the FMU log).
+    """
+    system = system if isinstance(system, SystemFile) else read_system(system)
+    step = step or system.step_size
+    stop = system.stop_time if stop is None else stop
+    algorithm = algorithm or system.algorithm or "gauss-seidel"
+    start = system.start_time
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
+    if not (step and step > 0 and math.isfinite(step)):
+        raise ValueError(f"{system.path}: the macro step must be positive (got {step}); give "
+                         "one or set it in the system's org.agilesat.master annotation")
+    if stop is None or stop <= start:
+        raise ValueError(f"{system.path}: stop time {stop} must be after start {start}")
+    n_steps = int(round((stop - start) / step))
+    if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
+        raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
+
+    log = Log(echo=echo)
+    instances = {}
+    try:
+        for ref in system.components:
+            instances[ref.name] = Instance(ref.name, ref.source, log)
+        bindings = system.parameters + [_override(system, instances, k, v)
+                                        for k, v in (parameters or {}).items()]
+        plan = check_system(system, instances, bindings)
+        return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
+                    log, out_dir, logging_on)
+    finally:
+        for instance in instances.values():
+            instance.free()
+
+
+@dataclass
+class _Plan:
+    order: list[str]          # step order (dependency order)
+    init_order: list[str]     # initialisation order
+    sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
+
+
+def check_system(system: SystemFile, instances: dict[str, Instance],
+                 bindings: list[ParameterValue]) -> _Plan:
+    """Check connections and parameters against the FMUs; return the dependency orders."""
+    problems = []
+    where = str(system.path)
+    sources = {}
+    for c in system.connections:
+        at = f"{where}:{c.line}: connection {c}"
+        a, b = instances.get(c.start_element), instances.get(c.end_element)
+        for element, inst in ((c.start_element, a), (c.end_element, b)):
+            if inst is None:
+                problems.append(f"{at}: unknown component '{element}' (components: "
+                                f"{', '.join(instances)})")
+        if a is None or b is None:
+            continue
+        va, vb = a.variables.get(c.start_connector), b.variables.get(c.end_connector)
+        if va is None:
+            problems.append(f"{at}: {a.name} ({a.path.name}) has no variable "
+                            f"'{c.start_connector}'")
+        if vb is None:
+            problems.append(f"{at}: {b.name} ({b.path.name}) has no variable "
+                            f"'{c.end_connector}'")
+        if va is None or vb is None:
+            continue
+        if va.causality != "output":
+            problems.append(f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an "
+                            "output")
+        if vb.causality != "input":
+            problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an "
+                            "input")
+        if va.type != vb.type:
+            problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
+        elif va.type == "Real" and (va.unit or "") != (vb.unit or ""):
+            problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
+        key = (b.name, vb.name)
+        if key in sources:
+            problems.append(f"{at}: input {b.name}.{vb.name} is already driven by "
+                            f"{'.'.join(sources[key])}")
+        sources[key] = (a.name, va.name)
+    for value in bindings:
+        inst = instances.get(value.component)
+        if inst is None:
+            problems.append(f"{value.origin}: parameter for unknown component "
+                            f"'{value.component}'")
+            continue
+        var = inst.variables.get(value.name)
+        if var is None:
+            problems.append(f"{value.origin}: {inst.name} ({inst.path.name}) has no variable "
+                            f"'{value.name}'")
+        elif var.causality not in ("parameter", "input") or var.variability == "constant":
+            problems.append(f"{value.origin}: {inst.name}.{value.name} is a {var.causality}, "
+                            "expected a parameter")
+        elif var.type != value.type:
+            problems.append(f"{value.origin}: {inst.name}.{value.name} is {var.type}, the "
+                            f"value is {value.type}")
+    for inst in instances.values():
+        for name in sorted(inst.required_inputs or ()):
+            if (inst.name, name) not in sources:
+                problems.append(f"{where}: required input {inst.name}.{name} is not connected")
+    if problems:
+        raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
+    order = _dependency_order(instances, sources, "feedthrough", where)
+    init_order = _dependency_order(instances, sources, "initial_feedthrough", where)
+    return _Plan(order, init_order, sources)
+
+
+def _dependency_order(instances, sources, kind, where) -> list[str]:
+    """Topological order of "B needs A now" (stable in the system's component order)."""
+    needs = {name: set() for name in instances}
+    for (b, input_name), (a, _) in sources.items():
+        dependencies = getattr(instances[b], kind)
+        if any(deps is None or input_name in deps for deps in dependencies.values()):
+            needs[b].add(a)
+    order, done, visiting = [], set(), []
+
+    def visit(name):
+        if name in done:
+            return
+        if name in visiting:
+            cycle = visiting[visiting.index(name):] + [name]
+            raise SystemFileError(f"{where}: algebraic loop ({kind}): {' -> '.join(cycle)}: "
+                                  "each of these FMUs has an output that depends directly on "
+                                  "an input driven by the previous one")
+        visiting.append(name)
+        for other in sorted(needs[name], key=list(instances).index):
+            visit(other)
+        visiting.pop()
+        done.add(name)
+        order.append(name)
+
+    for name in instances:
+        visit(name)
+    return order
+
+
+def _override(system, instances, key: str, value) -> ParameterValue:
+    name, _, variable = key.partition(".")
+    if name not in instances or not variable:
+        raise SystemFileError(f"--set {key}: expected Instance.variable with an instance of "
+                              f"{', '.join(instances)}")
+    var = instances[name].variables.get(variable)
+    kind = var.type if var is not None else "Real"
+    if kind == "Boolean" and isinstance(value, str):
+        value = value.lower() in ("1", "true", "yes")
+    elif kind in ("Real", "Integer"):
+        try:
+            value = float(value) if kind == "Real" else int(value)
+        except ValueError:
+            raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
+    return ParameterValue(name, variable, kind, value, f"--set {key}")
+
+
+def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
+         logging_on) -> Results:
+    nodes = {}
+    offset = 0
+    columns = ["time"]
+    output_position = {}
+    for name in plan.order:  # outputs first, so that input indices can refer to them
+        inst = instances[name]
+        outputs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
+        nodes[name] = _Node(inst, {}, outputs, offset)
+        for port, where in zip(nodes[name].outputs, nodes[name].slices):
+            for n, i in zip(port.names, range(where.start, where.stop)):
+                output_position[(name, n)] = i
+                columns.append(f"{name}.{n}")
+        offset = nodes[name].end
+    for name, node in nodes.items():
+        inputs = {"Real": [], "Integer": [], "Boolean": []}
+        for (b, input_name), source in plan.sources.items():
+            if b == name:
+                inputs[node.instance.variables[input_name].type].append(
+                    (input_name, output_position[source]))
+        node.inputs = [_Port.make(node.instance, t, [n for n, _ in pairs],
+                                  [i for _, i in pairs]) for t, pairs in inputs.items() if pairs]
+
+    values = np.zeros(offset)
+    data = np.full((n_steps + 1, offset + 1), np.nan)
+    meta = {"system": str(system.path), "step": step, "start": start,
+            "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
+            "order": plan.order}
+    writer = ResultWriter(Path(out_dir) / "results.csv", columns) if out_dir else None
+    rows = 0
+    try:
+        _initialize(plan, instances, nodes, bindings, values, start, start + n_steps * step,
+                    log, logging_on)
+        data[0, 0], data[0, 1:] = start, values
+        rows = 1
+        order = [nodes[n] for n in plan.order]
+        for n in range(n_steps):
+            t = start + n * step
+            log.time = t
+            if algorithm == "gauss-seidel":
+                for node in order:
+                    node.set_inputs(values)
+                    _do_step(node.instance, t, step)
+                    node.get_outputs(values)
+            else:
+                for node in order:
+                    _do_step(node.instance, t, step)
+                for node in order:
+                    node.set_inputs(values)
+                    node.get_outputs(values)
+            data[n + 1, 0] = start + (n + 1) * step
+            data[n + 1, 1:] = values
+            rows = n + 2
+            if writer:
+                writer.maybe_flush(data, rows)
+        log.time = start + n_steps * step
+        for inst in instances.values():
+            inst.call("fmi2Terminate")
+    except FmiCallError as exc:
+        partial = Results(columns, data[:rows], meta)
+        if writer:
+            writer.flush(data, rows)
+        raise SimulationError(f"{system.path.name}: {exc}\nKept {rows} recorded rows"
+                              + (f" in {writer.path}" if writer else ""), partial) from None
+    if writer:
+        writer.flush(data, rows)
+    return Results(columns, data, meta)
+
+
+def _do_step(instance: Instance, t: float, step: float) -> None:
+    status = instance.fmi2DoStep(instance.component, t, step, 1)
+    if status > 1:
+        instance.check(status, "fmi2DoStep")
+
+
+def _initialize(plan, instances, nodes, bindings, values, start, stop, log, logging_on):
+    log.time = start
+    for name in plan.order:
+        inst = instances[name]
+        inst.instantiate(logging_on)
+        inst.call("fmi2SetupExperiment", 0, 0.0, start, 1, stop)
+    for value in bindings:
+        _set_value(instances[value.component], value.name, value.type, value.value)
+    for inst in instances.values():
+        inst.call("fmi2EnterInitializationMode")
+    for name in plan.init_order:
+        nodes[name].set_inputs(values)
+        nodes[name].get_outputs(values)
+    for name in plan.order:
+        nodes[name].set_inputs(values)
+    for inst in instances.values():
+        inst.call("fmi2ExitInitializationMode")
+    for name in plan.order:
+        nodes[name].get_outputs(values)
+
+
+def _set_value(inst: Instance, name: str, type_: str, value) -> None:
+    vr = (ctypes.c_uint * 1)(inst.variables[name].valueReference)
+    if type_ == "Real":
+        inst.call("fmi2SetReal", vr, 1, (ctypes.c_double * 1)(float(value)))
+    elif type_ in ("Integer", "Boolean"):
+        inst.call(f"fmi2Set{type_}", vr, 1, (ctypes.c_int * 1)(int(value)))
+    else:
+        inst.call("fmi2SetString", vr, 1, (ctypes.c_char_p * 1)(str(value).encode()))

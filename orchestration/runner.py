@@ -1,0 +1,82 @@
+"""Run a shipped scenario (or any system file) end to end: build what is stale, simulate,
+write results, summary and figures.  The CLI's ``agilesat run`` is a thin layer on this.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from . import scenarios
+from .master import simulate
+from .results import Results
+
+
+def parse_target(target: str):
+    """'scan_pitch:literal_spin' -> (Scenario, 'literal_spin'); a file path -> (None, None)."""
+    name, _, variant = target.partition(":")
+    if name in scenarios.NAMES:
+        scenario = scenarios.get(name)
+        scenario.variant_parameters(variant or None)  # unknown variant: KeyError now
+        return scenario, variant or None
+    if Path(target).suffix in (".ssd", ".ssp"):
+        return None, None
+    raise KeyError(f"{target!r} is neither a scenario ({', '.join(scenarios.NAMES)}) nor an "
+                   ".ssd/.ssp file")
+
+
+def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
+        figures: bool = True, echo=None, build: bool = True) -> tuple[Results, dict]:
+    """Run a scenario[:variant] or a system file; returns (results, summary)."""
+    scenario, variant = parse_target(target)
+    overrides = dict(parameters or {})
+    if scenario is not None:
+        if build:
+            from ..fmus.build import build_all
+            build_all(names=scenario.components)
+        system = scenario.ssd
+        overrides = {**scenario.variant_parameters(variant), **overrides}
+    else:
+        system = Path(target)
+    if out_dir is not None:
+        out_dir = Path(out_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)
+    results = simulate(system, step=step, stop=stop, algorithm=algorithm, parameters=overrides,
+                       out_dir=out_dir, echo=echo)
+    summary = {
+        "scenario": scenario.name if scenario else None,
+        "variant": variant,
+        "system": str(system),
+        "settings": {k: results.meta[k] for k in ("start", "stop", "step", "algorithm")},
+        "parameters": overrides,
+        "fmu_messages": [str(e) for e in results.meta["log"] if e.status >= 1],
+    }
+    if scenario is not None:
+        summary.update(scenario.metrics(results, variant))
+        summary["status"] = "failed" if summary["diagnostics"] else "ok"
+    if out_dir is not None:
+        results.to_npz(out_dir / "results.npz")
+        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+        (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
+        if figures and scenario is not None:
+            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
+    return results, summary
+
+
+def format_summary(summary: dict) -> str:
+    """The headline numbers beside the paper's, angles in degrees."""
+    lines = []
+    for name, m in summary.get("metrics", {}).items():
+        scale, unit = _display(m["unit"])
+        value = f"{m['value'] * scale:.6g} {unit}"
+        paper = f"{m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
+        lines.append(f"  {name:34s} {value:>22s}   {('paper ' + paper) if paper else ''}")
+    for problem in summary.get("diagnostics", []):
+        lines.append(f"  FAILED: {problem}")
+    return "\n".join(lines)
+
+
+def _display(unit: str):
+    deg = 180 / math.pi
+    return {"rad": (deg, "deg"), "rad/s": (deg, "deg/s"),
+            "rad/s2": (1.0, "rad/s2")}.get(unit, (1.0, unit))

@@ -1,0 +1,84 @@
+"""The shipped scenarios: a system (written as ``systems/<name>.ssd``), variants, metrics
+and figures.
+
+A scenario's system is defined here at the level of whole variables and written to SSD
+by ``agilesat systems`` (the ``.ssd`` files are committed; a test keeps them in sync).
+Running reads only the ``.ssd`` and the FMUs.  A variant is a set of parameter values
+applied on top of the system's: ``agilesat run scan_pitch:literal_spin``.
+"""
+from __future__ import annotations
+
+import importlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+SYSTEMS_DIR = Path(__file__).resolve().parent.parent / "systems"
+NAMES = ("scan_pitch",)
+FMUS_PACKAGE = __name__.rsplit(".", 2)[0] + ".fmus"
+
+
+@dataclass
+class Scenario:
+    name: str
+    title: str
+    components: tuple[str, ...]               # instance name = FMU name
+    connections: tuple[tuple[str, str], ...]  # ("A.output", "B.input"), whole variables
+    parameters: dict                          # "A.parameter" -> value (scalar or array)
+    stop: float
+    step: float
+    metrics: Callable                         # (Results, variant) -> summary dict
+    figures: Callable                         # (Results, out_dir) -> [paths]
+    variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
+    algorithm: str = "gauss-seidel"
+
+    @property
+    def ssd(self) -> Path:
+        return SYSTEMS_DIR / f"{self.name}.ssd"
+
+    def variant_parameters(self, variant: str | None) -> dict:
+        """Scalar-named parameter values of a variant ({} for the default)."""
+        if not variant:
+            return {}
+        if variant not in self.variants:
+            raise KeyError(f"scenario {self.name} has no variant {variant!r}; variants: "
+                           f"{', '.join(self.variants) or 'none'}")
+        return scalar_values(self.variants[variant][1])
+
+    def render_ssd(self) -> bytes:
+        """The system as SSD, FMU sources relative to ``systems/`` (in ``fmus/build``)."""
+        from ...fmus import FMUS
+        from ...fmus.build import BUILD_DIR
+        from ...fmus.model_description import UNITS
+        from ..ssp import render_ssd
+        tables = {}
+        for name in self.components:
+            module = importlib.import_module(f"{FMUS_PACKAGE}.{FMUS[name]}")
+            tables[name] = getattr(module, name).model_class.VARIABLES
+        sources = {name: Path(os.path.relpath(BUILD_DIR / f"{name}.fmu", SYSTEMS_DIR)).as_posix()
+                   for name in self.components}
+        return render_ssd(self.name, sources, tables, self.connections, self.parameters,
+                          UNITS, 0.0, self.stop, self.step, self.algorithm)
+
+
+def get(name: str) -> Scenario:
+    if name not in NAMES:
+        raise KeyError(f"unknown scenario {name!r}; scenarios: {', '.join(NAMES)}")
+    return importlib.import_module(f"{__name__}.{name}").SCENARIO
+
+
+def scalar_values(values: dict) -> dict:
+    """{"A.x": array} -> {"A.x[1,1]": ..., ...} in FMI structured names (1-based)."""
+    result = {}
+    for key, value in values.items():
+        array = np.asarray(value)
+        if array.ndim == 0:
+            result[key] = value.item() if hasattr(value, "item") else value
+            continue
+        for index in np.ndindex(array.shape):
+            result[f"{key}[{','.join(str(i + 1) for i in index)}]"] = array[index].item()
+    return result
+

@@ -1,0 +1,232 @@
+"""``scan_pitch``: CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase
+(seeds 000/003, DESIGN.md §4.1).
+
+Variant ``literal_spin``: the rotor spin exactly as printed in the paper's A_s0.  The
+cluster momentum bias then lies along +y and the maneuver pushes it beyond the cluster's
+capacity: the run is diagnosed as failed instead of flying a wrong maneuver silently.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...components.cmg import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
+from ...components.orbit import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
+from ...components.pitch_maneuver import PitchProfile
+from . import Scenario
+from .. import plots
+
+DEG = math.pi / 180
+INERTIA = 956.0
+H_ROTOR = 16.65
+PROFILE = PitchProfile(theta0=120 * DEG, theta_f=0.0, duration=100.0, scan_rate=-0.8 * DEG)
+SCAN_RATE_TOLERANCE = 0.02 * DEG
+SETTLED_RATE = 0.01 * DEG  # |pitch rate| below this counts as stable
+
+CONNECTIONS = (
+    ("OrbitEnvironment.r_I", "SatelliteDynamics.r_I"),
+    ("OrbitEnvironment.q_OI", "SatelliteDynamics.q_OI"),
+    ("OrbitEnvironment.w_OI_O", "SatelliteDynamics.w_OI_O"),
+    ("CmgCluster.h", "SatelliteDynamics.h_cmg"),
+    ("CmgCluster.hdot", "SatelliteDynamics.hdot_cmg"),
+    ("SatelliteDynamics.q_BO", "PitchManeuverController.q_BO"),
+    ("SatelliteDynamics.w_BO_B", "PitchManeuverController.w_BO_B"),
+    ("PitchManeuverController.tau_cmd", "CmgSteering.tau_cmd"),
+    ("CmgCluster.delta", "CmgSteering.delta"),
+    ("CmgCluster.h", "CmgSteering.h"),
+    ("SatelliteDynamics.w_BI_B", "CmgSteering.w_BI_B"),
+    ("CmgSteering.delta_dot_cmd", "CmgCluster.delta_dot_cmd"),
+)
+
+PARAMETERS = {
+    "OrbitEnvironment.semi_major_axis": WGS84_A + SCAN_PITCH_ALTITUDE,
+    "OrbitEnvironment.eccentricity": 0.0,
+    "OrbitEnvironment.inclination": SCAN_PITCH_INCLINATION,
+    "SatelliteDynamics.inertia": INERTIA * np.eye(3),
+    "SatelliteDynamics.attitude0": [0.0, PROFILE.theta0, 0.0],
+    "SatelliteDynamics.rate0": [0.0, 0.0, 0.0],
+    "SatelliteDynamics.gravity_gradient": True,
+    "CmgCluster.h_rotor": H_ROTOR,
+    "CmgCluster.delta0": PAPER_DELTA0,
+    "CmgCluster.rate_limit": 0.6,
+    "CmgCluster.accel_limit": 0.5,
+    "CmgSteering.h_rotor": H_ROTOR,
+    "CmgSteering.law": 0,
+    "CmgSteering.null_gain": 0.0,
+    "PitchManeuverController.inertia": INERTIA,
+    "PitchManeuverController.pitch0": PROFILE.theta0,
+    "PitchManeuverController.pitch_final": PROFILE.theta_f,
+    "PitchManeuverController.duration": PROFILE.duration,
+    "PitchManeuverController.scan_rate": PROFILE.scan_rate,
+    "PitchManeuverController.kp": 0.9,
+    "PitchManeuverController.kd": 578.0,
+}
+
+VARIANTS = {
+    "literal_spin": ("rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
+                     {"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS}),
+}
+
+#: the paper's results (Figs 4–11 and their text), SI
+PAPER = {
+    "imaging_pitch_rate_mean": -0.8075 * DEG,
+    "max_gimbal_rate": 0.15,
+    "max_gimbal_accel": 0.4,
+    "feedforward_torque_phase1": -4.0,
+    "feedforward_torque_phase3": 4.0,
+    "max_abs_output_torque": 4.0,
+    "settling_time": 105.0,
+}
+
+
+def metrics(results, variant=None) -> dict:
+    """Headline numbers (SI) beside the paper's, and the diagnosis of a failed maneuver."""
+    t = results.time
+    step = float(t[1] - t[0])
+    pitch = results["SatelliteDynamics.euler_BO[2]"]
+    pitch_rate = results["SatelliteDynamics.euler_rate_BO[2]"]
+    phase = results["PitchManeuverController.phase"]
+    tau_cmd = results.vector("PitchManeuverController.tau_cmd")
+    delta_dot = results.vector("CmgCluster.delta_dot")
+    delivered = delivered_torque(results)
+    imaging = phase == 4
+    after = t >= PROFILE.times[3]
+    unsettled = after & (np.abs(pitch_rate) > SETTLED_RATE)
+    H_I = results.vector("SatelliteDynamics.H_I")
+    drift = np.abs(H_I - H_I[0]).max() / np.linalg.norm(H_I[0])
+    m = {
+        "imaging_pitch_rate_mean": (float(pitch_rate[imaging].mean()), "rad/s",
+                                    "mean pitch rate relative to O over the imaging phase "
+                                    "(t3, t4]"),
+        "imaging_pitch_rate_span": (float(np.ptp(pitch_rate[imaging])), "rad/s",
+                                    "max − min pitch rate over the imaging phase"),
+        "pitch_at_T": (float(np.interp(PROFILE.duration, t, pitch)), "rad",
+                       "pitch at the end of the maneuver time T = 100 s (target 0)"),
+        "pitch_final": (float(pitch[-1]), "rad", "pitch at the end of the run"),
+        "settling_time": (float(t[unsettled][-1] + step) if unsettled.any()
+                          else float(PROFILE.times[3]), "s",
+                          "from then on |pitch rate| < 0.01 °/s"),
+        "max_gimbal_rate": (float(np.abs(delta_dot).max()), "rad/s", "max |gimbal rate|"),
+        "max_gimbal_accel": (float(np.abs(np.diff(delta_dot, axis=0)).max() / step), "rad/s2",
+                             "max |gimbal acceleration| (rate differences over a step)"),
+        "feedforward_torque_phase1": (float(tau_cmd[phase == 1, 1].mean()), "N.m",
+                                      "commanded pitch torque in phase 1 (I θ̈m)"),
+        "feedforward_torque_phase3": (float(tau_cmd[phase == 3, 1].mean()), "N.m",
+                                      "commanded pitch torque in phase 3 (−I θ̈m)"),
+        "max_abs_output_torque": (float(np.abs(delivered).max()), "N.m",
+                                  "max |torque delivered by the cluster| (−ḣ − ω × h), any axis"),
+        "max_abs_output_torque_phases_1_4": (
+            float(np.abs(delivered[t <= PROFILE.times[3]]).max()), "N.m",
+            "the same over phases 1–4 (feedforward only)"),
+        "min_singularity": (float(results["CmgCluster.singularity"].min()), "1",
+                            "min det(A Aᵀ) of the cluster"),
+        "max_roll_yaw_error": (float(roll_yaw_error(results).max()), "rad",
+                               "max tilt of the pitch axis (swing of q_BO about x and z)"),
+        "momentum_drift": (float(drift), "1",
+                           "max |H_I(t) − H_I(0)| / |H_I(0)| (external torque zero for an "
+                           "isotropic hub)"),
+    }
+    summary = {name: {"value": v, "unit": u, "description": d,
+                      **({"paper": PAPER[name]} if name in PAPER else {})}
+               for name, (v, u, d) in m.items()}
+    summary["imaging_pitch_rate_mean"]["requirement"] = [
+        PROFILE.scan_rate - SCAN_RATE_TOLERANCE, PROFILE.scan_rate + SCAN_RATE_TOLERANCE]
+    return {"metrics": summary, "diagnostics": diagnose(results, summary)}
+
+
+def diagnose(results, summary) -> list[str]:
+    """Why the maneuver was not flown as planned, in words (empty: it was)."""
+    problems = []
+    t = results.time
+    commands = results.vector("CmgSteering.delta_dot_cmd")
+    over = np.abs(commands).max(axis=1) > 0.6
+    if over.any():
+        h = results.vector("CmgCluster.h")
+        k = int(np.argmax(np.linalg.norm(h, axis=1)))
+        direction = h[k] / np.linalg.norm(h[k])
+        problems.append(
+            f"the CMG cluster could not deliver the commanded torque: gimbal rate commands "
+            f"exceeded the 0.6 rad/s limit at {over.sum()} communication points between "
+            f"t = {t[over][0]:.2f} s and {t[over][-1]:.2f} s (max "
+            f"{np.abs(commands).max():.2f} rad/s); the cluster momentum reached "
+            f"{np.linalg.norm(h[k]):.1f} N·m·s at t = {t[k]:.1f} s, against a capacity of "
+            f"{momentum_capacity(direction):.1f} N·m·s in that direction; min singularity "
+            f"measure Q = {summary['min_singularity']['value']:.3g}")
+    low, high = summary["imaging_pitch_rate_mean"]["requirement"]
+    rate = summary["imaging_pitch_rate_mean"]["value"]
+    if not low <= rate <= high:
+        problems.append(f"imaging-phase pitch rate {rate / DEG:.4f} °/s is outside the "
+                        f"required {PROFILE.scan_rate / DEG:.2f} ± 0.02 °/s")
+    return problems
+
+
+def delivered_torque(results) -> np.ndarray:
+    """Torque of the cluster on the body, −ḣ − ω × h, in B (N, 3)."""
+    h = results.vector("CmgCluster.h")
+    w = results.vector("SatelliteDynamics.w_BI_B")
+    return -results.vector("CmgCluster.hdot") - np.cross(w, h)
+
+
+def roll_yaw_error(results) -> np.ndarray:
+    """Angle between the body y axis and the orbit y axis (rad): the non-pitch error."""
+    q = results.vector("SatelliteDynamics.q_BO")
+    # y_O in B is the second column of C_BO: (2(q1q2+q0q3), q0²−q1²+q2²−q3², 2(q2q3−q0q1))
+    cos_angle = q[:, 0] ** 2 - q[:, 1] ** 2 + q[:, 2] ** 2 - q[:, 3] ** 2
+    return np.arccos(np.clip(cos_angle, -1.0, 1.0))
+
+
+def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
+    """Largest cluster momentum along a direction: h Σ √(1 − (g_i·d)²)."""
+    d = np.asarray(direction) / np.linalg.norm(direction)
+    return float(h_rotor * np.sqrt(1.0 - (GIMBAL_AXES @ d) ** 2).sum())
+
+
+def figures(results, out_dir) -> list:
+    """The paper's Figs 4–11 from a run."""
+    t = results.time
+    deg = 180 / math.pi
+    pitch = results["SatelliteDynamics.euler_BO[2]"] * deg
+    rate = results["SatelliteDynamics.euler_rate_BO[2]"] * deg
+    reference = np.array([PROFILE.reference(x) for x in t]) * deg
+    delta_dot = results.vector("CmgCluster.delta_dot")
+    t3, t4 = PROFILE.times[2], PROFILE.times[3]
+    imaging = (t > t3) & (t <= t4)
+    gyros = [f"gimbal {i + 1}" for i in range(6)]
+    return [
+        plots.lines(out_dir / "fig04_pitch.png", "Fig. 4 pitch angle", t,
+                    {"pitch": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
+        plots.lines(out_dir / "fig05_pitch_rate.png", "Fig. 5 pitch rate", t,
+                    {"pitch rate": rate, "planned": reference[:, 1]}, "pitch rate [deg/s]"),
+        plots.panels(out_dir / "fig06_imaging_and_settling.png",
+                     "Fig. 6 imaging-phase and settling pitch rate",
+                     [(t[imaging], {"pitch rate": rate[imaging]}, "imaging [deg/s]"),
+                      (t[t >= t4], {"pitch rate": rate[t >= t4]}, "settling [deg/s]")]),
+        plots.lines(out_dir / "fig07_gimbal_rates.png", "Fig. 7 gimbal rates", t,
+                    dict(zip(gyros, delta_dot.T)), "gimbal rate [rad/s]"),
+        plots.lines(out_dir / "fig08_initial_gimbal_acceleration.png",
+                    "Fig. 8 gimbal rates, first 2 s", t[t <= 2.0],
+                    dict(zip(gyros, delta_dot[t <= 2.0].T)), "gimbal rate [rad/s]"),
+        plots.lines(out_dir / "fig09_gimbal_angles.png", "Fig. 9 gimbal angles", t,
+                    dict(zip(gyros, results.vector("CmgCluster.delta").T * deg)),
+                    "gimbal angle [deg]"),
+        plots.lines(out_dir / "fig10_singularity.png", "Fig. 10 singularity measure", t,
+                    {"Q = det(A Aᵀ)": results["CmgCluster.singularity"]}, "Q"),
+        plots.lines(out_dir / "fig11_output_torque.png", "Fig. 11 cluster output torque", t,
+                    dict(zip(("x", "y", "z"), delivered_torque(results).T)), "torque [N·m]"),
+    ]
+
+
+SCENARIO = Scenario(
+    name="scan_pitch",
+    title="CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase",
+    components=("OrbitEnvironment", "SatelliteDynamics", "CmgCluster", "CmgSteering",
+                "PitchManeuverController"),
+    connections=CONNECTIONS,
+    parameters=PARAMETERS,
+    stop=150.0,
+    step=0.05,
+    metrics=metrics,
+    figures=figures,
+    variants=VARIANTS,
+)

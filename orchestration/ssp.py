@@ -1,0 +1,353 @@
+"""System descriptions in the SSP 1.0 standard: read ``.ssd`` / ``.ssp`` files, write ``.ssd``.
+
+Read: components with their FMU sources, connections, and parameter values bound with
+``ssd:ParameterBindings`` (inline ``ssv:ParameterSet`` or an ``.ssv`` file), the default
+experiment (start, stop) and our master's settings (step size, algorithm) from an
+annotation of type ``org.agilesat.master``.  The file is first checked against the SSP XSD
+schemas that fmpy ships, then every error names the file, line, element and variable.
+The check against the FMUs themselves (variables, causality, type, unit) is
+:func:`master.check_system`, which needs the model descriptions.
+
+Write: :func:`render_ssd` expands a compact vector-level system description (see
+``scenarios/``) into scalar SSD connectors and connections, with SSP unit definitions.
+"""
+from __future__ import annotations
+
+import math
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+}
+MASTER_ANNOTATION = "org.agilesat.master"
+_TYPES = ("Real", "Integer", "Boolean", "String")
+
+
+class SystemFileError(ValueError):
+    """A system description is malformed or inconsistent with its FMUs."""
+
+
+@dataclass
+class ComponentRef:
+    name: str
+    source: Path          # absolute path of the FMU
+    line: int
+
+
+@dataclass
+class ConnectionRef:
+    start_element: str
+    start_connector: str
+    end_element: str
+    end_connector: str
+    line: int
+
+    def __str__(self):
+        return (f"{self.start_element}.{self.start_connector} -> "
+                f"{self.end_element}.{self.end_connector}")
+
+
+@dataclass
+class ParameterValue:
+    component: str
+    name: str
+    type: str
+    value: object
+    origin: str           # "file:line" where the value was given
+
+
+@dataclass
+class SystemFile:
+    path: Path
+    name: str
+    components: list[ComponentRef]
+    connections: list[ConnectionRef]
+    parameters: list[ParameterValue]
+    start_time: float = 0.0
+    stop_time: float | None = None
+    step_size: float | None = None
+    algorithm: str | None = None
+    _tempdir: object = field(default=None, repr=False)
+
+    def component(self, name: str) -> ComponentRef:
+        for c in self.components:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+
+def read_system(path) -> SystemFile:
+    """Read an ``.ssd`` file, or the ``SystemStructure.ssd`` of an ``.ssp`` package."""
+    path = Path(path).resolve()
+    if not path.exists():
+        raise SystemFileError(f"{path}: no such file")
+    if path.suffix == ".ssp":
+        tempdir = tempfile.TemporaryDirectory(prefix="agilesat_ssp_")
+        try:
+            with zipfile.ZipFile(path) as archive:
+                archive.extractall(tempdir.name)
+        except zipfile.BadZipFile as exc:
+            raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
+        ssd = Path(tempdir.name) / "SystemStructure.ssd"
+        if not ssd.exists():
+            raise SystemFileError(f"{path}: the package has no SystemStructure.ssd")
+        system = _read_ssd(ssd, display=f"{path.name}!SystemStructure.ssd")
+        system._tempdir = tempdir
+        return system
+    return _read_ssd(path, display=str(path))
+
+
+def _read_ssd(path: Path, display: str) -> SystemFile:
+    tree = _parse(path, display)
+    _validate_schema(tree, "SystemStructureDescription.xsd", display)
+    root = tree.getroot()
+    system = root.find("ssd:System", NS)
+    components = []
+    parameters = []
+    for element in system.findall("ssd:Elements/*", NS):
+        tag = etree.QName(element).localname
+        where = f"{display}:{element.sourceline}"
+        if tag != "Component":
+            raise SystemFileError(f"{where}: <{tag}> elements are not supported (flat systems "
+                                  "of FMU components only)")
+        name = element.get("name")
+        kind = element.get("type", "application/x-fmu-sharedlibrary")
+        if kind != "application/x-fmu-sharedlibrary":
+            raise SystemFileError(f"{where}: component '{name}' has type '{kind}'; only FMUs "
+                                  "(application/x-fmu-sharedlibrary) are supported")
+        if any(c.name == name for c in components):
+            raise SystemFileError(f"{where}: component name '{name}' is used twice")
+        source = (path.parent / element.get("source")).resolve()
+        if not source.exists():
+            raise SystemFileError(f"{where}: component '{name}': FMU source "
+                                  f"'{element.get('source')}' not found (looked at {source})")
+        components.append(ComponentRef(name, source, element.sourceline))
+        for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+            parameters += _read_binding(binding, name, path, display)
+    for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+        parameters += _read_binding(binding, None, path, display)
+    connections = [
+        ConnectionRef(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
+                      c.get("endConnector"), c.sourceline)
+        for c in system.findall("ssd:Connections/ssd:Connection", NS)]
+    for c in connections:
+        if not c.start_element or not c.end_element:
+            raise SystemFileError(f"{display}:{c.line}: connection {c}: connections to the "
+                                  "system's own connectors are not supported")
+    result = SystemFile(path, root.get("name"), components, connections, parameters)
+    experiment = root.find("ssd:DefaultExperiment", NS)
+    if experiment is not None:
+        result.start_time = float(experiment.get("startTime", 0.0))
+        if experiment.get("stopTime") is not None:
+            result.stop_time = float(experiment.get("stopTime"))
+        for annotation in experiment.findall("ssd:Annotations/ssc:Annotation", NS):
+            if annotation.get("type") == MASTER_ANNOTATION and len(annotation):
+                settings = annotation[0]
+                if settings.get("stepSize") is not None:
+                    result.step_size = float(settings.get("stepSize"))
+                result.algorithm = settings.get("algorithm")
+    return result
+
+
+def _read_binding(binding, component, ssd_path: Path, display: str) -> list[ParameterValue]:
+    prefix = binding.get("prefix", "")
+    source = binding.get("source")
+    if source:
+        ssv_path = (ssd_path.parent / source).resolve()
+        if not ssv_path.exists():
+            raise SystemFileError(f"{display}:{binding.sourceline}: parameter binding source "
+                                  f"'{source}' not found (looked at {ssv_path})")
+        ssv_display = str(ssv_path)
+        tree = _parse(ssv_path, ssv_display)
+        _validate_schema(tree, "SystemStructureParameterValues.xsd", ssv_display)
+        parameter_set = tree.getroot()
+    else:
+        ssv_display = display
+        parameter_set = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
+        if parameter_set is None:
+            raise SystemFileError(f"{display}:{binding.sourceline}: parameter binding without "
+                                  "source or inline ssv:ParameterSet")
+    values = []
+    for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
+        name = prefix + parameter.get("name")
+        origin = f"{ssv_display}:{parameter.sourceline}"
+        owner = component
+        if owner is None:  # system-level binding: "Component.variable"
+            owner, _, name = name.partition(".")
+            if not name:
+                raise SystemFileError(f"{origin}: system-level parameter "
+                                      f"'{parameter.get('name')}' must be 'Component.variable'")
+        typed = [child for child in parameter if etree.QName(child).localname in _TYPES]
+        if len(typed) != 1:
+            raise SystemFileError(f"{origin}: parameter '{name}' needs exactly one of "
+                                  f"{_TYPES}")
+        kind = etree.QName(typed[0]).localname
+        values.append(ParameterValue(owner, name, kind, _parse_value(kind, typed[0], origin),
+                                     origin))
+    return values
+
+
+def _parse_value(kind, element, origin):
+    text = element.get("value")
+    if text is None:
+        raise SystemFileError(f"{origin}: missing value attribute")
+    try:
+        if kind == "Real":
+            value = float(text)
+            if not math.isfinite(value):
+                raise ValueError("not finite")
+            return value
+        if kind == "Integer":
+            return int(text)
+        if kind == "Boolean":
+            if text not in ("true", "false", "1", "0"):
+                raise ValueError("expected true or false")
+            return text in ("true", "1")
+        return text
+    except ValueError as exc:
+        raise SystemFileError(f"{origin}: bad {kind} value '{text}': {exc}") from None
+
+
+def _parse(path: Path, display: str):
+    try:
+        return etree.parse(str(path))
+    except etree.XMLSyntaxError as exc:
+        raise SystemFileError(f"{display}: not well-formed XML: {exc}") from None
+
+
+def _validate_schema(tree, schema_name: str, display: str) -> None:
+    schema = _schema(schema_name)
+    if not schema.validate(tree):
+        problems = "; ".join(f"line {e.line}: {e.message}" for e in schema.error_log)
+        raise SystemFileError(f"{display}: does not follow the SSP 1.0 schema: {problems}")
+
+
+_schemas: dict[str, etree.XMLSchema] = {}
+
+
+def _schema(name: str) -> etree.XMLSchema:
+    if name not in _schemas:
+        import fmpy.ssp  # the SSP 1.0 XSDs ship with fmpy
+        directory = Path(fmpy.ssp.__file__).parent / "schema"
+        _schemas[name] = etree.XMLSchema(file=str(directory / name))
+    return _schemas[name]
+
+
+# ---------------------------------------------------------------------------------------
+# writing
+
+
+def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
+               connections, parameters: dict, units: dict, start: float, stop: float,
+               step: float, algorithm: str = "gauss-seidel") -> bytes:
+    """An SSD (schema-checked bytes) from a vector-level description.
+
+    ``components`` maps instance name to FMU source (relative to the SSD), ``tables`` maps
+    instance name to its variable table, ``connections`` are ("A.x", "B.y") pairs of whole
+    variables (arrays are expanded element by element), ``parameters`` maps "A.p" to a
+    value (scalar or array), ``units`` is the FMU unit table of fmus/model_description.py.
+    """
+    E = _Maker()
+    root = E("ssd:SystemStructureDescription", version="1.0", name=name,
+             generationTool="agilesat")
+    system = E.sub(root, "ssd:System", name=name)
+    elements = E.sub(system, "ssd:Elements")
+    by_instance = {}
+    used_units = set()
+    bound = _expand_parameters(parameters, tables)
+    for instance, source in components.items():
+        variables = {v.name: v for v in tables[instance]}
+        by_instance[instance] = variables
+        component = E.sub(elements, "ssd:Component", name=instance, source=source,
+                          type="application/x-fmu-sharedlibrary")
+        connectors = E.sub(component, "ssd:Connectors")
+        for v in tables[instance]:
+            for scalar in v.scalar_names():
+                connector = E.sub(connectors, "ssd:Connector", name=scalar, kind=v.causality)
+                attributes = {"unit": v.unit} if v.type == "Real" else {}
+                if v.type == "Real":
+                    used_units.add(v.unit)
+                E.sub(connector, f"ssc:{v.type}", **attributes)
+        values = bound.get(instance)
+        if values:
+            bindings = E.sub(component, "ssd:ParameterBindings")
+            binding = E.sub(bindings, "ssd:ParameterBinding")
+            holder = E.sub(binding, "ssd:ParameterValues")
+            parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0",
+                                  name=f"{instance}_parameters")
+            listing = E.sub(parameter_set, "ssv:Parameters")
+            for scalar, (kind, text) in values.items():
+                parameter = E.sub(listing, "ssv:Parameter", name=scalar)
+                E.sub(parameter, f"ssv:{kind}", value=text)
+    wires = E.sub(system, "ssd:Connections")
+    for source, target in connections:
+        (a, x), (b, y) = source.split(".", 1), target.split(".", 1)
+        va, vb = by_instance[a][x], by_instance[b][y]
+        if va.shape != vb.shape:
+            raise SystemFileError(f"{source} {va.shape} and {target} {vb.shape} differ in shape")
+        for sa, sb in zip(va.scalar_names(), vb.scalar_names()):
+            E.sub(wires, "ssd:Connection", startElement=a, startConnector=sa, endElement=b,
+                  endConnector=sb)
+    unit_list = E.sub(root, "ssd:Units")
+    for unit in sorted(used_units):
+        exponents, _ = units[unit]
+        element = E.sub(unit_list, "ssc:Unit", name=unit)
+        E.sub(element, "ssc:BaseUnit", **{k: str(e) for k, e in exponents.items()})
+    experiment = E.sub(root, "ssd:DefaultExperiment", startTime=repr(float(start)),
+                       stopTime=repr(float(stop)))
+    annotations = E.sub(experiment, "ssd:Annotations")
+    annotation = E.sub(annotations, "ssc:Annotation", type=MASTER_ANNOTATION)
+    etree.SubElement(annotation, "{%s}Master" % MASTER_NAMESPACE,
+                     {"stepSize": repr(float(step)), "algorithm": algorithm},
+                     nsmap={"agilesat": MASTER_NAMESPACE})
+    tree = etree.ElementTree(root)
+    _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
+    return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+
+
+MASTER_NAMESPACE = "http://agilesat.org/ssp/master"
+
+
+def _expand_parameters(parameters: dict, tables: dict) -> dict:
+    """{"A.p": value} -> {instance: {scalar name: (SSV type, text)}}, checked against tables."""
+    import numpy as np
+    result: dict[str, dict] = {}
+    for key, value in parameters.items():
+        instance, name = key.split(".", 1)
+        variable = next((v for v in tables[instance] if v.name == name), None)
+        if variable is None or variable.causality != "parameter":
+            raise SystemFileError(f"{key} is not a parameter of {instance}")
+        if variable.type == "String":
+            result.setdefault(instance, {})[name] = ("String", str(value))
+            continue
+        array = np.broadcast_to(np.asarray(value, dtype=float), variable.shape).reshape(-1)
+        for scalar, x in zip(variable.scalar_names(), array):
+            text = {"Boolean": lambda v: "true" if v else "false",
+                    "Integer": lambda v: str(int(v))}.get(variable.type, repr)(float(x))
+            result.setdefault(instance, {})[scalar] = (variable.type, text)
+    return result
+
+
+class _Maker:
+    """Tiny helper for namespaced lxml elements: E("ssd:System", name=...)."""
+
+    def __call__(self, tag, **attributes):
+        return etree.Element(self._qname(tag), {k: str(v) for k, v in attributes.items()},
+                             nsmap=NS)
+
+    def sub(self, parent, tag, **attributes):
+        return etree.SubElement(parent, self._qname(tag),
+                                {k: str(v) for k, v in attributes.items()})
+
+    @staticmethod
+    def _qname(tag):
+        prefix, local = tag.split(":")
+        return "{%s}%s" % (NS[prefix], local)
+
