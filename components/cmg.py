@@ -54,7 +54,10 @@ DEFAULT_SPINS = -PAPER_SPINS  # reversed rotor spin (DESIGN.md §4.1)
 
 
 class ClusterGeometry:
-    """h, Jacobian and singularity measure of a cluster, shared by cluster and steering."""
+    """h, Jacobian and singularity measure of a cluster, shared by cluster and steering.
+
+    Computed on Python floats: it runs at every communication point on six 3-vectors.
+    """
 
     def __init__(self, h_rotor: float, gimbal_axes, spins):
         G = np.asarray(gimbal_axes, dtype=float).reshape(N_GYROS, 3)
@@ -72,23 +75,69 @@ class ClusterGeometry:
         self.G = G
         self.S = S / spin_norms[:, None]
         self.T = np.cross(self.G, self.S)
+        self._st = [(tuple(s), tuple(t)) for s, t in zip(self.S.tolist(), self.T.tolist())]
+
+    def axes(self, delta) -> tuple[list, list]:
+        """(spins σ_i = s_i cos δ_i + t_i sin δ_i, Jacobian columns a_i = ∂σ_i/∂δ_i)."""
+        spins, columns = [], []
+        for d, (s, t) in zip(delta, self._st):
+            c, n = math.cos(d), math.sin(d)
+            spins.append((s[0] * c + t[0] * n, s[1] * c + t[1] * n, s[2] * c + t[2] * n))
+            columns.append((t[0] * c - s[0] * n, t[1] * c - s[1] * n, t[2] * c - s[2] * n))
+        return spins, columns
 
     def momentum(self, delta) -> np.ndarray:
-        """h = h_rotor Σ (s_i cos δ_i + t_i sin δ_i)."""
-        return self.h_rotor * (np.cos(delta) @ self.S + np.sin(delta) @ self.T)
+        """h = h_rotor Σ σ_i."""
+        return self.h_rotor * np.array(_sum(self.axes(delta)[0]))
 
     def spins(self, delta) -> np.ndarray:
-        """Spin direction σ_i = s_i cos δ_i + t_i sin δ_i of each gyro (rows, 6×3)."""
-        return self.S * np.cos(delta)[:, None] + self.T * np.sin(delta)[:, None]
+        """σ_i as rows (6×3)."""
+        return np.array(self.axes(delta)[0])
 
     def jacobian(self, delta) -> np.ndarray:
-        """A (3×6): columns a_i = t_i cos δ_i − s_i sin δ_i; hdot = h_rotor A δ̇."""
-        return (self.T * np.cos(delta)[:, None] - self.S * np.sin(delta)[:, None]).T
+        """A (3×6) with columns a_i; hdot = h_rotor A δ̇."""
+        return np.array(self.axes(delta)[1]).T
 
     @staticmethod
     def singularity(A) -> float:
         """Q = det(A Aᵀ): zero at a singular gimbal configuration."""
-        return float(np.linalg.det(A @ A.T))
+        return det3(gram(np.asarray(A).T.tolist()))
+
+
+def gram(columns) -> tuple:
+    """Σ a aᵀ over the columns (3×3 rows)."""
+    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+    for a0, a1, a2 in columns:
+        m00 += a0 * a0
+        m01 += a0 * a1
+        m02 += a0 * a2
+        m11 += a1 * a1
+        m12 += a1 * a2
+        m22 += a2 * a2
+    return (m00, m01, m02), (m01, m11, m12), (m02, m12, m22)
+
+
+def det3(M) -> float:
+    (a, b, c), (d, e, f), (g, h, i) = M
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def inv3(M) -> tuple:
+    """Inverse of a 3×3 matrix (rows) by its adjugate."""
+    (a, b, c), (d, e, f), (g, h, i) = M
+    det = det3(M)
+    return ((( e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
+            ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
+            ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det))
+
+
+def _sum(vectors) -> tuple:
+    x = y = z = 0.0
+    for v in vectors:
+        x += v[0]
+        y += v[1]
+        z += v[2]
+    return x, y, z
 
 
 def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
@@ -98,11 +147,14 @@ def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
     δ(dt) = δ + δ̇ dt + a τ (dt − τ/2), δ̇(dt) = δ̇ + a τ, with a = ±accel_limit and
     τ = min(|target − δ̇| / accel_limit, dt).
     """
-    target = np.clip(command, -rate_limit, rate_limit)
-    gap = target - rate
-    tau = np.minimum(np.abs(gap) / accel_limit, dt)
-    accel = np.sign(gap) * accel_limit
-    return delta + rate * dt + accel * tau * (dt - tau / 2), rate + accel * tau
+    angles, rates = [], []
+    for d, r, c in zip(delta, rate, command):
+        gap = min(max(c, -rate_limit), rate_limit) - r
+        tau = min(abs(gap) / accel_limit, dt)
+        a = accel_limit if gap > 0 else -accel_limit if gap < 0 else 0.0
+        angles.append(d + r * dt + a * tau * (dt - tau / 2))
+        rates.append(r + a * tau)
+    return angles, rates
 
 
 class CmgCluster(Model):
@@ -136,16 +188,16 @@ class CmgCluster(Model):
                              f"({p.accel_limit}) must be positive")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
         self.rate_limit, self.accel_limit = p.rate_limit, p.accel_limit
-        self.delta = np.array(p.delta0, dtype=float)
-        self.delta_dot = np.zeros(N_GYROS)
+        self.delta = p.delta0.tolist()
+        self.delta_dot = [0.0] * N_GYROS
         self.saturated = False
         self.t = t0
 
     def step(self, t, dt):
-        command = self.u.delta_dot_cmd
-        saturated = bool(np.any(np.abs(command) > self.rate_limit))
+        command = self.u.delta_dot_cmd.tolist()
+        saturated = max(map(abs, command)) > self.rate_limit
         if saturated and not self.saturated:
-            worst = int(np.argmax(np.abs(command)))
+            worst = max(range(N_GYROS), key=lambda i: abs(command[i]))
             self.warnings.append(
                 f"t={t:.3f} s: gimbal {worst + 1} rate command {command[worst]:.3f} rad/s "
                 f"exceeds the rate limit {self.rate_limit} rad/s (the cluster cannot deliver "
@@ -157,9 +209,11 @@ class CmgCluster(Model):
 
     def output(self):
         g, y = self.geometry, self.y
-        A = g.jacobian(self.delta)
+        spins, columns = g.axes(self.delta)
+        h_rotor = g.h_rotor
         y.delta[:] = self.delta
         y.delta_dot[:] = self.delta_dot
-        y.h[:] = g.momentum(self.delta)
-        y.hdot[:] = g.h_rotor * (A @ self.delta_dot)
-        y.singularity = g.singularity(A)
+        y.h[:] = [h_rotor * x for x in _sum(spins)]
+        y.hdot[:] = [h_rotor * x for x in _sum([(a[0] * r, a[1] * r, a[2] * r)
+                                                for a, r in zip(columns, self.delta_dot)])]
+        y.singularity = det3(gram(columns))

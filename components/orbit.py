@@ -54,6 +54,7 @@ from __future__ import annotations
 import math
 
 from .model import Model, ModelError
+from .rotations import quat_from_dcm
 from .variables import output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
@@ -99,34 +100,6 @@ def geodetic_to_ecef(lat: float, lon: float, alt: float) -> tuple[float, float, 
     N = WGS84_A / math.sqrt(1.0 - WGS84_E2 * s * s)
     return ((N + alt) * c * math.cos(lon), (N + alt) * c * math.sin(lon),
             (N * (1.0 - WGS84_E2) + alt) * s)
-
-
-def quat_from_rows(x, y, z) -> tuple[float, float, float, float]:
-    """q(C) for the DCM with rows x, y, z, on floats: Shepperd's method, q0 ≥ 0.
-
-    Same result as :func:`.rotations.quat_from_dcm` (tested), ten times cheaper.
-    """
-    c00, c01, c02 = x
-    c10, c11, c12 = y
-    c20, c21, c22 = z
-    trace = c00 + c11 + c22
-    if trace >= c00 and trace >= c11 and trace >= c22:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = (0.25 * s, (c12 - c21) / s, (c20 - c02) / s, (c01 - c10) / s)
-    elif c00 >= c11 and c00 >= c22:
-        s = 2.0 * math.sqrt(1.0 + 2.0 * c00 - trace)
-        q = ((c12 - c21) / s, 0.25 * s, (c01 + c10) / s, (c02 + c20) / s)
-    elif c11 >= c22:
-        s = 2.0 * math.sqrt(1.0 + 2.0 * c11 - trace)
-        q = ((c20 - c02) / s, (c01 + c10) / s, 0.25 * s, (c12 + c21) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + 2.0 * c22 - trace)
-        q = ((c01 - c10) / s, (c02 + c20) / s, (c12 + c21) / s, 0.25 * s)
-    q0, q1, q2, q3 = q
-    k = 1.0 / math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    if q0 < 0.0:
-        k = -k
-    return q0 * k, q1 * k, q2 * k, q3 * k
 
 
 class OrbitEnvironment(Model):
@@ -262,7 +235,7 @@ class OrbitEnvironment(Model):
 
         y.r_I[:] = (rx, ry, rz)
         y.v_I[:] = (vx, vy, vz)
-        y.q_OI[:] = quat_from_rows(x_O, (-nx, -ny, -nz), (-ux, -uy, -uz))
+        y.q_OI[:] = quat_from_dcm((x_O, (-nx, -ny, -nz), (-ux, -uy, -uz)))
         y.w_OI_O[:] = (0.0, -h / (r * r), -r * a_h / h)
 
         theta = self.earth_angle0 + EARTH_RATE * t

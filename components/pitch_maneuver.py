@@ -31,6 +31,7 @@ from .model import Model, ModelError
 from .variables import input_, output, parameter
 
 DEG = math.pi / 180.0
+PHASE_TIME_TOLERANCE = 1e-9  # s
 
 
 @dataclass(frozen=True)
@@ -64,9 +65,14 @@ class PitchProfile:
         object.__setattr__(self, "rate_max", rate_max)    # θ̇m
 
     def phase(self, t: float) -> int:
-        """Phase 1..5 at time t (half-open on the left; 5 from t4 on)."""
+        """Phase 1..5 at time t (half-open on the left; 5 from t4 on).
+
+        A time within 1e-9 s of a phase time counts as at it: t1 = T (1 − f2 − f4)/2 is
+        10.000000000000004 s in floating point, and the communication point at 10 s must
+        already switch to phase 2.
+        """
         for k, tk in enumerate(self.times[:4], start=1):
-            if t < tk:
+            if t < tk - PHASE_TIME_TOLERANCE:
                 return k
         return 5
 

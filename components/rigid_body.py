@@ -13,7 +13,8 @@ H_I changes only by external torque, so total momentum is conserved exactly what
 co-simulation step.  Across a step the devices' momentum is extrapolated with the
 derivative they report, h(t + s) = h + ḣ s, held at the communication point (FMI inputs
 are the values at the step's start).  Integration: classical RK4 with sub-steps of at
-most 0.02 rad of rotation.
+most 0.02 rad of rotation.  The gravity-gradient torque is skipped when J ∝ 1, where it
+vanishes identically.
 
 Outputs relative to the orbit frame O (inputs q_OI, w_OI_O): q_BO = q_OI* ⊗ q_BI,
 w_BO_B = w_BI_B − C_BO w_OI_O and the 1-2-3 Euler angles of B relative to O on a branch
@@ -27,11 +28,12 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .rotations import (IDENTITY_Q, dcm_from_euler123, dcm_from_quat, euler123_from_quat,
-                        euler123_rates, quat_conj, quat_from_dcm, quat_mul)
+from .rotations import (IDENTITY_Q, dcm, dcm_from_euler123, euler123_from_quat,
+                        euler123_rates, qmul, quat_from_dcm, rotate, rotate_back)
 from .variables import input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
+MAX_SUBSTEPS = 10000
 DEVICES = ("cmg", "wheel", "payload")
 MOMENTUM_INPUTS = tuple(f"h_{d}" for d in DEVICES)
 
@@ -92,55 +94,62 @@ class SatelliteDynamics(Model):
             raise ModelError(f"inertia must be symmetric, got {J.tolist()}")
         if np.any(np.linalg.eigvalsh(J) <= 0):
             raise ModelError(f"inertia must be positive definite, got {J.tolist()}")
-        self.J = J
-        self.J_inv = np.linalg.inv(J)
-        self._J = tuple(map(tuple, J))
-        self._J_inv = tuple(map(tuple, self.J_inv))
-        self.gravity_gradient = p.gravity_gradient
+        self.J = tuple(map(tuple, J.tolist()))
+        self.J_inv = tuple(map(tuple, np.linalg.inv(J).tolist()))
+        # the gravity-gradient torque r × J r vanishes identically for J ∝ 1
+        isotropic = np.allclose(J, J[0, 0] * np.eye(3), rtol=1e-15, atol=0.0)
+        self.gravity_gradient = p.gravity_gradient and not isotropic
+        self.needs_position = p.gravity_gradient
         self.mu = p.mu
         q_OI = _unit(u.q_OI, "q_OI")
         C_BO = dcm_from_euler123(p.attitude0)
         q_BO = quat_from_dcm(C_BO)
-        self.q_BI = quat_mul(q_OI, q_BO)
+        q_BI = qmul(q_OI, q_BO)
         w_BI_B = p.rate0 + C_BO @ u.w_OI_O
-        self.H_I = dcm_from_quat(self.q_BI).T @ (J @ w_BI_B + self._h_total())
-        self.euler = np.array(p.attitude0, dtype=float)
-        self.q_BO = q_BO
+        H_B = rotate(self.J, w_BI_B)
+        h = self._h_total()
+        self.q_BI = q_BI
+        self.H_I = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
+        self.euler = tuple(p.attitude0.tolist())
+        self.q_BO = tuple(q_BO.tolist())
         self.t = t0
 
     def step(self, t, dt):
         u = self.u
-        h0, hdot = self._h_total(), u.hdot_cmg + u.hdot_wheel + u.hdot_payload
-        tau = tuple(u.tau_ext)
-        r_I = tuple(u.r_I)
-        if self.gravity_gradient and not any(r_I):
+        h0 = self._h_total()
+        hdot = (u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist()
+        tau = u.tau_ext.tolist()
+        r_I = u.r_I.tolist()
+        if self.needs_position and not any(r_I):
             raise ModelError("gravity_gradient is on but r_I is zero: connect r_I or set "
                              "gravity_gradient = false")
-        w = self.J_inv @ (dcm_from_quat(self.q_BI) @ self.H_I - h0)
-        n = max(1, math.ceil(float(np.abs(w).max()) * dt / MAX_ROTATION_PER_SUBSTEP))
+        w = self._rate(self.q_BI, self.H_I, h0)
+        n = max(1, math.ceil(max(map(abs, w)) * dt / MAX_ROTATION_PER_SUBSTEP))
+        if n > MAX_SUBSTEPS:
+            raise ModelError(f"t={t}: body rate {max(map(abs, w)):.3g} rad/s would need {n} "
+                             f"sub-steps of {dt} s: the state is unphysical")
         x = (*self.q_BI, *self.H_I)
-        hs, hdots = tuple(h0), tuple(hdot)
         sub = dt / n
         for k in range(n):
-            x = self._rk4(x, k * sub, sub, hs, hdots, tau, r_I)
-        q = np.array(x[:4])
-        self.q_BI = q / math.sqrt(float(q @ q))
-        self.H_I = np.array(x[4:])
-        if not np.all(np.isfinite(x)):
+            x = self._rk4(x, k * sub, sub, h0, hdot, tau, r_I)
+        if not all(map(math.isfinite, x)):
             raise ModelError(f"non-finite state at t={t + dt}")
+        norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+        self.q_BI = (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm)
+        self.H_I = x[4:]
         self.t = t + dt
 
     def output(self):
         u, y = self.u, self.y
-        C_BI = dcm_from_quat(self.q_BI)
-        w_BI_B = self.J_inv @ (C_BI @ self.H_I - self._h_total())
-        q_BO = quat_mul(quat_conj(_unit(u.q_OI, "q_OI")), self.q_BI)
-        if q_BO @ self.q_BO < 0:  # keep the quaternion sign continuous
-            q_BO = -q_BO
+        q_OI = _unit(u.q_OI, "q_OI")
+        w_BI_B = self._rate(self.q_BI, self.H_I, self._h_total())
+        q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), self.q_BI)
+        if sum(a * b for a, b in zip(q_BO, self.q_BO)) < 0:  # keep the sign continuous
+            q_BO = tuple(-x for x in q_BO)
         self.q_BO = q_BO
-        C_BO = dcm_from_quat(q_BO)
         self.euler = euler123_from_quat(q_BO, previous=self.euler)
-        w_BO_B = w_BI_B - C_BO @ u.w_OI_O
+        w_OI_B = rotate(dcm(q_BO), u.w_OI_O)
+        w_BO_B = (w_BI_B[0] - w_OI_B[0], w_BI_B[1] - w_OI_B[1], w_BI_B[2] - w_OI_B[2])
         y.q_BI[:] = self.q_BI
         y.w_BI_B[:] = w_BI_B
         y.q_BO[:] = q_BO
@@ -150,63 +159,52 @@ class SatelliteDynamics(Model):
         y.H_I[:] = self.H_I
 
     # -- internals -----------------------------------------------------------------
-    def _h_total(self) -> np.ndarray:
+    def _h_total(self) -> list:
         u = self.u
-        return u.h_cmg + u.h_wheel + u.h_payload
+        return (u.h_cmg + u.h_wheel + u.h_payload).tolist()
+
+    def _rate(self, q, H_I, h) -> tuple:
+        """w_BI_B = J⁻¹ (C_BI H_I − h)."""
+        H_B = rotate(dcm(q), H_I)
+        return rotate(self.J_inv, (H_B[0] - h[0], H_B[1] - h[1], H_B[2] - h[2]))
 
     def _rk4(self, x, s, ds, h0, hdot, tau, r_I):
-        f = self._derivative
+        f, half = self._derivative, ds / 2
         k1 = f(x, s, h0, hdot, tau, r_I)
-        k2 = f(_axpy(x, ds / 2, k1), s + ds / 2, h0, hdot, tau, r_I)
-        k3 = f(_axpy(x, ds / 2, k2), s + ds / 2, h0, hdot, tau, r_I)
-        k4 = f(_axpy(x, ds, k3), s + ds, h0, hdot, tau, r_I)
-        return tuple(xi + ds / 6 * (a + 2 * b + 2 * c + d)
-                     for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
+        k2 = f([a + half * b for a, b in zip(x, k1)], s + half, h0, hdot, tau, r_I)
+        k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
+        k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
+        sixth = ds / 6
+        return tuple(xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
 
     def _derivative(self, x, s, h0, hdot, tau, r_I):
-        """(q̇_BI, Ḣ_I) at time s into the step, in plain floats (this is the hot loop)."""
-        q0, q1, q2, q3, Hx, Hy, Hz = x
-        C = _dcm(q0, q1, q2, q3)
-        H_B = _mv(C, (Hx, Hy, Hz))
-        w = _mv(self._J_inv, tuple(H_B[i] - h0[i] - hdot[i] * s for i in range(3)))
-        wx, wy, wz = w
+        """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
+        q0, q1, q2, q3 = q = x[:4]
+        k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
+        C = tuple((k * a, k * b, k * c) for a, b, c in dcm(q))
+        H_B = rotate(C, x[4:])
+        wx, wy, wz = rotate(self.J_inv, (H_B[0] - h0[0] - hdot[0] * s,
+                                         H_B[1] - h0[1] - hdot[1] * s,
+                                         H_B[2] - h0[2] - hdot[2] * s))
         q_dot = (0.5 * (-q1 * wx - q2 * wy - q3 * wz),
                  0.5 * (q0 * wx + q2 * wz - q3 * wy),
                  0.5 * (q0 * wy - q1 * wz + q3 * wx),
                  0.5 * (q0 * wz + q1 * wy - q2 * wx))
-        torque = tau
-        if self.gravity_gradient:
-            r_B = _mv(C, r_I)
-            r2 = r_B[0] ** 2 + r_B[1] ** 2 + r_B[2] ** 2
-            k = 3.0 * self.mu / (r2 * r2 * math.sqrt(r2))
-            Jr = _mv(self._J, r_B)
-            torque = (tau[0] + k * (r_B[1] * Jr[2] - r_B[2] * Jr[1]),
-                      tau[1] + k * (r_B[2] * Jr[0] - r_B[0] * Jr[2]),
-                      tau[2] + k * (r_B[0] * Jr[1] - r_B[1] * Jr[0]))
-        H_dot = tuple(C[0][i] * torque[0] + C[1][i] * torque[1] + C[2][i] * torque[2]
-                      for i in range(3))  # Cᵀ τ
-        return (*q_dot, *H_dot)
+        if not self.gravity_gradient:
+            return (*q_dot, *rotate_back(C, tau))
+        rx, ry, rz = r_B = rotate(C, r_I)
+        r2 = rx * rx + ry * ry + rz * rz
+        g = 3.0 * self.mu / (r2 * r2 * math.sqrt(r2))
+        jx, jy, jz = rotate(self.J, r_B)
+        torque = (tau[0] + g * (ry * jz - rz * jy), tau[1] + g * (rz * jx - rx * jz),
+                  tau[2] + g * (rx * jy - ry * jx))
+        return (*q_dot, *rotate_back(C, torque))
 
 
-def _unit(q, name) -> np.ndarray:
-    norm = math.sqrt(float(q @ q))
+def _unit(q, name) -> tuple:
+    q0, q1, q2, q3 = q.tolist()
+    norm = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     if not 0.5 < norm < 2.0:
-        raise ModelError(f"{name} must be a unit quaternion, got {list(q)} (norm {norm})")
-    return q / norm
-
-
-def _dcm(q0, q1, q2, q3):
-    """C(q) as nested tuples (see rotations.dcm_from_quat)."""
-    return ((q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)),
-            (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1)),
-            (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
-
-
-def _mv(M, v):
-    return (M[0][0] * v[0] + M[0][1] * v[1] + M[0][2] * v[2],
-            M[1][0] * v[0] + M[1][1] * v[1] + M[1][2] * v[2],
-            M[2][0] * v[0] + M[2][1] * v[1] + M[2][2] * v[2])
-
-
-def _axpy(x, a, k):
-    return tuple(xi + a * ki for xi, ki in zip(x, k))
+        raise ModelError(f"{name} must be a unit quaternion, got {[q0, q1, q2, q3]} "
+                         f"(norm {norm})")
+    return q0 / norm, q1 / norm, q2 / norm, q3 / norm

@@ -15,6 +15,11 @@ yaw ψ about the new z)::
 
 which is the transpose of the matrix of the video-SAR paper's eq. (9).  Its body rates
 are eq. (13): ``w = (φ̇ cψ cθ + θ̇ sψ, −φ̇ sψ cθ + θ̇ cψ, ψ̇ + φ̇ sθ)``.
+
+The functions take any sequence and compute on Python floats: models call them once or
+several times per co-simulation step on 3- and 4-vectors, where NumPy's per-call cost
+would dominate.  ``dcm``, ``rotate`` and ``qmul`` return tuples for such hot loops; the
+rest return NumPy arrays.
 """
 from __future__ import annotations
 
@@ -23,33 +28,73 @@ import math
 import numpy as np
 
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
+#: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined
+GIMBAL_LOCK_COS = 1e-9
+#: below this |cos θ| (within 2.9° of ±90°) the branch is chosen by the twist about y
+LOCK_ZONE_COS = 0.05
 
 
+def _floats(x):
+    return x.tolist() if isinstance(x, np.ndarray) else x
+
+
+# -- tuple primitives ------------------------------------------------------------------
+def dcm(q) -> tuple:
+    """C(q) as a tuple of rows."""
+    q0, q1, q2, q3 = _floats(q)
+    return ((q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)),
+            (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1)),
+            (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
+
+
+def rotate(M, v) -> tuple:
+    """M v for a 3×3 M given as rows (e.g. ``dcm(q)``)."""
+    v0, v1, v2 = _floats(v)
+    return (M[0][0] * v0 + M[0][1] * v1 + M[0][2] * v2,
+            M[1][0] * v0 + M[1][1] * v1 + M[1][2] * v2,
+            M[2][0] * v0 + M[2][1] * v1 + M[2][2] * v2)
+
+
+def rotate_back(M, v) -> tuple:
+    """Mᵀ v for a 3×3 M given as rows."""
+    v0, v1, v2 = _floats(v)
+    return (M[0][0] * v0 + M[1][0] * v1 + M[2][0] * v2,
+            M[0][1] * v0 + M[1][1] * v1 + M[2][1] * v2,
+            M[0][2] * v0 + M[1][2] * v1 + M[2][2] * v2)
+
+
+def qmul(p, q) -> tuple:
+    """Hamilton product p ⊗ q."""
+    p0, p1, p2, p3 = _floats(p)
+    q0, q1, q2, q3 = _floats(q)
+    return (p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
+            p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
+            p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0)
+
+
+# -- array API ---------------------------------------------------------------------------
 def skew(v) -> np.ndarray:
     """[v×], so that skew(a) @ b = a × b."""
-    x, y, z = v
+    x, y, z = _floats(v)
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def cross(a, b) -> np.ndarray:
     """a × b for 3-vectors (np.cross is ten times slower on tiny arrays)."""
-    return np.array([a[1] * b[2] - a[2] * b[1],
-                     a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+    a0, a1, a2 = _floats(a)
+    b0, b1, b2 = _floats(b)
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def quat_mul(p, q) -> np.ndarray:
     """Hamilton product p ⊗ q."""
-    p0, p1, p2, p3 = p
-    q0, q1, q2, q3 = q
-    return np.array([p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
-                     p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
-                     p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
-                     p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0])
+    return np.array(qmul(p, q))
 
 
 def quat_conj(q) -> np.ndarray:
-    return np.array([q[0], -q[1], -q[2], -q[3]])
+    q0, q1, q2, q3 = _floats(q)
+    return np.array([q0, -q1, -q2, -q3])
 
 
 def quat_normalize(q) -> np.ndarray:
@@ -68,33 +113,29 @@ def quat_from_axis_angle(axis, angle: float) -> np.ndarray:
 
 def dcm_from_quat(q) -> np.ndarray:
     """C(q): maps reference-frame coordinates to the rotated frame."""
-    q0, q1, q2, q3 = q
-    return np.array([
-        [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)],
-        [2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1)],
-        [2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3],
-    ])
+    return np.array(dcm(q))
 
 
 def quat_from_dcm(C) -> np.ndarray:
     """Inverse of :func:`dcm_from_quat` (Shepperd's method), scalar part ≥ 0."""
-    C = np.asarray(C, dtype=float)
-    trace = C[0, 0] + C[1, 1] + C[2, 2]
-    candidates = (trace, C[0, 0], C[1, 1], C[2, 2])
-    k = int(np.argmax(candidates))
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _floats(C)
+    trace = c00 + c11 + c22
+    k = max(range(4), key=(trace, c00, c11, c22).__getitem__)
     if k == 0:
         s = 2.0 * math.sqrt(1.0 + trace)
-        q = [0.25 * s, (C[1, 2] - C[2, 1]) / s, (C[2, 0] - C[0, 2]) / s, (C[0, 1] - C[1, 0]) / s]
+        q = (0.25 * s, (c12 - c21) / s, (c20 - c02) / s, (c01 - c10) / s)
     elif k == 1:
-        s = 2.0 * math.sqrt(1.0 + 2 * C[0, 0] - trace)
-        q = [(C[1, 2] - C[2, 1]) / s, 0.25 * s, (C[0, 1] + C[1, 0]) / s, (C[0, 2] + C[2, 0]) / s]
+        s = 2.0 * math.sqrt(1.0 + 2 * c00 - trace)
+        q = ((c12 - c21) / s, 0.25 * s, (c01 + c10) / s, (c02 + c20) / s)
     elif k == 2:
-        s = 2.0 * math.sqrt(1.0 + 2 * C[1, 1] - trace)
-        q = [(C[2, 0] - C[0, 2]) / s, (C[0, 1] + C[1, 0]) / s, 0.25 * s, (C[1, 2] + C[2, 1]) / s]
+        s = 2.0 * math.sqrt(1.0 + 2 * c11 - trace)
+        q = ((c20 - c02) / s, (c01 + c10) / s, 0.25 * s, (c12 + c21) / s)
     else:
-        s = 2.0 * math.sqrt(1.0 + 2 * C[2, 2] - trace)
-        q = [(C[0, 1] - C[1, 0]) / s, (C[0, 2] + C[2, 0]) / s, (C[1, 2] + C[2, 1]) / s, 0.25 * s]
-    return quat_normalize(q)
+        s = 2.0 * math.sqrt(1.0 + 2 * c22 - trace)
+        q = ((c01 - c10) / s, (c02 + c20) / s, (c12 + c21) / s, 0.25 * s)
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    sign = -1.0 if q[0] < 0.0 else 1.0
+    return np.array([sign * x / norm for x in q])
 
 
 def rot1(a: float) -> np.ndarray:
@@ -114,7 +155,7 @@ def rot3(a: float) -> np.ndarray:
 
 def dcm_from_euler123(euler) -> np.ndarray:
     """C_BO = R3(ψ) R2(θ) R1(φ) for euler = (φ, θ, ψ)."""
-    phi, theta, psi = euler
+    phi, theta, psi = _floats(euler)
     return rot3(psi) @ rot2(theta) @ rot1(phi)
 
 
@@ -122,43 +163,49 @@ def quat_from_euler123(euler) -> np.ndarray:
     return quat_from_dcm(dcm_from_euler123(euler))
 
 
-#: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined
-GIMBAL_LOCK_COS = 1e-9
-
-
 def euler123_from_quat(q, previous=None) -> np.ndarray:
     """(φ, θ, ψ) with C(q) = R3(ψ) R2(θ) R1(φ), on a branch continuous in time.
 
     Every rotation has two 1-2-3 representations, (φ, θ, ψ) with |θ| ≤ π/2 and
-    (φ+π, π−θ, ψ+π).  The one whose pitch is nearer the twist of q about y,
-    2 atan2(q2, q0), is returned: that angle is continuous and well conditioned through
-    the gimbal lock at θ = ±90°, where φ and ψ alone swing, so a slew in pitch from 120° to
-    0° keeps roll and yaw near zero instead of flipping them by 180°.  ``previous`` (the
-    last output) shifts each angle by multiples of 2π to keep it continuous; in exact
-    gimbal lock, where only φ + ψ (θ = +90°) or φ − ψ (θ = −90°) is defined, the change of
-    that combination is split equally between φ and ψ.
+    (φ+π, π−θ, ψ+π).  Without ``previous`` the first (principal) one is returned.  With
+    ``previous`` (the last output) the one nearer it is returned, each angle shifted by
+    multiples of 2π to stay continuous.  Near the gimbal lock at θ = ±90°
+    (|cos θ| < ``LOCK_ZONE_COS``) φ and ψ alone swing with tiny attitude changes and cannot
+    choose: there the representation whose pitch is nearer the twist of q about y,
+    2 atan2(q2, q0), wins — that angle is well conditioned through the lock, so a pitch
+    slew from 120° to 0° keeps roll and yaw near zero instead of flipping them by 180°.
+    In exact lock only φ + ψ (θ = +90°) or φ − ψ (θ = −90°) is defined; the change of that
+    combination is split equally between φ and ψ.
     """
-    q = np.asarray(q, dtype=float)
-    C = dcm_from_quat(q)
-    sin_theta = min(1.0, max(-1.0, C[2, 0]))
+    q0, q1, q2, q3 = _floats(q)
+    c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
+    c01, c10 = 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q2 - q0 * q3)
+    c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
+    c20, c21 = 2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1)
+    c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+    sin_theta = min(1.0, max(-1.0, c20))
     theta = math.asin(sin_theta)
-    if math.cos(theta) > GIMBAL_LOCK_COS:
-        phi = math.atan2(-C[2, 1], C[2, 2])
-        psi = math.atan2(-C[1, 0], C[0, 0])
-        twist = 2.0 * math.atan2(q[2], q[0]) if q[0] >= 0 else 2.0 * math.atan2(-q[2], -q[0])
-        if abs(_wrap(math.pi - theta - twist)) < abs(_wrap(theta - twist)):
-            phi, theta, psi = phi + math.pi, math.pi - theta, psi + math.pi
-        angles = np.array([phi, theta, psi])
-        return angles if previous is None else _unwrap_near(angles, previous)
+    cos_theta = math.cos(theta)
+    if cos_theta > GIMBAL_LOCK_COS:
+        principal = (math.atan2(-c21, c22), theta, math.atan2(-c10, c00))
+        if previous is None:
+            return np.array(principal)
+        other = (principal[0] + math.pi, math.pi - theta, principal[2] + math.pi)
+        if cos_theta < LOCK_ZONE_COS:
+            twist = 2.0 * math.atan2(q2, q0) if q0 >= 0 else 2.0 * math.atan2(-q2, -q0)
+            use_other = abs(_wrap(other[1] - twist)) < abs(_wrap(theta - twist))
+        else:
+            use_other = _distance(other, previous) < _distance(principal, previous)
+        return np.array(_unwrap_near(other if use_other else principal, previous))
     # gimbal lock: C[0,1] = ±sin(φ ± ψ), C[1,1] = cos(φ ± ψ) (upper signs for θ = +90°)
     sign = 1.0 if sin_theta > 0 else -1.0
-    combination = math.atan2(sign * C[0, 1], C[1, 1])
+    combination = math.atan2(sign * c01, c11)
     if previous is None:
         return np.array([combination, theta, 0.0])
-    phi0, theta0, psi0 = previous
+    phi0, _, psi0 = _floats(previous)
     change = _wrap(combination - (phi0 + sign * psi0))
-    result = np.array([phi0 + change / 2, theta, psi0 + sign * change / 2])
-    return _unwrap_near(result, previous)
+    return np.array(_unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2),
+                                 previous))
 
 
 def euler123_rates(euler, w) -> np.ndarray:
@@ -166,10 +213,10 @@ def euler123_rates(euler, w) -> np.ndarray:
 
     Singular at cos θ = 0; there φ̇ is set to 0 and ψ̇ takes the whole z rate.
     """
-    _, theta, psi = euler
+    _, theta, psi = _floats(euler)
     cp, sp = math.cos(psi), math.sin(psi)
     ct, st = math.cos(theta), math.sin(theta)
-    wx, wy, wz = w
+    wx, wy, wz = _floats(w)
     phi_dot = (wx * cp - wy * sp) / ct if abs(ct) > GIMBAL_LOCK_COS else 0.0
     return np.array([phi_dot, wx * sp + wy * cp, wz - phi_dot * st])
 
@@ -179,5 +226,9 @@ def _wrap(angle: float) -> float:
     return angle - 2 * math.pi * math.floor((angle + math.pi) / (2 * math.pi))
 
 
-def _unwrap_near(angles, reference) -> np.ndarray:
-    return reference + np.array([_wrap(a - r) for a, r in zip(angles, reference)])
+def _distance(angles, reference) -> float:
+    return sum(_wrap(a - r) ** 2 for a, r in zip(angles, _floats(reference)))
+
+
+def _unwrap_near(angles, reference) -> tuple:
+    return tuple(r + _wrap(a - r) for a, r in zip(angles, _floats(reference)))

@@ -24,7 +24,8 @@ import math
 
 import numpy as np
 
-from .cmg import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry
+from .cmg import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, det3, gram, inv3
+from .rotations import rotate
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
@@ -75,24 +76,26 @@ class CmgSteering(Model):
 
     def output(self):
         u, y, g = self.u, self.y, self.geometry
-        delta = u.delta
-        A = g.jacobian(delta)
-        M = A @ A.T
-        Q = float(np.linalg.det(M))
-        w, h = u.w_BI_B, u.h
-        h_dot = -u.tau_cmd - np.array([w[1] * h[2] - w[2] * h[1],
-                                       w[2] * h[0] - w[0] * h[2],
-                                       w[0] * h[1] - w[1] * h[0]])
+        spins, columns = g.axes(u.delta.tolist())
+        M = gram(columns)
+        Q = det3(M)
+        wx, wy, wz = u.w_BI_B.tolist()
+        hx, hy, hz = u.h.tolist()
+        tx, ty, tz = u.tau_cmd.tolist()
+        h_dot = (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
         if self.law == 1:
             lam = self.sr_lambda0 * math.exp(-self.sr_mu * Q)
-            rates = A.T @ np.linalg.solve(M + lam * np.eye(3), h_dot) / g.h_rotor
-        elif Q > SINGULAR_Q:
-            M_inv = np.linalg.inv(M)
-            rates = A.T @ (M_inv @ h_dot) / g.h_rotor
-            if self.null_gain:
-                rates += self.null_gain * _null_motion(A, M_inv, Q, g.spins(delta))
+            M = tuple(tuple(m + (lam if i == j else 0.0) for j, m in enumerate(row))
+                      for i, row in enumerate(M))
+        if self.law == 1 or Q > SINGULAR_Q:
+            M_inv = inv3(M)
+            v = rotate(M_inv, h_dot)
+            rates = [(a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) / g.h_rotor for a in columns]
+            if self.law == 0 and self.null_gain:
+                rates = [r + self.null_gain * n
+                         for r, n in zip(rates, _null_motion(columns, M_inv, Q, spins))]
         else:
-            rates = np.linalg.pinv(A, rcond=1e-6) @ h_dot / g.h_rotor
+            rates = (np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / g.h_rotor).tolist()
         self._note_singularity(Q)
         y.delta_dot_cmd[:] = rates
         y.singularity = Q
@@ -106,7 +109,14 @@ class CmgSteering(Model):
         self.singular = singular
 
 
-def _null_motion(A, M_inv, Q, spins):
+def _null_motion(columns, M_inv, Q, spins) -> list:
     """(1 − Aᵀ M⁻¹ A) ∂Q/∂δ with ∂Q/∂δ_i = −2 Q a_iᵀ M⁻¹ σ_i."""
-    gradient = -2.0 * Q * np.einsum("ji,jk,ik->i", A, M_inv, spins)
-    return gradient - A.T @ (M_inv @ (A @ gradient))
+    gradient = [-2.0 * Q * sum(x * y for x, y in zip(a, rotate(M_inv, s)))
+                for a, s in zip(columns, spins)]
+    v = rotate(M_inv, _sum_weighted(columns, gradient))
+    return [d - (a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) for a, d in zip(columns, gradient)]
+
+
+def _sum_weighted(columns, weights) -> tuple:
+    """A w = Σ a_i w_i."""
+    return tuple(sum(a[k] * w for a, w in zip(columns, weights)) for k in range(3))

@@ -6,9 +6,10 @@ start values and output dependencies, the docs get their interface tables and th
 get their expectations.  Nothing else restates a name, unit or start value.
 
 Array variables use FMI structured names, 1-based: ``w_BI_B[1]``, ``inertia[2,3]``.
-All values of a model (Real, Integer and Boolean alike) live in one flat float64 array,
-in table order; the offset of a scalar in that array is its FMI value reference.
-String parameters follow the numeric ones and are kept in a dict.
+All values of a model (Real, Integer and Boolean alike) live in one flat float64 array:
+parameters, then inputs, then outputs, each group in table order; the offset of a scalar
+in that array is its FMI value reference, so each group is one contiguous range.  String
+parameters follow the numeric ones and are kept in a dict.
 """
 from __future__ import annotations
 
@@ -98,7 +99,8 @@ class Layout:
             unknown = set(v.depends) - inputs
             if unknown:
                 raise ValueError(f"{v.name}: depends on unknown inputs {sorted(unknown)}")
-        numeric = [v for v in variables if v.type != "String"]
+        numeric = [v for c in CAUSALITIES for v in variables
+                   if v.causality == c and v.type != "String"]
         strings = [v for v in variables if v.type == "String"]
         self.variables = tuple(numeric + strings)
         self.by_name = {v.name: v for v in self.variables}
@@ -110,6 +112,12 @@ class Layout:
             self._slices[v.name] = slice(position, position + v.size)
             position += v.size
         self.n_numeric = position
+        #: contiguous value-reference range of each causality group
+        self.range = {c: range(min([self.offset[v.name] for v in numeric if v.causality == c],
+                                   default=0),
+                               max([self.offset[v.name] + v.size for v in numeric
+                                    if v.causality == c], default=0))
+                      for c in CAUSALITIES}
         for v in strings:
             self.offset[v.name] = position
             position += 1

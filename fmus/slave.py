@@ -66,7 +66,7 @@ class ModelSlave(Fmi2Slave):
         self._causality = np.array([_CAUSALITY_CODE[v.causality] for v, _ in layout.scalars])
         self._type = np.array([_TYPE_CODE[v.type] for v, _ in layout.scalars])
         self._string_names = [v.name for v in layout.variables if v.type == "String"]
-        self._outputs = np.flatnonzero(self._causality[:layout.n_numeric] == OUTPUT)
+        self._outputs = slice(layout.range["output"].start, layout.range["output"].stop)
         self._plans: dict = {}
         self._mode = "instantiated"
         self._start_time = 0.0
@@ -183,8 +183,8 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(plan)
         index, touches_parameters = plan
         if setting and touches_parameters and self._mode in ("step", "terminated"):
-            names = [self._scalar_names[i] for i in index
-                     if self._causality[i] == PARAMETER]
+            names = [self._scalar_names[vr] for vr in vrs
+                     if self._causality[vr] == PARAMETER]
             raise _CallRejected(f"parameters {names} are fixed: they can only be set before "
                                 "exitInitializationMode")
         return index
@@ -202,30 +202,33 @@ class ModelSlave(Fmi2Slave):
             outputs = [self._scalar_names[i] for i in index if self._causality[i] == OUTPUT]
             if outputs:
                 return f"outputs {outputs} cannot be set"
-        return index, bool(np.any(self._causality[index] == PARAMETER))
+        touches_parameters = bool(np.any(self._causality[index] == PARAMETER))
+        if len(vrs) and list(vrs) == list(range(vrs[0], vrs[0] + len(vrs))):
+            index = slice(vrs[0], vrs[0] + len(vrs))  # one range: a view, not a gather
+        return index, touches_parameters
 
     def _read(self, vrs, type_name):
         index = self._plan(vrs, type_name)
+        values = self.model.values
         if not self._outputs_valid:
             self._ensure_state()
             self.model.output()
-            values = self.model.values[self._outputs]
-            if not np.all(np.isfinite(values)):
-                bad = [self._scalar_names[i] for i, x in zip(self._outputs, values)
+            outputs = values[self._outputs].tolist()
+            if not math.isfinite(sum(outputs)) and not all(map(math.isfinite, outputs)):
+                bad = [name for name, x in zip(self._scalar_names[self._outputs], outputs)
                        if not math.isfinite(x)]
                 raise _CallRejected(f"the model produced non-finite outputs {bad} at "
                                     f"t={self.model.t!r}")
             self._outputs_valid = True
-        return self.model.values[index]
+        return values[index]
 
     def _write(self, vrs, values, type_name):
         index = self._plan(vrs, type_name, setting=True)
-        array = np.array(values, dtype=float)
-        if not np.all(np.isfinite(array)):
-            bad = [f"{self._scalar_names[i]}={x!r}" for i, x in zip(index, array)
+        if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
+            bad = [f"{self._scalar_names[vr]}={x!r}" for vr, x in zip(vrs, values)
                    if not math.isfinite(x)]
             raise _CallRejected(f"non-finite values rejected: {bad}")
-        self.model.values[index] = array
+        self.model.values[index] = values
         if self._mode in ("instantiated", "initialization"):
             self._state_valid = False
         self._outputs_valid = False

@@ -84,13 +84,26 @@ def _run(args) -> int:
     out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
     results, summary = run(args.target, step=args.step, stop=args.stop,
                            algorithm=args.algorithm, parameters=overrides, out_dir=out,
-                           figures=not args.no_figures,
-                           echo=lambda e: print(f"  FMU: {e}", file=sys.stderr))
+                           figures=not args.no_figures, echo=_echo(out))
     settings = summary["settings"]
     print(f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
           f"{settings['algorithm']}; results in {out}/")
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0
+
+
+def _echo(out: Path, limit: int = 5):
+    """Print an FMU's first warnings and errors; the rest go to log.txt only."""
+    counts: dict[str, int] = {}
+
+    def echo(entry):
+        counts[entry.instance] = counts.get(entry.instance, 0) + 1
+        if counts[entry.instance] <= limit:
+            print(f"  FMU: {entry}", file=sys.stderr)
+        elif counts[entry.instance] == limit + 1:
+            print(f"  FMU: {entry.instance}: more messages in {out / 'log.txt'}",
+                  file=sys.stderr)
+    return echo
 
 
 def _systems(args) -> int:

@@ -8,7 +8,6 @@ said.
 """
 from __future__ import annotations
 
-import ctypes
 import shutil
 import zipfile
 from dataclasses import dataclass
@@ -151,7 +150,3 @@ def _required_inputs(path: Path) -> set[str] | None:
         return None
     return {e.get("name") for e in tool.findall("RequiredInputs/Input")}
 
-
-def pointer(array):
-    """ctypes pointer to a float64 numpy array's data (array must stay alive)."""
-    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))

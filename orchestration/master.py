@@ -26,12 +26,12 @@ from __future__ import annotations
 
 import ctypes
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .fmu import FmiCallError, Instance, Log, pointer
+from .fmu import FmiCallError, Instance, Log
 from .results import Results, ResultWriter
 from .ssp import ParameterValue, SystemFile, SystemFileError, read_system
 
@@ -47,61 +47,53 @@ class SimulationError(RuntimeError):
         self.results = results
 
 
-@dataclass
 class _Port:
-    """The inputs or outputs of one type of one instance, with their buffers."""
+    """Inputs or outputs of one type of one instance: value references, buffer, FMI call."""
 
-    type: str
-    names: list[str]
-    vrs: object                      # ctypes array of value references
-    buffer: np.ndarray               # values exchanged with the FMU
-    ptr: object                      # ctypes pointer into buffer
-    index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    def __init__(self, instance: Instance, type_: str, names: list[str], direction: str,
+                 index=()):
+        self.instance, self.type, self.names, self.call = instance, type_, names, \
+            f"fmi2{direction}{type_}"
+        self.n = len(names)
+        self.buffer = np.zeros(self.n, dtype=np.float64 if type_ == "Real" else np.int32)
+        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[n].valueReference
+                                              for n in names))
+        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(_CTYPE[type_]))
+        self.function = getattr(instance, self.call)
+        self.index = np.array(index, dtype=np.intp)   # inputs: where in the value vector
 
-    @classmethod
-    def make(cls, instance: Instance, type_: str, names: list[str], index=()):
-        ctype = _CTYPE[type_]
-        buffer = np.zeros(len(names), dtype=np.float64 if type_ == "Real" else np.int32)
-        vrs = (ctypes.c_uint * len(names))(*(instance.variables[n].valueReference for n in names))
-        return cls(type_, names, vrs, buffer, buffer.ctypes.data_as(ctypes.POINTER(ctype)),
-                   np.array(index, dtype=np.intp))
+    def transfer(self) -> None:
+        status = self.function(self.instance.component, self.vrs, self.n, self.ptr)
+        if status > 1:
+            self.instance.check(status, self.call)
 
 
 class _Node:
-    """One instance with its inputs (gathered from the value vector) and outputs."""
+    """One instance: its outputs' place in the value vector and its connected inputs."""
 
-    def __init__(self, instance: Instance, inputs: dict, outputs: list, offset: int):
+    def __init__(self, instance: Instance, offset: int):
         self.instance = instance
-        self.inputs = [_Port.make(instance, t, [n for n, _ in pairs], [i for _, i in pairs])
-                       for t, pairs in inputs.items() if pairs]
-        self.outputs = []
-        self.slices = []
+        self.inputs: list[_Port] = []
+        self.outputs: list[tuple[_Port, slice]] = []
+        outputs = [v.name for v in sorted(instance.md.modelVariables,
+                                          key=lambda v: v.valueReference)
+                   if v.causality == "output"]
         for type_ in ("Real", "Integer", "Boolean"):
             names = [n for n in outputs if instance.variables[n].type == type_]
             if names:
-                self.outputs.append(_Port.make(instance, type_, names))
-                self.slices.append(slice(offset, offset + len(names)))
+                self.outputs.append((_Port(instance, type_, names, "Get"),
+                                     slice(offset, offset + len(names))))
                 offset += len(names)
         self.end = offset
 
     def set_inputs(self, values: np.ndarray) -> None:
-        c = self.instance
         for port in self.inputs:
-            port.buffer[:] = values[port.index]
-            setter = {"Real": c.fmi2SetReal, "Integer": c.fmi2SetInteger,
-                      "Boolean": c.fmi2SetBoolean}[port.type]
-            status = setter(c.component, port.vrs, len(port.names), port.ptr)
-            if status > 1:
-                c.check(status, f"fmi2Set{port.type}")
+            np.take(values, port.index, out=port.buffer)
+            port.transfer()
 
     def get_outputs(self, values: np.ndarray) -> None:
-        c = self.instance
-        for port, where in zip(self.outputs, self.slices):
-            getter = {"Real": c.fmi2GetReal, "Integer": c.fmi2GetInteger,
-                      "Boolean": c.fmi2GetBoolean}[port.type]
-            status = getter(c.component, port.vrs, len(port.names), port.ptr)
-            if status > 1:
-                c.check(status, f"fmi2Get{port.type}")
+        for port, where in self.outputs:
+            port.transfer()
             values[where] = port.buffer
 
 
@@ -269,24 +261,24 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     nodes = {}
     offset = 0
     columns = ["time"]
-    output_position = {}
-    for name in plan.order:  # outputs first, so that input indices can refer to them
-        inst = instances[name]
-        outputs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
-        nodes[name] = _Node(inst, {}, outputs, offset)
-        for port, where in zip(nodes[name].outputs, nodes[name].slices):
-            for n, i in zip(port.names, range(where.start, where.stop)):
-                output_position[(name, n)] = i
-                columns.append(f"{name}.{n}")
-        offset = nodes[name].end
+    position = {}  # (instance, output) -> index in the value vector
+    for name in plan.order:
+        node = nodes[name] = _Node(instances[name], offset)
+        for port, where in node.outputs:
+            for output, i in zip(port.names, range(where.start, where.stop)):
+                position[(name, output)] = i
+                columns.append(f"{name}.{output}")
+        offset = node.end
     for name, node in nodes.items():
-        inputs = {"Real": [], "Integer": [], "Boolean": []}
-        for (b, input_name), source in plan.sources.items():
-            if b == name:
-                inputs[node.instance.variables[input_name].type].append(
-                    (input_name, output_position[source]))
-        node.inputs = [_Port.make(node.instance, t, [n for n, _ in pairs],
-                                  [i for _, i in pairs]) for t, pairs in inputs.items() if pairs]
+        by_type = {}
+        for (target, input_name), source in plan.sources.items():
+            if target == name:
+                kind = node.instance.variables[input_name].type
+                by_type.setdefault(kind, []).append((input_name, position[source]))
+        for pairs in by_type.values():  # ascending value references: one range per FMU
+            pairs.sort(key=lambda pair: node.instance.variables[pair[0]].valueReference)
+        node.inputs = [_Port(node.instance, kind, [n for n, _ in pairs], "Set",
+                             [i for _, i in pairs]) for kind, pairs in by_type.items()]
 
     values = np.zeros(offset)
     data = np.full((n_steps + 1, offset + 1), np.nan)

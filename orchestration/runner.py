@@ -64,19 +64,18 @@ def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, o
 
 
 def format_summary(summary: dict) -> str:
-    """The headline numbers beside the paper's, angles in degrees."""
+    """The headline numbers beside the paper's, in each metric's display unit."""
     lines = []
     for name, m in summary.get("metrics", {}).items():
-        scale, unit = _display(m["unit"])
+        scale = DISPLAY_SCALE.get((m["unit"], m.get("display_unit")), 1.0)
+        unit = m.get("display_unit") or m["unit"]
         value = f"{m['value'] * scale:.6g} {unit}"
-        paper = f"{m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
-        lines.append(f"  {name:34s} {value:>22s}   {('paper ' + paper) if paper else ''}")
+        paper = f"paper {m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
+        lines.append(f"  {name:34s} {value:>22s}   {paper}")
     for problem in summary.get("diagnostics", []):
         lines.append(f"  FAILED: {problem}")
     return "\n".join(lines)
 
 
-def _display(unit: str):
-    deg = 180 / math.pi
-    return {"rad": (deg, "deg"), "rad/s": (deg, "deg/s"),
-            "rad/s2": (1.0, "rad/s2")}.get(unit, (1.0, unit))
+DISPLAY_SCALE = {("rad", "deg"): 180 / math.pi, ("rad/s", "deg/s"): 180 / math.pi,
+                 ("rad/s2", "deg/s2"): 180 / math.pi}

@@ -7,7 +7,7 @@ import pytest
 
 from agilesat.components.model import ModelError
 from agilesat.components.orbit import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
-                                       quat_from_rows, solve_kepler)
+                                       solve_kepler)
 from agilesat.components.rotations import dcm_from_quat, quat_from_dcm
 
 MU = MU_EARTH
@@ -205,18 +205,6 @@ def test_orbit_frame_axes(orbit, t):
     assert np.linalg.det(C) == pytest.approx(1.0, abs=1e-14)
     assert C[0] @ s["v_I"] > 0                             # x_O roughly along velocity
     assert s["q_OI"][0] >= 0 and np.linalg.norm(s["q_OI"]) == pytest.approx(1.0, abs=1e-15)
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_quat_from_rows_matches_rotations(seed):
-    """The model's float-only quaternion extraction is rotations.quat_from_dcm."""
-    rng = np.random.default_rng(seed)
-    for _ in range(200):
-        q = rng.normal(size=4)
-        if seed == 0:  # near each branch of Shepperd's method
-            q[rng.integers(4)] *= 50
-        C = dcm_from_quat(q / np.linalg.norm(q))
-        assert np.allclose(quat_from_rows(*C), quat_from_dcm(C), rtol=0, atol=1e-15)
 
 
 def rate_from_quaternions(t, dt, **p):

@@ -14,6 +14,7 @@ import numpy as np
 from ...components.cmg import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
 from ...components.orbit import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
 from ...components.pitch_maneuver import PitchProfile
+from ...components.rotations import dcm_from_quat, quat_from_axis_angle, quat_mul
 from . import Scenario
 from .. import plots
 
@@ -86,50 +87,55 @@ def metrics(results, variant=None) -> dict:
     step = float(t[1] - t[0])
     pitch = results["SatelliteDynamics.euler_BO[2]"]
     pitch_rate = results["SatelliteDynamics.euler_rate_BO[2]"]
+    body_rate = results["SatelliteDynamics.w_BO_B[2]"]
     phase = results["PitchManeuverController.phase"]
     tau_cmd = results.vector("PitchManeuverController.tau_cmd")
     delta_dot = results.vector("CmgCluster.delta_dot")
     delivered = delivered_torque(results)
     imaging = phase == 4
-    after = t >= PROFILE.times[3]
-    unsettled = after & (np.abs(pitch_rate) > SETTLED_RATE)
+    unsettled = (t >= PROFILE.times[3]) & (np.abs(body_rate) > SETTLED_RATE)
     H_I = results.vector("SatelliteDynamics.H_I")
     drift = np.abs(H_I - H_I[0]).max() / np.linalg.norm(H_I[0])
-    m = {
-        "imaging_pitch_rate_mean": (float(pitch_rate[imaging].mean()), "rad/s",
+    t_need, h_need = required_momentum(results)
+    m = {  # name: (value, unit, display unit, description)
+        "imaging_pitch_rate_mean": (pitch_rate[imaging].mean(), "rad/s", "deg/s",
                                     "mean pitch rate relative to O over the imaging phase "
                                     "(t3, t4]"),
-        "imaging_pitch_rate_span": (float(np.ptp(pitch_rate[imaging])), "rad/s",
+        "imaging_pitch_rate_span": (np.ptp(pitch_rate[imaging]), "rad/s", "deg/s",
                                     "max − min pitch rate over the imaging phase"),
-        "pitch_at_T": (float(np.interp(PROFILE.duration, t, pitch)), "rad",
+        "pitch_at_T": (np.interp(PROFILE.duration, t, pitch), "rad", "deg",
                        "pitch at the end of the maneuver time T = 100 s (target 0)"),
-        "pitch_final": (float(pitch[-1]), "rad", "pitch at the end of the run"),
-        "settling_time": (float(t[unsettled][-1] + step) if unsettled.any()
-                          else float(PROFILE.times[3]), "s",
-                          "from then on |pitch rate| < 0.01 °/s"),
-        "max_gimbal_rate": (float(np.abs(delta_dot).max()), "rad/s", "max |gimbal rate|"),
-        "max_gimbal_accel": (float(np.abs(np.diff(delta_dot, axis=0)).max() / step), "rad/s2",
-                             "max |gimbal acceleration| (rate differences over a step)"),
-        "feedforward_torque_phase1": (float(tau_cmd[phase == 1, 1].mean()), "N.m",
+        "pitch_final": (pitch[-1], "rad", "deg", "pitch at the end of the run"),
+        "settling_time": (t[unsettled][-1] + step if unsettled.any() else PROFILE.times[3],
+                          "s", "s", "from then on |body pitch rate| < 0.01 °/s"),
+        "max_gimbal_rate": (np.abs(delta_dot).max(), "rad/s", "rad/s", "max |gimbal rate|"),
+        "max_gimbal_accel": (np.abs(np.diff(delta_dot, axis=0)).max() / step, "rad/s2",
+                             "rad/s2", "max |gimbal acceleration| (rate change over a step)"),
+        "feedforward_torque_phase1": (tau_cmd[phase == 1, 1].mean(), "N.m", "N.m",
                                       "commanded pitch torque in phase 1 (I θ̈m)"),
-        "feedforward_torque_phase3": (float(tau_cmd[phase == 3, 1].mean()), "N.m",
+        "feedforward_torque_phase3": (tau_cmd[phase == 3, 1].mean(), "N.m", "N.m",
                                       "commanded pitch torque in phase 3 (−I θ̈m)"),
-        "max_abs_output_torque": (float(np.abs(delivered).max()), "N.m",
+        "max_abs_output_torque": (np.abs(delivered).max(), "N.m", "N.m",
                                   "max |torque delivered by the cluster| (−ḣ − ω × h), any axis"),
         "max_abs_output_torque_phases_1_4": (
-            float(np.abs(delivered[t <= PROFILE.times[3]]).max()), "N.m",
+            np.abs(delivered[t <= PROFILE.times[3]]).max(), "N.m", "N.m",
             "the same over phases 1–4 (feedforward only)"),
-        "min_singularity": (float(results["CmgCluster.singularity"].min()), "1",
+        "min_singularity": (results["CmgCluster.singularity"].min(), "1", "1",
                             "min det(A Aᵀ) of the cluster"),
-        "max_roll_yaw_error": (float(roll_yaw_error(results).max()), "rad",
-                               "max tilt of the pitch axis (swing of q_BO about x and z)"),
-        "momentum_drift": (float(drift), "1",
-                           "max |H_I(t) − H_I(0)| / |H_I(0)| (external torque zero for an "
+        "required_momentum_peak": (np.linalg.norm(h_need), "N.m.s", "N.m.s",
+                                   f"largest cluster momentum the planned maneuver needs "
+                                   f"(at t = {t_need:.1f} s)"),
+        "momentum_capacity_there": (momentum_capacity(h_need), "N.m.s", "N.m.s",
+                                    "the cluster's largest momentum in that direction"),
+        "max_roll_yaw_error": (roll_yaw_error(results).max(), "rad", "deg",
+                               "max tilt of the pitch axis from the orbit's y axis"),
+        "momentum_drift": (drift, "1", "1",
+                           "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an "
                            "isotropic hub)"),
     }
-    summary = {name: {"value": v, "unit": u, "description": d,
+    summary = {name: {"value": float(v), "unit": u, "display_unit": d, "description": text,
                       **({"paper": PAPER[name]} if name in PAPER else {})}
-               for name, (v, u, d) in m.items()}
+               for name, (v, u, d, text) in m.items()}
     summary["imaging_pitch_rate_mean"]["requirement"] = [
         PROFILE.scan_rate - SCAN_RATE_TOLERANCE, PROFILE.scan_rate + SCAN_RATE_TOLERANCE]
     return {"metrics": summary, "diagnostics": diagnose(results, summary)}
@@ -142,17 +148,16 @@ def diagnose(results, summary) -> list[str]:
     commands = results.vector("CmgSteering.delta_dot_cmd")
     over = np.abs(commands).max(axis=1) > 0.6
     if over.any():
-        h = results.vector("CmgCluster.h")
-        k = int(np.argmax(np.linalg.norm(h, axis=1)))
-        direction = h[k] / np.linalg.norm(h[k])
+        t_need, h_need = required_momentum(results)
+        direction = h_need / np.linalg.norm(h_need)
         problems.append(
             f"the CMG cluster could not deliver the commanded torque: gimbal rate commands "
             f"exceeded the 0.6 rad/s limit at {over.sum()} communication points between "
             f"t = {t[over][0]:.2f} s and {t[over][-1]:.2f} s (max "
-            f"{np.abs(commands).max():.2f} rad/s); the cluster momentum reached "
-            f"{np.linalg.norm(h[k]):.1f} N·m·s at t = {t[k]:.1f} s, against a capacity of "
-            f"{momentum_capacity(direction):.1f} N·m·s in that direction; min singularity "
-            f"measure Q = {summary['min_singularity']['value']:.3g}")
+            f"{np.abs(commands).max():.2f} rad/s); the planned maneuver needs a cluster "
+            f"momentum of {np.linalg.norm(h_need):.1f} N·m·s (at t = {t_need:.1f} s) where "
+            f"the cluster holds at most {momentum_capacity(direction):.1f} N·m·s in that "
+            f"direction; min singularity measure Q = {summary['min_singularity']['value']:.3g}")
     low, high = summary["imaging_pitch_rate_mean"]["requirement"]
     rate = summary["imaging_pitch_rate_mean"]["value"]
     if not low <= rate <= high:
@@ -176,6 +181,30 @@ def roll_yaw_error(results) -> np.ndarray:
     return np.arccos(np.clip(cos_angle, -1.0, 1.0))
 
 
+def required_momentum(results) -> tuple[float, np.ndarray]:
+    """When and what the cluster momentum must be to fly the planned maneuver (largest |h|).
+
+    Along the planned attitude q_BI = q_OI ⊗ q_BO,plan and rate w_BI = w_BO,plan +
+    C_BO w_OI_O, the devices must hold h = C_BI H_I − J w_BI, H_I being the (conserved)
+    total momentum.
+    """
+    t = results.time
+    H_I = results.vector("SatelliteDynamics.H_I")
+    q_OI = results.vector("OrbitEnvironment.q_OI")
+    w_OI_O = results.vector("OrbitEnvironment.w_OI_O")
+    needed = []
+    for k, time in enumerate(t):
+        pitch, rate = PROFILE.reference(time)
+        q_BO = quat_from_axis_angle([0.0, 1.0, 0.0], pitch)
+        C_BO = dcm_from_quat(q_BO)
+        C_BI = dcm_from_quat(quat_mul(q_OI[k], q_BO))
+        w_BI = np.array([0.0, rate, 0.0]) + C_BO @ w_OI_O[k]
+        needed.append(C_BI @ H_I[k] - INERTIA * w_BI)
+    needed = np.array(needed)
+    k = int(np.argmax(np.linalg.norm(needed, axis=1)))
+    return float(t[k]), needed[k]
+
+
 def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
     """Largest cluster momentum along a direction: h Σ √(1 − (g_i·d)²)."""
     d = np.asarray(direction) / np.linalg.norm(direction)
@@ -187,7 +216,7 @@ def figures(results, out_dir) -> list:
     t = results.time
     deg = 180 / math.pi
     pitch = results["SatelliteDynamics.euler_BO[2]"] * deg
-    rate = results["SatelliteDynamics.euler_rate_BO[2]"] * deg
+    rate = results["SatelliteDynamics.w_BO_B[2]"] * deg  # Euler rates spike at the lock
     reference = np.array([PROFILE.reference(x) for x in t]) * deg
     delta_dot = results.vector("CmgCluster.delta_dot")
     t3, t4 = PROFILE.times[2], PROFILE.times[3]
@@ -197,7 +226,8 @@ def figures(results, out_dir) -> list:
         plots.lines(out_dir / "fig04_pitch.png", "Fig. 4 pitch angle", t,
                     {"pitch": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
         plots.lines(out_dir / "fig05_pitch_rate.png", "Fig. 5 pitch rate", t,
-                    {"pitch rate": rate, "planned": reference[:, 1]}, "pitch rate [deg/s]"),
+                    {"body pitch rate ω_y (B rel. O)": rate, "planned": reference[:, 1]},
+                    "pitch rate [deg/s]"),
         plots.panels(out_dir / "fig06_imaging_and_settling.png",
                      "Fig. 6 imaging-phase and settling pitch rate",
                      [(t[imaging], {"pitch rate": rate[imaging]}, "imaging [deg/s]"),
