@@ -126,14 +126,14 @@ class SatelliteDynamics(Model):
         w = self._rate(self.q_BI, self.H_I, h0)
         n = max(1, math.ceil(max(map(abs, w)) * dt / MAX_ROTATION_PER_SUBSTEP))
         if n > MAX_SUBSTEPS:
-            raise ModelError(f"t={t}: body rate {max(map(abs, w)):.3g} rad/s would need {n} "
-                             f"sub-steps of {dt} s: the state is unphysical")
+            raise ModelError(f"t={t:.6g} s: body rate {max(map(abs, w)):.3g} rad/s would need "
+                             f"{n} sub-steps of {dt:g} s: the state is unphysical")
         x = (*self.q_BI, *self.H_I)
         sub = dt / n
         for k in range(n):
             x = self._rk4(x, k * sub, sub, h0, hdot, tau, r_I)
         if not all(map(math.isfinite, x)):
-            raise ModelError(f"non-finite state at t={t + dt}")
+            raise ModelError(f"non-finite state at t={t + dt:.6g} s")
         norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
         self.q_BI = (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm)
         self.H_I = x[4:]

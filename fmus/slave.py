@@ -23,6 +23,8 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
+from ..components.model import ModelError
+
 PARAMETER, INPUT, OUTPUT = 0, 1, 2
 _CAUSALITY_CODE = {"parameter": PARAMETER, "input": INPUT, "output": OUTPUT}
 _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
@@ -36,7 +38,7 @@ def _guarded(default):
         def wrapper(self, *args):
             try:
                 return method(self, *args)
-            except _CallRejected as rejected:
+            except (_CallRejected, ModelError) as rejected:
                 self._error(f"{method.__name__}: {rejected}")
             except Exception as exc:  # noqa: BLE001 - the FMI boundary
                 self._error(f"{method.__name__}: {type(exc).__name__}: {exc}\n"

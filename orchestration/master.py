@@ -200,9 +200,11 @@ def check_system(system: SystemFile, instances: dict[str, Instance],
             problems.append(f"{value.origin}: {inst.name}.{value.name} is {var.type}, the "
                             f"value is {value.type}")
     for inst in instances.values():
+        line = system.component(inst.name).line
         for name in sorted(inst.required_inputs or ()):
             if (inst.name, name) not in sources:
-                problems.append(f"{where}: required input {inst.name}.{name} is not connected")
+                problems.append(f"{where}:{line}: component {inst.name}: required input "
+                                f"{inst.name}.{name} is not connected")
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
     order = _dependency_order(instances, sources, "feedthrough", where)

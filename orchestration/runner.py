@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from . import scenarios
-from .master import simulate
+from .master import SimulationError, simulate
 from .results import Results
 
 
@@ -41,8 +41,13 @@ def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, o
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
-    results = simulate(system, step=step, stop=stop, algorithm=algorithm, parameters=overrides,
-                       out_dir=out_dir, echo=echo)
+    try:
+        results = simulate(system, step=step, stop=stop, algorithm=algorithm,
+                           parameters=overrides, out_dir=out_dir, echo=echo)
+    except SimulationError as failure:
+        if out_dir is not None and failure.results is not None:
+            _write_records(failure.results, out_dir)
+        raise
     summary = {
         "scenario": scenario.name if scenario else None,
         "variant": variant,
@@ -55,12 +60,17 @@ def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, o
         summary.update(scenario.metrics(results, variant))
         summary["status"] = "failed" if summary["diagnostics"] else "ok"
     if out_dir is not None:
-        results.to_npz(out_dir / "results.npz")
+        _write_records(results, out_dir)
         (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
-        (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
         if figures and scenario is not None:
             summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
     return results, summary
+
+
+def _write_records(results: Results, out_dir: Path) -> None:
+    """results.npz and log.txt (results.csv is written while the run goes)."""
+    results.to_npz(out_dir / "results.npz")
+    (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
 
 
 def format_summary(summary: dict) -> str:
@@ -69,7 +79,7 @@ def format_summary(summary: dict) -> str:
     for name, m in summary.get("metrics", {}).items():
         scale = DISPLAY_SCALE.get((m["unit"], m.get("display_unit")), 1.0)
         unit = m.get("display_unit") or m["unit"]
-        value = f"{m['value'] * scale:.6g} {unit}"
+        value = "not reached" if m["value"] is None else f"{m['value'] * scale:.6g} {unit}"
         paper = f"paper {m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
         lines.append(f"  {name:34s} {value:>22s}   {paper}")
     for problem in summary.get("diagnostics", []):

@@ -98,22 +98,24 @@ def metrics(results, variant=None) -> dict:
     drift = np.abs(H_I - H_I[0]).max() / np.linalg.norm(H_I[0])
     t_need, h_need = required_momentum(results)
     m = {  # name: (value, unit, display unit, description)
-        "imaging_pitch_rate_mean": (pitch_rate[imaging].mean(), "rad/s", "deg/s",
+        "imaging_pitch_rate_mean": (_stat(np.mean, pitch_rate[imaging]), "rad/s", "deg/s",
                                     "mean pitch rate relative to O over the imaging phase "
                                     "(t3, t4]"),
-        "imaging_pitch_rate_span": (np.ptp(pitch_rate[imaging]), "rad/s", "deg/s",
+        "imaging_pitch_rate_span": (_stat(np.ptp, pitch_rate[imaging]), "rad/s", "deg/s",
                                     "max − min pitch rate over the imaging phase"),
-        "pitch_at_T": (np.interp(PROFILE.duration, t, pitch), "rad", "deg",
+        "pitch_at_T": (np.interp(PROFILE.duration, t, pitch) if t[-1] >= PROFILE.duration
+                       else None, "rad", "deg",
                        "pitch at the end of the maneuver time T = 100 s (target 0)"),
         "pitch_final": (pitch[-1], "rad", "deg", "pitch at the end of the run"),
-        "settling_time": (t[unsettled][-1] + step if unsettled.any() else PROFILE.times[3],
+        "settling_time": (t[unsettled][-1] + step if unsettled.any() else
+                          PROFILE.times[3] if t[-1] >= PROFILE.times[3] else None,
                           "s", "s", "from then on |body pitch rate| < 0.01 °/s"),
         "max_gimbal_rate": (np.abs(delta_dot).max(), "rad/s", "rad/s", "max |gimbal rate|"),
         "max_gimbal_accel": (np.abs(np.diff(delta_dot, axis=0)).max() / step, "rad/s2",
                              "rad/s2", "max |gimbal acceleration| (rate change over a step)"),
-        "feedforward_torque_phase1": (tau_cmd[phase == 1, 1].mean(), "N.m", "N.m",
+        "feedforward_torque_phase1": (_stat(np.mean, tau_cmd[phase == 1, 1]), "N.m", "N.m",
                                       "commanded pitch torque in phase 1 (I θ̈m)"),
-        "feedforward_torque_phase3": (tau_cmd[phase == 3, 1].mean(), "N.m", "N.m",
+        "feedforward_torque_phase3": (_stat(np.mean, tau_cmd[phase == 3, 1]), "N.m", "N.m",
                                       "commanded pitch torque in phase 3 (−I θ̈m)"),
         "max_abs_output_torque": (np.abs(delivered).max(), "N.m", "N.m",
                                   "max |torque delivered by the cluster| (−ḣ − ω × h), any axis"),
@@ -133,12 +135,18 @@ def metrics(results, variant=None) -> dict:
                            "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an "
                            "isotropic hub)"),
     }
-    summary = {name: {"value": float(v), "unit": u, "display_unit": d, "description": text,
+    summary = {name: {"value": None if v is None else float(v), "unit": u,
+                      "display_unit": d, "description": text,
                       **({"paper": PAPER[name]} if name in PAPER else {})}
                for name, (v, u, d, text) in m.items()}
     summary["imaging_pitch_rate_mean"]["requirement"] = [
         PROFILE.scan_rate - SCAN_RATE_TOLERANCE, PROFILE.scan_rate + SCAN_RATE_TOLERANCE]
     return {"metrics": summary, "diagnostics": diagnose(results, summary)}
+
+
+def _stat(function, values):
+    """function(values), or None when the run did not reach that part of the maneuver."""
+    return function(values) if len(values) else None
 
 
 def diagnose(results, summary) -> list[str]:
@@ -160,7 +168,7 @@ def diagnose(results, summary) -> list[str]:
             f"direction; min singularity measure Q = {summary['min_singularity']['value']:.3g}")
     low, high = summary["imaging_pitch_rate_mean"]["requirement"]
     rate = summary["imaging_pitch_rate_mean"]["value"]
-    if not low <= rate <= high:
+    if t[-1] >= PROFILE.times[3] and not low <= rate <= high:
         problems.append(f"imaging-phase pitch rate {rate / DEG:.4f} °/s is outside the "
                         f"required {PROFILE.scan_rate / DEG:.2f} ± 0.02 °/s")
     return problems
