@@ -40,8 +40,9 @@ def test_pitch_goes_from_120_to_0_degrees(nominal):
     assert value(summary, "max_roll_yaw_error") < 0.1 * DEG     # pitch axis held on y_O
     roll_yaw = np.abs(results.vector("SatelliteDynamics.euler_BO")[:, [0, 2]])
     assert roll_yaw.max() < 135 * DEG         # no 180° flip of the Euler branch anywhere
-    away = np.abs(pitch - 90 * DEG) > 10 * DEG    # 1-2-3 roll and yaw swing near the lock
-    assert roll_yaw[away].max() < 0.1 * DEG
+    # near the lock 1-2-3 roll and yaw amplify the tilt by 1/cos θ; with |cos θ| ≥ ½:
+    away = np.abs(pitch - 90 * DEG) > 30 * DEG
+    assert roll_yaw[away].max() < 2 * value(summary, "max_roll_yaw_error")
 
 
 def test_imaging_phase_rate_is_within_the_requirement(nominal):
