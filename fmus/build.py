@@ -171,7 +171,29 @@ def interface_rows(model_class):
         shape = f"[{','.join(map(str, v.shape))}]" if v.shape else ""
         start = "" if v.causality == "output" else _short(v.start)
         unit = v.unit if v.type == "Real" else ""
-        yield f"{v.name}{shape}", v.causality, v.type, unit, start, v.description
+        notes = []
+        if v.causality == "input":
+            notes.append("required" if v.required else "optional")
+        if v.depends:
+            notes.append("feedthrough from " + ", ".join(v.depends))
+        description = v.description + (f" ({'; '.join(notes)})" if notes else "")
+        yield f"{v.name}{shape}", v.causality, v.type, unit, start, description
+
+
+def interfaces_markdown() -> str:
+    """fmus/INTERFACES.md: every FMU's variables, from the variable tables."""
+    parts = ["# FMU interfaces\n\nGenerated from the variable tables by `agilesat generate`; "
+             "do not edit.  Units are SI (angles in rad); structured names are 1-based "
+             "(`w_BI_B[1]`, `inertia[2,3]`).\n"]
+    for name, module in FMUS.items():
+        model_class = getattr(importlib.import_module(f"{__package__}.{module}"),
+                              name).model_class
+        doc = (model_class.__doc__ or "").strip()
+        parts.append(f"\n## {name}\n\n{doc}\n\n| variable | causality | type | unit | "
+                     "start | description |\n|---|---|---|---|---|---|")
+        for row in interface_rows(model_class):
+            parts.append("| " + " | ".join(str(c).replace("|", "\\|") for c in row) + " |")
+    return "\n".join(parts) + "\n"
 
 
 def _short(value) -> str:

@@ -36,14 +36,15 @@ def main(argv=None) -> int:
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
     run.add_argument("--no-figures", action="store_true")
 
-    systems = commands.add_parser("systems", help="write the scenarios' .ssd files")
-    systems.add_argument("--check", action="store_true",
-                         help="only check that the committed files are up to date")
+    generate = commands.add_parser("generate", help="write the files generated from the "
+                                   "variable tables and scenarios (.ssd, fmus/INTERFACES.md)")
+    generate.add_argument("--check", action="store_true",
+                          help="only check that the committed files are up to date")
 
     args = parser.parse_args(argv)
     try:
         return {"build": _build, "validate": _validate, "run": _run,
-                "systems": _systems}[args.command](args)
+                "generate": _generate}[args.command](args)
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
         return 1
@@ -106,18 +107,21 @@ def _echo(out: Path, limit: int = 5):
     return echo
 
 
-def _systems(args) -> int:
+def _generate(args) -> int:
+    from ..fmus.build import FMUS_DIR, interfaces_markdown
+    files = {scenarios.get(name).ssd: scenarios.get(name).render_ssd
+             for name in scenarios.NAMES}
+    files[FMUS_DIR / "INTERFACES.md"] = lambda: interfaces_markdown().encode()
     stale = []
-    for name in scenarios.NAMES:
-        scenario = scenarios.get(name)
-        text = scenario.render_ssd()
+    for path, render in files.items():
+        content = render()
         if args.check:
-            if not scenario.ssd.exists() or scenario.ssd.read_bytes() != text:
-                stale.append(str(scenario.ssd))
+            if not path.exists() or path.read_bytes() != content:
+                stale.append(str(path))
         else:
-            scenario.ssd.write_bytes(text)
-            print(scenario.ssd)
+            path.write_bytes(content)
+            print(path)
     if stale:
-        print(f"out of date (run `agilesat systems`): {', '.join(stale)}", file=sys.stderr)
+        print(f"out of date (run `agilesat generate`): {', '.join(stale)}", file=sys.stderr)
         return 1
     return 0

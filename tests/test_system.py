@@ -15,8 +15,9 @@ from conftest import agilesat
 SCAN_PITCH = get("scan_pitch").ssd
 
 
-def test_committed_system_files_are_generated_from_the_scenarios():
-    result = agilesat("systems", "--check")
+def test_committed_generated_files_are_up_to_date():
+    """The .ssd files and fmus/INTERFACES.md come from the scenarios and variable tables."""
+    result = agilesat("generate", "--check")
     assert result.returncode == 0, result.stderr
 
 

@@ -2,7 +2,7 @@
 and figures.
 
 A scenario's system is defined here at the level of whole variables and written to SSD
-by ``agilesat systems`` (the ``.ssd`` files are committed; a test keeps them in sync).
+by ``agilesat generate`` (the ``.ssd`` files are committed; a test keeps them in sync).
 Running reads only the ``.ssd`` and the FMUs.  A variant is a set of parameter values
 applied on top of the system's: ``agilesat run scan_pitch:literal_spin``.
 """

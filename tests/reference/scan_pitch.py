@@ -71,7 +71,8 @@ Controller (pitch 120° → 0° in T = 100 s, −0.8 °/s imaging phase)
     t3 = t2 + (θ̇m − θ̇0)/θ̈m,  t4 = t3 + f4 T,  t5 = t4 + θ̇0/θ̈m  (= T)
 
 (10, 30, 36.667, 96.667, 100 s; θ̈m = −0.24 °/s²).  Phase k on [t_{k−1}, t_k) for k = 1..4, phase 5
-for t ≥ t4.  Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
+for t ≥ t4; the comparisons use t_k − 1e-9 s so that the grid points t = 10.0 and 30.0 fall in the
+later phase despite the formula rounding t1, t2 to 10.000000000000004, 30.000000000000004.  Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
 
     n = hypot(q0, q2), c = q0/n, s = q2/n,  θ = 2 atan2(q2, q0),
     e_x = 2 (c q1 − s q3),  e_z = 2 (c q3 + s q1),  w = w_BO_B
@@ -86,6 +87,13 @@ advanced by classical RK4 whose stages use ``h`` from the exact gimbal angles at
 (0, h/2, h/2, h); ``H_I`` is constant (Ḣ_I = 0 is integrated exactly); ``q_BI`` normalised
 after each step.  The only discretisation is then the zero-order hold of the command (first
 order in h) plus the O(h⁴) RK4 error; as h → 0 this converges to the continuous closed loop.
+The largest first-order term is the quantisation of the phase switches t3, t4 (not grid points:
+phase 3 lasts until the first sample ≥ t3, e.g. 36.7 s at h = 0.1 s, an extra 0.033 s of 4 N m).
+Measured: max |pitch(1e-3) − pitch(5e-4)| = 0.0043°, max |Δw_BO_B| = 4.6e-6 rad/s; ≈ 23 µs/step.
+
+Outputs are recorded at t_k before the step: ``tau_cmd`` is the command computed at t_k and held
+over [t_k, t_k+1); ``delta_dot`` is the actual gimbal rate at t_k; ``H_I`` is recomputed from the
+outputs as C_BIᵀ (J w_BI_B + h); ``Q`` is det(A Aᵀ).
 """
 
 from __future__ import annotations
@@ -331,6 +339,7 @@ def pitch_errors(q_bo):
 
 
 def control(phase: int, q_bo, w_bo):
+    """(θ, τ_cmd) for the given phase from q_BO and w_BO_B."""
     theta, ex, ez = pitch_errors(q_bo)
     if phase == 1:
         ty = TAU_FF

@@ -1,0 +1,106 @@
+"""Three-axis quaternion PD attitude law with momentum-device feedforward.
+
+Errors of the body frame B relative to the reference frame R (R given by its attitude
+q_ref = q_RI and angular velocity w_ref = w_RI_R)::
+
+    q_BR = q_ref* ⊗ q_BI                       (Hamilton, scalar first: q_BI = q_RI ⊗ q_BR)
+    q_BR ← −q_BR if its scalar part is negative (the short way round)
+    att_error  = φ n = 2 atan2(|q_v|, q0) q_v / |q_v|       (rotation vector, |φ| ≤ π)
+    rate_error = w_BI_B − C(q_BR) w_ref                     (= w_BR_B)
+    tau_cmd    = −kp ∘ att_error − kd ∘ rate_error + hdot_ff + w_BI_B × h_ff
+
+att_error is the rotation vector (angle times axis) of q_BR, not 2·q_v: the two agree to
+second order, and the rotation vector keeps the restoring torque proportional to the true
+angle up to 180°.  It is continuous everywhere except at exactly 180°, where the shortest
+way flips (no continuous error field exists on the whole rotation group); its magnitude
+never exceeds π.  The last term cancels the torque −hdot_ff − w_BI_B × h_ff that a known
+momentum device (h_ff relative to the body, in B) exerts on the body (DESIGN.md §2).
+Not included: feedforward of the reference's angular acceleration and of the hub's own
+gyroscopic torque w × J w (the law has no inertia parameter).
+
+Default gains: a 150 kg·m² satellite (seed 004) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
+(linearised closed loop J θ̈ + kd θ̇ + kp θ = 0): kp = J ω_n² = 6 N·m/rad,
+kd = 2 ζ ω_n J = 42.4 N·m·s/rad.  A 0.2 N·m wheel then stays linear up to about 1.9°
+of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) ≈ 28 s is
+short against the 300 s pitch envelope of the payload sweep.
+
+Stateless: outputs are a function of the inputs at the communication point.
+"""
+from __future__ import annotations
+
+import math
+
+from .model import Model, ModelError
+from .rotations import IDENTITY_Q, dcm, qmul, rotate
+from .variables import input_, output, parameter
+
+DESIGN_INERTIA = 150.0                 # kg·m² (seed 004 satellite, each axis)
+DESIGN_BANDWIDTH = 0.2                 # rad/s
+DESIGN_DAMPING = 1.0 / math.sqrt(2.0)
+KP = DESIGN_INERTIA * DESIGN_BANDWIDTH ** 2
+KD = 2.0 * DESIGN_DAMPING * DESIGN_BANDWIDTH * DESIGN_INERTIA
+_ATTITUDE = ("q_BI", "q_ref")
+_RATE = ("q_BI", "w_BI_B", "q_ref", "w_ref")
+_ALL = _RATE + ("h_ff", "hdot_ff")
+
+
+class AttitudeController(Model):
+    """Quaternion PD law tracking a reference frame, with device-momentum feedforward."""
+
+    VARIABLES = (
+        parameter("kp", KP, "N.m", "attitude gain per body axis (N.m per rad of att_error)",
+                  shape=(3,)),
+        parameter("kd", KD, "N.m.s", "rate gain per body axis (N.m per rad/s of rate_error)",
+                  shape=(3,)),
+        input_("q_BI", "1", "attitude of B relative to I", IDENTITY_Q, shape=(4,)),
+        input_("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
+               display_unit="deg/s"),
+        input_("q_ref", "1", "attitude of the reference frame R relative to I (identity: "
+               "inertial hold)", IDENTITY_Q, shape=(4,), required=False),
+        input_("w_ref", "rad/s", "angular velocity of R relative to I, in R axes",
+               shape=(3,), required=False, display_unit="deg/s"),
+        input_("h_ff", "N.m.s", "momentum of a known disturbing device relative to the "
+               "body, in B (compensated)", shape=(3,), required=False),
+        input_("hdot_ff", "N.m", "time derivative of h_ff as seen in B", shape=(3,),
+               required=False),
+        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,),
+               depends=_ALL),
+        output("att_error", "rad", "rotation vector of B relative to R (angle <= pi), in B",
+               shape=(3,), depends=_ATTITUDE, display_unit="deg"),
+        output("rate_error", "rad/s", "angular velocity of B relative to R, in B",
+               shape=(3,), depends=_RATE, display_unit="deg/s"),
+    )
+
+    def initialize(self, t0):
+        self.kp = tuple(self.p.kp.tolist())
+        self.kd = tuple(self.p.kd.tolist())
+        self.t = t0
+
+    def step(self, t, dt):
+        self.t = t + dt  # stateless between communication points
+
+    def output(self):
+        u, y = self.u, self.y
+        r0, r1, r2, r3 = u.q_ref.tolist()
+        q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), u.q_BI.tolist())
+        norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
+        if not 0.25 < norm2 < 4.0:
+            raise ModelError(f"t={self.t:.6g} s: q_BI and q_ref must be unit quaternions, got "
+                             f"{u.q_BI.tolist()} and {[r0, r1, r2, r3]}")
+        if q0 < 0.0:
+            q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+        s = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
+        f = 2.0 * math.atan2(s, q0) / s if s > 0.0 else 0.0   # angle / |q_v|, scale-free
+        ex, ey, ez = f * q1, f * q2, f * q3
+        k = 1.0 / norm2
+        wrx, wry, wrz = rotate(dcm((q0, q1, q2, q3)), u.w_ref.tolist())
+        wx, wy, wz = u.w_BI_B.tolist()
+        rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
+        hx, hy, hz = u.h_ff.tolist()
+        dx, dy, dz = u.hdot_ff.tolist()
+        kp, kd = self.kp, self.kd
+        y.tau_cmd[:] = (-kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
+                        -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
+                        -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx))
+        y.att_error[:] = (ex, ey, ez)
+        y.rate_error[:] = (rx, ry, rz)

@@ -1,0 +1,254 @@
+"""Reaction-wheel assembly of one to four wheels (the 0.2 N·m flywheel of seed 004).
+
+Wheel i has the unit spin axis a_i (in B), the spin inertia J_w and the speed Ω_i relative
+to the body; its motor applies the torque m_i to the wheel (and −m_i a_i to the body).
+With viscous and Coulomb bearing friction c_v, c_c::
+
+    h    = Σ J_w Ω_i a_i                                   (relative to the body, in B)
+    J_w Ω̇_i = m_i − c_v Ω_i − c_c sign(Ω_i)
+    hdot = Σ J_w Ω̇_i a_i                                   (as seen in B)
+
+and the assembly exerts −hdot − w_BI_B × h on the body (DESIGN.md §2).  A wheel at rest
+stays at rest while |m_i| ≤ c_c (static friction taken equal to the Coulomb level) and
+breaks away with J_w Ω̇_i = m_i − c_c sign(m_i) otherwise.
+
+Drive (what a wheel drive electronics with closed-loop torque control does, sampled and
+held at the communication points).  The body torque τ_cmd needs
+``hdot_req = −τ_cmd − w_BI_B × h``; it is shared among the active wheels by least squares
+(minimum-norm pseudo-inverse of A = [a_1 … a_n]), J_w Ω̇_i,req = (A⁺ hdot_req)_i, and the
+drive adds the friction it knows about, so the motor torque is::
+
+    m_i = clip(J_w Ω̇_i,req + c_v Ω_i + c_c sign(Ω_i), ±torque_limit)
+
+(at Ω_i = 0: + c_c sign(Ω̇_i,req), the break-away torque).  Within the limits the wheels
+deliver τ_cmd exactly at the communication point; the compensation is ideal (the friction
+parameters are the drive's model too).  A wheel at or beyond ±momentum_limit is not driven
+further out: its requested acceleration away from zero is set to zero, i.e. the drive
+holds its speed.  ``saturated`` is true while a motor torque is clipped or a wheel is held
+at the momentum limit; torque the axes cannot reach (fewer than three independent axes)
+is not delivered and is reported once as a warning.
+
+Integration: over a step the motor torque is held, and between zero crossings of Ω the
+wheel ODE is linear, J_w Ω̇ = b − c_v Ω with b = m − c_c sign(Ω), whose exact solution is::
+
+    Ω(t) = Ω + Ω̇(0) (1 − e^{−k t}) / k,    k = c_v / J_w      (→ Ω + Ω̇(0) t as k → 0)
+
+A wheel decelerating toward zero stops there at t* = −ln(1 − k φ*) / k, φ* = −Ω / Ω̇(0),
+and then either sticks (|m| ≤ c_c, for the rest of the step, without chattering) or
+restarts the other way.  A speed limiter in the drive clamps Ω at the momentum limit
+(J_w |Ω| ≤ max(momentum_limit, J_w |Ω| at the step's start)) if it is reached within
+the step.
+
+Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
+of seed 004: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
+friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
+friction 1e-5 N·m·s/rad, an estimate (6.3 mN·m drag at 6000 rpm, 3 % of the torque).
+Three wheels along x, y, z; the 4th row of ``axis`` zero (no 4th wheel).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .model import Model, ModelError
+from .variables import input_, output, parameter
+
+N_WHEELS = 4
+RPM = 2.0 * math.pi / 60.0
+HR12_TORQUE = 0.2                    # N·m
+HR12_MOMENTUM = 12.0                 # N·m·s (smallest of the 12 / 25 / 50 options)
+HR12_SPEED = 6000.0 * RPM            # rad/s at 12 N·m·s
+HR12_INERTIA = HR12_MOMENTUM / HR12_SPEED
+HR12_COULOMB = 5e-4                  # N·m
+VISCOUS = 1e-5                       # N·m·s/rad (estimate)
+DEFAULT_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0))
+_AXIS_TOLERANCE = 1e-9
+_INPUTS = ("tau_cmd", "w_BI_B")
+
+
+def wheel_step(speed: float, torque: float, dt: float, inertia: float, viscous: float,
+               coulomb: float, limit: float = math.inf) -> float:
+    """Wheel speed after ``dt`` with the motor torque held (exact, see the module notes).
+
+    ``limit`` is the speed the drive's limiter clamps |Ω| to (it is never below the start
+    speed: a wheel already beyond it is not pulled back).
+    """
+    omega, remaining = speed, dt
+    k = viscous / inertia
+    for _ in range(2):  # at most: run down to rest, then one regime from rest
+        if omega == 0.0:
+            if abs(torque) <= coulomb:
+                return 0.0                       # stiction
+            sign = 1.0 if torque > 0.0 else -1.0
+        else:
+            sign = 1.0 if omega > 0.0 else -1.0
+        accel = (torque - sign * coulomb - viscous * omega) / inertia
+        phi = remaining if k == 0.0 else -math.expm1(-k * remaining) / k
+        if omega != 0.0 and accel * sign < 0.0:
+            phi_zero = -omega / accel           # reaches rest if φ* ≤ φ (so k φ* < 1)
+            if phi_zero <= phi:
+                remaining -= phi_zero if k == 0.0 else -math.log1p(-k * phi_zero) / k
+                omega = 0.0
+                continue
+        omega += accel * phi
+        bound = max(limit, abs(speed))
+        if sign * omega > bound:
+            omega = sign * bound
+        return omega
+    return omega
+
+
+class Flywheel(Model):
+    """Reaction-wheel assembly: torque command to wheel motor torques, exact wheel dynamics."""
+
+    VARIABLES = (
+        parameter("axis", DEFAULT_AXES, "1",
+                  "spin axis of each wheel in B (rows, normalised; a zero row = no wheel)",
+                  shape=(N_WHEELS, 3)),
+        parameter("J_wheel", HR12_INERTIA, "kg.m2", "spin-axis inertia of each wheel"),
+        parameter("torque_limit", HR12_TORQUE, "N.m",
+                  "motor torque limit of each wheel (0: motors off, wheels coast)"),
+        parameter("momentum_limit", HR12_MOMENTUM, "N.m.s",
+                  "momentum limit J_wheel |speed| of each wheel (not driven beyond)"),
+        parameter("viscous_friction", VISCOUS, "N.m.s",
+                  "viscous bearing friction coefficient c_v (N.m per rad/s)"),
+        parameter("coulomb_friction", HR12_COULOMB, "N.m",
+                  "Coulomb (and static) bearing friction torque c_c"),
+        parameter("speed0", 0.0, "rad/s", "initial wheel speeds relative to the body",
+                  shape=(N_WHEELS,)),
+        input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
+        input_("w_BI_B", "rad/s", "body angular velocity relative to I, in B", shape=(3,),
+               display_unit="deg/s"),
+        output("h", "N.m.s", "wheel angular momentum relative to the body, in B", shape=(3,)),
+        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,),
+               depends=_INPUTS),
+        output("speed", "rad/s", "wheel speeds relative to the body (0 for no wheel)",
+               shape=(N_WHEELS,)),
+        output("motor_torque", "N.m", "motor torque on each wheel (held over the step)",
+               shape=(N_WHEELS,), depends=_INPUTS),
+        output("saturated", "1", "a motor torque is clipped or a wheel is held at the "
+               "momentum limit", type="Boolean", depends=_INPUTS),
+    )
+
+    def initialize(self, t0):
+        p = self.p
+        if not p.J_wheel > 0:
+            raise ModelError(f"J_wheel must be positive, got {p.J_wheel}")
+        if not p.momentum_limit > 0:
+            raise ModelError(f"momentum_limit must be positive, got {p.momentum_limit}")
+        if not (p.torque_limit >= 0 and p.viscous_friction >= 0 and p.coulomb_friction >= 0):
+            raise ModelError("torque_limit, viscous_friction and coulomb_friction must not be "
+                             f"negative, got {p.torque_limit}, {p.viscous_friction}, "
+                             f"{p.coulomb_friction}")
+        axes = np.array(p.axis, dtype=float)
+        norms = np.linalg.norm(axes, axis=1)
+        self.wheels = [i for i in range(N_WHEELS) if norms[i] > _AXIS_TOLERANCE]
+        if not self.wheels:
+            raise ModelError("no wheel: every row of axis is zero")
+        A = (axes[self.wheels] / norms[self.wheels, None]).T           # 3 × n
+        self.axes = [tuple(a) for a in A.T.tolist()]
+        self.distribution = [tuple(row) for row in np.linalg.pinv(A, rcond=1e-9).tolist()]
+        rank = np.linalg.matrix_rank(A, tol=1e-9)
+        if rank < 3:
+            self.warnings.append(f"the wheel axes span only {rank} dimension(s): torque "
+                                 "outside their span is not delivered")
+        for i in range(N_WHEELS):
+            if i not in self.wheels and p.speed0[i] != 0.0:
+                self.warnings.append(f"speed0[{i + 1}] ignored: wheel {i + 1} has no axis")
+        self.inertia = p.J_wheel
+        self.viscous, self.coulomb = p.viscous_friction, p.coulomb_friction
+        self.torque_limit = p.torque_limit
+        self.speed_limit = p.momentum_limit / p.J_wheel
+        self.omega = [float(p.speed0[i]) for i in self.wheels]
+        self.limited = frozenset()
+        self.t = t0
+
+    def step(self, t, dt):
+        torques, _, limited, held = self._drive()
+        new = limited - self.limited
+        if new:
+            self.warnings.append(f"t={t:.3f} s: " + "; ".join(
+                f"wheel {self.wheels[i] + 1} {what}" for i, what in sorted(new)) +
+                " (the commanded torque is not delivered)")
+        self.limited = limited
+        J, cv, cc, limit = self.inertia, self.viscous, self.coulomb, self.speed_limit
+        self.omega = [w if k in held else wheel_step(w, m, dt, J, cv, cc, limit)
+                      for k, (w, m) in enumerate(zip(self.omega, torques))]
+        self.t = t + dt
+
+    def output(self):
+        torques, accel_torques, limited, _ = self._drive()
+        J, y = self.inertia, self.y
+        hx = hy = hz = dx = dy = dz = 0.0
+        for (ax, ay, az), w, n in zip(self.axes, self.omega, accel_torques):
+            hx += ax * w
+            hy += ay * w
+            hz += az * w
+            dx += ax * n
+            dy += ay * n
+            dz += az * n
+        speed, motor = [0.0] * N_WHEELS, [0.0] * N_WHEELS
+        for i, w, m in zip(self.wheels, self.omega, torques):
+            speed[i], motor[i] = w, m
+        y.h[:] = (J * hx, J * hy, J * hz)
+        y.hdot[:] = (dx, dy, dz)
+        y.speed[:] = speed
+        y.motor_torque[:] = motor
+        y.saturated = bool(limited)
+
+    # -- internals -----------------------------------------------------------------
+    def _drive(self):
+        """(motor torques m_i, J Ω̇_i at the communication point, active limits, held wheels).
+
+        A held wheel (at the momentum limit, friction compensated within the torque limit)
+        keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
+        limit does not toggle from one step to the next.
+        """
+        u = self.u
+        tx, ty, tz = u.tau_cmd.tolist()
+        wx, wy, wz = u.w_BI_B.tolist()
+        J, cv, cc = self.inertia, self.viscous, self.coulomb
+        tau_max, speed_max = self.torque_limit, self.speed_limit
+        hx = hy = hz = 0.0
+        for (ax, ay, az), w in zip(self.axes, self.omega):
+            hx += ax * w
+            hy += ay * w
+            hz += az * w
+        hx, hy, hz = J * hx, J * hy, J * hz
+        rx = -tx - (wy * hz - wz * hy)      # hdot_req = −τ_cmd − w × h
+        ry = -ty - (wz * hx - wx * hz)
+        rz = -tz - (wx * hy - wy * hx)
+        torques, net, limited, held = [], [], set(), set()
+        for k, ((px, py, pz), w) in enumerate(zip(self.distribution, self.omega)):
+            n = px * rx + py * ry + pz * rz     # wanted J Ω̇
+            if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
+                n = 0.0
+                limited.add((k, "held at the momentum limit"))
+                held.add(k)
+            if w > 0.0:
+                m = n + cv * w + cc
+            elif w < 0.0:
+                m = n + cv * w - cc
+            else:
+                m = n + cc if n > 0.0 else n - cc if n < 0.0 else 0.0
+            if m > tau_max:
+                m = tau_max
+                limited.add((k, "motor torque at the limit"))
+                held.discard(k)
+            elif m < -tau_max:
+                m = -tau_max
+                limited.add((k, "motor torque at the limit"))
+                held.discard(k)
+            torques.append(m)
+            if k in held:
+                net.append(0.0)
+            elif w > 0.0:
+                net.append(m - cv * w - cc)
+            elif w < 0.0:
+                net.append(m - cv * w + cc)
+            elif abs(m) <= cc:
+                net.append(0.0)
+            else:
+                net.append(m - cc if m > 0.0 else m + cc)
+        return torques, net, frozenset(limited), held

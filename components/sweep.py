@@ -1,0 +1,154 @@
+"""Sweep planner: the symmetric two-payload sweep of seed 004 (Chang et al. 2015, §1.2).
+
+Each axis (roll φ, pitch θ) of payload 1 sweeps between +A and −A at the constant rate r
+(the imaging rate) and reverses at each end in the ``turnaround_time`` τ with constant
+acceleration (the paper's §1.2 (3): "reverses with uniform acceleration").  The rate
+ramps linearly from +r to −r over τ, centred on the turning point, so the turning angle is
+exactly ±A and the period is::
+
+    P = 4A/r + τ                 (τ = 0: the paper's triangle wave, P = 4A/r)
+
+Payload 1 starts at rest at the upper turning point (+A_roll, +A_pitch) and moves toward
+negative roll and pitch (§1.2 (1)–(2)); that is, t = 0 is the middle of a reversal.  With
+s = t mod P, the first half period (0 ≤ s < P/2, descending from +A) is::
+
+    0 ≤ s < τ/2:             angle = A − r s²/τ,           rate = −2r s/τ,   accel = −2r/τ
+    τ/2 ≤ s < P/2 − τ/2:     angle = A + rτ/4 − r s,       rate = −r,        accel = 0
+    P/2 − τ/2 ≤ s < P/2:     angle = −A + r w²/τ,          rate = −2r w/τ,   accel = +2r/τ
+                             (w = P/2 − s)
+
+and the second half mirrors it: f(s) = −f(s − P/2).  Angle, rate and acceleration are
+exact functions of t.  During a reversal the angle moves by rτ/4 beyond the constant-rate
+stretch, so the constant-rate (imaging) part of a stroke is 2A − rτ/2 and τ ≤ 4A/r; at
+τ = 4A/r the whole motion is uniformly accelerated (rate a triangle wave of period 8A/r).
+
+Paper's values (body text and stated periods; the English abstract swaps the two rates):
+roll ±15° at 6 °/s (period 10 s), pitch ±45° at 0.6 °/s (period 300 s).
+
+Default τ = 1 s (the paper gives no number).  It keeps the paper's periods within 10 %
+(roll 11 s, pitch 301 s), keeps 90 % of each roll stroke (27° of 30°) at the imaging rate,
+and asks the roll drive for 2r/τ = 12 °/s², i.e. Jx φ̈ ≈ 45.5 × 0.21 ≈ 9.5 N·m of motor
+torque on a 45.5 kg·m² payload, which a gimbal torque motor of that size delivers.  The
+price is on the satellite: every roll reversal swings the pair's yaw momentum by about
+4 |Jz − Jx| r sinθ cosθ cos A ≈ 1.8 N·m·s (at θ = ±45°), i.e. a yaw torque ≈ 1.8 N·m·s / τ
+(see :mod:`.payload`); a longer τ lowers it in proportion but shortens the imaging stretch.
+
+``symmetric`` true: payload 2 = −payload 1 (angles and rates; §1.2, "synchronous and
+opposite").  False: payload 2 moves exactly as payload 1 (the non-compensating reference
+case, in which nothing cancels).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .model import Model, ModelError
+from .variables import output, parameter
+
+DEG = math.pi / 180.0
+DEFAULT_TURNAROUND = 1.0  # s; see the module docstring
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """The sweep of one axis: (angle, rate, acceleration) as exact functions of time."""
+
+    amplitude: float
+    rate: float
+    turnaround: float
+    name: str = "axis"
+
+    def __post_init__(self):
+        A, r, tau, name = self.amplitude, self.rate, self.turnaround, self.name
+        if not (math.isfinite(A) and A >= 0):
+            raise ModelError(f"{name}_amplitude must be finite and >= 0, got {A}")
+        if not (math.isfinite(tau) and tau >= 0):
+            raise ModelError(f"turnaround_time must be finite and >= 0, got {tau} s")
+        if A == 0:  # axis parked at zero
+            object.__setattr__(self, "period", math.inf)
+            return
+        if not (math.isfinite(r) and r > 0):
+            raise ModelError(f"{name}_rate must be finite and > 0, got {r} rad/s")
+        stroke_time = 4 * A / r
+        if tau > stroke_time * (1 + 1e-12):
+            raise ModelError(
+                f"turnaround_time {tau:g} s is too long for the {name} sweep: the reversal "
+                f"ramp (rate +r to -r) must fit in the stroke, turnaround_time <= "
+                f"4 * {name}_amplitude / {name}_rate = {stroke_time:g} s")
+        tau = min(tau, stroke_time)  # absorb rounding at the limit
+        object.__setattr__(self, "turnaround", tau)
+        object.__setattr__(self, "period", stroke_time + tau)
+
+    def __call__(self, t: float) -> tuple[float, float, float]:
+        """(angle, rate, acceleration) at time t (t = 0: at +A, starting toward −A)."""
+        A, r, tau = self.amplitude, self.rate, self.turnaround
+        if A == 0:
+            return 0.0, 0.0, 0.0
+        half = 0.5 * self.period
+        s = t % self.period
+        sign = 1.0
+        if s >= half:
+            s -= half
+            sign = -1.0
+        ramp = 0.5 * tau
+        if s < ramp:                        # leaving the upper turning point
+            return (sign * (A - r * s * s / tau), sign * (-2.0 * r * s / tau),
+                    sign * (-2.0 * r / tau))
+        w = half - s
+        if w < ramp:                        # arriving at the lower turning point
+            return (sign * (-A + r * w * w / tau), sign * (-2.0 * r * w / tau),
+                    sign * (2.0 * r / tau))
+        return sign * (A + 0.25 * r * tau - r * s), -sign * r, 0.0
+
+
+class SweepPlanner(Model):
+    """Roll/pitch sweep commands of two payloads (seed 004 §1.2, Figs 3–4)."""
+
+    VARIABLES = (
+        parameter("roll_amplitude", 15 * DEG, "rad", "roll sweep amplitude A (roll in +-A)",
+                  display_unit="deg"),
+        parameter("roll_rate", 6 * DEG, "rad/s", "constant roll rate between reversals",
+                  display_unit="deg/s"),
+        parameter("pitch_amplitude", 45 * DEG, "rad", "pitch sweep amplitude (pitch in +-A)",
+                  display_unit="deg"),
+        parameter("pitch_rate", 0.6 * DEG, "rad/s", "constant pitch rate between reversals",
+                  display_unit="deg/s"),
+        parameter("turnaround_time", DEFAULT_TURNAROUND, "s",
+                  "duration of each rate reversal (+r to -r at constant acceleration, "
+                  "centred on the turning point); 0 = triangle wave"),
+        parameter("symmetric", True, "1",
+                  "true: payload 2 = -payload 1; false: payload 2 = payload 1",
+                  type="Boolean"),
+        output("roll_cmd", "rad", "commanded roll of payloads 1 and 2", shape=(2,),
+               display_unit="deg"),
+        output("pitch_cmd", "rad", "commanded pitch of payloads 1 and 2", shape=(2,),
+               display_unit="deg"),
+        output("roll_rate_cmd", "rad/s", "commanded roll rate of payloads 1 and 2",
+               shape=(2,), display_unit="deg/s"),
+        output("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
+               shape=(2,), display_unit="deg/s"),
+    )
+
+    def initialize(self, t0):
+        p = self.p
+        self.roll = SweepAxis(p.roll_amplitude, p.roll_rate, p.turnaround_time, "roll")
+        self.pitch = SweepAxis(p.pitch_amplitude, p.pitch_rate, p.turnaround_time, "pitch")
+        self.sign2 = -1.0 if p.symmetric else 1.0
+        outputs = self.layout.range["output"]
+        self._outputs = slice(outputs.start, outputs.stop)
+        self.t = t0
+
+    def step(self, t, dt):
+        self.t = t + dt  # the commands are functions of time only
+
+    def output(self):
+        roll, roll_rate, _ = self.roll(self.t)
+        pitch, pitch_rate, _ = self.pitch(self.t)
+        k = self.sign2
+        # the outputs are contiguous in table order: one write instead of four
+        self.values[self._outputs] = (roll, k * roll, pitch, k * pitch,
+                                      roll_rate, k * roll_rate, pitch_rate, k * pitch_rate)
+
+    def accelerations(self, t: float) -> tuple[float, float]:
+        """Commanded (roll, pitch) accelerations of payload 1 at t (not an FMU output)."""
+        return self.roll(t)[2], self.pitch(t)[2]
