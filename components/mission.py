@@ -66,8 +66,9 @@ default; ``look_angle_kind="incidence"`` reads it as the incidence angle at the 
 
 - ``"sphere"`` (default of :func:`slant_range`): Earth a sphere of radius R_e = WGS-84 a,
   satellite at r = R_e + h: Rc = r cos θ − √(R_e² − r² sin² θ);
-- ``"ellipsoid"`` (default of :func:`overlap_ratio`, the paper's target): the look ray, θ off the geocentric nadir in the plane of nadir and
-  orbit normal (broadside, right- or left-looking), intersected with the WGS-84
+- ``"ellipsoid"`` (default of :func:`overlap_ratio`, the paper's target): the look ray,
+  θ off the geocentric nadir in the plane of nadir and orbit normal (broadside, right-
+  or left-looking), intersected with the WGS-84
   ellipsoid, the satellite on its circular orbit r = R_e + h placed so that the ray
   lands at the target's geodetic latitude (for the paper's 33.16° N the ground is
   6.4 km below R_e and Rc grows by 7.6 km, to 672.3 km);
@@ -102,14 +103,34 @@ default).  For a sun-synchronous orbit the node turns with the mean Sun, and the
 ground-track shift per nodal revolution is 2π T/86400 s (``earth_period=SOLAR_DAY``);
 at 567 km T_e/T = 14.96 (sidereal) or 15.00 (solar), P = 15 either way.  Eqs 17–19 count
 planes by ground-track shifts: P planes whose RAAN are 2π/P apart put a ground track
-every |Δφ| in longitude, which closes the coverage only if the strip ±α seen by a plane
-is at least as wide as the track spacing; :func:`walker_coverage` checks this by
-simulation.  Roundings: S and P by ``ceil`` (after forgiving a relative 1e-9 so that an
+every |Δφ| in longitude, which closes the coverage only if the strip a plane watches
+without a break is as wide as the track spacing.  That strip is narrower than ±α: at
+cross-track distance d the visible along-track half-arc is acos(cos α / cos d), which
+must stay ≥ π/S.  :func:`walker_coverage` checks the whole argument by simulation.
+Roundings: S and P by ``ceil`` (after forgiving a relative 1e-9 so that an
 exact integer is not pushed up by floating-point noise).
 
 :func:`visibility_time` is the independent check of eq 15: it finds numerically the time
 an overflown target stays within the angle limit on a spherical Earth, with the Earth's
 rotation ignored (equals eq 15 to solver precision) or included (the paper ignores it).
+
+Against the paper's numbers (tests/test_mission.py holds the full table of readings)
+-----------------------------------------------------------------------------------
+- Overlap, broadside frame, look angle 30°, V = inertial orbital speed: 56.7 % at 5 Hz
+  and 91.34 % at 25 Hz with Rc to the WGS-84 ellipsoid at 33.16° N (56.2 %, 91.24 % on the
+  sphere of R_e; the Earth's rotation, which the paper neglects, lowers both by ≈ 0.45
+  and 0.09 point).  The paper's 57 % follows; its 91.4 % does not: its two numbers imply
+  1 − α = 2.15 T_f /s, the physics gives 2.165 /s (ellipsoid) to 2.21 /s.  Only readings
+  without a physical basis give 91.4 % (30° read as incidence with V = √(V_s V_g): 56.8 %,
+  91.36 %; or frames centred 10 s off broadside: 57.0 %, 91.40 %).
+- Walker: T = 5760 s = 1.60 h and P = 15 follow.  S = 12 (N = 180) follows only if the
+  65° is the off-nadir look angle at the satellite (α = 15.71°, incidence at the ground
+  80.7°; any look limit in [64.59°, 65.33°] gives S = 12).  With β the incidence angle,
+  as eq 14 and the words "最大入射角" say, α = 8.66°, S = 21, N = 315.  Simulated (two
+  days, 5-s steps): 12 × 15 covers the target without a break under the look reading at
+  every phasing F, while under the incidence reading neither 12 × 15 nor the formulas'
+  own 21 × 15 does (≤ 85 % of the time, gaps of 8.5–17.5 min).  With the Earth's rotation
+  T_v is 1.0 % shorter; S is unchanged under both readings.
 """
 from __future__ import annotations
 

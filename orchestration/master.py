@@ -2,9 +2,8 @@
 
 Run (:func:`simulate`):
 
-1. Load every FMU and check the system against the model descriptions (:func:`check_system`):
-   unknown component or variable, causality, type and unit mismatch, an input driven twice,
-   a required input left open, a parameter that is not one, an algebraic loop.
+1. Load every FMU and check the system against the model descriptions
+   (:func:`validation.check_system`), which also gives the dependency orders.
 2. Instantiate, set up the experiment, set the parameters, enter initialisation mode;
    propagate the connected inputs in dependency order (FMI 2.0 ``InitialUnknowns``), then
    set every input once more and exit initialisation mode.
@@ -17,23 +16,19 @@ Run (:func:`simulate`):
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given).
-
-The dependency order is a topological sort of "B needs A": an output of A feeds an input
-of B on which some output of B depends directly (``ModelStructure``); a cycle is an
-algebraic loop and an error.
 """
 from __future__ import annotations
 
 import ctypes
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .fmu import FmiCallError, Instance, Log
 from .results import Results, ResultWriter
-from .ssp import ParameterValue, SystemFile, SystemFileError, read_system
+from .ssp import SystemFile, read_system
+from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
 _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
@@ -127,7 +122,7 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
     try:
         for ref in system.components:
             instances[ref.name] = Instance(ref.name, ref.source, log)
-        bindings = system.parameters + [_override(system, instances, k, v)
+        bindings = system.parameters + [override(instances, k, v)
                                         for k, v in (parameters or {}).items()]
         plan = check_system(system, instances, bindings)
         return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
@@ -135,127 +130,6 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
     finally:
         for instance in instances.values():
             instance.free()
-
-
-@dataclass
-class _Plan:
-    order: list[str]          # step order (dependency order)
-    init_order: list[str]     # initialisation order
-    sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
-
-
-def check_system(system: SystemFile, instances: dict[str, Instance],
-                 bindings: list[ParameterValue]) -> _Plan:
-    """Check connections and parameters against the FMUs; return the dependency orders."""
-    problems = []
-    where = str(system.path)
-    sources = {}
-    for c in system.connections:
-        at = f"{where}:{c.line}: connection {c}"
-        a, b = instances.get(c.start_element), instances.get(c.end_element)
-        for element, inst in ((c.start_element, a), (c.end_element, b)):
-            if inst is None:
-                problems.append(f"{at}: unknown component '{element}' (components: "
-                                f"{', '.join(instances)})")
-        if a is None or b is None:
-            continue
-        va, vb = a.variables.get(c.start_connector), b.variables.get(c.end_connector)
-        if va is None:
-            problems.append(f"{at}: {a.name} ({a.path.name}) has no variable "
-                            f"'{c.start_connector}'")
-        if vb is None:
-            problems.append(f"{at}: {b.name} ({b.path.name}) has no variable "
-                            f"'{c.end_connector}'")
-        if va is None or vb is None:
-            continue
-        if va.causality != "output":
-            problems.append(f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an "
-                            "output")
-        if vb.causality != "input":
-            problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an "
-                            "input")
-        if va.type != vb.type:
-            problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
-        elif va.type == "Real" and (va.unit or "") != (vb.unit or ""):
-            problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
-        key = (b.name, vb.name)
-        if key in sources:
-            problems.append(f"{at}: input {b.name}.{vb.name} is already driven by "
-                            f"{'.'.join(sources[key])}")
-        sources[key] = (a.name, va.name)
-    for value in bindings:
-        inst = instances.get(value.component)
-        if inst is None:
-            problems.append(f"{value.origin}: parameter for unknown component "
-                            f"'{value.component}'")
-            continue
-        var = inst.variables.get(value.name)
-        if var is None:
-            problems.append(f"{value.origin}: {inst.name} ({inst.path.name}) has no variable "
-                            f"'{value.name}'")
-        elif var.causality not in ("parameter", "input") or var.variability == "constant":
-            problems.append(f"{value.origin}: {inst.name}.{value.name} is a {var.causality}, "
-                            "expected a parameter")
-        elif var.type != value.type:
-            problems.append(f"{value.origin}: {inst.name}.{value.name} is {var.type}, the "
-                            f"value is {value.type}")
-    for inst in instances.values():
-        line = system.component(inst.name).line
-        for name in sorted(inst.required_inputs or ()):
-            if (inst.name, name) not in sources:
-                problems.append(f"{where}:{line}: component {inst.name}: required input "
-                                f"{inst.name}.{name} is not connected")
-    if problems:
-        raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    order = _dependency_order(instances, sources, "feedthrough", where)
-    init_order = _dependency_order(instances, sources, "initial_feedthrough", where)
-    return _Plan(order, init_order, sources)
-
-
-def _dependency_order(instances, sources, kind, where) -> list[str]:
-    """Topological order of "B needs A now" (stable in the system's component order)."""
-    needs = {name: set() for name in instances}
-    for (b, input_name), (a, _) in sources.items():
-        dependencies = getattr(instances[b], kind)
-        if any(deps is None or input_name in deps for deps in dependencies.values()):
-            needs[b].add(a)
-    order, done, visiting = [], set(), []
-
-    def visit(name):
-        if name in done:
-            return
-        if name in visiting:
-            cycle = visiting[visiting.index(name):] + [name]
-            raise SystemFileError(f"{where}: algebraic loop ({kind}): {' -> '.join(cycle)}: "
-                                  "each of these FMUs has an output that depends directly on "
-                                  "an input driven by the previous one")
-        visiting.append(name)
-        for other in sorted(needs[name], key=list(instances).index):
-            visit(other)
-        visiting.pop()
-        done.add(name)
-        order.append(name)
-
-    for name in instances:
-        visit(name)
-    return order
-
-
-def _override(system, instances, key: str, value) -> ParameterValue:
-    name, _, variable = key.partition(".")
-    if name not in instances or not variable:
-        raise SystemFileError(f"--set {key}: expected Instance.variable with an instance of "
-                              f"{', '.join(instances)}")
-    var = instances[name].variables.get(variable)
-    kind = var.type if var is not None else "Real"
-    if kind == "Boolean" and isinstance(value, str):
-        value = value.lower() in ("1", "true", "yes")
-    elif kind in ("Real", "Integer"):
-        try:
-            value = float(value) if kind == "Real" else int(value)
-        except ValueError:
-            raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
-    return ParameterValue(name, variable, kind, value, f"--set {key}")
 
 
 def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,

@@ -30,7 +30,8 @@ def yaw_closed_form(phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     sf, cf, s, c = math.sin(phi), math.cos(phi), math.sin(theta), math.cos(theta)
     h_z = 2 * (JY * theta_dot * sf + (JZ - JX) * phi_dot * s * c * cf)
     hdot_z = 2 * (JY * (theta_ddot * sf + phi_dot * theta_dot * cf)
-                  + (JZ - JX) * (phi_ddot * s * c * cf + phi_dot * theta_dot * math.cos(2 * theta) * cf
+                  + (JZ - JX) * (phi_ddot * s * c * cf
+                                 + phi_dot * theta_dot * math.cos(2 * theta) * cf
                                  - phi_dot ** 2 * s * c * sf))
     return h_z, hdot_z
 
@@ -403,7 +404,7 @@ def test_a_zero_amplitude_parks_the_axis():
 
 
 @pytest.mark.parametrize("parameters, message", [
-    ({"turnaround_time": 10.5}, r"turnaround_time 10.5 s is too long for the roll sweep.*<= .*10 s"),
+    ({"turnaround_time": 10.5}, r"turnaround_time 10.5 s is too long for the roll sweep.*= 10 s"),
     ({"turnaround_time": -1.0}, "turnaround_time must be finite and >= 0"),
     ({"roll_rate": 0.0}, "roll_rate must be finite and > 0"),
     ({"pitch_amplitude": -0.1}, "pitch_amplitude must be finite and >= 0"),
