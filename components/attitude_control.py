@@ -48,9 +48,9 @@ class AttitudeController(Model):
     """Quaternion PD law tracking a reference frame, with device-momentum feedforward."""
 
     VARIABLES = (
-        parameter("kp", KP, "N.m", "attitude gain per body axis (N.m per rad of att_error)",
+        parameter("kp", KP, "N.m/rad", "attitude gain per body axis (per rad of att_error)",
                   shape=(3,)),
-        parameter("kd", KD, "N.m.s", "rate gain per body axis (N.m per rad/s of rate_error)",
+        parameter("kd", KD, "N.m.s/rad", "rate gain per body axis (per rad/s of rate_error)",
                   shape=(3,)),
         input_("q_BI", "1", "attitude of B relative to I", IDENTITY_Q, shape=(4,)),
         input_("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),

@@ -7,7 +7,7 @@ Layout of an FMU::
     binaries/linux64/pythonfmu-export.so pythonfmu's binary, which the shim forwards to
     resources/slavemodule.txt            -> <Name>_<hash>
     resources/<Name>_<hash>.py           pythonfmu entry point: imports the slave class
-    resources/agilesat_<hash>/           our code: components/ and the slave wrapper
+    resources/agilesat_<hash>/           our code: the wrapper and the modules it imports
     resources/pythonfmu/                 pythonfmu's Python package (as pythonfmu packs it)
     documentation/index.html             the variable table
 
@@ -19,6 +19,7 @@ archive is deterministic (sorted entries, fixed timestamps): same sources, same 
 """
 from __future__ import annotations
 
+import ast
 import hashlib
 import importlib
 import importlib.util
@@ -36,7 +37,6 @@ from . import FMUS
 from .model_description import model_description
 
 FMUS_DIR = Path(__file__).resolve().parent
-COMPONENTS_DIR = FMUS_DIR.parent / "components"
 BUILD_DIR = FMUS_DIR / "build"
 SHIM_SOURCES = (FMUS_DIR / "shim" / "agilesat_fmi2.c", FMUS_DIR / "shim" / "fmi2_abi.h")
 PLATFORM = "linux64"
@@ -118,10 +118,21 @@ def is_current(path: Path, name: str, digest: str | None = None) -> bool:
 
 
 def _sources(name: str) -> tuple[dict[str, Path], str]:
-    """Files packed as our code (relative path -> file) and the content hash of the FMU."""
-    files = {f"components/{p.name}": p for p in sorted(COMPONENTS_DIR.glob("*.py"))}
-    for module in ("__init__", "slave", FMUS[name]):
-        files[f"fmus/{module}.py"] = FMUS_DIR / f"{module}.py"
+    """Files packed as our code (relative path -> file) and the content hash of the FMU.
+
+    Our code is the FMU's wrapper module and everything it imports from our packages,
+    followed through relative imports (``from ..components.cmg import ...``).
+    """
+    files = {}
+    pending = [f"fmus/{FMUS[name]}.py"]
+    while pending:
+        relative = pending.pop()
+        if relative in files:
+            continue
+        path = FMUS_DIR.parent / relative
+        files[relative] = path
+        pending += _relative_imports(relative, path)
+        pending.append(f"{relative.split('/')[0]}/__init__.py")
     digest = hashlib.sha256()
     for relative, path in sorted(files.items()):
         digest.update(relative.encode() + b"\0" + path.read_bytes() + b"\0")
@@ -130,6 +141,18 @@ def _sources(name: str) -> tuple[dict[str, Path], str]:
     digest.update(_pythonfmu_binary().read_bytes())
     digest.update(metadata.version("pythonfmu").encode())
     return files, digest.hexdigest()[:12]
+
+
+def _relative_imports(relative: str, path: Path) -> list[str]:
+    """Our modules a module imports relatively, as paths like 'components/cmg.py'."""
+    package = relative.split("/")[0]
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            parts = (node.module or "").split(".")
+            base = package if node.level == 1 else parts.pop(0)
+            found.append(f"{base}/{'/'.join(parts)}.py")
+    return found
 
 
 def _pythonfmu_dir() -> Path:
