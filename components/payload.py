@@ -48,11 +48,13 @@ Boresight: each payload's +z axis, in B: ``los_B = R_mbᵀ (0, 0, 1) = (sin θ, 
 cos φ cos θ)``.  With B ≈ O (z nadir, x along track, y to the right of the track), +θ looks
 forward and +φ to the left, as the paper's §1.2 (1) describes payload 1 at (15°, 45°).
 
-Servo.  ``bandwidth`` ωn = 0: ideal tracking, angles and rates equal the commands exactly.
-The interface carries no acceleration command, so the φ̈, θ̈ in ḣ are the change of the
-rate command over the last step divided by its length (zero before the first step):
-exact while the commanded rate is piecewise linear and the last step lay in one piece (the
-sweep planner's profile), one step late at a change of commanded acceleration, and a
+Servo.  ``bandwidth`` ωn = 0: ideal tracking, angles and rates equal the commands exactly,
+and so do the accelerations φ̈, θ̈ in ḣ when ``accel_inputs`` is true (the sweep planner
+supplies them; an extension of DESIGN.md's interface, without which ḣ would be one step
+late at every reversal — and the feedforward of a compensating controller with it).
+Otherwise they are the change of the rate command over the last step divided by its length
+(zero before the first step): exact while the commanded rate is piecewise linear and the
+last step lay in one piece, one step late at a change of commanded acceleration, and a
 one-step pulse of area Δφ̇ where the commanded rate jumps (the triangle wave's reversal).
 
 ωn > 0: each of the four axes is a second-order servo with rate feedforward::
@@ -81,6 +83,7 @@ from .variables import input_, output, parameter
 
 PAPER_J_PAYLOAD = (45.5, 35.8, 36.7)   # kg·m², principal inertia of each payload (§2)
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
+_ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
 _NEAR_CRITICAL = 1e-6                   # |λ² s²| below which C, S are taken from series
 
 
@@ -143,6 +146,9 @@ class PayloadGimbals(Model):
         parameter("bandwidth", 0.0, "rad/s",
                   "servo natural frequency of each gimbal axis (0 = ideal tracking)"),
         parameter("damping", 1.0, "1", "servo damping ratio"),
+        parameter("accel_inputs", False, "1", "ideal tracking: take the accelerations from "
+                  "roll_accel_cmd and pitch_accel_cmd (else from the rate commands' change)",
+                  type="Boolean"),
         input_("roll_cmd", "rad", "commanded roll (about body x) of payloads 1 and 2",
                shape=(2,), display_unit="deg"),
         input_("pitch_cmd", "rad", "commanded pitch (about the support's y) of payloads 1 "
@@ -151,6 +157,11 @@ class PayloadGimbals(Model):
                shape=(2,), display_unit="deg/s"),
         input_("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
                shape=(2,), display_unit="deg/s"),
+        input_("roll_accel_cmd", "rad/s2", "commanded roll acceleration of payloads 1 and 2 "
+               "(used with accel_inputs)", shape=(2,), required=False, display_unit="deg/s2"),
+        input_("pitch_accel_cmd", "rad/s2", "commanded pitch acceleration of payloads 1 and "
+               "2 (used with accel_inputs)", shape=(2,), required=False,
+               display_unit="deg/s2"),
         output("roll", "rad", "roll of payloads 1 and 2", shape=(2,),
                depends=("roll_cmd",), display_unit="deg"),
         output("pitch", "rad", "pitch of payloads 1 and 2", shape=(2,),
@@ -162,7 +173,7 @@ class PayloadGimbals(Model):
         output("h", "N.m.s", "angular momentum of both payloads relative to the body, in B",
                shape=(3,), depends=_COMMANDS),
         output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,),
-               depends=_COMMANDS),
+               depends=_COMMANDS + _ACCELERATIONS),
         output("los_B", "1", "unit boresight (payload +z axis) of payloads 1 and 2 in B "
                "(rows)", shape=(2, 3), depends=("roll_cmd", "pitch_cmd")),
     )
@@ -183,12 +194,13 @@ class PayloadGimbals(Model):
         self.J = tuple(J)
         self.omega, self.zeta = p.bandwidth, p.damping
         self.ideal = p.bandwidth == 0.0
+        self.accel_inputs = p.accel_inputs
         inputs, outputs = self.layout.range["input"], self.layout.range["output"]
-        self._inputs = slice(inputs.start, inputs.stop)     # roll, pitch, rates: 8 values
+        self._inputs = slice(inputs.start, inputs.stop)     # angles, rates, accelerations
         self._outputs = slice(outputs.start, outputs.stop)  # contiguous in table order
         commands = self.values[self._inputs].tolist()
         self.angles = commands[:4]       # roll 1, roll 2, pitch 1, pitch 2
-        self.rates = commands[4:]
+        self.rates = commands[4:8]
         self.last_rate_cmd = None        # ideal tracking: rate commands at the last step
         self.last_dt = 0.0
         self.t = t0
@@ -196,8 +208,8 @@ class PayloadGimbals(Model):
     def step(self, t, dt):
         commands = self.values[self._inputs].tolist()
         if self.ideal:
-            self.angles, self.rates = commands[:4], commands[4:]
-            self.last_rate_cmd, self.last_dt = commands[4:], dt
+            self.angles, self.rates = commands[:4], commands[4:8]
+            self.last_rate_cmd, self.last_dt = commands[4:8], dt
         else:
             omega, zeta, angles, rates = self.omega, self.zeta, self.angles, self.rates
             for i in range(4):
@@ -208,9 +220,11 @@ class PayloadGimbals(Model):
     def output(self):
         commands = self.values[self._inputs].tolist()
         if self.ideal:
-            angles, rates = commands[:4], commands[4:]
+            angles, rates = commands[:4], commands[4:8]
             last = self.last_rate_cmd
-            if last is None:
+            if self.accel_inputs:
+                accels = commands[8:]
+            elif last is None:
                 accels = (0.0, 0.0, 0.0, 0.0)
             else:
                 k = 1.0 / self.last_dt

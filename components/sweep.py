@@ -127,6 +127,10 @@ class SweepPlanner(Model):
                shape=(2,), display_unit="deg/s"),
         output("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
                shape=(2,), display_unit="deg/s"),
+        output("roll_accel_cmd", "rad/s2", "commanded roll acceleration of payloads 1 and 2",
+               shape=(2,), display_unit="deg/s2"),
+        output("pitch_accel_cmd", "rad/s2", "commanded pitch acceleration of payloads 1 and 2",
+               shape=(2,), display_unit="deg/s2"),
     )
 
     def initialize(self, t0):
@@ -142,13 +146,10 @@ class SweepPlanner(Model):
         self.t = t + dt  # the commands are functions of time only
 
     def output(self):
-        roll, roll_rate, _ = self.roll(self.t)
-        pitch, pitch_rate, _ = self.pitch(self.t)
+        roll, roll_rate, roll_accel = self.roll(self.t)
+        pitch, pitch_rate, pitch_accel = self.pitch(self.t)
         k = self.sign2
-        # the outputs are contiguous in table order: one write instead of four
+        # the outputs are contiguous in table order: one write instead of six
         self.values[self._outputs] = (roll, k * roll, pitch, k * pitch,
-                                      roll_rate, k * roll_rate, pitch_rate, k * pitch_rate)
-
-    def accelerations(self, t: float) -> tuple[float, float]:
-        """Commanded (roll, pitch) accelerations of payload 1 at t (not an FMU output)."""
-        return self.roll(t)[2], self.pitch(t)[2]
+                                      roll_rate, k * roll_rate, pitch_rate, k * pitch_rate,
+                                      roll_accel, k * roll_accel, pitch_accel, k * pitch_accel)

@@ -9,4 +9,8 @@ FMUS = {
     "CmgCluster": "cmg_cluster",
     "CmgSteering": "cmg_steering",
     "PitchManeuverController": "pitch_maneuver_controller",
+    "PayloadGimbals": "payload_gimbals",
+    "SweepPlanner": "sweep_planner",
+    "Flywheel": "flywheel",
+    "AttitudeController": "attitude_controller",
 }

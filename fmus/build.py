@@ -22,7 +22,6 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib
-import importlib.util
 import os
 import shutil
 import subprocess
@@ -156,8 +155,9 @@ def _relative_imports(relative: str, path: Path) -> list[str]:
 
 
 def _pythonfmu_dir() -> Path:
-    spec = importlib.util.find_spec("pythonfmu")
-    return Path(spec.origin).parent
+    """The installed pythonfmu package (from its distribution, not the import path, which
+    an FMU loaded in this process may have shadowed)."""
+    return Path(metadata.distribution("pythonfmu").locate_file("pythonfmu"))
 
 
 def _pythonfmu_binary() -> Path:

@@ -36,6 +36,15 @@ def main(argv=None) -> int:
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
     run.add_argument("--no-figures", action="store_true")
 
+    size = commands.add_parser("size-flywheel", help="smallest reaction wheel that meets the "
+                               "payload_sweep pointing requirements (co-simulation sweep)")
+    size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
+    size.add_argument("--accuracy", type=float, default=0.032, help="pointing accuracy [deg]")
+    size.add_argument("--stability", type=float, default=0.006, help="pointing stability [deg/s]")
+    size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
+    size.add_argument("--stop", type=float, help="run length [s] (default: one pitch sweep)")
+    size.add_argument("--out", type=Path, default=Path("out/size-flywheel"))
+
     generate = commands.add_parser("generate", help="write the files generated from the "
                                    "variable tables and scenarios (.ssd, fmus/INTERFACES.md)")
     generate.add_argument("--check", action="store_true",
@@ -44,7 +53,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return {"build": _build, "validate": _validate, "run": _run,
-                "generate": _generate}[args.command](args)
+                "size-flywheel": _size_flywheel, "generate": _generate}[args.command](args)
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
         return 1
@@ -91,6 +100,27 @@ def _run(args) -> int:
           f"{settings['algorithm']}; results in {out}/")
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0
+
+
+def _size_flywheel(args) -> int:
+    import math
+    from ..fmus.build import build_all
+    from .sizing import size_flywheel
+    deg = math.pi / 180
+    build_all(names=scenarios.get("payload_sweep").components)
+    print(f"wheel torque limit [N·m]   accuracy [deg]   stability [deg/s]   momentum [N·m·s]")
+    result = size_flywheel(args.turnaround, args.accuracy * deg, args.stability * deg,
+                           args.step, args.stop, out_dir=args.out, progress=lambda p: print(
+                               f"{p.torque:24.4g} {p.accuracy / deg:16.4g} "
+                               f"{p.stability / deg:19.4g} {p.momentum:18.3g}"
+                               f"   {'meets' if p.met else 'fails'}"))
+    if result.torque is None:
+        print(f"no wheel up to {max(p.torque for p in result.points):g} N·m meets "
+              f"{args.accuracy}° and {args.stability} °/s with {args.turnaround} s reversals")
+        return 3
+    print(f"smallest wheel: {result.torque:.3g} N·m torque, using {result.momentum:.3g} N·m·s "
+          f"(reversal {args.turnaround} s, step {args.step} s); {args.out / 'sizing.png'}")
+    return 0
 
 
 def _echo(out: Path, limit: int = 5):

@@ -9,6 +9,7 @@ said.
 from __future__ import annotations
 
 import shutil
+import sys
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -121,7 +122,12 @@ class Instance:
         self._log_mark = len(self.log.entries)
 
     def free(self) -> None:
-        """Free the instance and delete the extracted FMU (never raises)."""
+        """Free the instance and delete the extracted FMU (never raises).
+
+        pythonfmu puts the FMU's resources directory first on ``sys.path`` and leaves it
+        there; it is taken out again, or the host would import the FMU's copies (of
+        pythonfmu, for one) from a deleted directory.
+        """
         try:
             if self.component is not None:
                 self.slave.fmi2FreeInstance(self.component)
@@ -129,6 +135,9 @@ class Instance:
             self.slave.freeLibrary()
         except Exception:  # noqa: BLE001 - cleanup after an FMU failure
             pass
+        resources = str(Path(self.unzip_dir) / "resources")
+        sys.path[:] = [entry for entry in sys.path if entry.rstrip("/") != resources]
+        sys.path_importer_cache.pop(resources, None)
         shutil.rmtree(self.unzip_dir, ignore_errors=True)
 
 

@@ -8,11 +8,12 @@ Run (:func:`simulate`):
    propagate the connected inputs in dependency order (FMI 2.0 ``InitialUnknowns``), then
    set every input once more and exit initialisation mode.
 3. Fixed macro step H, time t_n = t0 + n H from the integer step counter n.
-   Gauss-Seidel: in dependency order, each FMU gets its inputs from the newest outputs,
-   steps, and hands its outputs on.  Jacobi: every FMU steps with the inputs of t_n, then
-   a pass in dependency order sets the inputs of t_{n+1} and reads the outputs.  Either way
-   the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
-   the inputs of t_{n+1}).
+   The outputs are read block by block in the order of :mod:`.schedule` (each block after
+   setting that FMU's inputs from the newest outputs).  Gauss-Seidel: an FMU steps at its
+   first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
+   steps with the inputs of t_n, then the blocks are read.  Either way the recorded outputs
+   at t_{n+1} are consistent with each other (feedthrough outputs see the inputs of
+   t_{n+1}).
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given).
@@ -70,6 +71,7 @@ class _Node:
         self.instance = instance
         self.inputs: list[_Port] = []
         self.outputs: list[tuple[_Port, slice]] = []
+        self.position: dict[str, int] = {}          # output -> index in the value vector
         outputs = [v.name for v in sorted(instance.md.modelVariables,
                                           key=lambda v: v.valueReference)
                    if v.causality == "output"]
@@ -78,8 +80,10 @@ class _Node:
             if names:
                 self.outputs.append((_Port(instance, type_, names, "Get"),
                                      slice(offset, offset + len(names))))
+                self.position.update((n, offset + i) for i, n in enumerate(names))
                 offset += len(names)
         self.end = offset
+        self.refresh: dict[tuple[str, ...], list[tuple[_Port, np.ndarray]]] = {}
 
     def set_inputs(self, values: np.ndarray) -> None:
         for port in self.inputs:
@@ -88,6 +92,21 @@ class _Node:
 
     def get_outputs(self, values: np.ndarray) -> None:
         for port, where in self.outputs:
+            port.transfer()
+            values[where] = port.buffer
+
+    def prepare_refresh(self, block: tuple[str, ...]) -> None:
+        """Ports reading only ``block`` (an FMU's later block in the evaluation sequence)."""
+        ports = []
+        for type_ in ("Real", "Integer", "Boolean"):
+            names = [n for n in block if self.instance.variables[n].type == type_]
+            if names:
+                ports.append((_Port(self.instance, type_, names, "Get"),
+                              np.array([self.position[n] for n in names])))
+        self.refresh[block] = ports
+
+    def get_block(self, block: tuple[str, ...], values: np.ndarray) -> None:
+        for port, where in self.refresh[block]:
             port.transfer()
             values[where] = port.buffer
 
@@ -137,52 +156,52 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     nodes = {}
     offset = 0
     columns = ["time"]
-    position = {}  # (instance, output) -> index in the value vector
-    for name in plan.order:
+    for name in plan.steps.step_order:
         node = nodes[name] = _Node(instances[name], offset)
-        for port, where in node.outputs:
-            for output, i in zip(port.names, range(where.start, where.stop)):
-                position[(name, output)] = i
-                columns.append(f"{name}.{output}")
+        for port, _ in node.outputs:
+            columns += [f"{name}.{output}" for output in port.names]
         offset = node.end
     for name, node in nodes.items():
         by_type = {}
-        for (target, input_name), source in plan.sources.items():
+        for (target, input_name), (source, output) in plan.sources.items():
             if target == name:
                 kind = node.instance.variables[input_name].type
-                by_type.setdefault(kind, []).append((input_name, position[source]))
+                by_type.setdefault(kind, []).append((input_name, nodes[source].position[output]))
         for pairs in by_type.values():  # ascending value references: one range per FMU
             pairs.sort(key=lambda pair: node.instance.variables[pair[0]].valueReference)
         node.inputs = [_Port(node.instance, kind, [n for n, _ in pairs], "Set",
                              [i for _, i in pairs]) for kind, pairs in by_type.items()]
+    sequence = _sequence(plan.steps, nodes)
+    init_sequence = _sequence(plan.init, nodes)
 
     values = np.zeros(offset)
     data = np.full((n_steps + 1, offset + 1), np.nan)
     meta = {"system": str(system.path), "step": step, "start": start,
             "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
-            "order": plan.order}
+            "order": plan.steps.step_order}
     writer = ResultWriter(Path(out_dir) / "results.csv", columns) if out_dir else None
     rows = 0
     try:
-        _initialize(plan, instances, nodes, bindings, values, start, start + n_steps * step,
-                    log, logging_on)
+        _initialize(plan, instances, nodes, init_sequence, bindings, values, start,
+                    start + n_steps * step, log, logging_on)
         data[0, 0], data[0, 1:] = start, values
         rows = 1
-        order = [nodes[n] for n in plan.order]
+        order = [nodes[n] for n in plan.steps.step_order]
         for n in range(n_steps):
             t = start + n * step
             log.time = t
             if algorithm == "gauss-seidel":
-                for node in order:
+                for node, block, first in sequence:
                     node.set_inputs(values)
-                    _do_step(node.instance, t, step)
-                    node.get_outputs(values)
+                    if first:
+                        _do_step(node.instance, t, step)
+                        node.get_outputs(values)
+                    else:
+                        node.get_block(block, values)
             else:
                 for node in order:
                     _do_step(node.instance, t, step)
-                for node in order:
-                    node.set_inputs(values)
-                    node.get_outputs(values)
+                _evaluate(sequence, values)
             data[n + 1, 0] = start + (n + 1) * step
             data[n + 1, 1:] = values
             rows = n + 2
@@ -208,9 +227,32 @@ def _do_step(instance: Instance, t: float, step: float) -> None:
         instance.check(status, "fmi2DoStep")
 
 
-def _initialize(plan, instances, nodes, bindings, values, start, stop, log, logging_on):
+def _sequence(schedule, nodes) -> list:
+    """(node, block, first occurrence?) for each block of a schedule."""
+    seen, result = set(), []
+    for name, block in schedule.blocks:
+        first = name not in seen
+        seen.add(name)
+        if not first:
+            nodes[name].prepare_refresh(block)
+        result.append((nodes[name], block, first))
+    return result
+
+
+def _evaluate(sequence, values) -> None:
+    """Bring every output to the current communication point, block by block."""
+    for node, block, first in sequence:
+        node.set_inputs(values)
+        if first:
+            node.get_outputs(values)
+        else:
+            node.get_block(block, values)
+
+
+def _initialize(plan, instances, nodes, init_sequence, bindings, values, start, stop, log,
+                logging_on):
     log.time = start
-    for name in plan.order:
+    for name in plan.steps.step_order:
         inst = instances[name]
         inst.instantiate(logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, start, 1, stop)
@@ -218,15 +260,13 @@ def _initialize(plan, instances, nodes, bindings, values, start, stop, log, logg
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    for name in plan.init_order:
-        nodes[name].set_inputs(values)
-        nodes[name].get_outputs(values)
-    for name in plan.order:
-        nodes[name].set_inputs(values)
+    _evaluate(init_sequence, values)
+    for node in nodes.values():
+        node.set_inputs(values)
     for inst in instances.values():
         inst.call("fmi2ExitInitializationMode")
-    for name in plan.order:
-        nodes[name].get_outputs(values)
+    for node in nodes.values():
+        node.get_outputs(values)
 
 
 def _set_value(inst: Instance, name: str, type_: str, value) -> None:

@@ -30,3 +30,26 @@ def panels(path: Path, title: str, rows) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
+    """Metrics against a design variable (log x), each with its requirement line; points
+    that meet every requirement filled, the others open."""
+    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 3.2 * len(rows)), squeeze=False)
+    for ax, (label, values, limit) in zip(axes[:, 0], rows):
+        ax.plot(x, values, color="0.6", linewidth=1)
+        for xi, v, ok in zip(x, values, met):
+            ax.plot(xi, v, "o", color="tab:green" if ok else "tab:red",
+                    fillstyle="full" if ok else "none")
+        ax.axhline(limit, color="tab:blue", linestyle="--", label="requirement")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[-1, 0].set_xlabel(xlabel)
+    axes[0, 0].set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)

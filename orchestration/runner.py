@@ -63,7 +63,7 @@ def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, o
         _write_records(results, out_dir)
         (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
         if figures and scenario is not None:
-            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
+            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir, variant)]
     return results, summary
 
 

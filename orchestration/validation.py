@@ -2,30 +2,28 @@
 
 :func:`check_system` reports, each naming the file, line, element and variable: unknown
 component or variable, causality, type and unit mismatch, an input driven twice, a required
-input left open, a parameter value for something that is not a parameter, an algebraic loop.
-
-The dependency order is a topological sort of "B needs A now": an output of A feeds an input
-of B on which some output of B depends directly (``ModelStructure/Outputs``; at
-initialisation ``InitialUnknowns``).  A cycle is an algebraic loop.
+input left open, a parameter value for something that is not a parameter, an algebraic loop
+(found while computing the schedules, :mod:`.schedule`).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from .fmu import Instance
+from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
 
 
 @dataclass
-class _Plan:
-    order: list[str]          # step order (dependency order)
-    init_order: list[str]     # initialisation order
+class Plan:
+    steps: Schedule           # stepping: step order and output evaluation blocks
+    init: Schedule            # initialisation
     sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
 
 
 def check_system(system: SystemFile, instances: dict[str, Instance],
-                 bindings: list[ParameterValue]) -> _Plan:
-    """Check connections and parameters against the FMUs; return the dependency orders."""
+                 bindings: list[ParameterValue]) -> Plan:
+    """Check connections and parameters against the FMUs; return the schedules."""
     problems = []
     where = str(system.path)
     sources = {}
@@ -86,38 +84,8 @@ def check_system(system: SystemFile, instances: dict[str, Instance],
                                 f"{inst.name}.{name} is not connected")
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    order = _dependency_order(instances, sources, "feedthrough", where)
-    init_order = _dependency_order(instances, sources, "initial_feedthrough", where)
-    return _Plan(order, init_order, sources)
-
-
-def _dependency_order(instances, sources, kind, where) -> list[str]:
-    """Topological order of "B needs A now" (stable in the system's component order)."""
-    needs = {name: set() for name in instances}
-    for (b, input_name), (a, _) in sources.items():
-        dependencies = getattr(instances[b], kind)
-        if any(deps is None or input_name in deps for deps in dependencies.values()):
-            needs[b].add(a)
-    order, done, visiting = [], set(), []
-
-    def visit(name):
-        if name in done:
-            return
-        if name in visiting:
-            cycle = visiting[visiting.index(name):] + [name]
-            raise SystemFileError(f"{where}: algebraic loop ({kind}): {' -> '.join(cycle)}: "
-                                  "each of these FMUs has an output that depends directly on "
-                                  "an input driven by the previous one")
-        visiting.append(name)
-        for other in sorted(needs[name], key=list(instances).index):
-            visit(other)
-        visiting.pop()
-        done.add(name)
-        order.append(name)
-
-    for name in instances:
-        visit(name)
-    return order
+    return Plan(schedule(instances, sources, "feedthrough", where),
+                schedule(instances, sources, "initial_feedthrough", where), sources)
 
 
 def override(instances, key: str, value) -> ParameterValue:

@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 SYSTEMS_DIR = Path(__file__).resolve().parent.parent / "systems"
-NAMES = ("scan_pitch",)
+NAMES = ("scan_pitch", "payload_sweep")
 FMUS_PACKAGE = __name__.rsplit(".", 2)[0] + ".fmus"
 
 
@@ -31,7 +31,7 @@ class Scenario:
     stop: float
     step: float
     metrics: Callable                         # (Results, variant) -> summary dict
-    figures: Callable                         # (Results, out_dir) -> [paths]
+    figures: Callable                         # (Results, out_dir, variant) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     algorithm: str = "gauss-seidel"
 

@@ -219,7 +219,7 @@ def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
     return float(h_rotor * np.sqrt(1.0 - (GIMBAL_AXES @ d) ** 2).sum())
 
 
-def figures(results, out_dir) -> list:
+def figures(results, out_dir, variant=None) -> list:
     """The paper's Figs 4–11 from a run."""
     t = results.time
     deg = 180 / math.pi
