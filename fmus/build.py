@@ -26,6 +26,7 @@ import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 import uuid
 import zipfile
 from html import escape
@@ -82,7 +83,12 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
     for path in sorted(_pythonfmu_dir().glob("*.py")):
         entries[f"resources/pythonfmu/{path.name}"] = path.read_bytes()
-    partial = target.with_suffix(".fmu.partial")
+    return write_archive(target, entries)
+
+
+def write_archive(target: Path, entries: dict[str, bytes]) -> Path:
+    """A deterministic zip (sorted entries, fixed timestamps), written atomically."""
+    partial = target.with_name(target.name + ".partial")
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
         for arcname in sorted(entries):
             info = zipfile.ZipInfo(arcname, _ZIP_TIME)
@@ -139,6 +145,7 @@ def _sources(name: str) -> tuple[dict[str, Path], str]:
         digest.update(path.read_bytes())
     digest.update(_pythonfmu_binary().read_bytes())
     digest.update(metadata.version("pythonfmu").encode())
+    digest.update("\0".join(python_runtime()).encode())
     return files, digest.hexdigest()[:12]
 
 
@@ -167,9 +174,27 @@ def _pythonfmu_binary() -> Path:
     return path
 
 
+def python_runtime() -> tuple[str, str]:
+    """(shared libpython, python executable) the FMUs start in a host without Python.
+
+    The executable is this environment's own (``sys.executable``, not resolved: a virtual
+    environment is recognised by the pyvenv.cfg beside its ``bin/``).  The library is ""
+    when this Python has no shared libpython (then only Python hosts can load the FMUs).
+    """
+    library = ""
+    if sysconfig.get_config_var("Py_ENABLE_SHARED"):
+        path = Path(sysconfig.get_config_var("LIBDIR") or "",
+                    sysconfig.get_config_var("INSTSONAME") or "")
+        library = str(path) if path.is_file() else ""
+    return library, os.path.abspath(sys.executable)
+
+
 def _shim_library(out_dir: Path) -> Path:
-    """Compile the shim once per source version (cached in <out_dir>/.shim/)."""
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in SHIM_SOURCES)).hexdigest()[:12]
+    """Compile the shim once per source version and Python runtime (cached in
+    <out_dir>/.shim/)."""
+    runtime = python_runtime()
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in SHIM_SOURCES)
+                            + "\0".join(runtime).encode()).hexdigest()[:12]
     library = out_dir / ".shim" / f"agilesat_fmi2_{digest}.so"
     if library.exists():
         return library
@@ -179,13 +204,20 @@ def _shim_library(out_dir: Path) -> Path:
         raise BuildError("building FMUs needs a C compiler (cc or gcc, or set CC) for the "
                          "FMI shim fmus/shim/agilesat_fmi2.c")
     partial = library.with_suffix(".partial")
-    command = [compiler, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-o", str(partial),
-               str(SHIM_SOURCES[0]), "-ldl", "-lpthread"]
+    defines = [f"-DAGILESAT_{key}={_c_string(value)}"
+               for key, value in zip(("LIBPYTHON", "PYTHON"), runtime)]
+    command = [compiler, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", *defines,
+               "-o", str(partial), str(SHIM_SOURCES[0]), "-ldl", "-lpthread"]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
         raise BuildError(f"compiling the FMI shim failed:\n{' '.join(command)}\n{result.stderr}")
     os.replace(partial, library)
     return library
+
+
+def _c_string(text: str) -> str:
+    """A C string literal (for a -D definition)."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def interface_rows(model_class):

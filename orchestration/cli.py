@@ -36,6 +36,12 @@ def main(argv=None) -> int:
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
     run.add_argument("--no-figures", action="store_true")
 
+    export = commands.add_parser("export", help="write a scenario[:variant] as a "
+                                 "self-contained SSP package (.ssd + FMUs)")
+    export.add_argument("target", help=f"one of {', '.join(scenarios.NAMES)} (optionally "
+                        ":variant)")
+    export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
+
     size = commands.add_parser("size-flywheel", help="smallest reaction wheel that meets the "
                                "payload_sweep pointing requirements (co-simulation sweep)")
     size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
@@ -52,7 +58,7 @@ def main(argv=None) -> int:
 
     args = parser.parse_args(argv)
     try:
-        return {"build": _build, "validate": _validate, "run": _run,
+        return {"build": _build, "validate": _validate, "run": _run, "export": _export,
                 "size-flywheel": _size_flywheel, "generate": _generate}[args.command](args)
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
@@ -100,6 +106,12 @@ def _run(args) -> int:
           f"{settings['algorithm']}; results in {out}/")
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0
+
+
+def _export(args) -> int:
+    from .export import export_ssp
+    print(export_ssp(args.target, args.out))
+    return 0
 
 
 def _size_flywheel(args) -> int:

@@ -64,11 +64,12 @@ class Log:
         return [e.message for e in self.entries[since:] if e.instance == instance]
 
 
-class Instance:
-    """An FMU instance: model description, variables by name, raw FMI calls."""
+class Description:
+    """What the model description of an FMU in a system says: variables by name, output
+    dependencies, required inputs.  Nothing is loaded."""
 
-    def __init__(self, name: str, path: Path, log: Log):
-        self.name, self.path, self.log = name, Path(path), log
+    def __init__(self, name: str, path: Path):
+        self.name, self.path = name, Path(path)
         self.md = read_model_description(str(path))
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
@@ -76,6 +77,19 @@ class Instance:
         self.required_inputs = _required_inputs(path)
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
+
+    def outputs(self) -> list[str]:
+        """Output names in value-reference order."""
+        return [v.name for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
+                if v.causality == "output"]
+
+
+class Instance(Description):
+    """An FMU instance: its description, the loaded binary, raw FMI calls."""
+
+    def __init__(self, name: str, path: Path, log: Log):
+        super().__init__(name, path)
+        self.log = log
         self.unzip_dir = extract(str(path))
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzip_dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier,

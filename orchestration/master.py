@@ -72,9 +72,7 @@ class _Node:
         self.inputs: list[_Port] = []
         self.outputs: list[tuple[_Port, slice]] = []
         self.position: dict[str, int] = {}          # output -> index in the value vector
-        outputs = [v.name for v in sorted(instance.md.modelVariables,
-                                          key=lambda v: v.valueReference)
-                   if v.causality == "output"]
+        outputs = instance.outputs()
         for type_ in ("Real", "Integer", "Boolean"):
             names = [n for n in outputs if instance.variables[n].type == type_]
             if names:

@@ -307,12 +307,23 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
     etree.SubElement(annotation, "{%s}Master" % MASTER_NAMESPACE,
                      {"stepSize": repr(float(step)), "algorithm": algorithm},
                      nsmap={"agilesat": MASTER_NAMESPACE})
+    # libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
+    # Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
+    # takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
+    # the namespace is declared on the annotation.
+    osp = etree.SubElement(annotations, E._qname("ssc:Annotation"), {"type": OSP_ANNOTATION},
+                           nsmap={"osp": OSP_NAMESPACE})
+    algorithm_element = etree.SubElement(osp, "{%s}Algorithm" % OSP_NAMESPACE)
+    etree.SubElement(algorithm_element, "{%s}FixedStepAlgorithm" % OSP_NAMESPACE,
+                     {"baseStepSize": repr(float(step))})
     tree = etree.ElementTree(root)
     _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 
 MASTER_NAMESPACE = "http://agilesat.org/ssp/master"
+OSP_ANNOTATION = "com.opensimulationplatform"
+OSP_NAMESPACE = "https://opensimulationplatform.com/SSP/1.0"
 
 
 def _expand_parameters(parameters: dict, tables: dict) -> dict:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .fmu import Instance
+from .fmu import Description
 from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
 
@@ -21,7 +21,7 @@ class Plan:
     sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
 
 
-def check_system(system: SystemFile, instances: dict[str, Instance],
+def check_system(system: SystemFile, instances: dict[str, Description],
                  bindings: list[ParameterValue]) -> Plan:
     """Check connections and parameters against the FMUs; return the schedules."""
     problems = []

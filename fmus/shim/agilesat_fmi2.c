@@ -19,6 +19,9 @@
  *    right after loading the library, so before pythonfmu's own (handlers run in reverse
  *    order); the later calls then find the pointer already null.
  *
+ *  - Python.  In a host that does not run Python itself, it loads and initializes the
+ *    building environment's Python before pythonfmu needs it (see ensure_python).
+ *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
 #define _GNU_SOURCE
@@ -27,6 +30,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <wchar.h>
 
 #include "fmi2_abi.h"
 
@@ -61,7 +66,83 @@ static void finalize_inner(void) {
     if (inner_finalize) inner_finalize();
 }
 
+/* ---- the Python interpreter ----------------------------------------------------------
+ * pythonfmu's binary uses libpython's symbols without linking libpython (PythonFMU#202,
+ * #206) and, when no interpreter runs yet, calls Py_Initialize() with no idea of our
+ * virtual environment, so numpy is not found.  We prepare the interpreter first:
+ *  - A Python host (FMPy, libcosimpy, ctypes) already runs an interpreter in the global
+ *    symbol scope: nothing to do; the model uses the host's interpreter and sys.path.
+ *  - Any other host (a C/C++ master): load the libpython recorded at build time with
+ *    RTLD_GLOBAL, so that pythonfmu's binary and numpy's extension modules bind to it, and
+ *    initialize it as the build environment's python (program name = its absolute path,
+ *    so Python finds the standard library and the virtual environment's pyvenv.cfg and
+ *    site-packages exactly as that python does).  Then release the GIL: pythonfmu takes
+ *    it with PyGILState_Ensure() from whatever thread the host calls in.  pythonfmu sees
+ *    Py_IsInitialized() and leaves initialization and finalization alone.
+ * The environment variables AGILESAT_LIBPYTHON and AGILESAT_PYTHON override the recorded
+ * paths (another machine).  Only stable-ABI entry points are used; Py_SetProgramName is
+ * deprecated since Python 3.11 but present in every CPython 3. */
+#ifndef AGILESAT_LIBPYTHON
+#error "define AGILESAT_LIBPYTHON: path of the shared libpython of the building interpreter"
+#endif
+#ifndef AGILESAT_PYTHON
+#error "define AGILESAT_PYTHON: sys.executable of the building environment"
+#endif
+
+static const char *setting(const char *variable, const char *recorded) {
+    const char *value = getenv(variable);
+    return value && *value ? value : recorded;
+}
+
+static int ensure_python(char *err, size_t n) {
+    int (*is_initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    if (is_initialized && is_initialized()) return 0;   /* the host runs Python */
+    void *lib = RTLD_DEFAULT;
+    if (!is_initialized) {
+        const char *path = setting("AGILESAT_LIBPYTHON", AGILESAT_LIBPYTHON);
+        if (!*path) {
+            snprintf(err, n, "this FMU runs Python, and the Python it was built with has no "
+                     "shared libpython: load it in a Python host, or set AGILESAT_LIBPYTHON "
+                     "to a shared libpython of the same version");
+            return -1;
+        }
+        lib = dlopen(path, RTLD_NOW | RTLD_GLOBAL);
+        if (!lib) {
+            snprintf(err, n, "this FMU runs Python: cannot load %s (%s); install that "
+                     "shared libpython or set AGILESAT_LIBPYTHON", path, dlerror());
+            return -1;
+        }
+        is_initialized = (int (*)(void))dlsym(lib, "Py_IsInitialized");
+        if (is_initialized && is_initialized()) return 0;
+    }
+    const char *python = setting("AGILESAT_PYTHON", AGILESAT_PYTHON);
+    void (*set_program_name)(const wchar_t *) =
+        (void (*)(const wchar_t *))dlsym(lib, "Py_SetProgramName");
+    void (*initialize)(int) = (void (*)(int))dlsym(lib, "Py_InitializeEx");
+    void *(*save_thread)(void) = (void *(*)(void))dlsym(lib, "PyEval_SaveThread");
+    if (!is_initialized || !set_program_name || !initialize || !save_thread) {
+        snprintf(err, n, "the loaded libpython lacks the embedding API (Py_SetProgramName, "
+                 "Py_InitializeEx, PyEval_SaveThread)");
+        return -1;
+    }
+    if (access(python, X_OK) != 0) {
+        snprintf(err, n, "this FMU runs Python as %s, which does not exist here: recreate "
+                 "that environment (with numpy) or set AGILESAT_PYTHON", python);
+        return -1;
+    }
+    static wchar_t program[4096];   /* must outlive the interpreter */
+    if (mbstowcs(program, python, sizeof program / sizeof *program - 1) == (size_t)-1) {
+        snprintf(err, n, "cannot decode the path %s", python);
+        return -1;
+    }
+    set_program_name(program);
+    initialize(0);                  /* 0: the host keeps its signal handlers */
+    save_thread();
+    return 0;
+}
+
 static void load_inner(void) {
+    if (ensure_python(load_error, sizeof load_error) != 0) return;
     Dl_info info;
     if (!dladdr((void *)&load_inner, &info) || !info.dli_fname) {
         snprintf(load_error, sizeof load_error, "cannot locate the FMU binary (dladdr)");

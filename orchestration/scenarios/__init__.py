@@ -48,8 +48,9 @@ class Scenario:
                            f"{', '.join(self.variants) or 'none'}")
         return scalar_values(self.variants[variant][1])
 
-    def render_ssd(self) -> bytes:
-        """The system as SSD, FMU sources relative to ``systems/`` (in ``fmus/build``)."""
+    def render_ssd(self, sources: dict | None = None, variant: str | None = None) -> bytes:
+        """The system as SSD.  FMU sources default to ``fmus/build`` relative to
+        ``systems/``; a variant's parameter values replace the defaults."""
         from ...fmus import FMUS
         from ...fmus.build import BUILD_DIR
         from ...fmus.model_description import UNITS
@@ -58,10 +59,14 @@ class Scenario:
         for name in self.components:
             module = importlib.import_module(f"{FMUS_PACKAGE}.{FMUS[name]}")
             tables[name] = getattr(module, name).model_class.VARIABLES
-        sources = {name: Path(os.path.relpath(BUILD_DIR / f"{name}.fmu", SYSTEMS_DIR)).as_posix()
-                   for name in self.components}
-        return render_ssd(self.name, sources, tables, self.connections, self.parameters,
-                          UNITS, 0.0, self.stop, self.step, self.algorithm)
+        sources = sources or {
+            name: Path(os.path.relpath(BUILD_DIR / f"{name}.fmu", SYSTEMS_DIR)).as_posix()
+            for name in self.components}
+        self.variant_parameters(variant)   # unknown variant: KeyError
+        parameters = {**self.parameters, **(self.variants[variant][1] if variant else {})}
+        title = f"{self.name}:{variant}" if variant else self.name
+        return render_ssd(title, sources, tables, self.connections, parameters, UNITS, 0.0,
+                          self.stop, self.step, self.algorithm)
 
 
 def get(name: str) -> Scenario:

@@ -1,0 +1,82 @@
+"""Write the call script of ``fmi2_host.c`` for a system: the same FMI calls, in the same
+order and with the same values, as our master's Gauss-Seidel run (orchestration/master.py),
+so that the C host's results must equal the master's bit for bit.
+
+Only model descriptions are read here; no FMU is loaded in this process.
+"""
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+from agilesat.orchestration.fmu import Description
+from agilesat.orchestration.ssp import read_system
+from agilesat.orchestration.validation import check_system
+
+TYPES = {"Real": "R", "Integer": "I", "Boolean": "B"}
+
+
+def write_script(system_path, script: Path, unzip_root: Path, stop: float | None = None) -> list:
+    """Extract the system's FMUs under ``unzip_root``, write the script; return the
+    recorded column names ("Instance.variable", the master's column order)."""
+    system = read_system(system_path)
+    descriptions = {c.name: Description(c.name, c.source) for c in system.components}
+    plan = check_system(system, descriptions, system.parameters)
+    start, step = system.start_time, system.step_size
+    stop = system.stop_time if stop is None else stop
+    n_steps = round((stop - start) / step)
+    ids = {name: k for k, name in enumerate(plan.steps.step_order)}
+    lines, slots = [], {}
+    for name, k in ids.items():
+        d = descriptions[name]
+        directory = unzip_root / name
+        with zipfile.ZipFile(d.path) as archive:
+            archive.extractall(directory)
+        lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} "
+                     f"{name}")
+        for type_ in TYPES:   # the master's value vector: per FMU, per type, by reference
+            for output in d.outputs():
+                if d.variables[output].type == type_:
+                    slots[(name, output)] = len(slots)
+    lines.append(f"slots {len(slots)}")
+    lines += [f"column {k} {name}.{output}" for (name, output), k in slots.items()]
+
+    def var(name, variable):
+        v = descriptions[name].variables[variable]
+        return f"{ids[name]} {TYPES[v.type]} {v.valueReference}"
+
+    def put_inputs(name):
+        return [f"put {var(name, u)} {slots[plan.sources[(b, u)]]}"
+                for (b, u) in plan.sources if b == name]
+
+    def get(name, outputs):
+        return [f"get {var(name, y)} {slots[(name, y)]}" for y in outputs]
+
+    def evaluate(schedule, stepping):
+        calls, seen = [], set()
+        for name, block in schedule.blocks:
+            calls += put_inputs(name)
+            if name in seen:
+                calls += get(name, block)
+            else:
+                seen.add(name)
+                calls += ([f"step {ids[name]}"] if stepping else [])
+                calls += get(name, descriptions[name].outputs())
+        return calls
+
+    components = [c.name for c in system.components]
+    for name in ids:
+        lines += [f"instantiate {ids[name]}", f"setup {ids[name]} {start!r} {stop!r}"]
+    lines += [f"set {var(p.component, p.name)} {float(p.value)!r}" for p in system.parameters]
+    lines += [f"enter {ids[name]}" for name in components]
+    lines += evaluate(plan.init, stepping=False)
+    for name in ids:
+        lines += put_inputs(name)
+    lines += [f"exit {ids[name]}" for name in components]
+    for name in ids:
+        lines += get(name, descriptions[name].outputs())
+    lines += ["record", f"loop {n_steps} {start!r} {step!r}", *evaluate(plan.steps, True),
+              "record", "end"]
+    lines += [f"terminate {ids[name]}" for name in components]
+    Path(script).write_text("\n".join(lines) + "\n")
+    return [f"{name}.{output}" for (name, output) in slots]
