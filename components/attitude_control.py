@@ -8,6 +8,7 @@ q_ref = q_RI and angular velocity w_ref = w_RI_R)::
     att_error  = φ n = 2 atan2(|q_v|, q0) q_v / |q_v|       (rotation vector, |φ| ≤ π)
     rate_error = w_BI_B − C(q_BR) w_ref                     (= w_BR_B)
     tau_cmd    = −kp ∘ att_error − kd ∘ rate_error + hdot_ff + w_BI_B × h_ff
+                 + J (C(q_BR) dw_ref − rate_error × C(q_BR) w_ref) + w_BI_B × J w_BI_B
 
 att_error is the rotation vector (angle times axis) of q_BR, not 2·q_v: the two agree to
 second order, and the rotation vector keeps the restoring torque proportional to the true
@@ -15,8 +16,13 @@ angle up to 180°.  It is continuous everywhere except at exactly 180°, where t
 way flips (no continuous error field exists on the whole rotation group); its magnitude
 never exceeds π.  The last term cancels the torque −hdot_ff − w_BI_B × h_ff that a known
 momentum device (h_ff relative to the body, in B) exerts on the body (DESIGN.md §2).
-Not included: feedforward of the reference's angular acceleration and of the hub's own
-gyroscopic torque w × J w (the law has no inertia parameter).
+
+Extension (not in DESIGN.md §3): with the hub ``inertia`` J given (default 0: none), the
+last line feeds forward the torque that makes the body follow R exactly: the hub equation
+J ẇ = −w × J w + τ (the steering law supplies −w × h of the actuators) with ẇ the
+derivative, seen in B, of the reference rate C_BR w_ref, i.e.
+d/dt(C_BR w_ref) = C_BR dw_ref − w_BR × C_BR w_ref (dw_ref = d/dt w_ref in R axes, an
+optional input).  The PD terms then only correct errors instead of carrying the maneuver.
 
 Default gains: a 150 kg·m² satellite (seed 004) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
 (linearised closed loop J θ̈ + kd θ̇ + kp θ = 0): kp = J ω_n² = 6 N·m/rad,
@@ -30,6 +36,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
 from .variables import input_, output, parameter
@@ -41,7 +49,7 @@ KP = DESIGN_INERTIA * DESIGN_BANDWIDTH ** 2
 KD = 2.0 * DESIGN_DAMPING * DESIGN_BANDWIDTH * DESIGN_INERTIA
 _ATTITUDE = ("q_BI", "q_ref")
 _RATE = ("q_BI", "w_BI_B", "q_ref", "w_ref")
-_ALL = _RATE + ("h_ff", "hdot_ff")
+_ALL = _RATE + ("h_ff", "hdot_ff", "dw_ref")
 
 
 class AttitudeController(Model):
@@ -52,6 +60,8 @@ class AttitudeController(Model):
                   shape=(3,)),
         parameter("kd", KD, "N.m.s/rad", "rate gain per body axis (per rad/s of rate_error)",
                   shape=(3,)),
+        parameter("inertia", np.zeros((3, 3)), "kg.m2", "hub inertia J for the "
+                  "acceleration feedforward, in B (0: no feedforward)", shape=(3, 3)),
         input_("q_BI", "1", "attitude of B relative to I", IDENTITY_Q, shape=(4,)),
         input_("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
                display_unit="deg/s"),
@@ -63,6 +73,8 @@ class AttitudeController(Model):
                "body, in B (compensated)", shape=(3,), required=False),
         input_("hdot_ff", "N.m", "time derivative of h_ff as seen in B", shape=(3,),
                required=False),
+        input_("dw_ref", "rad/s2", "time derivative of w_ref, in R axes (for the "
+               "acceleration feedforward)", shape=(3,), required=False, display_unit="deg/s2"),
         output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,),
                depends=_ALL),
         output("att_error", "rad", "rotation vector of B relative to R (angle <= pi), in B",
@@ -74,6 +86,10 @@ class AttitudeController(Model):
     def initialize(self, t0):
         self.kp = tuple(self.p.kp.tolist())
         self.kd = tuple(self.p.kd.tolist())
+        J = self.p.inertia
+        if not np.all(np.isfinite(J)) or not np.allclose(J, J.T, rtol=1e-9, atol=0.0):
+            raise ModelError(f"inertia must be a finite symmetric matrix, got {J.tolist()}")
+        self.inertia = tuple(map(tuple, J.tolist())) if J.any() else None
         self.t = t0
 
     def step(self, t, dt):
@@ -93,14 +109,26 @@ class AttitudeController(Model):
         f = 2.0 * math.atan2(s, q0) / s if s > 0.0 else 0.0   # angle / |q_v|, scale-free
         ex, ey, ez = f * q1, f * q2, f * q3
         k = 1.0 / norm2
-        wrx, wry, wrz = rotate(dcm((q0, q1, q2, q3)), u.w_ref.tolist())
+        C_BR = dcm((q0, q1, q2, q3))
+        wrx, wry, wrz = rotate(C_BR, u.w_ref.tolist())
         wx, wy, wz = u.w_BI_B.tolist()
         rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
         hx, hy, hz = u.h_ff.tolist()
         dx, dy, dz = u.hdot_ff.tolist()
         kp, kd = self.kp, self.kd
-        y.tau_cmd[:] = (-kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
-                        -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
-                        -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx))
+        tau = [-kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
+               -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
+               -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx)]
+        if self.inertia is not None:
+            J = self.inertia
+            ax, ay, az = rotate(C_BR, u.dw_ref.tolist())
+            wrx, wry, wrz = k * wrx, k * wry, k * wrz           # C_BR w_ref
+            wdot = (k * ax - (ry * wrz - rz * wry), k * ay - (rz * wrx - rx * wrz),
+                    k * az - (rx * wry - ry * wrx))
+            jx, jy, jz = (Ji[0] * wx + Ji[1] * wy + Ji[2] * wz for Ji in J)   # J w
+            gyro = (wy * jz - wz * jy, wz * jx - wx * jz, wx * jy - wy * jx)
+            for i, Ji in enumerate(J):
+                tau[i] += Ji[0] * wdot[0] + Ji[1] * wdot[1] + Ji[2] * wdot[2] + gyro[i]
+        y.tau_cmd[:] = tau
         y.att_error[:] = (ex, ey, ez)
         y.rate_error[:] = (rx, ry, rz)

@@ -104,6 +104,30 @@ class ClusterGeometry:
         return det3(gram(np.asarray(A).T.tolist()))
 
 
+def zero_momentum_angles(geometry: ClusterGeometry, delta, iterations: int = 300,
+                         gain: float = 0.05) -> np.ndarray:
+    """Gimbal angles near ``delta`` at which the cluster holds no momentum, moved along the
+    null space toward the largest singularity measure Q (the best-conditioned such set)::
+
+        δ ← δ − A⁺ Σσ_i + gain (1 − A⁺ A) ∇ ln Q,   ∂ ln Q/∂δ_i = −2 a_iᵀ (A Aᵀ)⁻¹ σ_i
+
+    (∂a_i/∂δ_i = −σ_i), then Newton steps alone.  Returns angles wrapped to (−π, π]; ModelError if |h| does not
+    reach 1e-12 h_rotor."""
+    d = np.array(delta, dtype=float)
+    for k in range(iterations + 10):          # the last ten: Newton alone, to convergence
+        spins, columns = (np.array(x) for x in geometry.axes(d))
+        A = columns.T
+        pinv = np.linalg.pinv(A)
+        d = d - pinv @ spins.sum(axis=0)
+        if k < iterations:
+            grad = -2.0 * np.einsum("ij,jk,ik->i", columns, np.linalg.inv(A @ A.T), spins)
+            d = d + gain * (np.eye(N_GYROS) - pinv @ A) @ grad
+    d = np.remainder(d + math.pi, 2.0 * math.pi) - math.pi
+    if not np.linalg.norm(geometry.momentum(d)) < 1e-12 * geometry.h_rotor:
+        raise ModelError(f"no zero-momentum gimbal set found near {list(delta)}")
+    return d
+
+
 def gram(columns) -> tuple:
     """Σ a aᵀ over the columns (3×3 rows)."""
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0

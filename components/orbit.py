@@ -42,16 +42,69 @@ that of the frame (r̂, ĥ × r̂, ĥ): ṙ̂ = (|h|/r²) ĥ × r̂ and ḣ̂ = 
 
 Earth and ground target
 -----------------------
-Earth rotation angle θ_E(t) = earth_angle0 + ω_E t, the Earth-fixed frame E being turned by
-+θ_E about z from I (C_EI = R3(θ_E)).  Target, WGS-84 geodetic (φ, λ, h)::
+Earth rotation angle θ_E(t) = earth_angle0 + ω_E t (without an epoch; with one, GMST, see
+below), the Earth-fixed frame E being turned by +θ_E about z from I (C_EI = R3(θ_E)).
+Target, WGS-84 geodetic (φ, λ, h)::
 
     N = a / √(1 − e² sin² φ),  e² = f (2 − f)
     r_T_E = ((N + h) cos φ cos λ, (N + h) cos φ sin λ, (N (1 − e²) + h) sin φ)
-    r_T_I = R3(θ_E)ᵀ r_T_E,  v_T_I = ω_E ẑ × r_T_I
+    r_T_I = R3(θ_E)ᵀ r_T_E,  v_T_I = θ̇_E ẑ × r_T_I
+
+Epoch and sidereal time
+-----------------------
+``epoch`` (ISO 8601, UTC, "YYYY-MM-DDTHH:MM:SS[.ffffff]", optional trailing "Z") dates
+t = 0.  With an epoch, θ_E(t) is the Greenwich mean sidereal time of epoch + t, IAU-82
+(Vallado, 4th ed., eq. 3-47), with T = Julian centuries of UT1 from J2000.0 (2000-01-01
+12:00:00 UT1, JD 2451545.0)::
+
+    θ_GMST = 67310.54841 s + (876600 h + 8640184.812866 s) T + 0.093104 s T² − 6.2e-6 s T³
+
+(seconds of time; 86400 s = 2π).  The (876600 h) T term is 86400 s per elapsed day, i.e.
+whole turns plus the time of day, which is how it is evaluated here (no precision lost
+in 3.2e9 T), and the change from t = 0 is evaluated on its own so that θ_E(t) is smooth
+to ≈ 1e-15 rad.  θ̇_E is the exact time derivative of this polynomial (7.2921158553e-5
+rad/s in 2016, ω_E + 8.6e-12).  **UT1 is taken equal to UTC** (|UT1 − UTC| < 0.9 s,
+i.e. < 6.6e-5 rad of Earth angle, < 0.42 km on the equator); leap seconds (":60") are
+not accepted.  R3(GMST) turns TEME (below) into the pseudo-Earth-fixed frame (Vallado et
+al., "Revisiting Spacetrack Report #3", AIAA 2006-6753); polar motion (≈ 10 m) is
+ignored.  Classical elements given with an epoch are referred to that same frame.  With
+an epoch, ``earth_angle0`` must be 0.
+
+Two-line elements (SGP4)
+------------------------
+With ``tle_line1`` and ``tle_line2`` set, the orbit is the SGP4 propagation (the ``sgp4``
+package, Vallado's code; WGS-72 constants, as TLEs are fitted) of the TLE to epoch + t,
+or to t after the TLE's own epoch when ``epoch`` is empty; θ_E is then GMST as above
+(from the TLE epoch, which is UTC).  The classical-element parameters, ``j2`` and ``mu``
+are not used.  **Approximation: I is TEME** (true equator, mean equinox of date), the
+frame SGP4 works in.  Its Earth-fixed frame is R3(GMST) of it, so the satellite-target
+geometry is consistent; TEME differs from GCRF by precession-nutation (≈ 0.23° in 2016),
+which turns both satellite and target alike and does not matter for their relative
+geometry (it would for star trackers or the Sun direction).  TEME rotates by
+precession-nutation at < 1e-11 rad/s, which is neglected (TEME taken as inertial).
+
+SGP4's velocity is its own analytic expression, not exactly the derivative of its
+position (they differ by up to ≈ 2 cm/s, 3e-6 relative, over an orbit), and it gives no
+acceleration.  v_I is SGP4's velocity; q_OI is built from r_I and v_I as above, and
+w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for the O axes (e_1, e_2, e_3) =
+(x_O, y_O, z_O), w·e_1 = ė_2·e_3, w·e_2 = ė_3·e_1, w·e_3 = ė_1·e_2, which gives::
+
+    w_OI_O = (ḣ·r̂/|h|, −ṙ·x_O/r, ḣ·x_O/|h|),   h = r × v
+
+(the Kepler formulas above when ṙ = v and ḣ = r × a).  ṙ and ḣ are fourth-order
+central differences of SGP4's r and r × v over ±SGP4_STEP and ±2 SGP4_STEP (truncation
+≈ δ⁴ n⁴ / 30 ≈ 6e-13 relative for δ = 2 s; SGP4's round-off gives ≈ 1e-14 rad/s).  Cost:
+five SGP4 calls per output.
+
+Errors of SGP4 (its error codes: eccentricity out of range, decayed, ...) raise
+ModelError naming the code and the time; a TLE is checked for length, line numbers,
+checksums, matching catalogue numbers and readable numeric fields before SGP4 sees it.
 """
 from __future__ import annotations
 
+import datetime
 import math
+import re
 
 from .model import Model, ModelError
 from .rotations import quat_from_dcm
@@ -74,6 +127,18 @@ SCAN_PITCH_INCLINATION = math.radians(98.1)
 
 TWO_PI = 2.0 * math.pi
 _KEPLER_MAX_ITER = 50
+
+DAY = 86400.0                            # s
+#: J2000.0, 2000-01-01 12:00:00 (JD 2451545.0), taken as UT1 = UTC
+J2000 = datetime.datetime(2000, 1, 1, 12, 0, 0)
+# IAU-82 GMST, Vallado (4th ed.) eq. 3-47, seconds of time, T in Julian centuries of UT1
+_GMST0, _GMST1, _GMST2, _GMST3 = 67310.54841, 8640184.812866, 0.093104, -6.2e-6
+_CENTURY = 36525.0                       # days
+_EPOCH_FORMAT = re.compile(r"(\d{4})-(\d{2})-(\d{2})T(\d{2}):(\d{2}):(\d{2})(?:\.(\d{1,6}))?Z?")
+#: step (s) of the central differences that give w_OI_O on the SGP4 path
+SGP4_STEP = 2.0
+#: TLE older or newer than this (days) against the epoch: warn (SGP4 accuracy degrades)
+TLE_AGE_WARNING = 30.0
 
 
 def solve_kepler(mean_anomaly: float, e: float) -> float:
@@ -102,32 +167,175 @@ def geodetic_to_ecef(lat: float, lon: float, alt: float) -> tuple[float, float, 
             (N * (1.0 - WGS84_E2) + alt) * s)
 
 
+# -- time --------------------------------------------------------------------------------
+def parse_epoch(epoch) -> datetime.datetime:
+    """UTC epoch as a naive datetime, from "YYYY-MM-DDTHH:MM:SS[.ffffff][Z]" or a datetime
+    (naive = UTC; aware ones are converted to UTC).  ModelError if malformed."""
+    if isinstance(epoch, datetime.datetime):
+        if epoch.tzinfo is not None:
+            epoch = epoch.astimezone(datetime.timezone.utc).replace(tzinfo=None)
+        return epoch
+    if not isinstance(epoch, str):
+        raise ModelError(f"epoch must be an ISO-8601 string or a datetime, got {epoch!r}")
+    match = _EPOCH_FORMAT.fullmatch(epoch.strip())
+    if match is None:
+        raise ModelError(f"epoch {epoch!r} is not ISO-8601 UTC 'YYYY-MM-DDTHH:MM:SS[.ffffff]'")
+    year, month, day, hour, minute, second, fraction = match.groups()
+    try:
+        return datetime.datetime(int(year), int(month), int(day), int(hour), int(minute),
+                                 int(second), int((fraction or "0").ljust(6, "0")))
+    except ValueError as exc:  # month 13, Feb 30, second 60 (leap seconds not supported)
+        raise ModelError(f"epoch {epoch!r}: {exc}") from None
+
+
+def format_epoch(epoch) -> str:
+    """The ``epoch`` parameter string of a datetime (UTC)."""
+    epoch = parse_epoch(epoch)
+    return epoch.isoformat(timespec="microseconds" if epoch.microsecond else "seconds")
+
+
+def j2000_parts(epoch) -> tuple[int, float]:
+    """(whole days, seconds in [0, 86400)) of an epoch since J2000.0 (UT1 = UTC)."""
+    delta = parse_epoch(epoch) - J2000
+    return delta.days, delta.seconds + 1e-6 * delta.microseconds
+
+
+def _gmst_base(days: int, seconds: float) -> tuple[float, float]:
+    """(GMST in seconds of time, reduced to [0, 86400), T) at ``days`` + ``seconds`` after
+    J2000.0; of the (876600 h) T term, 86400 s per day are whole turns plus ``seconds``."""
+    T = (days + seconds / DAY) / _CENTURY
+    g = _GMST0 + seconds + T * (_GMST1 + T * (_GMST2 + T * _GMST3))
+    return math.fmod(g, DAY) % DAY, T
+
+
+def _gmst(g0: float, T0: float, t: float) -> tuple[float, float]:
+    """GMST (rad, [0, 2π)) and its rate (rad/s) ``t`` seconds after the base (g0, T0).
+
+    The increment of eq. 3-47 is evaluated on its own (τ = t / 36525 days), so that θ
+    is smooth in t to the round-off of g0 + Δg (≈ 1e-15 rad), not of 8.6e6 T (1e-14)."""
+    tau = t / (DAY * _CENTURY)
+    dg = t + tau * (_GMST1 + _GMST2 * (2.0 * T0 + tau)
+                    + _GMST3 * (3.0 * T0 * T0 + tau * (3.0 * T0 + tau)))
+    T = T0 + tau
+    rate = TWO_PI / DAY * (1.0 + (_GMST1 + T * (2.0 * _GMST2 + 3.0 * _GMST3 * T))
+                           / (_CENTURY * DAY))
+    return wrap_2pi(math.fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
+
+
+def gmst(epoch, t: float = 0.0) -> float:
+    """Greenwich mean sidereal time (rad, [0, 2π)) at ``epoch`` + ``t`` seconds, IAU-82
+    (Vallado eq. 3-47); ``epoch`` an ISO-8601 UTC string or a datetime, UT1 = UTC."""
+    return _gmst(*_gmst_base(*j2000_parts(epoch)), t)[0]
+
+
+# -- two-line elements -------------------------------------------------------------------
+_TLE_FIELDS = {  # 0-based column slices of the numeric fields (CelesTrak/NORAD format)
+    1: (("epoch", 18, 32), ("mean motion derivative", 33, 43)),
+    2: (("inclination", 8, 16), ("right ascension of the node", 17, 25),
+        ("eccentricity", 26, 33), ("argument of perigee", 34, 42),
+        ("mean anomaly", 43, 51), ("mean motion", 52, 63)),
+}
+
+
+def tle_checksum(line: str) -> int:
+    """Modulo-10 checksum of a TLE line: digits at face value, '-' as 1, the rest 0."""
+    return sum(int(c) if c.isdigit() else c == "-" for c in line[:68]) % 10
+
+
+def load_tle(line1: str, line2: str):
+    """An SGP4 satellite record (WGS-72) from a two-line element set, checked first.
+
+    ModelError names the problem: wrong length or line number, checksum, different
+    catalogue numbers, unreadable numeric field, missing ``sgp4`` package, or the SGP4
+    initialisation error code.
+    """
+    lines = (line1.strip(), line2.strip())
+    for k, line in enumerate(lines, start=1):
+        name = f"tle_line{k}"
+        if not line.isascii() or len(line) != 69:
+            raise ModelError(f"{name} must be 69 ASCII characters (TLE format), got "
+                             f"{len(line)}: {line!r}")
+        if not line.startswith(f"{k} "):
+            raise ModelError(f"{name} must start with '{k} ', got {line[:2]!r}"
+                             + (" (lines swapped?)" if line.startswith(f"{3 - k} ") else ""))
+        expected = tle_checksum(line)
+        if line[68] != str(expected):
+            raise ModelError(f"{name} checksum: the last digit is {line[68]!r} but the line "
+                             f"sums to {expected} (mod 10): a corrupted element set")
+        for field, start, stop in _TLE_FIELDS[k]:
+            text = line[start:stop].strip()
+            try:
+                float("." + text if field == "eccentricity" else text)
+            except ValueError:
+                raise ModelError(f"{name}: {field} (columns {start + 1}-{stop}) is not a "
+                                 f"number: {line[start:stop]!r}") from None
+    if lines[0][2:7] != lines[1][2:7]:
+        raise ModelError(f"tle_line1 and tle_line2 are of different satellites "
+                         f"({lines[0][2:7].strip()!r} and {lines[1][2:7].strip()!r})")
+    if not float(lines[1][52:63]) > 0.0:
+        raise ModelError(f"tle_line2: mean motion must be > 0 rev/day, got {lines[1][52:63]!r}")
+    try:
+        from sgp4.api import SGP4_ERRORS, WGS72, Satrec
+    except ImportError:
+        raise ModelError("a TLE needs the sgp4 package (pip install sgp4)") from None
+    try:
+        satrec = Satrec.twoline2rv(*lines, WGS72)
+    except (ValueError, RuntimeError) as exc:
+        raise ModelError(f"the TLE could not be read: {exc}") from None
+    if satrec.error:
+        raise ModelError(f"the TLE is rejected by SGP4: error {satrec.error}, "
+                         f"{SGP4_ERRORS.get(satrec.error, 'unknown error')}")
+    return satrec
+
+
+def tle_epoch(satrec) -> tuple[int, float]:
+    """(whole days, seconds in [0, 86400)) of a TLE's epoch (UTC) since J2000.0."""
+    offset = satrec.jdsatepoch - 2451545.0
+    days = math.floor(offset)
+    seconds = ((offset - days) + satrec.jdsatepochF) * DAY
+    extra = math.floor(seconds / DAY)
+    return days + extra, seconds - extra * DAY
+
+
 class OrbitEnvironment(Model):
-    """Orbit (Kepler, optional secular J2), orbit frame and a rotating-Earth ground target."""
+    """Orbit (Kepler with optional secular J2, or SGP4 from a TLE), orbit frame and a
+    rotating-Earth ground target; the Earth angle from GMST when an epoch is given."""
 
     VARIABLES = (
         parameter("semi_major_axis", WGS84_A + SCAN_PITCH_ALTITUDE, "m",
-                  "semi-major axis a (mean value when j2 is set)", display_unit="km"),
-        parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1"),
-        parameter("inclination", SCAN_PITCH_INCLINATION, "rad", "inclination i, 0 <= i <= pi",
+                  "semi-major axis a (mean value when j2 is set); not used with a TLE",
+                  display_unit="km"),
+        parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1; not used with a TLE"),
+        parameter("inclination", SCAN_PITCH_INCLINATION, "rad", "inclination i, 0 <= i <= pi; "
+                  "not used with a TLE", display_unit="deg"),
+        parameter("raan", 0.0, "rad", "right ascension of the ascending node at t = 0; not "
+                  "used with a TLE", display_unit="deg"),
+        parameter("arg_perigee", 0.0, "rad", "argument of perigee at t = 0; not used with a TLE",
                   display_unit="deg"),
-        parameter("raan", 0.0, "rad", "right ascension of the ascending node at t = 0",
+        parameter("true_anomaly0", 0.0, "rad", "true anomaly at t = 0; not used with a TLE",
                   display_unit="deg"),
-        parameter("arg_perigee", 0.0, "rad", "argument of perigee at t = 0",
-                  display_unit="deg"),
-        parameter("true_anomaly0", 0.0, "rad", "true anomaly at t = 0", display_unit="deg"),
         parameter("j2", False, "1", "add the secular J2 drift of raan, arg_perigee and "
-                  "mean anomaly", type="Boolean"),
+                  "mean anomaly; not used with a TLE", type="Boolean"),
         parameter("earth_angle0", 0.0, "rad", "Earth rotation angle at t = 0 (Earth-fixed x "
-                  "from inertial x about z)", display_unit="deg"),
+                  "from inertial x about z); must be 0 with an epoch or a TLE, the angle is "
+                  "then GMST", display_unit="deg"),
         parameter("target_lat", 0.0, "rad", "ground target geodetic latitude (WGS-84)",
                   display_unit="deg"),
         parameter("target_lon", 0.0, "rad", "ground target longitude (WGS-84)",
                   display_unit="deg"),
         parameter("target_alt", 0.0, "m", "ground target height above the WGS-84 ellipsoid"),
-        parameter("mu", MU_EARTH, "m3/s2", "gravitational parameter of the Earth"),
+        parameter("mu", MU_EARTH, "m3/s2", "gravitational parameter of the Earth; not used "
+                  "with a TLE"),
+        parameter("epoch", "", "1", "UTC of t = 0, ISO 8601 'YYYY-MM-DDTHH:MM:SS[.ffffff]' "
+                  "(empty: none). With an epoch the Earth angle is the IAU-82 GMST of "
+                  "epoch + t (UT1 = UTC) and earth_angle0 must be 0", type="String"),
+        parameter("tle_line1", "", "1", "line 1 of a two-line element set (empty: use the "
+                  "classical elements). With a TLE the orbit is SGP4 (WGS-72) in TEME, taken "
+                  "as I; t = 0 is the epoch, or the TLE epoch without one", type="String"),
+        parameter("tle_line2", "", "1", "line 2 of the two-line element set", type="String"),
         output("r_I", "m", "satellite position in I", shape=(3,)),
-        output("v_I", "m/s", "satellite velocity in I (dr_I/dt)", shape=(3,)),
+        output("v_I", "m/s", "satellite velocity in I (dr_I/dt; SGP4's own velocity with a "
+               "TLE)", shape=(3,)),
         output("q_OI", "1", "attitude of the orbit frame O relative to I (scalar first)",
                shape=(4,)),
         output("w_OI_O", "rad/s", "angular velocity of O relative to I, in O", shape=(3,),
@@ -137,13 +345,48 @@ class OrbitEnvironment(Model):
         output("earth_angle", "rad", "Earth rotation angle, wrapped to [0, 2 pi)",
                display_unit="deg"),
     )
+    # the SGP4 record cannot be deep-copied and does not evolve: not part of the FMU state
+    _NOT_STATE = Model._NOT_STATE | {"_satrec"}
 
     def initialize(self, t0):
         p = self.p
-        values = {v.name: getattr(p, v.name) for v in self.layout.group("parameter")}
+        values = {v.name: getattr(p, v.name) for v in self.layout.group("parameter")
+                  if v.type != "String"}
         bad = sorted(name for name, value in values.items() if not math.isfinite(value))
         if bad:
             raise ModelError(f"parameters {bad} must be finite")
+        if not -math.pi / 2 <= p.target_lat <= math.pi / 2:
+            raise ModelError(f"target_lat must be in [-pi/2, pi/2] rad, got {p.target_lat}")
+        epoch, line1, line2 = p.epoch.strip(), p.tle_line1.strip(), p.tle_line2.strip()
+        if bool(line1) != bool(line2):
+            raise ModelError("tle_line1 and tle_line2 must be given together (or both empty)")
+
+        self._epoch = j2000_parts(epoch) if epoch else None
+        self._satrec = None
+        if line1:
+            self._satrec = load_tle(line1, line2)
+            days, seconds = tle_epoch(self._satrec)
+            if self._epoch is None:
+                self._epoch = (days, seconds)
+            offset = (self._epoch[0] - days) * DAY + (self._epoch[1] - seconds)
+            self._tsince0 = offset / 60.0          # minutes from the TLE epoch to t = 0
+            if abs(offset) > TLE_AGE_WARNING * DAY:
+                self.warnings.append(f"the epoch is {offset / DAY:.1f} days from the TLE's: "
+                                     "SGP4 errors grow by km per day")
+        else:
+            self._init_kepler()
+        self._gmst0 = None if self._epoch is None else _gmst_base(*self._epoch)
+        if self._epoch is not None and p.earth_angle0 != 0.0:
+            raise ModelError("earth_angle0 must be 0 when an epoch or a TLE is given (the "
+                             f"Earth angle is then GMST(epoch + t)), got {p.earth_angle0}")
+        self.earth_angle0 = p.earth_angle0
+        self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
+        self.t = t0
+        if self._satrec is not None:
+            self._sgp4(t0)                         # SGP4 errors at the start: fail here
+
+    def _init_kepler(self):
+        p = self.p
         a, e, i, mu = p.semi_major_axis, p.eccentricity, p.inclination, p.mu
         if not a > 0.0:
             raise ModelError(f"semi_major_axis must be > 0 m, got {a}")
@@ -153,8 +396,6 @@ class OrbitEnvironment(Model):
             raise ModelError(f"inclination must be in [0, pi] rad, got {i}")
         if not mu > 0.0:
             raise ModelError(f"mu must be > 0 m3/s2, got {mu}")
-        if not -math.pi / 2 <= p.target_lat <= math.pi / 2:
-            raise ModelError(f"target_lat must be in [-pi/2, pi/2] rad, got {p.target_lat}")
         if a * (1.0 - e) < WGS84_B:
             self.warnings.append(f"perigee radius {a * (1.0 - e):.0f} m is below the Earth's "
                                  "surface")
@@ -177,20 +418,27 @@ class OrbitEnvironment(Model):
         self.raan0, self.argp0 = p.raan, p.arg_perigee
         self.cos_i, self.sin_i = math.cos(i), math.sin(i)
         self.mu_kepler = mean_motion**2 * a**3   # = mu without J2
-        self.earth_angle0 = p.earth_angle0
-        self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
-        self.t = t0
 
     def step(self, t, dt):
         self.t = t + dt
 
     def elements(self, t: float) -> tuple[float, float, float]:
-        """(Ω, ω, M) at time t: the secular model's drifting angles."""
+        """(Ω, ω, M) at time t: the secular model's drifting angles (classical elements)."""
         return (self.raan0 + self.raan_rate * t, self.argp0 + self.argp_rate * t,
                 self.M0 + self.mean_motion * t)
 
-    def output(self):
-        t, a, e, b, y = self.t, self.a, self.e, self.b, self.y
+    def _sgp4(self, t: float):
+        """SGP4 position (km) and velocity (km/s) in TEME at time t; ModelError on error."""
+        error, r, v = self._satrec.sgp4_tsince(self._tsince0 + t / 60.0)
+        if error:
+            from sgp4.api import SGP4_ERRORS
+            raise ModelError(f"SGP4 error {error} at t = {t} s: "
+                             f"{SGP4_ERRORS.get(error, 'unknown error')}")
+        return r, v
+
+    def _kepler_state(self, t):
+        """r_I, v_I and the frame rate (w_y, w_z) of O of the Kepler/J2 model at t."""
+        a, e, b = self.a, self.e, self.b
         raan, argp, M = self.elements(t)
         Wr, wr = self.raan_rate, self.argp_rate
 
@@ -224,24 +472,65 @@ class OrbitEnvironment(Model):
         else:
             vx, vy, vz = kx, ky, kz
             ax, ay, az = g * rx, g * ry, g * rz
+        hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
+        h = math.sqrt(hx * hx + hy * hy + hz * hz)
+        a_h = (ax * hx + ay * hy + az * hz) / h
+        return (rx, ry, rz), (vx, vy, vz), (0.0, -h / (r * r), -r * a_h / h)
+
+    def _sgp4_state(self, t):
+        """r_I, v_I (SGP4, m and m/s) and w_OI_O of the frame built from them at t."""
+        (rx, ry, rz), (vx, vy, vz) = self._sgp4(t)
+        d = SGP4_STEP
+        # 4th-order central differences of r and h = r × v (km, km2/s)
+        rd = [0.0, 0.0, 0.0]
+        hd = [0.0, 0.0, 0.0]
+        for dt, weight in ((d, 8.0), (-d, -8.0), (2 * d, -1.0), (-2 * d, 1.0)):
+            (x, y, z), (u, v, w) = self._sgp4(t + dt)
+            rd[0] += weight * x
+            rd[1] += weight * y
+            rd[2] += weight * z
+            hd[0] += weight * (y * w - z * v)
+            hd[1] += weight * (z * u - x * w)
+            hd[2] += weight * (x * v - y * u)
+        scale = 1.0 / (12.0 * d)
+        hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
+        h = math.sqrt(hx * hx + hy * hy + hz * hz)
+        r = math.sqrt(rx * rx + ry * ry + rz * rz)
+        ux, uy, uz = rx / r, ry / r, rz / r
+        nx, ny, nz = hx / h, hy / h, hz / h
+        xx, xy, xz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux   # x_O = ĥ × r̂
+        w = (scale * (hd[0] * ux + hd[1] * uy + hd[2] * uz) / h,
+             -scale * (rd[0] * xx + rd[1] * xy + rd[2] * xz) / r,
+             scale * (hd[0] * xx + hd[1] * xy + hd[2] * xz) / h)
+        return ((1e3 * rx, 1e3 * ry, 1e3 * rz), (1e3 * vx, 1e3 * vy, 1e3 * vz), w)
+
+    def output(self):
+        t, y = self.t, self.y
+        if self._satrec is None:
+            (rx, ry, rz), (vx, vy, vz), w = self._kepler_state(t)
+        else:
+            (rx, ry, rz), (vx, vy, vz), w = self._sgp4_state(t)
 
         # orbit frame: z = −r̂, y = −ĥ, x = ĥ × r̂
         hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
         h = math.sqrt(hx * hx + hy * hy + hz * hz)
+        r = math.sqrt(rx * rx + ry * ry + rz * rz)
         ux, uy, uz = rx / r, ry / r, rz / r
         nx, ny, nz = hx / h, hy / h, hz / h
         x_O = (ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux)
-        a_h = ax * nx + ay * ny + az * nz
 
         y.r_I[:] = (rx, ry, rz)
         y.v_I[:] = (vx, vy, vz)
         y.q_OI[:] = quat_from_dcm((x_O, (-nx, -ny, -nz), (-ux, -uy, -uz)))
-        y.w_OI_O[:] = (0.0, -h / (r * r), -r * a_h / h)
+        y.w_OI_O[:] = w
 
-        theta = self.earth_angle0 + EARTH_RATE * t
+        if self._gmst0 is None:
+            theta, rate = self.earth_angle0 + EARTH_RATE * t, EARTH_RATE
+        else:
+            theta, rate = _gmst(*self._gmst0, t)
         cT, sT = math.cos(theta), math.sin(theta)
         xE, yE, zE = self.r_T_E
         xT, yT = cT * xE - sT * yE, sT * xE + cT * yE
         y.r_T_I[:] = (xT, yT, zE)
-        y.v_T_I[:] = (-EARTH_RATE * yT, EARTH_RATE * xT, 0.0)
+        y.v_T_I[:] = (-rate * yT, rate * xT, 0.0)
         y.earth_angle = wrap_2pi(theta)

@@ -13,4 +13,5 @@ FMUS = {
     "SweepPlanner": "sweep_planner",
     "Flywheel": "flywheel",
     "AttitudeController": "attitude_controller",
+    "StaringGuidance": "staring_guidance",
 }

@@ -9,6 +9,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from . import scenarios
 
 
@@ -42,6 +44,33 @@ def main(argv=None) -> int:
                         ":variant)")
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
+    stare = commands.add_parser("stare", help="video_sar over a pass of a real satellite "
+                                "(two-line elements) found for a ground target")
+    stare.add_argument("--tle", type=Path, required=True,
+                       help="file holding the two-line element set (an optional name line "
+                       "first)")
+    stare.add_argument("--target", nargs=2, type=float, metavar=("LAT", "LON"),
+                       default=(33.16, 129.72), help="geodetic target [deg] (default Sasebo)")
+    stare.add_argument("--epoch", help="start of the search, ISO 8601 UTC (default: the "
+                       "TLE's epoch)")
+    stare.add_argument("--hours", type=float, default=24.0, help="search window [h]")
+    stare.add_argument("--look", type=float, help="wanted look angle [deg]: the pass "
+                       "closest to it (default: the first pass)")
+    stare.add_argument("--max-look", type=float, default=60.0, help="largest look angle "
+                       "[deg] of a usable pass")
+    stare.add_argument("--no-yaw-compensation", action="store_true")
+    stare.add_argument("--out", type=Path, default=Path("out/stare"))
+
+    mission = commands.add_parser("mission", help="video-SAR mission analysis (seed 002): "
+                                  "frame overlap vs frame rate, Walker constellation size")
+    mission.add_argument("analysis", choices=("overlap", "walker"))
+    mission.add_argument("--frame-rates", type=float, nargs="+", default=(5.0, 25.0),
+                         help="frame rates to tabulate [Hz]")
+    mission.add_argument("--altitude", type=float, default=567.0, help="[km]")
+    mission.add_argument("--angle", type=float, help="look angle [deg] (overlap, default "
+                         "30) or largest angle β (walker, default 65)")
+    mission.add_argument("--out", type=Path, default=Path("out/mission"))
+
     size = commands.add_parser("size-flywheel", help="smallest reaction wheel that meets the "
                                "payload_sweep pointing requirements (co-simulation sweep)")
     size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
@@ -59,7 +88,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return {"build": _build, "validate": _validate, "run": _run, "export": _export,
-                "size-flywheel": _size_flywheel, "generate": _generate}[args.command](args)
+                "stare": _stare, "mission": _mission, "size-flywheel": _size_flywheel,
+                "generate": _generate}[args.command](args)
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
         return 1
@@ -111,6 +141,71 @@ def _run(args) -> int:
 def _export(args) -> int:
     from .export import export_ssp
     print(export_ssp(args.target, args.out))
+    return 0
+
+
+def _stare(args) -> int:
+    import math
+    from ..fmus.build import build_all
+    from .runner import format_summary, run
+    from .scenarios import video_sar
+    deg = math.pi / 180
+    lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
+    if len(lines) not in (2, 3):
+        raise ValueError(f"{args.tle}: expected two TLE lines (and an optional name line), "
+                         f"found {len(lines)} lines")
+    orbit, chosen, passes = video_sar.tle_pass(
+        *lines[-2:], target=(args.target[0] * deg, args.target[1] * deg, 0.0),
+        epoch=args.epoch, hours=args.hours,
+        look_angle=None if args.look is None else args.look * deg,
+        max_look_angle=args.max_look * deg)
+    print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
+    for g in passes:
+        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  look {g.look_angle / deg:6.2f}°"
+              f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
+              f"{'ascending' if g.ascending else 'descending'}")
+    print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
+    build_all(names=video_sar.SCENARIO.components)
+    scenario = video_sar.pass_scenario(orbit, args.out, not args.no_yaw_compensation)
+    results, summary = run(scenario, out_dir=args.out, echo=_echo(args.out), build=False)
+    print(f"results in {args.out}/")
+    print(format_summary(summary))
+    return 3 if summary.get("status") == "failed" else 0
+
+
+def _mission(args) -> int:
+    import math
+    from ..components import mission
+    deg = math.pi / 180
+    altitude = args.altitude * 1e3
+    args.out.mkdir(parents=True, exist_ok=True)
+    if args.analysis == "overlap":
+        from . import plots
+        look = (30.0 if args.angle is None else args.angle) * deg
+        table = mission.overlap_ratio(args.frame_rates, altitude=altitude, look_angle=look)
+        print(f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / deg:g}°, "
+              f"slant range {table.slant_range / 1e3:.1f} km, V = {table.velocity:.1f} m/s "
+              f"({table.velocity_model}), λ = {table.wavelength * 100:.3f} cm, "
+              f"ρ_a = {table.resolution:g} m")
+        for rate, overlap in zip(table.frame_rate, table.overlap):
+            print(f"  {rate:6.2f} Hz   overlap {100 * overlap:6.2f} %"
+                  + ("   (negative: the frames leave gaps)" if overlap < 0 else ""))
+        rates = np.linspace(1.0, 30.0, 146)
+        curve = mission.overlap_ratio(rates, altitude=altitude, look_angle=look)
+        path = plots.lines(args.out / "overlap_vs_frame_rate.png",
+                           "Frame overlap vs frame rate (seed 002, Fig. 3)", rates,
+                           {"overlap": 100 * curve.overlap}, "overlap [%]",
+                           xlabel="frame rate [Hz]")
+        print(f"figure: {path}")
+    else:
+        beta = (65.0 if args.angle is None else args.angle) * deg
+        print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / deg:g}°")
+        for kind, reading in (("incidence", "β = incidence at the ground (eq 14, the "
+                               "paper's words)"), ("look", "β = look angle at the satellite")):
+            w = mission.walker_sizing(altitude, beta, beta_kind=kind)
+            print(f"  {reading}: α = {w.central_angle / deg:.2f}°, T = {w.period / 3600:.3f} h, "
+                  f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
+                  f"P = {w.planes}, N = {w.satellites}")
     return 0
 
 

@@ -9,12 +9,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def lines(path: Path, title: str, t, series: dict, ylabel: str) -> Path:
-    """One axes: each named series against time."""
-    return panels(path, title, [(t, series, ylabel)])
+def lines(path: Path, title: str, t, series: dict, ylabel: str,
+          xlabel: str = "time [s]") -> Path:
+    """One axes: each named series against time (or ``xlabel``)."""
+    return panels(path, title, [(t, series, ylabel)], xlabel)
 
 
-def panels(path: Path, title: str, rows) -> Path:
+def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes, one per (t, {label: values}, ylabel) row."""
     fig, axes = plt.subplots(len(rows), 1, figsize=(8, 3.2 * len(rows)), squeeze=False)
     for ax, (t, series, ylabel) in zip(axes[:, 0], rows):
@@ -24,7 +25,7 @@ def panels(path: Path, title: str, rows) -> Path:
         ax.grid(True, alpha=0.3)
         if len(series) > 1:
             ax.legend(fontsize=8, ncol=min(len(series), 3))
-    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

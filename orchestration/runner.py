@@ -12,8 +12,11 @@ from .master import SimulationError, simulate
 from .results import Results
 
 
-def parse_target(target: str):
-    """'scan_pitch:literal_spin' -> (Scenario, 'literal_spin'); a file path -> (None, None)."""
+def parse_target(target):
+    """'scan_pitch:literal_spin' -> (Scenario, 'literal_spin'); a Scenario -> (it, None);
+    a file path -> (None, None)."""
+    if isinstance(target, scenarios.Scenario):
+        return target, None
     name, _, variant = target.partition(":")
     if name in scenarios.NAMES:
         scenario = scenarios.get(name)
@@ -25,9 +28,10 @@ def parse_target(target: str):
                    ".ssd/.ssp file")
 
 
-def run(target: str, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
+def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
         figures: bool = True, echo=None, build: bool = True) -> tuple[Results, dict]:
-    """Run a scenario[:variant] or a system file; returns (results, summary)."""
+    """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
+    (results, summary)."""
     scenario, variant = parse_target(target)
     overrides = dict(parameters or {})
     if scenario is not None:
@@ -88,4 +92,4 @@ def format_summary(summary: dict) -> str:
 
 
 DISPLAY_SCALE = {("rad", "deg"): 180 / math.pi, ("rad/s", "deg/s"): 180 / math.pi,
-                 ("rad/s2", "deg/s2"): 180 / math.pi}
+                 ("rad/s2", "deg/s2"): 180 / math.pi, ("m", "km"): 1e-3}

@@ -61,17 +61,36 @@ class Fmu:
         return self.dll.fmi2DoStep(self.c, t, h, 1)
 
 
+def orbit_geometry(k):
+    """A consistent orbit geometry, changing with k: an equatorial circular orbit at angle
+    0.01 k, its orbit frame q_OI (DESIGN.md §2: z = −r̂, y = −ĥ), a target below it on an
+    Earth turning at 7.292e-5 rad/s."""
+    a, mu, earth_rate, radius = 6.945e6, 3.986004418e14, 7.292115e-5, 6.378e6
+    u = 0.01 * k
+    c, s = math.cos(u), math.sin(u)
+    speed = math.sqrt(mu / a)
+    C = ((-s, c, 0.0), (0.0, 0.0, -1.0), (-c, -s, 0.0))   # rows x_O, y_O, z_O in I
+    q0 = 0.5 * math.sqrt(1.0 + C[0][0] + C[1][1] + C[2][2])   # C = (q0² − q·q) 1 + 2 q qᵀ
+    q = [q0, (C[1][2] - C[2][1]) / (4 * q0), (C[2][0] - C[0][2]) / (4 * q0),   # − 2 q0 [q×]
+         (C[0][1] - C[1][0]) / (4 * q0)]
+    return {"r_I": [a * c, a * s, 0.0], "v_I": [-speed * s, speed * c, 0.0], "q_OI": q,
+            "r_T_I": [radius * c, radius * s, 1.0e5],
+            "v_T_I": [-earth_rate * radius * s, earth_rate * radius * c, 0.0]}
+
+
 def plausible_inputs(fmu, k=0):
-    """Valid values for every Real input (unit quaternions, a position off the origin)."""
+    """Valid values for every Real input: the geometry of :func:`orbit_geometry`, unit
+    quaternions, small values elsewhere."""
     values = {}
+    geometry = orbit_geometry(k)
     for name in fmu.names("input"):
         base, _, index = name.partition("[")
         i = int(index.split(",")[0].rstrip("]")) if index else 1
-        if base.startswith("q_"):
+        if base in geometry:
+            values[name] = geometry[base][i - 1]
+        elif base.startswith("q_"):
             angle = 0.1 * (k + 1)
             values[name] = [math.cos(angle), math.sin(angle), 0.0, 0.0][i - 1]
-        elif base == "r_I":
-            values[name] = [7.0e6, 1.0e5 * k, 0.0][i - 1]
         else:
             values[name] = 0.01 * math.sin(i + 0.7 * k)
     return values

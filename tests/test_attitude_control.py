@@ -170,9 +170,10 @@ def test_variable_table_units_requirements_and_dependencies():
     by_name = {v.name: v for v in AttitudeController.VARIABLES}
     assert all(v.unit in UNITS and v.description for v in AttitudeController.VARIABLES)
     assert by_name["q_BI"].required and by_name["w_BI_B"].required
-    assert not any(by_name[n].required for n in ("q_ref", "w_ref", "h_ff", "hdot_ff"))
+    assert not any(by_name[n].required for n in ("q_ref", "w_ref", "h_ff", "hdot_ff",
+                                                 "dw_ref"))
     assert set(by_name["tau_cmd"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref", "h_ff",
-                                               "hdot_ff"}
+                                               "hdot_ff", "dw_ref"}
     assert set(by_name["att_error"].depends) == {"q_BI", "q_ref"}
     assert set(by_name["rate_error"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref"}
 
@@ -272,3 +273,59 @@ def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     expected = forced * (omega * dt / 2 if feedforward else 1.0)
     assert late == pytest.approx(expected, rel=0.05)
     assert not wheels.warnings                # within the wheels' torque and momentum
+
+
+# -- acceleration feedforward (extension) --------------------------------------------------
+J_TILTED = np.array([[900.0, 40.0, -25.0], [40.0, 1000.0, 30.0], [-25.0, 30.0, 800.0]])
+
+
+def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
+    """Reference R spun up about a fixed axis n (in I) from rest: angle φ = ½ α t², so
+    q_RI = (cos(φ/2), n sin(φ/2)) (the solution of q̇ = ½ q ⊗ (0, φ̇ n)), w_ref = α t n and
+    dw_ref = α n in R axes (n is fixed in R too).  The body starts on the reference, with
+    an off-principal inertia (gyroscopic torque w × J w ≠ 0) and weak gains; ideal torque.
+    Returns the largest attitude error (rad)."""
+    n = np.array([1.0, 2.0, 2.0]) / 3.0
+    body = SatelliteDynamics(inertia=J_TILTED, gravity_gradient=False).start()
+    ctrl = AttitudeController(kp=[1.0] * 3, kd=[30.0] * 3,
+                              inertia=J_TILTED if feedforward else np.zeros((3, 3))).start()
+    worst = 0.0
+    for k in range(int(round(T / dt)) + 1):
+        t = k * dt
+        phi = 0.5 * alpha * t * t
+        body.output()
+        for name, value in (("q_BI", body.get("q_BI")), ("w_BI_B", body.get("w_BI_B")),
+                            ("q_ref", np.concatenate(([math.cos(phi / 2)],
+                                                      n * math.sin(phi / 2)))),
+                            ("w_ref", alpha * t * n), ("dw_ref", alpha * n)):
+            ctrl.set(name, value)
+        ctrl.output()
+        worst = max(worst, np.linalg.norm(ctrl.get("att_error")))
+        body.set("tau_ext", ctrl.get("tau_cmd"))
+        body.step(t, dt)
+        ctrl.step(t, dt)
+    return worst
+
+
+def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_reference():
+    """J ẇ_des + w × J w: the error left is the torque's sample-and-hold over a step,
+    O(α dt) against the PD-only lag, which grows with the reference rate."""
+    with_ff, without = track_spin_up(True), track_spin_up(False)
+    assert with_ff < 1e-5 and without > 0.05
+    assert track_spin_up(True, dt=0.005) < 0.6 * with_ff        # and shrinks with dt
+
+
+def test_no_feedforward_without_an_inertia():
+    """Default inertia 0: dw_ref does nothing (the law of DESIGN.md §3)."""
+    q = random_quat()
+    plain = control(q, w_BI_B=(0.01, -0.02, 0.03))
+    c = AttitudeController()
+    for name, value in (("q_BI", q), ("w_BI_B", (0.01, -0.02, 0.03)), ("dw_ref", (1.0, 2.0, 3.0))):
+        c.set(name, value)
+    c.start()
+    assert np.array_equal(c.get("tau_cmd"), plain.get("tau_cmd"))
+
+
+def test_asymmetric_feedforward_inertia_is_rejected():
+    with pytest.raises(ModelError, match="inertia must be a finite symmetric matrix"):
+        AttitudeController(inertia=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]).start()

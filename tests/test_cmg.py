@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from agilesat.components.cmg import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS,
-                                     ClusterGeometry, CmgCluster, servo_step)
+                                     ClusterGeometry, CmgCluster, servo_step,
+                                     zero_momentum_angles)
 from agilesat.components.model import ModelError
 from agilesat.components.steering import CmgSteering
 
@@ -178,3 +179,23 @@ def test_exact_singularity_gives_finite_rates_and_a_warning():
 def test_unknown_steering_law_is_rejected():
     with pytest.raises(ModelError, match="law must be 0"):
         CmgSteering(law=2).start()
+
+
+def test_zero_momentum_angles_hold_no_momentum_at_a_local_maximum_of_q():
+    geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
+    delta = zero_momentum_angles(geometry, PAPER_DELTA0)
+    assert np.linalg.norm(geometry.momentum(delta)) < 1e-12 * 16.65
+    Q = geometry.singularity(geometry.jacobian(delta))
+    # along the zero-momentum set (Newton back onto h = 0 after a null-space step) Q falls
+    A = geometry.jacobian(delta)
+    null = np.linalg.svd(A)[2][3:]                       # basis of the null space of A
+    for direction in null:
+        for sign in (-1.0, 1.0):
+            moved = zero_momentum_angles(geometry, delta + sign * 0.05 * direction, iterations=0)
+            assert geometry.singularity(geometry.jacobian(moved)) < Q
+    assert Q > geometry.singularity(geometry.jacobian(PAPER_DELTA0))
+
+
+def test_zero_momentum_angles_report_a_failure():
+    with pytest.raises(ModelError, match="no zero-momentum gimbal set"):
+        zero_momentum_angles(ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS), np.zeros(6))

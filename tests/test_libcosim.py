@@ -26,6 +26,8 @@ CASES = {
     "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
     "payload_sweep": (150.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
                               "SatelliteDynamics.euler_BO[3]", "SatelliteDynamics.w_BO_B[3]"]),
+    "video_sar": (200.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
+                          "SatelliteDynamics.euler_BO[3]"]),
 }
 
 

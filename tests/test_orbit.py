@@ -361,3 +361,269 @@ def test_interface_units():
     j2 = next(v for v in OrbitEnvironment.VARIABLES if v.name == "j2")
     assert j2.type == "Boolean" and j2.unit == "1"
     assert WGS84_A == 6378137.0
+
+
+# -- epoch and sidereal time ------------------------------------------------------------
+from datetime import datetime, timedelta, timezone  # noqa: E402
+
+from agilesat.components.orbit import gmst, parse_epoch  # noqa: E402
+
+
+def test_gmst_vallado_example_3_5():
+    """Vallado, Fundamentals of Astrodynamics (4th ed.), Example 3-5: 1992 August 20,
+    12:14 UT1 gives GMST = 152.578 787 810° (IAU-82, eq. 3-47)."""
+    assert math.degrees(gmst("1992-08-20T12:14:00")) == pytest.approx(152.578787810, abs=1e-7)
+    assert math.degrees(gmst(datetime(1992, 8, 20, 12, 14))) == pytest.approx(152.578787810,
+                                                                              abs=1e-7)
+
+
+def test_gmst_at_j2000():
+    """At J2000.0 (2000-01-01 12:00 UT1) T = 0: GMST = 67310.54841 s = 280.46061837°."""
+    assert math.degrees(gmst("2000-01-01T12:00:00")) == pytest.approx(280.46061837, abs=1e-8)
+    assert math.degrees(gmst("2000-01-01T12:00:00Z")) == pytest.approx(280.46061837, abs=1e-8)
+
+
+@pytest.mark.parametrize("epoch", ["1980-01-06T00:00:00", "2006-06-27T12:00:00.5",
+                                   "2016-11-25T08:09:43", "2049-12-31T23:59:59.999999"])
+def test_gmst_agrees_with_the_sgp4_package(epoch):
+    """sgp4's gstime (Vallado's C++ code) implements the same formula independently."""
+    from sgp4.api import jday
+    from sgp4.propagation import gstime
+    d = parse_epoch(epoch)
+    jd, fr = jday(d.year, d.month, d.day, d.hour, d.minute, d.second + d.microsecond * 1e-6)
+    # gstime takes one float JD: 2.5e6 days carry 4e-10 days (3e-9 rad) of round-off
+    assert math.remainder(gmst(epoch) - gstime(jd + fr), 2 * math.pi) == pytest.approx(0, abs=1e-8)
+
+
+def test_gmst_time_argument_and_sidereal_day():
+    epoch = "2016-11-25T08:09:43"
+    later = datetime(2016, 11, 25, 8, 9, 43) + timedelta(seconds=12345.678)
+    assert gmst(epoch, 12345.678) == pytest.approx(gmst(later), abs=1e-12)
+    # aware datetimes are converted to UTC
+    tokyo = timezone(timedelta(hours=9))
+    assert gmst(datetime(2016, 11, 25, 17, 9, 43, tzinfo=tokyo)) == gmst(epoch)
+    # one mean sidereal day, 23 h 56 min 4.09053 s (Astronomical Almanac), is one turn
+    assert math.remainder(gmst(epoch, 86164.09053) - gmst(epoch), 2 * math.pi) == pytest.approx(
+        0.0, abs=1e-10)
+    # and a solar day is one turn plus 2π/365.2422 (mean Sun), to the precession rate
+    gain = math.remainder(gmst(epoch, DAY) - gmst(epoch), 2 * math.pi)
+    assert gain == pytest.approx(2 * math.pi / 365.2422, rel=1e-4)
+
+
+EPOCH = "2016-11-25T08:09:43"
+
+
+def test_epoch_makes_the_earth_angle_gmst():
+    p = dict(epoch=EPOCH, target_lat=0.5, target_lon=2.0, target_alt=100.0)
+    for t in (0.0, 100.0, 5000.0, 3 * DAY + 0.25):
+        s = state(t, **p)
+        assert s["earth_angle"] == pytest.approx(gmst(EPOCH, t), abs=1e-12)
+        # the target is the same Earth-fixed point turned by GMST
+        r0 = state(0.0, target_lat=0.5, target_lon=2.0, target_alt=100.0)["r_T_I"]
+        c, sn = math.cos(gmst(EPOCH, t)), math.sin(gmst(EPOCH, t))
+        assert np.allclose(s["r_T_I"], [c * r0[0] - sn * r0[1], sn * r0[0] + c * r0[1], r0[2]],
+                           rtol=0, atol=1e-7)
+        # v_T_I is the derivative of r_T_I (GMST rate, ω_E + 8.6e-12 rad/s)
+        # truncation dt²/6 ω³ |r| = 2e-8 m/s; round-off of θ (ulp of 3e5 s of time, 4e-15
+        # rad at 3 days) |r| / 2dt = 2e-8 m/s
+        fd = central(lambda u: at(u, **p).get("r_T_I"), t, 0.25)
+        assert np.allclose(fd, s["v_T_I"], rtol=0, atol=1e-7)
+        rate = (s["r_T_I"][0] * s["v_T_I"][1] - s["r_T_I"][1] * s["v_T_I"][0]) / (
+            s["r_T_I"][0]**2 + s["r_T_I"][1]**2)
+        assert rate == pytest.approx(7.2921158553e-5, rel=1e-10)
+
+
+def test_epoch_leaves_the_orbit_alone():
+    p = ORBITS["eccentric_j2"]
+    for name in ("r_I", "v_I", "q_OI", "w_OI_O"):
+        assert np.array_equal(state(777.0, **p)[name], state(777.0, epoch=EPOCH, **p)[name])
+
+
+@pytest.mark.parametrize("epoch, match", [
+    ("2016-13-01T00:00:00", "month must be in 1..12"),
+    ("2016-02-30T00:00:00", "day is out of range"),
+    ("2016-12-31T23:59:60", "second must be in 0..59"),        # leap second
+    ("2016-11-25 08:09:43", "is not ISO-8601 UTC"),
+    ("2016-11-25T08:09:43+08:00", "is not ISO-8601 UTC"),       # offsets: give UTC
+    ("2016-11-25T08:09", "is not ISO-8601 UTC"),
+    ("2016-11-25T08:09:43.1234567", "is not ISO-8601 UTC"),
+    ("yesterday", "is not ISO-8601 UTC"),
+])
+def test_bad_epoch_raises(epoch, match):
+    with pytest.raises(ModelError, match=match):
+        OrbitEnvironment(epoch=epoch).initialize(0.0)
+    with pytest.raises(ModelError, match=match):
+        gmst(epoch)
+
+
+def test_epoch_and_earth_angle0_exclude_each_other():
+    with pytest.raises(ModelError, match="earth_angle0 must be 0 when an epoch or a TLE"):
+        OrbitEnvironment(epoch=EPOCH, earth_angle0=0.1).initialize(0.0)
+    with pytest.raises(ModelError, match="earth_angle0 must be 0 when an epoch or a TLE"):
+        OrbitEnvironment(tle_line1=ISS[0], tle_line2=ISS[1], earth_angle0=0.1).initialize(0.0)
+
+
+def test_epoch_fraction_and_z_suffix():
+    assert parse_epoch("2016-11-25T08:09:43.25Z") == datetime(2016, 11, 25, 8, 9, 43, 250000)
+    assert state(0.0, epoch=" 2016-11-25T08:09:43.25 ")["earth_angle"] == pytest.approx(
+        gmst("2016-11-25T08:09:43.250000"), abs=1e-15)
+
+
+# -- two-line elements (SGP4) -----------------------------------------------------------
+# ISS (ZARYA), from the python-sgp4 README (epoch 2019 day 343.69339541)
+ISS = ("1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
+       "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482")
+# CBERS-2 (28057), sun-synchronous 98.4°, from Vallado's SGP4 verification set
+# (SGP4-VER.TLE, Vallado et al., "Revisiting Spacetrack Report #3", AIAA 2006-6753)
+CBERS2 = ("1 28057U 03049A   06177.78615833  .00000060  00000-0  35940-4 0  1836",
+          "2 28057  98.4283 247.6961 0000884  88.1964 271.9322 14.35478080140550")
+# SL-14 debris (28872), same set: "last stage of decay, lost in under 420 min"
+DECAYING = ("1 28872U 05037B   05333.02012661  .25992681  00000-0  24476-3 0  1534",
+            "2 28872  96.4736 157.9986 0303955 244.0492 110.6523 16.46015938 10708")
+TLES = {"iss": ISS, "cbers2": CBERS2}
+
+
+def tle(lines, **p):
+    return dict(tle_line1=lines[0], tle_line2=lines[1], **p)
+
+
+def tle_epoch_datetime(line1):
+    """TLE epoch from its fields (YYDDD.DDDDDDDD, years 57-99 are 19xx), independently."""
+    year = int(line1[18:20])
+    year += 1900 if year >= 57 else 2000
+    return datetime(year, 1, 1) + timedelta(days=float(line1[20:32]) - 1.0)
+
+
+def sgp4_direct(lines, when: datetime):
+    from sgp4.api import WGS72, Satrec, jday
+    sat = Satrec.twoline2rv(*lines, WGS72)
+    jd, fr = jday(when.year, when.month, when.day, when.hour, when.minute,
+                  when.second + when.microsecond * 1e-6)
+    error, r, v = sat.sgp4(jd, fr)
+    assert error == 0
+    return np.array(r) * 1e3, np.array(v) * 1e3
+
+
+@pytest.mark.parametrize("name", list(TLES))
+@pytest.mark.parametrize("t", [0.0, 1234.5, 2 * DAY + 0.125])
+def test_tle_without_epoch_is_sgp4_from_the_tle_epoch(name, t):
+    lines = TLES[name]
+    s = state(t, **tle(lines))
+    start = tle_epoch_datetime(lines[0])
+    r, v = sgp4_direct(lines, start + timedelta(seconds=t))
+    # jday/timedelta round the epoch to 1 µs: 7.6 mm/s × 1 µs, plus round-off
+    assert np.allclose(s["r_I"], r, rtol=0, atol=2e-5)
+    assert np.allclose(s["v_I"], v, rtol=0, atol=1e-7)
+    assert s["earth_angle"] == pytest.approx(gmst(start, t), abs=1e-9)
+
+
+@pytest.mark.parametrize("name, epoch", [("iss", "2019-12-10T00:00:00"),
+                                         ("cbers2", "2006-06-25T06:30:00.5")])
+@pytest.mark.parametrize("t", [0.0, 600.0, DAY])
+def test_tle_with_epoch_is_sgp4_at_epoch_plus_t(name, epoch, t):
+    lines = TLES[name]
+    s = state(t, **tle(lines, epoch=epoch))
+    r, v = sgp4_direct(lines, parse_epoch(epoch) + timedelta(seconds=t))
+    assert np.allclose(s["r_I"], r, rtol=0, atol=1e-6)
+    assert np.allclose(s["v_I"], v, rtol=0, atol=1e-9)
+    assert s["earth_angle"] == pytest.approx(gmst(epoch, t), abs=1e-12)
+
+
+def test_tle_ignores_the_classical_elements():
+    a = state(300.0, **tle(CBERS2))
+    b = state(300.0, **tle(CBERS2, semi_major_axis=8e6, eccentricity=0.3, j2=True,
+                           inclination=0.2, mu=1.0))
+    assert np.array_equal(a["r_I"], b["r_I"]) and np.array_equal(a["w_OI_O"], b["w_OI_O"])
+
+
+@pytest.mark.parametrize("name", list(TLES))
+@pytest.mark.parametrize("t", [0.0, 1111.0, DAY + 300.0])
+def test_tle_orbit_frame_axes_and_rate(name, t):
+    """q_OI from SGP4's r and v, w_OI_O its exact rate: against a finite difference of
+    q_OI (truncation dt²/6 |ẅ| < 1e-13 rad/s at dt = 0.1 s) to 1e-9 rad/s."""
+    p = tle(TLES[name])
+    s = state(t, **p)
+    C = dcm_from_quat(s["q_OI"])
+    h = np.cross(s["r_I"], s["v_I"])
+    assert np.allclose(C[2], -s["r_I"] / np.linalg.norm(s["r_I"]), atol=1e-15 * 4)
+    assert np.allclose(C[1], -h / np.linalg.norm(h), atol=1e-15 * 4)
+    fd = rate_from_quaternions(t, 0.1, **p)
+    assert np.linalg.norm(fd - s["w_OI_O"]) < 1e-9
+    # the orbit rate, and the normal's precession (J2) showing in w_z
+    n = 2 * math.pi * float(TLES[name][1][52:63]) / DAY
+    assert -s["w_OI_O"][1] == pytest.approx(n, rel=5e-3)
+    assert abs(s["w_OI_O"][0]) < 1e-8 and abs(s["w_OI_O"][2]) < 5e-6
+
+
+@pytest.mark.parametrize("t", [0.0, 4000.0])
+def test_tle_velocity_is_nearly_the_derivative_of_position(t):
+    """SGP4's velocity is its own expression, not d/dt of its position: they agree to
+    up to ≈ 2 cm/s (3e-6 relative), which is why w_OI_O differentiates r, not uses v."""
+    p = tle(CBERS2)
+    fd = central(lambda u: at(u, **p).get("r_I"), t, 0.25)
+    v = at(t, **p).get("v_I")
+    assert np.linalg.norm(fd - v) < 5e-6 * np.linalg.norm(v)
+
+
+def test_tle_outputs_depend_on_time_only_and_state_round_trips():
+    p = tle(ISS, epoch="2019-12-09T12:00:00")
+    m = OrbitEnvironment(**p).start(0.0)
+    t = 0.0
+    for dt in (0.5, 100.0, 3000.0):
+        m.advance(t, dt)
+        t += dt
+    direct = OrbitEnvironment(**p).start(t)
+    assert np.array_equal(m.get("r_I"), direct.get("r_I"))
+    saved = m.get_state()               # the SGP4 record is not part of the state
+    m.advance(t, 50.0)
+    m.set_state(saved)
+    m.output()
+    assert np.array_equal(m.get("w_OI_O"), direct.get("w_OI_O"))
+
+
+def test_tle_far_from_the_epoch_warns():
+    assert not OrbitEnvironment(**tle(ISS, epoch="2019-12-20T00:00:00")).start(0.0).warnings
+    model = OrbitEnvironment(**tle(ISS, epoch="2020-03-01T00:00:00")).start(0.0)
+    assert any("days from the TLE" in w for w in model.warnings)
+
+
+def test_decayed_satellite_raises_with_the_sgp4_error():
+    model = OrbitEnvironment(**tle(DECAYING)).start(0.0)
+    with pytest.raises(ModelError, match=r"SGP4 error 6 at t = .*decayed"):
+        model.advance(0.0, DAY)
+
+
+def with_checksum(line):
+    """A TLE line with its modulo-10 checksum recomputed (digits, '-' counts 1)."""
+    body = line[:68]
+    return body + str(sum(int(c) if c.isdigit() else c == "-" for c in body) % 10)
+
+
+@pytest.mark.parametrize("lines, match", [
+    ((ISS[0], ""), "must be given together"),
+    (("", ISS[1]), "must be given together"),
+    ((ISS[0][:60], ISS[1]), "tle_line1 must be 69 ASCII characters"),
+    ((ISS[0], ISS[1] + "0"), "tle_line2 must be 69 ASCII characters"),
+    ((ISS[1], ISS[0]), r"tle_line1 must start with '1 '.*swapped"),
+    ((ISS[0][:-1] + "0", ISS[1]), "tle_line1 checksum: the last digit is '0'"),
+    ((ISS[0], ISS[1].replace("51.6439", "51.6449")), "tle_line2 checksum"),
+    ((ISS[0], CBERS2[1]), "different satellites"),
+    ((ISS[0], with_checksum(ISS[1].replace("51.6439", "51.6A39"))),
+     r"tle_line2: inclination \(columns 9-16\) is not a number"),
+    ((ISS[0], with_checksum(ISS[1][:52] + " 0.00000000" + ISS[1][63:])),
+     "mean motion must be > 0"),
+    ((ISS[0], with_checksum(ISS[1][:52] + "19.00000000" + ISS[1][63:])),
+     "rejected by SGP4: error 6"),
+    (("garbage", "garbage"), "tle_line1 must be 69 ASCII characters"),
+])
+def test_bad_tle_raises(lines, match):
+    with pytest.raises(ModelError, match=match):
+        OrbitEnvironment(**tle(lines)).initialize(0.0)
+
+
+def test_string_parameters_in_the_interface():
+    table = {v.name: v for v in OrbitEnvironment.VARIABLES}
+    for name in ("epoch", "tle_line1", "tle_line2"):
+        assert table[name].type == "String" and table[name].unit == "1"
+        assert table[name].causality == "parameter" and table[name].start == ""
+    assert "earth_angle0 must be 0" in table["epoch"].description

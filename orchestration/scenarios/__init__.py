@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 SYSTEMS_DIR = Path(__file__).resolve().parent.parent / "systems"
-NAMES = ("scan_pitch", "payload_sweep")
+NAMES = ("scan_pitch", "payload_sweep", "video_sar")
 FMUS_PACKAGE = __name__.rsplit(".", 2)[0] + ".fmus"
 
 
@@ -34,10 +34,11 @@ class Scenario:
     figures: Callable                         # (Results, out_dir, variant) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     algorithm: str = "gauss-seidel"
+    system: Path | None = None                # the .ssd, if not the shipped systems/<name>
 
     @property
     def ssd(self) -> Path:
-        return SYSTEMS_DIR / f"{self.name}.ssd"
+        return self.system or SYSTEMS_DIR / f"{self.name}.ssd"
 
     def variant_parameters(self, variant: str | None) -> dict:
         """Scalar-named parameter values of a variant ({} for the default)."""

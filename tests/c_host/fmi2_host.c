@@ -12,6 +12,7 @@
  *     instantiate ID                fmi2Instantiate (co-simulation, logging off)
  *     setup ID START STOP           fmi2SetupExperiment
  *     set ID R|I|B VR VALUE         fmi2SetReal/Integer/Boolean of one variable
+ *     set ID S VR TEXT              fmi2SetString (TEXT: the rest of the line)
  *     enter ID | exit ID | terminate ID
  *     get ID R|I|B VR SLOT          slot <- variable
  *     put ID R|I|B VR SLOT          variable <- slot
@@ -50,6 +51,8 @@ typedef struct {
     fmi2Status (*do_step)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
     void (*free_instance)(fmi2Component);
     ArrayCall get[3], set[3];       /* Real, Integer, Boolean */
+    fmi2Status (*set_string)(fmi2Component, const fmi2ValueReference *, size_t,
+                             const fmi2String *);
 } Fmu;
 
 static Fmu fmus[MAX_FMUS];
@@ -123,6 +126,7 @@ static void load(int id, const char *dir, const char *model_identifier, const ch
         snprintf(name, sizeof name, "fmi2Set%s", types[k]);
         f->set[k] = (ArrayCall)symbol(f, name);
     }
+    f->set_string = symbol(f, "fmi2SetString");
 }
 
 static Fmu *fmu(int id) {
@@ -223,9 +227,17 @@ static void run(char **lines, int first, int last, double t, double h) {
             check(fmu(id), "fmi2SetupExperiment",
                   fmu(id)->setup(fmu(id)->component, fmi2False, 0.0, a, fmi2True, b));
         } else if (!strcmp(op, "set")) {
-            if (sscanf(line, "set %d %c %u %lf", &id, &type, &vr, &a) != 4)
+            int text = 0;
+            if (sscanf(line, "set %d %c %u %n", &id, &type, &vr, &text) != 3 || !text)
                 die(1, "bad line: %s", line);
-            transfer(fmu(id), 0, type, vr, &a);
+            if (type == 'S') {
+                fmi2String value = line + text;
+                check(fmu(id), "fmi2SetString",
+                      fmu(id)->set_string(fmu(id)->component, &vr, 1, &value));
+            } else {
+                if (sscanf(line + text, "%lf", &a) != 1) die(1, "bad line: %s", line);
+                transfer(fmu(id), 0, type, vr, &a);
+            }
         } else if (!strcmp(op, "get") || !strcmp(op, "put")) {
             if (sscanf(line + 3, " %d %c %u %d", &id, &type, &vr, &k) != 4)
                 die(1, "bad line: %s", line);

@@ -13,7 +13,7 @@ from agilesat.orchestration.fmu import Description
 from agilesat.orchestration.ssp import read_system
 from agilesat.orchestration.validation import check_system
 
-TYPES = {"Real": "R", "Integer": "I", "Boolean": "B"}
+TYPES = {"Real": "R", "Integer": "I", "Boolean": "B", "String": "S"}
 
 
 def write_script(system_path, script: Path, unzip_root: Path, stop: float | None = None) -> list:
@@ -34,7 +34,7 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
             archive.extractall(directory)
         lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} "
                      f"{name}")
-        for type_ in TYPES:   # the master's value vector: per FMU, per type, by reference
+        for type_ in ("Real", "Integer", "Boolean"):   # the master's value vector
             for output in d.outputs():
                 if d.variables[output].type == type_:
                     slots[(name, output)] = len(slots)
@@ -67,7 +67,9 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     components = [c.name for c in system.components]
     for name in ids:
         lines += [f"instantiate {ids[name]}", f"setup {ids[name]} {start!r} {stop!r}"]
-    lines += [f"set {var(p.component, p.name)} {float(p.value)!r}" for p in system.parameters]
+    lines += [f"set {var(p.component, p.name)} "
+              f"{p.value if p.type == 'String' else repr(float(p.value))}"
+              for p in system.parameters]
     lines += [f"enter {ids[name]}" for name in components]
     lines += evaluate(plan.init, stepping=False)
     for name in ids:
