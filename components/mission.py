@@ -139,12 +139,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .orbit import EARTH_RATE, J2, J2_RADIUS, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
+from . import passes
+from .orbit import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
 
 SPEED_OF_LIGHT = 299792458.0             # m/s, exact (SI)
 SIDEREAL_DAY = 2.0 * math.pi / EARTH_RATE  # s, Earth rotation period 2π/ω_E
 SOLAR_DAY = 86400.0                      # s, mean solar day
-TROPICAL_YEAR = 365.2421897 * SOLAR_DAY  # s
+TROPICAL_YEAR = passes.TROPICAL_YEAR * SOLAR_DAY  # s
 
 DEG = math.pi / 180.0
 
@@ -187,15 +188,9 @@ def orbital_period(altitude: float, *, earth_radius: float = WGS84_A,
 
 
 def sun_synchronous_inclination(altitude: float, *, mu: float = MU_EARTH) -> float:
-    """Inclination of the circular sun-synchronous orbit at this altitude (a = WGS-84 a + h).
-
-    First-order secular J2: Ω̇ = −3/2 n J2 (R/a)² cos i = 2π / tropical year.
-    """
-    a = WGS84_A + altitude
-    n = math.sqrt(mu / a**3)
-    cos_i = -(2.0 * math.pi / TROPICAL_YEAR) / (1.5 * n * J2 * (J2_RADIUS / a) ** 2)
-    _check(-1.0 <= cos_i <= 1.0, f"no sun-synchronous orbit at altitude {altitude} m")
-    return math.acos(cos_i)
+    """Inclination of the circular sun-synchronous orbit at this altitude (a = WGS-84 a + h),
+    :func:`.passes.sun_synchronous_inclination` (first-order secular J2)."""
+    return passes.sun_synchronous_inclination(WGS84_A + altitude, mu=mu)
 
 
 def geocentric_radius(latitude: float) -> float:

@@ -64,8 +64,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import ModelError
-from .orbit import (DAY, J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment, format_epoch,
-                    geodetic_to_ecef, gmst, parse_epoch, wrap_2pi)
+from .ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
+from .orbit import J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef
 
 #: mean tropical year (days), IERS / Astronomical Almanac value for J2000
 TROPICAL_YEAR = 365.2421897

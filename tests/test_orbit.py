@@ -1,10 +1,12 @@
 """OrbitEnvironment against independent truth: conservation laws, Kepler geometry,
 finite differences of its own outputs, the sun-synchronous condition, WGS-84 geometry."""
 import math
+from datetime import datetime, timedelta, timezone
 
 import numpy as np
 import pytest
 
+from agilesat.components.ephemeris import gmst, parse_epoch
 from agilesat.components.model import ModelError
 from agilesat.components.orbit import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
                                        solve_kepler)
@@ -364,9 +366,6 @@ def test_interface_units():
 
 
 # -- epoch and sidereal time ------------------------------------------------------------
-from datetime import datetime, timedelta, timezone  # noqa: E402
-
-from agilesat.components.orbit import gmst, parse_epoch  # noqa: E402
 
 
 def test_gmst_vallado_example_3_5():

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
-from agilesat.components.orbit import DAY, WGS84_A, OrbitEnvironment, gmst
+from agilesat.components.ephemeris import DAY, gmst
+from agilesat.components.orbit import WGS84_A, OrbitEnvironment
 from agilesat.components.passes import (PassGeometry, design_pass, find_pass, find_passes,
                                         sun_synchronous_inclination)
 from agilesat.components.rotations import dcm_from_quat

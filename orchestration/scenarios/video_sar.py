@@ -41,8 +41,8 @@ import numpy as np
 from ...components.attitude_control import AttitudeController
 from ...components.cmg import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, ClusterGeometry,
                                 zero_momentum_angles)
+from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.orbit import OrbitEnvironment
-from ...components.orbit import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.passes import design_pass, find_passes, look_geometry
 from ...components.rotations import dcm_from_quat, quat_conj, quat_mul
 from ...components.staring import StaringGuidance, footprint_azimuth
