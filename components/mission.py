@@ -145,7 +145,7 @@ from .orbit import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
 SPEED_OF_LIGHT = 299792458.0             # m/s, exact (SI)
 SIDEREAL_DAY = 2.0 * math.pi / EARTH_RATE  # s, Earth rotation period 2π/ω_E
 SOLAR_DAY = 86400.0                      # s, mean solar day
-TROPICAL_YEAR = passes.TROPICAL_YEAR * SOLAR_DAY  # s
+TROPICAL_YEAR = passes.TROPICAL_YEAR_DAYS * SOLAR_DAY  # s
 
 DEG = math.pi / 180.0
 
@@ -164,6 +164,12 @@ _ROUND_SLACK = 1e-9                      # relative, for ceil of near-integers
 
 def _ceil(x: float) -> int:
     return math.ceil(x * (1.0 - _ROUND_SLACK))
+
+
+def _inclination(altitude: float, inclination: float | None) -> float:
+    """The given inclination, or the sun-synchronous one at this altitude (a = R_e + h)."""
+    return passes.sun_synchronous_inclination(WGS84_A + altitude) if inclination is None \
+        else inclination
 
 
 def _check(condition: bool, message: str) -> None:
@@ -185,12 +191,6 @@ def orbital_period(altitude: float, *, earth_radius: float = WGS84_A,
                    mu: float = MU_EARTH) -> float:
     """Keplerian period 2π √(r³/μ) of a circular orbit, r = earth_radius + altitude."""
     return 2.0 * math.pi * math.sqrt((earth_radius + altitude) ** 3 / mu)
-
-
-def sun_synchronous_inclination(altitude: float, *, mu: float = MU_EARTH) -> float:
-    """Inclination of the circular sun-synchronous orbit at this altitude (a = WGS-84 a + h),
-    :func:`.passes.sun_synchronous_inclination` (first-order secular J2)."""
-    return passes.sun_synchronous_inclination(WGS84_A + altitude, mu=mu)
 
 
 def geocentric_radius(latitude: float) -> float:
@@ -280,7 +280,7 @@ def slant_range(altitude: float, look_angle: float, model: str | float = "sphere
     if model == "flat":
         return altitude / math.cos(theta)
     if model == "ellipsoid":
-        inc = sun_synchronous_inclination(altitude) if inclination is None else inclination
+        inc = _inclination(altitude, inclination)
         return _ellipsoid_slant_range(altitude, theta, latitude, inc, right_looking)
     raise ValueError(f"unknown slant-range model {model!r}: 'sphere', 'ellipsoid', "
                      "'flat' or a number")
@@ -309,7 +309,7 @@ def platform_velocity(altitude: float, model: str | float = "inertial", *,
     if model == "effective":
         return math.sqrt(vs * vg)
     if model == "earth_fixed":
-        inc = sun_synchronous_inclination(altitude) if inclination is None else inclination
+        inc = _inclination(altitude, inclination)
         we = EARTH_RATE
         lat_c = geocentric_latitude(latitude)
         return math.sqrt(vs * vs - 2.0 * vs * we * r * math.cos(inc)
@@ -545,7 +545,7 @@ def visibility_time(altitude: float = VIDEO_SAR_ALTITUDE,
     eq 15's 2α/ω.
     """
     _check(angle_kind in ("incidence", "look"), "angle_kind must be 'incidence' or 'look'")
-    inc = sun_synchronous_inclination(altitude) if inclination is None else inclination
+    inc = _inclination(altitude, inclination)
     _check(abs(latitude) <= min(inc, math.pi - inc), "the orbit never flies over this latitude")
     r = earth_radius + altitude
     n = math.sqrt(mu / r**3)
@@ -619,7 +619,7 @@ def walker_coverage(satellites_per_plane: int, planes: int, phasing: int = 0, *,
     """
     S, P = int(satellites_per_plane), int(planes)
     _check(S >= 1 and P >= 1 and step > 0 and duration > 0, "bad constellation or time grid")
-    inc = sun_synchronous_inclination(altitude) if inclination is None else inclination
+    inc = _inclination(altitude, inclination)
     r = earth_radius + altitude
     n = math.sqrt(mu / r**3)
     we = EARTH_RATE if earth_rotation else 0.0

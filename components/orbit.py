@@ -54,7 +54,8 @@ Epoch and sidereal time
 -----------------------
 ``epoch`` (ISO 8601 UTC) dates t = 0; θ_E(t) is then the Greenwich mean sidereal time
 of epoch + t (IAU-82, UT1 = UTC, :mod:`.ephemeris`) and θ̇_E its exact derivative.
-With an epoch, ``earth_angle0`` must be 0.
+With an epoch, ``earth_angle0`` must be 0, and classical elements are referred to the
+frame that GMST turns into the Earth-fixed one (TEME of the epoch, as for a TLE below).
 
 Two-line elements (SGP4)
 ------------------------

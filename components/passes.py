@@ -68,9 +68,9 @@ from .ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
 from .orbit import J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef
 
 #: mean tropical year (days), IERS / Astronomical Almanac value for J2000
-TROPICAL_YEAR = 365.2421897
+TROPICAL_YEAR_DAYS = 365.2421897
 #: node rate of a sun-synchronous orbit (rad/s): one turn eastward per tropical year
-SUN_SYNCHRONOUS_RATE = 2.0 * math.pi / (TROPICAL_YEAR * DAY)
+SUN_SYNCHRONOUS_RATE = 2.0 * math.pi / (TROPICAL_YEAR_DAYS * DAY)
 
 
 @dataclass(frozen=True)

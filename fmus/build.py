@@ -155,9 +155,12 @@ def _relative_imports(relative: str, path: Path) -> list[str]:
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ImportFrom) and node.level:
-            parts = (node.module or "").split(".")
+            parts = node.module.split(".") if node.module else []
             base = package if node.level == 1 else parts.pop(0)
-            found.append(f"{base}/{'/'.join(parts)}.py")
+            if parts:                                   # from .cmg import x
+                found.append(f"{base}/{'/'.join(parts)}.py")
+            else:                                       # from . import cmg, passes
+                found += [f"{base}/{alias.name}.py" for alias in node.names]
     return found
 
 

@@ -11,6 +11,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+#: a real satellite's two-line elements: the ISS set printed in the python-sgp4 README
+#: (https://pypi.org/project/sgp4/), epoch 2019-12-09 16:38:29 UTC
+ISS_TLE = ("1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
+           "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482")
 
 
 @pytest.fixture(scope="session")

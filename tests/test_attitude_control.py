@@ -329,3 +329,46 @@ def test_no_feedforward_without_an_inertia():
 def test_asymmetric_feedforward_inertia_is_rejected():
     with pytest.raises(ModelError, match="inertia must be a finite symmetric matrix"):
         AttitudeController(inertia=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]).start()
+
+
+def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
+    """kp = kd = 0: with the exact feedforward J ẇ_des + w × J w the body's acceleration
+    is that of the reference seen in B, so the rate error w − C_BR w_ref stays constant
+    whatever the reference does (axis moving in R, non-principal J, body off the
+    reference).  Rigid body, body and reference integrated together here with RK4, the
+    law evaluated at every stage (continuous time)."""
+    def w_ref(t):
+        return np.array([0.02 * math.sin(0.3 * t), 0.03 * math.cos(0.2 * t), 0.01 + 0.002 * t])
+
+    def dw_ref(t):
+        return np.array([0.006 * math.cos(0.3 * t), -0.006 * math.sin(0.2 * t), 0.002])
+
+    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED).start()
+
+    def f(t, x):
+        qB, w, qR = x[:4], x[4:7], x[7:]
+        for name, value in (("q_BI", qB), ("w_BI_B", w), ("q_ref", qR), ("w_ref", w_ref(t)),
+                            ("dw_ref", dw_ref(t))):
+            ctrl.set(name, value)
+        ctrl.output()
+        wdot = np.linalg.solve(J_TILTED, ctrl.get("tau_cmd") - np.cross(w, J_TILTED @ w))
+        return np.concatenate((0.5 * quat_mul(qB, np.r_[0.0, w]), wdot,
+                               0.5 * quat_mul(qR, np.r_[0.0, w_ref(t)])))
+
+    def rate_error(x, t):
+        C_BR = dcm_from_quat(x[:4]) @ dcm_from_quat(x[7:]).T
+        return x[4:7] - C_BR @ w_ref(t)
+
+    qR = np.array([1.0, 0.0, 0.0, 0.0])
+    qB = quat_mul(qR, quat_from_axis_angle([0.3, -0.2, 0.4], 0.54))
+    x = np.concatenate((qB, dcm_from_quat(qB) @ w_ref(0.0) + [0.01, -0.02, 0.015], qR))
+    e0, dt, worst = rate_error(x, 0.0), 0.01, 0.0
+    for k in range(3000):
+        t = k * dt
+        k1 = f(t, x)
+        k2 = f(t + dt / 2, x + dt / 2 * k1)
+        k3 = f(t + dt / 2, x + dt / 2 * k2)
+        k4 = f(t + dt, x + dt * k3)
+        x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        worst = max(worst, np.linalg.norm(rate_error(x, t + dt) - e0))
+    assert worst < 1e-10 * np.linalg.norm(e0)

@@ -17,7 +17,7 @@ import pytest
 
 from agilesat.orchestration.scenarios import NAMES, get
 from c_host.script import write_script
-from conftest import ROOT, run_python
+from conftest import ISS_TLE, ROOT, run_python
 
 HOST_SOURCE = ROOT / "tests" / "c_host" / "fmi2_host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"}
@@ -69,6 +69,50 @@ def test_the_c_host_reproduces_the_master_bit_for_bit(scenario, fmus, host, tmp_
     assert len(c_data) == len(m_data) == round(STOP / 0.05) + 1
     master = m_data[:, [m_names.index(n) for n in c_names]]
     assert np.array_equal(c_data, master), np.nanmax(np.abs(c_data - master))
+
+
+def test_a_real_satellites_orbit_through_the_c_host(fmus, host, tmp_path):
+    """video_sar over an ISS pass: OrbitEnvironment runs SGP4 from the ``sgp4`` package,
+    which only the build environment has: the C host's interpreter must be that
+    environment's.  Bit-identical to the master on the same system."""
+    from agilesat.orchestration.scenarios import video_sar
+    orbit, _, _ = video_sar.tle_pass(*ISS_TLE)
+    ssd = video_sar.pass_scenario(orbit, tmp_path).ssd
+    script = tmp_path / "script.txt"
+    names = write_script(ssd, script, tmp_path / "fmus", 10.0)
+    run = run_host(host, script, tmp_path / "c.csv")
+    assert run.returncode == 0, run.stderr
+    c_names, c_data = read_csv(tmp_path / "c.csv")
+    m_names, m_data = master_results(ssd, 10.0, tmp_path / "master.npz")
+    assert np.array_equal(c_data, m_data[:, [m_names.index(n) for n in c_names]])
+
+
+def test_the_hosts_python_variables_do_not_reach_the_fmus_python(host, tmp_path, fmus):
+    """A C host that sets PYTHONHOME/PYTHONPATH for its own reasons: ignored by the FMU."""
+    script = tmp_path / "script.txt"
+    write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
+    env = {**CLEAN_ENV, "PYTHONHOME": "/nonexistent", "PYTHONPATH": "/nonexistent"}
+    run = run_host(host, script, tmp_path / "c.csv", env)
+    assert run.returncode == 0, run.stderr
+
+
+def test_an_environment_under_a_non_ascii_path(host, tmp_path, fmus):
+    """The recorded environment's path is decoded as Python decodes paths, whatever the
+    host's locale (an alias of the build environment under 'vé/')."""
+    import sys
+    import sysconfig
+    venv = Path(sys.prefix)
+    alias = tmp_path / "vé"
+    (alias / "bin").mkdir(parents=True)
+    (alias / "pyvenv.cfg").write_text((venv / "pyvenv.cfg").read_text())
+    (alias / "bin" / "python").symlink_to(Path(sys.executable).resolve())
+    (alias / "lib").symlink_to(venv / "lib")
+    assert Path(sysconfig.get_paths()["purelib"]).is_relative_to(venv)
+    script = tmp_path / "script.txt"
+    write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
+    run = run_host(host, script, tmp_path / "c.csv",
+                   {**CLEAN_ENV, "LANG": "C", "AGILESAT_PYTHON": str(alias / "bin" / "python")})
+    assert run.returncode == 0, run.stderr
 
 
 @pytest.fixture

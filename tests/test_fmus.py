@@ -136,3 +136,14 @@ def test_each_fmu_runs_the_code_packed_inside_it(fmus, tmp_path):
 def test_host_modules_do_not_shadow_the_fmus_code(fmus):
     result = host("shadowed", fmus["CmgCluster"])
     assert result["host_patched"] == 123.0 and result["singularity"] != 123.0
+
+
+def test_the_import_follower_reads_every_form_of_relative_import(tmp_path):
+    from agilesat.fmus.build import _relative_imports
+    module = tmp_path / "wrapper.py"
+    module.write_text("from . import slave, shim_util\nfrom .slave import ModelSlave\n"
+                      "from ..components.cmg import CmgCluster\nfrom ..components import passes\n"
+                      "import math\nfrom numpy import pi\n")
+    assert sorted(_relative_imports("fmus/wrapper.py", module)) == [
+        "components/cmg.py", "components/passes.py", "fmus/shim_util.py", "fmus/slave.py",
+        "fmus/slave.py"]

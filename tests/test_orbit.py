@@ -11,6 +11,7 @@ from agilesat.components.model import ModelError
 from agilesat.components.orbit import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
                                        solve_kepler)
 from agilesat.components.rotations import dcm_from_quat, quat_from_dcm
+from conftest import ISS_TLE
 
 MU = MU_EARTH
 A_SSO = 6378137.0 + 681000.0          # scan_pitch orbit
@@ -469,9 +470,7 @@ def test_epoch_fraction_and_z_suffix():
 
 
 # -- two-line elements (SGP4) -----------------------------------------------------------
-# ISS (ZARYA), from the python-sgp4 README (epoch 2019 day 343.69339541)
-ISS = ("1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
-       "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482")
+ISS = ISS_TLE    # ISS (ZARYA), from the python-sgp4 README (epoch 2019 day 343.69339541)
 # CBERS-2 (28057), sun-synchronous 98.4°, from Vallado's SGP4 verification set
 # (SGP4-VER.TLE, Vallado et al., "Revisiting Spacetrack Report #3", AIAA 2006-6753)
 CBERS2 = ("1 28057U 03049A   06177.78615833  .00000060  00000-0  35940-4 0  1836",

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components.model import ModelError
 from agilesat.components.ephemeris import DAY, gmst
-from agilesat.components.orbit import WGS84_A, OrbitEnvironment
+from agilesat.components.model import ModelError
+from agilesat.components.orbit import MU_EARTH, WGS84_A, OrbitEnvironment
 from agilesat.components.passes import (PassGeometry, design_pass, find_pass, find_passes,
                                         sun_synchronous_inclination)
 from agilesat.components.rotations import dcm_from_quat
@@ -180,7 +180,15 @@ def test_design_pass_for_200_s_of_staring_centred_on_zero_doppler():
         assert g["elevation"] > math.radians(30.0) and g["side"] == "right"
         looks.append(g["look"])
     assert LOOK < looks[1] < looks[0] and LOOK < looks[2] < looks[3]
-    assert math.degrees(looks[0]) == pytest.approx(51.3, abs=0.1)
+    # against a sphere without rotation: the satellite 100 s of orbit (n Δt) along track
+    # from broadside of a target at the Earth central angle γ of the 30° look
+    a, R = WGS84_A + ALTITUDE, np.linalg.norm(outputs(p, 100.0)["r_T_I"])
+    gamma = math.asin(a * math.sin(LOOK) / R) - LOOK
+    beta = math.sqrt(MU_EARTH / a**3) * 100.0
+    s, target = a * np.array([math.cos(beta), math.sin(beta), 0.0]), R * np.array(
+        [math.cos(gamma), 0.0, math.sin(gamma)])
+    sphere = math.acos(-s @ (target - s) / a / np.linalg.norm(target - s))   # 50.97°
+    assert looks[0] == pytest.approx(sphere, abs=math.radians(0.5))          # 51.29°
 
 
 @pytest.mark.parametrize("kwargs, error, match", [

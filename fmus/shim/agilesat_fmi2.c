@@ -26,12 +26,12 @@
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
+#include <locale.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <wchar.h>
 
 #include "fmi2_abi.h"
 
@@ -80,8 +80,13 @@ static void finalize_inner(void) {
  *    it with PyGILState_Ensure() from whatever thread the host calls in.  pythonfmu sees
  *    Py_IsInitialized() and leaves initialization and finalization alone.
  * The environment variables AGILESAT_LIBPYTHON and AGILESAT_PYTHON override the recorded
- * paths (another machine).  Only stable-ABI entry points are used; Py_SetProgramName is
- * deprecated since Python 3.11 but present in every CPython 3. */
+ * paths (another machine).  The interpreter ignores the host's PYTHON* variables
+ * (Py_IgnoreEnvironmentFlag: the FMU's Python is the recorded one, not whatever the host's
+ * PYTHONHOME points at), and the host's LC_CTYPE, which Py_InitializeEx sets to the
+ * user's locale, is put back.  Only entry points of the stable ABI are used (dlsym, no
+ * Python headers); Py_SetProgramName and Py_IgnoreEnvironmentFlag are deprecated since
+ * 3.11/3.12 but kept in the ABI.  Py_InitializeEx has no error return: a Python whose
+ * standard library is broken aborts the process (Python's own fatal error message). */
 #ifndef AGILESAT_LIBPYTHON
 #error "define AGILESAT_LIBPYTHON: path of the shared libpython of the building interpreter"
 #endif
@@ -116,13 +121,16 @@ static int ensure_python(char *err, size_t n) {
         if (is_initialized && is_initialized()) return 0;
     }
     const char *python = setting("AGILESAT_PYTHON", AGILESAT_PYTHON);
+    wchar_t *(*decode)(const char *, size_t *) =
+        (wchar_t *(*)(const char *, size_t *))dlsym(lib, "Py_DecodeLocale");
     void (*set_program_name)(const wchar_t *) =
         (void (*)(const wchar_t *))dlsym(lib, "Py_SetProgramName");
     void (*initialize)(int) = (void (*)(int))dlsym(lib, "Py_InitializeEx");
     void *(*save_thread)(void) = (void *(*)(void))dlsym(lib, "PyEval_SaveThread");
-    if (!is_initialized || !set_program_name || !initialize || !save_thread) {
-        snprintf(err, n, "the loaded libpython lacks the embedding API (Py_SetProgramName, "
-                 "Py_InitializeEx, PyEval_SaveThread)");
+    int *ignore_environment = (int *)dlsym(lib, "Py_IgnoreEnvironmentFlag");
+    if (!is_initialized || !decode || !set_program_name || !initialize || !save_thread) {
+        snprintf(err, n, "the loaded libpython lacks the embedding API (Py_DecodeLocale, "
+                 "Py_SetProgramName, Py_InitializeEx, PyEval_SaveThread)");
         return -1;
     }
     if (access(python, X_OK) != 0) {
@@ -130,13 +138,17 @@ static int ensure_python(char *err, size_t n) {
                  "that environment (with numpy) or set AGILESAT_PYTHON", python);
         return -1;
     }
-    static wchar_t program[4096];   /* must outlive the interpreter */
-    if (mbstowcs(program, python, sizeof program / sizeof *program - 1) == (size_t)-1) {
+    wchar_t *program = decode(python, NULL);   /* kept: must outlive the interpreter */
+    if (!program) {
         snprintf(err, n, "cannot decode the path %s", python);
         return -1;
     }
+    char *host_ctype = strdup(setlocale(LC_CTYPE, NULL));
+    if (ignore_environment) *ignore_environment = 1;
     set_program_name(program);
     initialize(0);                  /* 0: the host keeps its signal handlers */
+    if (host_ctype) setlocale(LC_CTYPE, host_ctype);
+    free(host_ctype);
     save_thread();
     return 0;
 }

@@ -127,9 +127,13 @@ PARAMETERS = {
     "CmgSteering.law": 0,
 }
 
+_YAW_0 = dict(GUIDANCE, yaw_compensation=False)
 VARIANTS = {
     "no_yaw_compensation": ("yaw 0 (eq 11 only): the footprint turns on the ground",
-                            {"StaringGuidance.yaw_compensation": False}),
+                            {"StaringGuidance.yaw_compensation": False,
+                             **dict(zip(("SatelliteDynamics.attitude0",
+                                         "SatelliteDynamics.rate0"),
+                                        initial_state(ORBIT, _YAW_0)))}),
     "no_feedforward": ("PD attitude law alone, no feedforward of the reference acceleration",
                        {"AttitudeController.inertia": np.zeros((3, 3))}),
 }
@@ -185,21 +189,30 @@ def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> 
     return scenario
 
 
+def boresight_B(results) -> np.ndarray:
+    """The guidance's boresight in B, read back from its outputs at t = 0: the reference
+    points it along the line of sight, b = C(q_ref) û (so a ``--set`` of it is seen)."""
+    los = results.vector("OrbitEnvironment.r_T_I")[0] - results.vector("OrbitEnvironment.r_I")[0]
+    return dcm_from_quat(results.vector("StaringGuidance.q_ref")[0]) @ (los / np.linalg.norm(los))
+
+
 def boresight_error(results) -> np.ndarray:
-    """Angle (rad) between the body boresight +z and the line of sight to the target."""
+    """Angle (rad) between the body boresight and the line of sight to the target."""
+    b = boresight_B(results)
     q = results.vector("SatelliteDynamics.q_BI")
     los = results.vector("OrbitEnvironment.r_T_I") - results.vector("OrbitEnvironment.r_I")
-    z_I = np.array([dcm_from_quat(qk)[2] for qk in q])     # third row of C_BI: z_B in I
-    cos = np.einsum("ij,ij->i", z_I, los) / np.linalg.norm(los, axis=1)
-    return np.arccos(np.clip(cos, -1.0, 1.0))
+    beam = np.array([dcm_from_quat(qk).T @ b for qk in q])      # C_BIᵀ b: the beam in I
+    return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1),
+                      np.einsum("ij,ij->i", beam, los))
 
 
 def footprint_rotation(results) -> np.ndarray:
     """Turn (rad) of the achieved footprint on the ground since t = 0 (the definition of
     StaringGuidance.footprint_rotation applied to SatelliteDynamics.q_BI)."""
+    b = boresight_B(results)
     q = results.vector("SatelliteDynamics.q_BI")
     r_T = results.vector("OrbitEnvironment.r_T_I")
-    azimuth = np.unwrap([footprint_azimuth(qk, rk) for qk, rk in zip(q, r_T)])
+    azimuth = np.unwrap([footprint_azimuth(qk, rk, b) for qk, rk in zip(q, r_T)])
     return azimuth - azimuth[0]
 
 

@@ -4,7 +4,8 @@
  *
  *     fmi2_host SCRIPT RESULTS.csv
  *
- * SCRIPT is a list of calls, one per line (tests/c_host/script.py writes it from a system):
+ * SCRIPT is a list of calls, one per line (tests/c_host/script.py writes it from a system;
+ * paths without spaces):
  *
  *     fmu ID DIR MODEL_IDENTIFIER GUID INSTANCE   load DIR/binaries/linux64/MODEL_IDENTIFIER.so
  *     slots N                       N value slots (doubles), all 0
@@ -152,6 +153,8 @@ static void transfer(Fmu *f, int get, char type, fmi2ValueReference vr, double *
     if (k == 0) {
         status = (get ? f->get[0] : f->set[0])(f->component, &vr, 1, value);
     } else {
+        if (!get && !(*value >= INT_MIN && *value <= INT_MAX))
+            die(1, "%s: value %g is not an Integer/Boolean", f->name, *value);
         int integer = (int)*value;
         status = (get ? f->get[k] : f->set[k])(f->component, &vr, 1, &integer);
         if (get) *value = integer;
@@ -209,12 +212,13 @@ static void run(char **lines, int first, int last, double t, double h) {
             slots = calloc((size_t)n_slots, sizeof *slots);
             columns = calloc((size_t)n_slots, sizeof *columns);
             column_names = calloc((size_t)n_slots, sizeof *column_names);
+            if (!slots || !columns || !column_names) die(1, "out of memory");
         } else if (!strcmp(op, "column")) {
             if (sscanf(line, "column %d %1023s", &k, name) != 2 || n_columns >= n_slots)
                 die(1, "bad line: %s", line);
             slot(k);
             columns[n_columns] = k;
-            column_names[n_columns++] = strdup(name);
+            if (!(column_names[n_columns++] = strdup(name))) die(1, "out of memory");
         } else if (!strcmp(op, "instantiate")) {
             if (sscanf(line, "instantiate %d", &id) != 1) die(1, "bad line: %s", line);
             Fmu *f = fmu(id);
@@ -268,9 +272,11 @@ int main(int argc, char **argv) {
     if (!results) die(1, "cannot write %s", argv[2]);
     char **lines = calloc(MAX_LINES, sizeof *lines), buffer[8192];
     int n = 0;
-    while (fgets(buffer, sizeof buffer, script) && n < MAX_LINES) {
+    if (!lines) die(1, "out of memory");
+    while (fgets(buffer, sizeof buffer, script)) {
+        if (n == MAX_LINES) die(1, "%s: more than %d lines", argv[1], MAX_LINES);
         buffer[strcspn(buffer, "\r\n")] = '\0';
-        lines[n++] = strdup(buffer);
+        if (!(lines[n++] = strdup(buffer))) die(1, "out of memory");
     }
     fclose(script);
     run(lines, 0, n, 0.0, 0.0);

@@ -1,6 +1,7 @@
-"""Write the call script of ``fmi2_host.c`` for a system: the same FMI calls, in the same
-order and with the same values, as our master's Gauss-Seidel run (orchestration/master.py),
-so that the C host's results must equal the master's bit for bit.
+"""Write the call script of ``fmi2_host.c`` for a system: our master's Gauss-Seidel run
+(orchestration/master.py) call for call — the same calls in the same order with the same
+values, except that each array get/set of the master becomes one call per variable — so
+that the C host's results must equal the master's bit for bit.
 
 Only model descriptions are read here; no FMU is loaded in this process.
 """
