@@ -111,8 +111,8 @@ def zero_momentum_angles(geometry: ClusterGeometry, delta, iterations: int = 300
 
         δ ← δ − A⁺ Σσ_i + gain (1 − A⁺ A) ∇ ln Q,   ∂ ln Q/∂δ_i = −2 a_iᵀ (A Aᵀ)⁻¹ σ_i
 
-    (∂a_i/∂δ_i = −σ_i), then Newton steps alone.  Returns angles wrapped to [−π, π); ModelError if |h| does not
-    reach 1e-12 h_rotor."""
+    (∂a_i/∂δ_i = −σ_i), then Newton steps alone.  Returns angles wrapped to [−π, π);
+    ModelError if |h| does not reach 1e-12 h_rotor."""
     d = np.array(delta, dtype=float)
     for k in range(iterations + 10):          # the last ten: Newton alone, to convergence
         spins, columns = (np.array(x) for x in geometry.axes(d))

@@ -91,8 +91,8 @@ from __future__ import annotations
 
 import math
 
-from .ephemeris import (DAY, j2000_parts, load_tle, sidereal_base, sidereal_time, tle_epoch,
-                        wrap_2pi)
+from .ephemeris import (DAY, TWO_PI, j2000_parts, load_tle, sidereal_base, sidereal_time,
+                        tle_epoch, wrap_2pi)
 from .model import Model, ModelError
 from .rotations import quat_from_dcm
 from .variables import output, parameter
@@ -112,7 +112,6 @@ J2_RADIUS = 6378137.0                    # m
 SCAN_PITCH_ALTITUDE = 681000.0           # m, DESIGN.md §4.1
 SCAN_PITCH_INCLINATION = math.radians(98.1)
 
-TWO_PI = 2.0 * math.pi
 _KEPLER_MAX_ITER = 50
 
 #: step (s) of the central differences that give w_OI_O on the SGP4 path
@@ -139,6 +138,16 @@ def geodetic_to_ecef(lat: float, lon: float, alt: float) -> tuple[float, float, 
     N = WGS84_A / math.sqrt(1.0 - WGS84_E2 * s * s)
     return ((N + alt) * c * math.cos(lon), (N + alt) * c * math.sin(lon),
             (N * (1.0 - WGS84_E2) + alt) * s)
+
+
+def secular_j2_rates(a: float, e: float, i: float, mu: float = MU_EARTH
+                     ) -> tuple[float, float, float]:
+    """(Ω̇, ω̇, Ṁ) of the first-order secular J2 model (module docstring)."""
+    n = math.sqrt(mu / a**3)
+    k = 0.75 * n * J2 * (J2_RADIUS / (a * (1.0 - e * e)))**2
+    s2 = math.sin(i)**2
+    return (-2.0 * k * math.cos(i), k * (4.0 - 5.0 * s2),
+            n + k * math.sqrt(1.0 - e * e) * (2.0 - 3.0 * s2))
 
 
 class OrbitEnvironment(Model):
@@ -244,19 +253,11 @@ class OrbitEnvironment(Model):
             self.warnings.append(f"perigee radius {a * (1.0 - e):.0f} m is below the Earth's "
                                  "surface")
 
-        root = math.sqrt(1.0 - e * e)
-        n = math.sqrt(mu / a**3)
         E0 = 2.0 * math.atan2(math.sqrt(1.0 - e) * math.sin(p.true_anomaly0 / 2),
                               math.sqrt(1.0 + e) * math.cos(p.true_anomaly0 / 2))
-        raan_rate = argp_rate = 0.0
-        mean_motion = n
-        if p.j2:
-            k = 0.75 * n * J2 * (J2_RADIUS / (a * (1.0 - e * e)))**2
-            s2 = math.sin(i)**2
-            raan_rate = -2.0 * k * math.cos(i)
-            argp_rate = k * (4.0 - 5.0 * s2)
-            mean_motion = n + k * root * (2.0 - 3.0 * s2)
-        self.a, self.e, self.b = a, e, a * root
+        raan_rate, argp_rate, mean_motion = (secular_j2_rates(a, e, i, mu) if p.j2 else
+                                             (0.0, 0.0, math.sqrt(mu / a**3)))
+        self.a, self.e, self.b = a, e, a * math.sqrt(1.0 - e * e)
         self.M0 = E0 - e * math.sin(E0)
         self.mean_motion, self.raan_rate, self.argp_rate = mean_motion, raan_rate, argp_rate
         self.raan0, self.argp0 = p.raan, p.arg_perigee

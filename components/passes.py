@@ -65,7 +65,7 @@ import numpy as np
 
 from .model import ModelError
 from .ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
-from .orbit import J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef
+from .orbit import MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef, secular_j2_rates
 
 #: mean tropical year (days), IERS / Astronomical Almanac value for J2000
 TROPICAL_YEAR_DAYS = 365.2421897
@@ -227,8 +227,7 @@ def sun_synchronous_inclination(semi_major_axis: float, eccentricity: float = 0.
     """Inclination (rad) at which the secular J2 node rate of :mod:`.orbit` is one turn
     per tropical year: cos i = −Ω̇_ss / (3/2 n J2 (R/p)²)."""
     a, e = semi_major_axis, eccentricity
-    n = math.sqrt(mu / a**3)
-    c = -SUN_SYNCHRONOUS_RATE / (1.5 * n * J2 * (J2_RADIUS / (a * (1.0 - e * e)))**2)
+    c = SUN_SYNCHRONOUS_RATE / secular_j2_rates(a, e, 0.0, mu)[0]     # Ω̇ ∝ cos i
     if not -1.0 <= c <= 1.0:
         raise ModelError(f"no sun-synchronous inclination for a = {a} m, e = {e}")
     return math.acos(c)
@@ -291,15 +290,9 @@ def design_pass(altitude: float, target_lat: float, target_lon: float, target_al
     model = OrbitEnvironment(**parameters).start(0.0)      # secular rates to go back by t0
     guess -= t0 * np.array([model.raan_rate, model.argp_rate + model.mean_motion])
 
-    orbit_cache = {}
-
     def residual(z):
-        key = (float(z[0]), float(z[1]))
-        if key not in orbit_cache:
-            orbit = _Orbit(dict(parameters, raan=key[0], true_anomaly0=key[1]))
-            g = orbit.geometry(t0)
-            orbit_cache[key] = (np.array([g.squint, g.look_angle - look_angle]), g)
-        return orbit_cache[key]
+        g = _Orbit(dict(parameters, raan=float(z[0]), true_anomaly0=float(z[1]))).geometry(t0)
+        return np.array([g.squint, g.look_angle - look_angle]), g
 
     z = guess
     step = 1e-6

@@ -177,12 +177,8 @@ def euler123_from_quat(q, previous=None) -> np.ndarray:
     In exact lock only φ + ψ (θ = +90°) or φ − ψ (θ = −90°) is defined; the change of that
     combination is split equally between φ and ψ.
     """
-    q0, q1, q2, q3 = _floats(q)
-    c00 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
-    c01, c10 = 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q2 - q0 * q3)
-    c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
-    c20, c21 = 2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1)
-    c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+    q0, _, q2, _ = q = _floats(q)
+    (c00, c01, _), (c10, c11, _), (c20, c21, c22) = dcm(q)
     sin_theta = min(1.0, max(-1.0, c20))
     theta = math.asin(sin_theta)
     cos_theta = math.cos(theta)
@@ -193,18 +189,18 @@ def euler123_from_quat(q, previous=None) -> np.ndarray:
         other = (principal[0] + math.pi, math.pi - theta, principal[2] + math.pi)
         if cos_theta < LOCK_ZONE_COS:
             twist = 2.0 * math.atan2(q2, q0) if q0 >= 0 else 2.0 * math.atan2(-q2, -q0)
-            use_other = abs(_wrap(other[1] - twist)) < abs(_wrap(theta - twist))
+            use_other = abs(wrap_pi(other[1] - twist)) < abs(wrap_pi(theta - twist))
         else:
             use_other = _distance(other, previous) < _distance(principal, previous)
-        return np.array(_unwrap_near(other if use_other else principal, previous))
+        return np.array(unwrap_near(other if use_other else principal, previous))
     # gimbal lock: C[0,1] = ±sin(φ ± ψ), C[1,1] = cos(φ ± ψ) (upper signs for θ = +90°)
     sign = 1.0 if sin_theta > 0 else -1.0
     combination = math.atan2(sign * c01, c11)
     if previous is None:
         return np.array([combination, theta, 0.0])
     phi0, _, psi0 = _floats(previous)
-    change = _wrap(combination - (phi0 + sign * psi0))
-    return np.array(_unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2),
+    change = wrap_pi(combination - (phi0 + sign * psi0))
+    return np.array(unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2),
                                  previous))
 
 
@@ -221,14 +217,15 @@ def euler123_rates(euler, w) -> np.ndarray:
     return np.array([phi_dot, wx * sp + wy * cp, wz - phi_dot * st])
 
 
-def _wrap(angle: float) -> float:
+def wrap_pi(angle: float) -> float:
     """Angle wrapped to [−π, π)."""
     return angle - 2 * math.pi * math.floor((angle + math.pi) / (2 * math.pi))
 
 
 def _distance(angles, reference) -> float:
-    return sum(_wrap(a - r) ** 2 for a, r in zip(angles, _floats(reference)))
+    return sum(wrap_pi(a - r) ** 2 for a, r in zip(angles, _floats(reference)))
 
 
-def _unwrap_near(angles, reference) -> tuple:
-    return tuple(r + _wrap(a - r) for a, r in zip(angles, _floats(reference)))
+def unwrap_near(angles, reference) -> tuple:
+    """Each angle shifted by a multiple of 2π to lie within π of its reference."""
+    return tuple(r + wrap_pi(a - r) for a, r in zip(angles, _floats(reference)))

@@ -52,7 +52,7 @@ its own axes (from ė_i = ω × e_i; exact, no finite difference)::
   itself: g is frozen in the same tangent plane that measures it.
 
 Outputs.  ``footprint_rotation`` = azimuth of the reference's ground line minus its value
-at t_cap, wrapped to (−π, π] (0 before t_cap): rounding-level with compensation, the drift
+at t_cap, wrapped to [−π, π) (0 before t_cap): rounding-level with compensation, the drift
 without.  :func:`footprint_azimuth` applies the same definition to any attitude (e.g. the
 achieved q_BI) with the plane of the *body* boresight and footprint axis (the beam plane;
 for the reference, whose boresight is on û, the same plane).  ``look_angle`` =
@@ -90,7 +90,8 @@ import numpy as np
 
 from .model import Model, ModelError
 from .orbit import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import cross, dcm_from_quat, euler123_from_quat, quat_from_dcm
+from .rotations import (cross, dcm_from_quat, euler123_from_quat, quat_from_dcm, unwrap_near,
+                        wrap_pi)
 from .variables import input_, output, parameter
 
 CAPTURE_TOLERANCE = 1e-9      # s per s of max(1, |reference_time|): "t >= reference_time"
@@ -115,11 +116,6 @@ def _norm(v) -> float:
     return math.sqrt(float(v @ v))
 
 
-def _wrap(angle: float) -> float:
-    """Angle wrapped to (−π, π]."""
-    return angle - 2.0 * math.pi * math.ceil((angle - math.pi) / (2.0 * math.pi))
-
-
 def footprint_axis(boresight_B) -> np.ndarray:
     """Unit body axis ⊥ the boresight whose ground line is the footprint direction: body x
     made perpendicular to the boresight (body y if the boresight is along ±x)."""
@@ -135,21 +131,37 @@ def footprint_axis(boresight_B) -> np.ndarray:
     raise AssertionError("unreachable: b cannot be along both x and y")
 
 
-def local_tangent_frame(r_T) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(up, east, north) unit vectors at a point, in the axes of r_T (I or E: both share
-    the polar axis ẑ).  up = WGS-84 ellipsoid normal at the point's geodetic latitude."""
+def _polar_distance(r_T) -> tuple[float, float, float, float]:
+    """(x, y, z, p = distance from the polar axis); ModelError at a pole."""
     x, y, z = (float(c) for c in r_T)
     p = math.hypot(x, y)
     if not p > 1e-9 * max(1.0, abs(z)):
         raise ModelError(f"r_T_I = {[x, y, z]} is on the Earth's axis: north (hence the "
                          "footprint azimuth) is undefined at a pole")
+    return x, y, z, p
+
+
+def geodetic_latitude(r_T) -> float:
+    """WGS-84 geodetic latitude of a point (I or E axes), by the fixed-point iteration
+    tan φ = (z + e² N sin φ)/p (~4 iterations near the ground)."""
+    _, _, z, p = _polar_distance(r_T)
     lat = math.atan2(z, p * (1.0 - WGS84_E2))
-    for _ in range(20):          # tan φ = (z + e² N sin φ)/p; ~4 iterations near the ground
+    for _ in range(20):
         s = math.sin(lat)
-        lat, previous = math.atan2(z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s),
-                                   p), lat
+        lat, previous = math.atan2(
+            z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s), p), lat
         if abs(lat - previous) <= 1e-15:
             break
+    return lat
+
+
+def local_tangent_frame(r_T, latitude: float | None = None
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(up, east, north) unit vectors at a point, in the axes of r_T (I or E: both share
+    the polar axis ẑ).  up = WGS-84 ellipsoid normal at the geodetic latitude (computed
+    unless given: an Earth-fixed point keeps it)."""
+    x, y, _, p = _polar_distance(r_T)
+    lat = geodetic_latitude(r_T) if latitude is None else latitude
     cl, sl, cx, sx = math.cos(lat), math.sin(lat), x / p, y / p
     return (np.array([cl * cx, cl * sx, sl]), np.array([-sx, cx, 0.0]),
             np.array([-sl * cx, -sl * sx, cl]))
@@ -195,15 +207,20 @@ def _line_of_sight(r, v, r_T, v_T, t):
     return s, u, du, (ddrho - dds * u - 2.0 * ds * du) / s
 
 
-def _aligned_frame(u, du, ddu, a, da, dda, what: str):
-    """F(û, a): axes (x, y, z) in I as rows, ω and ω̇ in its own axes (module docstring)."""
+def _aligned_axes(u, a, what: str):
+    """Axes x, y of F(û, a) in I, n = û × a and |n| (module docstring)."""
     n = cross(u, a)
     m = _norm(n)
     if not m > PARALLEL_TOLERANCE:
         raise ModelError(f"the line of sight (r_T_I - r_I) is parallel to {what}: the "
                          "reference frame is undefined")
     y = n / m
-    x = cross(y, u)
+    return cross(y, u), y, n, m
+
+
+def _aligned_frame(u, du, ddu, a, da, dda, what: str):
+    """F(û, a): axes (x, y, z) in I as rows, ω and ω̇ in its own axes (module docstring)."""
+    x, y, n, m = _aligned_axes(u, a, what)
     dn = cross(du, a) + cross(u, da)
     ddn = cross(ddu, a) + 2.0 * cross(du, da) + cross(u, dda)
     dnx = float(dn @ x)
@@ -264,6 +281,7 @@ class StaringGuidance(Model):
         self.capture_time = None      # t_cap, then the captured g (I, at t_cap)
         self.g_ref_I = None           # and the footprint azimuth at t_cap
         self.azimuth_ref = 0.0
+        self.latitude = None          # the target's geodetic latitude, fixed at t_cap
         self.anchor = self.last = None   # (q_ref, euler) at the previous / last point
         inputs = self.layout.range["input"]
         self._inputs = slice(inputs.start, inputs.stop)
@@ -295,21 +313,26 @@ class StaringGuidance(Model):
                              f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
                              f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I")
         x_O = C_OI[0]
-        dx_O = -(h / r_norm**2) * r_hat
-        ddx_O = (2.0 * h * float(v @ r_hat) / r_norm**3) * r_hat - (h / r_norm**2)**2 * x_O
 
         s, u, du, ddu = _line_of_sight(r, v, r_T, v_T, t)
-        P0 = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O,
-                            "the orbit frame's x axis (pitch +-90 deg)")
-        if ((self.capture_time is None and t >= self.p.reference_time - self.tolerance)
-                or self.capture_time == t):          # capture, or recapture at t_cap
-            up, east, north = local_tangent_frame(r_T)
-            d = ground_line(u, P0[0][0], up)
+        capturing = ((self.capture_time is None and t >= self.p.reference_time - self.tolerance)
+                     or self.capture_time == t)      # capture, or recapture at t_cap
+        compensating = self.compensate and (capturing or self.capture_time is not None)
+        what = "the orbit frame's x axis (pitch +-90 deg)"
+        if compensating:                            # only the axes of the yaw-0 frame P0
+            x0, y0, _, _ = _aligned_axes(u, x_O, what)
+        else:                                       # P0 = F(û, x_O) is the reference
+            dx_O = -(h / r_norm**2) * r_hat
+            ddx_O = (2.0 * h * float(v @ r_hat) / r_norm**3) * r_hat - (h / r_norm**2)**2 * x_O
+            P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O, what)
+            x0 = P[0][0]
+        if capturing:
+            self.latitude = geodetic_latitude(r_T)
+            up, east, north = local_tangent_frame(r_T, self.latitude)
+            d = ground_line(u, x0, up)
             self.azimuth_ref = _azimuth(d, east, north)
             self.capture_time, self.g_ref_I = t, tuple((d / _norm(d)).tolist())
-        captured = self.capture_time is not None
-        P = P0
-        if captured and self.compensate:
+        if compensating:
             angle = EARTH_RATE * (t - self.capture_time)
             c, sn = math.cos(angle), math.sin(angle)
             gx, gy, gz = self.g_ref_I
@@ -328,20 +351,18 @@ class StaringGuidance(Model):
             q = -q
         if self.C_RP is None:   # eq (11) and the yaw of eq (12), continued from the anchor
             x, y_, z = (C_OI @ u).tolist()
-            psi = (math.atan2(float(C_PI[0] @ P0[0][1]), float(C_PI[0] @ P0[0][0]))
-                   if P is not P0 else 0.0)
-            euler = np.array([-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi])
-            if anchor_euler is not None:
-                euler += [2 * math.pi * round((e0 - e) / (2 * math.pi))
-                          for e, e0 in zip(euler, anchor_euler)]
+            psi = (math.atan2(float(C_PI[0] @ y0), float(C_PI[0] @ x0))
+                   if compensating else 0.0)
+            euler = (-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi)
+            euler = np.array(euler if anchor_euler is None else unwrap_near(euler, anchor_euler))
         else:
             euler = euler123_from_quat(quat_from_dcm(C_RI @ C_OI.T), anchor_euler)
 
         rotation = 0.0
-        if captured:
-            up, east, north = local_tangent_frame(r_T)
-            rotation = _wrap(_azimuth(ground_line(u, C_PI[0], up), east, north)
-                             - self.azimuth_ref)
+        if self.capture_time is not None:
+            up, east, north = local_tangent_frame(r_T, self.latitude)
+            rotation = wrap_pi(_azimuth(ground_line(u, C_PI[0], up), east, north)
+                               - self.azimuth_ref)
         y.q_ref[:] = q
         y.w_ref[:] = w
         y.dw_ref[:] = dw

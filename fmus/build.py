@@ -20,6 +20,7 @@ archive is deterministic (sorted entries, fixed timestamps): same sources, same 
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import importlib
 import os
@@ -143,10 +144,17 @@ def _sources(name: str) -> tuple[dict[str, Path], str]:
         digest.update(relative.encode() + b"\0" + path.read_bytes() + b"\0")
     for path in (*SHIM_SOURCES, FMUS_DIR / "build.py", FMUS_DIR / "model_description.py"):
         digest.update(path.read_bytes())
-    digest.update(_pythonfmu_binary().read_bytes())
-    digest.update(metadata.version("pythonfmu").encode())
-    digest.update("\0".join(python_runtime()).encode())
+    digest.update(_toolchain_digest())
     return files, digest.hexdigest()[:12]
+
+
+@functools.cache
+def _toolchain_digest() -> bytes:
+    """What every FMU's content depends on besides our code (once per process): the
+    pythonfmu binary and version, the Python runtime the shim starts."""
+    return hashlib.sha256(_pythonfmu_binary().read_bytes()
+                          + metadata.version("pythonfmu").encode()
+                          + "\0".join(python_runtime()).encode()).digest()
 
 
 def _relative_imports(relative: str, path: Path) -> list[str]:
@@ -164,6 +172,7 @@ def _relative_imports(relative: str, path: Path) -> list[str]:
     return found
 
 
+@functools.cache
 def _pythonfmu_dir() -> Path:
     """The installed pythonfmu package (from its distribution, not the import path, which
     an FMU loaded in this process may have shadowed)."""

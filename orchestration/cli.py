@@ -6,12 +6,17 @@ Exit status: 0 success; 1 bad input or a failed run (the message says what and w
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from ..components import mission
 from . import scenarios
+from .scenarios import payload_sweep
+
+DEG = math.pi / 180
 
 
 def main(argv=None) -> int:
@@ -50,7 +55,9 @@ def main(argv=None) -> int:
                        help="file holding the two-line element set (an optional name line "
                        "first)")
     stare.add_argument("--target", nargs=2, type=float, metavar=("LAT", "LON"),
-                       default=(33.16, 129.72), help="geodetic target [deg] (default Sasebo)")
+                       default=(mission.VIDEO_SAR_TARGET_LAT / DEG,
+                                mission.VIDEO_SAR_TARGET_LON / DEG),
+                       help="geodetic target [deg] (default Sasebo)")
     stare.add_argument("--epoch", help="start of the search, ISO 8601 UTC (default: the "
                        "TLE's epoch)")
     stare.add_argument("--hours", type=float, default=24.0, help="search window [h]")
@@ -61,21 +68,25 @@ def main(argv=None) -> int:
     stare.add_argument("--no-yaw-compensation", action="store_true")
     stare.add_argument("--out", type=Path, default=Path("out/stare"))
 
-    mission = commands.add_parser("mission", help="video-SAR mission analysis (seed 002): "
+    analysis = commands.add_parser("mission", help="video-SAR mission analysis (seed 002): "
                                   "frame overlap vs frame rate, Walker constellation size")
-    mission.add_argument("analysis", choices=("overlap", "walker"))
-    mission.add_argument("--frame-rates", type=float, nargs="+", default=(5.0, 25.0),
+    analysis.add_argument("analysis", choices=("overlap", "walker"))
+    analysis.add_argument("--frame-rates", type=float, nargs="+", default=(5.0, 25.0),
                          help="frame rates to tabulate [Hz]")
-    mission.add_argument("--altitude", type=float, default=567.0, help="[km]")
-    mission.add_argument("--angle", type=float, help="look angle [deg] (overlap, default "
-                         "30) or largest angle β (walker, default 65)")
-    mission.add_argument("--out", type=Path, default=Path("out/mission"))
+    analysis.add_argument("--altitude", type=float, default=mission.VIDEO_SAR_ALTITUDE / 1e3,
+                          help="[km]")
+    analysis.add_argument("--angle", type=float, help="look angle [deg] (overlap, default "
+                          f"{mission.VIDEO_SAR_LOOK_ANGLE / DEG:g}) or largest angle β "
+                          f"(walker, default {mission.VIDEO_SAR_MAX_INCIDENCE / DEG:g})")
+    analysis.add_argument("--out", type=Path, default=Path("out/mission"))
 
     size = commands.add_parser("size-flywheel", help="smallest reaction wheel that meets the "
                                "payload_sweep pointing requirements (co-simulation sweep)")
     size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
-    size.add_argument("--accuracy", type=float, default=0.032, help="pointing accuracy [deg]")
-    size.add_argument("--stability", type=float, default=0.006, help="pointing stability [deg/s]")
+    size.add_argument("--accuracy", type=float, default=payload_sweep.ACCURACY / DEG,
+                      help="pointing accuracy [deg]")
+    size.add_argument("--stability", type=float, default=payload_sweep.STABILITY / DEG,
+                      help="pointing stability [deg/s]")
     size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
     size.add_argument("--stop", type=float, help="run length [s] (default: one pitch sweep)")
     size.add_argument("--out", type=Path, default=Path("out/size-flywheel"))
@@ -120,7 +131,7 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
-    from .runner import format_summary, run
+    from .runner import run
     overrides = {}
     for item in args.set:
         key, sep, value = item.partition("=")
@@ -134,6 +145,12 @@ def _run(args) -> int:
     settings = summary["settings"]
     print(f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
           f"{settings['algorithm']}; results in {out}/")
+    return _report(summary)
+
+
+def _report(summary) -> int:
+    """Print the summary's numbers; the exit status of a run."""
+    from .runner import format_summary
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0
 
@@ -145,45 +162,37 @@ def _export(args) -> int:
 
 
 def _stare(args) -> int:
-    import math
-    from ..fmus.build import build_all
-    from .runner import format_summary, run
+    from .runner import run
     from .scenarios import video_sar
-    deg = math.pi / 180
     lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
     if len(lines) not in (2, 3):
         raise ValueError(f"{args.tle}: expected two TLE lines (and an optional name line), "
                          f"found {len(lines)} lines")
     orbit, chosen, passes = video_sar.tle_pass(
-        *lines[-2:], target=(args.target[0] * deg, args.target[1] * deg, 0.0),
+        *lines[-2:], target=(args.target[0] * DEG, args.target[1] * DEG, 0.0),
         epoch=args.epoch, hours=args.hours,
-        look_angle=None if args.look is None else args.look * deg,
-        max_look_angle=args.max_look * deg)
+        look_angle=None if args.look is None else args.look * DEG,
+        max_look_angle=args.max_look * DEG)
     print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
     for g in passes:
-        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  look {g.look_angle / deg:6.2f}°"
+        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  look {g.look_angle / DEG:6.2f}°"
               f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
               f"{'ascending' if g.ascending else 'descending'}")
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
-    build_all(names=video_sar.SCENARIO.components)
     scenario = video_sar.pass_scenario(orbit, args.out, not args.no_yaw_compensation)
-    results, summary = run(scenario, out_dir=args.out, echo=_echo(args.out), build=False)
+    _, summary = run(scenario, out_dir=args.out, echo=_echo(args.out))
     print(f"results in {args.out}/")
-    print(format_summary(summary))
-    return 3 if summary.get("status") == "failed" else 0
+    return _report(summary)
 
 
 def _mission(args) -> int:
-    import math
-    from ..components import mission
-    deg = math.pi / 180
     altitude = args.altitude * 1e3
     args.out.mkdir(parents=True, exist_ok=True)
     if args.analysis == "overlap":
         from . import plots
-        look = (30.0 if args.angle is None else args.angle) * deg
+        look = mission.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
         table = mission.overlap_ratio(args.frame_rates, altitude=altitude, look_angle=look)
-        print(f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / deg:g}°, "
+        print(f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / DEG:g}°, "
               f"slant range {table.slant_range / 1e3:.1f} km, V = {table.velocity:.1f} m/s "
               f"({table.velocity_model}), λ = {table.wavelength * 100:.3f} cm, "
               f"ρ_a = {table.resolution:g} m")
@@ -198,28 +207,24 @@ def _mission(args) -> int:
                            xlabel="frame rate [Hz]")
         print(f"figure: {path}")
     else:
-        beta = (65.0 if args.angle is None else args.angle) * deg
-        print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / deg:g}°")
+        beta = mission.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
+        print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
         for kind, reading in (("incidence", "β = incidence at the ground (eq 14, the "
                                "paper's words)"), ("look", "β = look angle at the satellite")):
             w = mission.walker_sizing(altitude, beta, beta_kind=kind)
-            print(f"  {reading}: α = {w.central_angle / deg:.2f}°, T = {w.period / 3600:.3f} h, "
+            print(f"  {reading}: α = {w.central_angle / DEG:.2f}°, T = {w.period / 3600:.3f} h, "
                   f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
                   f"P = {w.planes}, N = {w.satellites}")
     return 0
 
 
 def _size_flywheel(args) -> int:
-    import math
-    from ..fmus.build import build_all
     from .sizing import size_flywheel
-    deg = math.pi / 180
-    build_all(names=scenarios.get("payload_sweep").components)
-    print(f"wheel torque limit [N·m]   accuracy [deg]   stability [deg/s]   momentum [N·m·s]")
-    result = size_flywheel(args.turnaround, args.accuracy * deg, args.stability * deg,
+    print("wheel torque limit [N·m]   accuracy [deg]   stability [deg/s]   momentum [N·m·s]")
+    result = size_flywheel(args.turnaround, args.accuracy * DEG, args.stability * DEG,
                            args.step, args.stop, out_dir=args.out, progress=lambda p: print(
-                               f"{p.torque:24.4g} {p.accuracy / deg:16.4g} "
-                               f"{p.stability / deg:19.4g} {p.momentum:18.3g}"
+                               f"{p.torque:24.4g} {p.accuracy / DEG:16.4g} "
+                               f"{p.stability / DEG:19.4g} {p.momentum:18.3g}"
                                f"   {'meets' if p.met else 'fails'}"))
     if result.torque is None:
         print(f"no wheel up to {max(p.torque for p in result.points):g} N·m meets "

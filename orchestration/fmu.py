@@ -77,11 +77,10 @@ class Description:
         self.required_inputs = _required_inputs(path)
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
-
-    def outputs(self) -> list[str]:
-        """Output names in value-reference order."""
-        return [v.name for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
-                if v.causality == "output"]
+        #: output names in value-reference order
+        self.outputs = [v.name for v in sorted(self.md.modelVariables,
+                                               key=lambda v: v.valueReference)
+                        if v.causality == "output"]
 
 
 class Instance(Description):

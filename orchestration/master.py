@@ -43,70 +43,92 @@ class SimulationError(RuntimeError):
         self.results = results
 
 
+TYPES = ("Real", "Integer", "Boolean")   # of the values the master passes on
+
+
+def value_layout(descriptions: dict, order) -> dict[tuple[str, str], int]:
+    """(instance, output) -> its index in the master's value vector: FMU by FMU in
+    ``order``, within one by type (:data:`TYPES`), then by value reference."""
+    layout = {}
+    for name in order:
+        d = descriptions[name]
+        for type_ in TYPES:
+            for y in d.outputs:
+                if d.variables[y].type == type_:
+                    layout[(name, y)] = len(layout)
+    return layout
+
+
+def evaluation_sequence(schedule) -> list[tuple[str, tuple[str, ...], bool]]:
+    """(instance, outputs read, first block of that instance?) for each block of a
+    schedule; an FMU steps at its first block."""
+    seen, result = set(), []
+    for name, block in schedule.blocks:
+        result.append((name, block, name not in seen))
+        seen.add(name)
+    return result
+
+
 class _Port:
-    """Inputs or outputs of one type of one instance: value references, buffer, FMI call."""
+    """Variables of one type of one instance and their places in the value vector:
+    value references, buffer, the bound FMI call."""
 
     def __init__(self, instance: Instance, type_: str, names: list[str], direction: str,
-                 index=()):
-        self.instance, self.type, self.names, self.call = instance, type_, names, \
-            f"fmi2{direction}{type_}"
+                 index: list[int]):
+        self.instance, self.call = instance, f"fmi2{direction}{type_}"
         self.n = len(names)
         self.buffer = np.zeros(self.n, dtype=np.float64 if type_ == "Real" else np.int32)
         self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[n].valueReference
                                               for n in names))
         self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(_CTYPE[type_]))
         self.function = getattr(instance, self.call)
-        self.index = np.array(index, dtype=np.intp)   # inputs: where in the value vector
+        self.index = np.array(index, dtype=np.intp)
+        contiguous = index == list(range(index[0], index[0] + self.n))
+        self.where = slice(index[0], index[0] + self.n) if contiguous else self.index
 
     def transfer(self) -> None:
         status = self.function(self.instance.component, self.vrs, self.n, self.ptr)
         if status > 1:
             self.instance.check(status, self.call)
 
+    def read(self, values: np.ndarray) -> None:
+        self.transfer()
+        values[self.where] = self.buffer
+
+    def write(self, values: np.ndarray) -> None:
+        np.take(values, self.index, out=self.buffer)
+        self.transfer()
+
+
+def _ports(instance: Instance, names, direction: str, index: dict) -> list[_Port]:
+    """One port per type over ``names`` (order kept); ``index`` maps a name to its place."""
+    ports = []
+    for type_ in TYPES:
+        chosen = [n for n in names if instance.variables[n].type == type_]
+        if chosen:
+            ports.append(_Port(instance, type_, chosen, direction, [index[n] for n in chosen]))
+    return ports
+
 
 class _Node:
-    """One instance: its outputs' place in the value vector and its connected inputs."""
+    """One instance: its output ports and its connected-input ports."""
 
-    def __init__(self, instance: Instance, offset: int):
+    def __init__(self, instance: Instance, layout: dict, sources: dict):
         self.instance = instance
-        self.inputs: list[_Port] = []
-        self.outputs: list[tuple[_Port, slice]] = []
-        self.position: dict[str, int] = {}          # output -> index in the value vector
-        outputs = instance.outputs()
-        for type_ in ("Real", "Integer", "Boolean"):
-            names = [n for n in outputs if instance.variables[n].type == type_]
-            if names:
-                self.outputs.append((_Port(instance, type_, names, "Get"),
-                                     slice(offset, offset + len(names))))
-                self.position.update((n, offset + i) for i, n in enumerate(names))
-                offset += len(names)
-        self.end = offset
-        self.refresh: dict[tuple[str, ...], list[tuple[_Port, np.ndarray]]] = {}
+        self.position = {y: layout[(instance.name, y)] for y in instance.outputs}
+        self.outputs = _ports(instance, instance.outputs, "Get", self.position)
+        connected = sorted((u for (b, u) in sources if b == instance.name),
+                           key=lambda u: instance.variables[u].valueReference)
+        self.inputs = _ports(instance, connected, "Set",
+                             {u: layout[sources[(instance.name, u)]] for u in connected})
 
     def set_inputs(self, values: np.ndarray) -> None:
         for port in self.inputs:
-            np.take(values, port.index, out=port.buffer)
-            port.transfer()
+            port.write(values)
 
     def get_outputs(self, values: np.ndarray) -> None:
-        for port, where in self.outputs:
-            port.transfer()
-            values[where] = port.buffer
-
-    def prepare_refresh(self, block: tuple[str, ...]) -> None:
-        """Ports reading only ``block`` (an FMU's later block in the evaluation sequence)."""
-        ports = []
-        for type_ in ("Real", "Integer", "Boolean"):
-            names = [n for n in block if self.instance.variables[n].type == type_]
-            if names:
-                ports.append((_Port(self.instance, type_, names, "Get"),
-                              np.array([self.position[n] for n in names])))
-        self.refresh[block] = ports
-
-    def get_block(self, block: tuple[str, ...], values: np.ndarray) -> None:
-        for port, where in self.refresh[block]:
-            port.transfer()
-            values[where] = port.buffer
+        for port in self.outputs:
+            port.read(values)
 
 
 def simulate(system, *, step: float | None = None, stop: float | None = None,
@@ -151,53 +173,32 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
 
 def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
          logging_on) -> Results:
-    nodes = {}
-    offset = 0
-    columns = ["time"]
-    for name in plan.steps.step_order:
-        node = nodes[name] = _Node(instances[name], offset)
-        for port, _ in node.outputs:
-            columns += [f"{name}.{output}" for output in port.names]
-        offset = node.end
-    for name, node in nodes.items():
-        by_type = {}
-        for (target, input_name), (source, output) in plan.sources.items():
-            if target == name:
-                kind = node.instance.variables[input_name].type
-                by_type.setdefault(kind, []).append((input_name, nodes[source].position[output]))
-        for pairs in by_type.values():  # ascending value references: one range per FMU
-            pairs.sort(key=lambda pair: node.instance.variables[pair[0]].valueReference)
-        node.inputs = [_Port(node.instance, kind, [n for n, _ in pairs], "Set",
-                             [i for _, i in pairs]) for kind, pairs in by_type.items()]
+    layout = value_layout(instances, plan.steps.step_order)
+    nodes = {name: _Node(instances[name], layout, plan.sources)
+             for name in plan.steps.step_order}
+    columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
 
-    values = np.zeros(offset)
-    data = np.full((n_steps + 1, offset + 1), np.nan)
+    values = np.zeros(len(layout))
+    data = np.full((n_steps + 1, len(layout) + 1), np.nan)
     meta = {"system": str(system.path), "step": step, "start": start,
             "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
             "order": plan.steps.step_order}
     writer = ResultWriter(Path(out_dir) / "results.csv", columns) if out_dir else None
     rows = 0
     try:
-        _initialize(plan, instances, nodes, init_sequence, bindings, values, start,
+        _initialize(instances, nodes, init_sequence, bindings, values, start,
                     start + n_steps * step, log, logging_on)
         data[0, 0], data[0, 1:] = start, values
         rows = 1
-        order = [nodes[n] for n in plan.steps.step_order]
         for n in range(n_steps):
             t = start + n * step
             log.time = t
             if algorithm == "gauss-seidel":
-                for node, block, first in sequence:
-                    node.set_inputs(values)
-                    if first:
-                        _do_step(node.instance, t, step)
-                        node.get_outputs(values)
-                    else:
-                        node.get_block(block, values)
+                _evaluate(sequence, values, t, step)
             else:
-                for node in order:
+                for node in nodes.values():
                     _do_step(node.instance, t, step)
                 _evaluate(sequence, values)
             data[n + 1, 0] = start + (n + 1) * step
@@ -226,32 +227,28 @@ def _do_step(instance: Instance, t: float, step: float) -> None:
 
 
 def _sequence(schedule, nodes) -> list:
-    """(node, block, first occurrence?) for each block of a schedule."""
-    seen, result = set(), []
-    for name, block in schedule.blocks:
-        first = name not in seen
-        seen.add(name)
-        if not first:
-            nodes[name].prepare_refresh(block)
-        result.append((nodes[name], block, first))
-    return result
+    """(node, output ports to read, first block?) for each block of a schedule."""
+    return [(nodes[name], nodes[name].outputs if first else
+             _ports(nodes[name].instance, block, "Get", nodes[name].position), first)
+            for name, block, first in evaluation_sequence(schedule)]
 
 
-def _evaluate(sequence, values) -> None:
-    """Bring every output to the current communication point, block by block."""
-    for node, block, first in sequence:
+def _evaluate(sequence, values, t: float | None = None, step: float | None = None) -> None:
+    """Bring every output to the current communication point, block by block; with a
+    step, each FMU first steps from t at its first block (Gauss-Seidel)."""
+    for node, reads, first in sequence:
         node.set_inputs(values)
-        if first:
-            node.get_outputs(values)
-        else:
-            node.get_block(block, values)
+        if first and step is not None:
+            _do_step(node.instance, t, step)
+        for port in reads:
+            port.read(values)
 
 
-def _initialize(plan, instances, nodes, init_sequence, bindings, values, start, stop, log,
+def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log,
                 logging_on):
     log.time = start
-    for name in plan.steps.step_order:
-        inst = instances[name]
+    for node in nodes.values():
+        inst = node.instance
         inst.instantiate(logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, start, 1, stop)
     for value in bindings:

@@ -25,12 +25,7 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
         ax.grid(True, alpha=0.3)
         if len(series) > 1:
             ax.legend(fontsize=8, ncol=min(len(series), 3))
-    axes[-1, 0].set_xlabel(xlabel)
-    axes[0, 0].set_title(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, axes, path, title, xlabel)
 
 
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
@@ -48,6 +43,11 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
+    return _save(fig, axes, path, title, xlabel)
+
+
+def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
+    """Label the stacked axes, write the figure, free it."""
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     fig.tight_layout()

@@ -4,9 +4,9 @@ write results, summary and figures.  The CLI's ``agilesat run`` is a thin layer 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
+from ..fmus.model_description import UNITS
 from . import scenarios
 from .master import SimulationError, simulate
 from .results import Results
@@ -61,13 +61,13 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
         "fmu_messages": [str(e) for e in results.meta["log"] if e.status >= 1],
     }
     if scenario is not None:
-        summary.update(scenario.metrics(results, variant))
+        summary.update(scenario.metrics(results))
         summary["status"] = "failed" if summary["diagnostics"] else "ok"
     if out_dir is not None:
         _write_records(results, out_dir)
         (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
         if figures and scenario is not None:
-            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir, variant)]
+            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
     return results, summary
 
 
@@ -81,7 +81,7 @@ def format_summary(summary: dict) -> str:
     """The headline numbers beside the paper's, in each metric's display unit."""
     lines = []
     for name, m in summary.get("metrics", {}).items():
-        scale = DISPLAY_SCALE.get((m["unit"], m.get("display_unit")), 1.0)
+        scale = UNITS.get(m["unit"], ({}, {}))[1].get(m.get("display_unit"), 1.0)
         unit = m.get("display_unit") or m["unit"]
         value = "not reached" if m["value"] is None else f"{m['value'] * scale:.6g} {unit}"
         paper = f"paper {m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
@@ -90,6 +90,3 @@ def format_summary(summary: dict) -> str:
         lines.append(f"  FAILED: {problem}")
     return "\n".join(lines)
 
-
-DISPLAY_SCALE = {("rad", "deg"): 180 / math.pi, ("rad/s", "deg/s"): 180 / math.pi,
-                 ("rad/s2", "deg/s2"): 180 / math.pi, ("m", "km"): 1e-3}

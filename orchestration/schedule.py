@@ -28,7 +28,7 @@ class Schedule:
 
 def schedule(instances: dict, sources: dict, kind: str, where: str) -> Schedule:
     """``kind``: "feedthrough" (stepping) or "initial_feedthrough" (initialisation)."""
-    outputs = {name: inst.outputs() for name, inst in instances.items()}
+    outputs = {name: inst.outputs for name, inst in instances.items()}
     needs = {(b, z): set() for b, names in outputs.items() for z in names}
     via = {}                                       # (B, z), (A, y) -> input of B
     for (b, u), (a, y) in sources.items():

@@ -15,8 +15,10 @@ import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from ..fmus.build import build_all
 from . import plots
 from .runner import run
+from .scenarios import payload_sweep
 
 DEG = math.pi / 180
 GRID = (0.05, 0.1, 0.2, 0.4, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0)   # N·m
@@ -49,19 +51,25 @@ class Sizing:
 def evaluate(torque: float, turnaround: float, accuracy: float, stability: float,
              step: float, stop: float) -> Point:
     """One co-simulation of payload_sweep with this wheel torque limit."""
-    _, summary = run("payload_sweep", step=step, stop=stop, figures=False, parameters={
-        "Flywheel.torque_limit": torque, "Flywheel.momentum_limit": 100.0,
-        "SweepPlanner.turnaround_time": turnaround})
+    _, summary = run("payload_sweep", step=step, stop=stop, figures=False, build=False,
+                     parameters={"Flywheel.torque_limit": torque,
+                                 "Flywheel.momentum_limit": 100.0,
+                                 "SweepPlanner.turnaround_time": turnaround})
     m = summary["metrics"]
     a, s = m["pointing_accuracy"]["value"], m["pointing_stability"]["value"]
     return Point(torque, a, s, m["wheel_momentum_max"]["value"], a <= accuracy and s <= stability)
 
 
-def size_flywheel(turnaround: float = 1.0, accuracy: float = 0.032 * DEG,
-                  stability: float = 0.006 * DEG, step: float = 0.05, stop: float | None = None,
-                  grid=GRID, refine: int = 5, out_dir=None, progress=None) -> Sizing:
+def size_flywheel(turnaround: float = 1.0, accuracy: float = payload_sweep.ACCURACY,
+                  stability: float = payload_sweep.STABILITY, step: float = 0.05,
+                  stop: float | None = None, grid=GRID, refine: int = 5, out_dir=None,
+                  progress=None) -> Sizing:
     """The smallest wheel torque meeting both requirements (angles in rad, SI)."""
-    stop = stop or 4 * 45 / 0.6 + turnaround + 10.0   # one pitch sweep and a margin
+    sweep = payload_sweep.PARAMETERS
+    # one pitch sweep (4 amplitudes at the pitch rate, plus a reversal) and a margin
+    stop = stop or (4 * sweep["SweepPlanner.pitch_amplitude"] / sweep["SweepPlanner.pitch_rate"]
+                    + turnaround + 10.0)
+    build_all(names=payload_sweep.SCENARIO.components)
     points = []
 
     def point(torque):

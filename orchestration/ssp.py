@@ -27,6 +27,10 @@ NS = {
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
 }
 MASTER_ANNOTATION = "org.agilesat.master"
+MASTER_NAMESPACE = "http://agilesat.org/ssp/master"
+OSP_ANNOTATION = "com.opensimulationplatform"
+OSP_NAMESPACE = "https://opensimulationplatform.com/SSP/1.0"
+_PREFIXES = {**NS, "agilesat": MASTER_NAMESPACE, "osp": OSP_NAMESPACE}
 _TYPES = ("Real", "Integer", "Boolean", "String")
 
 
@@ -304,26 +308,19 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
                        stopTime=repr(float(stop)))
     annotations = E.sub(experiment, "ssd:Annotations")
     annotation = E.sub(annotations, "ssc:Annotation", type=MASTER_ANNOTATION)
-    etree.SubElement(annotation, "{%s}Master" % MASTER_NAMESPACE,
-                     {"stepSize": repr(float(step)), "algorithm": algorithm},
-                     nsmap={"agilesat": MASTER_NAMESPACE})
+    E.sub(annotation, "agilesat:Master", nsmap={"agilesat": MASTER_NAMESPACE},
+          stepSize=repr(float(step)), algorithm=algorithm)
     # libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
     # Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
     # takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
     # the namespace is declared on the annotation.
-    osp = etree.SubElement(annotations, E._qname("ssc:Annotation"), {"type": OSP_ANNOTATION},
-                           nsmap={"osp": OSP_NAMESPACE})
-    algorithm_element = etree.SubElement(osp, "{%s}Algorithm" % OSP_NAMESPACE)
-    etree.SubElement(algorithm_element, "{%s}FixedStepAlgorithm" % OSP_NAMESPACE,
-                     {"baseStepSize": repr(float(step))})
+    osp = E.sub(annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE},
+                type=OSP_ANNOTATION)
+    E.sub(E.sub(osp, "osp:Algorithm"), "osp:FixedStepAlgorithm", baseStepSize=repr(float(step)))
     tree = etree.ElementTree(root)
     _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
-
-MASTER_NAMESPACE = "http://agilesat.org/ssp/master"
-OSP_ANNOTATION = "com.opensimulationplatform"
-OSP_NAMESPACE = "https://opensimulationplatform.com/SSP/1.0"
 
 
 def _expand_parameters(parameters: dict, tables: dict) -> dict:
@@ -353,12 +350,13 @@ class _Maker:
         return etree.Element(self._qname(tag), {k: str(v) for k, v in attributes.items()},
                              nsmap=NS)
 
-    def sub(self, parent, tag, **attributes):
-        return etree.SubElement(parent, self._qname(tag),
-                                {k: str(v) for k, v in attributes.items()})
+    def sub(self, parent, tag, nsmap=None, **attributes):
+        """A child element; ``nsmap`` declares further namespaces on it."""
+        attributes = {k: str(v) for k, v in attributes.items()}
+        return etree.SubElement(parent, self._qname(tag), attributes, nsmap=nsmap)
 
     @staticmethod
     def _qname(tag):
         prefix, local = tag.split(":")
-        return "{%s}%s" % (NS[prefix], local)
+        return "{%s}%s" % (_PREFIXES[prefix], local)
 

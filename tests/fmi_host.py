@@ -20,7 +20,6 @@ class Fmu:
     def __init__(self, path, name):
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.var = {v.name: v for v in self.md.modelVariables}
         self.messages = []
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(path),
                                modelIdentifier=self.md.coSimulation.modelIdentifier,

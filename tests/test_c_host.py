@@ -5,7 +5,6 @@ PATH): the FMU binary itself must load libpython and find numpy in the environme
 was built in.  Fed the master's own sequence of FMI calls (tests/c_host/script.py), it
 must reproduce the master's results bit for bit.
 """
-import csv
 import re
 import os
 import shutil
@@ -15,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
 from c_host.script import write_script
 from conftest import ISS_TLE, ROOT, run_python
@@ -40,21 +40,19 @@ def run_host(host, script, results, env=CLEAN_ENV):
 
 
 def read_csv(path):
-    with open(path) as stream:
-        rows = list(csv.reader(stream))
-    return rows[0], np.array(rows[1:], dtype=float).reshape(-1, len(rows[0]))
+    results = Results.from_csv(path)
+    return results.names, results.data
 
 
 def master_results(ssd, stop, out):
     """The master's run of ``ssd`` in a fresh interpreter, saved as .npz."""
     result = run_python(
-        "import sys, numpy as np\n"
+        "import sys\n"
         "from agilesat.orchestration.master import simulate\n"
-        "r = simulate(sys.argv[1], stop=float(sys.argv[2]))\n"
-        "np.savez(sys.argv[3], names=np.array(r.names), data=r.data)\n", ssd, stop, out)
+        "simulate(sys.argv[1], stop=float(sys.argv[2])).to_npz(sys.argv[3])\n", ssd, stop, out)
     assert result.returncode == 0, result.stderr
-    saved = np.load(out)
-    return list(saved["names"]), saved["data"]
+    results = Results.from_npz(out)
+    return results.names, results.data
 
 
 @pytest.mark.parametrize("scenario", NAMES)
@@ -79,7 +77,7 @@ def test_a_real_satellites_orbit_through_the_c_host(fmus, host, tmp_path):
     orbit, _, _ = video_sar.tle_pass(*ISS_TLE)
     ssd = video_sar.pass_scenario(orbit, tmp_path).ssd
     script = tmp_path / "script.txt"
-    names = write_script(ssd, script, tmp_path / "fmus", 10.0)
+    write_script(ssd, script, tmp_path / "fmus", 10.0)
     run = run_host(host, script, tmp_path / "c.csv")
     assert run.returncode == 0, run.stderr
     c_names, c_data = read_csv(tmp_path / "c.csv")

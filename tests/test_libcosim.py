@@ -18,6 +18,7 @@ import sys
 import numpy as np
 import pytest
 
+from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
 from conftest import ROOT, agilesat
 
@@ -54,16 +55,16 @@ def libcosim(package, stop, step, out):
                           str(package), str(stop), str(out), str(step)],
                          capture_output=True, text=True, timeout=900, cwd=out.parent)
     assert run.returncode == 0, run.stderr
-    saved = np.load(out)
-    return list(saved["names"]), saved["data"]
+    results = Results.from_npz(out)
+    return results.names, results.data
 
 
 def ours(package, stop, step, out_dir):
     run = agilesat("run", package, "--stop", stop, "--step", step, "--out", out_dir,
                    "--no-figures", cwd=out_dir.parent)
     assert run.returncode == 0, run.stderr
-    saved = np.load(out_dir / "results.npz")
-    return list(saved["names"]), saved["data"]
+    results = Results.from_npz(out_dir / "results.npz")
+    return results.names, results.data
 
 
 @pytest.mark.parametrize("scenario", NAMES)

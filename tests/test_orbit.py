@@ -10,7 +10,7 @@ from agilesat.components.ephemeris import gmst, parse_epoch
 from agilesat.components.model import ModelError
 from agilesat.components.orbit import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
                                        solve_kepler)
-from agilesat.components.rotations import dcm_from_quat, quat_from_dcm
+from agilesat.components.rotations import dcm_from_quat
 from conftest import ISS_TLE
 
 MU = MU_EARTH

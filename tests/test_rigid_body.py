@@ -1,6 +1,4 @@
 """SatelliteDynamics against closed-form rigid-body solutions and conservation laws."""
-import math
-
 import numpy as np
 import pytest
 

@@ -10,7 +10,7 @@ from agilesat.orchestration.ssp import SystemFileError
 def fmu(outputs: dict):
     """A stand-in with the attributes the schedule reads: outputs -> inputs they depend on."""
     deps = {n: set(d) for n, d in outputs.items()}
-    return SimpleNamespace(outputs=lambda: list(outputs), feedthrough=deps,
+    return SimpleNamespace(outputs=list(outputs), feedthrough=deps,
                            initial_feedthrough=deps)
 
 

@@ -30,8 +30,8 @@ class Scenario:
     parameters: dict                          # "A.parameter" -> value (scalar or array)
     stop: float
     step: float
-    metrics: Callable                         # (Results, variant) -> summary dict
-    figures: Callable                         # (Results, out_dir, variant) -> [paths]
+    metrics: Callable                         # Results -> {"metrics", "diagnostics"}
+    figures: Callable                         # (Results, out_dir) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     algorithm: str = "gauss-seidel"
     system: Path | None = None                # the .ssd, if not the shipped systems/<name>
@@ -74,6 +74,30 @@ def get(name: str) -> Scenario:
     if name not in NAMES:
         raise KeyError(f"unknown scenario {name!r}; scenarios: {', '.join(NAMES)}")
     return importlib.import_module(f"{__name__}.{name}").SCENARIO
+
+
+def summarize(metrics: dict, paper: dict | None = None) -> dict:
+    """{name: (value, unit, display unit, description)} -> the summary's metric entries,
+    with the paper's value beside each one it gives (value None: not reached)."""
+    return {name: {"value": None if v is None else float(v), "unit": u, "display_unit": d,
+                   "description": text,
+                   **({"paper": paper[name]} if paper and name in paper else {})}
+            for name, (v, u, d, text) in metrics.items()}
+
+
+def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:
+    """C_BIᵀ (J w + Σ h) per row (N, 3), from the recorded SatelliteDynamics attitude and
+    rate and the named devices' momentum columns."""
+    from ...components.rotations import dcm, rotate_back
+    w = results.vector("SatelliteDynamics.w_BI_B")
+    body = w @ np.asarray(inertia).T + sum(results.vector(d) for d in devices)
+    C = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
+    return np.array(rotate_back(C, tuple(body.T))).T
+
+
+def relative_drift(H: np.ndarray) -> float:
+    """max |H(t) − H(0)| / |H(0)| over the rows of H (N, 3)."""
+    return float(np.abs(H - H[0]).max() / max(np.linalg.norm(H[0]), 1e-300))
 
 
 def scalar_values(values: dict) -> dict:

@@ -19,12 +19,13 @@ import math
 import numpy as np
 
 from ...components.orbit import WGS84_A
-from . import Scenario
+from . import Scenario, inertial_momentum, relative_drift, summarize
 from .. import plots
 
 DEG = math.pi / 180
 ALTITUDE, INCLINATION = 500e3, 97.40 * DEG
 ORBIT_RATE = math.sqrt(3.986004418e14 / (WGS84_A + ALTITUDE) ** 3)
+INERTIA = 150.0 * np.eye(3)                   # kg·m², payloads included
 ACCURACY, STABILITY = 0.032 * DEG, 0.006 * DEG   # the paper's claims with the wheel
 
 CONNECTIONS = (
@@ -51,7 +52,7 @@ CONNECTIONS = (
 PARAMETERS = {
     "OrbitEnvironment.semi_major_axis": WGS84_A + ALTITUDE,
     "OrbitEnvironment.inclination": INCLINATION,
-    "SatelliteDynamics.inertia": 150.0 * np.eye(3),
+    "SatelliteDynamics.inertia": INERTIA,
     "SatelliteDynamics.attitude0": [0.0, 0.0, 0.0],
     "SatelliteDynamics.rate0": [0.0, 0.0, 0.0],
     "PayloadGimbals.J_payload": [45.5, 35.8, 36.7],
@@ -86,8 +87,7 @@ PAPER = {
 }
 
 
-def metrics(results, variant=None) -> dict:
-    t = results.time
+def metrics(results) -> dict:
     h = results.vector("PayloadGimbals.h")
     hdot = results.vector("PayloadGimbals.hdot")
     error = results.vector("AttitudeController.att_error")
@@ -123,20 +123,24 @@ def metrics(results, variant=None) -> dict:
                                "max |wheel momentum| along any body axis"),
         "wheel_saturated_fraction": (saturated.mean(), "1", "1",
                                      "fraction of the run with a wheel limit active"),
-        "momentum_drift": (momentum_drift(results), "1", "1",
+        "momentum_drift": (relative_drift(inertial_momentum(
+            results, INERTIA, "Flywheel.h", "PayloadGimbals.h")), "1", "1",
                            "max relative change of C_BIᵀ(J w + h_wheel + h_payload), "
                            "recomputed from the recorded outputs"),
     }
-    summary = {name: {"value": float(v), "unit": u, "display_unit": d, "description": text,
-                      **({"paper": PAPER[name]} if name in PAPER else {})}
-               for name, (v, u, d, text) in m.items()}
+    summary = summarize(m, PAPER)
     summary["pointing_accuracy"]["requirement"] = [0.0, ACCURACY]
     summary["pointing_stability"]["requirement"] = [0.0, STABILITY]
-    return {"metrics": summary, "diagnostics": diagnose(results, summary, variant)}
+    return {"metrics": summary, "diagnostics": diagnose(results, summary)}
 
 
-def diagnose(results, summary, variant) -> list[str]:
-    if variant and variant.startswith("no_control"):
+def controlled(results) -> bool:
+    """Did the wheels act at all (no: motors off, e.g. the no_control variants)?"""
+    return bool(np.abs(results.vector("Flywheel.motor_torque")).max() > 0.0)
+
+
+def diagnose(results, summary) -> list[str]:
+    if not controlled(results):
         return []   # nothing is asked of an uncontrolled satellite
     problems = []
     accuracy, stability = (summary[k]["value"] for k in ("pointing_accuracy",
@@ -154,17 +158,6 @@ def diagnose(results, summary, variant) -> list[str]:
                      "`agilesat size-flywheel` for the wheel that meets the requirement)")
         problems.append(text)
     return problems
-
-
-def momentum_drift(results) -> float:
-    """Total momentum from recorded outputs: C_BIᵀ (J w + h_wheel + h_payload)."""
-    from ...components.rotations import dcm_from_quat
-    q = results.vector("SatelliteDynamics.q_BI")
-    w = results.vector("SatelliteDynamics.w_BI_B")
-    h = results.vector("Flywheel.h") + results.vector("PayloadGimbals.h")
-    J = 150.0 * np.eye(3)
-    H = np.array([dcm_from_quat(qk).T @ (J @ wk + hk) for qk, wk, hk in zip(q, w, h)])
-    return float(np.abs(H - H[0]).max() / max(np.linalg.norm(H[0]), 1e-300))
 
 
 def yaw_periods(results) -> tuple[float, float]:
@@ -186,10 +179,12 @@ def yaw_periods(results) -> tuple[float, float]:
     spectrum = np.abs(np.fft.rfft(x, n))
     frequency = np.fft.rfftfreq(n, t[1] - t[0])
     slow = (frequency > 1 / (t[-1] - t[0])) & (frequency < 1 / 60)
+    if not slow.any():                       # a run shorter than a minute
+        return float("nan"), ripple
     return 1 / float(frequency[slow][np.argmax(spectrum[slow])]), ripple
 
 
-def figures(results, out_dir, variant=None) -> list:
+def figures(results, out_dir) -> list:
     t = results.time
     deg = 180 / math.pi
     roll, pitch = results.vector("PayloadGimbals.roll") * deg, \
@@ -197,8 +192,7 @@ def figures(results, out_dir, variant=None) -> list:
     h, hdot = results.vector("PayloadGimbals.h"), results.vector("PayloadGimbals.hdot")
     zoom = t <= min(t[-1], 30.0)
     axes = ("x", "y", "z")
-    controlled = not (variant or "").startswith("no_control")
-    label = "Fig. 8 compensated" if controlled else "Fig. 7 uncompensated"
+    label = "Fig. 8 compensated" if controlled(results) else "Fig. 7 uncompensated"
     return [
         plots.panels(out_dir / "fig04_payload_angles.png", "Fig. 4 payload angles",
                      [(t, {"payload 1": pitch[:, 0], "payload 2": pitch[:, 1]}, "pitch [deg]"),

@@ -14,13 +14,14 @@ import numpy as np
 from ...components.cmg import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
 from ...components.orbit import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
 from ...components.pitch_maneuver import PitchProfile
-from ...components.rotations import dcm_from_quat, quat_from_axis_angle, quat_mul
-from . import Scenario
+from ...components.rotations import dcm, qmul, rotate
+from . import Scenario, relative_drift, summarize
 from .. import plots
 
 DEG = math.pi / 180
 INERTIA = 956.0
 H_ROTOR = 16.65
+RATE_LIMIT = 0.6                       # rad/s, gimbal rate limit (DESIGN.md §3)
 PROFILE = PitchProfile(theta0=120 * DEG, theta_f=0.0, duration=100.0, scan_rate=-0.8 * DEG)
 SCAN_RATE_TOLERANCE = 0.02 * DEG
 SETTLED_RATE = 0.01 * DEG  # |pitch rate| below this counts as stable
@@ -50,7 +51,7 @@ PARAMETERS = {
     "SatelliteDynamics.gravity_gradient": True,
     "CmgCluster.h_rotor": H_ROTOR,
     "CmgCluster.delta0": PAPER_DELTA0,
-    "CmgCluster.rate_limit": 0.6,
+    "CmgCluster.rate_limit": RATE_LIMIT,
     "CmgCluster.accel_limit": 0.5,
     "CmgSteering.h_rotor": H_ROTOR,
     "CmgSteering.law": 0,
@@ -81,7 +82,7 @@ PAPER = {
 }
 
 
-def metrics(results, variant=None) -> dict:
+def metrics(results) -> dict:
     """Headline numbers (SI) beside the paper's, and the diagnosis of a failed maneuver."""
     t = results.time
     step = float(t[1] - t[0])
@@ -94,8 +95,6 @@ def metrics(results, variant=None) -> dict:
     delivered = delivered_torque(results)
     imaging = phase == 4
     unsettled = (t >= PROFILE.times[3]) & (np.abs(body_rate) > SETTLED_RATE)
-    H_I = results.vector("SatelliteDynamics.H_I")
-    drift = np.abs(H_I - H_I[0]).max() / np.linalg.norm(H_I[0])
     t_need, h_need = required_momentum(results)
     m = {  # name: (value, unit, display unit, description)
         "imaging_pitch_rate_mean": (_stat(np.mean, pitch_rate[imaging]), "rad/s", "deg/s",
@@ -131,17 +130,14 @@ def metrics(results, variant=None) -> dict:
                                     "the cluster's largest momentum in that direction"),
         "max_roll_yaw_error": (roll_yaw_error(results).max(), "rad", "deg",
                                "max tilt of the pitch axis from the orbit's y axis"),
-        "momentum_drift": (drift, "1", "1",
+        "momentum_drift": (relative_drift(results.vector("SatelliteDynamics.H_I")), "1", "1",
                            "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an "
                            "isotropic hub)"),
     }
-    summary = {name: {"value": None if v is None else float(v), "unit": u,
-                      "display_unit": d, "description": text,
-                      **({"paper": PAPER[name]} if name in PAPER else {})}
-               for name, (v, u, d, text) in m.items()}
+    summary = summarize(m, PAPER)
     summary["imaging_pitch_rate_mean"]["requirement"] = [
         PROFILE.scan_rate - SCAN_RATE_TOLERANCE, PROFILE.scan_rate + SCAN_RATE_TOLERANCE]
-    return {"metrics": summary, "diagnostics": diagnose(results, summary)}
+    return {"metrics": summary, "diagnostics": diagnose(results, summary, t_need, h_need)}
 
 
 def _stat(function, values):
@@ -149,18 +145,18 @@ def _stat(function, values):
     return function(values) if len(values) else None
 
 
-def diagnose(results, summary) -> list[str]:
-    """Why the maneuver was not flown as planned, in words (empty: it was)."""
+def diagnose(results, summary, t_need, h_need) -> list[str]:
+    """Why the maneuver was not flown as planned, in words (empty: it was); (t_need,
+    h_need): :func:`required_momentum`."""
     problems = []
     t = results.time
     commands = results.vector("CmgSteering.delta_dot_cmd")
-    over = np.abs(commands).max(axis=1) > 0.6
+    over = np.abs(commands).max(axis=1) > RATE_LIMIT
     if over.any():
-        t_need, h_need = required_momentum(results)
         direction = h_need / np.linalg.norm(h_need)
         problems.append(
             f"the CMG cluster could not deliver the commanded torque: gimbal rate commands "
-            f"exceeded the 0.6 rad/s limit at {over.sum()} communication points between "
+            f"exceeded the {RATE_LIMIT} rad/s limit at {over.sum()} communication points between "
             f"t = {t[over][0]:.2f} s and {t[over][-1]:.2f} s (max "
             f"{np.abs(commands).max():.2f} rad/s); the planned maneuver needs a cluster "
             f"momentum of {np.linalg.norm(h_need):.1f} N·m·s (at t = {t_need:.1f} s) where "
@@ -197,18 +193,14 @@ def required_momentum(results) -> tuple[float, np.ndarray]:
     total momentum.
     """
     t = results.time
-    H_I = results.vector("SatelliteDynamics.H_I")
-    q_OI = results.vector("OrbitEnvironment.q_OI")
-    w_OI_O = results.vector("OrbitEnvironment.w_OI_O")
-    needed = []
-    for k, time in enumerate(t):
-        pitch, rate = PROFILE.reference(time)
-        q_BO = quat_from_axis_angle([0.0, 1.0, 0.0], pitch)
-        C_BO = dcm_from_quat(q_BO)
-        C_BI = dcm_from_quat(quat_mul(q_OI[k], q_BO))
-        w_BI = np.array([0.0, rate, 0.0]) + C_BO @ w_OI_O[k]
-        needed.append(C_BI @ H_I[k] - INERTIA * w_BI)
-    needed = np.array(needed)
+    pitch, rate = np.array([PROFILE.reference(x) for x in t]).T
+    zero = np.zeros_like(pitch)
+    q_BO = (np.cos(pitch / 2), zero, np.sin(pitch / 2), zero)     # pitch about y
+    C_BI = dcm(qmul(tuple(results.vector("OrbitEnvironment.q_OI").T), q_BO))
+    w_BI = np.column_stack((zero, rate, zero)) + np.array(
+        rotate(dcm(q_BO), tuple(results.vector("OrbitEnvironment.w_OI_O").T))).T
+    needed = np.array(rotate(C_BI, tuple(results.vector("SatelliteDynamics.H_I").T))).T \
+        - INERTIA * w_BI
     k = int(np.argmax(np.linalg.norm(needed, axis=1)))
     return float(t[k]), needed[k]
 
@@ -219,7 +211,7 @@ def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
     return float(h_rotor * np.sqrt(1.0 - (GIMBAL_AXES @ d) ** 2).sum())
 
 
-def figures(results, out_dir, variant=None) -> list:
+def figures(results, out_dir) -> list:
     """The paper's Figs 4–11 from a run."""
     t = results.time
     deg = 180 / math.pi

@@ -38,23 +38,23 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.attitude_control import AttitudeController
 from ...components.cmg import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, ClusterGeometry,
                                 zero_momentum_angles)
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
+from ...components.mission import (VIDEO_SAR_ALTITUDE, VIDEO_SAR_LOOK_ANGLE, VIDEO_SAR_STARE,
+                                   VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON)
 from ...components.orbit import OrbitEnvironment
 from ...components.passes import design_pass, find_passes, look_geometry
-from ...components.rotations import dcm_from_quat, quat_conj, quat_mul
+from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring import StaringGuidance, footprint_azimuth
-from . import Scenario
+from . import Scenario, relative_drift, summarize
 from .. import plots
-from .scan_pitch import H_ROTOR, INERTIA
+from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
 
 DEG = math.pi / 180
-TARGET = (33.16 * DEG, 129.72 * DEG, 0.0)
+TARGET = (VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON, 0.0)
 ZERO_DOPPLER = "2016-11-25T08:09:43"
-LOOK_ANGLE = 30 * DEG
-HALF_STARE = 100.0                       # s each side of zero Doppler
+HALF_STARE = VIDEO_SAR_STARE / 2          # s each side of zero Doppler
 BANDWIDTH, DAMPING = 0.5, 0.7            # rad/s, 1: the attitude loop
 #: pointing accuracy the run is held to (ours: the paper states none; a tenth of a
 #: typical X-band spotlight beam of ~0.5°)
@@ -69,7 +69,8 @@ def _rounded(value, digits=12):
 
 
 ORBIT = {key: _rounded(value) for key, value in design_pass(
-    567e3, *TARGET, ZERO_DOPPLER, LOOK_ANGLE, "right", "ascending", t0=HALF_STARE).items()}
+    VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER, VIDEO_SAR_LOOK_ANGLE, "right", "ascending",
+    t0=HALF_STARE).items()}
 GUIDANCE = {"yaw_compensation": True, "boresight_B": [0.0, 0.0, 1.0], "reference_time": 0.0}
 
 
@@ -87,7 +88,6 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
             [_rounded(float(x)) for x in rate])
 
 
-ATTITUDE0, RATE0 = initial_state(ORBIT, GUIDANCE)
 #: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set
 DELTA0 = [_rounded(float(x), 9) for x in zero_momentum_angles(
     ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS), PAPER_DELTA0)]
@@ -111,21 +111,32 @@ CONNECTIONS = (
     ("CmgCluster.hdot", "SatelliteDynamics.hdot_cmg"),
 )
 
-PARAMETERS = {
-    **{f"OrbitEnvironment.{key}": value for key, value in ORBIT.items()},
-    **{f"StaringGuidance.{key}": value for key, value in GUIDANCE.items()},
-    "AttitudeController.kp": [INERTIA * BANDWIDTH**2] * 3,
-    "AttitudeController.kd": [2 * DAMPING * BANDWIDTH * INERTIA] * 3,
-    "AttitudeController.inertia": INERTIA * np.eye(3),
-    "SatelliteDynamics.inertia": INERTIA * np.eye(3),
-    "SatelliteDynamics.attitude0": ATTITUDE0,
-    "SatelliteDynamics.rate0": RATE0,
-    "SatelliteDynamics.gravity_gradient": True,
-    "CmgCluster.h_rotor": H_ROTOR,
-    "CmgCluster.delta0": DELTA0,
-    "CmgSteering.h_rotor": H_ROTOR,
-    "CmgSteering.law": 0,
-}
+
+
+def parameters(orbit: dict, guidance: dict) -> dict:
+    """The system's parameter values for a pass (``orbit``: OrbitEnvironment parameters,
+    t = 0 at the start of the stare) and guidance settings; the body starts on the
+    reference."""
+    attitude0, rate0 = initial_state(orbit, guidance)
+    return {
+        **{f"OrbitEnvironment.{key}": value for key, value in orbit.items()},
+        **{f"StaringGuidance.{key}": value for key, value in guidance.items()},
+        "AttitudeController.kp": [INERTIA * BANDWIDTH**2] * 3,
+        "AttitudeController.kd": [2 * DAMPING * BANDWIDTH * INERTIA] * 3,
+        "AttitudeController.inertia": INERTIA * np.eye(3),
+        "SatelliteDynamics.inertia": INERTIA * np.eye(3),
+        "SatelliteDynamics.attitude0": attitude0,
+        "SatelliteDynamics.rate0": rate0,
+        "SatelliteDynamics.gravity_gradient": True,
+        "CmgCluster.h_rotor": H_ROTOR,
+        "CmgCluster.delta0": DELTA0,
+        "CmgCluster.rate_limit": RATE_LIMIT,
+        "CmgSteering.h_rotor": H_ROTOR,
+        "CmgSteering.law": 0,
+    }
+
+
+PARAMETERS = parameters(ORBIT, GUIDANCE)
 
 _YAW_0 = dict(GUIDANCE, yaw_compensation=False)
 VARIANTS = {
@@ -173,16 +184,11 @@ def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> 
     start of the stare), its system written to ``out_dir/video_sar_pass.ssd`` with the FMUs
     of fmus/build."""
     from ...fmus.build import BUILD_DIR
-    guidance = dict(GUIDANCE, yaw_compensation=yaw_compensation)
-    attitude0, rate0 = initial_state(orbit, guidance)
-    parameters = {**{k: v for k, v in PARAMETERS.items()
-                     if not k.startswith(("OrbitEnvironment.", "StaringGuidance."))},
-                  **{f"OrbitEnvironment.{k}": v for k, v in orbit.items()},
-                  **{f"StaringGuidance.{k}": v for k, v in guidance.items()},
-                  "SatelliteDynamics.attitude0": attitude0, "SatelliteDynamics.rate0": rate0}
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    scenario = dataclasses.replace(SCENARIO, parameters=parameters, variants={},
+    scenario = dataclasses.replace(
+        SCENARIO, parameters=parameters(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation)),
+        variants={},
                                    system=out_dir / "video_sar_pass.ssd")
     scenario.system.write_bytes(scenario.render_ssd(
         {name: str(BUILD_DIR / f"{name}.fmu") for name in scenario.components}))
@@ -198,10 +204,9 @@ def boresight_B(results) -> np.ndarray:
 
 def boresight_error(results) -> np.ndarray:
     """Angle (rad) between the body boresight and the line of sight to the target."""
-    b = boresight_B(results)
-    q = results.vector("SatelliteDynamics.q_BI")
+    C_BI = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
+    beam = np.array(rotate_back(C_BI, tuple(boresight_B(results)))).T   # the beam in I
     los = results.vector("OrbitEnvironment.r_T_I") - results.vector("OrbitEnvironment.r_I")
-    beam = np.array([dcm_from_quat(qk).T @ b for qk in q])      # C_BIᵀ b: the beam in I
     return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1),
                       np.einsum("ij,ij->i", beam, los))
 
@@ -221,7 +226,7 @@ def _geometry(results, k):
                            for n in ("r_I", "v_I", "r_T_I", "v_T_I")), time=results.time[k])
 
 
-def metrics(results, variant=None) -> dict:
+def metrics(results) -> dict:
     t = results.time
     error = boresight_error(results)
     rotation = footprint_rotation(results)
@@ -231,7 +236,6 @@ def metrics(results, variant=None) -> dict:
     geometry = _geometry(results, closest)
     euler = results.vector("SatelliteDynamics.euler_BO")
     euler_rate = results.vector("SatelliteDynamics.euler_rate_BO")
-    H_I = results.vector("SatelliteDynamics.H_I")
     m = {  # name: (value, unit, display unit, description)
         "zero_doppler_time": (t[closest], "s", "s", "communication point nearest zero "
                               "Doppler (designed: 100 s, 08:09:43 UTC)"),
@@ -256,12 +260,11 @@ def metrics(results, variant=None) -> dict:
                              "N.m.s", "N.m.s", "max |cluster momentum|"),
         "min_singularity": (results["CmgCluster.singularity"].min(), "1", "1",
                             "min det(A Aᵀ) of the cluster"),
-        "momentum_drift": (np.abs(H_I - H_I[0]).max() / np.linalg.norm(H_I[0]), "1", "1",
+        "momentum_drift": (relative_drift(results.vector("SatelliteDynamics.H_I")), "1", "1",
                            "max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external "
                            "torque)"),
     }
-    summary = {name: {"value": float(v), "unit": u, "display_unit": d, "description": text}
-               for name, (v, u, d, text) in m.items()}
+    summary = summarize(m)
     summary["pointing_error_max"]["requirement"] = POINTING_REQUIREMENT
     problems = []
     if error.max() > POINTING_REQUIREMENT:
@@ -269,13 +272,13 @@ def metrics(results, variant=None) -> dict:
         problems.append(f"pointing error {error.max() / DEG:.4f}° at t = {t[worst]:.2f} s "
                         f"exceeds the {POINTING_REQUIREMENT / DEG}° assumed requirement")
     commands = np.abs(results.vector("CmgSteering.delta_dot_cmd")).max()
-    if commands > 0.6:
+    if commands > RATE_LIMIT:
         problems.append(f"gimbal rate commands reached {commands:.2f} rad/s, above the "
-                        "cluster's 0.6 rad/s limit")
+                        f"cluster's {RATE_LIMIT} rad/s limit")
     return {"metrics": summary, "diagnostics": problems}
 
 
-def figures(results, out_dir, variant=None) -> list:
+def figures(results, out_dir) -> list:
     """The paper's Fig. 7 (Euler angles and rates, achieved and reference), pointing error,
     footprint rotation, look geometry, gimbal rates."""
     t = results.time

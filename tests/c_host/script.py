@@ -11,6 +11,7 @@ import zipfile
 from pathlib import Path
 
 from agilesat.orchestration.fmu import Description
+from agilesat.orchestration.master import evaluation_sequence, value_layout
 from agilesat.orchestration.ssp import read_system
 from agilesat.orchestration.validation import check_system
 
@@ -27,7 +28,8 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     stop = system.stop_time if stop is None else stop
     n_steps = round((stop - start) / step)
     ids = {name: k for k, name in enumerate(plan.steps.step_order)}
-    lines, slots = [], {}
+    slots = value_layout(descriptions, plan.steps.step_order)
+    lines = []
     for name, k in ids.items():
         d = descriptions[name]
         directory = unzip_root / name
@@ -35,10 +37,6 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
             archive.extractall(directory)
         lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} "
                      f"{name}")
-        for type_ in ("Real", "Integer", "Boolean"):   # the master's value vector
-            for output in d.outputs():
-                if d.variables[output].type == type_:
-                    slots[(name, output)] = len(slots)
     lines.append(f"slots {len(slots)}")
     lines += [f"column {k} {name}.{output}" for (name, output), k in slots.items()]
 
@@ -54,15 +52,11 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
         return [f"get {var(name, y)} {slots[(name, y)]}" for y in outputs]
 
     def evaluate(schedule, stepping):
-        calls, seen = [], set()
-        for name, block in schedule.blocks:
+        calls = []
+        for name, block, first in evaluation_sequence(schedule):
             calls += put_inputs(name)
-            if name in seen:
-                calls += get(name, block)
-            else:
-                seen.add(name)
-                calls += ([f"step {ids[name]}"] if stepping else [])
-                calls += get(name, descriptions[name].outputs())
+            calls += [f"step {ids[name]}"] if first and stepping else []
+            calls += get(name, descriptions[name].outputs if first else block)
         return calls
 
     components = [c.name for c in system.components]
@@ -77,7 +71,7 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
         lines += put_inputs(name)
     lines += [f"exit {ids[name]}" for name in components]
     for name in ids:
-        lines += get(name, descriptions[name].outputs())
+        lines += get(name, descriptions[name].outputs)
     lines += ["record", f"loop {n_steps} {start!r} {step!r}", *evaluate(plan.steps, True),
               "record", "end"]
     lines += [f"terminate {ids[name]}" for name in components]

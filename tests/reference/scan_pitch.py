@@ -383,7 +383,6 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
     sixth = dt / 6.0
     jinv = 1.0 / J_HUB
     hr = H_ROTOR
-    inv_hr = 1.0 / H_ROTOR
     rmax, acc = RATE_MAX, ACCEL_MAX
     nw = -N_ORBIT                                   # w_OI_O = (0, nw, 0)
     hq = 0.5 * N_ORBIT
