@@ -1,5 +1,5 @@
-"""FMU ``AttitudeController``: maps FMI variables onto :class:`components.attitude_control.AttitudeController`."""
-from ..components.attitude_control import AttitudeController as Model
+"""FMU ``AttitudeController``: maps FMI variables onto :class:`components.attitude_controller.AttitudeController`."""
+from ..components.attitude_controller import AttitudeController as Model
 from .slave import ModelSlave
 
 

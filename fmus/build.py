@@ -127,7 +127,7 @@ def _sources(name: str) -> tuple[dict[str, Path], str]:
     """Files packed as our code (relative path -> file) and the content hash of the FMU.
 
     Our code is the FMU's wrapper module and everything it imports from our packages,
-    followed through relative imports (``from ..components.cmg import ...``).
+    followed through relative imports (``from ..components.cmg_cluster import ...``).
     """
     files = {}
     pending = [f"fmus/{FMUS[name]}.py"]
@@ -158,14 +158,14 @@ def _toolchain_digest() -> bytes:
 
 
 def _relative_imports(relative: str, path: Path) -> list[str]:
-    """Our modules a module imports relatively, as paths like 'components/cmg.py'."""
+    """Our modules a module imports relatively, as paths like 'components/cmg_cluster.py'."""
     package = relative.split("/")[0]
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ImportFrom) and node.level:
             parts = node.module.split(".") if node.module else []
             base = package if node.level == 1 else parts.pop(0)
-            if parts:                                   # from .cmg import x
+            if parts:                                   # from .cmg_cluster import x
                 found.append(f"{base}/{'/'.join(parts)}.py")
             else:                                       # from . import cmg, passes
                 found += [f"{base}/{alias.name}.py" for alias in node.names]

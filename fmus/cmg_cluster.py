@@ -1,5 +1,5 @@
-"""FMU ``CmgCluster``: maps FMI variables onto :class:`components.cmg.CmgCluster`."""
-from ..components.cmg import CmgCluster as Model
+"""FMU ``CmgCluster``: maps FMI variables onto :class:`components.cmg_cluster.CmgCluster`."""
+from ..components.cmg_cluster import CmgCluster as Model
 from .slave import ModelSlave
 
 

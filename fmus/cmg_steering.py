@@ -1,5 +1,5 @@
-"""FMU ``CmgSteering``: maps FMI variables onto :class:`components.steering.CmgSteering`."""
-from ..components.steering import CmgSteering as Model
+"""FMU ``CmgSteering``: maps FMI variables onto :class:`components.cmg_steering.CmgSteering`."""
+from ..components.cmg_steering import CmgSteering as Model
 from .slave import ModelSlave
 
 

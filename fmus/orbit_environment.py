@@ -1,5 +1,5 @@
-"""FMU ``OrbitEnvironment``: maps FMI variables onto :class:`components.orbit.OrbitEnvironment`."""
-from ..components.orbit import OrbitEnvironment as Model
+"""FMU ``OrbitEnvironment``: maps FMI variables onto :class:`components.orbit_environment.OrbitEnvironment`."""
+from ..components.orbit_environment import OrbitEnvironment as Model
 from .slave import ModelSlave
 
 

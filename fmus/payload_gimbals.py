@@ -1,5 +1,5 @@
-"""FMU ``PayloadGimbals``: maps FMI variables onto :class:`components.payload.PayloadGimbals`."""
-from ..components.payload import PayloadGimbals as Model
+"""FMU ``PayloadGimbals``: maps FMI variables onto :class:`components.payload_gimbals.PayloadGimbals`."""
+from ..components.payload_gimbals import PayloadGimbals as Model
 from .slave import ModelSlave
 
 

@@ -1,5 +1,5 @@
-"""FMU ``PitchManeuverController``: maps FMI variables onto :class:`components.pitch_maneuver.PitchManeuverController`."""
-from ..components.pitch_maneuver import PitchManeuverController as Model
+"""FMU ``PitchManeuverController``: maps FMI variables onto :class:`components.pitch_maneuver_controller.PitchManeuverController`."""
+from ..components.pitch_maneuver_controller import PitchManeuverController as Model
 from .slave import ModelSlave
 
 

@@ -1,5 +1,5 @@
-"""FMU ``SatelliteDynamics``: maps FMI variables onto :class:`components.rigid_body.SatelliteDynamics`."""
-from ..components.rigid_body import SatelliteDynamics as Model
+"""FMU ``SatelliteDynamics``: maps FMI variables onto :class:`components.satellite_dynamics.SatelliteDynamics`."""
+from ..components.satellite_dynamics import SatelliteDynamics as Model
 from .slave import ModelSlave
 
 

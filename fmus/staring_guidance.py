@@ -1,5 +1,5 @@
-"""FMU ``StaringGuidance``: maps FMI variables onto :class:`components.staring.StaringGuidance`."""
-from ..components.staring import StaringGuidance as Model
+"""FMU ``StaringGuidance``: maps FMI variables onto :class:`components.staring_guidance.StaringGuidance`."""
+from ..components.staring_guidance import StaringGuidance as Model
 from .slave import ModelSlave
 
 

@@ -1,5 +1,5 @@
-"""FMU ``SweepPlanner``: maps FMI variables onto :class:`components.sweep.SweepPlanner`."""
-from ..components.sweep import SweepPlanner as Model
+"""FMU ``SweepPlanner``: maps FMI variables onto :class:`components.sweep_planner.SweepPlanner`."""
+from ..components.sweep_planner import SweepPlanner as Model
 from .slave import ModelSlave
 
 

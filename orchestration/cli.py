@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..components import mission
+from ..components.analysis import mission
 from . import scenarios
 from .scenarios import payload_sweep
 

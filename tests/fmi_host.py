@@ -186,7 +186,7 @@ def singularity(*paths):
 
 def shadowed(path):
     """Import and patch the host's own agilesat copy first: the FMU must not see it."""
-    import agilesat.components.cmg as host_copy
+    import agilesat.components.cmg_cluster as host_copy
     host_copy.det3 = lambda M: 123.0
     fmu = Fmu(path, "c")
     fmu.initialize()

@@ -4,10 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components.attitude_control import AttitudeController
+from agilesat.components.attitude_controller import AttitudeController
 from agilesat.components.flywheel import Flywheel
 from agilesat.components.model import ModelError
-from agilesat.components.rigid_body import SatelliteDynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.components.rotations import (dcm_from_quat, euler123_from_quat, quat_conj,
                                            quat_from_axis_angle, quat_mul)
 from agilesat.fmus.model_description import UNITS

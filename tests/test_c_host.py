@@ -17,7 +17,7 @@ import pytest
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
 from c_host.script import write_script
-from conftest import ISS_TLE, ROOT, run_python
+from helpers import ISS_TLE, ROOT, run_python
 
 HOST_SOURCE = ROOT / "tests" / "c_host" / "fmi2_host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.scenarios import NAMES, get
-from conftest import run_python
+from helpers import run_python
 
 TWICE = """
 import sys

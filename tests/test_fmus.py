@@ -9,7 +9,7 @@ from fmpy.validation import validate_fmu
 from lxml import etree
 
 from agilesat.fmus import FMUS
-from conftest import ROOT, run_python
+from helpers import ROOT, run_python
 
 HOST = ROOT / "tests" / "fmi_host.py"
 
@@ -108,7 +108,7 @@ def doubled(fmu, out, rename: bool):
         entries = {i.filename: archive.read(i) for i in archive.infolist()}
     package = next(n.split("/")[1] for n in entries if n.startswith("resources/agilesat_"))
     digest = package.removeprefix("agilesat_")
-    cmg = f"resources/{package}/components/cmg.py"
+    cmg = f"resources/{package}/components/cmg_cluster.py"
     entries[cmg] = entries[cmg].replace(b"y.singularity = det3(gram(columns))",
                                         b"y.singularity = 2.0 * det3(gram(columns))")
     assert b"2.0 * det3" in entries[cmg]
@@ -142,8 +142,8 @@ def test_the_import_follower_reads_every_form_of_relative_import(tmp_path):
     from agilesat.fmus.build import _relative_imports
     module = tmp_path / "wrapper.py"
     module.write_text("from . import slave, shim_util\nfrom .slave import ModelSlave\n"
-                      "from ..components.cmg import CmgCluster\nfrom ..components import passes\n"
+                      "from ..components.cmg_cluster import CmgCluster\nfrom ..components import passes\n"
                       "import math\nfrom numpy import pi\n")
     assert sorted(_relative_imports("fmus/wrapper.py", module)) == [
-        "components/cmg.py", "components/passes.py", "fmus/shim_util.py", "fmus/slave.py",
+        "components/cmg_cluster.py", "components/analysis/passes.py", "fmus/shim_util.py", "fmus/slave.py",
         "fmus/slave.py"]

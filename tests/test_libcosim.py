@@ -20,7 +20,7 @@ import pytest
 
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
-from conftest import ROOT, agilesat
+from helpers import ROOT, agilesat
 
 #: run length [s] and the compared attitude columns of each scenario
 CASES = {

@@ -1,14 +1,14 @@
 """Mission analysis of the video-SAR paper (seed 002): frame overlap (eqs 1–5) and Walker
 sizing (eqs 14–20), against the printed formulas, independent geometry and the paper's
-numbers under the readings stated in components/mission.py."""
+numbers under the readings stated in components/analysis/mission.py."""
 import math
 
 import numpy as np
 import pytest
 
-from agilesat.components import mission as m
-from agilesat.components.orbit import EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment
-from agilesat.components.passes import sun_synchronous_inclination
+from agilesat.components.analysis import mission as m
+from agilesat.components.orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment
+from agilesat.components.analysis.passes import sun_synchronous_inclination
 
 DEG = math.pi / 180.0
 H = 567e3

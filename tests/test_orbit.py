@@ -8,10 +8,10 @@ import pytest
 
 from agilesat.components.ephemeris import gmst, parse_epoch
 from agilesat.components.model import ModelError
-from agilesat.components.orbit import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
+from agilesat.components.orbit_environment import (EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment,
                                        solve_kepler)
 from agilesat.components.rotations import dcm_from_quat
-from conftest import ISS_TLE
+from helpers import ISS_TLE
 
 MU = MU_EARTH
 A_SSO = 6378137.0 + 681000.0          # scan_pitch orbit

@@ -7,8 +7,8 @@ import pytest
 
 from agilesat.components.ephemeris import DAY, gmst
 from agilesat.components.model import ModelError
-from agilesat.components.orbit import MU_EARTH, WGS84_A, OrbitEnvironment
-from agilesat.components.passes import (PassGeometry, design_pass, find_pass, find_passes,
+from agilesat.components.orbit_environment import MU_EARTH, WGS84_A, OrbitEnvironment
+from agilesat.components.analysis.passes import (PassGeometry, design_pass, find_pass, find_passes,
                                         sun_synchronous_inclination)
 from agilesat.components.rotations import dcm_from_quat
 

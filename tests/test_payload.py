@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
-from agilesat.components.payload import PayloadGimbals, payload_momentum
+from agilesat.components.payload_gimbals import PayloadGimbals, payload_momentum
 from agilesat.components.rotations import rot1, rot2
-from agilesat.components.sweep import SweepAxis, SweepPlanner
+from agilesat.components.sweep_planner import SweepAxis, SweepPlanner
 
 DEG = math.pi / 180
 JX, JY, JZ = 45.5, 35.8, 36.7            # seed 004 §2, each payload, kg·m²

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.results import Results
-from conftest import agilesat
+from helpers import agilesat
 
 DEG = math.pi / 180
 JX, JY, JZ = 45.5, 35.8, 36.7

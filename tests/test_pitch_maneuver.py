@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
-from agilesat.components.pitch_maneuver import PitchManeuverController, PitchProfile
+from agilesat.components.pitch_maneuver_controller import PitchManeuverController, PitchProfile
 from agilesat.components.rotations import quat_from_axis_angle, quat_from_euler123
 
 DEG = math.pi / 180

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.results import Results
-from conftest import agilesat
+from helpers import agilesat
 from reference import scan_pitch as reference
 
 DEG = math.pi / 180

@@ -3,7 +3,7 @@ import importlib
 import re
 
 from agilesat.fmus import FMUS
-from conftest import ROOT
+from helpers import ROOT
 
 
 def test_ci_runs_the_readme_test_command():

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
-from agilesat.components.rigid_body import SatelliteDynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.components.rotations import (dcm_from_quat, quat_from_axis_angle,
                                            quat_from_euler123, quat_mul)
 

@@ -7,7 +7,7 @@ import pytest
 
 from agilesat.components.rotations import dcm_from_quat
 from agilesat.orchestration.results import Results
-from conftest import agilesat
+from helpers import agilesat
 
 DEG = math.pi / 180
 

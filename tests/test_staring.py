@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
-from agilesat.components.orbit import (J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment,
+from agilesat.components.orbit_environment import (J2, J2_RADIUS, MU_EARTH, WGS84_A, OrbitEnvironment,
                                        geodetic_to_ecef)
 from agilesat.components.rotations import (dcm_from_euler123, dcm_from_quat, euler123_rates,
                                            quat_from_dcm)
-from agilesat.components.staring import StaringGuidance, footprint_azimuth
+from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuth
 from agilesat.fmus.model_description import UNITS
 
 DEG = math.pi / 180

@@ -10,7 +10,7 @@ import pytest
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import get
 from agilesat.orchestration.ssp import SystemFileError, read_system
-from conftest import agilesat
+from helpers import agilesat
 
 SCAN_PITCH = get("scan_pitch").ssd
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.results import Results
-from conftest import ISS_TLE as ISS, agilesat
+from helpers import ISS_TLE as ISS, agilesat
 
 DEG = math.pi / 180
 LAT, LON = 33.16 * DEG, 129.72 * DEG
@@ -222,7 +222,7 @@ def test_stare_reports_a_bad_tle(tmp_path):
 
 
 def test_mission_analysis_commands_print_the_functions_results(tmp_path):
-    from agilesat.components.mission import overlap_ratio, walker_sizing
+    from agilesat.components.analysis.mission import overlap_ratio, walker_sizing
     result = agilesat("mission", "overlap", "--frame-rates", "5", "25", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
     for rate, overlap in zip((5, 25), overlap_ratio([5.0, 25.0]).overlap):

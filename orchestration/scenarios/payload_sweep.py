@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ...components.orbit import WGS84_A
+from ...components.orbit_environment import WGS84_A
 from . import Scenario, inertial_momentum, relative_drift, summarize
 from .. import plots
 

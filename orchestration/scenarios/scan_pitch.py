@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from ...components.cmg import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
-from ...components.orbit import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
-from ...components.pitch_maneuver import PitchProfile
+from ...components.cmg_cluster import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
+from ...components.orbit_environment import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
+from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
 from . import Scenario, relative_drift, summarize
 from .. import plots

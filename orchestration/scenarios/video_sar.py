@@ -38,15 +38,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.cmg import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, ClusterGeometry,
-                                zero_momentum_angles)
+from ...components.analysis.mission import (VIDEO_SAR_ALTITUDE, VIDEO_SAR_LOOK_ANGLE,
+                                            VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT,
+                                            VIDEO_SAR_TARGET_LON)
+from ...components.analysis.passes import design_pass, find_passes, look_geometry
+from ...components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0,
+                                       ClusterGeometry, zero_momentum_angles)
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
-from ...components.mission import (VIDEO_SAR_ALTITUDE, VIDEO_SAR_LOOK_ANGLE, VIDEO_SAR_STARE,
-                                   VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON)
-from ...components.orbit import OrbitEnvironment
-from ...components.passes import design_pass, find_passes, look_geometry
+from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
-from ...components.staring import StaringGuidance, footprint_azimuth
+from ...components.staring_guidance import StaringGuidance, footprint_azimuth
 from . import Scenario, relative_drift, summarize
 from .. import plots
 from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT

@@ -63,9 +63,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import ModelError
-from .ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
-from .orbit import MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef, secular_j2_rates
+from ..model import ModelError
+from ..ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
+from ..orbit_environment import (MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef,
+                                 secular_j2_rates)
 
 #: mean tropical year (days), IERS / Astronomical Almanac value for J2000
 TROPICAL_YEAR_DAYS = 365.2421897

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from .cmg import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, det3, gram, inv3
+from .cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, det3, gram, inv3
 from .rotations import rotate
 from .model import Model, ModelError
 from .variables import input_, output, parameter

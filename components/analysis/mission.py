@@ -140,7 +140,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import passes
-from .orbit import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
+from ..orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
 
 SPEED_OF_LIGHT = 299792458.0             # m/s, exact (SI)
 SIDEREAL_DAY = 2.0 * math.pi / EARTH_RATE  # s, Earth rotation period 2π/ω_E

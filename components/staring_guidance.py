@@ -89,7 +89,7 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .orbit import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
+from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
 from .rotations import (cross, dcm_from_quat, euler123_from_quat, quat_from_dcm, unwrap_near,
                         wrap_pi)
 from .variables import input_, output, parameter

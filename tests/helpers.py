@@ -1,0 +1,27 @@
+"""Helpers shared by the tests: paths, a real TLE, and clean processes to run FMUs in.
+
+Built FMUs are only ever *run* in a separate, fresh interpreter (``run_python`` and
+``agilesat``): pythonfmu executes FMU code inside the host's interpreter, where modules
+this pytest process imported could mask a file missing from an FMU.
+"""
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: a real satellite's two-line elements: the ISS set printed in the python-sgp4 README
+#: (https://pypi.org/project/sgp4/), epoch 2019-12-09 16:38:29 UTC
+ISS_TLE = ("1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
+           "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482")
+
+
+def run_python(code: str, *args, timeout: float = 600, cwd=None) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh interpreter of this environment (nothing pre-imported)."""
+    return subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, cwd=cwd or ROOT)
+
+
+def agilesat(*args, timeout: float = 900, cwd=None) -> subprocess.CompletedProcess:
+    """The ``agilesat`` command line, in a fresh interpreter."""
+    return subprocess.run([sys.executable, "-m", "agilesat.orchestration", *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT)
