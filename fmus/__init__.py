@@ -15,3 +15,11 @@ FMUS = {
     "AttitudeController": "attitude_controller",
     "StaringGuidance": "staring_guidance",
 }
+
+
+def model_class(name: str):
+    """The component model class (``components``) of the FMU ``name``."""
+    import importlib
+    if name not in FMUS:
+        raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(FMUS)}")
+    return getattr(importlib.import_module(f"{__name__}.{FMUS[name]}"), name).model_class
