@@ -24,20 +24,28 @@ import math
 
 import numpy as np
 
-from .cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, det3, gram, inv3
+from .cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, ClusterGeometry, det3,
+                          gram, inv3)
 from .rotations import rotate
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
 SINGULAR_Q = 1e-12
 _INPUTS = ("tau_cmd", "delta", "w_BI_B", "h")
+H_ROTOR = 16.65
+#: start values of the delta and h inputs: the cluster's default (CmgCluster.delta0, the
+#: paper's δ0, Q = 1.10) and its momentum there, so that the FMU at its defaults is the
+#: steering of a default cluster at t = 0, away from any singularity
+DELTA_START = PAPER_DELTA0
+H_START = tuple(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS).momentum(DELTA_START)
+                .tolist())
 
 
 class CmgSteering(Model):
     """Steering law of a six-gyro SGCMG cluster: torque command to gimbal rates."""
 
     VARIABLES = (
-        parameter("h_rotor", 16.65, "N.m.s", "rotor angular momentum of each gyro"),
+        parameter("h_rotor", H_ROTOR, "N.m.s", "rotor angular momentum of each gyro"),
         parameter("gimbal_axis", GIMBAL_AXES, "1", "gimbal axis of each gyro in B (rows)",
                   shape=(6, 3)),
         parameter("spin_ref", DEFAULT_SPINS, "1",
@@ -49,10 +57,11 @@ class CmgSteering(Model):
         parameter("sr_lambda0", 0.01, "1", "singularity-robust weight lambda0 (law 1)"),
         parameter("sr_mu", 10.0, "1", "singularity-robust decay mu in lambda0 exp(-mu Q)"),
         input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
-        input_("delta", "rad", "gimbal angles", shape=(6,), display_unit="deg"),
+        input_("delta", "rad", "gimbal angles (start: CmgCluster's default delta0)",
+               DELTA_START, shape=(6,), display_unit="deg"),
         input_("w_BI_B", "rad/s", "body angular velocity relative to I, in B", shape=(3,)),
-        input_("h", "N.m.s", "cluster angular momentum relative to the body, in B",
-               shape=(3,)),
+        input_("h", "N.m.s", "cluster angular momentum relative to the body, in B (start: "
+               "the default cluster's at delta0)", H_START, shape=(3,)),
         output("delta_dot_cmd", "rad/s", "gimbal rate commands", shape=(6,),
                depends=_INPUTS, display_unit="deg/s"),
         output("singularity", "1", "singularity measure Q = det(A A^T)", depends=("delta",)),

@@ -13,6 +13,17 @@ A model owns one flat float64 array holding its parameters, inputs and outputs (
 ``output()``
     write ``y`` from the state at ``self.t`` and the current inputs.
 
+Every model also has the parameter ``warnings_return_ok`` (:data:`COMMON_VARIABLES`,
+appended to each table): the FMU logs the model's warnings (limits, saturation,
+singularity) at category ``logStatusWarning`` in any case; with it set the call returns
+``fmi2OK`` instead of ``fmi2Warning``, for hosts that stop on a warning (OMSimulator).
+
+A model whose initial state depends on inputs (``INITIAL_STATE_DEPENDS``) calls
+:meth:`Model.remember_initial_inputs` at the end of ``initialize`` and
+:meth:`Model.check_initial_inputs` at the start of ``step``: an FMI host that sets those
+inputs only after initialisation would otherwise start the model from another state,
+silently (the in-process :meth:`Model.start` leaves the inputs to its caller).
+
 The same object runs in-process (tests, references) and inside the FMU wrapper.
 """
 from __future__ import annotations
@@ -21,7 +32,16 @@ import copy
 
 import numpy as np
 
-from .variables import Bus, Layout, Var
+from .variables import Bus, Layout, Var, parameter
+
+#: parameters of every model, appended to each table
+COMMON_VARIABLES = (
+    parameter("warnings_return_ok", False, "1", "log limit, saturation and singularity "
+              "warnings (category logStatusWarning) but return fmi2OK, not fmi2Warning, for "
+              "hosts that stop on a warning", type="Boolean"),
+)
+#: relative and absolute tolerance of "the same input" in check_initial_inputs
+_SAME_INPUT = dict(rtol=1e-9, atol=1e-12)
 
 
 class ModelError(RuntimeError):
@@ -33,6 +53,12 @@ class Model:
     #: inputs that the initial state depends on (beyond the parameters)
     INITIAL_STATE_DEPENDS: tuple[str, ...] = ()
     _layouts: dict[type, Layout] = {}
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        names = {v.name for v in cls.VARIABLES}
+        cls.VARIABLES = cls.VARIABLES + tuple(v for v in COMMON_VARIABLES
+                                              if v.name not in names)
 
     def __init__(self, **parameters):
         cls = type(self)
@@ -60,6 +86,44 @@ class Model:
     def output(self) -> None:
         raise NotImplementedError
 
+    # -- inputs the initial state was computed from --------------------------------
+    def remember_initial_inputs(self) -> None:
+        """End of ``initialize``: keep the INITIAL_STATE_DEPENDS inputs it used."""
+        self._initial_inputs = self._initial_state_inputs()
+        self._t0 = self.t
+        self._outputs_seen = False
+
+    def check_initial_inputs(self, t: float) -> None:
+        """Start of ``step``: at the first step, if the INITIAL_STATE_DEPENDS inputs are
+        not those ``initialize`` used (a host that sets inputs only after initialisation),
+        re-initialise from them when that is exactly what initialising with them would
+        have given (first step, at the start time, no output read since), else raise
+        ModelError naming the inputs.  ``output`` sets ``_outputs_seen``."""
+        used = getattr(self, "_initial_inputs", None)
+        if used is None:
+            return
+        self._initial_inputs = None   # only the first step is checked
+        now = self._initial_state_inputs()
+        changed = [name for name in used if not np.allclose(now[name], used[name],
+                                                            **_SAME_INPUT)]
+        if not changed:
+            return
+        if t == self._t0 and not self._outputs_seen:
+            self.initialize(t)
+            self._initial_inputs = None
+            return
+        detail = "; ".join(f"{name} = {np.round(now[name], 9).tolist()} at the first step, "
+                           f"{np.round(used[name], 9).tolist()} at initialisation"
+                           for name in changed)
+        raise ModelError(f"the initial state was computed from other inputs than the host "
+                         f"now gives ({detail}): set these inputs before "
+                         "exitInitializationMode (FMI 2.0 allows it in initialisation "
+                         "mode); the run would start from another state")
+
+    def _initial_state_inputs(self) -> dict:
+        return {name: self.values[self.layout.slice(name)].copy()
+                for name in self.INITIAL_STATE_DEPENDS}
+
     # -- in-process convenience ------------------------------------------------------
     def set(self, name: str, value) -> None:
         """Set a parameter or input by name (whole arrays at once)."""
@@ -86,8 +150,10 @@ class Model:
         return data.reshape(v.shape).copy() if v.shape else data[0]
 
     def start(self, t0: float = 0.0) -> "Model":
-        """Initialize at ``t0`` and evaluate the outputs; returns self."""
+        """Initialize at ``t0`` and evaluate the outputs; returns self.  In-process the
+        caller owns the inputs and may change them at will: no first-step check."""
         self.initialize(t0)
+        self._initial_inputs = None
         self.output()
         return self
 

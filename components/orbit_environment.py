@@ -54,6 +54,10 @@ Epoch and sidereal time
 -----------------------
 ``epoch`` (ISO 8601 UTC) dates t = 0; θ_E(t) is then the Greenwich mean sidereal time
 of epoch + t (IAU-82, UT1 = UTC, :mod:`.ephemeris`) and θ̇_E its exact derivative.
+``epoch_j2000`` (Real, for hosts without String parameters) gives the same epoch as
+seconds since J2000.0 = 2000-01-01T12:00:00 UTC, counted as the String's is (86 400 s per
+calendar day, leap seconds not counted), so whole seconds are exact; 0 means none
+(J2000.0 itself: give the String).  Giving both is an error.
 With an epoch, ``earth_angle0`` must be 0, and classical elements are referred to the
 frame that GMST turns into the Earth-fixed one (TEME of the epoch, as for a TLE below).
 
@@ -132,6 +136,12 @@ def solve_kepler(mean_anomaly: float, e: float) -> float:
     raise ModelError(f"Kepler's equation did not converge (M = {M}, e = {e})")
 
 
+def _day_parts(seconds: float) -> tuple[int, float]:
+    """(whole days, seconds in [0, 86400)) of ``seconds`` since J2000.0."""
+    days = math.floor(seconds / DAY)
+    return days, seconds - days * DAY
+
+
 def geodetic_to_ecef(lat: float, lon: float, alt: float) -> tuple[float, float, float]:
     """WGS-84 geodetic latitude, longitude (rad) and height (m) to Earth-fixed x, y, z (m)."""
     s, c = math.sin(lat), math.cos(lat)
@@ -182,6 +192,9 @@ class OrbitEnvironment(Model):
         parameter("epoch", "", "1", "UTC of t = 0, ISO 8601 'YYYY-MM-DDTHH:MM:SS[.ffffff]' "
                   "(empty: none). With an epoch the Earth angle is the IAU-82 GMST of "
                   "epoch + t (UT1 = UTC) and earth_angle0 must be 0", type="String"),
+        parameter("epoch_j2000", 0.0, "s", "the epoch as seconds since J2000.0 "
+                  "(2000-01-01T12:00:00 UTC, 86400 s per day, no leap seconds), for hosts "
+                  "without String parameters; 0: none. Not together with epoch"),
         parameter("tle_line1", "", "1", "line 1 of a two-line element set (empty: use the "
                   "classical elements). With a TLE the orbit is SGP4 (WGS-72) in TEME, taken "
                   "as I; t = 0 is the epoch, or the TLE epoch without one", type="String"),
@@ -214,7 +227,11 @@ class OrbitEnvironment(Model):
         if bool(line1) != bool(line2):
             raise ModelError("tle_line1 and tle_line2 must be given together (or both empty)")
 
-        self._epoch = j2000_parts(epoch) if epoch else None
+        if epoch and p.epoch_j2000:
+            raise ModelError(f"the epoch is given twice, as epoch = {epoch!r} and as "
+                             f"epoch_j2000 = {p.epoch_j2000!r}: give one of them")
+        self._epoch = (j2000_parts(epoch) if epoch else
+                       _day_parts(p.epoch_j2000) if p.epoch_j2000 else None)
         self._satrec = None
         if line1:
             self._satrec = load_tle(line1, line2)

@@ -204,8 +204,11 @@ class PayloadGimbals(Model):
         self.last_rate_cmd = None        # ideal tracking: rate commands at the last step
         self.last_dt = 0.0
         self.t = t0
+        if not self.ideal:   # ideal tracking: the state is the commands, no initial state
+            self.remember_initial_inputs()
 
     def step(self, t, dt):
+        self.check_initial_inputs(t)
         commands = self.values[self._inputs].tolist()
         if self.ideal:
             self.angles, self.rates = commands[:4], commands[4:8]
@@ -218,6 +221,7 @@ class PayloadGimbals(Model):
         self.t = t + dt
 
     def output(self):
+        self._outputs_seen = True
         commands = self.values[self._inputs].tolist()
         if self.ideal:
             angles, rates = commands[:4], commands[4:8]

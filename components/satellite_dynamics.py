@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
+from .orbit_environment import SCAN_PITCH_ALTITUDE, WGS84_A
 from .rotations import (IDENTITY_Q, dcm, dcm_from_euler123, euler123_from_quat,
                         euler123_rates, qmul, quat_from_dcm, rotate, rotate_back)
 from .variables import input_, output, parameter
@@ -36,6 +37,10 @@ MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
 DEVICES = ("cmg", "wheel", "payload")
 MOMENTUM_INPUTS = tuple(f"h_{d}" for d in DEVICES)
+#: r_I when unconnected: the default orbit's radius (OrbitEnvironment) on the nadir
+#: (+z_O) of the identity orbit frame that q_OI defaults to, so that the FMU at its
+#: defaults is a satellite at 681 km with the gravity gradient on
+DEFAULT_R_I = (0.0, 0.0, -(WGS84_A + SCAN_PITCH_ALTITUDE))
 
 
 def _device_inputs():
@@ -67,8 +72,9 @@ class SatelliteDynamics(Model):
         *_device_inputs(),
         input_("tau_ext", "N.m", "other external torque on the body, in B", shape=(3,),
                required=False),
-        input_("r_I", "m", "satellite position in I (for the gravity gradient)", shape=(3,),
-               required=False),
+        input_("r_I", "m", "satellite position in I (for the gravity gradient); the start "
+               "value is the default orbit's radius at nadir of the identity orbit frame",
+               DEFAULT_R_I, shape=(3,), required=False),
         input_("q_OI", "1", "attitude of the orbit frame O relative to I", IDENTITY_Q,
                shape=(4,), required=False),
         input_("w_OI_O", "rad/s", "angular velocity of O relative to I, in O", shape=(3,),
@@ -113,8 +119,10 @@ class SatelliteDynamics(Model):
         self.euler = tuple(p.attitude0.tolist())
         self.q_BO = tuple(q_BO.tolist())
         self.t = t0
+        self.remember_initial_inputs()
 
     def step(self, t, dt):
+        self.check_initial_inputs(t)
         u = self.u
         h0 = self._h_total()
         hdot = (u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist()
@@ -141,6 +149,7 @@ class SatelliteDynamics(Model):
 
     def output(self):
         u, y = self.u, self.y
+        self._outputs_seen = True
         q_OI = _unit(u.q_OI, "q_OI")
         w_BI_B = self._rate(self.q_BI, self.H_I, self._h_total())
         q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), self.q_BI)

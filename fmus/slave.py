@@ -242,7 +242,11 @@ class ModelSlave(Fmi2Slave):
             self._state_valid = True
 
     def _flush_warnings(self):
+        """The model's warnings, at category logStatusWarning; with the parameter
+        warnings_return_ok at status fmi2OK, which the shim forwards to the host (even
+        with debug logging off) without raising the call's status."""
+        status = Fmi2Status.ok if self.model.p.warnings_return_ok else Fmi2Status.warning
         for message in self.model.warnings:
             self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}",
-                     Fmi2Status.warning)
+                     status, "logStatusWarning")
         self.model.warnings.clear()

@@ -30,7 +30,9 @@ MASTER_ANNOTATION = "org.agilesat.master"
 MASTER_NAMESPACE = "http://agilesat.org/ssp/master"
 OSP_ANNOTATION = "com.opensimulationplatform"
 OSP_NAMESPACE = "https://opensimulationplatform.com/SSP/1.0"
-_PREFIXES = {**NS, "agilesat": MASTER_NAMESPACE, "osp": OSP_NAMESPACE}
+OMS_ANNOTATION = "org.openmodelica"
+OMS_NAMESPACE = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+_PREFIXES = {**NS, "agilesat": MASTER_NAMESPACE, "osp": OSP_NAMESPACE, "oms": OMS_NAMESPACE}
 _TYPES = ("Real", "Integer", "Boolean", "String")
 
 
@@ -257,6 +259,12 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
     instance name to its variable table, ``connections`` are ("A.x", "B.y") pairs of whole
     variables (arrays are expanded element by element), ``parameters`` maps "A.p" to a
     value (scalar or array), ``units`` is the FMU unit table of fmus/model_description.py.
+
+    For third-party hosts: every component's parameter set is named ``name`` (ECOS applies
+    only the one set named at its init); String connectors without a bound value are left
+    out (hosts that cannot set Strings); the step is also written in the annotations
+    that libcosim (Open Simulation Platform, on the default experiment) and OMSimulator
+    (OpenModelica, on the system; it refuses a system without one) read.
     """
     E = _Maker()
     root = E("ssd:SystemStructureDescription", version="1.0", name=name,
@@ -272,25 +280,28 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
         component = E.sub(elements, "ssd:Component", name=instance, source=source,
                           type="application/x-fmu-sharedlibrary")
         connectors = E.sub(component, "ssd:Connectors")
+        values = bound.get(instance, {})
         for v in tables[instance]:
+            if v.type == "String" and v.name not in values:
+                continue
             for scalar in v.scalar_names():
                 connector = E.sub(connectors, "ssd:Connector", name=scalar, kind=v.causality)
                 attributes = {"unit": v.unit} if v.type == "Real" else {}
                 if v.type == "Real":
                     used_units.add(v.unit)
                 E.sub(connector, f"ssc:{v.type}", **attributes)
-        values = bound.get(instance)
         if values:
             bindings = E.sub(component, "ssd:ParameterBindings")
             binding = E.sub(bindings, "ssd:ParameterBinding")
             holder = E.sub(binding, "ssd:ParameterValues")
             parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0",
-                                  name=f"{instance}_parameters")
+                                  name=name)
             listing = E.sub(parameter_set, "ssv:Parameters")
             for scalar, (kind, text) in values.items():
                 parameter = E.sub(listing, "ssv:Parameter", name=scalar)
                 E.sub(parameter, f"ssv:{kind}", value=text)
     wires = E.sub(system, "ssd:Connections")
+    _oms_annotation(E, system, step)
     for source, target in connections:
         (a, x), (b, y) = source.split(".", 1), target.split(".", 1)
         va, vb = by_instance[a][x], by_instance[b][y]
@@ -321,6 +332,18 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
     _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
+
+
+def _oms_annotation(E, system, step: float) -> None:
+    """OMSimulator's fixed-step master on the system (written and read by OMSimulator as
+    ssd:Annotations/ssc:Annotation type="org.openmodelica"/oms:Annotations/
+    oms:SimulationInformation/oms:FixedStepMaster, e.g. its testsuite's exported SSDs);
+    after ssd:Connections, where the SSD schema puts a system's annotations."""
+    annotation = E.sub(E.sub(system, "ssd:Annotations"), "ssc:Annotation",
+                       nsmap={"oms": OMS_NAMESPACE}, type=OMS_ANNOTATION)
+    information = E.sub(E.sub(annotation, "oms:Annotations"), "oms:SimulationInformation")
+    E.sub(information, "oms:FixedStepMaster", description="oms-ma",
+          stepSize=repr(float(step)))
 
 
 def _expand_parameters(parameters: dict, tables: dict) -> dict:

@@ -139,7 +139,7 @@ def test_bad_inertia_is_rejected(inertia, message):
 
 
 def test_gravity_gradient_needs_a_position():
-    m = SatelliteDynamics(inertia=np.diag([1.0, 2.0, 3.0])).start()
+    m = SatelliteDynamics(inertia=np.diag([1.0, 2.0, 3.0]), r_I=[0.0, 0.0, 0.0]).start()
     with pytest.raises(ModelError, match="r_I is zero"):
         m.step(0.0, 0.1)
 

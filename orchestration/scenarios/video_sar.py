@@ -69,9 +69,18 @@ def _rounded(value, digits=12):
     return float(round(value, digits)) if isinstance(value, float) else value
 
 
-ORBIT = {key: _rounded(value) for key, value in design_pass(
+def real_epoch(orbit: dict) -> dict:
+    """OrbitEnvironment parameters with the String ``epoch`` given as the Real
+    ``epoch_j2000`` instead (the same instant; for hosts without String parameters)."""
+    orbit = dict(orbit)
+    epoch = orbit.pop("epoch")
+    return dict(orbit, epoch_j2000=(parse_epoch(epoch) - J2000).total_seconds())
+
+
+#: the shipped pass, its epoch as a Real: the system sets no String
+ORBIT = real_epoch({key: _rounded(value) for key, value in design_pass(
     VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER, VIDEO_SAR_LOOK_ANGLE, "right", "ascending",
-    t0=HALF_STARE).items()}
+    t0=HALF_STARE).items()})
 GUIDANCE = {"yaw_compensation": True, "boresight_B": [0.0, 0.0, 1.0], "reference_time": 0.0}
 
 
