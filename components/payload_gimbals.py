@@ -78,6 +78,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
@@ -207,8 +209,20 @@ class PayloadGimbals(Model):
         if not self.ideal:   # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
 
+    def initial_input_jumps(self, used, dt):
+        """Servo mode: an angle command moves by at most 4 |rate command| dt in a step (a
+        host that passed nothing in initialisation jumps from 0 to the sweep's start);
+        rate commands are not bounded (accelerations are not always given)."""
+        u, jumps = self.u, {}
+        for angle, rate in (("roll_cmd", "roll_rate_cmd"), ("pitch_cmd", "pitch_rate_cmd")):
+            change = np.abs(getattr(u, angle) - used[angle])
+            bound = 4.0 * np.maximum(np.abs(getattr(u, rate)), np.abs(used[rate])) * dt + 1e-9
+            if np.any(change > bound):
+                jumps[angle] = f"changed by {np.degrees(change).round(4).tolist()} deg"
+        return jumps
+
     def step(self, t, dt):
-        self.check_initial_inputs(t)
+        self.check_initial_inputs(dt)
         commands = self.values[self._inputs].tolist()
         if self.ideal:
             self.angles, self.rates = commands[:4], commands[4:8]
@@ -221,7 +235,6 @@ class PayloadGimbals(Model):
         self.t = t + dt
 
     def output(self):
-        self._outputs_seen = True
         commands = self.values[self._inputs].tolist()
         if self.ideal:
             angles, rates = commands[:4], commands[4:8]

@@ -122,7 +122,7 @@ class SatelliteDynamics(Model):
         self.remember_initial_inputs()
 
     def step(self, t, dt):
-        self.check_initial_inputs(t)
+        self.check_initial_inputs(dt)
         u = self.u
         h0 = self._h_total()
         hdot = (u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist()
@@ -149,7 +149,6 @@ class SatelliteDynamics(Model):
 
     def output(self):
         u, y = self.u, self.y
-        self._outputs_seen = True
         q_OI = _unit(u.q_OI, "q_OI")
         w_BI_B = self._rate(self.q_BI, self.H_I, self._h_total())
         q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), self.q_BI)
@@ -166,6 +165,27 @@ class SatelliteDynamics(Model):
         y.euler_rate_BO[:] = euler123_rates(self.euler, w_BO_B)
         y.w_BO_B[:] = w_BO_B
         y.H_I[:] = self.H_I
+
+    def initial_input_jumps(self, used, dt):
+        """Bounds of one step of dt (margin 4): the orbit frame turns by at most
+        |w_OI_O| dt, its rate changes by a small fraction, each device's momentum by
+        |hdot| dt.  A host that passed nothing in initialisation jumps by the whole
+        orbit attitude or stored momentum (radians, tens of N·m·s)."""
+        u, jumps = self.u, {}
+        w = max(np.linalg.norm(used["w_OI_O"]), np.linalg.norm(u.w_OI_O))
+        cos_half = abs(float(np.dot(_unit(u.q_OI, "q_OI"), _unit(used["q_OI"], "q_OI"))))
+        angle = 2.0 * math.acos(min(1.0, cos_half))
+        if angle > 4.0 * w * dt + 1e-9:
+            jumps["q_OI"] = f"turned {math.degrees(angle):.4g} deg"
+        change = np.linalg.norm(u.w_OI_O - used["w_OI_O"])
+        if change > 0.01 * w + 1e-12:
+            jumps["w_OI_O"] = f"changed by {change:.3g} rad/s"
+        for h in MOMENTUM_INPUTS:
+            change = np.linalg.norm(getattr(u, h) - used[h])
+            hdot = getattr(u, "hdot" + h[1:])
+            if change > 4.0 * np.linalg.norm(hdot) * dt + 1e-9 * (1.0 + np.linalg.norm(used[h])):
+                jumps[h] = f"changed by {change:.4g} N.m.s"
+        return jumps
 
     # -- internals -----------------------------------------------------------------
     def _h_total(self) -> list:
