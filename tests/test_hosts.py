@@ -126,6 +126,25 @@ def test_the_initial_state_uses_the_inputs_given_in_initialisation():
     assert abs(np.dot(body.get("q_BI"), expected)) == pytest.approx(1.0, abs=1e-14)
 
 
+@pytest.mark.parametrize("late, error", [(True, True), (False, False)])
+def test_a_servo_payload_commanded_only_after_initialisation_is_an_error(late, error):
+    """PayloadGimbals with a servo starts its angles at the commands: 15° roll set late is
+    an error; the same command moved by one step at 6°/s is not."""
+    from agilesat.components.payload_gimbals import PayloadGimbals
+    model = PayloadGimbals(bandwidth=5.0)
+    rate = math.radians(6.0)
+    if not late:
+        model.set("roll_cmd", [math.radians(15.0)] * 2)
+    model.initialize(0.0)
+    model.set("roll_cmd", [math.radians(15.0) + rate * 0.05] * 2)
+    model.set("roll_rate_cmd", [rate] * 2)
+    if error:
+        with pytest.raises(ModelError, match=r"\['roll_cmd'\]"):
+            model.step(0.0, 0.05)
+    else:
+        model.step(0.0, 0.05)
+
+
 @pytest.mark.slow
 @pytest.mark.integration
 @pytest.mark.parametrize("read_first", [0, 1])
