@@ -87,13 +87,15 @@ def _unit_definitions(root, layout):
 
 
 def _required_inputs(root, layout):
-    """Inputs a system must connect, for masters that read it (ours does)."""
+    """Every input, for masters that read it (ours does): ``<Input name=.../>`` a system
+    must connect, ``<Input name=... optional="what the default means"/>`` it may leave open
+    (one element under Tool: the FMI 2.0 schema allows no more)."""
     tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", {"name": "agilesat"})
-    required = SubElement(tool, "RequiredInputs")
+    inputs = SubElement(tool, "Inputs")
     for var in layout.group("input"):
-        if var.required:
-            for name in var.scalar_names():
-                SubElement(required, "Input", {"name": name})
+        for name in var.scalar_names():
+            SubElement(inputs, "Input", {"name": name} if var.required else
+                       {"name": name, "optional": var.optional})
 
 
 def _model_variables(root, layout):
