@@ -291,8 +291,9 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
             + (f" in {recorder.csv.path}" if out_dir is not None else "")] + problems
     if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
         name = signal.Signals(signals.signal).name
-        raise Interrupted("\n".join([f"{system.path.name}: interrupted by {name} at "
-                                     f"t={log.time:.6g} s"] + kept), results, signals.signal)
+        raise Interrupted("\n".join([f"{system.path.name}: interrupted by {name} after "
+                                     f"t={results.time[-1]:.6g} s"] + kept), results,
+                          signals.signal)
     if failure is not None or problems:
         raise SimulationError("\n".join([f"{system.path.name}: {failure or 'results lost'}"]
                                         + kept), results)

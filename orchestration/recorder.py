@@ -91,8 +91,8 @@ class _File:
                 view = view[os.write(self.fd, view):]
         except OSError as exc:
             self.truncate()
-            raise OSError(exc.errno, f"{self.path}: {exc.strerror}; kept the {rows} complete "
-                          "rows written before") from None
+            raise file_error(self.path, exc, f"; kept the {rows} complete rows written "
+                             "before") from None
 
     def commit(self) -> None:
         self.size = self.pending
@@ -111,11 +111,18 @@ class _File:
             self.fd = None
 
 
+def file_error(path, exc: OSError, note: str = "") -> OSError:
+    """An OSError whose message starts with the file's name."""
+    error = OSError(f"{path}: {exc.strerror or exc}{note}")
+    error.errno = exc.errno
+    return error
+
+
 def _checked(path, action):
     try:
         return action()
     except OSError as exc:
-        raise OSError(exc.errno, f"{path}: {exc.strerror}") from None
+        raise file_error(path, exc) from None
 
 
 def _map(raw: Path, rows: int, n: int) -> np.ndarray:
@@ -147,4 +154,4 @@ def write_npz(path: Path, names: list[str], raw: Path, rows: int, chunk: int = 1
         os.replace(temporary, path)
     except OSError as exc:
         temporary.unlink(missing_ok=True)
-        raise OSError(exc.errno, f"{path}: {exc.strerror or exc}; not written") from None
+        raise file_error(path, exc, "; not written") from None

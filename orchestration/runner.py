@@ -10,6 +10,7 @@ from pathlib import Path
 from ..fmus.model_description import UNITS
 from . import scenarios
 from .master import Interrupted, SimulationError, simulate, stop_on_signals
+from .recorder import file_error
 from .results import Results
 
 
@@ -90,19 +91,20 @@ def _facts(results: Results) -> dict:
 
 def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
     """log.txt and summary.json, each under a temporary name then renamed (the master
-    writes results.csv row by row and results.npz)."""
-    _write_text(out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"]))
-    _write_text(out_dir / "summary.json", json.dumps(summary, indent=2, default=str) + "\n")
-
-
-def _write_text(path: Path, text: str) -> None:
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
-        temporary.write_text(text)
-        os.replace(temporary, path)
-    except OSError as exc:
-        temporary.unlink(missing_ok=True)
-        raise OSError(exc.errno, f"{path}: {exc.strerror}; not written") from None
+    writes results.csv row by row and results.npz); an OSError names each file not written."""
+    problems = []
+    for name, text in (("log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+                       ("summary.json", json.dumps(summary, indent=2, default=str) + "\n")):
+        path = out_dir / name
+        temporary = path.with_name(f".{name}.{os.getpid()}.partial")
+        try:
+            temporary.write_text(text)
+            os.replace(temporary, path)
+        except OSError as exc:
+            temporary.unlink(missing_ok=True)
+            problems.append(str(file_error(path, exc, "; not written")))
+    if problems:
+        raise OSError("\n".join(problems))
 
 
 def format_summary(summary: dict) -> str:
