@@ -44,7 +44,7 @@ from .ssp import SystemFile, SystemFileError, read_system
 from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
-MAX_STEPS = 10_000_000   # macro steps of one run (about 20 GB of CSV for scan_pitch)
+MAX_STEPS = 10_000_000   # macro steps of one run (about 15 GB of CSV for scan_pitch)
 _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
 
@@ -187,8 +187,11 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
     ``parameters`` maps "Instance.variable" (scalar names, e.g. "A.inertia[1,1]") to values
-    that override the system's.  With ``out_dir``, ``results.csv`` is written there as the
-    run goes.  Returns :class:`Results` (``meta`` holds the settings and the FMU log).
+    that override the system's.  With ``out_dir``, ``results.csv`` is written there row by
+    row and ``results.npz`` at the end, and the Results returned map their rows from disk
+    (memory independent of the run length); without, the rows are held in memory.  Returns
+    :class:`Results` (``meta`` holds the settings, the FMU log and the open inputs); raises
+    :class:`SimulationError` (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
     """
     system = system if isinstance(system, SystemFile) else read_system(system)
     start = system.start_time
@@ -229,10 +232,11 @@ def _steps(path, start: float, step, stop) -> int:
     if stop is None or not math.isfinite(stop) or stop <= start:
         raise ValueError(f"{path}: the stop time must be finite and after the start {start} s "
                          f"(got {stop})")
-    n_steps = int(round((stop - start) / step))
-    if n_steps > MAX_STEPS:
-        raise ValueError(f"{path}: {stop - start} s at a step of {step} s would be {n_steps} "
-                         f"macro steps, more than the {MAX_STEPS} a run may have")
+    ratio = (stop - start) / step
+    if not ratio <= MAX_STEPS:   # also inf, from a tiny step
+        raise ValueError(f"{path}: {stop - start} s at a step of {step} s would be "
+                         f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have")
+    n_steps = int(round(ratio))
     if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
         raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
     return n_steps
