@@ -22,7 +22,7 @@ Run (:func:`simulate`):
    the run stops between two macro steps, terminates and frees the FMUs, keeps its rows and
    raises :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
 
-The system is checked against the model descriptions before any FMU is loaded; open
+The system is checked against the model descriptions before any FMU is instantiated; open
 inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
 in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
 the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
@@ -37,7 +37,7 @@ import threading
 
 import numpy as np
 
-from .fmu import Description, FmiCallError, Instance, Log
+from .fmu import FmiCallError, Instance, Log
 from .recorder import Recorder
 from .results import Results
 from .ssp import SystemFile, SystemFileError, read_system
@@ -205,17 +205,17 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
     with stop_on_signals() as signals:
         log = Log(echo=echo)
         log.time = start
-        descriptions = {ref.name: _describe(system, ref) for ref in system.components}
-        bindings = system.parameters + [override(descriptions, k, v)
-                                        for k, v in (parameters or {}).items()]
-        plan = check_system(system, descriptions, bindings)
-        for entry in plan.open_inputs:
-            log.add(entry["input"].partition(".")[0], 0 if entry["declared"] else 1,
-                    "master", f"input {entry['input']} is not connected: {entry['meaning']}")
         instances = {}
         try:
             for ref in system.components:
-                instances[ref.name] = Instance(ref.name, ref.source, log)
+                instances[ref.name] = _load(system, ref, log)
+            bindings = system.parameters + [override(instances, k, v)
+                                            for k, v in (parameters or {}).items()]
+            plan = check_system(system, instances, bindings)
+            for entry in plan.open_inputs:
+                log.add(entry["input"].partition(".")[0], 0 if entry["declared"] else 1,
+                        "master", f"input {entry['input']} is not connected: "
+                        f"{entry['meaning']}")
             return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
                         log, out_dir, logging_on, signals)
         finally:
@@ -242,9 +242,9 @@ def _steps(path, start: float, step, stop) -> int:
     return n_steps
 
 
-def _describe(system, ref) -> Description:
+def _load(system, ref, log) -> Instance:
     try:
-        return Description(ref.name, ref.source)
+        return Instance(ref.name, ref.source, log)
     except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
         raise SystemFileError(f"{system.path}:{ref.line}: component '{ref.name}': "
                               f"{ref.source} is not a readable FMU: {exc}") from None

@@ -131,7 +131,7 @@ def _map(raw: Path, rows: int, n: int) -> np.ndarray:
     return np.memmap(raw, dtype="<f8", mode="c", shape=(rows, n))
 
 
-def write_npz(path: Path, names: list[str], raw: Path, rows: int, chunk: int = 1 << 22) -> None:
+def write_npz(path: Path, names: list[str], raw: Path, rows: int, chunk: int = 1 << 20) -> None:
     """results.npz (``names``, ``data`` as :meth:`Results.to_npz` writes them) from the raw
     float64 rows in ``raw``, copied in chunks; written to a temporary name, then renamed."""
     temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")

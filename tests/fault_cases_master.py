@@ -63,9 +63,11 @@ def _csv_rows(path: Path) -> tuple[int, bool]:
     return len(body), all(line.count(",") == fields for line in body)
 
 
-def _stderr_line(result) -> str:
-    lines = [line for line in result.stderr.splitlines() if line.strip()]
-    return lines[-1].strip()[:160] if lines else "(nothing on stderr)"
+def _stderr_line(result, key: str = "") -> str:
+    """The first line of stderr holding key, else the last one."""
+    lines = [line.strip() for line in result.stderr.splitlines() if line.strip()]
+    chosen = [line for line in lines if key and key in line] or lines[-1:]
+    return chosen[0][:160] if chosen else "(nothing on stderr)"
 
 
 # ---------------------------------------------------------------------------------------
@@ -362,8 +364,8 @@ def disk_full():
             return _case("disk full (200 KiB tmpfs) while writing results.csv",
                          "exit 1 naming results.csv; every complete row kept, no torn row; "
                          "no half-written results.npz or temporary files",
-                         f"exit {result.returncode}: {_stderr_line(result)}; {rows} whole "
-                         f"rows, torn: {not whole}, leftovers {leftovers}", ok)
+                         f"exit {result.returncode}: {_stderr_line(result, 'results.csv')}; "
+                         f"{rows} whole rows, torn: {not whole}, leftovers {leftovers}", ok)
         finally:
             subprocess.run(["umount", str(mount)], check=True)
 

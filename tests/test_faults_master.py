@@ -51,8 +51,8 @@ def _without(ssd: Path, index: int, directory: Path) -> Path:
 @pytest.mark.parametrize("ssd", SYSTEMS, ids=lambda p: p.stem)
 def test_removing_any_connection_is_an_error_or_a_listed_open_input(fmus, ssd, tmp_path):
     """Never silent: each single connection removed from each shipped system either makes
-    the check (which runs before any FMU is loaded) fail naming file, component and input,
-    or leaves an open optional input that the run lists with its meaning."""
+    the check (the run makes it before instantiating any FMU) fail naming file, component
+    and input, or leaves an open optional input that the run lists with its meaning."""
     system = read_system(ssd)
     descriptions = {c.name: Description(c.name, c.source) for c in system.components}
     assert check_system(system, descriptions, system.parameters).open_inputs is not None
