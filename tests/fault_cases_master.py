@@ -108,25 +108,51 @@ def unconnected_optional_input():
                      f"exit {result.returncode}; listed {listed}; in log.txt: {logged}", ok)
 
 
-def _bad_setting(option, value, message):
+_SETTINGS_SCRIPT = """
+import contextlib, io, json, sys
+from agilesat.orchestration.cli import main
+results = []
+for option, value in json.loads(sys.argv[2]):
+    stderr = io.StringIO()
+    with contextlib.redirect_stderr(stderr):
+        code = main(["run", sys.argv[1], option, value, "--out", sys.argv[3]])
+    results.append((code, stderr.getvalue()))
+print(json.dumps(results))
+"""
+
+
+def _bad_settings(settings: list[tuple[str, str, str]]) -> tuple[bool, str]:
+    """Run `agilesat run` (its main(), in one fresh process) with each (option, value);
+    each must exit 1 with its message."""
     with tempfile.TemporaryDirectory() as tmp:
-        result = agilesat("run", system_copy(tmp), option, value, "--out", Path(tmp) / "o")
-        return result.returncode == 1 and message in result.stderr, \
-            f"{option} {value}: exit {result.returncode}"
+        pairs = [(option, value) for option, value, _ in settings]
+        result = subprocess.run([sys.executable, "-c", _SETTINGS_SCRIPT, str(system_copy(tmp)),
+                                 json.dumps(pairs), str(Path(tmp) / "out")], cwd=ROOT,
+                                capture_output=True, text=True, timeout=300)
+        outcomes = json.loads(result.stdout) if result.returncode == 0 else []
+        ok = len(outcomes) == len(settings) and all(
+            code == 1 and message in stderr and "Traceback" not in stderr
+            for (code, stderr), (_, _, message) in zip(outcomes, settings))
+        observed = "; ".join(f"{o} {v}: exit {code}" for (o, v), (code, _) in
+                             zip(pairs, outcomes)) or f"script failed: {result.stderr[-300:]}"
+        return ok and not (Path(tmp) / "out" / "results.csv").exists(), observed
 
 
 def step_zero():
-    ok, observed = _bad_setting("--step", "0", "the macro step must be a positive, finite")
-    return _case("--step 0", "exit 1: the macro step must be positive and finite", observed,
-                 ok)
+    ok, observed = _bad_settings([("--step", "0", "the macro step must be a positive, finite"),
+                                  ("--step", "-0.05", "the macro step must be a positive")])
+    return _case("--step 0, --step -0.05", "exit 1: the macro step must be positive and "
+                 "finite; nothing run", observed, ok)
 
 
 def absurd_stop():
-    checks = [_bad_setting("--stop", v, m) for v, m in (
-        ("inf", "the stop time must be finite"), ("nan", "the stop time must be finite"),
-        ("-1", "after the start"), ("1e9", "more than the 10000000 a run may have"))]
+    ok, observed = _bad_settings([
+        ("--stop", "inf", "the stop time must be finite"),
+        ("--stop", "nan", "the stop time must be finite"),
+        ("--stop", "-1", "after the start"),
+        ("--stop", "1e9", "more than the 10000000 a run may have")])
     return _case("--stop inf, nan, -1, 1e9", "exit 1 with a message for each (no traceback, "
-                 "no MemoryError)", "; ".join(o for _, o in checks), all(k for k, _ in checks))
+                 "no MemoryError); nothing run", observed, ok)
 
 
 def connector_unit():
