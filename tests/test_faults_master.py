@@ -5,6 +5,7 @@ The cases of ``fault_cases_master.CASES`` run the CLI in fresh processes (slow);
 checks the pieces in this process without loading any FMU.
 """
 import os
+import re
 import signal
 import threading
 from pathlib import Path
@@ -87,6 +88,31 @@ def test_simulate_rejects_a_zero_step_and_absurd_stop_times_before_loading_anyth
     for step, stop in ((None, 1e9), (1e-320, None)):
         with pytest.raises(ValueError, match=f"more than the {master.MAX_STEPS}"):
             master.simulate(ssd, step=step, stop=stop)
+
+
+CONNECTOR = '<ssd:Connector name="r_I[1]" kind="input">\n            <ssc:Real unit="m"/>'
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("new, message", [
+    (CONNECTOR.replace('"m"', '"km"'), "declared unit 'km', the FMU's variable has 'm'"),
+    (CONNECTOR.replace('kind="input"', 'kind="output"'),
+     "declared output, the FMU's variable is a input"),
+    (CONNECTOR.replace('<ssc:Real unit="m"/>', '<ssc:Integer/>'),
+     "declared Integer, the FMU's variable is Real"),
+    (CONNECTOR.replace('r_I[1]', 'r_I[9]'), "SatelliteDynamics (SatelliteDynamics.fmu) has no "
+                                            "variable 'r_I[9]'"),
+])
+def test_a_connector_that_disagrees_with_the_fmu_is_refused(fmus, tmp_path, new, message):
+    ssd = ROOT / "orchestration" / "systems" / "scan_pitch.ssd"
+    path = fault_cases_master.system_copy(tmp_path, lambda s: s.replace(CONNECTOR, new, 1))
+    system = read_system(path)
+    descriptions = {c.name: Description(c.name, c.source) for c in system.components}
+    with pytest.raises(SystemFileError, match=rf"scan_pitch.ssd:\d+: connector "
+                                              rf"SatelliteDynamics.r_I\[[19]\]: .*"
+                                              + re.escape(message)):
+        check_system(system, descriptions, system.parameters)
+    assert ssd.read_text().count(CONNECTOR) == 1
 
 
 def test_a_connector_unit_is_read_from_the_ssd():
