@@ -66,7 +66,7 @@ class Log:
 
 class Description:
     """What the model description of an FMU in a system says: variables by name, output
-    dependencies, required inputs.  Nothing is loaded."""
+    dependencies, optional inputs.  Nothing is loaded."""
 
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
@@ -74,9 +74,9 @@ class Description:
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
-        #: inputs the FMU declares required, and optional ones -> what their default means
-        #: (our VendorAnnotations); None: not declared (not our FMU)
-        self.required_inputs, self.optional_inputs = _declared_inputs(path)
+        #: optional input -> what its default means, as our FMUs declare them
+        #: (VendorAnnotations; every other input is required); None: not our FMU
+        self.optional_inputs = _optional_inputs(path)
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
         #: output names in value-reference order
@@ -171,15 +171,14 @@ def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
     return result
 
 
-def _declared_inputs(path: Path) -> tuple[set[str] | None, dict[str, str] | None]:
-    """(required inputs, {optional input: what its default means}) an agilesat FMU declares
-    (VendorAnnotations); (None, None): not declared."""
+def _optional_inputs(path: Path) -> dict[str, str] | None:
+    """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
+    None: nothing declared."""
     with zipfile.ZipFile(path) as archive:
         root = etree.fromstring(archive.read("modelDescription.xml"))
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
-        return None, None
-    inputs = tool.findall("Inputs/Input")
-    return ({e.get("name") for e in inputs if e.get("optional") is None},
-            {e.get("name"): e.get("optional") for e in inputs if e.get("optional") is not None})
+        return None
+    return {e.get("name"): e.get("optional") for e in tool.findall("Inputs/Input")
+            if e.get("optional") is not None}
 
