@@ -160,10 +160,11 @@ class PayloadGimbals(Model):
         input_("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
                shape=(2,), display_unit="deg/s"),
         input_("roll_accel_cmd", "rad/s2", "commanded roll acceleration of payloads 1 and 2 "
-               "(used with accel_inputs)", shape=(2,), required=False, display_unit="deg/s2"),
+               "(used with accel_inputs)", shape=(2,), display_unit="deg/s2",
+               optional="zero: unused unless accel_inputs (then no roll acceleration)"),
         input_("pitch_accel_cmd", "rad/s2", "commanded pitch acceleration of payloads 1 and "
-               "2 (used with accel_inputs)", shape=(2,), required=False,
-               display_unit="deg/s2"),
+               "2 (used with accel_inputs)", shape=(2,), display_unit="deg/s2",
+               optional="zero: unused unless accel_inputs (then no pitch acceleration)"),
         output("roll", "rad", "roll of payloads 1 and 2", shape=(2,),
                depends=("roll_cmd",), display_unit="deg"),
         output("pitch", "rad", "pitch of payloads 1 and 2", shape=(2,),

@@ -47,10 +47,10 @@ def _device_inputs():
     for device in DEVICES:
         yield input_(f"h_{device}", "N.m.s",
                      f"{device} angular momentum relative to the body, in B", shape=(3,),
-                     required=False)
+                     optional=f"zero: no {device} momentum")
         yield input_(f"hdot_{device}", "N.m",
                      f"time derivative of h_{device} as seen in B", shape=(3,),
-                     required=False)
+                     optional=f"zero: constant {device} momentum")
 
 
 class SatelliteDynamics(Model):
@@ -71,14 +71,17 @@ class SatelliteDynamics(Model):
         parameter("mu", 3.986004418e14, "m3/s2", "gravitational parameter of the Earth"),
         *_device_inputs(),
         input_("tau_ext", "N.m", "other external torque on the body, in B", shape=(3,),
-               required=False),
+               optional="zero: no other external torque"),
         input_("r_I", "m", "satellite position in I (for the gravity gradient); the start "
                "value is the default orbit's radius at nadir of the identity orbit frame",
-               DEFAULT_R_I, shape=(3,), required=False),
+               DEFAULT_R_I, shape=(3,),
+               optional="a fixed position, the default orbit's radius at nadir of the "
+                        "identity orbit frame: connect it for the gravity gradient of a real "
+                        "orbit"),
         input_("q_OI", "1", "attitude of the orbit frame O relative to I", IDENTITY_Q,
-               shape=(4,), required=False),
+               shape=(4,), optional="identity: O is the inertial frame (q_BO = q_BI)"),
         input_("w_OI_O", "rad/s", "angular velocity of O relative to I, in O", shape=(3,),
-               required=False),
+               optional="zero: O does not rotate"),
         output("q_BI", "1", "attitude of B relative to I", shape=(4,)),
         output("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
                depends=MOMENTUM_INPUTS, display_unit="deg/s"),

@@ -29,9 +29,11 @@ class Var:
 
     ``depends`` (outputs only) names the inputs with direct feedthrough to this output at
     a communication point; an output that is a function of the state alone leaves it
-    empty.  ``required`` (inputs only): a system must connect it; an optional input keeps
-    its start value (zero, or the identity quaternion) when left open.  ``start`` is a
-    scalar (broadcast) or a nested sequence of ``shape``.
+    empty.  ``optional`` (inputs only): empty, a system must connect the input (or give it
+    a parameter value); else the input may be left open and keeps its start value, and the
+    text says what that default means ("zero: no wheel momentum"): a master lists each open
+    optional input with it.  An array input is connected as a whole or not at all.
+    ``start`` is a scalar (broadcast) or a nested sequence of ``shape``.
     """
 
     name: str
@@ -43,7 +45,7 @@ class Var:
     type: str = "Real"
     display_unit: str | None = None
     depends: tuple[str, ...] = ()
-    required: bool = False
+    optional: str = ""
 
     def __post_init__(self):
         if self.causality not in CAUSALITIES:
@@ -52,10 +54,18 @@ class Var:
             raise ValueError(f"{self.name}: type {self.type!r} not in {TYPES}")
         if self.depends and self.causality != "output":
             raise ValueError(f"{self.name}: only outputs have feedthrough dependencies")
-        if self.required and self.causality != "input":
-            raise ValueError(f"{self.name}: only inputs can be required")
+        if not isinstance(self.optional, str):
+            raise TypeError(f"{self.name}: optional= is the text saying what the default "
+                            f"means, got {self.optional!r}")
+        if self.optional and self.causality != "input":
+            raise ValueError(f"{self.name}: only inputs can be optional")
         if self.type == "String" and (self.shape or self.causality != "parameter"):
             raise ValueError(f"{self.name}: String variables must be scalar parameters")
+
+    @property
+    def required(self) -> bool:
+        """An input a system must connect (or give a parameter value)."""
+        return self.causality == "input" and not self.optional
 
     @property
     def size(self) -> int:
@@ -78,8 +88,14 @@ def parameter(name, start, unit, description, **kw) -> Var:
     return Var(name, "parameter", unit, description, start, **kw)
 
 
-def input_(name, unit, description, start=0.0, required=True, **kw) -> Var:
-    return Var(name, "input", unit, description, start, required=required, **kw)
+def input_(name, unit, description, start=0.0, *, optional: str = "", **kw) -> Var:
+    """An input; required unless ``optional`` says what its default (``start``) means."""
+    if "required" in kw:
+        raise TypeError(f"{name}: declare an optional input with optional='what its "
+                        "default means' (there is no required=)")
+    if not isinstance(optional, str) or (optional and not optional.strip()):
+        raise ValueError(f"{name}: optional= must say what the default means")
+    return Var(name, "input", unit, description, start, optional=optional.strip(), **kw)
 
 
 def output(name, unit, description, depends=(), **kw) -> Var:

@@ -88,15 +88,19 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
 
 
 def write_archive(target: Path, entries: dict[str, bytes]) -> Path:
-    """A deterministic zip (sorted entries, fixed timestamps), written atomically."""
-    partial = target.with_name(target.name + ".partial")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-        for arcname in sorted(entries):
-            info = zipfile.ZipInfo(arcname, _ZIP_TIME)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
-            archive.writestr(info, entries[arcname])
-    os.replace(partial, target)
+    """A deterministic zip (sorted entries, fixed timestamps), written atomically (under a
+    name unique to this writer, then renamed: parallel builds never share a file)."""
+    partial = _partial(target)
+    try:
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+            for arcname in sorted(entries):
+                info = zipfile.ZipInfo(arcname, _ZIP_TIME)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
+                archive.writestr(info, entries[arcname])
+        os.replace(partial, target)
+    finally:
+        partial.unlink(missing_ok=True)
     return target
 
 
@@ -215,16 +219,25 @@ def _shim_library(out_dir: Path) -> Path:
     if not compiler:
         raise BuildError("building FMUs needs a C compiler (cc or gcc, or set CC) for the "
                          "FMI shim fmus/shim/agilesat_fmi2.c")
-    partial = library.with_suffix(".partial")
+    partial = _partial(library)
     defines = [f"-DAGILESAT_{key}={_c_string(value)}"
                for key, value in zip(("LIBPYTHON", "PYTHON"), runtime)]
     command = [compiler, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", *defines,
                "-o", str(partial), str(SHIM_SOURCES[0]), "-ldl", "-lpthread"]
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise BuildError(f"compiling the FMI shim failed:\n{' '.join(command)}\n{result.stderr}")
-    os.replace(partial, library)
+    try:
+        result = subprocess.run(command, capture_output=True, text=True)
+        if result.returncode != 0:
+            raise BuildError(f"compiling the FMI shim failed:\n{' '.join(command)}\n"
+                             f"{result.stderr}")
+        os.replace(partial, library)
+    finally:
+        partial.unlink(missing_ok=True)
     return library
+
+
+def _partial(target: Path) -> Path:
+    """A temporary name beside target, unique to this process and call."""
+    return target.with_name(f".{target.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.partial")
 
 
 def _c_string(text: str) -> str:
@@ -240,7 +253,7 @@ def interface_rows(model_class):
         unit = v.unit if v.type == "Real" else ""
         notes = []
         if v.causality == "input":
-            notes.append("required" if v.required else "optional")
+            notes.append("required" if v.required else f"optional, {v.optional}")
         if v.depends:
             notes.append("feedthrough from " + ", ".join(v.depends))
         description = v.description + (f" ({'; '.join(notes)})" if notes else "")

@@ -65,7 +65,7 @@ def model_description(name: str, model_class, guid: str, description: str,
     categories = SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": category, "description": text})
-    _required_inputs(root, layout)
+    _input_annotation(root, layout)
     _model_variables(root, layout)
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
@@ -86,14 +86,16 @@ def _unit_definitions(root, layout):
             SubElement(element, "DisplayUnit", {"name": display, "factor": repr(factor)})
 
 
-def _required_inputs(root, layout):
-    """Inputs a system must connect, for masters that read it (ours does)."""
+def _input_annotation(root, layout):
+    """Every input, for masters that read it (ours does): ``<Input name=.../>`` a system
+    must connect, ``<Input name=... optional="what the default means"/>`` it may leave open
+    (one element under Tool: the FMI 2.0 schema allows no more)."""
     tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", {"name": "agilesat"})
-    required = SubElement(tool, "RequiredInputs")
+    inputs = SubElement(tool, "Inputs")
     for var in layout.group("input"):
-        if var.required:
-            for name in var.scalar_names():
-                SubElement(required, "Input", {"name": name})
+        for name in var.scalar_names():
+            SubElement(inputs, "Input", {"name": name} if var.required else
+                       {"name": name, "optional": var.optional})
 
 
 def _model_variables(root, layout):

@@ -1,7 +1,8 @@
 """``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
 
 Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
-3 a scenario that ran but did not fly as required (the summary's diagnostics say why).
+3 a scenario that ran but did not fly as required (the summary's diagnostics say why);
+130 a run interrupted by SIGINT (Ctrl-C) or SIGTERM (everything recorded so far is kept).
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from ..components.analysis import mission
 from . import scenarios
+from .master import Interrupted
 from .scenarios import payload_sweep
 
 DEG = math.pi / 180
@@ -101,6 +103,9 @@ def main(argv=None) -> int:
         return {"build": _build, "validate": _validate, "run": _run, "export": _export,
                 "stare": _stare, "mission": _mission, "size-flywheel": _size_flywheel,
                 "generate": _generate}[args.command](args)
+    except (Interrupted, KeyboardInterrupt) as exc:
+        print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
+        return 130
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
         return 1

@@ -66,7 +66,7 @@ class Log:
 
 class Description:
     """What the model description of an FMU in a system says: variables by name, output
-    dependencies, required inputs.  Nothing is loaded."""
+    dependencies, optional inputs.  Nothing is loaded."""
 
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
@@ -74,7 +74,9 @@ class Description:
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
-        self.required_inputs = _required_inputs(path)
+        #: optional input -> what its default means, as our FMUs declare them
+        #: (VendorAnnotations; every other input is required); None: not our FMU
+        self.optional_inputs = _optional_inputs(path)
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
         #: output names in value-reference order
@@ -99,6 +101,7 @@ class Instance(Description):
         self.fmi2GetInteger, self.fmi2SetInteger = dll.fmi2GetInteger, dll.fmi2SetInteger
         self.fmi2GetBoolean, self.fmi2SetBoolean = dll.fmi2GetBoolean, dll.fmi2SetBoolean
         self.component = None
+        self.fatal = False   # after fmi2Fatal nothing more is called (FMI 2.0 §2.1.3)
         self._log_mark = 0
 
     def instantiate(self, logging_on: bool = False) -> None:
@@ -121,6 +124,9 @@ class Instance(Description):
 
     def call(self, name: str, *args) -> int:
         """Call an FMI function of this instance (component first) and check its status."""
+        if self.fatal:
+            raise FmiCallError(self.name, name, self.log.time, 4,
+                               ["not called: the FMU returned fmi2Fatal before"])
         self._mark()
         status = getattr(self.slave.dll, name)(self.component, *args)
         self.check(status, name)
@@ -128,6 +134,7 @@ class Instance(Description):
 
     def check(self, status: int, call: str) -> None:
         if status > 1:
+            self.fatal = self.fatal or status == 4
             raise FmiCallError(self.name, call, self.log.time, status,
                                self.log.of(self.name, self._log_mark))
 
@@ -142,10 +149,11 @@ class Instance(Description):
         pythonfmu, for one) from a deleted directory.
         """
         try:
-            if self.component is not None:
-                self.slave.fmi2FreeInstance(self.component)
-                self.component = None
-            self.slave.freeLibrary()
+            if not self.fatal:  # after fmi2Fatal: not even freed, the library stays loaded
+                if self.component is not None:
+                    self.slave.fmi2FreeInstance(self.component)
+                    self.component = None
+                self.slave.freeLibrary()
         except Exception:  # noqa: BLE001 - cleanup after an FMU failure
             pass
         resources = str(Path(self.unzip_dir) / "resources")
@@ -163,12 +171,14 @@ def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
     return result
 
 
-def _required_inputs(path: Path) -> set[str] | None:
-    """Inputs an agilesat FMU declares required (VendorAnnotations); None: not declared."""
+def _optional_inputs(path: Path) -> dict[str, str] | None:
+    """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
+    None: nothing declared."""
     with zipfile.ZipFile(path) as archive:
         root = etree.fromstring(archive.read("modelDescription.xml"))
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
         return None
-    return {e.get("name") for e in tool.findall("RequiredInputs/Input")}
+    return {e.get("name"): e.get("optional") for e in tool.findall("Inputs/Input")
+            if e.get("optional") is not None}
 

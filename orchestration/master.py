@@ -16,22 +16,35 @@ Run (:func:`simulate`):
    t_{n+1}).
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
-   when an output directory is given).
+   when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
+   called on that FMU.
+5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
+   the run stops between two macro steps, terminates and frees the FMUs, keeps its rows and
+   raises :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
+
+The system is checked against the model descriptions before any FMU is instantiated; open
+inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
+in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
+the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
-from pathlib import Path
+import signal
+import threading
 
 import numpy as np
 
 from .fmu import FmiCallError, Instance, Log
-from .results import Results, ResultWriter
-from .ssp import SystemFile, read_system
+from .recorder import Recorder
+from .results import Results
+from .ssp import SystemFile, SystemFileError, read_system
 from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
+MAX_STEPS = 10_000_000   # macro steps of one run (about 15 GB of CSV for scan_pitch)
 _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
 
@@ -41,6 +54,43 @@ class SimulationError(RuntimeError):
     def __init__(self, message: str, results: Results | None):
         super().__init__(message)
         self.results = results
+
+
+class Interrupted(SimulationError):
+    """A run stopped by SIGINT or SIGTERM between two macro steps (``signal`` says which)."""
+
+    def __init__(self, message: str, results: Results | None, signum: int):
+        super().__init__(message, results)
+        self.signal = signum
+
+
+class _Stop:
+    signal: int | None = None
+
+    def handler(self, signum, _frame):
+        self.signal = signum
+
+
+_active: _Stop | None = None
+
+
+@contextlib.contextmanager
+def stop_on_signals():
+    """While inside: SIGINT and SIGTERM set ``.signal`` of the object yielded instead of
+    raising or killing; the previous handlers come back on exit.  Only the main thread can
+    install handlers; elsewhere (and nested) the active object, if any, is shared."""
+    global _active
+    if _active is not None or threading.current_thread() is not threading.main_thread():
+        yield _active or _Stop()
+        return
+    stop = _active = _Stop()
+    previous = {s: signal.signal(s, stop.handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        _active = None
 
 
 TYPES = ("Real", "Integer", "Boolean")   # of the values the master passes on
@@ -137,42 +187,71 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
     ``parameters`` maps "Instance.variable" (scalar names, e.g. "A.inertia[1,1]") to values
-    that override the system's.  With ``out_dir``, ``results.csv`` is written there as the
-    run goes.  Returns :class:`Results` (``meta`` holds the settings and the FMU log).
+    that override the system's.  With ``out_dir``, ``results.csv`` is written there row by
+    row and ``results.npz`` at the end, and the Results returned map their rows from disk
+    (memory independent of the run length); without, the rows are held in memory.  Returns
+    :class:`Results` (``meta`` holds the settings, the FMU log and the open inputs); raises
+    :class:`SimulationError` (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
     """
     system = system if isinstance(system, SystemFile) else read_system(system)
-    step = step or system.step_size
+    start = system.start_time
+    step = system.step_size if step is None else step
     stop = system.stop_time if stop is None else stop
     algorithm = algorithm or system.algorithm or "gauss-seidel"
-    start = system.start_time
+    n_steps = _steps(system.path, start, step, stop)
     if algorithm not in ALGORITHMS:
         raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
-    if not (step and step > 0 and math.isfinite(step)):
-        raise ValueError(f"{system.path}: the macro step must be positive (got {step}); give "
-                         "one or set it in the system's org.agilesat.master annotation")
-    if stop is None or stop <= start:
-        raise ValueError(f"{system.path}: stop time {stop} must be after start {start}")
-    n_steps = int(round((stop - start) / step))
+
+    with stop_on_signals() as signals:
+        log = Log(echo=echo)
+        log.time = start
+        instances = {}
+        try:
+            for ref in system.components:
+                instances[ref.name] = _load(system, ref, log)
+            bindings = system.parameters + [override(instances, k, v)
+                                            for k, v in (parameters or {}).items()]
+            plan = check_system(system, instances, bindings)
+            for entry in plan.open_inputs:
+                log.add(entry["input"].partition(".")[0], 0 if entry["declared"] else 1,
+                        "master", f"input {entry['input']} is not connected: "
+                        f"{entry['meaning']}")
+            return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
+                        log, out_dir, logging_on, signals)
+        finally:
+            for instance in instances.values():
+                instance.free()
+
+
+def _steps(path, start: float, step, stop) -> int:
+    """The number of macro steps from start to stop, or a ValueError saying what is wrong."""
+    if step is None or not (math.isfinite(step) and step > 0):
+        raise ValueError(f"{path}: the macro step must be a positive, finite number of "
+                         f"seconds (got {step}); give one or set it in the system's "
+                         "org.agilesat.master annotation")
+    if stop is None or not math.isfinite(stop) or stop <= start:
+        raise ValueError(f"{path}: the stop time must be finite and after the start {start} s "
+                         f"(got {stop})")
+    ratio = (stop - start) / step
+    if not ratio <= MAX_STEPS:   # also inf, from a tiny step
+        raise ValueError(f"{path}: {stop - start} s at a step of {step} s would be "
+                         f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have")
+    n_steps = int(round(ratio))
     if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
         raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
+    return n_steps
 
-    log = Log(echo=echo)
-    instances = {}
+
+def _load(system, ref, log) -> Instance:
     try:
-        for ref in system.components:
-            instances[ref.name] = Instance(ref.name, ref.source, log)
-        bindings = system.parameters + [override(instances, k, v)
-                                        for k, v in (parameters or {}).items()]
-        plan = check_system(system, instances, bindings)
-        return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
-                    log, out_dir, logging_on)
-    finally:
-        for instance in instances.values():
-            instance.free()
+        return Instance(ref.name, ref.source, log)
+    except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
+        raise SystemFileError(f"{system.path}:{ref.line}: component '{ref.name}': "
+                              f"{ref.source} is not a readable FMU: {exc}") from None
 
 
 def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
-         logging_on) -> Results:
+         logging_on, signals) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
     nodes = {name: _Node(instances[name], layout, plan.sources)
              for name in plan.steps.step_order}
@@ -181,18 +260,20 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     init_sequence = _sequence(plan.init, nodes)
 
     values = np.zeros(len(layout))
-    data = np.full((n_steps + 1, len(layout) + 1), np.nan)
+    row = np.zeros(len(layout) + 1)
     meta = {"system": str(system.path), "step": step, "start": start,
             "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
-            "order": plan.steps.step_order}
-    writer = ResultWriter(Path(out_dir) / "results.csv", columns) if out_dir else None
-    rows = 0
+            "order": plan.steps.step_order, "unconnected_optional_inputs": plan.open_inputs}
+    recorder = Recorder(columns, out_dir)
+    failure = None
     try:
         _initialize(instances, nodes, init_sequence, bindings, values, start,
                     start + n_steps * step, log, logging_on)
-        data[0, 0], data[0, 1:] = start, values
-        rows = 1
+        row[0], row[1:] = start, values
+        recorder.append(row)
         for n in range(n_steps):
+            if signals.signal is not None:
+                break
             t = start + n * step
             log.time = t
             if algorithm == "gauss-seidel":
@@ -201,23 +282,26 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
                 for node in nodes.values():
                     _do_step(node.instance, t, step)
                 _evaluate(sequence, values)
-            data[n + 1, 0] = start + (n + 1) * step
-            data[n + 1, 1:] = values
-            rows = n + 2
-            if writer:
-                writer.maybe_flush(data, rows)
-        log.time = start + n_steps * step
+            row[0], row[1:] = start + (n + 1) * step, values
+            recorder.append(row)
+        else:
+            log.time = start + n_steps * step
         for inst in instances.values():
             inst.call("fmi2Terminate")
-    except FmiCallError as exc:
-        partial = Results(columns, data[:rows], meta)
-        if writer:
-            writer.flush(data, rows)
-        raise SimulationError(f"{system.path.name}: {exc}\nKept {rows} recorded rows"
-                              + (f" in {writer.path}" if writer else ""), partial) from None
-    if writer:
-        writer.flush(data, rows)
-    return Results(columns, data, meta)
+    except (FmiCallError, OSError) as exc:
+        failure = str(exc)
+    results, problems = recorder.close(meta)
+    kept = [f"Kept {recorder.rows} recorded rows"
+            + (f" in {recorder.csv.path}" if out_dir is not None else "")] + problems
+    if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
+        name = signal.Signals(signals.signal).name
+        raise Interrupted("\n".join([f"{system.path.name}: interrupted by {name} after "
+                                     f"t={results.time[-1]:.6g} s"] + kept), results,
+                          signals.signal)
+    if failure is not None or problems:
+        raise SimulationError("\n".join([f"{system.path.name}: {failure or 'results lost'}"]
+                                        + kept), results)
+    return results
 
 
 def _do_step(instance: Instance, t: float, step: float) -> None:

@@ -2,13 +2,12 @@
 
 Columns are ``time`` and ``<instance>.<variable>`` (e.g. ``SatelliteDynamics.q_BI[1]``).
 Written as CSV (``results.csv``) and as NumPy's binary ``.npz``.  While a run is going,
-:class:`ResultWriter` appends rows to the CSV in chunks, so a run that fails (or is
-killed) leaves everything recorded up to the failure on disk.
+:mod:`.recorder` appends each row to the CSV, so a run that fails (or is killed) leaves
+everything recorded up to the failure on disk.
 """
 from __future__ import annotations
 
 import csv
-import time
 from pathlib import Path
 
 import numpy as np
@@ -72,25 +71,3 @@ class Results:
         archive = np.load(path)
         return cls(list(archive["names"]), archive["data"])
 
-
-class ResultWriter:
-    """Appends rows to a CSV file every ``seconds`` of wall time (and on close)."""
-
-    def __init__(self, path, names: list[str], seconds: float = 2.0):
-        self.path = Path(path)
-        self.seconds = seconds
-        self.written = 0
-        self.last = time.perf_counter()
-        with self.path.open("w", newline="") as stream:
-            csv.writer(stream).writerow(names)
-
-    def maybe_flush(self, data: np.ndarray, rows: int) -> None:
-        if time.perf_counter() - self.last >= self.seconds:
-            self.flush(data, rows)
-
-    def flush(self, data: np.ndarray, rows: int) -> None:
-        if rows > self.written:
-            with self.path.open("a", newline="") as stream:
-                csv.writer(stream).writerows(data[self.written:rows].tolist())
-            self.written = rows
-        self.last = time.perf_counter()

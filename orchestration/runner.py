@@ -4,11 +4,13 @@ write results, summary and figures.  The CLI's ``agilesat run`` is a thin layer 
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 from ..fmus.model_description import UNITS
 from . import scenarios
-from .master import SimulationError, simulate
+from .master import Interrupted, SimulationError, simulate, stop_on_signals
+from .recorder import file_error
 from .results import Results
 
 
@@ -31,7 +33,14 @@ def parse_target(target):
 def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
         figures: bool = True, echo=None, build: bool = True) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
-    (results, summary)."""
+    (results, summary).
+
+    With ``out_dir``: results.csv (row by row), results.npz, log.txt and summary.json, also
+    when the run fails (``status: "error"``) or is interrupted by SIGINT/SIGTERM
+    (``status: "interrupted"``); the exception is raised after they are written.  The
+    summary lists every input left open with what its default means
+    (``unconnected_optional_inputs``).
+    """
     scenario, variant = parse_target(target)
     overrides = dict(parameters or {})
     if scenario is not None:
@@ -45,36 +54,57 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
-    try:
-        results = simulate(system, step=step, stop=stop, algorithm=algorithm,
-                           parameters=overrides, out_dir=out_dir, echo=echo)
-    except SimulationError as failure:
-        if out_dir is not None and failure.results is not None:
-            _write_records(failure.results, out_dir)
-        raise
-    summary = {
-        "scenario": scenario.name if scenario else None,
-        "variant": variant,
-        "system": str(system),
-        "settings": {k: results.meta[k] for k in ("start", "stop", "step", "algorithm")},
-        "parameters": overrides,
-        "fmu_messages": [str(e) for e in results.meta["log"] if e.status >= 1],
-    }
-    if scenario is not None:
-        summary.update(scenario.metrics(results))
-        summary["status"] = "failed" if summary["diagnostics"] else "ok"
-    if out_dir is not None:
-        _write_records(results, out_dir)
-        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
-        if figures and scenario is not None:
-            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
+    summary = {"scenario": scenario.name if scenario else None, "variant": variant,
+               "system": str(system), "parameters": overrides}
+    with stop_on_signals() as signals:
+        try:
+            results = simulate(system, step=step, stop=stop, algorithm=algorithm,
+                               parameters=overrides, out_dir=out_dir, echo=echo)
+        except SimulationError as failure:
+            if out_dir is not None and failure.results is not None:
+                summary.update(_facts(failure.results), error=str(failure),
+                               status="interrupted" if isinstance(failure, Interrupted)
+                               else "error")
+                try:
+                    _write_records(failure.results, summary, out_dir)
+                except OSError as exc:   # say both
+                    failure.args = (f"{failure}\n{exc}",)
+            raise
+        summary.update(_facts(results))
+        if scenario is not None:
+            summary.update(scenario.metrics(results))
+            summary["status"] = "failed" if summary["diagnostics"] else "ok"
+        if out_dir is not None:
+            _write_records(results, summary, out_dir)
+            if figures and scenario is not None and signals.signal is None:
+                summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
     return results, summary
 
 
-def _write_records(results: Results, out_dir: Path) -> None:
-    """results.npz and log.txt (results.csv is written while the run goes)."""
-    results.to_npz(out_dir / "results.npz")
-    (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
+def _facts(results: Results) -> dict:
+    meta = results.meta
+    return {"settings": {k: meta[k] for k in ("start", "stop", "step", "algorithm")},
+            "rows": len(results),
+            "unconnected_optional_inputs": meta["unconnected_optional_inputs"],
+            "fmu_messages": [str(e) for e in meta["log"] if e.status >= 1]}
+
+
+def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
+    """log.txt and summary.json, each under a temporary name then renamed (the master
+    writes results.csv row by row and results.npz); an OSError names each file not written."""
+    problems = []
+    for name, text in (("log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+                       ("summary.json", json.dumps(summary, indent=2, default=str) + "\n")):
+        path = out_dir / name
+        temporary = path.with_name(f".{name}.{os.getpid()}.partial")
+        try:
+            temporary.write_text(text)
+            os.replace(temporary, path)
+        except OSError as exc:
+            temporary.unlink(missing_ok=True)
+            problems.append(str(file_error(path, exc, "; not written")))
+    if problems:
+        raise OSError("\n".join(problems))
 
 
 def format_summary(summary: dict) -> str:

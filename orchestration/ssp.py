@@ -5,8 +5,13 @@ Read: components with their FMU sources, connections, and parameter values bound
 experiment (start, stop) and our master's settings (step size, algorithm) from an
 annotation of type ``org.agilesat.master``.  The file is first checked against the SSP XSD
 schemas that fmpy ships, then every error names the file, line, element and variable.
-The check against the FMUs themselves (variables, causality, type, unit) is
-:func:`master.check_system`, which needs the model descriptions.
+The check against the FMUs themselves (variables, causality, type, unit, also of the
+declared connectors) is :func:`validation.check_system`, which needs the model descriptions.
+
+An ``.ssp`` package is unpacked into a temporary directory, refusing members with absolute
+paths or ``..`` and more than ``max_unpacked`` bytes in total (default
+:data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable ``AGILESAT_SSP_MAX_BYTES``);
+its component and parameter-binding sources must resolve inside the package.
 
 Write: :func:`render_ssd` expands a compact vector-level system description (see
 ``scenarios/``) into scalar SSD connectors and connections, with SSP unit definitions.
@@ -14,10 +19,11 @@ Write: :func:`render_ssd` expands a compact vector-level system description (see
 from __future__ import annotations
 
 import math
+import os
 import tempfile
 import zipfile
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
@@ -34,6 +40,7 @@ OMS_ANNOTATION = "org.openmodelica"
 OMS_NAMESPACE = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 _PREFIXES = {**NS, "agilesat": MASTER_NAMESPACE, "osp": OSP_NAMESPACE, "oms": OMS_NAMESPACE}
 _TYPES = ("Real", "Integer", "Boolean", "String")
+MAX_UNPACKED_BYTES = 256 * 2**20
 
 
 class SystemFileError(ValueError):
@@ -41,10 +48,20 @@ class SystemFileError(ValueError):
 
 
 @dataclass
+class ConnectorRef:
+    name: str
+    kind: str
+    type: str | None      # Real, Integer, Boolean, String; None: not declared
+    unit: str | None      # of a Real; None: not declared
+    line: int
+
+
+@dataclass
 class ComponentRef:
     name: str
     source: Path          # absolute path of the FMU
     line: int
+    connectors: list[ConnectorRef] = field(default_factory=list)
 
 
 @dataclass
@@ -89,28 +106,68 @@ class SystemFile:
         raise KeyError(name)
 
 
-def read_system(path) -> SystemFile:
-    """Read an ``.ssd`` file, or the ``SystemStructure.ssd`` of an ``.ssp`` package."""
+def read_system(path, *, max_unpacked: int | None = None) -> SystemFile:
+    """Read an ``.ssd`` file, or the ``SystemStructure.ssd`` of an ``.ssp`` package
+    (unpacking at most ``max_unpacked`` bytes)."""
     path = Path(path).resolve()
     if not path.exists():
         raise SystemFileError(f"{path}: no such file")
     if path.suffix == ".ssp":
         tempdir = tempfile.TemporaryDirectory(prefix="agilesat_ssp_")
-        try:
-            with zipfile.ZipFile(path) as archive:
-                archive.extractall(tempdir.name)
-        except zipfile.BadZipFile as exc:
-            raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
-        ssd = Path(tempdir.name) / "SystemStructure.ssd"
+        root = Path(tempdir.name).resolve()
+        _unpack(path, root, max_unpacked)
+        ssd = root / "SystemStructure.ssd"
         if not ssd.exists():
             raise SystemFileError(f"{path}: the package has no SystemStructure.ssd")
-        system = _read_ssd(ssd, display=f"{path.name}!SystemStructure.ssd")
+        system = _read_ssd(ssd, display=f"{path.name}!SystemStructure.ssd", package=root)
         system._tempdir = tempdir
         return system
     return _read_ssd(path, display=str(path))
 
 
-def _read_ssd(path: Path, display: str) -> SystemFile:
+def _unpack(path: Path, root: Path, limit: int | None) -> None:
+    """Unpack an SSP package into root: no member outside it, at most limit bytes."""
+    if limit is None:
+        limit = int(os.environ.get("AGILESAT_SSP_MAX_BYTES", MAX_UNPACKED_BYTES))
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = archive.infolist()
+            for info in members:
+                parts = PurePosixPath(info.filename.replace("\\", "/")).parts
+                if info.filename.startswith(("/", "\\")) or ".." in parts or (
+                        parts and ":" in parts[0]):
+                    raise SystemFileError(f"{path}: member '{info.filename}' would unpack "
+                                          "outside the package: refused")
+            declared = sum(info.file_size for info in members)
+            if declared > limit:
+                raise SystemFileError(f"{path}: unpacks to {declared} bytes, more than the "
+                                      f"limit of {limit} (raise it with "
+                                      "AGILESAT_SSP_MAX_BYTES or max_unpacked=)")
+            total = 0
+            for info in members:
+                target = root.joinpath(*PurePosixPath(info.filename).parts)
+                if info.is_dir():
+                    target.mkdir(parents=True, exist_ok=True)
+                    continue
+                target.parent.mkdir(parents=True, exist_ok=True)
+                with archive.open(info) as source, target.open("wb") as sink:
+                    while chunk := source.read(1 << 20):
+                        total += len(chunk)
+                        if total > limit:
+                            raise SystemFileError(f"{path}: unpacks to more than the limit "
+                                                  f"of {limit} bytes")
+                        sink.write(chunk)
+    except (zipfile.BadZipFile, EOFError) as exc:
+        raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
+
+
+def _inside(source: Path, package: Path | None, where: str, what: str) -> None:
+    if package is not None and not source.is_relative_to(package):
+        raise SystemFileError(f"{where}: {what} resolves outside the package ({source}): "
+                              "refused")
+
+
+def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFile:
     tree = _parse(path, display)
     _validate_schema(tree, "SystemStructureDescription.xsd", display)
     root = tree.getroot()
@@ -131,14 +188,17 @@ def _read_ssd(path: Path, display: str) -> SystemFile:
         if any(c.name == name for c in components):
             raise SystemFileError(f"{where}: component name '{name}' is used twice")
         source = (path.parent / element.get("source")).resolve()
-        if not source.exists():
+        _inside(source, package, where, f"component '{name}': FMU source "
+                f"'{element.get('source')}'")
+        if not source.is_file():
             raise SystemFileError(f"{where}: component '{name}': FMU source "
                                   f"'{element.get('source')}' not found (looked at {source})")
-        components.append(ComponentRef(name, source, element.sourceline))
+        components.append(ComponentRef(name, source, element.sourceline,
+                                       _read_connectors(element)))
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
-            parameters += _read_binding(binding, name, path, display)
+            parameters += _read_binding(binding, name, path, display, package)
     for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
-        parameters += _read_binding(binding, None, path, display)
+        parameters += _read_binding(binding, None, path, display, package)
     connections = [
         ConnectionRef(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
                       c.get("endConnector"), c.sourceline)
@@ -162,11 +222,25 @@ def _read_ssd(path: Path, display: str) -> SystemFile:
     return result
 
 
-def _read_binding(binding, component, ssd_path: Path, display: str) -> list[ParameterValue]:
+def _read_connectors(element) -> list[ConnectorRef]:
+    """A component's declared connectors: name, kind and, when given, type and unit."""
+    result = []
+    for c in element.findall("ssd:Connectors/ssd:Connector", NS):
+        typed = [t for t in c if etree.QName(t).localname in _TYPES]
+        kind = etree.QName(typed[0]).localname if typed else None
+        unit = typed[0].get("unit") if typed else None
+        result.append(ConnectorRef(c.get("name"), c.get("kind"), kind, unit, c.sourceline))
+    return result
+
+
+def _read_binding(binding, component, ssd_path: Path, display: str,
+                  package: Path | None = None) -> list[ParameterValue]:
     prefix = binding.get("prefix", "")
     source = binding.get("source")
     if source:
         ssv_path = (ssd_path.parent / source).resolve()
+        _inside(ssv_path, package, f"{display}:{binding.sourceline}",
+                f"parameter binding source '{source}'")
         if not ssv_path.exists():
             raise SystemFileError(f"{display}:{binding.sourceline}: parameter binding source "
                                   f"'{source}' not found (looked at {ssv_path})")

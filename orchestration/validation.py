@@ -1,13 +1,22 @@
 """Checks of a system against its FMUs, and the dependency orders the master runs in.
 
 :func:`check_system` reports, each naming the file, line, element and variable: unknown
-component or variable, causality, type and unit mismatch, an input driven twice, a required
-input left open, a parameter value for something that is not a parameter, an algebraic loop
-(found while computing the schedules, :mod:`.schedule`).
+component or variable, causality, type and unit mismatch (of a connection, and of an SSD
+connector against the FMU's variable), an input driven twice, an input left open that may
+not be, a parameter value for something that is not a parameter, an algebraic loop (found
+while computing the schedules, :mod:`.schedule`).
+
+Open inputs, the rule: every input of every component is connected, or given a value in
+the system's parameter values, or declared optional by its FMU (our FMUs' VendorAnnotations
+say what the default of each optional input means).  An open optional input is listed in
+``Plan.open_inputs`` with that meaning (the master logs it, the runner's summary lists it);
+an array input is connected as a whole or not at all.  Any other open input of our FMUs is an
+error.  An FMU that is not ours declares nothing: its open inputs are listed too, as keeping
+their start value, and logged as warnings.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .fmu import Description
 from .schedule import Schedule, schedule
@@ -19,6 +28,8 @@ class Plan:
     steps: Schedule           # stepping: step order and output evaluation blocks
     init: Schedule            # initialisation
     sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
+    #: open inputs allowed to be open: {"input": "B.u", "meaning": ..., "declared": bool}
+    open_inputs: list[dict] = field(default_factory=list)
 
 
 def check_system(system: SystemFile, instances: dict[str, Description],
@@ -76,16 +87,69 @@ def check_system(system: SystemFile, instances: dict[str, Description],
         elif var.type != value.type:
             problems.append(f"{value.origin}: {inst.name}.{value.name} is {var.type}, the "
                             f"value is {value.type}")
-    for inst in instances.values():
-        line = system.component(inst.name).line
-        for name in sorted(inst.required_inputs or ()):
-            if (inst.name, name) not in sources:
-                problems.append(f"{where}:{line}: component {inst.name}: required input "
-                                f"{inst.name}.{name} is not connected")
+    problems += _connector_problems(system, instances)
+    open_inputs = _open_inputs(system, instances, sources, bindings, problems)
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
     return Plan(schedule(instances, sources, "feedthrough", where),
-                schedule(instances, sources, "initial_feedthrough", where), sources)
+                schedule(instances, sources, "initial_feedthrough", where), sources,
+                open_inputs)
+
+
+def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
+    """The open inputs that may be open (see the module's rule); the others go to problems."""
+    where, result = str(system.path), []
+    given = set(sources) | {(b.component, b.name) for b in bindings}
+    for inst in instances.values():
+        at = f"{where}:{system.component(inst.name).line}: component {inst.name}"
+        inputs = [v for v in inst.md.modelVariables if v.causality == "input"]
+        open_ = [v for v in inputs if (inst.name, v.name) not in given]
+        if inst.optional_inputs is None:   # not our FMU: nothing declared
+            result += [{"input": f"{inst.name}.{v.name}", "declared": False,
+                        "meaning": f"keeps its start value {v.start} (the FMU declares no "
+                                   "optional inputs)"} for v in open_]
+            continue
+        groups: dict[str, list] = {}
+        for v in open_:
+            if v.name in inst.optional_inputs:
+                groups.setdefault(v.name.partition("[")[0], []).append(v.name)
+            else:
+                problems.append(f"{at}: required input {inst.name}.{v.name} is not connected "
+                                "(connect it or give it a parameter value)")
+        for variable, names in groups.items():
+            members = [v.name for v in inputs if v.name.partition("[")[0] == variable]
+            if len(names) < len(members):
+                given_ = [m for m in members if m not in names]
+                problems.append(f"{at}: input {inst.name}.{variable} is partly connected: "
+                                f"{', '.join(names)} open, {', '.join(given_)} connected or "
+                                "set (connect all of it or none)")
+            else:
+                result.append({"input": f"{inst.name}.{variable}", "declared": True,
+                               "meaning": inst.optional_inputs[names[0]]})
+    return result
+
+
+def _connector_problems(system, instances) -> list[str]:
+    """SSD connectors that disagree with the FMU's variable (kind, type, unit)."""
+    problems = []
+    for ref in system.components:
+        inst = instances.get(ref.name)
+        for c in ref.connectors if inst is not None else ():
+            at = f"{system.path}:{c.line}: connector {ref.name}.{c.name}"
+            var = inst.variables.get(c.name)
+            if var is None:
+                problems.append(f"{at}: {ref.name} ({inst.path.name}) has no variable "
+                                f"'{c.name}'")
+                continue
+            if c.kind in ("input", "output", "parameter") and c.kind != var.causality:
+                problems.append(f"{at}: declared {c.kind}, the FMU's variable is a "
+                                f"{var.causality}")
+            if c.type is not None and c.type != var.type:
+                problems.append(f"{at}: declared {c.type}, the FMU's variable is {var.type}")
+            elif c.unit is not None and var.type == "Real" and c.unit != (var.unit or ""):
+                problems.append(f"{at}: declared unit '{c.unit}', the FMU's variable has "
+                                f"'{var.unit or ''}'")
+    return problems
 
 
 def override(instances, key: str, value) -> ParameterValue:

@@ -51,10 +51,19 @@ def test_output_dependencies_are_the_true_feedthrough(fmus):
     assert "h_cmg[1]" in initial["q_BI[1]"] and "attitude0[2]" in initial["q_BI[1]"]
 
 
-def test_required_inputs_are_declared_for_masters(fmus):
+def test_required_and_optional_inputs_are_declared_for_masters(fmus):
+    with zipfile.ZipFile(fmus["SatelliteDynamics"]) as archive:
+        root = etree.fromstring(archive.read("modelDescription.xml"))
+    declared = {e.get("name"): e.get("optional")
+                for e in root.iterfind(".//Tool[@name='agilesat']/Inputs/Input")}
+    inputs = {v.get("name") for v in root.iterfind(".//ScalarVariable[@causality='input']")}
+    assert set(declared) == inputs                  # every input, one way or the other
+    assert declared["q_OI[1]"].startswith("identity:") and declared["h_cmg[3]"] == \
+        "zero: no cmg momentum"
     with zipfile.ZipFile(fmus["CmgSteering"]) as archive:
         root = etree.fromstring(archive.read("modelDescription.xml"))
-    required = {e.get("name") for e in root.iterfind(".//Tool[@name='agilesat']//Input")}
+    required = {e.get("name") for e in root.iterfind(".//Tool[@name='agilesat']//Input")
+                if e.get("optional") is None}
     assert "tau_cmd[1]" in required and "delta[6]" in required
 
 

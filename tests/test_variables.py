@@ -44,7 +44,8 @@ def test_value_references_group_parameters_inputs_outputs():
 @pytest.mark.parametrize("kwargs, message", [
     (dict(name="a", causality="state", unit="1", description=""), "causality"),
     (dict(name="a", causality="input", unit="1", description="", depends=("b",)), "only outputs"),
-    (dict(name="a", causality="output", unit="1", description="", required=True), "only inputs"),
+    (dict(name="a", causality="output", unit="1", description="", optional="zero"),
+     "only inputs"),
     (dict(name="a", causality="input", unit="1", description="", type="String"), "String"),
 ])
 def test_bad_rows_are_rejected(kwargs, message):
@@ -103,3 +104,28 @@ def test_bus_reads_scalars_with_their_type():
     values = layout.start_values()
     bus = Bus(values, layout, "parameter", {"label": "z"})
     assert bus.gain == 2.0 and bus.label == "z" and bus.inertia.shape == (2, 2)
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    (dict(required=False), TypeError, "optional='what its default means'"),
+    (dict(optional="  "), ValueError, "must say what the default means"),
+    (dict(optional=True), ValueError, "must say what the default means"),
+])
+def test_an_optional_input_must_say_what_its_default_means(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        input_("u", "N.m", "torque", **kwargs)
+
+
+def test_inputs_are_required_unless_declared_optional():
+    assert input_("u", "N.m", "torque").required
+    optional = input_("u", "N.m", "torque", optional="zero: no torque")
+    assert not optional.required and optional.optional == "zero: no torque"
+    assert not parameter("p", 1.0, "1", "gain").required
+
+
+def test_every_shipped_input_is_required_or_says_what_its_default_means():
+    from agilesat.fmus import FMUS, model_class
+    for name in FMUS:
+        for v in model_class(name).VARIABLES:
+            if v.causality == "input":
+                assert v.required or len(v.optional) > 5, (name, v.name)

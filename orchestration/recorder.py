@@ -1,0 +1,157 @@
+"""Recording a run's rows as they come: memory independent of the run length.
+
+With an output directory every row goes to disk at once, as one ``os.write`` of whole lines:
+text to ``results.csv`` and raw float64 to a scratch file ``.results.f64`` beside it.  A
+process that is killed (even ``kill -9``) loses at most the row being written, and the CSV
+never ends in a torn row: a short write (disk full) is cut back to the last whole row, in
+both files, and the error names the file.  :meth:`Recorder.close` (also after a failure or
+an interrupt) writes ``results.npz`` from the raw rows in chunks, under a temporary name
+renamed when complete, and hands back :class:`Results` that map the raw rows from disk
+(copy-on-write: the caller may modify them) instead of holding them in memory.
+
+Without an output directory the caller gets the rows in memory (a buffer grown by doubling).
+"""
+from __future__ import annotations
+
+import errno
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from .results import Results
+
+RAW = ".results.f64"
+
+
+class Recorder:
+    """Rows of ``columns`` (time first) recorded one communication point at a time."""
+
+    def __init__(self, columns: list[str], out_dir=None):
+        self.columns, self.rows = list(columns), 0
+        self.out_dir = None if out_dir is None else Path(out_dir)
+        self._memory = np.empty((64, len(columns)))
+        self._files = []
+        if self.out_dir is not None:
+            header = (",".join(self.columns) + "\n").encode()
+            self.csv = _File(self.out_dir / "results.csv", header)
+            self.raw = _File(self.out_dir / RAW, b"")
+            self._files = [self.raw, self.csv]
+
+    def append(self, row: np.ndarray) -> None:
+        """Record one row; an OSError (disk full) names the file and keeps every whole row."""
+        if not self._files:
+            if self.rows == len(self._memory):
+                self._memory = np.concatenate([self._memory, np.empty_like(self._memory)])
+            self._memory[self.rows] = row
+        else:
+            self.raw.write(np.ascontiguousarray(row, dtype="<f8").tobytes(), self.rows)
+            try:
+                self.csv.write((",".join(map(repr, row.tolist())) + "\n").encode(), self.rows)
+            except OSError:
+                self.raw.truncate()
+                raise
+            self.raw.commit()
+            self.csv.commit()
+        self.rows += 1
+
+    def close(self, meta: dict) -> tuple[Results, list[str]]:
+        """(the rows recorded, problems writing the files); writes results.npz."""
+        if not self._files:
+            return Results(self.columns, self._memory[:self.rows].copy(), meta), []
+        problems = []
+        for f in self._files:
+            f.close()
+        data = _map(self.raw.path, self.rows, len(self.columns))
+        try:
+            write_npz(self.out_dir / "results.npz", self.columns, self.raw.path, self.rows)
+        except OSError as exc:
+            problems.append(str(exc))
+        self.raw.path.unlink(missing_ok=True)  # mapped already (POSIX keeps the pages)
+        return Results(self.columns, data, meta), problems
+
+
+class _File:
+    """An append-only file written in whole records with os.write."""
+
+    def __init__(self, path: Path, header: bytes):
+        self.path = path
+        self.fd = _checked(path, lambda: os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC,
+                                                 0o644))
+        self.size = 0   # bytes of whole records
+        self.write(header, 0)
+        self.commit()
+
+    def write(self, data: bytes, rows: int) -> None:
+        self.pending = self.size + len(data)
+        view = memoryview(data)
+        try:
+            while view:
+                view = view[os.write(self.fd, view):]
+        except OSError as exc:
+            self.truncate()
+            raise file_error(self.path, exc, f"; kept the {rows} complete rows written "
+                             "before") from None
+
+    def commit(self) -> None:
+        self.size = self.pending
+
+    def truncate(self) -> None:
+        """Back to the last whole record (a torn one is cut off)."""
+        try:
+            os.ftruncate(self.fd, self.size)
+            os.lseek(self.fd, self.size, os.SEEK_SET)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+
+def file_error(path, exc: OSError, note: str = "") -> OSError:
+    """An OSError whose message starts with the file's name."""
+    error = OSError(f"{path}: {exc.strerror or exc}{note}")
+    error.errno = exc.errno
+    return error
+
+
+def _checked(path, action):
+    try:
+        return action()
+    except OSError as exc:
+        raise file_error(path, exc) from None
+
+
+def _map(raw: Path, rows: int, n: int) -> np.ndarray:
+    if rows == 0:
+        return np.empty((0, n))
+    return np.memmap(raw, dtype="<f8", mode="c", shape=(rows, n))
+
+
+def write_npz(path: Path, names: list[str], raw: Path, rows: int, chunk: int = 1 << 20) -> None:
+    """results.npz (``names``, ``data`` as :meth:`Results.to_npz` writes them) from the raw
+    float64 rows in ``raw``, copied in chunks; written to a temporary name, then renamed."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    n = len(names)
+    try:
+        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
+            with archive.open("names.npy", "w") as stream:
+                np.lib.format.write_array(stream, np.array(names))
+            with archive.open("data.npy", "w", force_zip64=True) as stream, \
+                    open(raw, "rb") as source:
+                np.lib.format.write_array_header_1_0(
+                    stream, {"descr": "<f8", "fortran_order": False, "shape": (rows, n)})
+                left = rows * n * 8
+                while left:
+                    block = source.read(min(chunk, left))
+                    if not block:
+                        raise OSError(errno.EIO, f"{raw}: shorter than {rows} rows")
+                    stream.write(block)
+                    left -= len(block)
+        os.replace(temporary, path)
+    except OSError as exc:
+        temporary.unlink(missing_ok=True)
+        raise file_error(path, exc, "; not written") from None
