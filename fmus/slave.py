@@ -10,7 +10,9 @@ with a harmless value, and the FMU's C shim (``shim/agilesat_fmi2.c``) returns t
 status logged during the call.  Checked here: unknown value reference or wrong type,
 setting an output or a fixed parameter after initialisation, non-finite values,
 non-positive or non-finite step size, a time discontinuity between steps, calls in the
-wrong mode, and exceptions or non-finite outputs from the model.
+wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
+instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
+from the model.  FMU states are data (``fmu_state``), never pickles.
 """
 from __future__ import annotations
 

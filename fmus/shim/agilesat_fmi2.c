@@ -9,7 +9,8 @@
  *  - Logging.  pythonfmu drops every message, errors included, unless debug logging is on.
  *    The shim keeps pythonfmu's logging on and applies the host's wish itself: warnings
  *    and errors always reach the host, OK-level messages only with logging on (and the
- *    category enabled).
+ *    category enabled), except OK-level messages of category "logStatusWarning" (warnings
+ *    a user asked not to fail the call with): those always reach the host, as OK.
  *
  *  - Exit.  At process exit pythonfmu's ELF destructor (onLibraryUnload, run by _dl_fini)
  *    calls finalizePythonInterpreter(), which resets a static std::shared_ptr that the exit
@@ -21,6 +22,17 @@
  *
  *  - Python.  In a host that does not run Python itself, it loads and initializes the
  *    building environment's Python before pythonfmu needs it (see ensure_python).
+ *
+ *  - Handles and arguments.  pythonfmu dereferences whatever it is given.  The shim
+ *    keeps a registry of live instances and of the FMU states each handed out, and checks
+ *    every handle and pointer before forwarding: a freed, NULL, foreign or made-up
+ *    instance or state, a NULL array with n > 0, a too-small serialization buffer all get
+ *    fmi2Error (with a message when the instance is known) and never reach pythonfmu.
+ *  - Fatal.  After an fmi2Fatal (pythonfmu's answer to an exception it caught, after which
+ *    its instance is broken) every call but fmi2FreeInstance is refused with fmi2Error.
+ *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
+ *    once (fmi2Error; fmi2FreeInstance does nothing): a host calling from a static
+ *    destructor would otherwise take the GIL of a dead interpreter inside pythonfmu.
  *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
