@@ -155,7 +155,8 @@ class Instance(Description):
     def free(self) -> None:
         """Free the instance (never raises); the unpacked FMU stays loaded for the next run,
         and a component whose calls all succeeded is reset and kept for it (pythonfmu 0.7.0
-        leaks about 1 KB of Python objects per fmi2Instantiate, in its findClass).
+        leaks about 1 KB of Python objects per fmi2Instantiate in its findClass; see
+        NTNU-IHB/PythonFMU#229).
 
         pythonfmu puts the FMU's resources directory first on ``sys.path`` at every
         instantiation and leaves it there; it is taken out again, or ``sys.path`` would grow

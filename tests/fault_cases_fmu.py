@@ -391,10 +391,19 @@ def _growth(step, n: int, warm: int = 20) -> dict:
 
 
 def simulate_loop(n):
+    """On a copy of the system and its FMUs (a rebuild meanwhile is a new FMU)."""
     from agilesat.orchestration.master import simulate
     from agilesat.orchestration.scenarios import get
+    copy = Path(tempfile.mkdtemp(prefix="agilesat-loop-"))
     ssd = get("scan_pitch").ssd
-    return _growth(lambda: simulate(ssd, stop=0.1), int(n))
+    shutil.copytree(BUILD, copy / "fmus" / "build", ignore=shutil.ignore_patterns(".*"))
+    (copy / "orchestration" / "systems").mkdir(parents=True)
+    shutil.copy(ssd, copy / "orchestration" / "systems" / ssd.name)
+    try:
+        return _growth(lambda: simulate(copy / "orchestration" / "systems" / ssd.name,
+                                        stop=0.1), int(n))
+    finally:
+        shutil.rmtree(copy, ignore_errors=True)
 
 
 def instance_cycles(n):
