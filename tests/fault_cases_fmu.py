@@ -128,13 +128,40 @@ CASES += [
 ]
 
 
+def _warning_case():
+    directory = Path(tempfile.mkdtemp(prefix="agilesat-fake-"))
+    try:
+        _compile(HERE / "c_host" / "fake_inner.c", directory / "pythonfmu-export.so",
+                 "-shared", "-fPIC")
+        _compile(ROOT / "fmus" / "shim" / "agilesat_fmi2.c", directory / "Fake.so", "-shared",
+                 "-fPIC", "-fvisibility=hidden", '-DAGILESAT_LIBPYTHON=""',
+                 '-DAGILESAT_PYTHON=""', "-lpthread")
+        answer, process = _child("warning_as_ok", directory / "Fake.so")
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
+    want = {"step": 0, "messages": [[0, "logStatusWarning", "gimbal rate command limited"]]}
+    return {"fault": "the slave logs a warning at status OK, category logStatusWarning "
+            "(the shim alone, on a stand-in for pythonfmu's binary), logging off",
+            "expected": "the host's logger gets it as OK with that category; fmi2DoStep "
+            "returns fmi2OK; OK-level debug messages stay filtered",
+            "observed": process if answer is None else f"{process}; {json.dumps(answer)}",
+            "ok": answer == want}
+
+
+_warning_case.__name__ = "warning_as_ok"
+CASES.append(_warning_case)
+
+
+def _compile(source: Path, output: Path, *flags: str) -> None:
+    compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-I", str(ROOT / "fmus" / "shim"),
+                    *flags, "-o", str(output), str(source), "-ldl"], check=True)
+
+
 @functools.cache
 def _hostile_host() -> Path:
-    compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     binary = Path(tempfile.mkdtemp(prefix="agilesat-host-")) / "hostile_host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-I", str(ROOT / "fmus" / "shim"),
-                    "-o", str(binary), str(HERE / "c_host" / "hostile_host.c"), "-ldl"],
-                   check=True)
+    _compile(HERE / "c_host" / "hostile_host.c", binary)
     return binary
 
 
@@ -373,6 +400,24 @@ def after_fatal():
     refused = len(_errors(a, mark)) == 3 and all("fmi2Fatal" in m for m in _errors(a, mark))
     a.dll.fmi2FreeInstance(a.c)
     return {"fatal": fatal, "after": after, "refused": refused, "exit": "clean"}
+
+
+def warning_as_ok(library):
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    messages = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, name, status, category, message: messages.append(
+            [status, category.decode(), message.decode()]))
+    dll = ctypes.CDLL(library)
+    dll.fmi2Instantiate.restype = ctypes.c_void_p
+    dll.fmi2Instantiate.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                                    ctypes.c_char_p, ctypes.c_void_p, ctypes.c_int,
+                                    ctypes.c_int]
+    dll.fmi2DoStep.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
+    c = dll.fmi2Instantiate(b"fake", 1, b"{0}", b"file:///nonexistent", ctypes.addressof(callbacks),
+                            0, 0)
+    return {"step": dll.fmi2DoStep(c, 0.0, 0.05, 1), "messages": messages}
 
 
 def _rss_maps() -> tuple[float, int]:
