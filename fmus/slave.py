@@ -114,9 +114,7 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(False)
     def do_step(self, current_time, step_size):
-        if self._mode != "step":
-            raise _CallRejected(f"called in mode '{self._mode}' (expected after "
-                                "exitInitializationMode)")
+        self._require_mode("step")
         if not (math.isfinite(step_size) and step_size > 0.0):
             raise _CallRejected(f"step size must be positive and finite, got {step_size!r}")
         if not math.isclose(current_time, self._next_time, rel_tol=1e-9, abs_tol=1e-12):
@@ -235,19 +233,20 @@ class ModelSlave(Fmi2Slave):
         try:
             cls._check_state(fmu_state.decode(cls._identity(), data, _PACKAGE))
             return bytes(data)
+        except fmu_state.StateError as exc:
+            return _Rejected(str(exc))
         except Exception as exc:  # noqa: BLE001 - never raise into pythonfmu
-            return _Rejected(f"{type(exc).__name__}: {exc}" if not isinstance(
-                exc, fmu_state.StateError) else str(exc))
+            return _Rejected(f"{type(exc).__name__}: {exc}")
 
     # -- internals -----------------------------------------------------------------
-    def _require_mode(self, *modes):
+    _WHEN = {"instantiated": "after fmi2Instantiate", "initialization": "in initialization "
+             "mode", "step": "after fmi2ExitInitializationMode"}
+
+    def _require_mode(self, mode: str):
         """FMI 2.0 co-simulation state machine (section 4.2.4)."""
-        if self._mode not in modes:
-            expected = {"instantiated": "after fmi2Instantiate",
-                        "initialization": "in initialization mode",
-                        "step": "after fmi2ExitInitializationMode"}
+        if self._mode != mode:
             raise _CallRejected(f"not allowed in mode '{self._mode}' (only "
-                                f"{' or '.join(expected.get(m, m) for m in modes)})")
+                                f"{self._WHEN[mode]})")
 
     def _error(self, message: str) -> None:
         self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}",
@@ -266,7 +265,7 @@ class ModelSlave(Fmi2Slave):
         index, touches_parameters = plan
         if setting and self._mode == "terminated":
             raise _CallRejected("variables cannot be set after fmi2Terminate")
-        if setting and touches_parameters and self._mode in ("step", "terminated"):
+        if setting and touches_parameters and self._mode == "step":
             names = [self._scalar_names[vr] for vr in vrs
                      if self._causality[vr] == PARAMETER]
             raise _CallRejected(f"parameters {names} are fixed: they can only be set before "
