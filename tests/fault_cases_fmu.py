@@ -11,6 +11,7 @@ one FMU, and the memory of one live instance.
 
 The child processes run this file: ``python fault_cases_fmu.py CASE [ARGS]`` prints the
 case's observations as JSON.  They use ``fmi_host`` (a plain fmpy host, no agilesat).
+``python tests/fault_cases_fmu.py figures N`` prints the resource figures.
 """
 from __future__ import annotations
 
@@ -486,4 +487,8 @@ def live_instances(n):
 
 if __name__ == "__main__":
     case, *arguments = sys.argv[1:]
-    print(json.dumps(globals()[case](*arguments)), flush=True)
+    if case == "figures":             # python tests/fault_cases_fmu.py figures N
+        for figure, value in resource_figures(int(arguments[0])):
+            print(f"{figure}: {value}")
+    else:
+        print(json.dumps(globals()[case](*arguments)), flush=True)
