@@ -8,10 +8,11 @@ said.
 
 Each FMU is unpacked and its binary loaded once per process, keyed by the content of the
 file (SHA-256; a rebuilt FMU is a new one, a copy of the same file is the same one), and
-every run instantiates and frees its instances on it.  Unpacking it again for each run
-would map another copy of the binary each time that is never unmapped: pythonfmu's
-binary cannot be unloaded (its GNU-unique C++ symbols make it NODELETE), so a campaign
-of thousands of runs in one process would run out of memory mappings.
+every run instantiates its instances on it.  Unpacking it again for each run would map
+another copy of the binary each time that is never unmapped: pythonfmu's binary cannot be
+unloaded (its GNU-unique C++ symbols make it NODELETE), so a campaign of thousands of runs
+in one process would run out of memory mappings.  A run's components are reset and kept
+for the next run with the same FMU and instance name (see :meth:`Instance.free`).
 """
 from __future__ import annotations
 
@@ -176,6 +177,7 @@ class Instance(Description):
         sys.path_importer_cache.pop(resources, None)
 
 
+# -- components kept for the next run ---------------------------------------------------
 class _Component:
     """An instantiated component, its callbacks, and the Instance now using it."""
 
