@@ -111,7 +111,8 @@ def _entry_module(name: str, package: str) -> str:
         "# pythonfmu 0.7.0 runs this file once per instantiation with the module's __dict__ as\n"
         "# globals, then drops a reference to that dict that it never took (Py_DECREF of the\n"
         "# borrowed PyModule_GetDict result; NTNU-IHB/PythonFMU#228): the dict would be freed\n"
-        "# while in use.  Each run adds the reference back.\n"
+        "# while in use.  Each run adds the reference back, so the count is balanced per\n"
+        "# instantiation (only the import itself keeps one: nothing grows).\n"
         "import ctypes\n"
         "ctypes.pythonapi.Py_IncRef(ctypes.py_object(globals()))\n"
         f"from {package}.fmus.{FMUS[name]} import {name}  # noqa: E402,F401\n")

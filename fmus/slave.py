@@ -10,13 +10,14 @@ with a harmless value, and the FMU's C shim (``shim/agilesat_fmi2.c``) returns t
 status logged during the call.  Checked here: unknown value reference or wrong type,
 setting an output or a fixed parameter after initialisation, non-finite values,
 non-positive or non-finite step size, a time discontinuity between steps, calls in the
-wrong mode, and exceptions or non-finite outputs from the model.
+wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
+instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
+from the model.  FMU states are data (``fmu_state``), never pickles.
 """
 from __future__ import annotations
 
 import functools
 import math
-import pickle
 import traceback
 
 import numpy as np
@@ -24,11 +25,14 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
 from ..components.model import ModelError
+from . import fmu_state
 
 PARAMETER, INPUT, OUTPUT = 0, 1, 2
 _CAUSALITY_CODE = {"parameter": PARAMETER, "input": INPUT, "output": OUTPUT}
 _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
 _PLAN_CACHE_SIZE = 64
+_PACKAGE = __name__.split(".")[0]   # agilesat_<hash> inside an FMU
+_MODES = ("instantiated", "initialization", "step", "terminated")
 
 
 def _guarded(default):
@@ -56,6 +60,20 @@ class _CallRejected(Exception):
     pass
 
 
+class _Rejected:
+    """What deserializing bytes that are not a state of this FMU gives (never raised)."""
+    __slots__ = ("reason",)
+
+    def __init__(self, reason: str):
+        self.reason = reason
+
+
+def _rejection(state) -> str:
+    if isinstance(state, _Rejected):
+        return f"not a state of this FMU: {state.reason}"
+    return f"not a state of this FMU (a {type(state).__name__})"
+
+
 class ModelSlave(Fmi2Slave):
     model_class = None  # set by each FMU wrapper
 
@@ -79,23 +97,24 @@ class ModelSlave(Fmi2Slave):
     # -- FMI life cycle ------------------------------------------------------------
     @_guarded(None)
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._require_mode("instantiated")
         self._start_time = float(start_time)
 
     @_guarded(None)
     def enter_initialization_mode(self):
+        self._require_mode("instantiated")
         self._mode = "initialization"
 
     @_guarded(None)
     def exit_initialization_mode(self):
+        self._require_mode("initialization")
         self._ensure_state()
         self._mode = "step"
         self._next_time = self._start_time
 
     @_guarded(False)
     def do_step(self, current_time, step_size):
-        if self._mode != "step":
-            raise _CallRejected(f"called in mode '{self._mode}' (expected after "
-                                "exitInitializationMode)")
+        self._require_mode("step")
         if not (math.isfinite(step_size) and step_size > 0.0):
             raise _CallRejected(f"step size must be positive and finite, got {step_size!r}")
         if not math.isclose(current_time, self._next_time, rel_tol=1e-9, abs_tol=1e-12):
@@ -109,6 +128,7 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(None)
     def terminate(self):
+        self._require_mode("step")
         self._mode = "terminated"
 
     # -- getters and setters -------------------------------------------------------
@@ -149,26 +169,85 @@ class ModelSlave(Fmi2Slave):
         self._state_valid = self._outputs_valid = False
 
     # -- FMU state -----------------------------------------------------------------
+    # A state is the bytes of fmu_state's data-only format: taken by _get_fmu_state,
+    # checked and applied by _set_fmu_state.  pythonfmu calls the two byte converters on
+    # the class and turns any exception into fmi2Fatal (and a broken instance), so they
+    # never raise: a rejected state is a _Rejected, which serializes to a NUL byte and the
+    # reason; the shim refuses such a state with fmi2Error and that reason.
+    @_guarded(None)
     def _get_fmu_state(self):
         wrapper = (self._mode, self._start_time, self._next_time,
                    self._state_valid, self._outputs_valid)
-        return self.model.get_state(), wrapper
+        return fmu_state.encode(self._identity(), (self.model.get_state(), wrapper), _PACKAGE)
 
+    @_guarded(None)
     def _set_fmu_state(self, state):
-        model_state, wrapper = state
+        if type(state) is not bytes:
+            raise _CallRejected(_rejection(state))
+        model_state, wrapper = self._check_state(fmu_state.decode(self._identity(), state,
+                                                                  _PACKAGE))
         self.model.set_state(model_state)
         (self._mode, self._start_time, self._next_time,
          self._state_valid, self._outputs_valid) = wrapper
 
-    @staticmethod
-    def _fmu_state_to_bytes(state) -> bytes:
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    @classmethod
+    def _identity(cls) -> str:
+        return f"{_PACKAGE}.{cls.__name__}"
 
-    @staticmethod
-    def _fmu_state_from_bytes(data: bytes):
-        return pickle.loads(data)
+    @classmethod
+    def _check_state(cls, value):
+        """The structure a state of this FMU has (everything not depending on an instance)."""
+        model = cls.model_class
+        layout = model._layouts.get(model)          # set once a model was created
+        size = layout.n_numeric if layout else None
+        names = {v.name for v in layout.variables if v.type == "String"} if layout else None
+        try:
+            (values, strings, attributes), wrapper = value
+            mode, start, next_time, state_valid, outputs_valid = wrapper
+        except (TypeError, ValueError):
+            raise fmu_state.StateError("not a (model state, wrapper state) pair") from None
+        if not (type(values) is np.ndarray and values.dtype == np.float64 and values.ndim == 1
+                and (size is None or values.size == size)):
+            raise fmu_state.StateError(f"the value array must be float64 of {size} values")
+        if not (type(strings) is dict and all(type(k) is str and type(v) is str
+                                              for k, v in strings.items())
+                and (names is None or set(strings) == names)):
+            raise fmu_state.StateError(f"the string values must map {sorted(names or [])} "
+                                       "to strings")
+        if not (type(attributes) is dict and all(type(k) is str and k.isidentifier()
+                                                 and k not in model._NOT_STATE
+                                                 for k in attributes)):
+            raise fmu_state.StateError("the model attributes must be a dict of names")
+        if not (mode in _MODES and type(start) is float
+                and (next_time is None or type(next_time) is float)
+                and type(state_valid) is bool and type(outputs_valid) is bool):
+            raise fmu_state.StateError("malformed FMI wrapper state")
+        return value
+
+    @classmethod
+    def _fmu_state_to_bytes(cls, state) -> bytes:
+        return state if type(state) is bytes else b"\0" + _rejection(state).encode()
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, data: bytes):
+        try:
+            cls._check_state(fmu_state.decode(cls._identity(), data, _PACKAGE))
+            return bytes(data)
+        except fmu_state.StateError as exc:
+            return _Rejected(str(exc))
+        except Exception as exc:  # noqa: BLE001 - never raise into pythonfmu
+            return _Rejected(f"{type(exc).__name__}: {exc}")
 
     # -- internals -----------------------------------------------------------------
+    _WHEN = {"instantiated": "after fmi2Instantiate", "initialization": "in initialization "
+             "mode", "step": "after fmi2ExitInitializationMode"}
+
+    def _require_mode(self, mode: str):
+        """FMI 2.0 co-simulation state machine (section 4.2.4)."""
+        if self._mode != mode:
+            raise _CallRejected(f"not allowed in mode '{self._mode}' (only "
+                                f"{self._WHEN[mode]})")
+
     def _error(self, message: str) -> None:
         self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}",
                  Fmi2Status.error)
@@ -184,7 +263,9 @@ class ModelSlave(Fmi2Slave):
         if isinstance(plan, str):
             raise _CallRejected(plan)
         index, touches_parameters = plan
-        if setting and touches_parameters and self._mode in ("step", "terminated"):
+        if setting and self._mode == "terminated":
+            raise _CallRejected("variables cannot be set after fmi2Terminate")
+        if setting and touches_parameters and self._mode == "step":
             names = [self._scalar_names[vr] for vr in vrs
                      if self._causality[vr] == PARAMETER]
             raise _CallRejected(f"parameters {names} are fixed: they can only be set before "

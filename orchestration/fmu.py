@@ -5,16 +5,30 @@ calls the bound ctypes functions directly on preallocated buffers and checks eve
 returned status itself (:meth:`Instance.check`).  The FMU's log messages go to the run's
 :class:`Log`, so that an error names the component, the call, the time and what the FMU
 said.
+
+Each FMU is unpacked and its binary loaded once per process, keyed by the content of the
+file (SHA-256; a rebuilt FMU is a new one, a copy of the same file is the same one), and
+every run instantiates its instances on it.  Unpacking it again for each run would map
+another copy of the binary each time that is never unmapped: pythonfmu's binary cannot be
+unloaded (its GNU-unique C++ symbols make it NODELETE), so a campaign of thousands of runs
+in one process would run out of memory mappings.  A run's components are reset and kept
+for the next run with the same FMU and instance name (see :meth:`Instance.free`).
 """
 from __future__ import annotations
 
+import atexit
+import ctypes
+import functools
+import hashlib
+import os
 import shutil
 import sys
+import threading
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmpy import extract, read_model_description
+from fmpy import extract, platform, read_model_description, sharedLibraryExtension
 from fmpy.fmi2 import (FMU2Slave, calloc, fmi2CallbackAllocateMemoryTYPE,
                        fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
                        fmi2CallbackLoggerTYPE, free)
@@ -70,13 +84,12 @@ class Description:
 
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
-        self.md = read_model_description(str(path))
+        #: optional input -> what its default means, as our FMUs declare them
+        #: (VendorAnnotations; every other input is required); None: not our FMU
+        self.md, self.optional_inputs = _described(_content_key(self.path), str(path))
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
-        #: optional input -> what its default means, as our FMUs declare them
-        #: (VendorAnnotations; every other input is required); None: not our FMU
-        self.optional_inputs = _optional_inputs(path)
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
         #: output names in value-reference order
@@ -91,7 +104,8 @@ class Instance(Description):
     def __init__(self, name: str, path: Path, log: Log):
         super().__init__(name, path)
         self.log = log
-        self.unzip_dir = extract(str(path))
+        self._key = _content_key(self.path)
+        self.unzip_dir = _unpacked(self._key, str(path), self.md.coSimulation.modelIdentifier)
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzip_dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=name)
@@ -101,26 +115,30 @@ class Instance(Description):
         self.fmi2GetInteger, self.fmi2SetInteger = dll.fmi2GetInteger, dll.fmi2SetInteger
         self.fmi2GetBoolean, self.fmi2SetBoolean = dll.fmi2GetBoolean, dll.fmi2SetBoolean
         self.component = None
-        self.fatal = False   # after fmi2Fatal nothing more is called (FMI 2.0 §2.1.3)
+        self.failed = False   # a call failed: the component is freed, not reused
+        self.fatal = False    # after fmi2Fatal nothing more is called (FMI 2.0 §2.1.3)
         self._log_mark = 0
 
     def instantiate(self, logging_on: bool = False) -> None:
-        def logger(_env, _name, status, category, message):
-            self.log.add(self.name, status, (category or b"").decode(errors="replace"),
-                         (message or b"").decode(errors="replace"))
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self._callbacks = callbacks  # keep alive while the FMU lives
+        """Instantiate, or take an idle component of this FMU and instance name that an
+        earlier run left reset (fmi2Reset: as if just instantiated, FMI 2.0 section 2.1.6)."""
         self._mark()
+        record = _take_idle(self._key, self.name)
+        if record is not None:
+            record.user = self
+            self._record = record
+            self.component = self.slave.component = record.pointer
+            self.call("fmi2SetDebugLogging", int(logging_on), 0, None)
+            return
+        record = _Component(self)
         try:
-            self.slave.instantiate(callbacks=callbacks, loggingOn=logging_on)
+            self.slave.instantiate(callbacks=record.callbacks, loggingOn=logging_on)
         except Exception:
+            self.failed = True
             raise FmiCallError(self.name, "fmi2Instantiate", self.log.time, 4,
                                self.log.of(self.name, self._log_mark)) from None
-        self.component = self.slave.component
+        self._record = record
+        self.component = record.pointer = self.slave.component
 
     def call(self, name: str, *args) -> int:
         """Call an FMI function of this instance (component first) and check its status."""
@@ -134,6 +152,7 @@ class Instance(Description):
 
     def check(self, status: int, call: str) -> None:
         if status > 1:
+            self.failed = True
             self.fatal = self.fatal or status == 4
             raise FmiCallError(self.name, call, self.log.time, status,
                                self.log.of(self.name, self._log_mark))
@@ -142,24 +161,127 @@ class Instance(Description):
         self._log_mark = len(self.log.entries)
 
     def free(self) -> None:
-        """Free the instance and delete the extracted FMU (never raises).
+        """Free the instance (never raises); the unpacked FMU stays loaded for the next run,
+        and a component whose calls all succeeded is reset and kept for it (pythonfmu 0.7.0
+        leaks about 1 KB of Python objects per fmi2Instantiate in its findClass; see
+        NTNU-IHB/PythonFMU#229).
 
-        pythonfmu puts the FMU's resources directory first on ``sys.path`` and leaves it
-        there; it is taken out again, or the host would import the FMU's copies (of
-        pythonfmu, for one) from a deleted directory.
+        pythonfmu puts the FMU's resources directory first on ``sys.path`` at every
+        instantiation and leaves it there; it is taken out again, or ``sys.path`` would grow
+        with every run and the host would import the FMU's copies (of pythonfmu, for one).
         """
         try:
-            if not self.fatal:  # after fmi2Fatal: not even freed, the library stays loaded
-                if self.component is not None:
-                    self.slave.fmi2FreeInstance(self.component)
-                    self.component = None
+            if self.fatal:  # after fmi2Fatal: not even freed, the library stays loaded
+                self.component = None
+            elif self.component is not None:
+                component, self.component = self.component, None
+                if self.failed or not _keep_idle(self._key, self.name, self._record,
+                                                 self.slave.dll.fmi2Reset):
+                    self.slave.fmi2FreeInstance(component)
+            if not self.fatal:
                 self.slave.freeLibrary()
         except Exception:  # noqa: BLE001 - cleanup after an FMU failure
             pass
         resources = str(Path(self.unzip_dir) / "resources")
         sys.path[:] = [entry for entry in sys.path if entry.rstrip("/") != resources]
         sys.path_importer_cache.pop(resources, None)
-        shutil.rmtree(self.unzip_dir, ignore_errors=True)
+
+
+# -- components kept for the next run ---------------------------------------------------
+class _Component:
+    """An instantiated component, its callbacks, and the Instance now using it."""
+
+    def __init__(self, user: Instance):
+        self.user, self.pointer = user, None
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(self._logger)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+
+    def _logger(self, _env, _name, status, category, message):
+        user = self.user
+        if user is not None:
+            user.log.add(user.name, status, (category or b"").decode(errors="replace"),
+                         (message or b"").decode(errors="replace"))
+
+
+_idle: dict[tuple[str, str], list[_Component]] = {}   # (content key, name) -> reset ones
+_IDLE_PER_NAME = 4
+
+
+def _take_idle(key: str, name: str) -> _Component | None:
+    with _lock:
+        idle = _idle.get((key, name))
+        return idle.pop() if idle else None
+
+
+def _keep_idle(key: str, name: str, record: _Component, reset) -> bool:
+    """Reset the component and keep it for a later run; False if it is not kept."""
+    with _lock:
+        if len(_idle.get((key, name), ())) >= _IDLE_PER_NAME:
+            return False
+    record.user = None
+    if reset(record.pointer) != 0:
+        return False
+    with _lock:
+        _idle.setdefault((key, name), []).append(record)
+    return True
+
+
+# -- one load per FMU file content, per process -----------------------------------------
+_lock = threading.Lock()
+_unpacked_dirs: dict[str, str] = {}      # content key -> extraction directory
+_descriptions: dict[str, tuple] = {}     # content key -> (model description, optional inputs)
+_pinned: list = []                       # one handle per loaded binary: never unloaded
+_KEYS_KEPT = 1024
+
+
+@functools.lru_cache(maxsize=_KEYS_KEPT)
+def _file_digest(path: str, size: int, mtime_ns: int) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _content_key(path: Path) -> str:
+    """The SHA-256 of the FMU file (hashed once per path, size and modification time)."""
+    stat = os.stat(path)
+    return _file_digest(os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
+
+
+def _described(key: str, path: str):
+    """(model description, optional inputs) of the FMU with content ``key``."""
+    with _lock:
+        described = _descriptions.get(key)
+    if described is None:
+        described = (read_model_description(path), _optional_inputs(Path(path)))
+        with _lock:
+            if len(_descriptions) >= _KEYS_KEPT:
+                _descriptions.pop(next(iter(_descriptions)))
+            _descriptions[key] = described
+    return described
+
+
+def _unpacked(key: str, path: str, model_identifier: str) -> str:
+    """The extraction directory of the FMU with content ``key``; its binary stays loaded."""
+    with _lock:
+        directory = _unpacked_dirs.get(key)
+        if directory is None:
+            directory = extract(path)
+            library = Path(directory, "binaries", platform,
+                           model_identifier + sharedLibraryExtension)
+            if library.exists():
+                _pinned.append(ctypes.CDLL(str(library)))
+            _unpacked_dirs[key] = directory
+        return directory
+
+
+@atexit.register
+def _remove_unpacked() -> None:
+    for directory in _unpacked_dirs.values():
+        shutil.rmtree(directory, ignore_errors=True)
 
 
 def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:

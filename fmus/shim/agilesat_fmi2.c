@@ -9,7 +9,8 @@
  *  - Logging.  pythonfmu drops every message, errors included, unless debug logging is on.
  *    The shim keeps pythonfmu's logging on and applies the host's wish itself: warnings
  *    and errors always reach the host, OK-level messages only with logging on (and the
- *    category enabled).
+ *    category enabled), except OK-level messages of category "logStatusWarning" (warnings
+ *    a user asked not to fail the call with): those always reach the host, as OK.
  *
  *  - Exit.  At process exit pythonfmu's ELF destructor (onLibraryUnload, run by _dl_fini)
  *    calls finalizePythonInterpreter(), which resets a static std::shared_ptr that the exit
@@ -21,6 +22,17 @@
  *
  *  - Python.  In a host that does not run Python itself, it loads and initializes the
  *    building environment's Python before pythonfmu needs it (see ensure_python).
+ *
+ *  - Handles and arguments.  pythonfmu dereferences whatever it is given.  The shim
+ *    keeps a registry of live instances and of the FMU states each handed out, and checks
+ *    every handle and pointer before forwarding: a freed, NULL, foreign or made-up
+ *    instance or state, a NULL array with n > 0, a too-small serialization buffer all get
+ *    fmi2Error (with a message when the instance is known) and never reach pythonfmu.
+ *  - Fatal.  After an fmi2Fatal (pythonfmu's answer to an exception it caught, after which
+ *    its instance is broken) every call but fmi2FreeInstance is refused with fmi2Error.
+ *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
+ *    once (fmi2Error; fmi2FreeInstance does nothing): a host calling from a static
+ *    destructor would otherwise take the GIL of a dead interpreter inside pythonfmu.
  *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
@@ -60,10 +72,19 @@ static struct {
 static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static char load_error[8400];
 static void (*inner_finalize)(void);
+static int (*python_initialized)(void);   /* Py_IsInitialized of the interpreter we use */
+static volatile int finalized;            /* our exit handler has run */
 
 /* atexit() in a shared object is tied to it: this runs at process exit and at dlclose. */
 static void finalize_inner(void) {
+    finalized = 1;
     if (inner_finalize) inner_finalize();
+}
+
+/* True once the process is exiting or the host's Python has been finalized: then no call
+ * may enter pythonfmu (PyGILState_Ensure on a finalized interpreter crashes). */
+static int python_gone(void) {
+    return finalized || (python_initialized && !python_initialized());
 }
 
 /* ---- the Python interpreter ----------------------------------------------------------
@@ -101,6 +122,7 @@ static const char *setting(const char *variable, const char *recorded) {
 
 static int ensure_python(char *err, size_t n) {
     int (*is_initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    python_initialized = is_initialized;
     if (is_initialized && is_initialized()) return 0;   /* the host runs Python */
     void *lib = RTLD_DEFAULT;
     if (!is_initialized) {
@@ -118,6 +140,7 @@ static int ensure_python(char *err, size_t n) {
             return -1;
         }
         is_initialized = (int (*)(void))dlsym(lib, "Py_IsInitialized");
+        python_initialized = is_initialized;
         if (is_initialized && is_initialized()) return 0;
     }
     const char *python = setting("AGILESAT_PYTHON", AGILESAT_PYTHON);
@@ -181,8 +204,19 @@ static void load_inner(void) {
     atexit(finalize_inner);
 }
 
-/* ---- one instance ------------------------------------------------------------------ */
-typedef struct {
+/* ---- instances and states ------------------------------------------------------------
+ * Every handle a host passes is checked against the live instances (and each instance's
+ * live states) before anything is forwarded: NULL, freed, foreign or made-up handles get
+ * fmi2Error (logged when the instance is known) and never reach pythonfmu, which would
+ * dereference them.  States are our own small records around pythonfmu's (a Python object
+ * per state), so fmi2GetFMUstate can reuse a handle and fmi2FreeInstance frees an
+ * instance's states with it. */
+typedef struct State {
+    void *inner;                 /* pythonfmu's state */
+    struct State *next;
+} State;
+
+typedef struct Shim {
     fmi2Component inner;
     fmi2CallbackFunctions host;  /* what the host gave us */
     fmi2CallbackFunctions ours;  /* what pythonfmu sees: our logger, us as environment */
@@ -191,7 +225,26 @@ typedef struct {
     char **categories;
     size_t n_categories;
     fmi2Status worst;            /* worst status logged during the current call */
+    int fatal;                   /* a call returned fmi2Fatal: only fmi2FreeInstance now */
+    State *states;
+    struct Shim *next;
 } Shim;
+
+static pthread_mutex_t registry_lock = PTHREAD_MUTEX_INITIALIZER;
+static Shim *instances;
+
+static Shim *find_instance(fmi2Component c, int unlink) {
+    pthread_mutex_lock(&registry_lock);
+    Shim **at = &instances;
+    while (*at && *at != c) at = &(*at)->next;
+    Shim *s = *at;
+    if (s && unlink) *at = s->next;
+    pthread_mutex_unlock(&registry_lock);
+    return s;
+}
+
+/* Largest array a call may pass (pythonfmu indexes with int and builds Python lists). */
+#define MAX_VALUES ((size_t)1 << 24)
 
 static int category_enabled(const Shim *s, const char *category) {
     if (s->n_categories == 0) return 1;
@@ -218,12 +271,24 @@ static void host_log(const Shim *s, fmi2Status status, const char *category, con
     free(escaped);
 }
 
+static fmi2Status refuse(Shim *s, const char *call, const char *why) {
+    char text[512];
+    snprintf(text, sizeof text, "%s: %s", call, why);
+    host_log(s, fmi2Error, "logStatusError", text);
+    return fmi2Error;
+}
+
+/* The slave logs limit and saturation conditions at status OK with category
+ * "logStatusWarning" when the user asks for warnings that do not fail the call (hosts that
+ * treat fmi2Warning from fmi2DoStep as failure): those always reach the host, as OK. */
 static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     (void)instance;
     Shim *s = env;
     if (status > s->worst && status != fmi2Pending) s->worst = status;
-    if (status == fmi2OK && (!s->logging_on || !category_enabled(s, category))) return;
+    int warning_as_ok = category && strcmp(category, "logStatusWarning") == 0;
+    if (status == fmi2OK && !warning_as_ok && (!s->logging_on || !category_enabled(s, category)))
+        return;
     host_log(s, status, category, message ? message : "");
 }
 
@@ -271,16 +336,31 @@ static int guid_matches(const char *resource_uri, const char *guid, char *why, s
     return 0;
 }
 
-/* Forward a call to the inner instance (arguments after it) and return the worse of its
- * status and the worst status logged during the call. */
-#define FORWARD(c, type, fn, ...)                                                         \
-    do {                                                                                  \
-        Shim *s_ = (Shim *)(c);                                                           \
-        if (!s_) return fmi2Error;                                                        \
-        s_->worst = fmi2OK;                                                               \
-        fmi2Status st_ = ((type)inner.fn)(s_->inner, ##__VA_ARGS__);          \
-        return st_ > s_->worst ? st_ : s_->worst;                                         \
-    } while (0)
+/* The instance behind c, ready for a call; NULL (the call returns fmi2Error) when c is not
+ * a live instance, after a fatal error, or once Python has shut down (a host calling from
+ * a static destructor or an exit handler: pythonfmu would take the GIL of a finalized
+ * interpreter).  Nothing is logged then: the host's logger may itself be Python. */
+static Shim *enter(fmi2Component c, const char *call) {
+    if (python_gone()) return NULL;
+    Shim *s = find_instance(c, 0);
+    if (!s) return NULL;
+    if (s->fatal) {
+        refuse(s, call, "refused: an earlier call returned fmi2Fatal, only fmi2FreeInstance "
+               "is allowed now");
+        return NULL;
+    }
+    s->worst = fmi2OK;
+    return s;
+}
+
+/* The worse of a forwarded call's status and the worst status logged during it. */
+static fmi2Status leave(Shim *s, fmi2Status status) {
+    if (status < s->worst) status = s->worst;
+    if (status == fmi2Fatal) s->fatal = 1;
+    return status;
+}
+
+#define INNER(type, fn) ((type)inner.fn)
 
 /* ---- FMI 2.0 API -------------------------------------------------------------------- */
 EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
@@ -292,6 +372,11 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     Shim probe = {0};
     if (cb) probe.host = *cb;
     probe.name = (char *)(name ? name : "");
+    if (!name || !resources) {
+        host_log(&probe, fmi2Error, "logStatusError", name ? "fmuResourceLocation is NULL"
+                 : "instanceName is NULL");
+        return NULL;
+    }
     if (type != fmi2CoSimulation) {
         host_log(&probe, fmi2Error, "logStatusError",
                  "this FMU supports co-simulation only (fmi2CoSimulation)");
@@ -307,30 +392,53 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         host_log(&probe, fmi2Fatal, "logStatusFatal", load_error);
         return NULL;
     }
+    if (python_gone()) return NULL;
     Shim *s = calloc(1, sizeof *s);
-    if (!s) return NULL;
+    if (!s || !(s->name = strdup(name))) {
+        free(s);
+        host_log(&probe, fmi2Error, "logStatusError", "out of memory");
+        return NULL;
+    }
     s->host = probe.host;
     s->ours = probe.host;
     s->ours.logger = shim_logger;
     s->ours.componentEnvironment = s;
-    s->name = strdup(probe.name);
     s->logging_on = logging_on;
     typedef fmi2Component (*F)(fmi2String, fmi2Type, fmi2String, fmi2String,
                                const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
-    s->inner = ((F)inner.fmi2Instantiate)(name, type, guid, resources, &s->ours, visible,
-                                          fmi2True);
+    s->inner = INNER(F, fmi2Instantiate)(name, type, guid, resources, &s->ours, visible,
+                                         fmi2True);
     if (!s->inner) {
         free(s->name);
         free(s);
         return NULL;
     }
+    pthread_mutex_lock(&registry_lock);
+    s->next = instances;
+    instances = s;
+    pthread_mutex_unlock(&registry_lock);
     return s;
 }
 
+static void free_inner_state(Shim *s, void *state) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate *);
+    INNER(F, fmi2FreeFMUstate)(s->inner, &state);
+}
+
+/* pythonfmu's instance is freed unless it raised (fmi2Fatal): then it has already released
+ * its Python objects, and its destructor would release them a second time
+ * (PySlaveInstance::handle_py_exception, pythonfmu 0.7.0), so it is left alone. */
 EXPORT void fmi2FreeInstance(fmi2Component c) {
-    Shim *s = c;
+    if (python_gone()) return;
+    Shim *s = find_instance(c, 1);
     if (!s) return;
-    ((void (*)(fmi2Component))inner.fmi2FreeInstance)(s->inner);
+    while (s->states) {
+        State *state = s->states;
+        s->states = state->next;
+        free_inner_state(s, state->inner);
+        free(state);
+    }
+    if (!s->fatal) INNER(void (*)(fmi2Component), fmi2FreeInstance)(s->inner);
     free_categories(s);
     free(s->name);
     free(s);
@@ -338,15 +446,18 @@ EXPORT void fmi2FreeInstance(fmi2Component c) {
 
 EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
                                       const fmi2String categories[]) {
-    Shim *s = c;
+    Shim *s = enter(c, "fmi2SetDebugLogging");
     if (!s) return fmi2Error;
+    if (n > 0 && !categories) return refuse(s, "fmi2SetDebugLogging", "categories is NULL");
+    for (size_t i = 0; i < n; i++)
+        if (!categories[i]) return refuse(s, "fmi2SetDebugLogging", "a category is NULL");
     free_categories(s);
     s->logging_on = on;
-    if (n > 0 && categories) {
+    if (n > 0) {
         s->categories = calloc(n, sizeof *s->categories);
         if (!s->categories) return fmi2Error;
-        for (size_t i = 0; i < n; i++) s->categories[i] = strdup(categories[i]);
-        s->n_categories = n;
+        for (size_t i = 0; i < n; i++)
+            if ((s->categories[i] = strdup(categories[i]))) s->n_categories = i + 1;
     }
     return fmi2OK;
 }
@@ -355,13 +466,17 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tol_defined, 
                                       fmi2Real start, fmi2Boolean stop_defined, fmi2Real stop) {
     typedef fmi2Status (*F)(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean,
                             fmi2Real);
-    FORWARD(c, F, fmi2SetupExperiment, tol_defined, tol, start, stop_defined, stop);
+    Shim *s = enter(c, "fmi2SetupExperiment");
+    if (!s) return fmi2Error;
+    return leave(s, INNER(F, fmi2SetupExperiment)(s->inner, tol_defined, tol, start,
+                                                  stop_defined, stop));
 }
 
 #define FORWARD_NOARGS(fn)                                                                \
     EXPORT fmi2Status fn(fmi2Component c) {                                               \
-        typedef fmi2Status (*F)(fmi2Component);                                           \
-        FORWARD(c, F, fn);                                                       \
+        Shim *s = enter(c, #fn);                                                          \
+        if (!s) return fmi2Error;                                                         \
+        return leave(s, INNER(fmi2Status (*)(fmi2Component), fn)(s->inner));              \
     }
 FORWARD_NOARGS(fmi2EnterInitializationMode)
 FORWARD_NOARGS(fmi2ExitInitializationMode)
@@ -369,51 +484,194 @@ FORWARD_NOARGS(fmi2Terminate)
 FORWARD_NOARGS(fmi2Reset)
 FORWARD_NOARGS(fmi2CancelStep)
 
-#define FORWARD_ARRAY(fn, type)                                                           \
+static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const void *value) {
+    if (n == 0) return 0;
+    if (!vr || !value) {
+        refuse(s, call, "the value reference or value array is NULL");
+        return 1;
+    }
+    if (n > MAX_VALUES) {
+        refuse(s, call, "too many values in one call");
+        return 1;
+    }
+    return 0;
+}
+
+#define FORWARD_ARRAY(fn, type, check_strings)                                            \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
-        FORWARD(c, F, fn, vr, n, value);                                         \
+        Shim *s = enter(c, #fn);                                                          \
+        if (!s) return fmi2Error;                                                         \
+        if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
+        for (size_t i = 0; check_strings && i < n; i++)                                   \
+            if (!((const void *const *)value)[i]) return refuse(s, #fn, "a string is NULL"); \
+        return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
-FORWARD_ARRAY(fmi2GetReal, fmi2Real)
-FORWARD_ARRAY(fmi2GetInteger, fmi2Integer)
-FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean)
-FORWARD_ARRAY(fmi2GetString, fmi2String)
-FORWARD_ARRAY(fmi2SetReal, const fmi2Real)
-FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer)
-FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean)
-FORWARD_ARRAY(fmi2SetString, const fmi2String)
+FORWARD_ARRAY(fmi2GetReal, fmi2Real, 0)
+FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0)
+FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0)
+FORWARD_ARRAY(fmi2GetString, fmi2String, 0)
+FORWARD_ARRAY(fmi2SetReal, const fmi2Real, 0)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0)
+FORWARD_ARRAY(fmi2SetString, const fmi2String, 1)
 
-EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
+/* ---- FMU states --------------------------------------------------------------------- */
+static State **find_state(Shim *s, fmi2FMUstate state) {
+    State **at = &s->states;
+    while (*at && *at != state) at = &(*at)->next;
+    return *at ? at : NULL;
+}
+
+static State *known_state(Shim *s, const char *call, fmi2FMUstate state) {
+    State **at = state ? find_state(s, state) : NULL;
+    if (!at) refuse(s, call, "not an FMU state of this instance (NULL, freed, or from "
+                    "another instance or FMU)");
+    return at ? *at : NULL;
+}
+
+static State *add_state(Shim *s, void *inner_state) {
+    State *state = calloc(1, sizeof *state);
+    if (!state) {
+        free_inner_state(s, inner_state);
+        refuse(s, "fmi2GetFMUstate", "out of memory");
+        return NULL;
+    }
+    state->inner = inner_state;
+    state->next = s->states;
+    s->states = state;
+    return state;
+}
+
+EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *out) {
     typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate *);
-    FORWARD(c, F, fmi2GetFMUstate, state);
+    Shim *s = enter(c, "fmi2GetFMUstate");
+    if (!s) return fmi2Error;
+    if (!out) return refuse(s, "fmi2GetFMUstate", "the FMUstate pointer is NULL");
+    State *reuse = NULL;
+    if (*out && !(reuse = known_state(s, "fmi2GetFMUstate", *out))) return fmi2Error;
+    void *got = NULL;
+    fmi2Status status = leave(s, INNER(F, fmi2GetFMUstate)(s->inner, &got));
+    if (status > fmi2Warning || !got) {
+        if (got && !s->fatal) free_inner_state(s, got);
+        return status > fmi2Warning ? status : fmi2Error;
+    }
+    if (reuse) {
+        free_inner_state(s, reuse->inner);
+        reuse->inner = got;
+    } else if (!(reuse = add_state(s, got))) {
+        return fmi2Error;
+    }
+    *out = reuse;
+    return status;
 }
 
 EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate);
-    FORWARD(c, F, fmi2SetFMUstate, state);
+    Shim *s = enter(c, "fmi2SetFMUstate");
+    if (!s) return fmi2Error;
+    State *known = known_state(s, "fmi2SetFMUstate", state);
+    if (!known) return fmi2Error;
+    return leave(s, INNER(F, fmi2SetFMUstate)(s->inner, known->inner));
 }
 
+/* FMI 2.0 section 2.1.8: a NULL *FMUstate is ignored. */
 EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate *);
-    FORWARD(c, F, fmi2FreeFMUstate, state);
+    Shim *s = enter(c, "fmi2FreeFMUstate");
+    if (!s) return fmi2Error;
+    if (!state) return refuse(s, "fmi2FreeFMUstate", "the FMUstate pointer is NULL");
+    if (!*state) return fmi2OK;
+    State **at = find_state(s, *state);
+    if (!at) return refuse(s, "fmi2FreeFMUstate", "not an FMU state of this instance (freed, "
+                           "or from another instance or FMU)");
+    State *known = *at;
+    *at = known->next;
+    free_inner_state(s, known->inner);
+    free(known);
+    *state = NULL;
+    return leave(s, fmi2OK);
+}
+
+static fmi2Status inner_size(Shim *s, void *state, size_t *n) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, size_t *);
+    *n = 0;
+    return leave(s, INNER(F, fmi2SerializedFMUstateSize)(s->inner, state, n));
+}
+
+static fmi2Status inner_serialize(Shim *s, void *state, fmi2Byte *bytes, size_t n) {
+    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
+    return leave(s, INNER(F, fmi2SerializeFMUstate)(s->inner, state, bytes, n));
 }
 
 EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *n) {
-    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, size_t *);
-    FORWARD(c, F, fmi2SerializedFMUstateSize, state, n);
+    Shim *s = enter(c, "fmi2SerializedFMUstateSize");
+    if (!s) return fmi2Error;
+    State *known = known_state(s, "fmi2SerializedFMUstateSize", state);
+    if (!known) return fmi2Error;
+    if (!n) return refuse(s, "fmi2SerializedFMUstateSize", "the size pointer is NULL");
+    return inner_size(s, known->inner, n);
 }
 
+/* pythonfmu copies exactly n bytes of the state, whatever its length: the buffer must hold
+ * the whole state (a shorter one would give a truncated state); a longer one is padded
+ * with NUL bytes, which deserialization accepts. */
 EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[],
                                         size_t n) {
-    typedef fmi2Status (*F)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
-    FORWARD(c, F, fmi2SerializeFMUstate, state, bytes, n);
+    Shim *s = enter(c, "fmi2SerializeFMUstate");
+    if (!s) return fmi2Error;
+    State *known = known_state(s, "fmi2SerializeFMUstate", state);
+    if (!known) return fmi2Error;
+    if (!bytes) return refuse(s, "fmi2SerializeFMUstate", "the byte buffer is NULL");
+    size_t need;
+    fmi2Status status = inner_size(s, known->inner, &need);
+    if (status > fmi2Warning) return status;
+    if (n < need) {
+        char why[160];
+        snprintf(why, sizeof why, "the buffer of %zu bytes is too small: the state needs %zu "
+                 "bytes (fmi2SerializedFMUstateSize)", n, need);
+        return refuse(s, "fmi2SerializeFMUstate", why);
+    }
+    memset(bytes + need, 0, n - need);
+    fmi2Status copied = inner_serialize(s, known->inner, bytes, need);
+    return copied > status ? copied : status;
 }
 
+/* The slave never raises on bad bytes (pythonfmu would make that fatal): it returns a
+ * rejected state, whose serialization is a NUL byte followed by the reason. */
 EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t n,
-                                          fmi2FMUstate *state) {
+                                          fmi2FMUstate *out) {
     typedef fmi2Status (*F)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
-    FORWARD(c, F, fmi2DeSerializeFMUstate, bytes, n, state);
+    static const char call[] = "fmi2DeSerializeFMUstate";
+    Shim *s = enter(c, call);
+    if (!s) return fmi2Error;
+    if (!out || (!bytes && n > 0)) return refuse(s, call, "a NULL pointer argument");
+    void *got = NULL;
+    fmi2Status status = leave(s, INNER(F, fmi2DeSerializeFMUstate)(s->inner, bytes ? bytes : "",
+                                                                   n, &got));
+    if (status > fmi2Warning || !got) {
+        if (got && !s->fatal) free_inner_state(s, got);
+        return status > fmi2Warning ? status : fmi2Error;
+    }
+    fmi2Byte first = 0;
+    size_t size = 0;
+    if (inner_size(s, got, &size) > fmi2Warning || size == 0 ||
+        inner_serialize(s, got, &first, 1) > fmi2Warning || first == '\0') {
+        char *reason = size > 1 ? malloc(size + 1) : NULL;
+        if (reason && inner_serialize(s, got, reason, size) <= fmi2Warning) {
+            reason[size] = '\0';
+            refuse(s, call, reason + 1);
+        } else {
+            refuse(s, call, "not a state of this FMU");
+        }
+        free(reason);
+        if (!s->fatal) free_inner_state(s, got);
+        return fmi2Error;
+    }
+    State *state = add_state(s, got);
+    if (!state) return fmi2Error;
+    *out = state;
+    return status;
 }
 
 EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
@@ -422,8 +680,10 @@ EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                                const fmi2Real dv_known[], fmi2Real dv_unknown[]) {
     typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
                             const fmi2ValueReference *, size_t, const fmi2Real *, fmi2Real *);
-    FORWARD(c, F, fmi2GetDirectionalDerivative, unknowns, nu, knowns, nk, dv_known,
-                                                dv_unknown);
+    Shim *s = enter(c, "fmi2GetDirectionalDerivative");
+    if (!s) return fmi2Error;
+    return leave(s, INNER(F, fmi2GetDirectionalDerivative)(s->inner, unknowns, nu, knowns, nk,
+                                                           dv_known, dv_unknown));
 }
 
 EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
@@ -431,7 +691,9 @@ EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueRe
                                               const fmi2Real value[]) {
     typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
                             const fmi2Integer *, const fmi2Real *);
-    FORWARD(c, F, fmi2SetRealInputDerivatives, vr, n, order, value);
+    Shim *s = enter(c, "fmi2SetRealInputDerivatives");
+    if (!s) return fmi2Error;
+    return leave(s, INNER(F, fmi2SetRealInputDerivatives)(s->inner, vr, n, order, value));
 }
 
 EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
@@ -439,18 +701,25 @@ EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueR
                                                fmi2Real value[]) {
     typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
                             const fmi2Integer *, fmi2Real *);
-    FORWARD(c, F, fmi2GetRealOutputDerivatives, vr, n, order, value);
+    Shim *s = enter(c, "fmi2GetRealOutputDerivatives");
+    if (!s) return fmi2Error;
+    return leave(s, INNER(F, fmi2GetRealOutputDerivatives)(s->inner, vr, n, order, value));
 }
 
 EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_set_prior) {
     typedef fmi2Status (*F)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
-    FORWARD(c, F, fmi2DoStep, t, h, no_set_prior);
+    Shim *s = enter(c, "fmi2DoStep");
+    if (!s) return fmi2Error;
+    return leave(s, INNER(F, fmi2DoStep)(s->inner, t, h, no_set_prior));
 }
 
 #define FORWARD_STATUS(fn, type)                                                          \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2StatusKind kind, type *value) {       \
         typedef fmi2Status (*F)(fmi2Component, fmi2StatusKind, type *);                   \
-        FORWARD(c, F, fn, kind, value);                                          \
+        Shim *s = enter(c, #fn);                                                          \
+        if (!s) return fmi2Error;                                                         \
+        if (!value) return refuse(s, #fn, "the value pointer is NULL");                   \
+        return leave(s, INNER(F, fn)(s->inner, kind, value));                             \
     }
 FORWARD_STATUS(fmi2GetStatus, fmi2Status)
 FORWARD_STATUS(fmi2GetRealStatus, fmi2Real)
