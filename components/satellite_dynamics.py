@@ -35,6 +35,9 @@ from .variables import input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
+#: rad/s, above the orbit-frame rate of any Earth orbit: h/r² is largest at the perigee of an
+#: orbit grazing the surface, √2 · √(μ/R³) ≈ 1.75e-3 rad/s for e → 1
+MAX_ORBIT_FRAME_RATE = 2e-3
 DEVICES = ("cmg", "wheel", "payload")
 MOMENTUM_INPUTS = tuple(f"h_{d}" for d in DEVICES)
 #: r_I when unconnected: the default orbit's radius (OrbitEnvironment) on the nadir
@@ -173,9 +176,11 @@ class SatelliteDynamics(Model):
         """Bounds of one step of dt (margin 4): the orbit frame turns by at most
         |w_OI_O| dt, its rate changes by a small fraction, each device's momentum by
         |hdot| dt.  A host that passed nothing in initialisation jumps by the whole
-        orbit attitude or stored momentum (radians, tens of N·m·s)."""
+        orbit attitude or stored momentum (radians, tens of N·m·s).  The frame's rate is
+        taken as at least that of any Earth orbit (``MAX_ORBIT_FRAME_RATE``), so that a
+        system leaving the optional w_OI_O open still passes its moving q_OI."""
         u, jumps = self.u, {}
-        w = max(np.linalg.norm(used["w_OI_O"]), np.linalg.norm(u.w_OI_O))
+        w = max(np.linalg.norm(used["w_OI_O"]), np.linalg.norm(u.w_OI_O), MAX_ORBIT_FRAME_RATE)
         cos_half = abs(float(np.dot(_unit(u.q_OI, "q_OI"), _unit(used["q_OI"], "q_OI"))))
         angle = 2.0 * math.acos(min(1.0, cos_half))
         if angle > 4.0 * w * dt + 1e-9:
