@@ -18,10 +18,13 @@ The same object runs in-process (tests, references) and inside the FMU wrapper.
 from __future__ import annotations
 
 import copy
+from typing import TypeVar
 
 import numpy as np
 
 from .variables import Bus, Layout, Var
+
+_M = TypeVar("_M", bound="Model")
 
 
 class ModelError(RuntimeError):
@@ -85,13 +88,13 @@ class Model:
         data = self.values[self.layout.slice(name)]
         return data.reshape(v.shape).copy() if v.shape else data[0]
 
-    def start(self, t0: float = 0.0) -> "Model":
+    def start(self: _M, t0: float = 0.0) -> _M:
         """Initialize at ``t0`` and evaluate the outputs; returns self."""
         self.initialize(t0)
         self.output()
         return self
 
-    def advance(self, t: float, dt: float) -> "Model":
+    def advance(self: _M, t: float, dt: float) -> _M:
         """Step from ``t`` to ``t + dt`` and evaluate the outputs; returns self."""
         self.step(t, dt)
         self.output()

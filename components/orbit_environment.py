@@ -73,8 +73,8 @@ precession-nutation at < 1e-11 rad/s, which is neglected (TEME taken as inertial
 SGP4's velocity is its own analytic expression, not exactly the derivative of its
 position (they differ by up to ≈ 2 cm/s, 3e-6 relative, over an orbit), and it gives no
 acceleration.  v_I is SGP4's velocity; q_OI is built from r_I and v_I as above, and
-w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for the O axes (e_1, e_2, e_3) =
-(x_O, y_O, z_O), w·e_1 = ė_2·e_3, w·e_2 = ė_3·e_1, w·e_3 = ė_1·e_2, which gives::
+w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for the O axes
+(e_1, e_2, e_3) = (x_O, y_O, z_O), w·e_1 = ė_2·e_3, w·e_2 = ė_3·e_1, w·e_3 = ė_1·e_2, which gives::
 
     w_OI_O = (ḣ·r̂/|h|, −ṙ·x_O/r, ḣ·x_O/|h|),   h = r × v
 

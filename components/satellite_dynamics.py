@@ -175,7 +175,8 @@ class SatelliteDynamics(Model):
         k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
         k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
         sixth = ds / 6
-        return tuple(xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
+        return tuple(xi + sixth * (a + 2 * (b + c) + d)
+                     for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
 
     def _derivative(self, x, s, h0, hdot, tau, r_I):
         """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""

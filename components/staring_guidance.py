@@ -78,9 +78,9 @@ errs by ≈ 2e-8 rad/s², 3e-4 of the peak 7.7e-5 rad/s² of the video-SAR stare
 
 Assumptions: target fixed on the Earth, which turns at ω_E = EARTH_RATE about ẑ_I (the
 I and E z axes coincide; :mod:`.orbit`; with an epoch the orbit model turns the Earth at
-the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH; q_OI must be the orbit frame built
-from r_I, v_I (checked to 1e-6 rad); the state (captured g, anchors of the angle
-branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
+the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH;
+q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad); the state (captured
+g, anchors of the angle branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
 """
 from __future__ import annotations
 

@@ -40,7 +40,7 @@ case, in which nothing cancels).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .model import Model, ModelError
 from .variables import output, parameter
@@ -57,6 +57,7 @@ class SweepAxis:
     rate: float
     turnaround: float
     name: str = "axis"
+    period: float = field(init=False, repr=False, compare=False)   # set by __post_init__
 
     def __post_init__(self):
         A, r, tau, name = self.amplitude, self.rate, self.turnaround, self.name

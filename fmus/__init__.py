@@ -17,9 +17,14 @@ FMUS = {
 }
 
 
-def model_class(name: str):
-    """The component model class (``components``) of the FMU ``name``."""
+def slave_class(name: str):
+    """The pythonfmu slave class of the FMU ``name`` (a :class:`.slave.ModelSlave`)."""
     import importlib
     if name not in FMUS:
         raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(FMUS)}")
-    return getattr(importlib.import_module(f"{__name__}.{FMUS[name]}"), name).model_class
+    return getattr(importlib.import_module(f"{__name__}.{FMUS[name]}"), name)
+
+
+def model_class(name: str):
+    """The component model class (``components``) of the FMU ``name``."""
+    return slave_class(name).model_class

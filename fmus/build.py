@@ -157,18 +157,24 @@ def _toolchain_digest() -> bytes:
                           + "\0".join(python_runtime()).encode()).digest()
 
 
-def _relative_imports(relative: str, path: Path) -> list[str]:
-    """Our modules a module imports relatively, as paths like 'components/cmg_cluster.py'."""
-    package = relative.split("/")[0]
+def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -> list[str]:
+    """Our modules a module imports relatively, as paths like 'components/cmg_cluster.py'
+    (relative to ``root``; a package's modules with its ``__init__.py``)."""
+    package = "/".join(relative.split("/")[:-1])
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ImportFrom) and node.level:
-            parts = node.module.split(".") if node.module else []
-            base = package if node.level == 1 else parts.pop(0)
-            if parts:                                   # from .cmg_cluster import x
-                found.append(f"{base}/{'/'.join(parts)}.py")
-            else:                                       # from . import cmg, passes
-                found += [f"{base}/{alias.name}.py" for alias in node.names]
+            base = package.split("/")[:len(package.split("/")) - node.level + 1]
+            module = "/".join(base + (node.module.split(".") if node.module else []))
+            if (root / module).is_dir():                # from ..components.analysis import x
+                found.append(f"{module}/__init__.py")
+                for alias in node.names:                # from . import slave, analysis
+                    if (root / module / f"{alias.name}.py").is_file():
+                        found.append(f"{module}/{alias.name}.py")
+                    elif (root / module / alias.name).is_dir():
+                        found.append(f"{module}/{alias.name}/__init__.py")
+            else:                                       # from .cmg_cluster import x
+                found.append(f"{module}.py")
     return found
 
 

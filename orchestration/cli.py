@@ -175,7 +175,8 @@ def _stare(args) -> int:
         max_look_angle=args.max_look * DEG)
     print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
     for g in passes:
-        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  look {g.look_angle / DEG:6.2f}°"
+        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  "
+              f"look {g.look_angle / DEG:6.2f}°"
               f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
               f"{'ascending' if g.ascending else 'descending'}")
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")

@@ -32,7 +32,8 @@ from .ssp import SystemFile, read_system
 from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
-_CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+_CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
+    "Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
 
 class SimulationError(RuntimeError):
@@ -233,7 +234,7 @@ def _sequence(schedule, nodes) -> list:
             for name, block, first in evaluation_sequence(schedule)]
 
 
-def _evaluate(sequence, values, t: float | None = None, step: float | None = None) -> None:
+def _evaluate(sequence, values, t: float = 0.0, step: float | None = None) -> None:
     """Bring every output to the current communication point, block by block; with a
     step, each FMU first steps from t at its first block (Gauss-Seidel)."""
     for node, reads, first in sequence:

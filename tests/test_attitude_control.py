@@ -10,7 +10,6 @@ from agilesat.components.model import ModelError
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.components.rotations import (dcm_from_quat, euler123_from_quat, quat_conj,
                                            quat_from_axis_angle, quat_mul)
-from agilesat.fmus.model_description import UNITS
 
 RNG = np.random.default_rng(17)
 AXES = np.eye(3)
@@ -124,11 +123,11 @@ def body_rate(q_of_t, t, h=1e-6):
 
 def test_rate_error_is_the_rate_of_B_relative_to_a_rotating_reference():
     u1, u2, u3 = random_axis(), random_axis(), random_axis()
-    q_RI = lambda t: quat_mul(quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t),  # noqa: E731
+    q_RI = lambda t: quat_mul(quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t),
                               quat_from_axis_angle(u2, -0.1 * t))
     for q_BR in (lambda t: quat_from_axis_angle(u3, 0.7),               # rides with R
                  lambda t: quat_from_axis_angle(u3, 0.7 + 0.05 * t)):     # turns within R
-        q_BI = lambda t: quat_mul(q_RI(t), q_BR(t))                          # noqa: E731
+        q_BI = lambda t: quat_mul(q_RI(t), q_BR(t))
         for t in (0.0, 1.3, 4.0):
             c = control(q_BI(t), body_rate(q_BI, t), q_RI(t), body_rate(q_RI, t))
             assert np.allclose(c.get("rate_error"), body_rate(q_BR, t), atol=1e-8)
@@ -163,19 +162,6 @@ def test_feedforward_adds_to_the_pd_torque():
     without = control(q, w, q_ref).get("tau_cmd")
     with_ff = control(q, w, q_ref, h_ff=h, hdot_ff=hdot).get("tau_cmd")
     assert np.allclose(with_ff - without, hdot + np.cross(w, h), atol=1e-13)
-
-
-# -- variable table -----------------------------------------------------------------------
-def test_variable_table_units_requirements_and_dependencies():
-    by_name = {v.name: v for v in AttitudeController.VARIABLES}
-    assert all(v.unit in UNITS and v.description for v in AttitudeController.VARIABLES)
-    assert by_name["q_BI"].required and by_name["w_BI_B"].required
-    assert not any(by_name[n].required for n in ("q_ref", "w_ref", "h_ff", "hdot_ff",
-                                                 "dw_ref"))
-    assert set(by_name["tau_cmd"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref", "h_ff",
-                                               "hdot_ff", "dw_ref"}
-    assert set(by_name["att_error"].depends) == {"q_BI", "q_ref"}
-    assert set(by_name["rate_error"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref"}
 
 
 # -- closed loops ------------------------------------------------------------------------
@@ -253,6 +239,7 @@ def test_wheels_in_the_loop_deliver_the_commanded_torque():
     assert not wheels.warnings
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("feedforward, dt", [(False, 0.1), (True, 0.1), (True, 0.05)])
 def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     """Device h = A sin(ω t) about z, torque −A ω cos(ω t) on the body.
@@ -262,7 +249,7 @@ def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     the wheels hold the compensating torque over a step while the device's torque moves
     on, a residual torque of A ω · ω dt/2 in amplitude, so the error shrinks by ω dt/2."""
     A, omega = 0.2, 2 * math.pi / 10
-    device = lambda t: (np.array([0, 0, A * math.sin(omega * t)]),  # noqa: E731
+    device = lambda t: (np.array([0, 0, A * math.sin(omega * t)]),
                         np.array([0, 0, A * omega * math.cos(omega * t)]))
     kp, kd = J_SAT * 0.2 ** 2, 2 / math.sqrt(2) * 0.2 * J_SAT
     forced = A * omega / abs(J_SAT * (kp / J_SAT - omega ** 2) + 1j * kd * omega)
@@ -307,6 +294,7 @@ def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
     return worst
 
 
+@pytest.mark.slow
 def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_reference():
     """J ẇ_des + w × J w: the error left is the torque's sample-and-hold over a step,
     O(α dt) against the PD-only lag, which grows with the reference rate."""
@@ -331,6 +319,7 @@ def test_asymmetric_feedforward_inertia_is_rejected():
         AttitudeController(inertia=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]).start()
 
 
+@pytest.mark.slow
 def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
     """kp = kd = 0: with the exact feedforward J ẇ_des + w × J w the body's acceleration
     is that of the reference seen in B, so the rate error w − C_BR w_ref stays constant

@@ -94,6 +94,7 @@ def test_singularity_measure_is_det_of_A_At():
     (0.1, 5.0, 3.0),      # command above the rate limit: clipped to 0.6
     (0.25, 0.25, 0.7),    # already there
 ])
+@pytest.mark.slow
 def test_servo_step_matches_fine_integration(rate, command, dt):
     angle, rate_end = servo_step([0.5], [rate], [command], dt, 0.6, 0.5)
     n = 200000
@@ -148,7 +149,7 @@ def test_null_motion_follows_the_gradient_of_Q_without_torque():
     geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
     free = steering([0, 0, 0], delta, [0, 0, 0], [0, 0, 0], null_gain=1.0).get("delta_dot_cmd")
     assert np.allclose(geometry.jacobian(delta) @ free, 0, atol=1e-13)   # no torque
-    Q = lambda d: geometry.singularity(geometry.jacobian(d))  # noqa: E731
+    Q = lambda d: geometry.singularity(geometry.jacobian(d))
     gradient = np.array([(Q(delta + e) - Q(delta - e)) / 2e-6 for e in np.eye(6) * 1e-6])
     projected = gradient - np.linalg.pinv(geometry.jacobian(delta)) @ (
         geometry.jacobian(delta) @ gradient)

@@ -59,6 +59,7 @@ ORBIT = dict(semi_major_axis=WGS84_A + 600e3, inclination=math.radians(97.8), j2
              target_lon=math.radians(11.6), target_alt=520.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("parameters", [ORBIT, dict(ORBIT, epoch="", earth_angle0=1.0),
                                         dict(tle_line1=CBERS2[0], tle_line2=CBERS2[1],
                                              target_lat=-0.4, target_lon=2.5)],
@@ -80,6 +81,7 @@ def test_find_pass_is_zero_doppler_with_the_geometry_there(parameters):
     assert [p.time for p in passes] == sorted(p.time for p in passes)
 
 
+@pytest.mark.slow
 def test_find_passes_sees_every_range_minimum():
     """Sampled brute force: every local minimum of |r − r_T| over 6 h is found."""
     t = np.arange(0.0, 6 * 3600.0, 5.0)

@@ -72,7 +72,8 @@ Controller (pitch 120° → 0° in T = 100 s, −0.8 °/s imaging phase)
 
 (10, 30, 36.667, 96.667, 100 s; θ̈m = −0.24 °/s²).  Phase k on [t_{k−1}, t_k) for k = 1..4, phase 5
 for t ≥ t4; the comparisons use t_k − 1e-9 s so that the grid points t = 10.0 and 30.0 fall in the
-later phase despite the formula rounding t1, t2 to 10.000000000000004, 30.000000000000004.  Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
+later phase despite the formula rounding t1, t2 to 10.000000000000004, 30.000000000000004.
+Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
 
     n = hypot(q0, q2), c = q0/n, s = q2/n,  θ = 2 atan2(q2, q0),
     e_x = 2 (c q1 − s q3),  e_z = 2 (c q3 + s q1),  w = w_BO_B
