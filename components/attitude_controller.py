@@ -24,7 +24,7 @@ derivative, seen in B, of the reference rate C_BR w_ref, i.e.
 d/dt(C_BR w_ref) = C_BR dw_ref − w_BR × C_BR w_ref (dw_ref = d/dt w_ref in R axes, an
 optional input).  The PD terms then only correct errors instead of carrying the maneuver.
 
-Default gains: a 150 kg·m² satellite (seed 004) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
+Default gains: a 150 kg·m² satellite ([Chang 2015]) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
 (linearised closed loop J θ̈ + kd θ̇ + kp θ = 0): kp = J ω_n² = 6 N·m/rad,
 kd = 2 ζ ω_n J = 42.4 N·m·s/rad.  A 0.2 N·m wheel then stays linear up to about 1.9°
 of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) ≈ 28 s is
@@ -42,7 +42,7 @@ from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
 from .variables import input_, output, parameter
 
-DESIGN_INERTIA = 150.0                 # kg·m² (seed 004 satellite, each axis)
+DESIGN_INERTIA = 150.0                 # kg·m² ([Chang 2015] satellite, each axis)
 DESIGN_BANDWIDTH = 0.2                 # rad/s
 DESIGN_DAMPING = 1.0 / math.sqrt(2.0)
 KP = DESIGN_INERTIA * DESIGN_BANDWIDTH ** 2

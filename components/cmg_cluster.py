@@ -1,4 +1,4 @@
-"""Cluster of six single-gimbal control-moment gyros (seeds 000/003, §3.2).
+"""Cluster of six single-gimbal control-moment gyros ([Zhao 2016] §3.2).
 
 Gyro i has gimbal axis g_i, reference spin s_i (its spin direction at δ_i = 0) and
 transverse axis t_i = g_i × s_i.  Its rotor momentum relative to the body, in B, is

@@ -1,4 +1,4 @@
-"""CMG steering law: gimbal-rate commands that deliver a wanted body torque (seed 003 §3.2).
+"""CMG steering law: gimbal-rate commands that deliver a wanted body torque ([Zhao 2016] §3.2).
 
 The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque τ_cmd needs
 ḣ = −τ_cmd − w × h = h_rotor A(δ) δ̇  (eq. 14 with the gyroscopic term kept), solved as

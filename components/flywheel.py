@@ -1,4 +1,4 @@
-"""Reaction-wheel assembly of one to four wheels (the 0.2 N·m flywheel of seed 004).
+"""Reaction-wheel assembly of one to four wheels (the 0.2 N·m flywheel of [Chang 2015]).
 
 Wheel i has the unit spin axis a_i (in B), the spin inertia J_w and the speed Ω_i relative
 to the body; its motor applies the torque m_i to the wheel (and −m_i a_i to the body).
@@ -40,7 +40,7 @@ restarts the other way.  A speed limiter in the drive clamps Ω at the momentum 
 the step.
 
 Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
-of seed 004: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
+of [Chang 2015]: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
 friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
 friction 1e-5 N·m·s/rad, an estimate (6.3 mN·m drag at 6000 rpm, 3 % of the torque).
 Three wheels along x, y, z; the 4th row of ``axis`` zero (no 4th wheel).

@@ -1,4 +1,4 @@
-"""Two rigid payloads on roll-then-pitch gimbals (seed 004, Chang et al. 2015, §1.1, §1.3).
+"""Two rigid payloads on roll-then-pitch gimbals ([Chang 2015] §1.1, §1.3).
 
 Frames (paper §1.1, Fig. 2): body B; support r, turned by the roll φ about body x; payload
 m (principal axes, origin at its centre of mass), turned by the pitch θ about the support's

@@ -1,4 +1,4 @@
-"""Five-phase pitch maneuver with a constant-rate scanning phase (seeds 000/003 §2–3.1).
+"""Five-phase pitch maneuver with a constant-rate scanning phase ([Zhao 2016] §2–3.1).
 
 Pitch θ of B relative to O goes from θ0 to θf in T with the imaging phase (t3, t4] at the
 scan rate θ̇0.  With the cruise and imaging fractions f2 = (t2 − t1)/T, f4 = (t4 − t3)/T

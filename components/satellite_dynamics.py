@@ -1,4 +1,4 @@
-"""Rigid satellite hub carrying momentum-exchange devices (seeds 000/003 eqs 1–3).
+"""Rigid satellite hub carrying momentum-exchange devices ([Zhao 2016] eqs 1–3).
 
 States: the attitude q_BI and the *total* angular momentum H_I (hub + devices, inertial
 axes).  With J the hub inertia, h the devices' momentum relative to the body (in B) and

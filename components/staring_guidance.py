@@ -1,4 +1,4 @@
-"""Staring guidance with yaw compensation: the video-SAR paper (seed 002, Liang et al. 2019,
+"""Staring guidance with yaw compensation: the video-SAR paper ([Liang 2019],
 §2.2–2.4, eqs 6–13), made exact.
 
 Line of sight (I axes; r, v satellite, r_T, v_T target, all inputs)::
@@ -233,7 +233,7 @@ def _aligned_frame(u, du, ddu, a, da, dda, what: str):
 
 
 class StaringGuidance(Model):
-    """Reference attitude staring at a ground target, with yaw compensation (seed 002)."""
+    """Reference attitude staring at a ground target, with yaw compensation ([Liang 2019])."""
 
     VARIABLES = (
         parameter("yaw_compensation", True, "1", "true: hold the footprint direction fixed "

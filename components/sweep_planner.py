@@ -1,4 +1,4 @@
-"""Sweep planner: the symmetric two-payload sweep of seed 004 (Chang et al. 2015, §1.2).
+"""Sweep planner: the symmetric two-payload sweep of [Chang 2015] (Chang et al. 2015, §1.2).
 
 Each axis (roll φ, pitch θ) of payload 1 sweeps between +A and −A at the constant rate r
 (the imaging rate) and reverses at each end in the ``turnaround_time`` τ with constant
@@ -103,7 +103,7 @@ class SweepAxis:
 
 
 class SweepPlanner(Model):
-    """Roll/pitch sweep commands of two payloads (seed 004 §1.2, Figs 3–4)."""
+    """Roll/pitch sweep commands of two payloads ([Chang 2015] §1.2, Figs 3–4)."""
 
     VARIABLES = (
         parameter("roll_amplitude", 15 * DEG, "rad", "roll sweep amplitude A (roll in +-A)",

@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     stare.add_argument("--no-yaw-compensation", action="store_true")
     stare.add_argument("--out", type=Path, default=Path("out/stare"))
 
-    analysis = commands.add_parser("mission", help="video-SAR mission analysis (seed 002): "
+    analysis = commands.add_parser("mission", help="video-SAR mission analysis ([Liang 2019]): "
                                   "frame overlap vs frame rate, Walker constellation size")
     analysis.add_argument("analysis", choices=("overlap", "walker"))
     analysis.add_argument("--frame-rates", type=float, nargs="+", default=(5.0, 25.0),
@@ -203,7 +203,7 @@ def _mission(args) -> int:
         rates = np.linspace(1.0, 30.0, 146)
         curve = mission.overlap_ratio(rates, altitude=altitude, look_angle=look)
         path = plots.lines(args.out / "overlap_vs_frame_rate.png",
-                           "Frame overlap vs frame rate (seed 002, Fig. 3)", rates,
+                           "Frame overlap vs frame rate ([Liang 2019], Fig. 3)", rates,
                            {"overlap": 100 * curve.overlap}, "overlap [%]",
                            xlabel="frame rate [Hz]")
         print(f"figure: {path}")

@@ -165,7 +165,7 @@ def test_feedforward_adds_to_the_pd_torque():
 
 
 # -- closed loops ------------------------------------------------------------------------
-J_SAT = 150.0   # kg·m², the seed-004 satellite the default gains are designed for
+J_SAT = 150.0   # kg·m², the [Chang 2015] satellite the default gains are designed for
 
 
 def second_order(theta0, t, wn, zeta):

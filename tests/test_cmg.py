@@ -11,11 +11,11 @@ from agilesat.components.model import ModelError
 from agilesat.components.cmg_steering import CmgSteering
 
 DEG = math.pi / 180
-A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of seed 003 §3.2
+A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of [Zhao 2016] §3.2
 
 
 def paper_matrices(d):
-    """A_s0 and A_c0 as printed in seed 003 §3.2 (3×6), at gimbal angles d.
+    """A_s0 and A_c0 as printed in [Zhao 2016] §3.2 (3×6), at gimbal angles d.
 
     Column 6 of A_s0 is printed (cδ06, cδ06, 0); its derivative, A_c0's column 6, is
     (−sδ06, cδ06, 0), so the second entry must be sδ06 (a misprint, used corrected).
@@ -52,7 +52,7 @@ def test_default_rotor_spin_is_the_printed_one_reversed():
     A_s, _ = paper_matrices(np.array(PAPER_DELTA0))
     cluster = CmgCluster().start()
     assert np.allclose(cluster.get("h"), -16.65 * A_s.sum(axis=1), atol=1e-12)
-    assert np.linalg.norm(cluster.get("h")) == pytest.approx(57, abs=0.5)  # DESIGN §4.1
+    assert np.linalg.norm(cluster.get("h")) == pytest.approx(57, abs=0.5)  # DESIGN.md §4.1
 
 
 def test_gimbal_axes_are_unit_and_perpendicular_to_the_spins():
@@ -79,7 +79,7 @@ def test_envelope_along_y_is_singular_and_equals_the_capacity_formula():
     assert geometry.singularity(geometry.jacobian(delta)) == pytest.approx(0, abs=1e-12)
     capacity = 16.65 * np.sqrt(1 - (GIMBAL_AXES @ y) ** 2).sum()
     assert geometry.momentum(delta)[1] == pytest.approx(capacity, rel=1e-12)
-    assert capacity == pytest.approx(79, abs=0.5)  # DESIGN §4.1
+    assert capacity == pytest.approx(79, abs=0.5)  # DESIGN.md §4.1
 
 
 def test_singularity_measure_is_det_of_A_At():

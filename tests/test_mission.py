@@ -1,4 +1,4 @@
-"""Mission analysis of the video-SAR paper (seed 002): frame overlap (eqs 1–5) and Walker
+"""Mission analysis of the video-SAR paper ([Liang 2019]): frame overlap (eqs 1–5) and Walker
 sizing (eqs 14–20), against the printed formulas, independent geometry and the paper's
 numbers under the readings stated in components/analysis/mission.py."""
 import math

@@ -1,4 +1,4 @@
-"""Payload gimbals and sweep planner (seed 004) against closed forms and first principles."""
+"""Payload gimbals and sweep planner ([Chang 2015]) against closed forms and first principles."""
 import math
 
 import numpy as np
@@ -10,7 +10,7 @@ from agilesat.components.rotations import rot1, rot2
 from agilesat.components.sweep_planner import SweepAxis, SweepPlanner
 
 DEG = math.pi / 180
-JX, JY, JZ = 45.5, 35.8, 36.7            # seed 004 §2, each payload, kg·m²
+JX, JY, JZ = 45.5, 35.8, 36.7            # [Chang 2015] §2, each payload, kg·m²
 J = np.diag([JX, JY, JZ])
 ROLL_A, ROLL_R, PITCH_A, PITCH_R = 15 * DEG, 6 * DEG, 45 * DEG, 0.6 * DEG   # §1.2
 COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")

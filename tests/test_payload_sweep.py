@@ -1,4 +1,4 @@
-"""payload_sweep end to end through the CLI (seed 004): the physics, and the paper's claims."""
+"""payload_sweep end to end through the CLI ([Chang 2015]): the physics, and the paper's claims."""
 import json
 import math
 

@@ -1,4 +1,4 @@
-"""The five-phase pitch law of seeds 000/003 (eqs 6–11) and its errata."""
+"""The five-phase pitch law of [Zhao 2016] (eqs 6–11) and its errata."""
 import math
 
 import numpy as np

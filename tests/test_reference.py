@@ -127,7 +127,7 @@ def test_jacobian_is_derivative_of_spin():
 
 def test_initial_momentum_bias():
     h0 = sp.cluster_momentum(sp.DELTA0)
-    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)   # DESIGN §4.1: "about 57 N m s"
+    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)   # DESIGN.md §4.1: "about 57 N m s"
     assert sp.singularity_measure(np.array(sp.DELTA0))[0] > 0.5
 
 
@@ -284,7 +284,7 @@ def test_total_angular_momentum_is_conserved(step):
 
 @pytest.mark.slow
 def test_outputs_consistent_with_hub_equation():
-    """Finite differences of the outputs satisfy J ẇ = −w × (J w + h) − ḣ (DESIGN §2)."""
+    """Finite differences of the outputs satisfy J ẇ = −w × (J w + h) − ḣ (DESIGN.md §2)."""
     r = run(1e-3)
     dt = 1e-3
     w, h = r["w_BI_B"], r["h"]

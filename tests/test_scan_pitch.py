@@ -115,7 +115,7 @@ def test_literal_spin_is_diagnosed_not_flown_silently(fmus, tmp_path):
     assert any("exceeds the rate limit" in m for m in summary["fmu_messages"])  # the cluster's
     need = float(diagnosis.split("needs a cluster momentum of ")[1].split(" ")[0])
     holds = float(diagnosis.split("holds at most ")[1].split(" ")[0])
-    assert need == pytest.approx(86, abs=1) and holds == pytest.approx(79, abs=1)  # DESIGN
+    assert need == pytest.approx(86, abs=1) and holds == pytest.approx(79, abs=1)  # DESIGN.md §4.1
 
 
 @pytest.mark.parametrize("step", [0.05])

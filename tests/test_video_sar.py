@@ -1,4 +1,4 @@
-"""video_sar end to end through the CLI (seed 002): the pass, the pointing, the footprint.
+"""video_sar end to end through the CLI ([Liang 2019]): the pass, the pointing, the footprint.
 
 Truth here is computed in the test from the recorded positions and attitude with plain
 NumPy (the DESIGN.md §2 conventions written out again), not with the toolkit's functions.

@@ -1,5 +1,5 @@
 """``scan_pitch``: CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase
-(seeds 000/003, DESIGN.md §4.1).
+([Zhao 2016], DESIGN.md §4.1).
 
 Variant ``literal_spin``: the rotor spin exactly as printed in the paper's A_s0.  The
 cluster momentum bias then lies along +y and the maneuver pushes it beyond the cluster's

@@ -1,5 +1,5 @@
 """``video_sar``: an agile SAR satellite stares at a ground target for 200 s, with yaw
-compensation (seed 002, Liang et al. 2019, §2 and §4; DESIGN.md §4.3).
+compensation ([Liang 2019], §2 and §4; DESIGN.md §4.3).
 
 The pass.  The paper's Table 1 (its orbit) is missing; its text gives 567 km,
 sun-synchronous, the target (Sasebo, 33.16° N 129.72° E), zero Doppler at 2016-11-25

@@ -1,6 +1,6 @@
 r"""Independent monolithic reference simulation of the ``scan_pitch`` scenario.
 
-Written from /work/shared/DESIGN.md §2 and §4.1 and the equations below only; it imports
+Written from DESIGN.md §2 and §4.1 and the equations below only; it imports
 nothing from ``components/``, ``fmus/`` or ``orchestration/``, so it can be used to check the
 co-simulation (FMUs + master).
 
@@ -33,7 +33,7 @@ States ``q_BI`` and the total inertial angular momentum ``H_I`` (constant)::
 
     w_BI_B = J⁻¹ (C_BI H_I − h),     Ḣ_I = 0
 
-which is the hub equation ``J ẇ = −w × (J w + h) − ḣ`` of DESIGN §2 written in conserved form.
+which is the hub equation ``J ẇ = −w × (J w + h) − ḣ`` of DESIGN.md §2 written in conserved form.
 Outputs: ``q_BO = q_OI* ⊗ q_BI``, ``w_BO_B = w_BI_B − C_BO w_OI_O``.
 Initial: ``q_BO(0)`` = Euler (0, 120°, 0); ``q_BI(0) = q_OI(0) ⊗ q_BO(0)``;
 ``w_BI_B(0) = C_BO(0) w_OI_O``; ``H_I(0) = C_BI(0)ᵀ (J w_BI_B(0) + h(0))``.
