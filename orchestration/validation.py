@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .agreement import disagreements
 from .fmu import Description
 from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
@@ -82,6 +83,7 @@ def check_system(system: SystemFile, instances: dict[str, Description],
             if (inst.name, name) not in sources:
                 problems.append(f"{where}:{line}: component {inst.name}: required input "
                                 f"{inst.name}.{name} is not connected")
+    problems += disagreements(instances, bindings, sources)
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
     return Plan(schedule(instances, sources, "feedthrough", where),

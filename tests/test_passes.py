@@ -215,3 +215,26 @@ def test_pass_geometry_is_a_plain_record():
     assert isinstance(g, PassGeometry) and g.visible
     assert g.incidence_angle == pytest.approx(math.pi / 2 - g.elevation, abs=1e-15)
     assert g.incidence_angle > g.look_angle              # Earth curvature
+
+
+@pytest.mark.slow
+def test_the_frozen_video_sar_design_values_are_the_solved_ones():
+    """video_sar ships its pass, cluster start and initial state as literals (the committed
+    .ssd must not depend on the solver's last bits); solving again reproduces them."""
+    from agilesat.components.analysis import mission
+    from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0,
+                                                 ClusterGeometry, zero_momentum_angles)
+    from agilesat.orchestration.scenarios import video_sar as v
+    solved = design_pass(mission.VIDEO_SAR_ALTITUDE, *v.TARGET, v.ZERO_DOPPLER,
+                         mission.VIDEO_SAR_LOOK_ANGLE, "right", "ascending", t0=v.HALF_STARE)
+    assert solved.keys() == v.ORBIT.keys()
+    for key, value in solved.items():
+        assert value == v.ORBIT[key] if not isinstance(value, float) else \
+            abs(value - v.ORBIT[key]) <= 5e-13, key
+    delta = zero_momentum_angles(ClusterGeometry(v.H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS),
+                                 PAPER_DELTA0)
+    assert np.max(np.abs(delta - v.DELTA0)) <= 5e-10
+    for guidance, frozen in ((v.GUIDANCE, v.ON_REFERENCE),
+                             (dict(v.GUIDANCE, yaw_compensation=False), v.ON_REFERENCE_YAW_0)):
+        state = v.initial_state(v.ORBIT, guidance)
+        assert np.max(np.abs(np.subtract(state, frozen))) <= 5e-13

@@ -16,6 +16,7 @@ from ...components.orbit_environment import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCL
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
 from . import Scenario, relative_drift, summarize
+from .common import cmg_hardware, hub_inertia
 from .. import plots
 
 DEG = math.pi / 180
@@ -45,18 +46,16 @@ PARAMETERS = {
     "OrbitEnvironment.semi_major_axis": WGS84_A + SCAN_PITCH_ALTITUDE,
     "OrbitEnvironment.eccentricity": 0.0,
     "OrbitEnvironment.inclination": SCAN_PITCH_INCLINATION,
-    "SatelliteDynamics.inertia": INERTIA * np.eye(3),
+    **hub_inertia(INERTIA * np.eye(3), "PitchManeuverController"),
     "SatelliteDynamics.attitude0": [0.0, PROFILE.theta0, 0.0],
     "SatelliteDynamics.rate0": [0.0, 0.0, 0.0],
     "SatelliteDynamics.gravity_gradient": True,
-    "CmgCluster.h_rotor": H_ROTOR,
+    **cmg_hardware(h_rotor=H_ROTOR),
     "CmgCluster.delta0": PAPER_DELTA0,
     "CmgCluster.rate_limit": RATE_LIMIT,
     "CmgCluster.accel_limit": 0.5,
-    "CmgSteering.h_rotor": H_ROTOR,
     "CmgSteering.law": 0,
     "CmgSteering.null_gain": 0.0,
-    "PitchManeuverController.inertia": INERTIA,
     "PitchManeuverController.pitch0": PROFILE.theta0,
     "PitchManeuverController.pitch_final": PROFILE.theta_f,
     "PitchManeuverController.duration": PROFILE.duration,
@@ -67,7 +66,7 @@ PARAMETERS = {
 
 VARIANTS = {
     "literal_spin": ("rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
-                     {"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS}),
+                     cmg_hardware(spin_ref=PAPER_SPINS)),
 }
 
 #: the paper's results (Figs 4–11 and their text), SI
