@@ -2,8 +2,9 @@
 
 A CMG steering law computes gimbal rates for a cluster geometry: its ``h_rotor``,
 ``gimbal_axis`` and ``spin_ref`` must be the cluster's.  A controller's feedforward uses the
-hub inertia: AttitudeController's ``inertia`` must be the satellite's (or zero: no
-acceleration feedforward), PitchManeuverController's ``inertia`` its pitch-axis element.
+hub inertia: AttitudeController's ``inertia`` must be the satellite's (when its
+``acceleration_feedforward`` is on), PitchManeuverController's ``inertia`` its pitch-axis
+element.
 Two instances are paired by the connection that makes them work together (the steering
 reads the cluster's ``h``; the controller reads the satellite's rates).
 
@@ -22,14 +23,14 @@ from dataclasses import dataclass
 class Rule:
     """``a.a_parameter`` == ``b.b_parameter`` (scalar names, ``[i,j]`` selecting elements),
     for every pair of instances of FMUs ``a``, ``b`` joined by ``link`` = (output of a,
-    input of b); ``or_zero``: b's values may all be zero instead (the feature is off)."""
+    input of b); ``when``: only if b's Boolean parameter of that name is true."""
 
     a: str
     a_parameter: str
     b: str
     b_parameter: str
     link: tuple[str, str]
-    or_zero: bool = False
+    when: str | None = None
     why: str = ""
 
 
@@ -38,7 +39,7 @@ RULES = (
            why="the steering law must be computed for the cluster it steers")
       for name in ("h_rotor", "gimbal_axis", "spin_ref")),
     Rule("SatelliteDynamics", "inertia", "AttitudeController", "inertia",
-         ("w_BI_B[1]", "w_BI_B[1]"), or_zero=True,
+         ("w_BI_B[1]", "w_BI_B[1]"), when="acceleration_feedforward",
          why="the acceleration feedforward J ẇ_ref + ω × J ω needs the hub inertia"),
     Rule("SatelliteDynamics", "inertia[2,2]", "PitchManeuverController", "inertia",
          ("w_BO_B[2]", "w_BO_B[2]"),
@@ -58,18 +59,17 @@ def disagreements(instances: dict, bindings: list, sources: dict) -> list[str]:
                 continue
             ours = _values(instances[a], rule.a_parameter, a, bound)
             theirs = _values(instances[b], rule.b_parameter, b, bound)
-            if ours is None or theirs is None:          # set at run time: the user's choice
-                continue
-            if list(ours.values()) == list(theirs.values()) or (
-                    rule.or_zero and not any(theirs.values())):
+            switch = _values(instances[b], rule.when, b, bound) if rule.when else {"": 1.0}
+            if ours is None or theirs is None or switch is None:   # set at run time: the
+                continue                                           # user's choice
+            if list(ours.values()) == list(theirs.values()) or not all(switch.values()):
                 continue
             differ = [f"{a}.{x} = {ours[x]!r} vs {b}.{z} = {theirs[z]!r}"
                       for x, z in zip(ours, theirs) if ours[x] != theirs[z]]
             origin = next((bound[(b, z)].origin for z in theirs if (b, z) in bound),
                           f"{b}'s start values")
             problems.append(f"{origin}: {b}.{rule.b_parameter} must equal "
-                            f"{a}.{rule.a_parameter} ({rule.why}"
-                            f"{'; or be zero' if rule.or_zero else ''}): "
+                            f"{a}.{rule.a_parameter} ({rule.why}): "
                             + "; ".join(differ[:3]) + (" ..." if len(differ) > 3 else ""))
     return problems
 
@@ -84,6 +84,15 @@ def _values(description, parameter: str, instance: str, bound: dict) -> dict | N
         binding = bound.get((instance, name))
         if binding is not None and binding.origin.startswith("--set"):
             return None
-        values[name] = float(binding.value if binding is not None
-                             else description.variables[name].start)
+        value = binding.value if binding is not None else description.variables[name].start
+        values[name] = _number(value)
     return values
+
+
+def _number(value) -> float:
+    """A parameter value as a number (a start value from modelDescription.xml is text;
+    Booleans "true"/"false" are 1/0)."""
+    if isinstance(value, str):
+        return {"true": 1.0, "false": 0.0}[value] if value in ("true", "false") \
+            else float(value)
+    return float(value)

@@ -59,14 +59,12 @@ def test_a_system_file_that_breaks_an_agreement_is_refused(fmus, component, name
     assert f"{line}: {component}." in str(refused.value)
 
 
-def test_the_feedforward_inertia_is_the_satellites_or_zero(fmus):
+def test_the_feedforward_inertia_is_the_satellites_when_the_feedforward_is_on(fmus):
     ssd, instances = system("video_sar", fmus)
     sources = sources_of(ssd)
-    off = changed(ssd.parameters, "AttitudeController", "inertia[1,1]", 0.0)
-    for i in (2, 3):
-        off = changed(off, "AttitudeController", f"inertia[{i},{i}]", 0.0)
-    assert disagreements(instances, off, sources) == []                 # no feedforward
     wrong = changed(ssd.parameters, "AttitudeController", "inertia[3,3]", 1000.0)
+    off = changed(wrong, "AttitudeController", "acceleration_feedforward", False)
+    assert disagreements(instances, off, sources) == []                 # not used
     [problem] = disagreements(instances, wrong, sources)
     assert "AttitudeController.inertia must equal SatelliteDynamics.inertia" in problem
     assert "AttitudeController.inertia[3,3] = 1000.0" in problem

@@ -275,7 +275,7 @@ def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
     n = np.array([1.0, 2.0, 2.0]) / 3.0
     body = SatelliteDynamics(inertia=J_TILTED, gravity_gradient=False).start()
     ctrl = AttitudeController(kp=[1.0] * 3, kd=[30.0] * 3,
-                              inertia=J_TILTED if feedforward else np.zeros((3, 3))).start()
+                              inertia=J_TILTED, acceleration_feedforward=feedforward).start()
     worst = 0.0
     for k in range(int(round(T / dt)) + 1):
         t = k * dt
@@ -303,15 +303,20 @@ def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_referenc
     assert track_spin_up(True, dt=0.005) < 0.6 * with_ff        # and shrinks with dt
 
 
-def test_no_feedforward_without_an_inertia():
-    """Default inertia 0: dw_ref does nothing (the law of DESIGN.md §3)."""
+def test_no_acceleration_feedforward_unless_switched_on():
+    """Default off: dw_ref and the inertia do nothing (the law of DESIGN.md §3)."""
     q = random_quat()
     plain = control(q, w_BI_B=(0.01, -0.02, 0.03))
-    c = AttitudeController()
+    c = AttitudeController(inertia=J_TILTED)
     for name, value in (("q_BI", q), ("w_BI_B", (0.01, -0.02, 0.03)), ("dw_ref", (1.0, 2.0, 3.0))):
         c.set(name, value)
     c.start()
     assert np.array_equal(c.get("tau_cmd"), plain.get("tau_cmd"))
+
+
+def test_acceleration_feedforward_without_an_inertia_is_rejected():
+    with pytest.raises(ModelError, match="acceleration_feedforward is on but inertia is zero"):
+        AttitudeController(acceleration_feedforward=True).start()
 
 
 def test_asymmetric_feedforward_inertia_is_rejected():
@@ -332,7 +337,8 @@ def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
     def dw_ref(t):
         return np.array([0.006 * math.cos(0.3 * t), -0.006 * math.sin(0.2 * t), 0.002])
 
-    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED).start()
+    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED,
+                              acceleration_feedforward=True).start()
 
     def f(t, x):
         qB, w, qR = x[:4], x[4:7], x[7:]

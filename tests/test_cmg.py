@@ -8,7 +8,7 @@ from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_D
                                      ClusterGeometry, CmgCluster, servo_step,
                                      zero_momentum_angles)
 from agilesat.components.model import ModelError
-from agilesat.components.cmg_steering import CmgSteering
+from agilesat.components.cmg_steering import PSEUDO_INVERSE, SR_INVERSE, CmgSteering
 
 DEG = math.pi / 180
 A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of [Zhao 2016] §3.2
@@ -162,8 +162,8 @@ def test_singularity_robust_inverse_bounds_the_rates_near_a_singularity():
     y = np.array([0.0, 1.0, 0.0])
     delta = np.arctan2(geometry.T @ y, geometry.S @ y) + 1e-4   # just off the envelope
     tau = np.array([0.0, -1.0, 0.0])                               # push further along +y
-    pinv = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=0).get("delta_dot_cmd")
-    robust = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=1).get("delta_dot_cmd")
+    pinv = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=PSEUDO_INVERSE).get("delta_dot_cmd")
+    robust = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=SR_INVERSE).get("delta_dot_cmd")
     assert np.abs(pinv).max() > 50 * np.abs(robust).max()
     assert np.abs(robust).max() < 1.0
 
@@ -178,7 +178,8 @@ def test_exact_singularity_gives_finite_rates_and_a_warning():
 
 
 def test_unknown_steering_law_is_rejected():
-    with pytest.raises(ModelError, match="law must be 0"):
+    with pytest.raises(ModelError, match=r"law must be one of 0 \(PSEUDO_INVERSE\), "
+                                         r"1 \(SR_INVERSE\), got 2"):
         CmgSteering(law=2).start()
 
 

@@ -19,7 +19,8 @@ STEP = 0.1
 #: parameters that switch on every path the table declares (the defaults leave some off)
 PATHS_ON = {
     "PayloadGimbals": {"accel_inputs": [True]},                         # hdot <- accel_cmd
-    "AttitudeController": {f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)},  # tau <- dw_ref
+    "AttitudeController": {"acceleration_feedforward": [True],             # tau <- dw_ref
+                           **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)}},
     "StaringGuidance": {"yaw_compensation": [False]},      # q_ref <- q_OI after the capture
 }
 #: declared, but measured not to feed through: the reference frame's orientation follows

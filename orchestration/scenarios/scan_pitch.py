@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ...components.cmg_cluster import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
+from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.orbit_environment import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
@@ -54,7 +55,7 @@ PARAMETERS = {
     "CmgCluster.delta0": PAPER_DELTA0,
     "CmgCluster.rate_limit": RATE_LIMIT,
     "CmgCluster.accel_limit": 0.5,
-    "CmgSteering.law": 0,
+    "CmgSteering.law": PSEUDO_INVERSE,
     "CmgSteering.null_gain": 0.0,
     "PitchManeuverController.pitch0": PROFILE.theta0,
     "PitchManeuverController.pitch_final": PROFILE.theta_f,

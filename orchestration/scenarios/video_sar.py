@@ -41,6 +41,7 @@ import numpy as np
 from ...components.analysis.mission import (VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT,
                                             VIDEO_SAR_TARGET_LON)
 from ...components.analysis.passes import find_passes, look_geometry
+from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
@@ -136,13 +137,14 @@ def parameters(orbit: dict, guidance: dict, on_reference: tuple | None = None) -
         "AttitudeController.kp": [INERTIA * BANDWIDTH**2] * 3,
         "AttitudeController.kd": [2 * DAMPING * BANDWIDTH * INERTIA] * 3,
         **hub_inertia(INERTIA * np.eye(3), "AttitudeController"),
+        "AttitudeController.acceleration_feedforward": True,
         "SatelliteDynamics.attitude0": attitude0,
         "SatelliteDynamics.rate0": rate0,
         "SatelliteDynamics.gravity_gradient": True,
         **cmg_hardware(h_rotor=H_ROTOR),
         "CmgCluster.delta0": DELTA0,
         "CmgCluster.rate_limit": RATE_LIMIT,
-        "CmgSteering.law": 0,
+        "CmgSteering.law": PSEUDO_INVERSE,
     }
 
 
@@ -154,7 +156,7 @@ VARIANTS = {
                              **dict(zip(("SatelliteDynamics.attitude0",
                                          "SatelliteDynamics.rate0"), ON_REFERENCE_YAW_0))}),
     "no_feedforward": ("PD attitude law alone, no feedforward of the reference acceleration",
-                       {"AttitudeController.inertia": np.zeros((3, 3))}),
+                       {"AttitudeController.acceleration_feedforward": False}),
 }
 
 
