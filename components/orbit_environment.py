@@ -109,9 +109,6 @@ MU_EARTH = 3.986004418e14                # m3/s2, GM (atmosphere included)
 J2 = 1.08262668e-3
 J2_RADIUS = 6378137.0                    # m
 
-SCAN_PITCH_ALTITUDE = 681000.0           # m, DESIGN.md §4.1
-SCAN_PITCH_INCLINATION = math.radians(98.1)
-
 _KEPLER_MAX_ITER = 50
 
 #: step (s) of the central differences that give w_OI_O on the SGP4 path
@@ -155,11 +152,12 @@ class OrbitEnvironment(Model):
     rotating-Earth ground target; the Earth angle from GMST when an epoch is given."""
 
     VARIABLES = (
-        parameter("semi_major_axis", WGS84_A + SCAN_PITCH_ALTITUDE, "m",
+        # defaults: the [Zhao 2016] orbit, 681 km, 98.1° (DESIGN.md §4.1)
+        parameter("semi_major_axis", WGS84_A + 681000.0, "m",
                   "semi-major axis a (mean value when j2 is set); not used with a TLE",
                   display_unit="km"),
         parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1; not used with a TLE"),
-        parameter("inclination", SCAN_PITCH_INCLINATION, "rad", "inclination i, 0 <= i <= pi; "
+        parameter("inclination", math.radians(98.1), "rad", "inclination i, 0 <= i <= pi; "
                   "not used with a TLE", display_unit="deg"),
         parameter("raan", 0.0, "rad", "right ascension of the ascending node at t = 0; not "
                   "used with a TLE", display_unit="deg"),

@@ -4,11 +4,12 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS,
+from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES,
                                      ClusterGeometry, CmgCluster, servo_step,
                                      zero_momentum_angles)
 from agilesat.components.model import ModelError
 from agilesat.components.cmg_steering import PSEUDO_INVERSE, SR_INVERSE, CmgSteering
+from agilesat.orchestration.scenarios.scan_pitch import PAPER_DELTA0, PAPER_SPINS
 
 DEG = math.pi / 180
 A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of [Zhao 2016] §3.2

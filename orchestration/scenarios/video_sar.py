@@ -96,7 +96,7 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
 
 #: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set,
 #: frozen: ``zero_momentum_angles(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS),
-#: PAPER_DELTA0)`` rounded to 9 digits (tests/test_passes.py solves it again)
+#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/test_passes.py solves it again)
 DELTA0 = [0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566]
 #: (attitude0, rate0) on the reference at t = 0, frozen: ``initial_state(ORBIT, GUIDANCE)``
 #: and with yaw 0 (tests/test_passes.py computes them again)
