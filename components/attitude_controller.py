@@ -18,9 +18,9 @@ never exceeds π.  The last term cancels the torque −hdot_ff − w_BI_B × h_f
 momentum device (h_ff relative to the body, in B) exerts on the body (DESIGN.md §2).
 
 Extension (not in DESIGN.md §3): with ``acceleration_feedforward`` on (default off) and the
-hub ``inertia`` J given, the last line feeds forward the torque that makes the body follow R exactly: the hub equation
-J ẇ = −w × J w + τ (the steering law supplies −w × h of the actuators) with ẇ the
-derivative, seen in B, of the reference rate C_BR w_ref, i.e.
+hub ``inertia`` J given, the last line feeds forward the torque that makes the body follow
+R exactly: the hub equation J ẇ = −w × J w + τ (the steering law supplies −w × h of the
+actuators) with ẇ the derivative, seen in B, of the reference rate C_BR w_ref, i.e.
 d/dt(C_BR w_ref) = C_BR dw_ref − w_BR × C_BR w_ref (dw_ref = d/dt w_ref in R axes, an
 optional input).  The PD terms then only correct errors instead of carrying the maneuver.
 
