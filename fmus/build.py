@@ -106,7 +106,7 @@ def _entry_module(name: str, package: str) -> str:
         "# globals, then drops a reference to that dict that it never took (Py_DECREF of the\n"
         "# borrowed PyModule_GetDict result; NTNU-IHB/PythonFMU#228): the dict would be freed\n"
         "# while in use.  Each run adds the reference back.\n"
-        "# The slave class is the only Fmi2Slave subclass in this module: pythonfmu's.\n"
+        "# pythonfmu instantiates the Fmi2Slave subclass it finds here, made by slave_class.\n"
         "import ctypes\n"
         "ctypes.pythonapi.Py_IncRef(ctypes.py_object(globals()))\n"
         f"from {package}.fmus import slave_class as _slave_class  # noqa: E402\n"

@@ -38,7 +38,8 @@ def test_every_variable_has_a_description_and_every_real_a_declared_unit(fmus, n
             assert v.unit in units, v.name
 
 
-def test_output_dependencies_are_the_true_feedthrough(fmus):
+def test_model_structure_declares_the_dependencies_of_the_variable_tables(fmus):
+    """What the built modelDescription.xml declares (measured: tests/test_feedthrough.py)."""
     md = read_model_description(str(fmus["SatelliteDynamics"]))
     deps = {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
     assert deps["q_BI[1]"] == set() and deps["H_I[2]"] == set()          # states
