@@ -17,14 +17,14 @@ way flips (no continuous error field exists on the whole rotation group); its ma
 never exceeds π.  The last term cancels the torque −hdot_ff − w_BI_B × h_ff that a known
 momentum device (h_ff relative to the body, in B) exerts on the body (DESIGN.md §2).
 
-Extension (not in DESIGN.md §3): with the hub ``inertia`` J given (default 0: none), the
-last line feeds forward the torque that makes the body follow R exactly: the hub equation
-J ẇ = −w × J w + τ (the steering law supplies −w × h of the actuators) with ẇ the
-derivative, seen in B, of the reference rate C_BR w_ref, i.e.
+Extension (not in DESIGN.md §3): with ``acceleration_feedforward`` on (default off) and the
+hub ``inertia`` J given, the last line feeds forward the torque that makes the body follow
+R exactly: the hub equation J ẇ = −w × J w + τ (the steering law supplies −w × h of the
+actuators) with ẇ the derivative, seen in B, of the reference rate C_BR w_ref, i.e.
 d/dt(C_BR w_ref) = C_BR dw_ref − w_BR × C_BR w_ref (dw_ref = d/dt w_ref in R axes, an
 optional input).  The PD terms then only correct errors instead of carrying the maneuver.
 
-Default gains: a 150 kg·m² satellite (seed 004) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
+Default gains: a 150 kg·m² satellite ([Chang 2015]) at ω_n = 0.2 rad/s, ζ = 1/√2 on each axis
 (linearised closed loop J θ̈ + kd θ̇ + kp θ = 0): kp = J ω_n² = 6 N·m/rad,
 kd = 2 ζ ω_n J = 42.4 N·m·s/rad.  A 0.2 N·m wheel then stays linear up to about 1.9°
 of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) ≈ 28 s is
@@ -42,7 +42,7 @@ from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
 from .variables import input_, output, parameter
 
-DESIGN_INERTIA = 150.0                 # kg·m² (seed 004 satellite, each axis)
+DESIGN_INERTIA = 150.0                 # kg·m² ([Chang 2015] satellite, each axis)
 DESIGN_BANDWIDTH = 0.2                 # rad/s
 DESIGN_DAMPING = 1.0 / math.sqrt(2.0)
 KP = DESIGN_INERTIA * DESIGN_BANDWIDTH ** 2
@@ -61,7 +61,10 @@ class AttitudeController(Model):
         parameter("kd", KD, "N.m.s/rad", "rate gain per body axis (per rad/s of rate_error)",
                   shape=(3,)),
         parameter("inertia", np.zeros((3, 3)), "kg.m2", "hub inertia J for the "
-                  "acceleration feedforward, in B (0: no feedforward)", shape=(3, 3)),
+                  "acceleration feedforward, in B", shape=(3, 3)),
+        parameter("acceleration_feedforward", False, "1", "true: feed forward "
+                  "J d/dt(C_BR w_ref) + w_BI_B x J w_BI_B with inertia (which must then be "
+                  "non-zero)", type="Boolean"),
         input_("q_BI", "1", "attitude of B relative to I", IDENTITY_Q, shape=(4,)),
         input_("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
                display_unit="deg/s"),
@@ -93,7 +96,11 @@ class AttitudeController(Model):
         J = self.p.inertia
         if not np.all(np.isfinite(J)) or not np.allclose(J, J.T, rtol=1e-9, atol=0.0):
             raise ModelError(f"inertia must be a finite symmetric matrix, got {J.tolist()}")
-        self.inertia = tuple(map(tuple, J.tolist())) if J.any() else None
+        if self.p.acceleration_feedforward and not J.any():
+            raise ModelError("acceleration_feedforward is on but inertia is zero: set the "
+                             "hub inertia it needs")
+        self.inertia = tuple(map(tuple, J.tolist())) if self.p.acceleration_feedforward \
+            else None
         self.t = t0
 
     def step(self, t, dt):

@@ -1,4 +1,4 @@
-"""Cluster of six single-gimbal control-moment gyros (seeds 000/003, §3.2).
+"""Cluster of six single-gimbal control-moment gyros ([Zhao 2016] §3.2).
 
 Gyro i has gimbal axis g_i, reference spin s_i (its spin direction at δ_i = 0) and
 transverse axis t_i = g_i × s_i.  Its rotor momentum relative to the body, in B, is
@@ -33,7 +33,6 @@ from .variables import input_, output, parameter
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)               # α0
 PYRAMID_AZIMUTHS = np.radians([90.0, 162.0, 234.0, 306.0, 18.0])
-PAPER_DELTA0 = (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0)
 
 
 def five_pyramid(alpha0: float = PYRAMID_HALF_ANGLE, azimuths=PYRAMID_AZIMUTHS):
@@ -49,8 +48,8 @@ def five_pyramid(alpha0: float = PYRAMID_HALF_ANGLE, azimuths=PYRAMID_AZIMUTHS):
     return G, S
 
 
-GIMBAL_AXES, PAPER_SPINS = five_pyramid()
-DEFAULT_SPINS = -PAPER_SPINS  # reversed rotor spin (DESIGN.md §4.1)
+GIMBAL_AXES, _PRINTED_SPINS = five_pyramid()
+DEFAULT_SPINS = -_PRINTED_SPINS  # the printed rotor spin reversed (DESIGN.md §4.1)
 
 
 class ClusterGeometry:
@@ -191,7 +190,8 @@ class CmgCluster(Model):
         parameter("spin_ref", DEFAULT_SPINS, "1",
                   "rotor spin direction of each gyro at zero gimbal angle, in B (rows; "
                   "default: the paper's A_s0 spin reversed)", shape=(6, 3)),
-        parameter("delta0", PAPER_DELTA0, "rad", "initial gimbal angles", shape=(6,),
+        parameter("delta0", (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0),
+                  "rad", "initial gimbal angles", shape=(6,),
                   display_unit="deg"),
         parameter("rate_limit", 0.6, "rad/s", "gimbal rate limit", display_unit="deg/s"),
         parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit",

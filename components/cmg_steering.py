@@ -1,9 +1,11 @@
-"""CMG steering law: gimbal-rate commands that deliver a wanted body torque (seed 003 §3.2).
+"""CMG steering law: gimbal-rate commands that deliver a wanted body torque ([Zhao 2016] §3.2).
 
 The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque τ_cmd needs
 ḣ = −τ_cmd − w × h = h_rotor A(δ) δ̇  (eq. 14 with the gyroscopic term kept), solved as
 
-``law = 0`` — pseudo-inverse with null motion (the paper)::
+``law`` names the solution (an Integer parameter; the names are the constants below):
+
+``law = 0`` (PSEUDO_INVERSE) — pseudo-inverse with null motion (the paper)::
 
     δ̇ = Aᵀ(AAᵀ)⁻¹ ḣ / h_rotor + ε (1 − Aᵀ(AAᵀ)⁻¹A) ∂Q/∂δ,   Q = det(AAᵀ)
     ∂Q/∂δ_i = −2 Q a_iᵀ (AAᵀ)⁻¹ σ_i          (σ_i: spin of gyro i, ∂a_i/∂δ_i = −σ_i)
@@ -12,7 +14,7 @@ The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque 
   exact singularity (Q below 1e-12) the inverse is replaced by the SVD pseudo-inverse,
   which leaves the torque along the singular direction undelivered.
 
-``law = 1`` — singularity-robust inverse (Nakamura & Hanafusa 1986; Bedrossian 1990)::
+``law = 1`` (SR_INVERSE) — singularity-robust inverse (Nakamura & Hanafusa 1986; Bedrossian 1990)::
 
     δ̇ = Aᵀ(AAᵀ + λ1)⁻¹ ḣ / h_rotor,   λ = λ0 exp(−μ Q)
 
@@ -24,11 +26,15 @@ import math
 
 import numpy as np
 
-from .cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, ClusterGeometry, det3,
+from .cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, CmgCluster, ClusterGeometry, det3,
                           gram, inv3)
 from .rotations import rotate
 from .model import Model, ModelError
 from .variables import input_, output, parameter
+
+#: values of the ``law`` parameter
+PSEUDO_INVERSE, SR_INVERSE = 0, 1
+LAWS = {PSEUDO_INVERSE: "PSEUDO_INVERSE", SR_INVERSE: "SR_INVERSE"}
 
 SINGULAR_Q = 1e-12
 _INPUTS = ("tau_cmd", "delta", "w_BI_B", "h")
@@ -36,7 +42,7 @@ H_ROTOR = 16.65
 #: start values of the delta and h inputs: the cluster's default (CmgCluster.delta0, the
 #: paper's δ0, Q = 1.10) and its momentum there, so that the FMU at its defaults is the
 #: steering of a default cluster at t = 0, away from any singularity
-DELTA_START = PAPER_DELTA0
+DELTA_START = tuple(next(v.start for v in CmgCluster.VARIABLES if v.name == "delta0"))
 H_START = tuple(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS).momentum(DELTA_START)
                 .tolist())
 
@@ -51,8 +57,9 @@ class CmgSteering(Model):
         parameter("spin_ref", DEFAULT_SPINS, "1",
                   "rotor spin direction of each gyro at zero gimbal angle, in B (rows)",
                   shape=(6, 3)),
-        parameter("law", 0, "1", "0: pseudo-inverse with null motion; 1: singularity-robust "
-                  "inverse", type="Integer"),
+        parameter("law", PSEUDO_INVERSE, "1", "steering law: 0 = PSEUDO_INVERSE "
+                  "(pseudo-inverse with null motion), 1 = SR_INVERSE (singularity-robust "
+                  "inverse)", type="Integer"),
         parameter("null_gain", 0.0, "1", "null-motion gain epsilon (law 0)"),
         parameter("sr_lambda0", 0.01, "1", "singularity-robust weight lambda0 (law 1)"),
         parameter("sr_mu", 10.0, "1", "singularity-robust decay mu in lambda0 exp(-mu Q)"),
@@ -69,9 +76,9 @@ class CmgSteering(Model):
 
     def initialize(self, t0):
         p = self.p
-        if p.law not in (0, 1):
-            raise ModelError(f"law must be 0 (pseudo-inverse) or 1 (singularity-robust), "
-                             f"got {p.law}")
+        if p.law not in LAWS:
+            raise ModelError("law must be one of " + ", ".join(
+                f"{value} ({name})" for value, name in LAWS.items()) + f", got {p.law}")
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
@@ -92,15 +99,15 @@ class CmgSteering(Model):
         hx, hy, hz = u.h.tolist()
         tx, ty, tz = u.tau_cmd.tolist()
         h_dot = (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
-        if self.law == 1:
+        if self.law == SR_INVERSE:
             lam = self.sr_lambda0 * math.exp(-self.sr_mu * Q)
             M = tuple(tuple(m + (lam if i == j else 0.0) for j, m in enumerate(row))
                       for i, row in enumerate(M))
-        if self.law == 1 or Q > SINGULAR_Q:
+        if self.law == SR_INVERSE or Q > SINGULAR_Q:
             M_inv = inv3(M)
             v = rotate(M_inv, h_dot)
             rates = [(a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) / g.h_rotor for a in columns]
-            if self.law == 0 and self.null_gain:
+            if self.law == PSEUDO_INVERSE and self.null_gain:
                 rates = [r + self.null_gain * n
                          for r, n in zip(rates, _null_motion(columns, M_inv, Q, spins))]
         else:

@@ -1,4 +1,4 @@
-"""Reaction-wheel assembly of one to four wheels (the 0.2 N·m flywheel of seed 004).
+"""Reaction-wheel assembly of one to four wheels (the 0.2 N·m flywheel of [Chang 2015]).
 
 Wheel i has the unit spin axis a_i (in B), the spin inertia J_w and the speed Ω_i relative
 to the body; its motor applies the torque m_i to the wheel (and −m_i a_i to the body).
@@ -40,7 +40,7 @@ restarts the other way.  A speed limiter in the drive clamps Ω at the momentum 
 the step.
 
 Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
-of seed 004: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
+of [Chang 2015]: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
 friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
 friction 1e-5 N·m·s/rad, an estimate (6.3 mN·m drag at 6000 rpm, 3 % of the torque).
 Three wheels along x, y, z; the 4th row of ``axis`` zero (no 4th wheel).
@@ -179,76 +179,90 @@ class Flywheel(Model):
 
     def output(self):
         torques, accel_torques, limited, _ = self._drive()
-        J, y = self.inertia, self.y
-        hx = hy = hz = dx = dy = dz = 0.0
-        for (ax, ay, az), w, n in zip(self.axes, self.omega, accel_torques):
-            hx += ax * w
-            hy += ay * w
-            hz += az * w
+        y = self.y
+        dx = dy = dz = 0.0
+        for (ax, ay, az), n in zip(self.axes, accel_torques):
             dx += ax * n
             dy += ay * n
             dz += az * n
         speed, motor = [0.0] * N_WHEELS, [0.0] * N_WHEELS
         for i, w, m in zip(self.wheels, self.omega, torques):
             speed[i], motor[i] = w, m
-        y.h[:] = (J * hx, J * hy, J * hz)
+        y.h[:] = self._momentum()
         y.hdot[:] = (dx, dy, dz)
         y.speed[:] = speed
         y.motor_torque[:] = motor
         y.saturated = bool(limited)
 
     # -- internals -----------------------------------------------------------------
-    def _drive(self):
-        """(motor torques m_i, J Ω̇_i at the communication point, active limits, held wheels).
-
-        A held wheel (at the momentum limit, friction compensated within the torque limit)
-        keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
-        limit does not toggle from one step to the next.
-        """
-        u = self.u
-        tx, ty, tz = u.tau_cmd.tolist()
-        wx, wy, wz = u.w_BI_B.tolist()
-        J, cv, cc = self.inertia, self.viscous, self.coulomb
-        tau_max, speed_max = self.torque_limit, self.speed_limit
+    def _momentum(self) -> tuple[float, float, float]:
+        """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
         hx = hy = hz = 0.0
         for (ax, ay, az), w in zip(self.axes, self.omega):
             hx += ax * w
             hy += ay * w
             hz += az * w
-        hx, hy, hz = J * hx, J * hy, J * hz
+        J = self.inertia
+        return J * hx, J * hy, J * hz
+
+    def _drive(self):
+        """(motor torques m_i, J Ω̇_i at the communication point, active limits, held wheels).
+
+        Each wheel is asked for its share (least squares over the axes) of
+        ḣ_req = −τ_cmd − w × h; :meth:`_wheel` applies its friction and limits.
+        """
+        u = self.u
+        tx, ty, tz = u.tau_cmd.tolist()
+        wx, wy, wz = u.w_BI_B.tolist()
+        hx, hy, hz = self._momentum()
         rx = -tx - (wy * hz - wz * hy)      # hdot_req = −τ_cmd − w × h
         ry = -ty - (wz * hx - wx * hz)
         rz = -tz - (wx * hy - wy * hx)
         torques, net, limited, held = [], [], set(), set()
         for k, ((px, py, pz), w) in enumerate(zip(self.distribution, self.omega)):
-            n = px * rx + py * ry + pz * rz     # wanted J Ω̇
-            if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
-                n = 0.0
-                limited.add((k, "held at the momentum limit"))
-                held.add(k)
-            if w > 0.0:
-                m = n + cv * w + cc
-            elif w < 0.0:
-                m = n + cv * w - cc
-            else:
-                m = n + cc if n > 0.0 else n - cc if n < 0.0 else 0.0
-            if m > tau_max:
-                m = tau_max
-                limited.add((k, "motor torque at the limit"))
-                held.discard(k)
-            elif m < -tau_max:
-                m = -tau_max
-                limited.add((k, "motor torque at the limit"))
-                held.discard(k)
+            m, accel_torque, is_held, limits = self._wheel(w, px * rx + py * ry + pz * rz)
             torques.append(m)
-            if k in held:
-                net.append(0.0)
-            elif w > 0.0:
-                net.append(m - cv * w - cc)
-            elif w < 0.0:
-                net.append(m - cv * w + cc)
-            elif abs(m) <= cc:
-                net.append(0.0)
-            else:
-                net.append(m - cc if m > 0.0 else m + cc)
+            net.append(accel_torque)
+            limited.update((k, what) for what in limits)
+            if is_held:
+                held.add(k)
         return torques, net, frozenset(limited), held
+
+    def _wheel(self, w: float, n: float) -> tuple[float, float, bool, list[str]]:
+        """One wheel at speed Ω = ``w`` asked for J Ω̇ = ``n``: (motor torque m, delivered
+        J Ω̇, held, limits reached).
+
+        m = n plus the friction cv Ω + cc sign(Ω) (at rest: the breakaway cc in the sense
+        of n), clipped to ±torque_limit; J Ω̇ = m − friction (at rest: 0 while |m| ≤ cc).
+        A held wheel (at the momentum limit, friction compensated within the torque limit)
+        keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
+        limit does not toggle from one step to the next.
+        """
+        cv, cc, tau_max, speed_max = self.viscous, self.coulomb, self.torque_limit, \
+            self.speed_limit
+        limits, held = [], False
+        if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
+            n = 0.0
+            limits.append("held at the momentum limit")
+            held = True
+        if w > 0.0:
+            m = n + cv * w + cc
+        elif w < 0.0:
+            m = n + cv * w - cc
+        else:
+            m = n + cc if n > 0.0 else n - cc if n < 0.0 else 0.0
+        if m > tau_max or m < -tau_max:
+            m = tau_max if m > tau_max else -tau_max
+            limits.append("motor torque at the limit")
+            held = False
+        if held:
+            return m, 0.0, True, limits
+        if w > 0.0:
+            net = m - cv * w - cc
+        elif w < 0.0:
+            net = m - cv * w + cc
+        elif abs(m) <= cc:
+            net = 0.0
+        else:
+            net = m - cc if m > 0.0 else m + cc
+        return m, net, False, limits

@@ -31,6 +31,7 @@ The same object runs in-process (tests, references) and inside the FMU wrapper.
 from __future__ import annotations
 
 import copy
+from typing import TypeVar
 
 import numpy as np
 
@@ -42,6 +43,8 @@ COMMON_VARIABLES = (
               "warnings (category logStatusWarning) but return fmi2OK, not fmi2Warning, for "
               "hosts that stop on a warning", type="Boolean"),
 )
+
+_M = TypeVar("_M", bound="Model")
 
 
 class ModelError(RuntimeError):
@@ -145,7 +148,7 @@ class Model:
         data = self.values[self.layout.slice(name)]
         return data.reshape(v.shape).copy() if v.shape else data[0]
 
-    def start(self, t0: float = 0.0) -> "Model":
+    def start(self: _M, t0: float = 0.0) -> _M:
         """Initialize at ``t0`` and evaluate the outputs; returns self.  In-process the
         caller owns the inputs and may change them at will: no first-step check."""
         self.initialize(t0)
@@ -153,7 +156,7 @@ class Model:
         self.output()
         return self
 
-    def advance(self, t: float, dt: float) -> "Model":
+    def advance(self: _M, t: float, dt: float) -> _M:
         """Step from ``t`` to ``t + dt`` and evaluate the outputs; returns self."""
         self.step(t, dt)
         self.output()

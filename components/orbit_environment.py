@@ -77,8 +77,8 @@ precession-nutation at < 1e-11 rad/s, which is neglected (TEME taken as inertial
 SGP4's velocity is its own analytic expression, not exactly the derivative of its
 position (they differ by up to ≈ 2 cm/s, 3e-6 relative, over an orbit), and it gives no
 acceleration.  v_I is SGP4's velocity; q_OI is built from r_I and v_I as above, and
-w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for the O axes (e_1, e_2, e_3) =
-(x_O, y_O, z_O), w·e_1 = ė_2·e_3, w·e_2 = ė_3·e_1, w·e_3 = ė_1·e_2, which gives::
+w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for the O axes
+(e_1, e_2, e_3) = (x_O, y_O, z_O), w·e_1 = ė_2·e_3, w·e_2 = ė_3·e_1, w·e_3 = ė_1·e_2, which gives::
 
     w_OI_O = (ḣ·r̂/|h|, −ṙ·x_O/r, ḣ·x_O/|h|),   h = r × v
 
@@ -112,9 +112,6 @@ MU_EARTH = 3.986004418e14                # m3/s2, GM (atmosphere included)
 # J2 = −√5 C̄20, C̄20 = −4.84165371736e-4; reference radius = WGS-84 a
 J2 = 1.08262668e-3
 J2_RADIUS = 6378137.0                    # m
-
-SCAN_PITCH_ALTITUDE = 681000.0           # m, DESIGN.md §4.1
-SCAN_PITCH_INCLINATION = math.radians(98.1)
 
 _KEPLER_MAX_ITER = 50
 
@@ -165,11 +162,12 @@ class OrbitEnvironment(Model):
     rotating-Earth ground target; the Earth angle from GMST when an epoch is given."""
 
     VARIABLES = (
-        parameter("semi_major_axis", WGS84_A + SCAN_PITCH_ALTITUDE, "m",
+        # defaults: the [Zhao 2016] orbit, 681 km, 98.1° (DESIGN.md §4.1)
+        parameter("semi_major_axis", WGS84_A + 681000.0, "m",
                   "semi-major axis a (mean value when j2 is set); not used with a TLE",
                   display_unit="km"),
         parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1; not used with a TLE"),
-        parameter("inclination", SCAN_PITCH_INCLINATION, "rad", "inclination i, 0 <= i <= pi; "
+        parameter("inclination", math.radians(98.1), "rad", "inclination i, 0 <= i <= pi; "
                   "not used with a TLE", display_unit="deg"),
         parameter("raan", 0.0, "rad", "right ascension of the ascending node at t = 0; not "
                   "used with a TLE", display_unit="deg"),

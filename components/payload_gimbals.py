@@ -1,4 +1,4 @@
-"""Two rigid payloads on roll-then-pitch gimbals (seed 004, Chang et al. 2015, §1.1, §1.3).
+"""Two rigid payloads on roll-then-pitch gimbals ([Chang 2015] §1.1, §1.3).
 
 Frames (paper §1.1, Fig. 2): body B; support r, turned by the roll φ about body x; payload
 m (principal axes, origin at its centre of mass), turned by the pitch θ about the support's
@@ -83,7 +83,6 @@ import numpy as np
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
-PAPER_J_PAYLOAD = (45.5, 35.8, 36.7)   # kg·m², principal inertia of each payload (§2)
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
 _ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
 _NEAR_CRITICAL = 1e-6                   # |λ² s²| below which C, S are taken from series
@@ -142,7 +141,7 @@ class PayloadGimbals(Model):
     """Two payloads, each on a roll-then-pitch gimbal: momentum relative to the body."""
 
     VARIABLES = (
-        parameter("J_payload", PAPER_J_PAYLOAD, "kg.m2",
+        parameter("J_payload", (45.5, 35.8, 36.7), "kg.m2",     # [Chang 2015] §2
                   "principal inertia (Jx, Jy, Jz) of each payload about its centre of mass",
                   shape=(3,)),
         parameter("bandwidth", 0.0, "rad/s",

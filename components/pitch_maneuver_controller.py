@@ -1,4 +1,4 @@
-"""Five-phase pitch maneuver with a constant-rate scanning phase (seeds 000/003 §2–3.1).
+"""Five-phase pitch maneuver with a constant-rate scanning phase ([Zhao 2016] §2–3.1).
 
 Pitch θ of B relative to O goes from θ0 to θf in T with the imaging phase (t3, t4] at the
 scan rate θ̇0.  With the cruise and imaging fractions f2 = (t2 − t1)/T, f4 = (t4 − t3)/T
@@ -25,7 +25,7 @@ chosen, so that θ is in (−180°, 180°]).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .model import Model, ModelError
 from .variables import input_, output, parameter
@@ -44,6 +44,11 @@ class PitchProfile:
     scan_rate: float
     cruise_fraction: float = 0.2
     imaging_fraction: float = 0.6
+    # set by __post_init__: phase times t1..t5, θ̈m, θ̇m
+    times: tuple[float, float, float, float, float] = field(init=False, repr=False,
+                                                          compare=False)
+    accel: float = field(init=False, repr=False, compare=False)
+    rate_max: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         T, f2, f4 = self.duration, self.cruise_fraction, self.imaging_fraction

@@ -42,9 +42,12 @@ def _floats(x):
 def dcm(q) -> tuple:
     """C(q) as a tuple of rows."""
     q0, q1, q2, q3 = _floats(q)
-    return ((q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)),
-            (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1)),
-            (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
+    return ((q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3),
+             2 * (q1 * q3 - q0 * q2)),
+            (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3,
+             2 * (q2 * q3 + q0 * q1)),
+            (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1),
+             q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
 
 
 def rotate(M, v) -> tuple:

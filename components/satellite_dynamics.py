@@ -1,4 +1,4 @@
-"""Rigid satellite hub carrying momentum-exchange devices (seeds 000/003 eqs 1–3).
+"""Rigid satellite hub carrying momentum-exchange devices ([Zhao 2016] eqs 1–3).
 
 States: the attitude q_BI and the *total* angular momentum H_I (hub + devices, inertial
 axes).  With J the hub inertia, h the devices' momentum relative to the body (in B) and
@@ -212,7 +212,8 @@ class SatelliteDynamics(Model):
         k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
         k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
         sixth = ds / 6
-        return tuple(xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
+        return tuple(xi + sixth * (a + 2 * (b + c) + d)
+                     for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
 
     def _derivative(self, x, s, h0, hdot, tau, r_I):
         """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""

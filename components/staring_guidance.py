@@ -1,4 +1,4 @@
-"""Staring guidance with yaw compensation: the video-SAR paper (seed 002, Liang et al. 2019,
+"""Staring guidance with yaw compensation: the video-SAR paper ([Liang 2019],
 §2.2–2.4, eqs 6–13), made exact.
 
 Line of sight (I axes; r, v satellite, r_T, v_T target, all inputs)::
@@ -78,9 +78,9 @@ errs by ≈ 2e-8 rad/s², 3e-4 of the peak 7.7e-5 rad/s² of the video-SAR stare
 
 Assumptions: target fixed on the Earth, which turns at ω_E = EARTH_RATE about ẑ_I (the
 I and E z axes coincide; :mod:`.orbit`; with an epoch the orbit model turns the Earth at
-the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH; q_OI must be the orbit frame built
-from r_I, v_I (checked to 1e-6 rad); the state (captured g, anchors of the angle
-branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
+the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH;
+q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad); the state (captured
+g, anchors of the angle branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
 """
 from __future__ import annotations
 
@@ -114,6 +114,24 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 def _norm(v) -> float:
     return math.sqrt(float(v @ v))
+
+
+def _orbit_axes(r, v, C_OI, t):
+    """(|r|, |h|, r̂, x_O) of the two-body orbit frame of r, v; ModelError if r, v do not
+    define one or q_OI (as C_OI) is not it (to Q_OI_TOLERANCE)."""
+    r_norm = _norm(r)
+    h_vec = cross(r, v)
+    h = _norm(h_vec)
+    if not h > 1e-12 * r_norm * max(_norm(v), 1.0):
+        raise ModelError(f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit "
+                         "frame is undefined")
+    r_hat, h_hat = r / r_norm, h_vec / h
+    mismatch = float(np.max(np.abs(C_OI - (cross(h_hat, r_hat), -h_hat, -r_hat))))
+    if mismatch > Q_OI_TOLERANCE:
+        raise ModelError(f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
+                         f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
+                         f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I")
+    return r_norm, h, r_hat, C_OI[0]
 
 
 def footprint_axis(boresight_B) -> np.ndarray:
@@ -233,7 +251,7 @@ def _aligned_frame(u, du, ddu, a, da, dda, what: str):
 
 
 class StaringGuidance(Model):
-    """Reference attitude staring at a ground target, with yaw compensation (seed 002)."""
+    """Reference attitude staring at a ground target, with yaw compensation ([Liang 2019])."""
 
     VARIABLES = (
         parameter("yaw_compensation", True, "1", "true: hold the footprint direction fixed "
@@ -292,38 +310,54 @@ class StaringGuidance(Model):
         self.t = t + dt
 
     def output(self):
-        u_in, y, t = self.u, self.y, self.t
+        y, t = self.y, self.t
+        r, v, r_T, v_T, C_OI = self._checked_inputs(t)
+        r_norm, h, r_hat, x_O = _orbit_axes(r, v, C_OI, t)
+        s, u, du, ddu = _line_of_sight(r, v, r_T, v_T, t)
+        compensating, (x0, y0), (C_PI, w_P, dw_P) = self._pointing_frame(
+            t, r_T, u, du, ddu, (r_norm, h, r_hat, x_O), float(v @ r_hat))
+        C_RI, w, dw = C_PI, w_P, dw_P
+        if self.C_RP is not None:
+            C_RI, w, dw = self.C_RP @ C_PI, self.C_RP @ w_P, self.C_RP @ dw_P
+        q, euler = self._attitude(C_RI, C_PI, C_OI, u, x0, y0, compensating)
+        rotation = 0.0
+        if self.capture_time is not None:
+            up, east, north = local_tangent_frame(r_T, self.latitude)
+            rotation = wrap_pi(_azimuth(ground_line(u, C_PI[0], up), east, north)
+                               - self.azimuth_ref)
+        y.q_ref[:] = q
+        y.w_ref[:] = w
+        y.dw_ref[:] = dw
+        y.euler_ref_BO[:] = euler
+        y.look_angle = math.atan2(_norm(cross(u, r_hat)), -float(u @ r_hat))
+        y.slant_range = s
+        y.footprint_rotation = rotation
+        self.last = (q, euler)
+
+    # -- internals -----------------------------------------------------------------
+    def _checked_inputs(self, t):
+        """(r, v, r_T, v_T, C_OI); ModelError if an input is not finite."""
+        u_in = self.u
         if not np.all(np.isfinite(self.values[self._inputs])):
             bad = [name for name in _INPUTS if not np.all(np.isfinite(getattr(u_in, name)))]
             raise ModelError(f"t={t:.6g} s: inputs {bad} are not finite")
         r, v, r_T, v_T = (np.array(getattr(u_in, n)) for n in _INPUTS[:4])
-        C_OI = dcm_from_quat(u_in.q_OI)
+        return r, v, r_T, v_T, dcm_from_quat(u_in.q_OI)
 
-        # orbit frame from r, v (two-body rates) and the check of q_OI against it
-        r_norm = _norm(r)
-        h_vec = cross(r, v)
-        h = _norm(h_vec)
-        if not h > 1e-12 * r_norm * max(_norm(v), 1.0):
-            raise ModelError(f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit "
-                             "frame is undefined")
-        r_hat, h_hat = r / r_norm, h_vec / h
-        mismatch = float(np.max(np.abs(C_OI - (cross(h_hat, r_hat), -h_hat, -r_hat))))
-        if mismatch > Q_OI_TOLERANCE:
-            raise ModelError(f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
-                             f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
-                             f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I")
-        x_O = C_OI[0]
-
-        s, u, du, ddu = _line_of_sight(r, v, r_T, v_T, t)
+    def _pointing_frame(self, t, r_T, u, du, ddu, orbit, r_dot):
+        """(compensating, (x0, y0) axes of the yaw-0 frame P0, (C_PI, ω_P, ω̇_P)): P0 =
+        F(û, x_O), or with yaw compensation F(û, g) after the capture (made here at t_cap)."""
+        r_norm, h, r_hat, x_O = orbit
         capturing = ((self.capture_time is None and t >= self.p.reference_time - self.tolerance)
                      or self.capture_time == t)      # capture, or recapture at t_cap
         compensating = self.compensate and (capturing or self.capture_time is not None)
         what = "the orbit frame's x axis (pitch +-90 deg)"
+        y0 = None
         if compensating:                            # only the axes of the yaw-0 frame P0
             x0, y0, _, _ = _aligned_axes(u, x_O, what)
         else:                                       # P0 = F(û, x_O) is the reference
             dx_O = -(h / r_norm**2) * r_hat
-            ddx_O = (2.0 * h * float(v @ r_hat) / r_norm**3) * r_hat - (h / r_norm**2)**2 * x_O
+            ddx_O = (2.0 * h * r_dot / r_norm**3) * r_hat - (h / r_norm**2)**2 * x_O
             P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O, what)
             x0 = P[0][0]
         if capturing:
@@ -340,11 +374,11 @@ class StaringGuidance(Model):
             dg = EARTH_RATE * cross(_Z, g)
             P = _aligned_frame(u, du, ddu, g, dg, EARTH_RATE * cross(_Z, dg),
                                "the captured footprint direction g (grazing view)")
-        C_PI, w_P, dw_P = P
+        return compensating, (x0, y0), P
 
-        C_RI, w, dw = C_PI, w_P, dw_P
-        if self.C_RP is not None:
-            C_RI, w, dw = self.C_RP @ C_PI, self.C_RP @ w_P, self.C_RP @ dw_P
+    def _attitude(self, C_RI, C_PI, C_OI, u, x0, y0, compensating):
+        """(q_RI with its sign continued, 1-2-3 angles of R relative to O on the branch of
+        the previous communication point)."""
         q = quat_from_dcm(C_RI)
         anchor_q, anchor_euler = self.anchor if self.anchor is not None else (None, None)
         if anchor_q is not None and float(q @ anchor_q) < 0.0:
@@ -357,17 +391,4 @@ class StaringGuidance(Model):
             euler = np.array(euler if anchor_euler is None else unwrap_near(euler, anchor_euler))
         else:
             euler = euler123_from_quat(quat_from_dcm(C_RI @ C_OI.T), anchor_euler)
-
-        rotation = 0.0
-        if self.capture_time is not None:
-            up, east, north = local_tangent_frame(r_T, self.latitude)
-            rotation = wrap_pi(_azimuth(ground_line(u, C_PI[0], up), east, north)
-                               - self.azimuth_ref)
-        y.q_ref[:] = q
-        y.w_ref[:] = w
-        y.dw_ref[:] = dw
-        y.euler_ref_BO[:] = euler
-        y.look_angle = math.atan2(_norm(cross(u, r_hat)), -float(u @ r_hat))
-        y.slant_range = s
-        y.footprint_rotation = rotation
-        self.last = (q, euler)
+        return q, euler

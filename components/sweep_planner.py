@@ -1,4 +1,4 @@
-"""Sweep planner: the symmetric two-payload sweep of seed 004 (Chang et al. 2015, §1.2).
+"""Sweep planner: the symmetric two-payload sweep of [Chang 2015] (Chang et al. 2015, §1.2).
 
 Each axis (roll φ, pitch θ) of payload 1 sweeps between +A and −A at the constant rate r
 (the imaging rate) and reverses at each end in the ``turnaround_time`` τ with constant
@@ -40,7 +40,7 @@ case, in which nothing cancels).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .model import Model, ModelError
 from .variables import output, parameter
@@ -57,6 +57,7 @@ class SweepAxis:
     rate: float
     turnaround: float
     name: str = "axis"
+    period: float = field(init=False, repr=False, compare=False)   # set by __post_init__
 
     def __post_init__(self):
         A, r, tau, name = self.amplitude, self.rate, self.turnaround, self.name
@@ -102,7 +103,7 @@ class SweepAxis:
 
 
 class SweepPlanner(Model):
-    """Roll/pitch sweep commands of two payloads (seed 004 §1.2, Figs 3–4)."""
+    """Roll/pitch sweep commands of two payloads ([Chang 2015] §1.2, Figs 3–4)."""
 
     VARIABLES = (
         parameter("roll_amplitude", 15 * DEG, "rad", "roll sweep amplitude A (roll in +-A)",

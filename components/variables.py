@@ -166,7 +166,7 @@ class Bus:
     def __init__(self, values: np.ndarray, layout: Layout, causality: str, strings: dict):
         object.__setattr__(self, "_values", values)
         object.__setattr__(self, "_strings", strings)
-        scalars = {}
+        scalars: dict[str, tuple[int | None, type]] = {}
         for v in layout.group(causality):
             if v.type == "String":
                 scalars[v.name] = (None, str)

@@ -6,8 +6,8 @@ Layout of an FMU::
     binaries/linux64/<Name>.so           our C shim (shim/agilesat_fmi2.c), compiled here
     binaries/linux64/pythonfmu-export.so pythonfmu's binary, which the shim forwards to
     resources/slavemodule.txt            -> <Name>_<hash>
-    resources/<Name>_<hash>.py           pythonfmu entry point: imports the slave class
-    resources/agilesat_<hash>/           our code: the wrapper and the modules it imports
+    resources/<Name>_<hash>.py           pythonfmu entry point: makes the slave class
+    resources/agilesat_<hash>/           our code: the model, the slave and their imports
     resources/pythonfmu/                 pythonfmu's Python package (as pythonfmu packs it)
     documentation/index.html             the variable table
 
@@ -22,7 +22,6 @@ from __future__ import annotations
 import ast
 import functools
 import hashlib
-import importlib
 import os
 import shutil
 import subprocess
@@ -34,7 +33,7 @@ from html import escape
 from importlib import metadata
 from pathlib import Path
 
-from . import FMUS
+from . import FMUS, model_class
 from .model_description import model_description
 
 FMUS_DIR = Path(__file__).resolve().parent
@@ -63,14 +62,13 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     sources, digest = _sources(name)
     if not force and is_current(target, name, digest):
         return target
-    slave_class = getattr(importlib.import_module(f"{__package__}.{FMUS[name]}"), name)
-    model_class = slave_class.model_class
+    model = model_class(name)
     package = f"agilesat_{digest}"
     entry = f"{name}_{digest}"
-    description = (model_class.__doc__ or name).strip().splitlines()[0]
+    description = (model.__doc__ or name).strip().splitlines()[0]
     entries = {
         "modelDescription.xml": model_description(
-            name, model_class, str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
+            name, model, str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
             description, f"agilesat {metadata.version('agilesat')} "
                          f"(pythonfmu {metadata.version('pythonfmu')})"),
         f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
@@ -78,7 +76,7 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": _entry_module(name, package).encode(),
         f"resources/{package}/__init__.py": b"",
-        "documentation/index.html": _documentation(name, model_class).encode(),
+        "documentation/index.html": _documentation(name, model).encode(),
     }
     for relative, path in sources.items():
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
@@ -113,9 +111,12 @@ def _entry_module(name: str, package: str) -> str:
         "# borrowed PyModule_GetDict result; NTNU-IHB/PythonFMU#228): the dict would be freed\n"
         "# while in use.  Each run adds the reference back, so the count is balanced per\n"
         "# instantiation (only the import itself keeps one: nothing grows).\n"
+        "# pythonfmu instantiates the Fmi2Slave subclass it finds here, made by slave_class.\n"
         "import ctypes\n"
         "ctypes.pythonapi.Py_IncRef(ctypes.py_object(globals()))\n"
-        f"from {package}.fmus.{FMUS[name]} import {name}  # noqa: E402,F401\n")
+        f"from {package}.fmus import slave_class as _slave_class  # noqa: E402\n"
+        f"{name} = _slave_class({name!r})\n"
+        "del _slave_class\n")
 
 
 def is_current(path: Path, name: str, digest: str | None = None) -> bool:
@@ -131,11 +132,12 @@ def is_current(path: Path, name: str, digest: str | None = None) -> bool:
 def _sources(name: str) -> tuple[dict[str, Path], str]:
     """Files packed as our code (relative path -> file) and the content hash of the FMU.
 
-    Our code is the FMU's wrapper module and everything it imports from our packages,
+    Our code is the FMU's model module, the generic slave and the registry that makes the
+    slave class (``fmus/__init__.py``), and everything they import from our packages,
     followed through relative imports (``from ..components.cmg_cluster import ...``).
     """
-    files = {}
-    pending = [f"fmus/{FMUS[name]}.py"]
+    files: dict[str, Path] = {}
+    pending = ["fmus/__init__.py", "fmus/slave.py", f"components/{FMUS[name]}.py"]
     while pending:
         relative = pending.pop()
         if relative in files:
@@ -162,18 +164,24 @@ def _toolchain_digest() -> bytes:
                           + "\0".join(python_runtime()).encode()).digest()
 
 
-def _relative_imports(relative: str, path: Path) -> list[str]:
-    """Our modules a module imports relatively, as paths like 'components/cmg_cluster.py'."""
-    package = relative.split("/")[0]
+def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -> list[str]:
+    """Our modules a module imports relatively, as paths like 'components/cmg_cluster.py'
+    (relative to ``root``; a package's modules with its ``__init__.py``)."""
+    package = "/".join(relative.split("/")[:-1])
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ImportFrom) and node.level:
-            parts = node.module.split(".") if node.module else []
-            base = package if node.level == 1 else parts.pop(0)
-            if parts:                                   # from .cmg_cluster import x
-                found.append(f"{base}/{'/'.join(parts)}.py")
-            else:                                       # from . import cmg, passes
-                found += [f"{base}/{alias.name}.py" for alias in node.names]
+            base = package.split("/")[:len(package.split("/")) - node.level + 1]
+            module = "/".join(base + (node.module.split(".") if node.module else []))
+            if (root / module).is_dir():                # from ..components.analysis import x
+                found.append(f"{module}/__init__.py")
+                for alias in node.names:                # from . import slave, analysis
+                    if (root / module / f"{alias.name}.py").is_file():
+                        found.append(f"{module}/{alias.name}.py")
+                    elif (root / module / alias.name).is_dir():
+                        found.append(f"{module}/{alias.name}/__init__.py")
+            else:                                       # from .cmg_cluster import x
+                found.append(f"{module}.py")
     return found
 
 
@@ -246,9 +254,9 @@ def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def interface_rows(model_class):
+def interface_rows(model):
     """(name, causality, type, unit, start, description) for docs, from the table."""
-    for v in model_class.VARIABLES:
+    for v in model.VARIABLES:
         shape = f"[{','.join(map(str, v.shape))}]" if v.shape else ""
         start = "" if v.causality == "output" else _short(v.start)
         unit = v.unit if v.type == "Real" else ""
@@ -266,13 +274,12 @@ def interfaces_markdown() -> str:
     parts = ["# FMU interfaces\n\nGenerated from the variable tables by `agilesat generate`; "
              "do not edit.  Units are SI (angles in rad); structured names are 1-based "
              "(`w_BI_B[1]`, `inertia[2,3]`).\n"]
-    for name, module in FMUS.items():
-        model_class = getattr(importlib.import_module(f"{__package__}.{module}"),
-                              name).model_class
-        doc = (model_class.__doc__ or "").strip()
+    for name in FMUS:
+        model = model_class(name)
+        doc = (model.__doc__ or "").strip()
         parts.append(f"\n## {name}\n\n{doc}\n\n| variable | causality | type | unit | "
                      "start | description |\n|---|---|---|---|---|---|")
-        for row in interface_rows(model_class):
+        for row in interface_rows(model):
             parts.append("| " + " | ".join(str(c).replace("|", "\\|") for c in row) + " |")
     return "\n".join(parts) + "\n"
 
@@ -282,10 +289,10 @@ def _short(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _documentation(name: str, model_class) -> str:
+def _documentation(name: str, model) -> str:
     rows = "\n".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
-                     for row in interface_rows(model_class))
-    doc = escape(model_class.__doc__ or "")
+                     for row in interface_rows(model))
+    doc = escape(model.__doc__ or "")
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
             f"<body><h1>{name}</h1><pre>{doc}</pre><table border='1'>"
             "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"

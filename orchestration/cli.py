@@ -70,7 +70,7 @@ def main(argv=None) -> int:
     stare.add_argument("--no-yaw-compensation", action="store_true")
     stare.add_argument("--out", type=Path, default=Path("out/stare"))
 
-    analysis = commands.add_parser("mission", help="video-SAR mission analysis (seed 002): "
+    analysis = commands.add_parser("mission", help="video-SAR mission analysis ([Liang 2019]): "
                                   "frame overlap vs frame rate, Walker constellation size")
     analysis.add_argument("analysis", choices=("overlap", "walker"))
     analysis.add_argument("--frame-rates", type=float, nargs="+", default=(5.0, 25.0),
@@ -180,7 +180,8 @@ def _stare(args) -> int:
         max_look_angle=args.max_look * DEG)
     print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
     for g in passes:
-        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  look {g.look_angle / DEG:6.2f}°"
+        print(f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  "
+              f"look {g.look_angle / DEG:6.2f}°"
               f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
               f"{'ascending' if g.ascending else 'descending'}")
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
@@ -207,7 +208,7 @@ def _mission(args) -> int:
         rates = np.linspace(1.0, 30.0, 146)
         curve = mission.overlap_ratio(rates, altitude=altitude, look_angle=look)
         path = plots.lines(args.out / "overlap_vs_frame_rate.png",
-                           "Frame overlap vs frame rate (seed 002, Fig. 3)", rates,
+                           "Frame overlap vs frame rate ([Liang 2019], Fig. 3)", rates,
                            {"overlap": 100 * curve.overlap}, "overlap [%]",
                            xlabel="frame rate [Hz]")
         print(f"figure: {path}")

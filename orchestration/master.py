@@ -45,7 +45,8 @@ from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
 MAX_STEPS = 10_000_000   # macro steps of one run (about 15 GB of CSV for scan_pitch)
-_CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+_CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
+    "Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
 
 class SimulationError(RuntimeError):
@@ -317,7 +318,7 @@ def _sequence(schedule, nodes) -> list:
             for name, block, first in evaluation_sequence(schedule)]
 
 
-def _evaluate(sequence, values, t: float | None = None, step: float | None = None) -> None:
+def _evaluate(sequence, values, t: float = 0.0, step: float | None = None) -> None:
     """Bring every output to the current communication point, block by block; with a
     step, each FMU first steps from t at its first block (Gauss-Seidel)."""
     for node, reads, first in sequence:

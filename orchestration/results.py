@@ -60,14 +60,14 @@ class Results:
         return Path(path)
 
     @classmethod
-    def from_csv(cls, path) -> "Results":
+    def from_csv(cls, path) -> Results:
         with Path(path).open() as stream:
             names = next(csv.reader(stream))
         data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
         return cls(names, data)
 
     @classmethod
-    def from_npz(cls, path) -> "Results":
+    def from_npz(cls, path) -> Results:
         archive = np.load(path)
         return cls(list(archive["names"]), archive["data"])
 

@@ -39,13 +39,14 @@ def schedule(instances: dict, sources: dict, kind: str, where: str) -> Schedule:
                 needs[(b, z)].add((a, y))
                 via[((b, z), (a, y))] = u
     rank = _fmu_rank(list(instances), needs)
-    blocks, done = [], set()
+    blocks: list[tuple[str, tuple[str, ...]]] = []
+    done: set = set()
     while len(done) < len(needs):
         ready = [v for v in needs if v not in done and needs[v] <= done]
         if not ready:
             raise SystemFileError(f"{where}: algebraic loop: {_cycle(needs, done, via)}")
         last = blocks[-1][0] if blocks else None
-        chosen = last if any(v[0] == last for v in ready) else min(
+        chosen: str = last if last is not None and any(v[0] == last for v in ready) else min(
             (v[0] for v in ready), key=rank.__getitem__)
         block = [z for (b, z) in ready if b == chosen]
         done.update((chosen, z) for z in block)

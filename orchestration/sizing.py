@@ -1,4 +1,4 @@
-"""How big must the reaction wheel be?  (payload_sweep, seed 004)
+"""How big must the reaction wheel be?  (payload_sweep, [Chang 2015])
 
 For a given reversal (turnaround) time, the smallest wheel torque that keeps the pointing
 accuracy and stability within their requirement (default: the paper's 0.032° and

@@ -455,5 +455,5 @@ class _Maker:
     @staticmethod
     def _qname(tag):
         prefix, local = tag.split(":")
-        return "{%s}%s" % (_PREFIXES[prefix], local)
+        return f"{{{_PREFIXES[prefix]}}}{local}"
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .agreement import disagreements
 from .fmu import Description
 from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
@@ -89,6 +90,7 @@ def check_system(system: SystemFile, instances: dict[str, Description],
                             f"value is {value.type}")
     problems += _connector_problems(system, instances)
     open_inputs = _open_inputs(system, instances, sources, bindings, problems)
+    problems += disagreements(instances, bindings, sources)
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
     return Plan(schedule(instances, sources, "feedthrough", where),

@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from reference import scan_pitch as reference  # noqa: E402
+from reference import scan_pitch as reference
 
-from agilesat.fmus.build import build_all  # noqa: E402
-from agilesat.orchestration import simulate  # noqa: E402
-from agilesat.orchestration.scenarios import get  # noqa: E402
+from agilesat.fmus.build import build_all
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
 
 STEPS = (0.01, 0.05, 0.1)
 STOP = 150.0
@@ -52,9 +52,9 @@ def stub_models():
             if isinstance(obj, type) and "VARIABLES" in vars(obj) and obj.__module__ == name:
                 for method in ("initialize", "step", "output"):
                     saved.append((obj, method, vars(obj)[method]))
-                setattr(obj, "initialize", lambda self, t0: None)
-                setattr(obj, "step", lambda self, t, dt: None)
-                setattr(obj, "output", lambda self: None)
+                obj.initialize = lambda self, t0: None
+                obj.step = lambda self, t, dt: None
+                obj.output = lambda self: None
 
     def restore():
         for obj, method, function in saved:
@@ -93,8 +93,10 @@ def main() -> None:
     rtf = STOP / cosim
     print(f"\ntargets at 0.05 s: real-time factor {rtf:.0f} (target >= 300: "
           f"{'met' if rtf >= 300 else 'NOT met'}); co-simulation / reference "
-          f"{cosim / monolithic:.2f} (target <= 3: {'met' if cosim / monolithic <= 3 else 'NOT met'})")
-    print(f"peak resident memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+          f"{cosim / monolithic:.2f} "
+          f"(target <= 3: {'met' if cosim / monolithic <= 3 else 'NOT met'})")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak resident memory {peak:.0f} MiB")
 
 
 if __name__ == "__main__":

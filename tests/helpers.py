@@ -25,3 +25,35 @@ def agilesat(*args, timeout: float = 900, cwd=None) -> subprocess.CompletedProce
     """The ``agilesat`` command line, in a fresh interpreter."""
     return subprocess.run([sys.executable, "-m", "agilesat.orchestration", *map(str, args)],
                           capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT)
+
+
+def slave(name: str, start_time: float = 0.0):
+    """FMU ``name``'s wrapper (a ``ModelSlave``) instantiated in this process, in
+    initialisation mode: drive it with ``set_real``/``do_step``/``get_real`` as a host
+    would (pythonfmu's own tests do the same with their slaves)."""
+    from agilesat.fmus import slave_class
+    instance = slave_class(name)(instance_name=f"test_{name}")
+    instance.setup_experiment(start_time)
+    instance.enter_initialization_mode()
+    return instance
+
+
+def logged(instance, status: str = "error") -> list[str]:
+    """Messages an in-process slave logged at ``status`` ("error", "warning", ...)."""
+    return [entry.msg for entry in instance.log_queue if entry.status.name == status]
+
+
+def operating_point(name: str, rng) -> dict:
+    """Input values (by variable) away from zero: quaternions unit, the staring guidance
+    fed a real orbit and target (from OrbitEnvironment's defaults)."""
+    import numpy as np
+    from agilesat.fmus import model_class as _model_class
+    if name == "StaringGuidance":
+        orbit = _model_class("OrbitEnvironment")().start(0.0)
+        return {v: orbit.get(v) for v in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}
+    values = {}
+    for v in _model_class(name).VARIABLES:
+        if v.causality == "input":
+            x = rng.uniform(-0.3, 0.3, v.size)
+            values[v.name] = x / np.linalg.norm(x) if v.name.startswith("q_") else x
+    return values

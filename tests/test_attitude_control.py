@@ -10,7 +10,6 @@ from agilesat.components.model import ModelError
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.components.rotations import (dcm_from_quat, euler123_from_quat, quat_conj,
                                            quat_from_axis_angle, quat_mul)
-from agilesat.fmus.model_description import UNITS
 
 RNG = np.random.default_rng(17)
 AXES = np.eye(3)
@@ -124,11 +123,11 @@ def body_rate(q_of_t, t, h=1e-6):
 
 def test_rate_error_is_the_rate_of_B_relative_to_a_rotating_reference():
     u1, u2, u3 = random_axis(), random_axis(), random_axis()
-    q_RI = lambda t: quat_mul(quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t),  # noqa: E731
+    q_RI = lambda t: quat_mul(quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t),
                               quat_from_axis_angle(u2, -0.1 * t))
     for q_BR in (lambda t: quat_from_axis_angle(u3, 0.7),               # rides with R
                  lambda t: quat_from_axis_angle(u3, 0.7 + 0.05 * t)):     # turns within R
-        q_BI = lambda t: quat_mul(q_RI(t), q_BR(t))                          # noqa: E731
+        q_BI = lambda t: quat_mul(q_RI(t), q_BR(t))
         for t in (0.0, 1.3, 4.0):
             c = control(q_BI(t), body_rate(q_BI, t), q_RI(t), body_rate(q_RI, t))
             assert np.allclose(c.get("rate_error"), body_rate(q_BR, t), atol=1e-8)
@@ -165,21 +164,8 @@ def test_feedforward_adds_to_the_pd_torque():
     assert np.allclose(with_ff - without, hdot + np.cross(w, h), atol=1e-13)
 
 
-# -- variable table -----------------------------------------------------------------------
-def test_variable_table_units_requirements_and_dependencies():
-    by_name = {v.name: v for v in AttitudeController.VARIABLES}
-    assert all(v.unit in UNITS and v.description for v in AttitudeController.VARIABLES)
-    assert by_name["q_BI"].required and by_name["w_BI_B"].required
-    assert not any(by_name[n].required for n in ("q_ref", "w_ref", "h_ff", "hdot_ff",
-                                                 "dw_ref"))
-    assert set(by_name["tau_cmd"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref", "h_ff",
-                                               "hdot_ff", "dw_ref"}
-    assert set(by_name["att_error"].depends) == {"q_BI", "q_ref"}
-    assert set(by_name["rate_error"].depends) == {"q_BI", "w_BI_B", "q_ref", "w_ref"}
-
-
 # -- closed loops ------------------------------------------------------------------------
-J_SAT = 150.0   # kg·m², the seed-004 satellite the default gains are designed for
+J_SAT = 150.0   # kg·m², the [Chang 2015] satellite the default gains are designed for
 
 
 def second_order(theta0, t, wn, zeta):
@@ -253,6 +239,7 @@ def test_wheels_in_the_loop_deliver_the_commanded_torque():
     assert not wheels.warnings
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("feedforward, dt", [(False, 0.1), (True, 0.1), (True, 0.05)])
 def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     """Device h = A sin(ω t) about z, torque −A ω cos(ω t) on the body.
@@ -262,7 +249,7 @@ def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     the wheels hold the compensating torque over a step while the device's torque moves
     on, a residual torque of A ω · ω dt/2 in amplitude, so the error shrinks by ω dt/2."""
     A, omega = 0.2, 2 * math.pi / 10
-    device = lambda t: (np.array([0, 0, A * math.sin(omega * t)]),  # noqa: E731
+    device = lambda t: (np.array([0, 0, A * math.sin(omega * t)]),
                         np.array([0, 0, A * omega * math.cos(omega * t)]))
     kp, kd = J_SAT * 0.2 ** 2, 2 / math.sqrt(2) * 0.2 * J_SAT
     forced = A * omega / abs(J_SAT * (kp / J_SAT - omega ** 2) + 1j * kd * omega)
@@ -288,7 +275,7 @@ def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
     n = np.array([1.0, 2.0, 2.0]) / 3.0
     body = SatelliteDynamics(inertia=J_TILTED, gravity_gradient=False).start()
     ctrl = AttitudeController(kp=[1.0] * 3, kd=[30.0] * 3,
-                              inertia=J_TILTED if feedforward else np.zeros((3, 3))).start()
+                              inertia=J_TILTED, acceleration_feedforward=feedforward).start()
     worst = 0.0
     for k in range(int(round(T / dt)) + 1):
         t = k * dt
@@ -307,6 +294,7 @@ def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
     return worst
 
 
+@pytest.mark.slow
 def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_reference():
     """J ẇ_des + w × J w: the error left is the torque's sample-and-hold over a step,
     O(α dt) against the PD-only lag, which grows with the reference rate."""
@@ -315,15 +303,20 @@ def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_referenc
     assert track_spin_up(True, dt=0.005) < 0.6 * with_ff        # and shrinks with dt
 
 
-def test_no_feedforward_without_an_inertia():
-    """Default inertia 0: dw_ref does nothing (the law of DESIGN.md §3)."""
+def test_no_acceleration_feedforward_unless_switched_on():
+    """Default off: dw_ref and the inertia do nothing (the law of DESIGN.md §3)."""
     q = random_quat()
     plain = control(q, w_BI_B=(0.01, -0.02, 0.03))
-    c = AttitudeController()
+    c = AttitudeController(inertia=J_TILTED)
     for name, value in (("q_BI", q), ("w_BI_B", (0.01, -0.02, 0.03)), ("dw_ref", (1.0, 2.0, 3.0))):
         c.set(name, value)
     c.start()
     assert np.array_equal(c.get("tau_cmd"), plain.get("tau_cmd"))
+
+
+def test_acceleration_feedforward_without_an_inertia_is_rejected():
+    with pytest.raises(ModelError, match="acceleration_feedforward is on but inertia is zero"):
+        AttitudeController(acceleration_feedforward=True).start()
 
 
 def test_asymmetric_feedforward_inertia_is_rejected():
@@ -331,6 +324,7 @@ def test_asymmetric_feedforward_inertia_is_rejected():
         AttitudeController(inertia=[[1, 2, 0], [0, 1, 0], [0, 0, 1]]).start()
 
 
+@pytest.mark.slow
 def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
     """kp = kd = 0: with the exact feedforward J ẇ_des + w × J w the body's acceleration
     is that of the reference seen in B, so the rate error w − C_BR w_ref stays constant
@@ -343,7 +337,8 @@ def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
     def dw_ref(t):
         return np.array([0.006 * math.cos(0.3 * t), -0.006 * math.sin(0.2 * t), 0.002])
 
-    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED).start()
+    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED,
+                              acceleration_feedforward=True).start()
 
     def f(t, x):
         qB, w, qR = x[:4], x[4:7], x[7:]

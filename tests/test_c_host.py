@@ -19,6 +19,8 @@ from agilesat.orchestration.scenarios import NAMES, get
 from c_host.script import write_script
 from helpers import ISS_TLE, ROOT, run_python
 
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
 HOST_SOURCE = ROOT / "tests" / "c_host" / "fmi2_host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"}
 STOP = 60.0   # s of each scenario: 1200 macro steps

@@ -4,18 +4,19 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS,
+from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES,
                                      ClusterGeometry, CmgCluster, servo_step,
                                      zero_momentum_angles)
 from agilesat.components.model import ModelError
-from agilesat.components.cmg_steering import CmgSteering
+from agilesat.components.cmg_steering import PSEUDO_INVERSE, SR_INVERSE, CmgSteering
+from agilesat.orchestration.scenarios.scan_pitch import PAPER_DELTA0, PAPER_SPINS
 
 DEG = math.pi / 180
-A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of seed 003 §3.2
+A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of [Zhao 2016] §3.2
 
 
 def paper_matrices(d):
-    """A_s0 and A_c0 as printed in seed 003 §3.2 (3×6), at gimbal angles d.
+    """A_s0 and A_c0 as printed in [Zhao 2016] §3.2 (3×6), at gimbal angles d.
 
     Column 6 of A_s0 is printed (cδ06, cδ06, 0); its derivative, A_c0's column 6, is
     (−sδ06, cδ06, 0), so the second entry must be sδ06 (a misprint, used corrected).
@@ -52,7 +53,7 @@ def test_default_rotor_spin_is_the_printed_one_reversed():
     A_s, _ = paper_matrices(np.array(PAPER_DELTA0))
     cluster = CmgCluster().start()
     assert np.allclose(cluster.get("h"), -16.65 * A_s.sum(axis=1), atol=1e-12)
-    assert np.linalg.norm(cluster.get("h")) == pytest.approx(57, abs=0.5)  # DESIGN §4.1
+    assert np.linalg.norm(cluster.get("h")) == pytest.approx(57, abs=0.5)  # DESIGN.md §4.1
 
 
 def test_gimbal_axes_are_unit_and_perpendicular_to_the_spins():
@@ -79,7 +80,7 @@ def test_envelope_along_y_is_singular_and_equals_the_capacity_formula():
     assert geometry.singularity(geometry.jacobian(delta)) == pytest.approx(0, abs=1e-12)
     capacity = 16.65 * np.sqrt(1 - (GIMBAL_AXES @ y) ** 2).sum()
     assert geometry.momentum(delta)[1] == pytest.approx(capacity, rel=1e-12)
-    assert capacity == pytest.approx(79, abs=0.5)  # DESIGN §4.1
+    assert capacity == pytest.approx(79, abs=0.5)  # DESIGN.md §4.1
 
 
 def test_singularity_measure_is_det_of_A_At():
@@ -94,6 +95,7 @@ def test_singularity_measure_is_det_of_A_At():
     (0.1, 5.0, 3.0),      # command above the rate limit: clipped to 0.6
     (0.25, 0.25, 0.7),    # already there
 ])
+@pytest.mark.slow
 def test_servo_step_matches_fine_integration(rate, command, dt):
     angle, rate_end = servo_step([0.5], [rate], [command], dt, 0.6, 0.5)
     n = 200000
@@ -148,7 +150,7 @@ def test_null_motion_follows_the_gradient_of_Q_without_torque():
     geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
     free = steering([0, 0, 0], delta, [0, 0, 0], [0, 0, 0], null_gain=1.0).get("delta_dot_cmd")
     assert np.allclose(geometry.jacobian(delta) @ free, 0, atol=1e-13)   # no torque
-    Q = lambda d: geometry.singularity(geometry.jacobian(d))  # noqa: E731
+    Q = lambda d: geometry.singularity(geometry.jacobian(d))
     gradient = np.array([(Q(delta + e) - Q(delta - e)) / 2e-6 for e in np.eye(6) * 1e-6])
     projected = gradient - np.linalg.pinv(geometry.jacobian(delta)) @ (
         geometry.jacobian(delta) @ gradient)
@@ -161,8 +163,8 @@ def test_singularity_robust_inverse_bounds_the_rates_near_a_singularity():
     y = np.array([0.0, 1.0, 0.0])
     delta = np.arctan2(geometry.T @ y, geometry.S @ y) + 1e-4   # just off the envelope
     tau = np.array([0.0, -1.0, 0.0])                               # push further along +y
-    pinv = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=0).get("delta_dot_cmd")
-    robust = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=1).get("delta_dot_cmd")
+    pinv = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=PSEUDO_INVERSE).get("delta_dot_cmd")
+    robust = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=SR_INVERSE).get("delta_dot_cmd")
     assert np.abs(pinv).max() > 50 * np.abs(robust).max()
     assert np.abs(robust).max() < 1.0
 
@@ -177,7 +179,8 @@ def test_exact_singularity_gives_finite_rates_and_a_warning():
 
 
 def test_unknown_steering_law_is_rejected():
-    with pytest.raises(ModelError, match="law must be 0"):
+    with pytest.raises(ModelError, match=r"law must be one of 0 \(PSEUDO_INVERSE\), "
+                                         r"1 \(SR_INVERSE\), got 2"):
         CmgSteering(law=2).start()
 
 

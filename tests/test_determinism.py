@@ -6,6 +6,8 @@ import pytest
 from agilesat.orchestration.scenarios import NAMES, get
 from helpers import run_python
 
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
 TWICE = """
 import sys
 import numpy as np

@@ -6,7 +6,6 @@ import pytest
 
 from agilesat.components.flywheel import Flywheel, wheel_step
 from agilesat.components.model import ModelError
-from agilesat.fmus.model_description import UNITS
 
 RNG = np.random.default_rng(5)
 X_WHEEL = [[0, 0, 0], [0, 0, 0], [1.0, 0, 0], [0, 0, 0]]   # one wheel (the 3rd) along x
@@ -253,22 +252,3 @@ def test_other_wheels_keep_delivering_when_one_saturates():
 def test_bad_parameters_are_rejected(parameters, message):
     with pytest.raises(ModelError, match=message):
         Flywheel(**parameters).start()
-
-
-def test_variable_table_units_and_dependencies():
-    by_name = {v.name: v for v in Flywheel.VARIABLES}
-    assert all(v.unit in UNITS and v.description for v in Flywheel.VARIABLES)
-    assert by_name["tau_cmd"].required and by_name["w_BI_B"].required
-    assert by_name["h"].depends == () and by_name["speed"].depends == ()
-    for name in ("hdot", "motor_torque", "saturated"):
-        assert set(by_name[name].depends) == {"tau_cmd", "w_BI_B"}
-
-
-def test_outputs_without_feedthrough_do_not_move_with_the_inputs():
-    m = wheel(speed0=[10.0, 20.0, 30.0, 0.0])
-    h, speed = m.get("h"), m.get("speed")
-    m.set("tau_cmd", [0.1, 0.1, 0.1])
-    m.set("w_BI_B", [0.1, 0.2, 0.3])
-    m.output()
-    assert np.array_equal(m.get("h"), h) and np.array_equal(m.get("speed"), speed)
-    assert not np.array_equal(m.get("hdot"), np.zeros(3))

@@ -38,7 +38,8 @@ def test_every_variable_has_a_description_and_every_real_a_declared_unit(fmus, n
             assert v.unit in units, v.name
 
 
-def test_output_dependencies_are_the_true_feedthrough(fmus):
+def test_model_structure_declares_the_dependencies_of_the_variable_tables(fmus):
+    """What the built modelDescription.xml declares (measured: tests/test_feedthrough.py)."""
     md = read_model_description(str(fmus["SatelliteDynamics"]))
     deps = {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
     assert deps["q_BI[1]"] == set() and deps["H_I[2]"] == set()          # states
@@ -67,12 +68,15 @@ def test_required_and_optional_inputs_are_declared_for_masters(fmus):
     assert "tau_cmd[1]" in required and "delta[6]" in required
 
 
+@pytest.mark.slow
 def test_identical_sources_build_an_identical_file(fmus, tmp_path):
     from agilesat.fmus.build import build_fmu
     again = build_fmu("CmgCluster", tmp_path, force=True)
     assert again.read_bytes() == fmus["CmgCluster"].read_bytes()
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 @pytest.mark.parametrize("name", FMUS)
 def test_state_save_step_restore_step_is_bit_identical(fmus, name):
     result = host("state", fmus[name])
@@ -80,6 +84,8 @@ def test_state_save_step_restore_step_is_bit_identical(fmus, name):
     assert result["restored_identical"] and result["deserialized_identical"]
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 @pytest.mark.parametrize("name", FMUS)
 def test_bad_calls_return_fmi2Error_with_a_message_and_the_instance_survives(fmus, name):
     result = host("errors", fmus[name])
@@ -95,12 +101,16 @@ def test_bad_calls_return_fmi2Error_with_a_message_and_the_instance_survives(fmu
         assert re.search(r"non-finite values rejected: \['\w+(\[[0-9,]+\])?=nan'\]", text)
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_all_fmus_and_two_instances_of_one_run_side_by_side(fmus):
     first = fmus["CmgCluster"]   # has inputs: its twin gets other values and must differ
     result = host("together", first, *(p for p in fmus.values() if p != first))
     assert result == {"all_ok": True, "instances": len(FMUS) + 1, "twin_differs": True}
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_many_live_instances_exit_the_host_cleanly(fmus):
     """pythonfmu 0.7.0 corrupts the heap at exit (a double free); the shim prevents it."""
     for _ in range(4):
@@ -132,6 +142,8 @@ def doubled(fmu, out, rename: bool):
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_each_fmu_runs_the_code_packed_inside_it(fmus, tmp_path):
     original = fmus["CmgCluster"]
     ours = host("singularity", original, doubled(original, tmp_path / "a.fmu", rename=True))
@@ -142,6 +154,8 @@ def test_each_fmu_runs_the_code_packed_inside_it(fmus, tmp_path):
     assert shared["singularity"][1] == pytest.approx(shared["singularity"][0])
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_host_modules_do_not_shadow_the_fmus_code(fmus):
     result = host("shadowed", fmus["CmgCluster"])
     assert result["host_patched"] == 123.0 and result["singularity"] != 123.0
@@ -149,10 +163,18 @@ def test_host_modules_do_not_shadow_the_fmus_code(fmus):
 
 def test_the_import_follower_reads_every_form_of_relative_import(tmp_path):
     from agilesat.fmus.build import _relative_imports
-    module = tmp_path / "wrapper.py"
+    for name in ("fmus/slave.py", "fmus/shim_util.py", "components/cmg_cluster.py",
+                 "components/analysis/__init__.py", "components/analysis/passes.py"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("")
+    module = tmp_path / "fmus" / "wrapper.py"
     module.write_text("from . import slave, shim_util\nfrom .slave import ModelSlave\n"
-                      "from ..components.cmg_cluster import CmgCluster\nfrom ..components import passes\n"
+                      "from ..components.cmg_cluster import CmgCluster\n"
+                      "from ..components.analysis import passes\n"
+                      "from ..components import analysis\n"
                       "import math\nfrom numpy import pi\n")
-    assert sorted(_relative_imports("fmus/wrapper.py", module)) == [
-        "components/cmg_cluster.py", "components/analysis/passes.py", "fmus/shim_util.py", "fmus/slave.py",
+    assert sorted(_relative_imports("fmus/wrapper.py", module, tmp_path)) == [
+        "components/__init__.py", "components/analysis/__init__.py",
+        "components/analysis/__init__.py", "components/analysis/passes.py",
+        "components/cmg_cluster.py", "fmus/__init__.py", "fmus/shim_util.py", "fmus/slave.py",
         "fmus/slave.py"]

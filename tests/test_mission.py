@@ -1,4 +1,4 @@
-"""Mission analysis of the video-SAR paper (seed 002): frame overlap (eqs 1–5) and Walker
+"""Mission analysis of the video-SAR paper ([Liang 2019]): frame overlap (eqs 1–5) and Walker
 sizing (eqs 14–20), against the printed formulas, independent geometry and the paper's
 numbers under the readings stated in components/analysis/mission.py."""
 import math
@@ -295,11 +295,13 @@ def test_eq15_with_earth_rotation_is_one_percent_shorter_and_keeps_S(kind, S):
     assert math.ceil(w.period / v.duration) == S
 
 
+@pytest.mark.slow
 def test_180_satellites_cover_the_target_continuously_under_the_look_reading():
     c = m.walker_coverage(12, 15, 0, angle_kind="look", max_angle=65 * DEG, step=10.0)
     assert c.covered_fraction == 1.0 and c.min_visible >= 1 and c.longest_gap == 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("S", [12, 21])
 def test_eqs_14_to_20_do_not_give_continuous_cover_under_the_incidence_reading(S):
     """With β = 65° incidence, S from eq 16 only covers targets on the ground track:

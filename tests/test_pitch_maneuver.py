@@ -1,4 +1,4 @@
-"""The five-phase pitch law of seeds 000/003 (eqs 6–11) and its errata."""
+"""The five-phase pitch law of [Zhao 2016] (eqs 6–11) and its errata."""
 import math
 
 import numpy as np
@@ -39,7 +39,7 @@ def test_printed_closed_forms_have_the_wrong_sign():
 
 def test_reference_trajectory_reaches_each_waypoint():
     t1, t2, t3, t4, t5 = PAPER.times
-    theta = lambda t: PAPER.reference(t)[0] / DEG  # noqa: E731
+    theta = lambda t: PAPER.reference(t)[0] / DEG
     assert theta(0) == pytest.approx(120) and theta(t1) == pytest.approx(108)
     assert theta(t2) == pytest.approx(60) and theta(t3) == pytest.approx(49.3333, abs=1e-4)
     assert theta(t4) == pytest.approx(1.3333, abs=1e-4) and theta(t5) == pytest.approx(0, abs=1e-9)

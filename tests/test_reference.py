@@ -18,7 +18,7 @@ from reference import scan_pitch as sp   # tests/ is on sys.path (rootdir-less t
 DEG = math.pi / 180.0
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def run(step: float, stop: float = 150.0):
     return sp.simulate(step, stop)
 
@@ -127,7 +127,7 @@ def test_jacobian_is_derivative_of_spin():
 
 def test_initial_momentum_bias():
     h0 = sp.cluster_momentum(sp.DELTA0)
-    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)   # DESIGN §4.1: "about 57 N m s"
+    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)   # DESIGN.md §4.1: "about 57 N m s"
     assert sp.singularity_measure(np.array(sp.DELTA0))[0] > 0.5
 
 
@@ -219,6 +219,7 @@ def test_pitch_measurement_is_singularity_free():
         assert sp.pitch_errors(tuple(-q))[0] == pytest.approx(theta, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_recorded_torque_and_phase():
     r = run(1e-3)
     t, ph, tau = r["time"], r["phase"], r["tau_cmd"]
@@ -270,6 +271,7 @@ def test_initial_state():
                                atol=1e-16)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("step", [0.1, 1e-3])
 def test_total_angular_momentum_is_conserved(step):
     r = run(step)
@@ -280,8 +282,9 @@ def test_total_angular_momentum_is_conserved(step):
     np.testing.assert_allclose(np.linalg.norm(L, axis=1), np.linalg.norm(H[0]), rtol=1e-13)
 
 
+@pytest.mark.slow
 def test_outputs_consistent_with_hub_equation():
-    """Finite differences of the outputs satisfy J ẇ = −w × (J w + h) − ḣ (DESIGN §2)."""
+    """Finite differences of the outputs satisfy J ẇ = −w × (J w + h) − ḣ (DESIGN.md §2)."""
     r = run(1e-3)
     dt = 1e-3
     w, h = r["w_BI_B"], r["h"]
@@ -357,6 +360,7 @@ def _simulate_plain(step, stop):
     return np.array(pitch), np.array(wbo_all), np.array(delta_all)
 
 
+@pytest.mark.slow
 def test_fast_loop_agrees_with_literal_implementation():
     # fine run over phases 1–4 (servo in its ramp and hold branches), coarse run into phase 5
     for step, stop in ((0.05, 40.0), (0.5, 100.0)):
@@ -367,6 +371,7 @@ def test_fast_loop_agrees_with_literal_implementation():
         np.testing.assert_allclose(r["delta"], delta, atol=1e-11)
 
 
+@pytest.mark.slow
 def test_self_convergence():
     a, b = run(1e-3), run(5e-4)
     dp = np.abs(a["pitch"] - b["pitch"][::2]).max()
@@ -379,6 +384,7 @@ def test_self_convergence():
     assert dp_coarse > 3 * dp           # the error shrinks with the step
 
 
+@pytest.mark.slow
 def test_maneuver_physics():
     r = run(1e-3)
     t, pitch, w = r["time"], r["pitch"], r["w_BO_B"]

@@ -1,8 +1,8 @@
-"""Repository-level promises: CI runs the README's test command; every FMU is wired up."""
+"""Repository-level promises: CI runs the README's test command; every model is an FMU."""
 import importlib
 import re
 
-from agilesat.fmus import FMUS
+from agilesat.fmus import FMUS, model_class, slave_class
 from helpers import ROOT
 
 
@@ -14,9 +14,40 @@ def test_ci_runs_the_readme_test_command():
     assert test_command in (ROOT / ".ci" / "run").read_text().splitlines()
 
 
-def test_every_fmu_has_a_thin_wrapper_on_a_tabled_model():
-    for name, module in FMUS.items():
-        slave = getattr(importlib.import_module(f"agilesat.fmus.{module}"), name)
-        assert slave.model_class.VARIABLES, name
-        source = (ROOT / "fmus" / f"{module}.py").read_text()
-        assert len(source.splitlines()) <= 8, f"{module}.py should only map, not compute"
+def test_every_component_model_is_an_fmu_named_after_its_module():
+    """The registry is read from the sources: it must be what importing them finds."""
+    from agilesat.components.model import Model
+    found = {}
+    for path in sorted((ROOT / "components").glob("*.py")):
+        module = importlib.import_module(f"agilesat.components.{path.stem}")
+        found.update({name: path.stem for name, obj in vars(module).items()
+                      if isinstance(obj, type) and issubclass(obj, Model) and obj is not Model
+                      and obj.__module__ == module.__name__})
+    assert FMUS == found
+    assert all(model_class(name).VARIABLES for name in FMUS)
+    assert all(slave_class(name).model_class is model_class(name) for name in FMUS)
+
+
+def _tracked_text_files():
+    import subprocess
+    names = subprocess.run(["git", "ls-files", "*.py", "*.md", "*.c", "*.toml"], cwd=ROOT,
+                           capture_output=True, text=True, check=True).stdout.split()
+    return {name: (ROOT / name).read_text(encoding="utf-8") for name in names
+            if (ROOT / name).is_file()}
+
+
+def test_references_resolve_inside_the_repository():
+    """Papers are cited by the keys DESIGN.md's References define, design sections by
+    headings DESIGN.md has; nothing points at files outside the repository."""
+    design = (ROOT / "DESIGN.md").read_text(encoding="utf-8")
+    references = design.split("\n## References\n", 1)[1]
+    keys = set(re.findall(r"\*\*\[([A-Z][a-z]+ \d{4})\]\*\*", references))
+    assert keys == {"Zhao 2016", "Chang 2015", "Liang 2019"}
+    sections = set(re.findall(r"^#+ (\d+(?:\.\d+)?)\.? ", design, re.M))
+    for name, text in _tracked_text_files().items():
+        if name != "tests/test_repository.py":                  # which spells them out
+            assert not re.search(r"\.\./shared|/work/|\bseeds? ?\d{3}", text), name
+        for key in re.findall(r"\[([A-Z][a-z]+ (?:19|20)\d\d)\]", text):
+            assert key in keys, f"{name}: [{key}] is not in DESIGN.md's References"
+        for section in re.findall(r"DESIGN(?:\.md)?(?:'s)? §(\d+(?:\.\d+)?)", text):
+            assert section in sections, f"{name}: DESIGN.md has no §{section}"

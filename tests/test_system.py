@@ -15,6 +15,8 @@ from helpers import agilesat
 SCAN_PITCH = get("scan_pitch").ssd
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_committed_generated_files_are_up_to_date():
     """The .ssd files and fmus/INTERFACES.md come from the scenarios and variable tables."""
     result = agilesat("generate", "--check")
@@ -94,6 +96,8 @@ CASES = {
 }
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 @pytest.mark.parametrize("case", CASES)
 def test_a_bad_system_is_refused_naming_file_line_and_variable(broken, case, tmp_path):
     edit, expected = CASES[case]
@@ -117,6 +121,8 @@ def test_read_system_reports_a_missing_fmu(broken, fmus):
         read_system(path)
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_a_failing_fmu_stops_the_run_and_keeps_what_was_recorded(fmus, tmp_path):
     out = tmp_path / "out"
     result = agilesat("run", "scan_pitch", "--set", "SatelliteDynamics.inertia[1,1]=1e-4",
@@ -130,17 +136,23 @@ def test_a_failing_fmu_stops_the_run_and_keeps_what_was_recorded(fmus, tmp_path)
     assert "unphysical" in (out / "log.txt").read_text()
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_unknown_override_is_an_error(fmus, tmp_path):
     result = agilesat("run", "scan_pitch", "--set", "CmgCluster.nope=1", "--out", tmp_path)
     assert result.returncode == 1 and "CmgCluster (CmgCluster.fmu) has no variable 'nope'" \
         in result.stderr
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_unknown_scenario_variant_is_an_error():
     result = agilesat("run", "scan_pitch:nope")
     assert result.returncode == 1 and "has no variant 'nope'" in result.stderr
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 @pytest.mark.parametrize("algorithm", ["gauss-seidel", "jacobi"])
 def test_results_have_named_columns_at_every_communication_point(fmus, tmp_path, algorithm):
     result = agilesat("run", "scan_pitch", "--stop", "2", "--step", "0.1", "--algorithm",

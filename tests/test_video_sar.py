@@ -1,4 +1,4 @@
-"""video_sar end to end through the CLI (seed 002): the pass, the pointing, the footprint.
+"""video_sar end to end through the CLI ([Liang 2019]): the pass, the pointing, the footprint.
 
 Truth here is computed in the test from the recorded positions and attitude with plain
 NumPy (the DESIGN.md §2 conventions written out again), not with the toolkit's functions.
@@ -13,6 +13,8 @@ import pytest
 
 from agilesat.orchestration.results import Results
 from helpers import ISS_TLE as ISS, agilesat
+
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
 DEG = math.pi / 180
 LAT, LON = 33.16 * DEG, 129.72 * DEG
@@ -172,7 +174,8 @@ def iss_passes():
         theta = gstime(sat.jdsatepoch + fr)
         c, s = math.cos(theta), math.sin(theta)
         r_T = np.array([c * r_E[0] - s * r_E[1], s * r_E[0] + c * r_E[1], r_E[2]])
-        return np.array(r) * 1e3, np.array(v) * 1e3, r_T, 7.292115e-5 * np.array([-r_T[1], r_T[0], 0])
+        return (np.array(r) * 1e3, np.array(v) * 1e3, r_T,
+                7.292115e-5 * np.array([-r_T[1], r_T[0], 0]))
 
     def doppler(t):
         r, v, r_T, v_T = state(t)

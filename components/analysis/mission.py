@@ -1,4 +1,4 @@
-"""Mission analysis of the video-SAR paper (seed 002, Liang et al. 2019): frame overlap
+"""Mission analysis of the video-SAR paper ([Liang 2019]): frame overlap
 ratio versus frame rate (§1, eqs 1–5) and Walker-constellation sizing for continuous
 staring (§3, eqs 14–20), with independent numerical checks of both.
 
@@ -149,7 +149,7 @@ TROPICAL_YEAR = passes.TROPICAL_YEAR_DAYS * SOLAR_DAY  # s
 
 DEG = math.pi / 180.0
 
-# The paper's case (seed 002 §1, §3, §4)
+# The paper's case ([Liang 2019] §1, §3, §4)
 VIDEO_SAR_ALTITUDE = 567e3               # m
 VIDEO_SAR_CARRIER = 9.6e9                # Hz
 VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG        # 下视角

@@ -268,26 +268,12 @@ def design_pass(altitude: float, target_lat: float, target_lon: float, target_al
                       arg_perigee=0.0, j2=bool(j2), earth_angle0=0.0,
                       epoch=format_epoch(zero_doppler - datetime.timedelta(seconds=t0)),
                       target_lat=target_lat, target_lon=target_lon, target_alt=target_alt)
-
-    # first guess at the zero-Doppler time: spherical Earth, no rotation
-    r_T = _rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T
-    alpha, beta = math.atan2(r_T[1], r_T[0]), math.asin(r_T[2])
-    gamma = math.asin(a * math.sin(look_angle) / rho_T) - look_angle
-    s = (-1.0 if side == "right" else 1.0) * math.sin(gamma)   # r̂_T·ĥ
-    ci, si = math.cos(inclination), math.sin(inclination)
-    x = (s - ci * math.sin(beta)) / (si * math.cos(beta))
-    if abs(x) > 1.0:
+    guess = _spherical_guess(_rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T,
+                             a, rho_T, look_angle, inclination, side, node)
+    if guess is None:
         raise ModelError(f"the target at latitude {math.degrees(target_lat):.2f}° cannot be "
                          f"seen {side} at {math.degrees(look_angle):.2f}° from an orbit of "
                          f"inclination {math.degrees(inclination):.2f}°")
-    guess = None
-    for delta in (math.asin(x), math.pi - math.asin(x)):
-        raan = alpha + delta
-        n_hat = np.array([math.cos(raan), math.sin(raan), 0.0])
-        h_hat = np.array([si * math.sin(raan), -si * math.cos(raan), ci])
-        u = math.atan2(r_T @ np.cross(h_hat, n_hat), r_T @ n_hat)
-        if (math.cos(u) > 0.0) == (node == "ascending"):
-            guess = np.array([raan, u])
     model = OrbitEnvironment(**parameters).start(0.0)      # secular rates to go back by t0
     guess -= t0 * np.array([model.raan_rate, model.argp_rate + model.mean_motion])
 
@@ -295,22 +281,49 @@ def design_pass(altitude: float, target_lat: float, target_lon: float, target_al
         g = _Orbit(dict(parameters, raan=float(z[0]), true_anomaly0=float(z[1]))).geometry(t0)
         return np.array([g.squint, g.look_angle - look_angle]), g
 
-    z = guess
-    step = 1e-6
-    for _ in range(30):
-        F, _ = residual(z)
-        J = np.empty((2, 2))
-        for k in range(2):
-            dz = np.zeros(2)
-            dz[k] = step
-            J[:, k] = (residual(z + dz)[0] - residual(z - dz)[0]) / (2 * step)
-        delta = np.linalg.solve(J, -F)
-        z = z + delta
-        if np.max(np.abs(delta)) < 1e-13:
-            break
+    z = _newton(residual, guess)
     F, geometry = residual(z)
     if np.max(np.abs(F)) > 1e-10 or geometry.side != side or \
             geometry.ascending != (node == "ascending") or not geometry.visible:
         raise ModelError(f"pass design did not converge (residuals {F}, {geometry})")
     parameters.update(raan=wrap_2pi(float(z[0])), true_anomaly0=wrap_2pi(float(z[1])))
     return parameters
+
+
+def _spherical_guess(r_T, a: float, rho_T: float, look_angle: float, inclination: float,
+                     side: str, node: str) -> np.ndarray | None:
+    """First guess (Ω, u) at the zero-Doppler time: spherical Earth, no rotation, target
+    direction ``r_T`` (unit, I axes) at radius ``rho_T``, orbit radius ``a``.  None if no
+    orbit of this inclination sees it."""
+    alpha, beta = math.atan2(r_T[1], r_T[0]), math.asin(r_T[2])
+    gamma = math.asin(a * math.sin(look_angle) / rho_T) - look_angle
+    s = (-1.0 if side == "right" else 1.0) * math.sin(gamma)   # r̂_T·ĥ
+    ci, si = math.cos(inclination), math.sin(inclination)
+    x = (s - ci * math.sin(beta)) / (si * math.cos(beta))
+    if abs(x) > 1.0:
+        return None
+    guess = None
+    for node_offset in (math.asin(x), math.pi - math.asin(x)):
+        raan = alpha + node_offset
+        n_hat = np.array([math.cos(raan), math.sin(raan), 0.0])
+        h_hat = np.array([si * math.sin(raan), -si * math.cos(raan), ci])
+        u = math.atan2(r_T @ np.cross(h_hat, n_hat), r_T @ n_hat)
+        if (math.cos(u) > 0.0) == (node == "ascending"):
+            guess = np.array([raan, u])
+    return guess
+
+
+def _newton(residual, z, step: float = 1e-6, tol: float = 1e-13, iterations: int = 30):
+    """Newton's method on ``residual(z) -> (F, _)`` with a central-difference Jacobian."""
+    for _ in range(iterations):
+        F, _ = residual(z)
+        J = np.empty((len(z), len(z)))
+        for k in range(len(z)):
+            dz = np.zeros(len(z))
+            dz[k] = step
+            J[:, k] = (residual(z + dz)[0] - residual(z - dz)[0]) / (2 * step)
+        delta = np.linalg.solve(J, -F)
+        z = z + delta
+        if np.max(np.abs(delta)) < tol:
+            break
+    return z

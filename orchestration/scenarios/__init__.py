@@ -12,13 +12,12 @@ import importlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
 SYSTEMS_DIR = Path(__file__).resolve().parent.parent / "systems"
 NAMES = ("scan_pitch", "payload_sweep", "video_sar")
-FMUS_PACKAGE = __name__.rsplit(".", 2)[0] + ".fmus"
 
 
 @dataclass
@@ -52,14 +51,13 @@ class Scenario:
     def render_ssd(self, sources: dict | None = None, variant: str | None = None) -> bytes:
         """The system as SSD.  FMU sources default to ``fmus/build`` relative to
         ``systems/``; a variant's parameter values replace the defaults."""
-        from ...fmus import FMUS
+        from ...fmus import model_class
         from ...fmus.build import BUILD_DIR
         from ...fmus.model_description import UNITS
         from ..ssp import render_ssd
         tables = {}
         for name in self.components:
-            module = importlib.import_module(f"{FMUS_PACKAGE}.{FMUS[name]}")
-            tables[name] = getattr(module, name).model_class.VARIABLES
+            tables[name] = model_class(name).VARIABLES
         sources = sources or {
             name: Path(os.path.relpath(BUILD_DIR / f"{name}.fmu", SYSTEMS_DIR)).as_posix()
             for name in self.components}

@@ -1,4 +1,4 @@
-"""``payload_sweep``: two symmetric swinging payloads, reaction-wheel compensation (seed 004,
+"""``payload_sweep``: two symmetric swinging payloads, reaction-wheel compensation ([Chang 2015],
 DESIGN.md §4.2).
 
 Satellite 150 kg·m² on each axis (payloads included), holding the orbit frame: an

@@ -1,5 +1,5 @@
 """``scan_pitch``: CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase
-(seeds 000/003, DESIGN.md §4.1).
+([Zhao 2016], DESIGN.md §4.1).
 
 Variant ``literal_spin``: the rotor spin exactly as printed in the paper's A_s0.  The
 cluster momentum bias then lies along +y and the maneuver pushes it beyond the cluster's
@@ -11,16 +11,25 @@ import math
 
 import numpy as np
 
-from ...components.cmg_cluster import GIMBAL_AXES, PAPER_DELTA0, PAPER_SPINS
-from ...components.orbit_environment import SCAN_PITCH_ALTITUDE, SCAN_PITCH_INCLINATION, WGS84_A
+from ...components.cmg_cluster import GIMBAL_AXES, five_pyramid
+from ...components.cmg_steering import PSEUDO_INVERSE
+from ...components.orbit_environment import WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
 from . import Scenario, relative_drift, summarize
+from .common import cmg_hardware, hub_inertia
 from .. import plots
 
 DEG = math.pi / 180
+# the paper's case ([Zhao 2016], DESIGN.md §4.1)
+ALTITUDE = 681000.0                    # m, sun-synchronous
+INCLINATION = math.radians(98.1)
 INERTIA = 956.0
 H_ROTOR = 16.65
+#: initial gimbal angles (Table 1)
+PAPER_DELTA0 = (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0)
+#: the rotor spin as printed in A_s0 (the cluster's default is its reverse)
+PAPER_SPINS = five_pyramid()[1]
 RATE_LIMIT = 0.6                       # rad/s, gimbal rate limit (DESIGN.md §3)
 PROFILE = PitchProfile(theta0=120 * DEG, theta_f=0.0, duration=100.0, scan_rate=-0.8 * DEG)
 SCAN_RATE_TOLERANCE = 0.02 * DEG
@@ -42,21 +51,19 @@ CONNECTIONS = (
 )
 
 PARAMETERS = {
-    "OrbitEnvironment.semi_major_axis": WGS84_A + SCAN_PITCH_ALTITUDE,
+    "OrbitEnvironment.semi_major_axis": WGS84_A + ALTITUDE,
     "OrbitEnvironment.eccentricity": 0.0,
-    "OrbitEnvironment.inclination": SCAN_PITCH_INCLINATION,
-    "SatelliteDynamics.inertia": INERTIA * np.eye(3),
+    "OrbitEnvironment.inclination": INCLINATION,
+    **hub_inertia(INERTIA * np.eye(3), "PitchManeuverController"),
     "SatelliteDynamics.attitude0": [0.0, PROFILE.theta0, 0.0],
     "SatelliteDynamics.rate0": [0.0, 0.0, 0.0],
     "SatelliteDynamics.gravity_gradient": True,
-    "CmgCluster.h_rotor": H_ROTOR,
+    **cmg_hardware(h_rotor=H_ROTOR),
     "CmgCluster.delta0": PAPER_DELTA0,
     "CmgCluster.rate_limit": RATE_LIMIT,
     "CmgCluster.accel_limit": 0.5,
-    "CmgSteering.h_rotor": H_ROTOR,
-    "CmgSteering.law": 0,
+    "CmgSteering.law": PSEUDO_INVERSE,
     "CmgSteering.null_gain": 0.0,
-    "PitchManeuverController.inertia": INERTIA,
     "PitchManeuverController.pitch0": PROFILE.theta0,
     "PitchManeuverController.pitch_final": PROFILE.theta_f,
     "PitchManeuverController.duration": PROFILE.duration,
@@ -67,7 +74,7 @@ PARAMETERS = {
 
 VARIANTS = {
     "literal_spin": ("rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
-                     {"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS}),
+                     cmg_hardware(spin_ref=PAPER_SPINS)),
 }
 
 #: the paper's results (Figs 4–11 and their text), SI

@@ -1,5 +1,5 @@
 """``video_sar``: an agile SAR satellite stares at a ground target for 200 s, with yaw
-compensation (seed 002, Liang et al. 2019, §2 and §4; DESIGN.md §4.3).
+compensation ([Liang 2019], §2 and §4; DESIGN.md §4.3).
 
 The pass.  The paper's Table 1 (its orbit) is missing; its text gives 567 km,
 sun-synchronous, the target (Sasebo, 33.16° N 129.72° E), zero Doppler at 2016-11-25
@@ -38,17 +38,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.analysis.mission import (VIDEO_SAR_ALTITUDE, VIDEO_SAR_LOOK_ANGLE,
-                                            VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT,
+from ...components.analysis.mission import (VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT,
                                             VIDEO_SAR_TARGET_LON)
-from ...components.analysis.passes import design_pass, find_passes, look_geometry
-from ...components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, PAPER_DELTA0,
-                                       ClusterGeometry, zero_momentum_angles)
+from ...components.analysis.passes import find_passes, look_geometry
+from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
 from . import Scenario, relative_drift, summarize
+from .common import cmg_hardware, hub_inertia
 from .. import plots
 from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
 
@@ -64,7 +63,7 @@ _GUIDANCE_INPUTS = ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")
 
 
 def _rounded(value, digits=12):
-    """Design outputs written to the system file, rounded so that last-bit differences of
+    """Design outputs written to a system file, rounded so that last-bit differences of
     the solver between platforms do not change the file."""
     return float(round(value, digits)) if isinstance(value, float) else value
 
@@ -77,10 +76,17 @@ def real_epoch(orbit: dict) -> dict:
     return dict(orbit, epoch_j2000=(parse_epoch(epoch) - J2000).total_seconds())
 
 
+#: The pass, frozen: ``design_pass(VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER,
+#: VIDEO_SAR_LOOK_ANGLE, "right", "ascending", t0=HALF_STARE)`` rounded to 12 digits
+#: (tests/test_passes.py solves it again and compares).
+PASS = {
+    "semi_major_axis": 6945137.0, "eccentricity": 0.0, "inclination": 1.704466827309,
+    "arg_perigee": 0.0, "j2": True, "earth_angle0": 0.0, "epoch": "2016-11-25T08:08:03",
+    "target_lat": 0.578751179961, "target_lon": 2.264041105687, "target_alt": 0.0,
+    "raan": 5.554027575477, "true_anomaly0": 0.462124375447,
+}
 #: the shipped pass, its epoch as a Real: the system sets no String
-ORBIT = real_epoch({key: _rounded(value) for key, value in design_pass(
-    VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER, VIDEO_SAR_LOOK_ANGLE, "right", "ascending",
-    t0=HALF_STARE).items()})
+ORBIT = real_epoch(PASS)
 GUIDANCE = {"yaw_compensation": True, "boresight_B": [0.0, 0.0, 1.0], "reference_time": 0.0}
 
 
@@ -98,9 +104,16 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
             [_rounded(float(x)) for x in rate])
 
 
-#: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set
-DELTA0 = [_rounded(float(x), 9) for x in zero_momentum_angles(
-    ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS), PAPER_DELTA0)]
+#: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set,
+#: frozen: ``zero_momentum_angles(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS),
+#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/test_passes.py solves it again)
+DELTA0 = [0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566]
+#: (attitude0, rate0) on the reference at t = 0, frozen: ``initial_state(ORBIT, GUIDANCE)``
+#: and with yaw 0 (tests/test_passes.py computes them again)
+ON_REFERENCE = ([-0.446370651122, 0.804885764925, 0.0],
+                [-0.000684611902, -0.004466724288, -0.000198845573])
+ON_REFERENCE_YAW_0 = ([-0.446370651122, 0.804885764925, 0.0],
+                      [-0.000684611902, -0.004466724288, -0.000711599654])
 
 CONNECTIONS = (
     *((f"OrbitEnvironment.{name}", f"StaringGuidance.{name}") for name in _GUIDANCE_INPUTS),
@@ -123,40 +136,37 @@ CONNECTIONS = (
 
 
 
-def parameters(orbit: dict, guidance: dict) -> dict:
+def parameters(orbit: dict, guidance: dict, on_reference: tuple | None = None) -> dict:
     """The system's parameter values for a pass (``orbit``: OrbitEnvironment parameters,
     t = 0 at the start of the stare) and guidance settings; the body starts on the
-    reference."""
-    attitude0, rate0 = initial_state(orbit, guidance)
+    reference (``on_reference`` = (attitude0, rate0), default: computed)."""
+    attitude0, rate0 = on_reference or initial_state(orbit, guidance)
     return {
         **{f"OrbitEnvironment.{key}": value for key, value in orbit.items()},
         **{f"StaringGuidance.{key}": value for key, value in guidance.items()},
         "AttitudeController.kp": [INERTIA * BANDWIDTH**2] * 3,
         "AttitudeController.kd": [2 * DAMPING * BANDWIDTH * INERTIA] * 3,
-        "AttitudeController.inertia": INERTIA * np.eye(3),
-        "SatelliteDynamics.inertia": INERTIA * np.eye(3),
+        **hub_inertia(INERTIA * np.eye(3), "AttitudeController"),
+        "AttitudeController.acceleration_feedforward": True,
         "SatelliteDynamics.attitude0": attitude0,
         "SatelliteDynamics.rate0": rate0,
         "SatelliteDynamics.gravity_gradient": True,
-        "CmgCluster.h_rotor": H_ROTOR,
+        **cmg_hardware(h_rotor=H_ROTOR),
         "CmgCluster.delta0": DELTA0,
         "CmgCluster.rate_limit": RATE_LIMIT,
-        "CmgSteering.h_rotor": H_ROTOR,
-        "CmgSteering.law": 0,
+        "CmgSteering.law": PSEUDO_INVERSE,
     }
 
 
-PARAMETERS = parameters(ORBIT, GUIDANCE)
+PARAMETERS = parameters(ORBIT, GUIDANCE, ON_REFERENCE)
 
-_YAW_0 = dict(GUIDANCE, yaw_compensation=False)
 VARIANTS = {
     "no_yaw_compensation": ("yaw 0 (eq 11 only): the footprint turns on the ground",
                             {"StaringGuidance.yaw_compensation": False,
                              **dict(zip(("SatelliteDynamics.attitude0",
-                                         "SatelliteDynamics.rate0"),
-                                        initial_state(ORBIT, _YAW_0)))}),
+                                         "SatelliteDynamics.rate0"), ON_REFERENCE_YAW_0))}),
     "no_feedforward": ("PD attitude law alone, no feedforward of the reference acceleration",
-                       {"AttitudeController.inertia": np.zeros((3, 3))}),
+                       {"AttitudeController.acceleration_feedforward": False}),
 }
 
 

@@ -1,6 +1,6 @@
 r"""Independent monolithic reference simulation of the ``scan_pitch`` scenario.
 
-Written from /work/shared/DESIGN.md §2 and §4.1 and the equations below only; it imports
+Written from DESIGN.md §2 and §4.1 and the equations below only; it imports
 nothing from ``components/``, ``fmus/`` or ``orchestration/``, so it can be used to check the
 co-simulation (FMUs + master).
 
@@ -33,7 +33,7 @@ States ``q_BI`` and the total inertial angular momentum ``H_I`` (constant)::
 
     w_BI_B = J⁻¹ (C_BI H_I − h),     Ḣ_I = 0
 
-which is the hub equation ``J ẇ = −w × (J w + h) − ḣ`` of DESIGN §2 written in conserved form.
+which is the hub equation ``J ẇ = −w × (J w + h) − ḣ`` of DESIGN.md §2 written in conserved form.
 Outputs: ``q_BO = q_OI* ⊗ q_BI``, ``w_BO_B = w_BI_B − C_BO w_OI_O``.
 Initial: ``q_BO(0)`` = Euler (0, 120°, 0); ``q_BI(0) = q_OI(0) ⊗ q_BO(0)``;
 ``w_BI_B(0) = C_BO(0) w_OI_O``; ``H_I(0) = C_BI(0)ᵀ (J w_BI_B(0) + h(0))``.
@@ -72,7 +72,8 @@ Controller (pitch 120° → 0° in T = 100 s, −0.8 °/s imaging phase)
 
 (10, 30, 36.667, 96.667, 100 s; θ̈m = −0.24 °/s²).  Phase k on [t_{k−1}, t_k) for k = 1..4, phase 5
 for t ≥ t4; the comparisons use t_k − 1e-9 s so that the grid points t = 10.0 and 30.0 fall in the
-later phase despite the formula rounding t1, t2 to 10.000000000000004, 30.000000000000004.  Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
+later phase despite the formula rounding t1, t2 to 10.000000000000004, 30.000000000000004.
+Singularity-free measurement from ``q = q_BO`` (sign chosen so q0 ≥ 0)::
 
     n = hypot(q0, q2), c = q0/n, s = q2/n,  θ = 2 atan2(q2, q0),
     e_x = 2 (c q1 − s q3),  e_z = 2 (c q3 + s q1),  w = w_BO_B
