@@ -112,6 +112,8 @@ MU_EARTH = 3.986004418e14                # m3/s2, GM (atmosphere included)
 # J2 = −√5 C̄20, C̄20 = −4.84165371736e-4; reference radius = WGS-84 a
 J2 = 1.08262668e-3
 J2_RADIUS = 6378137.0                    # m
+#: default orbit: the [Zhao 2016] 681 km (DESIGN.md §4.1)
+DEFAULT_SEMI_MAJOR_AXIS = WGS84_A + 681000.0
 
 _KEPLER_MAX_ITER = 50
 
@@ -163,7 +165,7 @@ class OrbitEnvironment(Model):
 
     VARIABLES = (
         # defaults: the [Zhao 2016] orbit, 681 km, 98.1° (DESIGN.md §4.1)
-        parameter("semi_major_axis", WGS84_A + 681000.0, "m",
+        parameter("semi_major_axis", DEFAULT_SEMI_MAJOR_AXIS, "m",
                   "semi-major axis a (mean value when j2 is set); not used with a TLE",
                   display_unit="km"),
         parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1; not used with a TLE"),

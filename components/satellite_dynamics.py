@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .orbit_environment import SCAN_PITCH_ALTITUDE, WGS84_A
+from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (IDENTITY_Q, dcm, dcm_from_euler123, euler123_from_quat,
                         euler123_rates, qmul, quat_from_dcm, rotate, rotate_back)
 from .variables import input_, output, parameter
@@ -43,7 +43,7 @@ MOMENTUM_INPUTS = tuple(f"h_{d}" for d in DEVICES)
 #: r_I when unconnected: the default orbit's radius (OrbitEnvironment) on the nadir
 #: (+z_O) of the identity orbit frame that q_OI defaults to, so that the FMU at its
 #: defaults is a satellite at 681 km with the gravity gradient on
-DEFAULT_R_I = (0.0, 0.0, -(WGS84_A + SCAN_PITCH_ALTITUDE))
+DEFAULT_R_I = (0.0, 0.0, -DEFAULT_SEMI_MAJOR_AXIS)
 
 
 def _device_inputs():
