@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .fmu import FmiCallError, Instance, Log
+from .parameters import scalar_parameters
 from .results import Results, ResultWriter
 from .ssp import SystemFile, read_system
 from .validation import check_system, override
@@ -133,12 +134,14 @@ class _Node:
 
 def simulate(system, *, step: float | None = None, stop: float | None = None,
              algorithm: str | None = None, parameters: dict | None = None,
-             out_dir=None, logging_on: bool = False, echo=None) -> Results:
+             out_dir=None, logging_on: bool = False, echo=None, progress=None) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
-    ``parameters`` maps "Instance.variable" (scalar names, e.g. "A.inertia[1,1]") to values
-    that override the system's.  With ``out_dir``, ``results.csv`` is written there as the
-    run goes.  Returns :class:`Results` (``meta`` holds the settings and the FMU log).
+    ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
+    "A.inertia": 3×3) to values that override the system's.  With ``out_dir``,
+    ``results.csv`` is written there as the run goes.  ``progress(steps done, steps)`` is
+    called about a hundred times over the run.  Returns :class:`Results` (``meta`` holds
+    the settings, the units of the columns and the FMU log).
     """
     system = system if isinstance(system, SystemFile) else read_system(system)
     step = step or system.step_size
@@ -162,17 +165,18 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
         for ref in system.components:
             instances[ref.name] = Instance(ref.name, ref.source, log)
         bindings = system.parameters + [override(instances, k, v)
-                                        for k, v in (parameters or {}).items()]
+                                        for k, v in scalar_parameters(
+                                            instances, parameters or {}).items()]
         plan = check_system(system, instances, bindings)
         return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
-                    log, out_dir, logging_on)
+                    log, out_dir, logging_on, progress)
     finally:
         for instance in instances.values():
             instance.free()
 
 
 def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
-         logging_on) -> Results:
+         logging_on, progress=None) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
     nodes = {name: _Node(instances[name], layout, plan.sources)
              for name in plan.steps.step_order}
@@ -184,9 +188,10 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     data = np.full((n_steps + 1, len(layout) + 1), np.nan)
     meta = {"system": str(system.path), "step": step, "start": start,
             "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
-            "order": plan.steps.step_order}
+            "order": plan.steps.step_order,
+            "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout}}
     writer = ResultWriter(Path(out_dir) / "results.csv", columns) if out_dir else None
-    rows = 0
+    rows, every = 0, max(1, n_steps // 100)
     try:
         _initialize(instances, nodes, init_sequence, bindings, values, start,
                     start + n_steps * step, log, logging_on)
@@ -206,6 +211,8 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
             rows = n + 2
             if writer:
                 writer.maybe_flush(data, rows)
+            if progress and (n + 1) % every == 0:
+                progress(n + 1, n_steps)
         log.time = start + n_steps * step
         for inst in instances.values():
             inst.call("fmi2Terminate")

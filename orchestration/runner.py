@@ -1,15 +1,29 @@
 """Run a shipped scenario (or any system file) end to end: build what is stale, simulate,
 write results, summary and figures.  The CLI's ``agilesat run`` is a thin layer on this.
+
+``summary.json`` (UTF-8 text): the target and settings, every parameter override with its
+FMI type, status, wall time and real-time factor (simulated seconds per wall-clock
+second), the metrics (a scenario's, each with unit, display unit, the paper's value and its
+requirement where there is one) or, for any other system, min/max/final of every recorded
+output and the momentum drift where ``H_I`` is recorded; the figures written.
 """
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
+
+import numpy as np
 
 from ..fmus.model_description import UNITS
 from . import scenarios
+from .fmu import Description
 from .master import SimulationError, simulate
-from .results import Results
+from .parameters import did_you_mean, scalar_parameters
+from .results import Results, units_path
+from .ssp import read_system
+from .units import pretty
+from .validation import override
 
 
 def parse_target(target):
@@ -20,18 +34,23 @@ def parse_target(target):
     name, _, variant = target.partition(":")
     if name in scenarios.NAMES:
         scenario = scenarios.get(name)
-        scenario.variant_parameters(variant or None)  # unknown variant: KeyError now
+        if variant and variant not in scenario.variants:
+            raise KeyError(f"scenario {name} has no variant {variant!r}"
+                           + did_you_mean(variant, scenario.variants)
+                           + f" (variants: {', '.join(scenario.variants) or 'none'})")
         return scenario, variant or None
     if Path(target).suffix in (".ssd", ".ssp"):
         return None, None
     raise KeyError(f"{target!r} is neither a scenario ({', '.join(scenarios.NAMES)}) nor an "
-                   ".ssd/.ssp file")
+                   ".ssd/.ssp file" + did_you_mean(name, scenarios.NAMES))
 
 
 def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
-        figures: bool = True, echo=None, build: bool = True) -> tuple[Results, dict]:
+        figures: bool = True, echo=None, build: bool = True,
+        progress=None) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
-    (results, summary)."""
+    (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
+    elements (:mod:`.parameters`); ``progress``: see :func:`simulate`."""
     scenario, variant = parse_target(target)
     overrides = dict(parameters or {})
     if scenario is not None:
@@ -42,51 +61,138 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
         overrides = {**scenario.variant_parameters(variant), **overrides}
     else:
         system = Path(target)
+    typed = typed_overrides(system, overrides)
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
+    wall = time.perf_counter()
     try:
         results = simulate(system, step=step, stop=stop, algorithm=algorithm,
-                           parameters=overrides, out_dir=out_dir, echo=echo)
+                           parameters={k: p.value for k, p in typed.items()},
+                           out_dir=out_dir, echo=echo, progress=progress)
     except SimulationError as failure:
         if out_dir is not None and failure.results is not None:
             _write_records(failure.results, out_dir)
         raise
+    wall = time.perf_counter() - wall
+    settings = {k: results.meta[k] for k in ("start", "stop", "step", "algorithm")}
     summary = {
         "scenario": scenario.name if scenario else None,
         "variant": variant,
         "system": str(system),
-        "settings": {k: results.meta[k] for k in ("start", "stop", "step", "algorithm")},
-        "parameters": overrides,
+        "settings": settings,
+        "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()},
+        "wall_time": wall,
+        "real_time_factor": (settings["stop"] - settings["start"]) / max(wall, 1e-9),
         "fmu_messages": [str(e) for e in results.meta["log"] if e.status >= 1],
     }
     if scenario is not None:
         summary.update(scenario.metrics(results))
         summary["status"] = "failed" if summary["diagnostics"] else "ok"
+    else:
+        summary.update(generic_summary(results))
     if out_dir is not None:
         _write_records(results, out_dir)
-        (out_dir / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
-        if figures and scenario is not None:
-            summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
+        _write_summary(summary, out_dir)
+        if figures:
+            from . import plots
+            paths = scenario.figures(results, out_dir) if scenario is not None else \
+                plots.overview(results, out_dir)
+            summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
+            _write_summary(summary, out_dir)
     return results, summary
 
 
+def _write_summary(summary: dict, out_dir: Path) -> None:
+    (out_dir / "summary.json").write_text(
+        json.dumps(summary, indent=2, default=str, ensure_ascii=False) + "\n",
+        encoding="utf-8")
+
+
+def typed_overrides(system, overrides: dict) -> dict:
+    """{"A.x[i]": ParameterValue} of the overrides (whole arrays split, each typed by the
+    FMU's variable), checked against the system's model descriptions."""
+    if not overrides:
+        return {}
+    described = {c.name: Description(c.name, c.source) for c in read_system(system).components}
+    return {k: override(described, k, v)
+            for k, v in scalar_parameters(described, overrides).items()}
+
+
+def generic_summary(results: Results) -> dict:
+    """Any system: min/max/final of every output, the momentum drift of every recorded
+    ``H_I`` (max |H(t) − H(0)| / |H(0)|); status ok (nothing is required of it)."""
+    outputs = {}
+    for name, column in zip(results.names[1:], results.data[:, 1:].T):
+        outputs[name] = {"min": float(np.min(column)), "max": float(np.max(column)),
+                         "final": float(column[-1]), "unit": results.units.get(name)}
+    metrics = {}
+    for base in sorted({n.rsplit("[", 1)[0] for n in results.names
+                        if n.rsplit("[", 1)[0].endswith(".H_I")}):
+        metrics[f"{base.split('.')[0]}.momentum_drift"] = {
+            "value": scenarios.relative_drift(results.vector(base)), "unit": "1",
+            "display_unit": "1", "description": f"max |H_I(t) − H_I(0)| / |H_I(0)| of {base}"}
+    return {"metrics": metrics, "outputs": outputs, "diagnostics": [], "status": "ok"}
+
+
 def _write_records(results: Results, out_dir: Path) -> None:
-    """results.npz and log.txt (results.csv is written while the run goes)."""
+    """results.npz, the units of results.csv, log.txt (results.csv is written while the run
+    goes)."""
     results.to_npz(out_dir / "results.npz")
+    results.write_units(units_path(out_dir / "results.csv"))
     (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
 
 
+def _display(value, unit, display_unit):
+    """(value in the display unit, the display unit as people write it)."""
+    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit, 1.0)
+    return value * scale, pretty(display_unit or unit)
+
+
+def _requirement(requirement, unit, display_unit) -> str:
+    """A requirement as text in the display unit: a bound (≤ x), a band [a, b], or
+    {"min"/"max": ...} (either may be missing)."""
+    if isinstance(requirement, dict):
+        low = requirement.get("min", requirement.get("lower"))
+        high = requirement.get("max", requirement.get("upper"))
+    elif isinstance(requirement, (list, tuple)):
+        low, high = requirement
+    else:
+        low, high = None, requirement
+    show = lambda x: f"{_display(x, unit, display_unit)[0]:.4g}"  # noqa: E731
+    u = _display(0.0, unit, display_unit)[1]
+    if low is not None and high is not None:
+        return f"in [{show(low)}, {show(high)}]{' ' + u if u else ''}"
+    if high is not None:
+        return f"≤ {show(high)}{' ' + u if u else ''}"
+    return f"≥ {show(low)}{' ' + u if u else ''}" if low is not None else ""
+
+
 def format_summary(summary: dict) -> str:
-    """The headline numbers beside the paper's, in each metric's display unit."""
+    """The headline numbers beside the paper's and the requirement, in each metric's display
+    unit; for a system without a scenario, min/max/final of every output."""
     lines = []
     for name, m in summary.get("metrics", {}).items():
-        scale = UNITS.get(m["unit"], ({}, {}))[1].get(m.get("display_unit"), 1.0)
-        unit = m.get("display_unit") or m["unit"]
-        value = "not reached" if m["value"] is None else f"{m['value'] * scale:.6g} {unit}"
-        paper = f"paper {m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
-        lines.append(f"  {name:34s} {value:>22s}   {paper}")
+        unit, display = m["unit"], m.get("display_unit")
+        value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
+        text = "not reached" if value is None else f"{value:.6g} {u}".rstrip()
+        paper = f"paper {_display(m['paper'], unit, display)[0]:.6g} {u}".rstrip() \
+            if "paper" in m else ""
+        required = f"required {_requirement(m['requirement'], unit, display)}" \
+            if "requirement" in m else ""
+        verdict = {True: "PASS", False: "FAIL"}.get(m.get("met"), "")
+        lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}"
+                     .rstrip())
+    outputs = summary.get("outputs", {})
+    if outputs:
+        lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")
+        for name, o in outputs.items():
+            lines.append(f"  {name:40s} {o['min']:12.5g} {o['max']:12.5g} {o['final']:12.5g}"
+                         f"  {pretty(o['unit'])}".rstrip())
+    if "wall_time" in summary:
+        lines.append(f"  status {summary.get('status', '?')}, wall time "
+                     f"{summary['wall_time']:.2f} s, {summary['real_time_factor']:.3g}× real "
+                     "time")
     for problem in summary.get("diagnostics", []):
         lines.append(f"  FAILED: {problem}")
     return "\n".join(lines)
-
