@@ -285,11 +285,13 @@ def _mission(args) -> int:
             print(f"  {rate:6.2f} Hz   overlap {100 * overlap:6.2f} %"
                   + ("   (negative: the frames leave gaps)" if overlap < 0 else ""))
         rates = np.linspace(1.0, 30.0, 146)
-        curve = mission.overlap_ratio(rates, altitude=altitude, look_angle=look)
-        path = plots.lines(args.out / "overlap_vs_frame_rate.png",
-                           "Frame overlap vs frame rate (seed 002, Fig. 3)", rates,
-                           {"overlap": 100 * curve.overlap}, "overlap [%]",
-                           xlabel="frame rate [Hz]")
+        overlap = 100 * mission.overlap_ratio(rates, altitude=altitude, look_angle=look).overlap
+        gaps = rates[overlap < 0]      # frames leave gaps: no overlap to plot
+        title = "Frame overlap vs frame rate (seed 002, Fig. 3)" + (
+            f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else "")
+        path = plots.lines(args.out / "overlap_vs_frame_rate.png", title, rates,
+                           {"overlap": np.where(overlap >= 0, overlap, np.nan)}, "overlap [%]",
+                           xlabel="frame rate [Hz]", bottom=0.0)
         print(f"figure: {path}")
     else:
         beta = mission.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
