@@ -39,8 +39,9 @@ def assert_within(results, name: str, low: float | None = None, high: float | No
             worst = values.min() if word == "below" else values.max()
             raise AssertionError(
                 f"{name} is {word} {bound:g} {unit} at {bad.any(axis=1).sum()} of {len(t)} "
-                f"points, first at t = {t[k]:g} s ({values[k, j]:.6g} {unit}, element "
-                f"{j + 1}); worst {worst:.6g} {unit}")
+                f"points, first at t = {t[k]:g} s ({values[k, j]:.6g} {unit}"
+                + (f", element {j + 1}" if values.shape[1] > 1 else "")
+                + f"); worst {worst:.6g} {unit}")
 
 
 def assert_settles(results, name: str, bound: float, after: float, *,
