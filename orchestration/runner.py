@@ -31,7 +31,7 @@ def parse_target(target):
     a file path -> (None, None)."""
     if isinstance(target, scenarios.Scenario):
         return target, None
-    name, _, variant = target.partition(":")
+    name, _, variant = str(target).partition(":")
     if name in scenarios.NAMES:
         scenario = scenarios.get(name)
         if variant and variant not in scenario.variants:
