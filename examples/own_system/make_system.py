@@ -6,7 +6,7 @@
     Flywheel.h, Flywheel.hdot -> SatelliteDynamics.h_wheel, hdot_wheel
 
 A 50 kg·m² satellite tumbling at about 1.5 °/s, gain 5 N·m·s/rad (time constant J/gain =
-10 s), 100 s at 0.05 s.  Usage: python make_system.py [OUT_DIR]  (default: ./build).
+10 s), 100 s at 0.05 s.  Usage: python make_system.py [OUT_DIR]  (default: out/own_system).
 """
 import os
 import subprocess
@@ -16,14 +16,14 @@ from pathlib import Path
 from agilesat.fmus.build import build_fmu
 
 HERE = Path(__file__).resolve().parent
-OUT = Path(sys.argv[1] if len(sys.argv) > 1 else HERE / "build").resolve()
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "out/own_system").resolve()
 OUT.mkdir(parents=True, exist_ok=True)
 
 # 1. the user's FMU (pythonfmu's command line), and ours
 subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(HERE / "rate_damper.py"),
                 "-d", str(OUT)], check=True, capture_output=True)
-sources = {"SatelliteDynamics": build_fmu("SatelliteDynamics"), "Flywheel": build_fmu("Flywheel"),
-           "RateDamper": OUT / "RateDamper.fmu"}
+sources = {"SatelliteDynamics": build_fmu("SatelliteDynamics"),
+           "Flywheel": build_fmu("Flywheel"), "RateDamper": OUT / "RateDamper.fmu"}
 
 # 2. the system: whole vectors, written element by element as SSP wants them
 WIRES = [("SatelliteDynamics.w_BI_B", "RateDamper.w_BI_B"),

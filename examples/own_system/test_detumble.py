@@ -12,7 +12,7 @@ import pytest
 from agilesat.orchestration.checks import (assert_momentum_conserved, assert_settles,
                                            assert_within)
 
-SYSTEM = Path(os.environ.get("DETUMBLE_SSD", Path(__file__).parent / "build" / "detumble.ssd"))
+SYSTEM = Path(os.environ.get("DETUMBLE_SSD", "out/own_system/detumble.ssd"))
 J, GAIN = 50.0, 5.0          # kg·m², N·m·s/rad: as make_system.py sets them
 
 
