@@ -10,6 +10,7 @@ stay visible.
 """
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -94,10 +95,12 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     return _save(fig, axes, path, title, xlabel)
 
 
-def signals(path: Path, runs: dict, variables, deg: bool = False) -> Path:
+def signals(path: Path, runs: dict, variables, deg: bool = False,
+            instance: str | None = None) -> Path:
     """Recorded variables (scalar columns or whole arrays by base name), one panel each,
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
-    the results, angles in degrees with ``deg``."""
+    the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
+    one), it is the title and the axes name the variables alone."""
     fig, axes = plt.subplots(len(variables), 1, figsize=(8, 1.2 + 2.6 * len(variables)),
                              squeeze=False, sharex=True)
     for ax, name in zip(axes[:, 0], variables):
@@ -108,11 +111,13 @@ def signals(path: Path, runs: dict, variables, deg: bool = False) -> Path:
                 ax.plot(results.time, v, linewidth=1.3, linestyle=_STYLES[k % len(_STYLES)],
                         label=f"{run} {element}".strip())
         unit = results.unit(name)
-        ax.set_ylabel(unit_label(name, to_degrees(unit)[1] if deg else unit))
+        ax.set_ylabel(unit_label(name.split(".", 1)[1] if instance else name,
+                                 to_degrees(unit)[1] if deg else unit))
         ax.grid(True, alpha=0.3)
         if len(ax.get_lines()) > 1:
             ax.legend(fontsize=8, ncol=3)
-    return _save(fig, axes, path, ", ".join(variables), "time [s]")
+    return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90),
+                 "time [s]")
 
 
 def overview(results, out_dir) -> list[Path]:
@@ -126,7 +131,7 @@ def overview(results, out_dir) -> list[Path]:
     paths = []
     for instance, variables in by_instance.items():
         paths.append(signals(Path(out_dir) / f"overview_{instance}.png", {"": results},
-                             variables))
+                             variables, instance=instance))
     return paths
 
 
