@@ -95,7 +95,8 @@ def scalar_parameters(instances: dict, parameters: dict) -> dict:
             result[key] = value
             continue
         if variable not in table:
-            raise SystemFileError(f"--set {key}: {name} has no variable {variable!r}"
+            raise SystemFileError(f"--set {key}: {name} ({instances[name].path.name}) has "
+                                  f"no variable {variable!r}"
                                   + did_you_mean(variable, table))
         array = table[variable]
         if np.shape(value) != array.shape:

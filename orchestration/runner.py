@@ -114,7 +114,8 @@ def typed_overrides(system, overrides: dict) -> dict:
     FMU's variable), checked against the system's model descriptions."""
     if not overrides:
         return {}
-    described = {c.name: Description(c.name, c.source) for c in read_system(system).components}
+    system_file = read_system(system)       # holds an .ssp's unpacked FMUs while we read
+    described = {c.name: Description(c.name, c.source) for c in system_file.components}
     return {k: override(described, k, v)
             for k, v in scalar_parameters(described, overrides).items()}
 

@@ -198,3 +198,18 @@ def test_own_system_gets_a_generic_summary_and_figures(fmus, tmp_path):
     assert drift == pytest.approx(np.abs(H - H[0]).max() / np.linalg.norm(H[0]))
     assert (tmp_path / "overview_CmgCluster.png").exists()
     assert str(tmp_path / "overview_SatelliteDynamics.svg") in summary["figures"]
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
+    package = tmp_path / "scan_pitch.ssp"
+    assert agilesat("export", "scan_pitch", "--out", package).returncode == 0
+    result = agilesat("run", package, "--stop", 1, "--no-figures", "--out", tmp_path / "run",
+                      "--set", "SatelliteDynamics.rate0=[0.001,0,0]")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["parameters"]["SatelliteDynamics.rate0[1]"] == {"value": 0.001,
+                                                                   "type": "Real"}
+    assert Results.load(tmp_path / "run")["SatelliteDynamics.w_BO_B[1]"][0] == pytest.approx(
+        0.001, rel=1e-12)
