@@ -144,6 +144,11 @@ def _write_records(results: Results, out_dir: Path) -> None:
     (out_dir / "log.txt").write_text("".join(f"{e}\n" for e in results.meta["log"]))
 
 
+def _join(number: str, unit: str) -> str:
+    """'0.5 rad/s', '2.1°' (no space before a degree sign), '0.57' (no unit)."""
+    return number + ("" if not unit or unit.startswith("°") and "/" not in unit else " ") + unit
+
+
 def _display(value, unit, display_unit):
     """(value in the display unit, the display unit as people write it)."""
     scale = UNITS.get(unit, ({}, {}))[1].get(display_unit, 1.0)
@@ -163,10 +168,10 @@ def _requirement(requirement, unit, display_unit) -> str:
     show = lambda x: f"{_display(x, unit, display_unit)[0]:.4g}"  # noqa: E731
     u = _display(0.0, unit, display_unit)[1]
     if low is not None and high is not None:
-        return f"in [{show(low)}, {show(high)}]{' ' + u if u else ''}"
+        return _join(f"in [{show(low)}, {show(high)}]", u)
     if high is not None:
-        return f"≤ {show(high)}{' ' + u if u else ''}"
-    return f"≥ {show(low)}{' ' + u if u else ''}" if low is not None else ""
+        return _join(f"≤ {show(high)}", u)
+    return _join(f"≥ {show(low)}", u) if low is not None else ""
 
 
 def format_summary(summary: dict) -> str:
@@ -176,8 +181,8 @@ def format_summary(summary: dict) -> str:
     for name, m in summary.get("metrics", {}).items():
         unit, display = m["unit"], m.get("display_unit")
         value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
-        text = "not reached" if value is None else f"{value:.6g} {u}".rstrip()
-        paper = f"paper {_display(m['paper'], unit, display)[0]:.6g} {u}".rstrip() \
+        text = "not reached" if value is None else _join(f"{value:.6g}", u)
+        paper = "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u) \
             if "paper" in m else ""
         required = f"required {_requirement(m['requirement'], unit, display)}" \
             if "requirement" in m else ""
