@@ -1,14 +1,16 @@
 """``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
 
 Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
-3 a scenario that ran but did not fly as required (the summary's diagnostics say why);
-130 a run interrupted by SIGINT (Ctrl-C) or SIGTERM (everything recorded so far is kept).
+2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
+as required (the summary's diagnostics say why); 130 a run interrupted by SIGINT (Ctrl-C)
+or SIGTERM (everything recorded so far is kept).
 """
 from __future__ import annotations
 
 import argparse
 import math
 import sys
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -22,10 +24,23 @@ DEG = math.pi / 180
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="agilesat", description=__doc__.splitlines()[0])
+    doc = __doc__.split("\n\n")
+    parser = argparse.ArgumentParser(prog="agilesat", description=doc[0],
+                                     epilog=doc[1].strip(),
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version",
+                        version=f"agilesat {metadata.version('agilesat')}")
+    quiet = argparse.ArgumentParser(add_help=False)
+    quiet.add_argument("-q", "--quiet", action="store_true",
+                       help="no progress bar or progress lines")
     commands = parser.add_subparsers(dest="command", required=True)
 
-    build = commands.add_parser("build", help="build FMUs into fmus/build/")
+    commands.add_parser("list", help="the scenarios and their variants")
+    info = commands.add_parser("info", help="components, connections and every settable "
+                               "parameter of a scenario, system file or FMU")
+    info.add_argument("target", help="a scenario, an .ssd/.ssp file, an FMU name or .fmu file")
+
+    build = commands.add_parser("build", parents=[quiet], help="build FMUs into fmus/build/")
     build.add_argument("names", nargs="*", help="FMU names (default: all)")
     build.add_argument("--out", type=Path, help="output directory (default fmus/build)")
     build.add_argument("--force", action="store_true", help="rebuild even if up to date")
@@ -34,16 +49,28 @@ def main(argv=None) -> int:
     validate.add_argument("fmus", nargs="*", type=Path,
                           help="FMU files (default: every FMU in fmus/build)")
 
-    run = commands.add_parser("run", help="run a scenario[:variant] or an .ssd/.ssp file")
+    run = commands.add_parser("run", parents=[quiet],
+                              help="run a scenario[:variant] or an .ssd/.ssp file")
     run.add_argument("target", help=f"one of {', '.join(scenarios.NAMES)} (optionally "
                      ":variant) or a system file")
     run.add_argument("--step", type=float, help="macro step [s]")
     run.add_argument("--stop", type=float, help="stop time [s]")
     run.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
     run.add_argument("--set", action="append", default=[], metavar="INSTANCE.VAR=VALUE",
-                     help="override a parameter (scalar names, e.g. A.inertia[1,1]=900)")
+                     help="override a parameter: an element (A.inertia[2,2]=900) or a whole "
+                     "array (A.inertia=[[900,0,0],[0,900,0],[0,0,900]]); `agilesat info` "
+                     "lists them")
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
     run.add_argument("--no-figures", action="store_true")
+    run.add_argument("--mat", action="store_true", help="also write results.mat (MATLAB)")
+
+    plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
+    plot.add_argument("items", nargs="+", metavar="RESULTS_DIR... VARIABLE...",
+                      help="run directories (overlaid), then variables: a column "
+                      "(SatelliteDynamics.w_BI_B[2]) or a whole array (CmgCluster.delta)")
+    plot.add_argument("--deg", action="store_true", help="angles in degrees")
+    plot.add_argument("--out", type=Path, help="figure file (.png; an .svg is written "
+                      "beside it; default RESULTS_DIR/plot.png)")
 
     export = commands.add_parser("export", help="write a scenario[:variant] as a "
                                  "self-contained SSP package (.ssd + FMUs)")
@@ -51,8 +78,8 @@ def main(argv=None) -> int:
                         ":variant)")
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
-    stare = commands.add_parser("stare", help="video_sar over a pass of a real satellite "
-                                "(two-line elements) found for a ground target")
+    stare = commands.add_parser("stare", parents=[quiet], help="video_sar over a pass of a "
+                                "real satellite (two-line elements) found for a ground target")
     stare.add_argument("--tle", type=Path, required=True,
                        help="file holding the two-line element set (an optional name line "
                        "first)")
@@ -82,8 +109,9 @@ def main(argv=None) -> int:
                           f"(walker, default {mission.VIDEO_SAR_MAX_INCIDENCE / DEG:g})")
     analysis.add_argument("--out", type=Path, default=Path("out/mission"))
 
-    size = commands.add_parser("size-flywheel", help="smallest reaction wheel that meets the "
-                               "payload_sweep pointing requirements (co-simulation sweep)")
+    size = commands.add_parser("size-flywheel", parents=[quiet], help="smallest reaction "
+                               "wheel that meets the payload_sweep pointing requirements "
+                               "(co-simulation sweep)")
     size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
     size.add_argument("--accuracy", type=float, default=payload_sweep.ACCURACY / DEG,
                       help="pointing accuracy [deg]")
@@ -100,21 +128,50 @@ def main(argv=None) -> int:
 
     args = parser.parse_args(argv)
     try:
-        return {"build": _build, "validate": _validate, "run": _run, "export": _export,
-                "stare": _stare, "mission": _mission, "size-flywheel": _size_flywheel,
+        return {"list": _list, "info": _info, "build": _build, "validate": _validate,
+                "run": _run, "plot": _plot, "export": _export, "stare": _stare,
+                "mission": _mission, "size-flywheel": _size_flywheel,
                 "generate": _generate}[args.command](args)
     except (Interrupted, KeyboardInterrupt) as exc:
         print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
         return 130
-    except (KeyError, ValueError, RuntimeError, OSError) as exc:
-        print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
+    except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
         return 1
 
 
+def _list(args) -> int:
+    from .info import listing
+    print(listing())
+    return 0
+
+
+def _info(args) -> int:
+    from .info import info
+    print(info(args.target))
+    return 0
+
+
 def _build(args) -> int:
-    from ..fmus.build import BUILD_DIR, build_all
-    for path in build_all(args.out or BUILD_DIR, args.names or None, force=args.force):
+    from ..fmus import FMUS
+    from ..fmus.build import BUILD_DIR, build_fmu
+    from .progress import Progress
+    names = args.names or list(FMUS)
+    built = []
+    with Progress("build", unit="FMU", quiet=args.quiet) as progress:
+        for k, name in enumerate(names):
+            target = (args.out or BUILD_DIR) / f"{name}.fmu"
+            before = target.stat().st_mtime_ns if target.exists() else None
+            path = build_fmu(name, args.out or BUILD_DIR, force=args.force)
+            if path.stat().st_mtime_ns != before:
+                built.append(path)
+            progress(k + 1, len(names))
+    for path in built:
         print(path)
+    if not built:
+        print(f"all {len(names)} FMUs up to date in {args.out or BUILD_DIR} (nothing to do; "
+              "--force rebuilds)")
     return 0
 
 
@@ -136,6 +193,7 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
+    from .progress import Progress
     from .runner import run
     overrides = {}
     for item in args.set:
@@ -144,13 +202,38 @@ def _run(args) -> int:
             raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
         overrides[key.strip()] = value.strip()
     out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
-    results, summary = run(args.target, step=args.step, stop=args.stop,
-                           algorithm=args.algorithm, parameters=overrides, out_dir=out,
-                           figures=not args.no_figures, echo=_echo(out))
+    with Progress(args.target, quiet=args.quiet) as progress:
+        results, summary = run(args.target, step=args.step, stop=args.stop,
+                               algorithm=args.algorithm, parameters=overrides, out_dir=out,
+                               figures=not args.no_figures, echo=_echo(out),
+                               progress=progress)
+    if args.mat:
+        results.to_mat(out / "results.mat")
     settings = summary["settings"]
     print(f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
           f"{settings['algorithm']}; results in {out}/")
     return _report(summary)
+
+
+def _plot(args) -> int:
+    from . import plots
+    from .results import Results
+    runs = [Path(item) for item in args.items if Path(item).is_dir()]
+    variables = [item for item in args.items if not Path(item).is_dir()]
+    if not runs or not variables:
+        raise ValueError("expected RESULTS_DIR... VARIABLE...: one or more run directories, "
+                         f"then the variables to plot (got directories {list(map(str, runs))}"
+                         f", variables {variables})")
+    loaded = {run.name or str(run): Results.load(run) for run in runs}
+    for results in loaded.values():
+        for name in variables:
+            results.columns(name)       # a wrong name: did you mean ...
+    out = args.out or runs[0] / "plot.png"
+    if len(loaded) == 1:
+        loaded = {"": next(iter(loaded.values()))}    # one run: label the lines by element
+    path = plots.signals(out, loaded, variables, deg=args.deg)
+    print("\n".join(str(p) for p in plots.formats(path)))
+    return 0
 
 
 def _report(summary) -> int:
@@ -186,7 +269,9 @@ def _stare(args) -> int:
               f"{'ascending' if g.ascending else 'descending'}")
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
     scenario = video_sar.pass_scenario(orbit, args.out, not args.no_yaw_compensation)
-    _, summary = run(scenario, out_dir=args.out, echo=_echo(args.out))
+    from .progress import Progress
+    with Progress("stare", quiet=args.quiet) as progress:
+        _, summary = run(scenario, out_dir=args.out, echo=_echo(args.out), progress=progress)
     print(f"results in {args.out}/")
     return _report(summary)
 
@@ -206,11 +291,13 @@ def _mission(args) -> int:
             print(f"  {rate:6.2f} Hz   overlap {100 * overlap:6.2f} %"
                   + ("   (negative: the frames leave gaps)" if overlap < 0 else ""))
         rates = np.linspace(1.0, 30.0, 146)
-        curve = mission.overlap_ratio(rates, altitude=altitude, look_angle=look)
-        path = plots.lines(args.out / "overlap_vs_frame_rate.png",
-                           "Frame overlap vs frame rate ([Liang 2019], Fig. 3)", rates,
-                           {"overlap": 100 * curve.overlap}, "overlap [%]",
-                           xlabel="frame rate [Hz]")
+        overlap = 100 * mission.overlap_ratio(rates, altitude=altitude, look_angle=look).overlap
+        gaps = rates[overlap < 0]      # frames leave gaps: no overlap to plot
+        title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
+            f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else "")
+        path = plots.lines(args.out / "overlap_vs_frame_rate.png", title, rates,
+                           {"overlap": np.where(overlap >= 0, overlap, np.nan)}, "overlap [%]",
+                           xlabel="frame rate [Hz]", bottom=0.0)
         print(f"figure: {path}")
     else:
         beta = mission.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG

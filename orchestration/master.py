@@ -38,6 +38,7 @@ import threading
 import numpy as np
 
 from .fmu import FmiCallError, Instance, Log
+from .parameters import scalar_parameters
 from .recorder import Recorder
 from .results import Results
 from .ssp import SystemFile, SystemFileError, read_system
@@ -184,15 +185,17 @@ class _Node:
 
 def simulate(system, *, step: float | None = None, stop: float | None = None,
              algorithm: str | None = None, parameters: dict | None = None,
-             out_dir=None, logging_on: bool = False, echo=None) -> Results:
+             out_dir=None, logging_on: bool = False, echo=None, progress=None) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
-    ``parameters`` maps "Instance.variable" (scalar names, e.g. "A.inertia[1,1]") to values
-    that override the system's.  With ``out_dir``, ``results.csv`` is written there row by
-    row and ``results.npz`` at the end, and the Results returned map their rows from disk
-    (memory independent of the run length); without, the rows are held in memory.  Returns
-    :class:`Results` (``meta`` holds the settings, the FMU log and the open inputs); raises
-    :class:`SimulationError` (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
+    ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
+    "A.inertia": 3×3) to values that override the system's.  With ``out_dir``,
+    ``results.csv`` is written there row by row and ``results.npz`` at the end, and the
+    Results returned map their rows from disk (memory independent of the run length);
+    without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
+    hundred times over the run.  Returns :class:`Results` (``meta`` holds the settings, the
+    units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
+    (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
     """
     system = system if isinstance(system, SystemFile) else read_system(system)
     start = system.start_time
@@ -211,14 +214,15 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
             for ref in system.components:
                 instances[ref.name] = _load(system, ref, log)
             bindings = system.parameters + [override(instances, k, v)
-                                            for k, v in (parameters or {}).items()]
+                                            for k, v in scalar_parameters(
+                                                instances, parameters or {}).items()]
             plan = check_system(system, instances, bindings)
             for entry in plan.open_inputs:
                 log.add(entry["input"].partition(".")[0], 0 if entry["declared"] else 1,
                         "master", f"input {entry['input']} is not connected: "
                         f"{entry['meaning']}")
             return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
-                        log, out_dir, logging_on, signals)
+                        log, out_dir, logging_on, signals, progress)
         finally:
             for instance in instances.values():
                 instance.free()
@@ -252,7 +256,7 @@ def _load(system, ref, log) -> Instance:
 
 
 def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
-         logging_on, signals) -> Results:
+         logging_on, signals, progress=None) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
     nodes = {name: _Node(instances[name], layout, plan.sources)
              for name in plan.steps.step_order}
@@ -264,9 +268,10 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     row = np.zeros(len(layout) + 1)
     meta = {"system": str(system.path), "step": step, "start": start,
             "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
-            "order": plan.steps.step_order, "unconnected_optional_inputs": plan.open_inputs}
+            "order": plan.steps.step_order, "unconnected_optional_inputs": plan.open_inputs,
+            "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout}}
     recorder = Recorder(columns, out_dir)
-    failure = None
+    failure, every = None, max(1, n_steps // 100)
     try:
         _initialize(instances, nodes, init_sequence, bindings, values, start,
                     start + n_steps * step, log, logging_on)
@@ -285,6 +290,8 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
                 _evaluate(sequence, values)
             row[0], row[1:] = start + (n + 1) * step, values
             recorder.append(row)
+            if progress and (n + 1) % every == 0:
+                progress(n + 1, n_steps)
         else:
             log.time = start + n_steps * step
         for inst in instances.values():

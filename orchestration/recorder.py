@@ -63,13 +63,14 @@ class Recorder:
         problems = []
         for f in self._files:
             f.close()
-        data = _map(self.raw.path, self.rows, len(self.columns))
+        results = Results(self.columns, _map(self.raw.path, self.rows, len(self.columns)), meta)
         try:
-            write_npz(self.out_dir / "results.npz", self.columns, self.raw.path, self.rows)
+            write_npz(self.out_dir / "results.npz", self.columns, self.raw.path, self.rows,
+                      [results.units.get(n) or "" for n in self.columns])
         except OSError as exc:
             problems.append(str(exc))
         self.raw.path.unlink(missing_ok=True)  # mapped already (POSIX keeps the pages)
-        return Results(self.columns, data, meta), problems
+        return results, problems
 
 
 class _File:
@@ -131,15 +132,19 @@ def _map(raw: Path, rows: int, n: int) -> np.ndarray:
     return np.memmap(raw, dtype="<f8", mode="c", shape=(rows, n))
 
 
-def write_npz(path: Path, names: list[str], raw: Path, rows: int, chunk: int = 1 << 20) -> None:
-    """results.npz (``names``, ``data`` as :meth:`Results.to_npz` writes them) from the raw
-    float64 rows in ``raw``, copied in chunks; written to a temporary name, then renamed."""
+def write_npz(path: Path, names: list[str], raw: Path, rows: int, units: list[str],
+              chunk: int = 1 << 20) -> None:
+    """results.npz (``names``, ``data``, ``units`` as :meth:`Results.to_npz` writes them) from
+    the raw float64 rows in ``raw``, copied in chunks; written to a temporary name, then
+    renamed."""
     temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
     n = len(names)
     try:
         with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
             with archive.open("names.npy", "w") as stream:
                 np.lib.format.write_array(stream, np.array(names))
+            with archive.open("units.npy", "w") as stream:
+                np.lib.format.write_array(stream, np.array(units))
             with archive.open("data.npy", "w", force_zip64=True) as stream, \
                     open(raw, "rb") as source:
                 np.lib.format.write_array_header_1_0(

@@ -1,17 +1,31 @@
 """Run a shipped scenario (or any system file) end to end: build what is stale, simulate,
 write results, summary and figures.  The CLI's ``agilesat run`` is a thin layer on this.
+
+``summary.json`` (UTF-8 text): the target and settings, every parameter override with its
+FMI type, status, wall time and real-time factor (simulated seconds per wall-clock
+second), the metrics (a scenario's, each with unit, display unit, the paper's value and its
+requirement where there is one) or, for any other system, min/max/final of every recorded
+output and the momentum drift where ``H_I`` is recorded; the figures written.
 """
 from __future__ import annotations
 
 import json
 import os
+import time
 from pathlib import Path
+
+import numpy as np
 
 from ..fmus.model_description import UNITS
 from . import scenarios
+from .fmu import Description
 from .master import Interrupted, SimulationError, simulate, stop_on_signals
+from .parameters import did_you_mean, scalar_parameters
 from .recorder import file_error
-from .results import Results
+from .results import Results, units_path
+from .ssp import read_system
+from .units import pretty
+from .validation import override
 
 
 def parse_target(target):
@@ -19,21 +33,26 @@ def parse_target(target):
     a file path -> (None, None)."""
     if isinstance(target, scenarios.Scenario):
         return target, None
-    name, _, variant = target.partition(":")
+    name, _, variant = str(target).partition(":")
     if name in scenarios.NAMES:
         scenario = scenarios.get(name)
-        scenario.variant_parameters(variant or None)  # unknown variant: KeyError now
+        if variant and variant not in scenario.variants:
+            raise KeyError(f"scenario {name} has no variant {variant!r}"
+                           + did_you_mean(variant, scenario.variants)
+                           + f" (variants: {', '.join(scenario.variants) or 'none'})")
         return scenario, variant or None
     if Path(target).suffix in (".ssd", ".ssp"):
         return None, None
     raise KeyError(f"{target!r} is neither a scenario ({', '.join(scenarios.NAMES)}) nor an "
-                   ".ssd/.ssp file")
+                   ".ssd/.ssp file" + did_you_mean(name, scenarios.NAMES))
 
 
 def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
-        figures: bool = True, echo=None, build: bool = True) -> tuple[Results, dict]:
+        figures: bool = True, echo=None, build: bool = True,
+        progress=None) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
-    (results, summary).
+    (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
+    elements (:mod:`.parameters`); ``progress``: see :func:`simulate`.
 
     With ``out_dir``: results.csv (row by row), results.npz, log.txt and summary.json, also
     when the run fails (``status: "error"``) or is interrupted by SIGINT/SIGTERM
@@ -51,18 +70,23 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
         overrides = {**scenario.variant_parameters(variant), **overrides}
     else:
         system = Path(target)
+    typed = typed_overrides(system, overrides)
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
     summary = {"scenario": scenario.name if scenario else None, "variant": variant,
-               "system": str(system), "parameters": overrides}
+               "system": str(system),
+               "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()}}
+    wall = time.perf_counter()
     with stop_on_signals() as signals:
         try:
             results = simulate(system, step=step, stop=stop, algorithm=algorithm,
-                               parameters=overrides, out_dir=out_dir, echo=echo)
+                               parameters={k: p.value for k, p in typed.items()},
+                               out_dir=out_dir, echo=echo, progress=progress)
         except SimulationError as failure:
             if out_dir is not None and failure.results is not None:
-                summary.update(_facts(failure.results), error=str(failure),
+                summary.update(_facts(failure.results, time.perf_counter() - wall),
+                               error=str(failure),
                                status="interrupted" if isinstance(failure, Interrupted)
                                else "error")
                 try:
@@ -70,53 +94,146 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
                 except OSError as exc:   # say both
                     failure.args = (f"{failure}\n{exc}",)
             raise
-        summary.update(_facts(results))
+        summary.update(_facts(results, time.perf_counter() - wall))
         if scenario is not None:
             summary.update(scenario.metrics(results))
             summary["status"] = "failed" if summary["diagnostics"] else "ok"
+        else:
+            summary.update(generic_summary(results))
         if out_dir is not None:
             _write_records(results, summary, out_dir)
-            if figures and scenario is not None and signals.signal is None:
-                summary["figures"] = [str(p) for p in scenario.figures(results, out_dir)]
+            if figures and signals.signal is None:
+                from . import plots
+                paths = scenario.figures(results, out_dir) if scenario is not None else \
+                    plots.overview(results, out_dir)
+                summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
+                _write_file(out_dir / "summary.json", _summary_text(summary))
     return results, summary
 
 
-def _facts(results: Results) -> dict:
+def _facts(results: Results, wall: float) -> dict:
     meta = results.meta
-    return {"settings": {k: meta[k] for k in ("start", "stop", "step", "algorithm")},
-            "rows": len(results),
+    settings = {k: meta[k] for k in ("start", "stop", "step", "algorithm")}
+    simulated = float(results.time[-1]) - settings["start"] if len(results) else 0.0
+    return {"settings": settings, "rows": len(results), "wall_time": wall,
+            "real_time_factor": simulated / max(wall, 1e-9),
             "unconnected_optional_inputs": meta["unconnected_optional_inputs"],
             "fmu_messages": [str(e) for e in meta["log"] if e.status >= 1]}
 
 
+def _summary_text(summary: dict) -> str:
+    return json.dumps(summary, indent=2, default=str, ensure_ascii=False) + "\n"
+
+
+def _write_file(path: Path, text: str) -> None:
+    """Write under a temporary name, then rename; an OSError names the file."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        temporary.write_text(text, encoding="utf-8")
+        os.replace(temporary, path)
+    except OSError as exc:
+        temporary.unlink(missing_ok=True)
+        raise file_error(path, exc, "; not written") from None
+
+
 def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
-    """log.txt and summary.json, each under a temporary name then renamed (the master
-    writes results.csv row by row and results.npz); an OSError names each file not written."""
+    """The units of results.csv, log.txt and summary.json (the master writes results.csv
+    row by row and results.npz); an OSError names each file not written."""
     problems = []
-    for name, text in (("log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
-                       ("summary.json", json.dumps(summary, indent=2, default=str) + "\n")):
-        path = out_dir / name
-        temporary = path.with_name(f".{name}.{os.getpid()}.partial")
+    for path, text in ((units_path(out_dir / "results.csv"),
+                        json.dumps(results.units, indent=1, ensure_ascii=False) + "\n"),
+                       (out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+                       (out_dir / "summary.json", _summary_text(summary))):
         try:
-            temporary.write_text(text)
-            os.replace(temporary, path)
+            _write_file(path, text)
         except OSError as exc:
-            temporary.unlink(missing_ok=True)
-            problems.append(str(file_error(path, exc, "; not written")))
+            problems.append(str(exc))
     if problems:
         raise OSError("\n".join(problems))
 
 
+def typed_overrides(system, overrides: dict) -> dict:
+    """{"A.x[i]": ParameterValue} of the overrides (whole arrays split, each typed by the
+    FMU's variable), checked against the system's model descriptions."""
+    if not overrides:
+        return {}
+    system_file = read_system(system)       # holds an .ssp's unpacked FMUs while we read
+    described = {c.name: Description(c.name, c.source) for c in system_file.components}
+    return {k: override(described, k, v)
+            for k, v in scalar_parameters(described, overrides).items()}
+
+
+def generic_summary(results: Results) -> dict:
+    """Any system: min/max/final of every output, the momentum drift of every recorded
+    ``H_I`` (max |H(t) − H(0)| / |H(0)|); status ok (nothing is required of it)."""
+    outputs = {}
+    for name, column in zip(results.names[1:], results.data[:, 1:].T):
+        outputs[name] = {"min": float(np.min(column)), "max": float(np.max(column)),
+                         "final": float(column[-1]), "unit": results.units.get(name)}
+    metrics = {}
+    for base in sorted({n.rsplit("[", 1)[0] for n in results.names
+                        if n.rsplit("[", 1)[0].endswith(".H_I")}):
+        metrics[f"{base.split('.')[0]}.momentum_drift"] = {
+            "value": scenarios.relative_drift(results.vector(base)), "unit": "1",
+            "display_unit": "1", "description": f"max |H_I(t) − H_I(0)| / |H_I(0)| of {base}"}
+    return {"metrics": metrics, "outputs": outputs, "diagnostics": [], "status": "ok"}
+
+
+def _join(number: str, unit: str) -> str:
+    """'0.5 rad/s', '2.1°' (no space before a degree sign), '0.57' (no unit)."""
+    return number + ("" if not unit or unit.startswith("°") and "/" not in unit else " ") + unit
+
+
+def _display(value, unit, display_unit):
+    """(value in the display unit, the display unit as people write it)."""
+    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit, 1.0)
+    return value * scale, pretty(display_unit or unit)
+
+
+def _requirement(requirement, unit, display_unit) -> str:
+    """A requirement as text in the display unit: a bound (≤ x), a band [a, b], or
+    {"min"/"max": ...} (either may be missing)."""
+    if isinstance(requirement, dict):
+        low = requirement.get("min", requirement.get("lower"))
+        high = requirement.get("max", requirement.get("upper"))
+    elif isinstance(requirement, (list, tuple)):
+        low, high = requirement
+    else:
+        low, high = None, requirement
+    show = lambda x: f"{_display(x, unit, display_unit)[0]:.4g}"  # noqa: E731
+    u = _display(0.0, unit, display_unit)[1]
+    if low is not None and high is not None:
+        return _join(f"in [{show(low)}, {show(high)}]", u)
+    if high is not None:
+        return _join(f"≤ {show(high)}", u)
+    return _join(f"≥ {show(low)}", u) if low is not None else ""
+
+
 def format_summary(summary: dict) -> str:
-    """The headline numbers beside the paper's, in each metric's display unit."""
+    """The headline numbers beside the paper's and the requirement, in each metric's display
+    unit; for a system without a scenario, min/max/final of every output."""
     lines = []
     for name, m in summary.get("metrics", {}).items():
-        scale = UNITS.get(m["unit"], ({}, {}))[1].get(m.get("display_unit"), 1.0)
-        unit = m.get("display_unit") or m["unit"]
-        value = "not reached" if m["value"] is None else f"{m['value'] * scale:.6g} {unit}"
-        paper = f"paper {m['paper'] * scale:.6g} {unit}" if "paper" in m else ""
-        lines.append(f"  {name:34s} {value:>22s}   {paper}")
+        unit, display = m["unit"], m.get("display_unit")
+        value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
+        text = "not reached" if value is None else _join(f"{value:.6g}", u)
+        paper = "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u) \
+            if "paper" in m else ""
+        required = f"required {_requirement(m['requirement'], unit, display)}" \
+            if "requirement" in m else ""
+        verdict = {True: "PASS", False: "FAIL"}.get(m.get("met"), "")
+        lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}"
+                     .rstrip())
+    outputs = summary.get("outputs", {})
+    if outputs:
+        lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")
+        for name, o in outputs.items():
+            lines.append(f"  {name:40s} {o['min']:12.5g} {o['max']:12.5g} {o['final']:12.5g}"
+                         f"  {pretty(o['unit'])}".rstrip())
+    if "wall_time" in summary:
+        lines.append(f"  status {summary.get('status', '?')}, wall time "
+                     f"{summary['wall_time']:.2f} s, {summary['real_time_factor']:.3g}× real "
+                     "time")
     for problem in summary.get("diagnostics", []):
         lines.append(f"  FAILED: {problem}")
     return "\n".join(lines)
-

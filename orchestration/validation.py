@@ -65,7 +65,9 @@ def check_system(system: SystemFile, instances: dict[str, Description],
                             "input")
         if va.type != vb.type:
             problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
-        elif va.type == "Real" and (va.unit or "") != (vb.unit or ""):
+        elif va.type == "Real" and va.unit and vb.unit and va.unit != vb.unit:
+            # a Real without a unit (FMI 2.0: optional; e.g. pythonfmu 0.7 writes none) is
+            # unspecified, not dimensionless: checked only where both sides declare one
             problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
         key = (b.name, vb.name)
         if key in sources:

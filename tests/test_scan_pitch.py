@@ -72,6 +72,7 @@ def test_summary_reports_paper_values_and_status(nominal):
     assert summary["status"] == "ok" and summary["diagnostics"] == []
     assert summary["metrics"]["imaging_pitch_rate_mean"]["paper"] == pytest.approx(-0.8075 * DEG)
     assert format_summary(summary) in result.stdout        # the CLI prints what it wrote
+    assert "paper -0.8075 °/s" in result.stdout
     assert len(list(out.glob("fig*.png"))) == 8
 
 

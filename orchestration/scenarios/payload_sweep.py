@@ -185,36 +185,50 @@ def yaw_periods(results) -> tuple[float, float]:
 
 
 def figures(results, out_dir) -> list:
+    """The paper's Figs 4–8 from a run, body-frame (B) quantities named as such, the pointing
+    requirement and the paper's yaw-torque bound drawn."""
     t = results.time
     deg = 180 / math.pi
     roll, pitch = results.vector("PayloadGimbals.roll") * deg, \
         results.vector("PayloadGimbals.pitch") * deg
     h, hdot = results.vector("PayloadGimbals.h"), results.vector("PayloadGimbals.hdot")
     zoom = t <= min(t[-1], 30.0)
-    axes = ("x", "y", "z")
+    axes = ("x (B)", "y (B)", "z (B)")
+    angles = ("roll", "pitch", "yaw")
     label = "Fig. 8 compensated" if controlled(results) else "Fig. 7 uncompensated"
+    yaw_torque = PAPER["payload_torque_yaw_max"]
     return [
         plots.panels(out_dir / "fig04_payload_angles.png", "Fig. 4 payload angles",
-                     [(t, {"payload 1": pitch[:, 0], "payload 2": pitch[:, 1]}, "pitch [deg]"),
+                     [(t, {"payload 1": pitch[:, 0], "payload 2": pitch[:, 1]}, "pitch [°]"),
                       (t[zoom], {"payload 1": roll[zoom, 0], "payload 2": roll[zoom, 1]},
-                       "roll [deg] (first 30 s)")]),
+                       "roll [°] (first 30 s)")]),
         plots.panels(out_dir / "fig05_payload_momentum.png",
-                     "Fig. 5 payload pair momentum in body axes",
+                     "Fig. 5 payload pair momentum h, in B",
                      [(t, dict(zip(axes, h.T)), "h [N·m·s]"),
-                      (t[zoom], {"z": h[zoom, 2]}, "h_z, first 30 s [N·m·s]")]),
+                      (t[zoom], {"z (B)": h[zoom, 2]}, "h_z, first 30 s [N·m·s]")]),
         plots.panels(out_dir / "fig06_payload_torque.png",
-                     "Fig. 6 payload pair torque ḣ in body axes",
-                     [(t, dict(zip(axes, hdot.T)), "ḣ [N·m]"),
-                      (t[zoom], {"z": hdot[zoom, 2]}, "ḣ_z, first 30 s [N·m]")]),
-        plots.panels(out_dir / "fig07_08_attitude.png", f"{label}: attitude relative to the "
-                     "orbit frame",
-                     [(t, dict(zip(("roll", "pitch", "yaw"),
+                     "Fig. 6 payload pair torque ḣ, in B",
+                     [(t, dict(zip(axes, hdot.T)), "ḣ [N·m]",
+                       {"paper": ((-yaw_torque, yaw_torque),
+                                  f"paper: |ḣ_z| < {yaw_torque:g} N·m")}),
+                      (t[zoom], {"z (B)": hdot[zoom, 2]}, "ḣ_z, first 30 s [N·m]")]),
+        plots.panels(out_dir / "fig07_08_attitude.png", f"{label}: attitude of B relative "
+                     "to the orbit frame O",
+                     [(t, dict(zip(angles,
                                    results.vector("SatelliteDynamics.euler_BO").T * deg)),
-                       "Euler angle [deg]"),
-                      (t, dict(zip(("roll", "pitch", "yaw"),
+                       "Euler angle [°]"),
+                      (t, dict(zip(angles,
                                    results.vector("SatelliteDynamics.euler_rate_BO").T * deg)),
-                       "Euler rate [deg/s]")]),
-        plots.panels(out_dir / "fig09_wheel.png", "Reaction wheels",
+                       "Euler rate [°/s]")]),
+        plots.panels(out_dir / "fig08_pointing.png", "Pointing error (controller, in B) "
+                     "against the requirement",
+                     [(t, dict(zip(axes, results.vector("AttitudeController.att_error").T
+                                   * deg)), "attitude error [°]",
+                       {"limit": (ACCURACY * deg, f"required ±{ACCURACY * deg:g}°")}),
+                      (t, dict(zip(axes, results.vector("AttitudeController.rate_error").T
+                                   * deg)), "rate error [°/s]",
+                       {"limit": (STABILITY * deg, f"required ±{STABILITY * deg:g} °/s")})]),
+        plots.panels(out_dir / "fig09_wheel.png", "Reaction wheels (axes in B)",
                      [(t, dict(zip(axes, results.vector("Flywheel.motor_torque")[:, :3].T)),
                        "motor torque [N·m]"),
                       (t, dict(zip(axes, results.vector("Flywheel.h").T)),

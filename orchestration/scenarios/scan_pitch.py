@@ -219,38 +219,64 @@ def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
 
 
 def figures(results, out_dir) -> list:
-    """The paper's Figs 4–11 from a run."""
+    """The paper's Figs 4–11 from a run, with the gimbal limits, the scan-rate requirement
+    and the paper's values drawn."""
     t = results.time
     deg = 180 / math.pi
     pitch = results["SatelliteDynamics.euler_BO[2]"] * deg
     rate = results["SatelliteDynamics.w_BO_B[2]"] * deg  # Euler rates spike at the lock
     reference = np.array([PROFILE.reference(x) for x in t]) * deg
     delta_dot = results.vector("CmgCluster.delta_dot")
+    accel = np.diff(delta_dot, axis=0) / (t[1] - t[0])        # as max_gimbal_accel
     t3, t4 = PROFILE.times[2], PROFILE.times[3]
-    imaging = (t > t3) & (t <= t4)
+    imaging, settling, start = (t > t3) & (t <= t4), t >= t4, t <= 2.0
     gyros = [f"gimbal {i + 1}" for i in range(6)]
+    scan, tolerance = PROFILE.scan_rate * deg, SCAN_RATE_TOLERANCE * deg
+    rate_limit = {"limit": (RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s"),
+                  "paper": ((-PAPER["max_gimbal_rate"], PAPER["max_gimbal_rate"]),
+                            f"paper: max {PAPER['max_gimbal_rate']:g} rad/s")}
+    accel_limit = PARAMETERS["CmgCluster.accel_limit"]
+    torque = delivered_torque(results)
+    paper_torque = PAPER["max_abs_output_torque"]
     return [
-        plots.lines(out_dir / "fig04_pitch.png", "Fig. 4 pitch angle", t,
-                    {"pitch": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
-        plots.lines(out_dir / "fig05_pitch_rate.png", "Fig. 5 pitch rate", t,
-                    {"body pitch rate ω_y (B rel. O)": rate, "planned": reference[:, 1]},
-                    "pitch rate [deg/s]"),
+        plots.panels(out_dir / "fig04_pitch.png", "Fig. 4 pitch angle (B rel. O)",
+                     [(t, {"achieved": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
+                      (t, {"achieved − planned": pitch - reference[:, 0]}, "error [deg]")]),
+        plots.panels(out_dir / "fig05_pitch_rate.png", "Fig. 5 pitch rate",
+                     [(t, {"body pitch rate ω_y (B rel. O, in B)": rate,
+                           "planned": reference[:, 1]}, "pitch rate [°/s]"),
+                      (t, {"achieved − planned": rate - reference[:, 1]}, "error [°/s]")]),
         plots.panels(out_dir / "fig06_imaging_and_settling.png",
-                     "Fig. 6 imaging-phase and settling pitch rate",
-                     [(t[imaging], {"pitch rate": rate[imaging]}, "imaging [deg/s]"),
-                      (t[t >= t4], {"pitch rate": rate[t >= t4]}, "settling [deg/s]")]),
+                     "Fig. 6 imaging-phase and settling pitch rate (B rel. O, in B)",
+                     [(t[imaging], {"pitch rate": rate[imaging]}, "imaging [°/s]",
+                       {"band": (scan - tolerance, scan + tolerance,
+                                 f"required {scan:g} ± {tolerance:g} °/s"),
+                        "paper": (PAPER["imaging_pitch_rate_mean"] * deg,
+                                  f"paper: mean {PAPER['imaging_pitch_rate_mean'] * deg:g} °/s")}),
+                      (t[settling], {"pitch rate": rate[settling]}, "settling [°/s]")]),
         plots.lines(out_dir / "fig07_gimbal_rates.png", "Fig. 7 gimbal rates", t,
-                    dict(zip(gyros, delta_dot.T)), "gimbal rate [rad/s]"),
-        plots.lines(out_dir / "fig08_initial_gimbal_acceleration.png",
-                    "Fig. 8 gimbal rates, first 2 s", t[t <= 2.0],
-                    dict(zip(gyros, delta_dot[t <= 2.0].T)), "gimbal rate [rad/s]"),
+                    dict(zip(gyros, delta_dot.T)), "gimbal rate [rad/s]", **rate_limit),
+        plots.panels(out_dir / "fig08_initial_gimbal_rates.png",
+                     "Fig. 8 gimbal rates and accelerations, first 2 s",
+                     [(t[start], dict(zip(gyros, delta_dot[start].T)), "gimbal rate [rad/s]",
+                       rate_limit),
+                      (t[1:][start[1:]], dict(zip(gyros, accel[start[1:]].T)),
+                       "gimbal accel. [rad/s²]",
+                       {"limit": (accel_limit, f"limit ±{accel_limit:g} rad/s²"),
+                        "paper": ((-PAPER["max_gimbal_accel"], PAPER["max_gimbal_accel"]),
+                                  f"paper: max {PAPER['max_gimbal_accel']:g} rad/s²")})]),
         plots.lines(out_dir / "fig09_gimbal_angles.png", "Fig. 9 gimbal angles", t,
                     dict(zip(gyros, results.vector("CmgCluster.delta").T * deg)),
-                    "gimbal angle [deg]"),
+                    "gimbal angle [°]"),
         plots.lines(out_dir / "fig10_singularity.png", "Fig. 10 singularity measure", t,
-                    {"Q = det(A Aᵀ)": results["CmgCluster.singularity"]}, "Q"),
-        plots.lines(out_dir / "fig11_output_torque.png", "Fig. 11 cluster output torque", t,
-                    dict(zip(("x", "y", "z"), delivered_torque(results).T)), "torque [N·m]"),
+                    {"Q": results["CmgCluster.singularity"]},
+                    "Q = det(A Aᵀ) [-], A = [a₁ … a₆] torque axes", bottom=0.0),
+        plots.panels(out_dir / "fig11_output_torque.png",
+                     "Fig. 11 cluster output torque −ḣ − ω × h, in B",
+                     [(t, {f"τ_{axis} (B)": torque[:, i]}, f"τ_{axis} [N·m]",
+                       {"paper": ((-paper_torque, paper_torque),
+                                  f"paper: ±{paper_torque:g} N·m")})
+                      for i, axis in enumerate("xyz")]),
     ]
 
 

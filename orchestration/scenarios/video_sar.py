@@ -310,13 +310,15 @@ def figures(results, out_dir) -> list:
     axes = ("roll", "pitch", "yaw")
     return [
         plots.panels(out_dir / "fig07_euler_angles.png", "Fig. 7 Euler angles (B rel. O)",
-                     [(t, {name: euler[:, i], "reference": ref[:, i]}, f"{name} [deg]")
+                     [(t, {name: euler[:, i], "reference": ref[:, i]}, f"{name} [°]")
                       for i, name in enumerate(axes)]),
-        plots.panels(out_dir / "fig07_euler_rates.png", "Fig. 7 Euler angle rates",
-                     [(t, {name: rate[:, i], "reference": ref_rate[:, i]}, f"{name} [deg/s]")
+        plots.panels(out_dir / "fig07_euler_rates.png", "Fig. 7 Euler angle rates (B rel. O)",
+                     [(t, {name: rate[:, i], "reference": ref_rate[:, i]}, f"{name} [°/s]")
                       for i, name in enumerate(axes)]),
         plots.lines(out_dir / "pointing_error.png", "Boresight to target", t,
-                    {"pointing error": boresight_error(results) * deg}, "angle [deg]"),
+                    {"pointing error": boresight_error(results) * deg}, "angle [°]",
+                    limit=((POINTING_REQUIREMENT * deg,),
+                           f"required ≤ {POINTING_REQUIREMENT * deg:g}° (ours)"), bottom=0.0),
         plots.lines(out_dir / "footprint_rotation.png", "Footprint rotation on the ground", t,
                     {"achieved": footprint_rotation(results) * deg,
                      "reference": results["StaringGuidance.footprint_rotation"] * deg},
@@ -328,7 +330,8 @@ def figures(results, out_dir) -> list:
                        "range [km]")]),
         plots.lines(out_dir / "gimbal_rates.png", "Gimbal rates", t,
                     {f"gimbal {i + 1}": x for i, x in
-                     enumerate(results.vector("CmgCluster.delta_dot").T)}, "rate [rad/s]"),
+                     enumerate(results.vector("CmgCluster.delta_dot").T)}, "rate [rad/s]",
+                    limit=(RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s")),
     ]
 
 

@@ -1,0 +1,134 @@
+"""Parameter values addressed by whole variables: ``--set SatelliteDynamics.inertia=...``.
+
+FMI 2.0 knows only scalars; an array variable is the scalars ``inertia[1,1]`` …
+``inertia[3,3]`` (1-based, row-major).  A value can be given
+
+* for one element: ``SatelliteDynamics.inertia[2,2]=900``;
+* for the whole array, with its shape: ``SatelliteDynamics.inertia=[[900,0,0],[0,900,0],
+  [0,0,900]]``, ``SatelliteDynamics.rate0=[0,0.01,0]``.
+
+A bare number for an array is refused, never broadcast: ``inertia=900`` could mean 900 on
+every element or 900 times the identity, and an attitude engineer means the second as often
+as the first.  The error says which elements there are and shows both forms.
+"""
+from __future__ import annotations
+
+import ast
+import difflib
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .ssp import SystemFileError
+
+_ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
+
+
+@dataclass
+class ArrayVariable:
+    """One variable of an FMU, scalar (shape ()) or array, from its model description."""
+
+    name: str
+    shape: tuple[int, ...]
+    scalars: list                 # fmpy ScalarVariables, row-major
+
+    @property
+    def first(self):
+        return self.scalars[0]
+
+    def start(self):
+        """The start value(s) as the model description gives them, shaped."""
+        values = [_typed(v, v.start) for v in self.scalars]
+        return values[0] if not self.shape else np.array(values, dtype=object).reshape(
+            self.shape).tolist()
+
+
+def variables(description) -> dict[str, ArrayVariable]:
+    """The variables of an FMU by whole name, in model-description order; array elements
+    grouped (shape from the largest index in each dimension)."""
+    groups: dict[str, list] = {}
+    for v in description.md.modelVariables:
+        match = _ELEMENT.match(v.name)
+        groups.setdefault(match.group(1) if match else v.name, []).append(v)
+    result = {}
+    for name, scalars in groups.items():
+        if len(scalars) == 1 and scalars[0].name == name:
+            result[name] = ArrayVariable(name, (), scalars)
+            continue
+        indices = [tuple(int(i) for i in _ELEMENT.match(v.name).group(2).split(","))
+                   for v in scalars]
+        shape = tuple(max(column) for column in zip(*indices))
+        order = sorted(range(len(scalars)), key=lambda k: indices[k])
+        result[name] = ArrayVariable(name, shape, [scalars[k] for k in order])
+    return result
+
+
+def parse_value(text):
+    """A command-line value: a bracketed list (``[[1,0],[0,1]]``) becomes nested lists;
+    anything else stays text for the FMU's variable type to read."""
+    if isinstance(text, str) and text.strip().startswith("["):
+        try:
+            return ast.literal_eval(text.strip())
+        except (ValueError, SyntaxError):
+            raise SystemFileError(f"cannot read {text!r} as an array: write it like "
+                                  "[1, 2, 3] or [[1, 0], [0, 1]]") from None
+    return text
+
+
+def scalar_parameters(instances: dict, parameters: dict) -> dict:
+    """{"A.x": value} -> {"A.x" or "A.x[i,j]": scalar value}: whole arrays split into their
+    elements; unknown instances and variables answered with the closest names."""
+    result = {}
+    for key, value in parameters.items():
+        name, _, variable = key.partition(".")
+        if name not in instances or not variable:
+            raise SystemFileError(f"--set {key}: expected Instance.variable with an instance "
+                                  f"of {', '.join(instances)}" + did_you_mean(
+                                      name, instances))
+        table = variables(instances[name])
+        value = parse_value(value)
+        if variable in instances[name].variables:
+            if np.ndim(value):
+                raise SystemFileError(f"--set {key}: {name}.{variable} is a scalar, got "
+                                      f"an array {value}")
+            result[key] = value
+            continue
+        if variable not in table:
+            raise SystemFileError(f"--set {key}: {name} ({instances[name].path.name}) has "
+                                  f"no variable {variable!r}"
+                                  + did_you_mean(variable, table))
+        array = table[variable]
+        if np.shape(value) != array.shape:
+            raise SystemFileError(
+                f"--set {key}: {name}.{variable} is an array of shape "
+                f"{'×'.join(map(str, array.shape))} [{array.first.unit or '1'}]; give it "
+                f"whole, e.g. {variable}={_literal(array.start())}, or one element, e.g. "
+                f"{array.first.name}={_typed(array.first, array.first.start)} (got "
+                f"{value!r}; a single number is not spread over the elements)")
+        for scalar, element in zip(array.scalars, np.asarray(value, dtype=object).ravel()):
+            result[f"{name}.{scalar.name}"] = element
+    return result
+
+
+def _literal(array) -> str:
+    return str(array).replace(" ", "")
+
+
+def did_you_mean(name: str, known) -> str:
+    """'; did you mean X, Y?' for the names of ``known`` closest to ``name`` (or '')."""
+    close = difflib.get_close_matches(name, list(known), n=3, cutoff=0.5)
+    return f"; did you mean {', '.join(close)}?" if close else ""
+
+
+def _typed(variable, text):
+    """A model-description start value (text or number) in the variable's Python type."""
+    if text is None:
+        return None
+    if variable.type == "Real":
+        return float(text)
+    if variable.type == "Integer":
+        return int(text)
+    if variable.type == "Boolean":
+        return text in (True, 1, "true", "1") if not isinstance(text, bool) else text
+    return str(text)
