@@ -201,7 +201,7 @@ def test_a_failed_npz_leaves_no_file_under_either_name(tmp_path):
     raw = tmp_path / "raw"
     raw.write_bytes(np.zeros(3).tobytes())
     with pytest.raises(OSError, match=r"results.npz: .*shorter than 2 rows; not written"):
-        recorder.write_npz(tmp_path / "results.npz", ["time", "a", "b"], raw, 2)
+        recorder.write_npz(tmp_path / "results.npz", ["time", "a", "b"], raw, 2, ["s", "", ""])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["raw"]
 
 
