@@ -96,11 +96,14 @@ def main(argv=None) -> int:
     generate.add_argument("--check", action="store_true",
                           help="only check that the committed files are up to date")
 
+    from .campaign import cli as campaign_cli
+    campaign_cli.add_parser(commands)
+
     args = parser.parse_args(argv)
     try:
         return {"build": _build, "validate": _validate, "run": _run, "export": _export,
                 "stare": _stare, "mission": _mission, "size-flywheel": _size_flywheel,
-                "generate": _generate}[args.command](args)
+                "generate": _generate, "campaign": campaign_cli.main}[args.command](args)
     except (KeyError, ValueError, RuntimeError, OSError) as exc:
         print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
         return 1
