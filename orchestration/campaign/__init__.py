@@ -73,7 +73,9 @@ def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler
     """:func:`campaign` returning a :class:`Campaign`; ``on_start(client)`` is called once
     the cluster is up (tests use it)."""
     for path in spec.files:
-        spec.vary += [d.text for d in dispersion.load(path)]
+        loaded, fixed = dispersion.load(path)
+        spec.vary += [d.text for d in loaded]
+        spec.set = {**fixed, **spec.set}
     plan = Plan(spec)
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
     done = engine.open_directory(plan, out, resume)

@@ -138,9 +138,10 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
     return Dispersion(key, kind, tuple(args), mode, f"{key}={expression.strip()}")
 
 
-def load(path) -> list[Dispersion]:
-    """Dispersions from a TOML or JSON file: a table ``[vary]`` (TOML) / an object
-    ``{"vary": {...}}`` (JSON) mapping ``"Instance.variable"`` to a DIST string."""
+def load(path) -> tuple[list[Dispersion], dict]:
+    """(dispersions, fixed values) from a TOML or JSON file: a table ``[vary]`` (TOML) /
+    an object ``{"vary": {...}}`` (JSON) mapping ``"Instance.variable"`` to a DIST string,
+    and an optional table ``[set]`` of values as for ``--set``."""
     path = Path(path)
     try:
         if path.suffix == ".toml":
@@ -164,7 +165,11 @@ def load(path) -> list[Dispersion]:
         if not isinstance(expression, str) or not _KEY.match(key):
             raise ValueError(f"{path}: vary.{key}: expected \"Instance.variable\" = \"DIST\"")
         result.append(expression_to_dispersion(key, expression, str(path)))
-    return result
+    fixed = data.get("set", {})
+    if not isinstance(fixed, dict) or not all(
+            _KEY.match(k) and isinstance(v, (int, float, bool)) for k, v in fixed.items()):
+        raise ValueError(f"{path}: 'set' must map \"Instance.variable\" to numbers")
+    return result, fixed
 
 
 def rotate_rows(nominal: np.ndarray, sd: float, rng) -> np.ndarray:
