@@ -131,6 +131,7 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
         "metrics_meta": metrics,
         "files": [p.name for p in files],
     }
+    (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     figures = report.histograms(table, metrics, out)
     if plan.signals:
         signals = np.load(out / "signals.npy", mmap_mode="r")

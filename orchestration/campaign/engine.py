@@ -105,7 +105,7 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
             yield client
         return
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as local, \
+                      dashboard_address=":0", silence_logs=logging.ERROR) as local, \
             Client(local) as client:
         yield client
 

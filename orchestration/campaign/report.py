@@ -140,8 +140,9 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
             continue
         scale, unit = display(meta)
         fig, ax = plt.subplots(figsize=(6, 3.6))
-        ax.hist(values * scale, bins=min(50, max(5, int(np.sqrt(len(values))))),
-                color="tab:blue", alpha=0.75)
+        spread = np.ptp(values) > 1e-9 * max(np.abs(values).max(), 1e-300)
+        ax.hist(values * scale, bins=min(50, max(5, int(np.sqrt(len(values)))))
+                if spread else 1, color="tab:blue", alpha=0.75)
         for bound, value in meta.get("requirement", {}).items():
             ax.axvline(value * scale, color="tab:red", linestyle="--",
                        label=f"requirement ({bound})")
