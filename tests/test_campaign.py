@@ -133,7 +133,7 @@ def test_failures_are_recorded_outcomes(tmp_path, fmus):
     assert result.returncode == 3, result.stderr
     table = rows(out)
     assert [r["status"] for r in table] == ["ok", "error", "failed", "error"]
-    assert "imaging-phase pitch rate -0.7" in table[2]["message"]
+    assert "imaging-phase pitch rate -0.69" in table[2]["message"]
     assert "is outside the required -0.80 ± 0.02 °/s" in table[2]["message"]
     assert "rate_limit (-1.0) and accel_limit (0.5) must be positive" in table[1]["message"]
     assert table[0]["met_imaging_pitch_rate_mean"] == "True"
