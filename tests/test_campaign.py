@@ -90,7 +90,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
             assert process.poll() is None and time.monotonic() < deadline, \
                 process.stdout.read() if process.poll() is not None else "timeout"
             time.sleep(0.2)
-        process.send_signal(signal.SIGINT)   # Ctrl-C
+        process.send_signal(signal.SIGTERM)   # handled as Ctrl-C (KeyboardInterrupt)
         output, _ = process.communicate(timeout=120)
     finally:
         if process.poll() is None:
@@ -219,9 +219,10 @@ def test_python_api_returns_the_table(dask_cluster, tmp_path):
                      as_frame=False)
     assert table.dtype.names[:4] == ("index", "seed", "grid", "Flywheel.torque_limit")
     assert list(table["Flywheel.torque_limit"]) == [0.2, 2.0]
-    assert list(table["status"]) == ["ok", "ok"]
-    assert table["pointing_accuracy"][1] <= table["pointing_accuracy"][0]
-    assert table["met_pointing_accuracy"].dtype == bool
+    # the 0.2 N·m wheel cannot hold the first reversal, the 2 N·m one can (README)
+    assert list(table["status"]) == ["failed", "ok"]
+    assert list(table["met_pointing_accuracy"]) == [False, True]
+    assert "pointing accuracy" in table["message"][0]
 
 
 REUSE = """

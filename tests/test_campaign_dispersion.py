@@ -189,3 +189,18 @@ def test_progress_prints_plain_lines_off_a_terminal(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("campaign: 2/4 runs done (none failed)")
     assert "3/4 runs done (1 failed)" in lines[1] and "runs/s, ETA" in lines[1]
+
+
+def test_progress_is_a_bar_on_a_terminal():
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    stream = Terminal()
+    progress = report.Progress(5, 2, stream=stream)
+    progress.update("ok")
+    progress.update("error")
+    progress.close()
+    text = stream.getvalue()
+    assert "4/5" in text and "1 error" in text and "run/s" in text

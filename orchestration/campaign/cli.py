@@ -7,6 +7,7 @@ failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
 from __future__ import annotations
 
 import argparse
+import signal
 from pathlib import Path
 
 from . import Spec, run_campaign, shipped
@@ -63,8 +64,13 @@ def main(args) -> int:
         print(f"dispersions: {files[0]} (the shipped campaign)")
     spec = Spec(args.target, args.runs, args.seed, list(args.vary), files, overrides,
                 list(args.keep), args.step, args.stop, args.algorithm)
-    result = run_campaign(spec, args.out, args.resume, args.workers, args.scheduler,
-                          progress=not args.no_progress)
+    signal.signal(signal.SIGTERM, _interrupt)   # a batch system's stop: as Ctrl-C
+    try:
+        result = run_campaign(spec, args.out, args.resume, args.workers, args.scheduler,
+                              progress=not args.no_progress)
+    except KeyboardInterrupt:
+        print("interrupted before the first run finished")
+        return 130
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if result.summary["status"] == "interrupted":
@@ -74,6 +80,10 @@ def main(args) -> int:
     runs = result.summary["runs"]
     unmet = any(r["met"] < r["runs"] for r in result.summary["pass_rates"].values())
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def format_campaign(summary: dict) -> str:
