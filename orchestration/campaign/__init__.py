@@ -80,8 +80,8 @@ def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
     done = engine.open_directory(plan, out, resume)
     metrics = {}
-    if done:
-        metrics = json.loads((out / "campaign.json").read_text()).get("metrics_meta", {})
+    if done and (out / "metrics.json").exists():
+        metrics = json.loads((out / "metrics.json").read_text())
     if plan.scenario is not None:
         from ...fmus.build import build_all
         build_all(names=plan.scenario.components)
@@ -128,7 +128,6 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
                      for r in table[table["status"] != "ok"][:100]],
         "kept": {"file": "signals.npy", "signals": plan.signals, "start": plan.start,
                  "step": plan.step, "points": plan.points} if plan.signals else None,
-        "metrics_meta": metrics,
         "files": [p.name for p in files],
     }
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")

@@ -12,6 +12,7 @@ Files in the output directory, written as runs finish:
 
 - ``runs.jsonl`` — the journal: one line per finished run (index, values, outcome,
   metrics), flushed at once; ``--resume`` and extensions skip the runs it holds.
+- ``metrics.json`` — each metric's unit, description and requirement (first run).
 - ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
   run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
 - at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
@@ -55,6 +56,9 @@ def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
     journal = out / "runs.jsonl"
     if not journal.exists():
         out.mkdir(parents=True, exist_ok=True)
+        # the spec first: a campaign killed before it finishes can still be resumed
+        (out / "campaign.json").write_text(json.dumps(
+            {"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n")
         return {}
     if not resume:
         raise CampaignExistsError(f"{out} already holds a campaign (runs.jsonl): --resume to "
@@ -144,17 +148,22 @@ def execute(plan: Plan, out: Path, client, done: dict, progress,
                 try:
                     record = future.result()
                 except KilledWorker as exc:
-                    record = {"index": index, "status": "lost", "message": f"the workers "
-                              f"running it died {exc.args[0] if exc.args else ''}: {exc}",
-                              "metrics": {}, "signals": None}
+                    record = {"index": index, "status": "lost", "metrics": {},
+                              "message": f"every worker that ran it died (Dask gives up after "
+                              f"distributed.scheduler.allowed-failures): {exc}"}
+                except Exception as exc:   # the task itself could not run there
+                    record = {"index": index, "status": "error", "metrics": {},
+                              "message": f"{type(exc).__name__}: {exc}"}
                 signal = record.pop("signals", None)
                 if signals is not None and signal is not None:
                     signals[index] = signal
                 record.update(seed=plan.spec.seed, values=plan.run_values(index),
                               grid=index % len(plan.grid))
-                for name, m in record["metrics"].items():
-                    metrics.setdefault(name, {k: v for k, v in m.items()
-                                              if k not in ("value", "met", "paper")})
+                if set(record["metrics"]) - set(metrics):
+                    for name, m in record["metrics"].items():
+                        metrics.setdefault(name, {k: v for k, v in m.items()
+                                                  if k not in ("value", "met", "paper")})
+                    (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
                 record["metrics"] = {k: {"value": m["value"], **({"met": m["met"]}
                                                                  if "met" in m else {})}
                                      for k, m in record["metrics"].items()}
@@ -163,8 +172,11 @@ def execute(plan: Plan, out: Path, client, done: dict, progress,
                 records[index] = record
                 watcher.check(futures)
                 progress.update(record["status"])
-                nxt = submit()
-                if nxt is not None:
+                # keep IN_FLIGHT_PER_WORKER runs per worker there is now
+                while len(futures) < IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers)):
+                    nxt = submit()
+                    if nxt is None:
+                        break
                     pending.add(nxt)
     except KeyboardInterrupt:
         status = "interrupted"
