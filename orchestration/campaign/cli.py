@@ -122,7 +122,8 @@ def format_campaign(summary: dict) -> str:
             values = ", ".join(f"{k}={v:.6g}" for k, v in point["values"].items())
             lines.append(f"  {values}: {met['met']}/{met['runs']} met")
     for failure in summary["failures"][:5]:
-        lines.append(f"  run {failure['index']} {failure['status']}: "
-                     f"{failure['message'][:200]}\n    replay: {failure['replay']}")
+        lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")
+    if summary["failures"]:
+        lines.append("  (campaign.json \"failures\" has the `agilesat run` command replaying each)")
     return "\n".join(lines)
 
