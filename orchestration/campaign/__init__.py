@@ -134,7 +134,7 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
     figures = report.histograms(table, metrics, out)
     if plan.signals:
         signals = np.load(out / "signals.npy", mmap_mode="r")
-        figures += report.envelopes(signals, plan.signals, time_axis(plan), out)
+        figures += report.envelopes(signals, plan.signals, plan.units, time_axis(plan), out)
     summary["figures"] = [p.name for p in figures]
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)

@@ -79,6 +79,7 @@ class Plan:
         grids = [d for d in self.dispersions if d.is_grid]
         self.grid_keys = [d.key for d in grids]
         self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
+        self.units = {}    # of the kept signals, where the variable table says
         self.signals = [name for key in spec.keep for name in self._signal(key)]
 
     @property
@@ -160,6 +161,8 @@ class Plan:
         var = self._variable(key, "--keep")
         if var is None:
             return [key]
+        instance = key.partition(".")[0]
+        self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
         return [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()] \
             if "[" not in key else [key]
 

@@ -160,7 +160,7 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
     return paths
 
 
-def envelopes(signals, names: list[str], t: np.ndarray, out: Path) -> list[Path]:
+def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
     """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal."""
     paths = []
     for j, name in enumerate(names):
@@ -174,7 +174,7 @@ def envelopes(signals, names: list[str], t: np.ndarray, out: Path) -> list[Path]
         ax.fill_between(t, p[1], p[3], color="tab:blue", alpha=0.4, label="5–95 %")
         ax.plot(t, p[2], color="tab:blue", linewidth=1.2, label="median")
         ax.set_xlabel("time [s]")
-        ax.set_ylabel(f"{name} [SI]")
+        ax.set_ylabel(f"{name} [{units.get(name, 'SI')}]")
         ax.set_title(f"{name}: {len(data)} runs", fontsize=10)
         ax.legend(fontsize=8)
         ax.grid(True, alpha=0.3)
