@@ -69,9 +69,8 @@ def campaign(target: str, runs: int = 1, *, seed: int = 0, vary=(), files=(), se
 
 
 def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler=None,
-                 progress=True, on_start=None) -> Campaign:
-    """:func:`campaign` returning a :class:`Campaign`; ``on_start(client)`` is called once
-    the cluster is up (tests use it)."""
+                 progress=True) -> Campaign:
+    """:func:`campaign` returning a :class:`Campaign` (table, summary, directory)."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
@@ -90,8 +89,6 @@ def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler
         print(f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
               f"grid points), {len(done)} already made in {out}", file=sys.stderr)
     with engine.cluster(workers, scheduler) as client:
-        if on_start:
-            on_start(client)
         environment = {"scheduler": scheduler or "LocalCluster",
                        "workers": len(client.scheduler_info()["workers"])}
         records, lost, status = engine.execute(plan, out, client, done, bar, metrics)
