@@ -126,12 +126,15 @@ def main(argv=None) -> int:
     generate.add_argument("--check", action="store_true",
                           help="only check that the committed files are up to date")
 
+    from .campaign import cli as campaign_cli
+    campaign_cli.add_parser(commands)
+
     args = parser.parse_args(argv)
     try:
         return {"list": _list, "info": _info, "build": _build, "validate": _validate,
                 "run": _run, "plot": _plot, "export": _export, "stare": _stare,
                 "mission": _mission, "size-flywheel": _size_flywheel,
-                "generate": _generate}[args.command](args)
+                "generate": _generate, "campaign": campaign_cli.main}[args.command](args)
     except (Interrupted, KeyboardInterrupt) as exc:
         print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
         return 130

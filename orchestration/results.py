@@ -180,14 +180,10 @@ class Results:
         return Path(path)
 
     def to_mat(self, path) -> Path:
-        """A MATLAB .mat file (``scipy.io``; ``pip install agilesat[mat]``): ``time`` (N×1)
+        """A MATLAB .mat file (``scipy.io``): ``time`` (N×1)
         and one struct per instance with a field per variable, arrays as N×size matrices
         (``SatelliteDynamics.w_BI_B(:, 2)``); ``units`` the same structs of unit strings."""
-        try:
-            from scipy.io import savemat
-        except ImportError:
-            raise ImportError("Results.to_mat needs scipy: pip install 'agilesat[mat]'") \
-                from None
+        from scipy.io import savemat
         content = {"time": self.time.reshape(-1, 1), "units": {"time": "s"}}
         units = self.units
         for name in [n for n in self.names if "." in n and not _ELEMENT.match(n)] \

@@ -3,8 +3,11 @@
 For a given reversal (turnaround) time, the smallest wheel torque that keeps the pointing
 accuracy and stability within their requirement (default: the paper's 0.032° and
 0.006 °/s), and the wheel momentum it then uses.  Every point is a real co-simulation of
-``payload_sweep`` over one full pitch sweep: first a geometric grid of torque limits, then
-bisection between the last failing and the first passing one.  The wheel momentum limit is
+``payload_sweep`` over one full pitch sweep, run on Dask like a campaign's runs
+(:mod:`.campaign`; a LocalCluster, or ``scheduler``): first the whole geometric grid of
+torque limits at once, then rounds of k points (k = the number of workers, at least 2)
+spaced geometrically between the largest failing and the smallest passing torque, each
+round shrinking that bracket (in log torque) by k + 1.  The wheel momentum limit is
 lifted (100 N·m·s) so that only the torque limits; the momentum the passing wheel uses is
 reported beside it.
 """
@@ -17,7 +20,8 @@ from pathlib import Path
 
 from ..fmus.build import build_all
 from . import plots
-from .runner import run
+from .campaign.engine import cluster
+from .campaign.worker import run_one
 from .scenarios import payload_sweep
 
 DEG = math.pi / 180
@@ -48,22 +52,31 @@ class Sizing:
         return Path(path)
 
 
-def evaluate(torque: float, turnaround: float, accuracy: float, stability: float,
-             step: float, stop: float) -> Point:
-    """One co-simulation of payload_sweep with this wheel torque limit."""
-    _, summary = run("payload_sweep", step=step, stop=stop, figures=False, build=False,
-                     parameters={"Flywheel.torque_limit": torque,
-                                 "Flywheel.momentum_limit": 100.0,
-                                 "SweepPlanner.turnaround_time": turnaround})
-    m = summary["metrics"]
-    a, s = m["pointing_accuracy"]["value"], m["pointing_stability"]["value"]
-    return Point(torque, a, s, m["wheel_momentum_max"]["value"], a <= accuracy and s <= stability)
+def evaluate(client, torques, turnaround: float, accuracy: float, stability: float,
+             step: float, stop: float) -> list[Point]:
+    """Co-simulations of payload_sweep with these wheel torque limits, in parallel."""
+    futures = [client.submit(run_one, i, "payload_sweep", {
+        "Flywheel.torque_limit": torque, "Flywheel.momentum_limit": 100.0,
+        "SweepPlanner.turnaround_time": turnaround}, step, stop, None, [], 0, pure=False)
+        for i, torque in enumerate(torques)]
+    points = []
+    for torque, future in zip(torques, futures):
+        record = future.result()
+        if record["status"] == "error":
+            raise RuntimeError(f"size-flywheel: the run at {torque} N·m stopped: "
+                               f"{record['message']}")
+        m = record["metrics"]
+        a, s = m["pointing_accuracy"]["value"], m["pointing_stability"]["value"]
+        points.append(Point(torque, a, s, m["wheel_momentum_max"]["value"],
+                            a <= accuracy and s <= stability))
+    return points
 
 
 def size_flywheel(turnaround: float = 1.0, accuracy: float = payload_sweep.ACCURACY,
                   stability: float = payload_sweep.STABILITY, step: float = 0.05,
-                  stop: float | None = None, grid=GRID, refine: int = 5, out_dir=None,
-                  progress=None) -> Sizing:
+                  stop: float | None = None, grid=GRID, refine: int = 3, out_dir=None,
+                  progress=None, workers: int | None = None,
+                  scheduler: str | None = None) -> Sizing:
     """The smallest wheel torque meeting both requirements (angles in rad, SI)."""
     sweep = payload_sweep.PARAMETERS
     # one pitch sweep (4 amplitudes at the pitch rate, plus a reversal) and a margin
@@ -71,31 +84,29 @@ def size_flywheel(turnaround: float = 1.0, accuracy: float = payload_sweep.ACCUR
                     + turnaround + 10.0)
     build_all(names=payload_sweep.SCENARIO.components)
     points = []
+    with cluster(workers, scheduler) as client:
+        k = max(2, len(client.scheduler_info()["workers"]))
 
-    def point(torque):
-        p = evaluate(torque, turnaround, accuracy, stability, step, stop)
-        points.append(p)
-        if progress:
-            progress(p)
-        return p
+        def measure(torques):
+            new = evaluate(client, list(torques), turnaround, accuracy, stability, step, stop)
+            for p in new:
+                points.append(p)
+                if progress:
+                    progress(p)
 
-    failing, passing = None, None
-    for torque in grid:
-        p = point(torque)
-        if p.met:
-            passing = p
-            break
-        failing = p
-    if passing is not None and failing is not None:
+        measure(grid)
         for _ in range(refine):
-            middle = point(math.sqrt(failing.torque * passing.torque))
-            if middle.met:
-                passing = middle
-            else:
-                failing = middle
+            passing = [p.torque for p in points if p.met]
+            failing = [p.torque for p in points if not p.met and p.torque < min(passing)] \
+                if passing else []
+            if not passing or not failing:
+                break
+            low, high = max(failing), min(passing)
+            measure(low * (high / low) ** (j / (k + 1)) for j in range(1, k + 1))
     points.sort(key=lambda p: p.torque)
+    best = min((p for p in points if p.met), key=lambda p: p.torque, default=None)
     result = Sizing(turnaround, accuracy, stability, step, points,
-                    passing.torque if passing else None, passing.momentum if passing else None)
+                    best.torque if best else None, best.momentum if best else None)
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)

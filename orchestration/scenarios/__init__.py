@@ -9,6 +9,7 @@ applied on top of the system's: ``agilesat run scan_pitch:literal_spin``.
 from __future__ import annotations
 
 import importlib
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -74,13 +75,29 @@ def get(name: str) -> Scenario:
     return importlib.import_module(f"{__name__}.{name}").SCENARIO
 
 
-def summarize(metrics: dict, paper: dict | None = None) -> dict:
+def summarize(metrics: dict, paper: dict | None = None,
+              requirements: dict | None = None) -> dict:
     """{name: (value, unit, display unit, description)} -> the summary's metric entries,
-    with the paper's value beside each one it gives (value None: not reached)."""
-    return {name: {"value": None if v is None else float(v), "unit": u, "display_unit": d,
-                   "description": text,
-                   **({"paper": paper[name]} if paper and name in paper else {})}
-            for name, (v, u, d, text) in metrics.items()}
+    with the paper's value beside each one it gives (value None: not reached).
+
+    ``requirements`` maps a metric name to ``{"min": lo, "max": hi}`` (either bound or
+    both, a band; SI like the value): its entry gets ``"requirement"`` and ``"met"``
+    (lo <= value <= hi; a value not reached does not meet it).  Campaign pass rates count
+    ``met`` per run.
+    """
+    entries = {name: {"value": None if v is None else float(v), "unit": u, "display_unit": d,
+                      "description": text,
+                      **({"paper": paper[name]} if paper and name in paper else {})}
+               for name, (v, u, d, text) in metrics.items()}
+    for name, bounds in (requirements or {}).items():
+        if not bounds or set(bounds) - {"min", "max"}:
+            raise ValueError(f"requirement on {name}: expected 'min' and/or 'max', got {bounds}")
+        value = entries[name]["value"]
+        entries[name]["requirement"] = {k: float(bounds[k]) for k in ("min", "max")
+                                        if k in bounds}
+        entries[name]["met"] = value is not None and bool(
+            bounds.get("min", -math.inf) <= value <= bounds.get("max", math.inf))
+    return entries
 
 
 def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:

@@ -89,6 +89,11 @@ PAPER = {
 }
 
 
+#: the imaging rate −0.8 ± 0.02 °/s (seed 003)
+REQUIREMENTS = {"imaging_pitch_rate_mean": {"min": PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
+                                            "max": PROFILE.scan_rate + SCAN_RATE_TOLERANCE}}
+
+
 def metrics(results) -> dict:
     """Headline numbers (SI) beside the paper's, and the diagnosis of a failed maneuver."""
     t = results.time
@@ -141,9 +146,7 @@ def metrics(results) -> dict:
                            "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an "
                            "isotropic hub)"),
     }
-    summary = summarize(m, PAPER)
-    summary["imaging_pitch_rate_mean"]["requirement"] = [
-        PROFILE.scan_rate - SCAN_RATE_TOLERANCE, PROFILE.scan_rate + SCAN_RATE_TOLERANCE]
+    summary = summarize(m, PAPER, REQUIREMENTS)
     return {"metrics": summary, "diagnostics": diagnose(results, summary, t_need, h_need)}
 
 
@@ -169,9 +172,8 @@ def diagnose(results, summary, t_need, h_need) -> list[str]:
             f"momentum of {np.linalg.norm(h_need):.1f} N·m·s (at t = {t_need:.1f} s) where "
             f"the cluster holds at most {momentum_capacity(direction):.1f} N·m·s in that "
             f"direction; min singularity measure Q = {summary['min_singularity']['value']:.3g}")
-    low, high = summary["imaging_pitch_rate_mean"]["requirement"]
     rate = summary["imaging_pitch_rate_mean"]["value"]
-    if t[-1] >= PROFILE.times[3] and not low <= rate <= high:
+    if t[-1] >= PROFILE.times[3] and not summary["imaging_pitch_rate_mean"]["met"]:
         problems.append(f"imaging-phase pitch rate {rate / DEG:.4f} °/s is outside the "
                         f"required {PROFILE.scan_rate / DEG:.2f} ± 0.02 °/s")
     return problems

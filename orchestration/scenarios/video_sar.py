@@ -284,8 +284,7 @@ def metrics(results) -> dict:
                            "max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external "
                            "torque)"),
     }
-    summary = summarize(m)
-    summary["pointing_error_max"]["requirement"] = POINTING_REQUIREMENT
+    summary = summarize(m, requirements={"pointing_error_max": {"max": POINTING_REQUIREMENT}})
     problems = []
     if error.max() > POINTING_REQUIREMENT:
         worst = int(np.argmax(error))

@@ -1,0 +1,214 @@
+"""Running a campaign on Dask, and what it leaves in its directory.
+
+Runs go to a ``distributed`` cluster: a ``LocalCluster`` of single-threaded worker
+processes on this machine, or any running cluster by its scheduler address.  At most a
+few runs per worker are in flight (``as_completed`` refilled as runs finish), so the
+client's memory stays bounded whatever N is.  A worker that dies is noticed by the
+scheduler, which runs what it held on the others (up to ``distributed.scheduler.
+allowed-failures`` times, then that run's outcome is ``lost``); the campaign reports the
+workers it lost.
+
+Files in the output directory, written as runs finish:
+
+- ``runs.jsonl`` — the journal: one line per finished run (index, values, outcome,
+  metrics), flushed at once; ``--resume`` and extensions skip the runs it holds.
+- ``metrics.json`` — each metric's unit, description and requirement (first run).
+- ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
+  run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
+- at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
+  ``campaign.json`` and the figures (:mod:`.report`).
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+import uuid
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from .plan import Plan, Spec
+from .worker import run_one
+
+IN_FLIGHT_PER_WORKER = 2
+
+
+class CampaignExistsError(ValueError):
+    pass
+
+
+def read_journal(path: Path) -> dict[int, dict]:
+    """Finished runs by index; a last line cut short by a kill is dropped."""
+    records = {}
+    if path.exists():
+        for line in path.read_text().splitlines(keepends=True):
+            if not line.endswith("\n"):
+                break
+            record = json.loads(line)
+            records[record["index"]] = record
+    return records
+
+
+def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
+    """Check ``out`` against the plan; the runs already finished there."""
+    journal = out / "runs.jsonl"
+    if not journal.exists():
+        out.mkdir(parents=True, exist_ok=True)
+        # the spec first: a campaign killed before it finishes can still be resumed
+        (out / "campaign.json").write_text(json.dumps(
+            {"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n")
+        return {}
+    if not resume:
+        raise CampaignExistsError(f"{out} already holds a campaign (runs.jsonl): --resume to "
+                                  "finish or extend it, or choose another --out")
+    saved = json.loads((out / "campaign.json").read_text())
+    differences = plan.spec.differences(Spec(**saved["spec"]))
+    if differences:
+        raise CampaignExistsError(f"--resume {out}: the campaign there differs: "
+                                  + "; ".join(differences))
+    # a truncated last line would be glued to the next record: rewrite the journal clean
+    records = read_journal(journal)
+    journal.write_text("".join(json.dumps(r) + "\n" for r in records.values()))
+    return {i: r for i, r in records.items() if i < plan.total}
+
+
+def signals_file(plan: Plan, out: Path):
+    """The (runs, signals, points) memory map, grown if the campaign was extended."""
+    if not plan.signals:
+        return None
+    path = out / "signals.npy"
+    shape = (plan.total, len(plan.signals), plan.points)
+    if path.exists():
+        old = np.load(path, mmap_mode="r")
+        if old.shape == shape:
+            return np.load(path, mmap_mode="r+")
+        if old.shape[1:] != shape[1:]:
+            raise CampaignExistsError(f"{path}: shape {old.shape} does not fit {shape}")
+        data = np.array(old[:shape[0]])
+        del old
+    else:
+        data = None
+    memory = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=shape)
+    memory[:] = np.nan
+    if data is not None:
+        memory[:len(data)] = data
+    return memory
+
+
+@contextmanager
+def cluster(workers: int | None = None, scheduler: str | None = None):
+    """A ``distributed.Client``: on the cluster at ``scheduler``, or on a LocalCluster of
+    ``workers`` single-threaded processes (default: one per core)."""
+    import logging
+
+    from distributed import Client, LocalCluster
+    if scheduler:
+        with Client(scheduler, timeout="30s") as client:
+            yield client
+        return
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=":0", silence_logs=logging.ERROR) as local, \
+            Client(local) as client:
+        yield client
+
+
+def execute(plan: Plan, out: Path, client, done: dict, progress,
+            metrics: dict) -> tuple[dict, list, str]:
+    """Run what is not in ``done`` on ``client``; returns (records by index, lost workers,
+    "complete" or "interrupted").  Every finished run is in the journal at once;
+    ``metrics`` collects each metric's unit, description and requirement."""
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+    records = dict(done)
+    signals = signals_file(plan, out)
+    todo = iter([i for i in range(plan.total) if i not in records])
+    watcher = WorkerWatch(client)
+    futures = {}
+    token = uuid.uuid4().hex[:8]   # keys unique on a shared scheduler
+
+    def submit():
+        for index in todo:
+            future = client.submit(run_one, index, plan.spec.target, plan.parameters(index),
+                                   plan.step, plan.stop, plan.spec.algorithm, plan.signals,
+                                   plan.points, key=f"agilesat-run-{index}-{token}",
+                                   pure=False)
+            futures[future] = index
+            return future
+        return None
+
+    window = max(1, IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers)))
+    pending = as_completed([f for f in (submit() for _ in range(window)) if f is not None])
+    status = "complete"
+    try:
+        with (out / "runs.jsonl").open("a") as journal:
+            for future in pending:
+                index = futures.pop(future)
+                try:
+                    record = future.result()
+                except KilledWorker as exc:
+                    record = {"index": index, "status": "lost", "metrics": {},
+                              "message": f"every worker that ran it died (Dask gives up after "
+                              f"distributed.scheduler.allowed-failures): {exc}"}
+                except Exception as exc:   # the task itself could not run there
+                    record = {"index": index, "status": "error", "metrics": {},
+                              "message": f"{type(exc).__name__}: {exc}"}
+                signal = record.pop("signals", None)
+                if signals is not None and signal is not None:
+                    signals[index] = signal
+                record.update(seed=plan.spec.seed, values=plan.run_values(index),
+                              grid=index % len(plan.grid))
+                if set(record["metrics"]) - set(metrics):
+                    for name, m in record["metrics"].items():
+                        metrics.setdefault(name, {k: v for k, v in m.items()
+                                                  if k not in ("value", "met", "paper")})
+                    (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
+                record["metrics"] = {k: {"value": m["value"], **({"met": m["met"]}
+                                                                 if "met" in m else {})}
+                                     for k, m in record["metrics"].items()}
+                journal.write(json.dumps(record) + "\n")
+                journal.flush()
+                records[index] = record
+                watcher.check(futures)
+                progress.update(record["status"])
+                # keep IN_FLIGHT_PER_WORKER runs per worker there is now
+                while len(futures) < IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers)):
+                    nxt = submit()
+                    if nxt is None:
+                        break
+                    pending.add(nxt)
+    except KeyboardInterrupt:
+        status = "interrupted"
+        client.cancel(list(futures))
+    finally:
+        if signals is not None:
+            signals.flush()
+        progress.close()
+    return records, watcher.lost, status
+
+
+class WorkerWatch:
+    """Which workers left while runs were in flight, and which runs they held."""
+
+    def __init__(self, client):
+        self.client = client
+        self.workers = set(client.scheduler_info()["workers"])
+        self.processing = {}
+        self.lost = []
+        self.last = 0.0
+
+    def check(self, futures: dict) -> None:
+        now = time.monotonic()
+        if now - self.last < 1.0:
+            return
+        self.last = now
+        workers = set(self.client.scheduler_info()["workers"])
+        keys = {f.key: i for f, i in futures.items()}
+        for address in sorted(self.workers - workers):
+            held = sorted(keys[k] for k in self.processing.get(address, ()) if k in keys)
+            self.lost.append({"worker": address, "runs_in_flight": held})
+            print(f"campaign: worker {address} left; Dask re-runs the runs it held "
+                  f"({held or 'none'}) on the others", file=sys.stderr)
+        self.workers = workers
+        self.processing = self.client.processing()

@@ -1,0 +1,177 @@
+"""A campaign's plan: the specification checked against the system, and the parameter
+values of every run.
+
+Run index i (0 ≤ i < runs × grid points) is grid point ``i % G`` and replicate ``i // G``
+(G: the number of grid points, 1 without grids), so extending ``--runs`` keeps every run
+already made.  Run i's values are the system's (its ``.ssd``, the variant, ``--set``) with
+the grid point's values and the draws of :meth:`Dispersion.draw` for index i on top.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...fmus import FMUS, model_class
+from ..runner import parse_target
+from ..ssp import read_system
+from . import dispersion as dispersions
+
+
+@dataclass
+class Spec:
+    """What the user asked for (``campaign.json``'s ``spec``; a resumed campaign must match
+    it in everything but ``runs``)."""
+    target: str
+    runs: int = 1                  # per grid point
+    seed: int = 0
+    vary: list[str] = field(default_factory=list)      # "A.x=DIST", as written
+    files: list[str] = field(default_factory=list)     # dispersion files they came from
+    set: dict = field(default_factory=dict)            # "A.x" -> value (as for `run --set`)
+    keep: list[str] = field(default_factory=list)      # signals to keep per run
+    step: float | None = None
+    stop: float | None = None
+    algorithm: str | None = None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def differences(self, other: "Spec") -> list[str]:
+        a, b = self.to_dict(), other.to_dict()
+        return [f"{k}: {a[k]!r} here, {b[k]!r} in the campaign" for k in a
+                if k != "runs" and a[k] != b[k]]
+
+
+class Plan:
+    def __init__(self, spec: Spec):
+        if spec.runs < 1:
+            raise ValueError(f"--runs must be at least 1, got {spec.runs}")
+        if not 0 <= spec.seed < 2**63:
+            raise ValueError(f"--seed must be a non-negative integer, got {spec.seed}")
+        self.spec = spec
+        self.scenario, variant = parse_target(spec.target)
+        ssd = self.scenario.ssd if self.scenario else Path(spec.target)
+        self.system = read_system(ssd)
+        self.step = spec.step or self.system.step_size
+        self.stop = self.system.stop_time if spec.stop is None else spec.stop
+        self.start = self.system.start_time
+        if not (self.step and self.stop and self.stop > self.start):
+            raise ValueError(f"{ssd}: give --step and --stop (the system sets none)")
+        self.points = int(round((self.stop - self.start) / self.step)) + 1
+        self.fmus = {c.name: Path(c.source).stem for c in self.system.components}
+        self.values = {f"{p.component}.{p.name}": p.value for p in self.system.parameters}
+        if self.scenario:
+            self.values.update(self.scenario.variant_parameters(variant))
+        self.values.update(spec.set)
+        self.dispersions = [dispersions.parse(text) for text in spec.vary]
+        keys = [d.key for d in self.dispersions]
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        if twice:
+            raise ValueError(f"dispersed twice: {', '.join(twice)}")
+        self.nominal = {d.key: self._check(d) for d in self.dispersions}
+        self.columns = [name for d in self.dispersions
+                        for name in _scalar_names(d.key, self.nominal[d.key].shape)]
+        overlap = set(self.columns) & set(spec.set)
+        if overlap:
+            raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
+        grids = [d for d in self.dispersions if d.is_grid]
+        self.grid_keys = [d.key for d in grids]
+        self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
+        self.units = {}    # of the kept signals, where the variable table says
+        self.signals = [name for key in spec.keep for name in self._signal(key)]
+
+    @property
+    def total(self) -> int:
+        return self.spec.runs * len(self.grid)
+
+    def run_values(self, index: int) -> dict:
+        """The dispersed scalar values of run ``index`` ({"A.x[1]": float, ...})."""
+        grid = dict(zip(self.grid_keys, self.grid[index % len(self.grid)]))
+        result = {}
+        for d in self.dispersions:
+            nominal = self.nominal[d.key]
+            value = (d.apply(grid[d.key], nominal) if d.is_grid
+                     else d.draw(self.spec.seed, index, nominal))
+            for name, x in zip(_scalar_names(d.key, nominal.shape), np.ravel(value)):
+                result[name] = x.item()
+        return result
+
+    def parameters(self, index: int) -> dict:
+        """Everything run ``index`` sets on top of the system: ``--set`` and its values."""
+        return {**self.spec.set, **self.run_values(index)}
+
+    def _variable(self, key: str, what: str):
+        instance, _, rest = key.partition(".")
+        name = rest.partition("[")[0]
+        if instance not in self.fmus:
+            raise ValueError(f"{what} {key}: no component {instance!r} in {self.system.path}; "
+                             f"components: {', '.join(self.fmus)}")
+        if self.fmus[instance] not in FMUS:
+            return None   # not one of ours: the master checks the name when it runs
+        for var in model_class(self.fmus[instance]).VARIABLES:
+            if var.name == name:
+                if "[" in rest and rest not in var.scalar_names():
+                    raise ValueError(f"{what} {key}: {instance}.{name} has shape {var.shape}; "
+                                     f"elements are {var.scalar_names()[0]} .. "
+                                     f"{var.scalar_names()[-1]}")
+                return var
+        raise ValueError(f"{what} {key}: {self.fmus[instance]} has no variable {name!r}")
+
+    def _check(self, d) -> np.ndarray:
+        """The nominal value of a dispersed variable, after checking that the dispersion
+        fits it."""
+        var = self._variable(d.key, "--vary")
+        whole = "[" not in d.key
+        if var is None:
+            if d.kind in ("rotate", "inertia") or whole and d.mode:
+                raise ValueError(f"--vary {d.text}: whole-variable dispersions need one of "
+                                 f"our FMUs, {self.fmus[d.instance]} is not")
+            return np.asarray(float(self.values.get(d.key, 0.0)))
+        if var.causality != "parameter" or var.type == "String":
+            raise ValueError(f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
+                             f"{var.causality}; only numeric parameters can be dispersed")
+        if var.type != "Real" and d.kind not in ("choice", "values"):
+            raise ValueError(f"--vary {d.text}: {var.type} parameter: use choice() or values()")
+        names = var.scalar_names()
+        start = var.start_array()
+        flat = np.array([float(self.values.get(f"{d.instance}.{n}", s))
+                         for n, s in zip(names, start)])
+        if not whole:
+            return np.asarray(flat[names.index(d.key.partition(".")[2])])
+        shape = var.shape
+        if d.is_grid and shape:
+            raise ValueError(f"--vary {d.text}: grids take scalar names, e.g. {d.instance}."
+                             f"{names[0]}")
+        if d.kind == "rotate" and not (shape == (3,) or len(shape) == 2 and shape[1] == 3):
+            raise ValueError(f"--vary {d.text}: rotate() turns a 3-vector or the rows of an "
+                             f"n×3 matrix; {d.instance}.{var.name} has shape {shape}")
+        if d.kind == "inertia" and shape != (3, 3):
+            raise ValueError(f"--vary {d.text}: inertia() disperses a 3×3 inertia; "
+                             f"{d.instance}.{var.name} has shape {shape}")
+        nominal = flat.reshape(shape)
+        if d.kind == "inertia" and not (np.allclose(nominal, nominal.T)
+                                        and np.linalg.eigvalsh(nominal).min() > 0):
+            raise ValueError(f"--vary {d.text}: nominal {nominal.tolist()} is not symmetric "
+                             "positive definite")
+        return nominal
+
+    def _signal(self, key: str) -> list[str]:
+        var = self._variable(key, "--keep")
+        if var is None:
+            return [key]
+        instance = key.partition(".")[0]
+        self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
+        return [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()] \
+            if "[" not in key else [key]
+
+
+def _scalar_names(key: str, shape) -> list[str]:
+    if not shape:
+        return [key]
+    return [f"{key}[{','.join(str(i + 1) for i in idx)}]" for idx in np.ndindex(*shape)]
+
+
+def time_axis(plan: Plan) -> np.ndarray:
+    return plan.start + plan.step * np.arange(plan.points)

@@ -1,0 +1,58 @@
+"""What a Dask worker runs: one campaign run, as ``agilesat run`` would make it.
+
+Outcomes: ``ok``; ``failed`` — the scenario ran but did not fly as required (exit 3 of
+``run``; the message is its diagnostics); ``error`` — the run stopped (a failed FMI call,
+bad values; the message says where).  Nothing raised here ends a campaign.  The worker
+process keeps its loaded FMUs between runs (``orchestration.fmu``).
+"""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+
+def run_one(index: int, target: str, parameters: dict, step, stop, algorithm,
+            signals: list[str], points: int) -> dict:
+    from ..master import SimulationError
+    from ..runner import run
+    began = time.perf_counter()
+    record = {"index": index, "status": "ok", "message": "", "metrics": {},
+              "worker": _worker(), "pid": os.getpid()}
+    results = None
+    try:
+        results, summary = run(target, step=step, stop=stop, algorithm=algorithm,
+                               parameters=parameters, figures=False, build=False)
+        record["metrics"] = summary.get("metrics", {})
+        if summary.get("status") == "failed":
+            record["status"] = "failed"
+            record["message"] = "; ".join(summary["diagnostics"])
+    except SimulationError as failure:
+        record.update(status="error", message=str(failure))
+        results = failure.results
+    except Exception as exc:   # a bad value for one run is that run's outcome
+        record.update(status="error", message=f"{type(exc).__name__}: {exc}")
+    record["signals"] = _signals(results, signals, points)
+    record["seconds"] = time.perf_counter() - began
+    return record
+
+
+def _signals(results, names, points) -> np.ndarray | None:
+    """(len(names), points) float64; NaN where the run did not get to."""
+    if not names:
+        return None
+    out = np.full((len(names), points), np.nan)
+    if results is not None:
+        n = min(len(results), points)
+        for row, name in enumerate(names):
+            out[row, :n] = results[name][:n]
+    return out
+
+
+def _worker() -> str:
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return "local"

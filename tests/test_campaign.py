@@ -1,0 +1,275 @@
+"""Campaigns end to end: the CLI on a LocalCluster, reproducibility, replay with
+``agilesat run``, resume after a real interruption, extension, recorded failures, a real
+scheduler with two workers (one killed mid-campaign), and bit identity of a reused worker.
+"""
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from helpers import ROOT, agilesat, run_python
+
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
+STOP = "4"
+VARY = ["--vary", "SatelliteDynamics.inertia=inertia(0.03, 1deg)",
+        "--vary", "CmgCluster.delta0=+normal(0, 0.5deg)",
+        "--vary", "CmgCluster.gimbal_axis=rotate(0.1deg)",
+        "--vary", "SatelliteDynamics.rate0[2]=+normal(0, 0.01deg)"]
+COMMAND = ["campaign", "scan_pitch", "--stop", STOP, "--seed", "11", *VARY,
+           "--keep", "SatelliteDynamics.w_BO_B[2]", "--no-progress"]
+MACHINE = ("worker", "seconds")   # where and how fast: the only columns that may differ
+
+
+def rows(out):
+    with (out / "runs.csv").open() as stream:
+        return [{k: v for k, v in r.items() if k not in MACHINE}
+                for r in csv.DictReader(stream)]
+
+
+def journal(out):
+    return [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+
+
+@pytest.fixture(scope="module")
+def three(tmp_path_factory, fmus):
+    out = tmp_path_factory.mktemp("campaign") / "three"
+    result = agilesat(*COMMAND, "--runs", "3", "--workers", "2", "--out", out)
+    assert result.returncode in (0, 3), result.stdout + result.stderr
+    return out
+
+
+def test_same_command_gives_the_identical_table(three, tmp_path):
+    again = tmp_path / "again"
+    result = agilesat(*COMMAND, "--runs", "3", "--workers", "1", "--out", again)
+    assert result.returncode in (0, 3), result.stderr
+    first = rows(three)
+    assert len(first) == 3 and all(r["status"] == "ok" for r in first)
+    assert rows(again) == first
+    assert np.array_equal(np.load(three / "signals.npy"), np.load(again / "signals.npy"))
+    summary = json.loads((three / "campaign.json").read_text())
+    assert summary["runs"]["ok"] == 3 and summary["spec"]["seed"] == 11
+    assert summary["pass_rates"]["imaging_pitch_rate_mean"]["method"] == "Clopper-Pearson"
+    assert "hist_max_gimbal_rate.png" in summary["figures"]
+    assert "envelope_SatelliteDynamics.w_BO_B_2.png" in summary["figures"]
+
+
+def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
+    row = rows(three)[2]
+    dispersed = list(row)[list(row).index("grid") + 1:list(row).index("status")]
+    assert len(dispersed) == 9 + 6 + 18 + 1
+    sets = [arg for key in dispersed for arg in ("--set", f"{key}={row[key]}")]
+    result = agilesat("run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path,
+                      "--no-figures")
+    assert result.returncode in (0, 3), result.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    for name, metric in summary["metrics"].items():
+        value = metric["value"]
+        assert (row[name] == "nan") if value is None else float(row[name]) == value, name
+    replayed = np.load(tmp_path / "results.npz")
+    column = list(replayed["names"]).index("SatelliteDynamics.w_BO_B[2]")
+    assert np.array_equal(np.load(three / "signals.npy")[2, 0], replayed["data"][:, column])
+
+
+def test_resume_after_an_interruption_and_extend(three, tmp_path):
+    out = tmp_path / "resumed"
+    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", *COMMAND,
+                                "--runs", "8", "--workers", "1", "--out", str(out)],
+                               cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not ((out / "runs.jsonl").exists() and
+                   len((out / "runs.jsonl").read_text().splitlines()) >= 2):
+            assert process.poll() is None and time.monotonic() < deadline, \
+                process.stdout.read() if process.poll() is not None else "timeout"
+            time.sleep(0.2)
+        process.send_signal(signal.SIGTERM)   # handled as Ctrl-C (KeyboardInterrupt)
+        output, _ = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130, output
+    summary = json.loads((out / "campaign.json").read_text())
+    assert summary["status"] == "interrupted"
+    made = journal(out)
+    assert 2 <= len(made) < 8 and len(rows(out)) == len(made)
+
+    result = agilesat(*COMMAND, "--runs", "8", "--workers", "1", "--out", out, "--resume")
+    assert result.returncode in (0, 3), result.stderr
+    assert f"{len(made)} already made" in result.stderr
+    after = journal(out)
+    assert after[:len(made)] == made                 # finished runs not redone
+    assert sorted(r["index"] for r in after) == list(range(8))
+    assert rows(out)[:3] == rows(three)               # run i is run i, whatever N
+
+    result = agilesat(*COMMAND, "--runs", "10", "--workers", "1", "--out", out, "--resume")
+    assert result.returncode in (0, 3), result.stderr
+    assert journal(out)[:8] == after and len(journal(out)) == 10
+    assert np.load(out / "signals.npy").shape[0] == 10
+    assert not np.isnan(np.load(out / "signals.npy")).any()
+
+    result = agilesat(*COMMAND, "--runs", "10", "--workers", "1", "--out", out)
+    assert result.returncode == 1 and "--resume" in result.stderr
+    result = agilesat(*COMMAND, "--runs", "10", "--seed", "12", "--out", out, "--resume")
+    assert result.returncode == 1 and "seed: 12 here, 11 in the campaign" in result.stderr
+
+
+def test_resume_after_the_process_is_killed(three, tmp_path):
+    """SIGKILL: no clean-up at all; the journal and the spec written at the start suffice."""
+    out = tmp_path / "killed"
+    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", *COMMAND,
+                                "--runs", "3", "--workers", "1", "--out", str(out)],
+                               cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 300
+        while not ((out / "runs.jsonl").exists() and (out / "runs.jsonl").read_text()):
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.1)
+    finally:
+        process.kill()
+        process.wait()
+    made = journal(out)
+    assert 1 <= len(made) < 3 and not (out / "runs.csv").exists()
+    result = agilesat(*COMMAND, "--runs", "3", "--workers", "1", "--out", out, "--resume")
+    assert result.returncode in (0, 3), result.stderr
+    assert journal(out)[:len(made)] == made
+    assert rows(out) == rows(three)
+
+
+def test_failures_are_recorded_outcomes(tmp_path, fmus):
+    """A run that stops (bad value) and one that is diagnosed (exit 3 in run) are rows
+    with their messages; the campaign goes on and exits 3."""
+    out = tmp_path / "failures"
+    result = agilesat("campaign", "scan_pitch", "--stop", "100", "--workers", "2",
+                      "--vary", "PitchManeuverController.scan_rate=values(-0.8deg, -0.7deg)",
+                      "--vary", "CmgCluster.rate_limit=values(0.6, -1)", "--out", out,
+                      "--no-progress")
+    assert result.returncode == 3, result.stderr
+    table = rows(out)
+    assert [r["status"] for r in table] == ["ok", "error", "failed", "error"]
+    assert "imaging-phase pitch rate -0.69" in table[2]["message"]
+    assert "is outside the required -0.80 ± 0.02 °/s" in table[2]["message"]
+    assert "rate_limit (-1.0) and accel_limit (0.5) must be positive" in table[1]["message"]
+    assert table[0]["met_imaging_pitch_rate_mean"] == "True"
+    assert table[2]["met_imaging_pitch_rate_mean"] == "False"
+    summary = json.loads((out / "campaign.json").read_text())
+    assert [f["index"] for f in summary["failures"]] == [1, 2, 3]
+    assert "CmgCluster.rate_limit=-1.0" in summary["failures"][0]["replay"]
+    rate = summary["pass_rates"]["imaging_pitch_rate_mean"]
+    assert (rate["met"], rate["runs"]) == (1, 4)
+
+
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """A `dask scheduler` and two `dask worker` processes on 127.0.0.1 (always killed)."""
+    bin_dir = os.path.dirname(sys.executable)
+    file = tmp_path / "scheduler.json"
+    processes = []
+
+    def start(*args):
+        processes.append(subprocess.Popen([os.path.join(bin_dir, "dask"), *args], cwd=tmp_path,
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                          start_new_session=True))
+        return processes[-1]
+    try:
+        start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+              "--scheduler-file", str(file))
+        deadline = time.monotonic() + 60
+        while not file.exists():
+            assert time.monotonic() < deadline, "no scheduler"
+            time.sleep(0.2)
+        address = json.loads(file.read_text())["address"]
+        workers = [start("worker", address, "--nthreads", "1", "--no-nanny",
+                         "--no-dashboard", "--host", "127.0.0.1") for _ in range(2)]
+        from distributed import Client
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, workers
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+def test_distributed_campaign_survives_a_worker_killed_midway(dask_cluster, tmp_path, fmus):
+    address, workers = dask_cluster
+    out = tmp_path / "remote"
+    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", "campaign",
+                                "scan_pitch", "--stop", "20", "--runs", "10", *VARY,
+                                "--scheduler", address, "--out", str(out), "--no-progress"],
+                               cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not ((out / "runs.jsonl").exists() and (out / "runs.jsonl").read_text()):
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.1)
+        victim = workers[0]
+        os.kill(victim.pid, signal.SIGKILL)
+        output, _ = process.communicate(timeout=600)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode in (0, 3), output
+    summary = json.loads((out / "campaign.json").read_text())
+    assert summary["runs"]["ok"] == 10, output
+    assert summary["cluster"] == {"scheduler": address, "workers": 2}
+    pids = {r["pid"] for r in journal(out)}
+    assert workers[1].pid in pids
+    assert len(summary["lost_workers"]) == 1, output
+    assert "left; Dask re-runs the runs it held" in output
+    # after the kill, every run is made by the surviving worker
+    later = journal(out)[len(journal(out)) // 2:]
+    assert {r["pid"] for r in later} == {workers[1].pid}
+
+
+def test_python_api_returns_the_table(dask_cluster, tmp_path):
+    from agilesat.orchestration.campaign import campaign
+    address, _ = dask_cluster
+    table = campaign("payload_sweep", stop=2.0, scheduler=address, out_dir=tmp_path / "api",
+                     vary=["Flywheel.torque_limit=values(0.2, 2.0)"], progress=False,
+                     as_frame=False)
+    assert table.dtype.names[:4] == ("index", "seed", "grid", "Flywheel.torque_limit")
+    assert list(table["Flywheel.torque_limit"]) == [0.2, 2.0]
+    # within 2 s the 0.2 N·m wheel already misses the pointing requirement, 2 N·m meets it
+    assert list(table["status"]) == ["failed", "ok"]
+    assert list(table["met_pointing_accuracy"]) == [False, True]
+    assert "pointing accuracy" in table["message"][0]
+
+
+REUSE = """
+import sys
+import numpy as np
+from agilesat.orchestration.campaign.worker import run_one
+nominal = {"CmgCluster.h_rotor": 16.65}
+other = {"CmgCluster.h_rotor": 17.0, "SatelliteDynamics.inertia[1,1]": 900.0}
+keep = ["SatelliteDynamics.q_BI[1]", "SatelliteDynamics.w_BI_B[2]", "CmgCluster.delta[3]"]
+order = sys.argv[1].split(",")
+runs = [run_one(i, "scan_pitch", nominal if k == "a" else other, None, 20.0, None, keep, 401)
+        for i, k in enumerate(order)]
+assert all(r["status"] == "ok" for r in runs), [r["message"] for r in runs]
+np.save(sys.argv[2], np.stack([r["signals"] for r in runs]))
+"""
+
+
+def test_a_reused_worker_is_bit_identical_to_a_fresh_process(tmp_path, fmus):
+    reused, fresh = tmp_path / "reused.npy", tmp_path / "fresh.npy"
+    result = run_python(REUSE, "a,b,a,a", reused)
+    assert result.returncode == 0, result.stderr
+    result = run_python(REUSE, "a", fresh)
+    assert result.returncode == 0, result.stderr
+    runs, alone = np.load(reused), np.load(fresh)[0]
+    assert not np.isnan(alone).any()
+    assert not np.array_equal(runs[1], alone)      # the other parameters do differ
+    for k in (0, 2, 3):
+        assert np.array_equal(runs[k], alone)

@@ -1,0 +1,206 @@
+"""Campaign building blocks that need no FMU run: the dispersion language, run indexing,
+pass-rate intervals, the table and requirements in scenario summaries."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from agilesat.orchestration.campaign import dispersion, report
+from agilesat.orchestration.campaign.plan import Plan, Spec
+from agilesat.orchestration.scenarios import summarize
+
+DEG = math.pi / 180
+
+
+def test_parse_numbers_degrees_and_modes():
+    d = dispersion.parse("CmgCluster.delta0=+normal(0, 0.5deg)")
+    assert (d.key, d.kind, d.mode) == ("CmgCluster.delta0", "normal", "+")
+    assert d.args == (0.0, 0.5 * DEG)
+    assert dispersion.parse("A.x[2,3] = *uniform(0.9,1.1e0)").args == (0.9, 1.1)
+    assert dispersion.parse("A.x=linspace(1, 2, 3)").grid() == [1.0, 1.5, 2.0]
+    assert dispersion.parse("A.x=values(-1, .5)").grid() == [-1.0, 0.5]
+
+
+@pytest.mark.parametrize("text, match", [
+    ("A.x", "expected Instance.variable=DIST"),
+    ("A=normal(0,1)", "expected Instance.variable=DIST"),
+    ("A.x=gauss(0,1)", "unknown distribution 'gauss'"),
+    ("A.x=normal(0)", "normal takes 2 argument"),
+    ("A.x=normal(0, -1)", "standard deviation must be ≥ 0"),
+    ("A.x=uniform(2, 1)", "lo <= hi"),
+    ("A.x=linspace(0, 1, 2.5)", "positive integer"),
+    ("A.x=normal(0, one)", "'one' is not a number"),
+    ("A.x=+rotate(1deg)", "drop the '\\+'"),
+])
+def test_parse_errors_name_the_problem(text, match):
+    with pytest.raises(ValueError, match=match):
+        dispersion.parse(text)
+
+
+def test_rotate_keeps_unit_vectors_and_has_the_stated_sd():
+    d = dispersion.parse("A.axis=rotate(0.1deg)")
+    axes = np.array([[1.0, 0, 0], [0, 0.6, 0.8]])
+    draws = np.array([d.draw(7, i, axes) for i in range(4000)])
+    assert np.allclose(np.linalg.norm(draws, axis=2), 1.0, atol=1e-15)
+    tilt = np.arccos(np.clip(np.einsum("nij,ij->ni", draws, axes), -1, 1))
+    # tilt² = φ₁² + φ₂², each N(0, sd²): E[tilt²] = 2 sd²
+    assert np.sqrt(np.mean(tilt**2) / 2) == pytest.approx(0.1 * DEG, rel=0.05)
+    # about each perpendicular axis: the component of the draw along e has sd = sd
+    assert np.std(draws[:, 0, 1]) == pytest.approx(0.1 * DEG, rel=0.05)
+    assert np.std(draws[:, 0, 2]) == pytest.approx(0.1 * DEG, rel=0.05)
+
+
+def test_inertia_stays_symmetric_positive_definite_and_physical():
+    nominal = np.diag([600.0, 1000.0, 1200.0])
+    d = dispersion.parse("S.inertia=inertia(0.03, 1deg)")
+    draws = np.array([d.draw(3, i, nominal) for i in range(3000)])
+    assert np.array_equal(draws, np.transpose(draws, (0, 2, 1)))
+    moments = np.linalg.eigvalsh(draws)
+    assert moments.min() > 0
+    assert np.all(2 * moments.max(axis=1) <= moments.sum(axis=1) * (1 + 1e-12))
+    # principal moments: 3 % relative sd (moments stay ordered at this spread)
+    assert np.std(moments / [600, 1000, 1200], axis=0) == pytest.approx([0.03] * 3, rel=0.07)
+    # principal axes: a rotation vector of 1° per axis; the x axis tilts by φ_y, φ_z
+    x_axis = np.linalg.eigh(draws)[1][:, :, 0] * np.sign(np.linalg.eigh(draws)[1][:, 0:1, 0])
+    assert np.std(x_axis[:, 1]) == pytest.approx(1 * DEG, rel=0.07)
+
+
+def test_draws_depend_on_seed_and_index_only():
+    a = dispersion.parse("A.x=normal(0, 1)")
+    nominal = np.zeros(3)
+    assert np.array_equal(a.draw(1, 5, nominal), a.draw(1, 5, nominal))
+    assert not np.array_equal(a.draw(1, 5, nominal), a.draw(1, 6, nominal))
+    assert not np.array_equal(a.draw(1, 5, nominal), a.draw(2, 5, nominal))
+    b = dispersion.parse("A.y=normal(0, 1)")   # another key: an independent stream
+    assert not np.array_equal(a.draw(1, 5, nominal), b.draw(1, 5, nominal))
+
+
+def test_mode_adds_to_or_multiplies_the_nominal():
+    nominal = np.array([10.0, 20.0])
+    plain, added, scaled = (dispersion.parse(f"A.x={m}normal(1, 0.1)") for m in ("", "+", "*"))
+    raw = plain.draw(0, 0, nominal)
+    assert np.array_equal(added.draw(0, 0, nominal), nominal + raw)
+    assert np.array_equal(scaled.draw(0, 0, nominal), nominal * raw)
+
+
+def test_plan_grid_full_factorial_and_index_mapping():
+    plan = Plan(Spec("payload_sweep", runs=3, seed=4, vary=[
+        "Flywheel.torque_limit=values(0.2, 2.0)",
+        "SweepPlanner.turnaround_time=linspace(1, 10, 3)",
+        "SatelliteDynamics.rate0[3]=normal(0, 1e-5)"]))
+    assert plan.total == 3 * 6 and len(plan.grid) == 6
+    seen = {(plan.run_values(i)["Flywheel.torque_limit"],
+             plan.run_values(i)["SweepPlanner.turnaround_time"]) for i in range(6)}
+    assert seen == {(t, r) for t in (0.2, 2.0) for r in (1.0, 5.5, 10.0)}
+    # run i is grid point i % 6: the same point, another draw, one replicate later
+    assert plan.run_values(1)["Flywheel.torque_limit"] == plan.run_values(7)["Flywheel.torque_limit"]
+    assert plan.run_values(1)["SatelliteDynamics.rate0[3]"] != \
+        plan.run_values(7)["SatelliteDynamics.rate0[3]"]
+    # extending --runs keeps every run already planned
+    longer = Plan(Spec("payload_sweep", runs=5, seed=4, vary=plan.spec.vary))
+    assert all(longer.run_values(i) == plan.run_values(i) for i in range(plan.total))
+
+
+def test_plan_whole_variables_start_from_the_system_values():
+    plan = Plan(Spec("scan_pitch", vary=["CmgCluster.delta0=+normal(0, 0)",
+                                         "SatelliteDynamics.inertia=inertia(0, 0)"]))
+    values = plan.run_values(0)
+    from agilesat.orchestration.scenarios.scan_pitch import PARAMETERS
+    assert [values[f"CmgCluster.delta0[{i}]"] for i in range(1, 7)] == \
+        pytest.approx(PARAMETERS["CmgCluster.delta0"], abs=1e-15)
+    assert values["SatelliteDynamics.inertia[2,2]"] == pytest.approx(956.0, rel=1e-14)
+    assert values["SatelliteDynamics.inertia[1,2]"] == pytest.approx(0.0, abs=1e-12)
+    assert plan.columns[:6] == [f"CmgCluster.delta0[{i}]" for i in range(1, 7)]
+
+
+@pytest.mark.parametrize("vary, match", [
+    ("Nobody.x=normal(0,1)", "no component 'Nobody'"),
+    ("CmgCluster.nothing=normal(0,1)", "CmgCluster has no variable 'nothing'"),
+    ("CmgCluster.delta0[7]=normal(0,1)", "has shape \\(6,\\)"),
+    ("CmgCluster.delta=normal(0,1)", "only numeric parameters"),
+    ("CmgSteering.law=normal(0,1)", "Integer parameter: use choice"),
+    ("CmgCluster.delta0=values(0, 1)", "grids take scalar names"),
+    ("CmgCluster.h_rotor=rotate(1deg)", "rotate\\(\\) turns a 3-vector"),
+    ("CmgCluster.gimbal_axis=inertia(0.1, 0)", "disperses a 3×3 inertia"),
+])
+def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
+    with pytest.raises(ValueError, match=match):
+        Plan(Spec("scan_pitch", vary=[vary]))
+
+
+def test_dispersion_files_toml_and_json_agree(tmp_path):
+    (tmp_path / "d.toml").write_text('[vary]\n"A.x" = "normal(1, 2)"\n"A.y[2]" = '
+                                     '"values(1, 2)"\n[set]\n"A.z" = 3.0\n')
+    (tmp_path / "d.json").write_text(json.dumps({"vary": {"A.x": "normal(1, 2)",
+                                                          "A.y[2]": "values(1, 2)"},
+                                                 "set": {"A.z": 3.0}}))
+    assert dispersion.load(tmp_path / "d.toml") == dispersion.load(tmp_path / "d.json")
+    (tmp_path / "bad.toml").write_text('[vary]\n"A.x" = "normal(1"\n')
+    with pytest.raises(ValueError, match="bad.toml A.x"):
+        dispersion.load(tmp_path / "bad.toml")
+    (tmp_path / "empty.json").write_text("{}")
+    with pytest.raises(ValueError, match="empty.json: expected a table 'vary'"):
+        dispersion.load(tmp_path / "empty.json")
+
+
+def test_clopper_pearson_against_closed_forms_and_a_table():
+    # k = n: lower = (α/2)^(1/n); k = 0: upper = 1 − (α/2)^(1/n)
+    assert report.clopper_pearson(100, 100)[0] == pytest.approx(0.025 ** (1 / 100), rel=1e-12)
+    assert report.clopper_pearson(0, 20)[1] == pytest.approx(1 - 0.025 ** (1 / 20), rel=1e-12)
+    # n = 10, k = 5: (0.1871, 0.8129) (tabulated exact interval)
+    assert report.clopper_pearson(5, 10) == pytest.approx((0.1871, 0.8129), abs=1e-4)
+
+
+def test_summarize_declares_requirements_and_met():
+    entries = summarize({"a": (1.0, "rad", "deg", ""), "b": (None, "s", "s", ""),
+                         "c": (-0.5, "1", "1", "")},
+                        requirements={"a": {"max": 2.0}, "b": {"min": 0.0},
+                                      "c": {"min": -1.0, "max": -0.6}})
+    assert entries["a"]["requirement"] == {"max": 2.0} and entries["a"]["met"] is True
+    assert entries["b"]["met"] is False            # not reached: not met
+    assert entries["c"]["met"] is False
+    with pytest.raises(ValueError, match="expected 'min' and/or 'max'"):
+        summarize({"a": (1.0, "1", "1", "")}, requirements={"a": {"below": 1}})
+
+
+def test_table_round_trips_floats_exactly_through_csv(tmp_path):
+    plan = Plan(Spec("scan_pitch", runs=2, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
+    metrics = {"m": {"unit": "rad", "display_unit": "deg", "requirement": {"max": 1.0}}}
+    records = {i: {"index": i, "seed": 0, "grid": 0, "values": plan.run_values(i),
+                   "status": "ok", "message": "", "worker": "w", "seconds": 0.1,
+                   "metrics": {"m": {"value": 1 / 3 + i, "met": i == 0}}} for i in (1, 0)}
+    array = report.table(plan, records, metrics)
+    assert list(array["index"]) == [0, 1] and list(array["met_m"]) == [True, False]
+    report.write_table(array, tmp_path)
+    import csv
+    rows = list(csv.DictReader((tmp_path / "runs.csv").open()))
+    assert float(rows[1]["m"]) == 1 / 3 + 1
+    assert float(rows[0]["CmgCluster.h_rotor"]) == plan.run_values(0)["CmgCluster.h_rotor"]
+    rates = report.pass_rates(array, metrics)
+    assert rates["m"]["met"] == 1 and rates["m"]["runs"] == 2
+
+
+def test_progress_prints_plain_lines_off_a_terminal(capsys):
+    import sys
+    progress = report.Progress(4, 1, period=0.0, stream=sys.stdout)
+    progress.update("ok")
+    progress.update("failed")
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("campaign: 2/4 runs done (none failed)")
+    assert "3/4 runs done (1 failed)" in lines[1] and "runs/s, ETA" in lines[1]
+
+
+def test_progress_is_a_bar_on_a_terminal():
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    stream = Terminal()
+    progress = report.Progress(5, 2, stream=stream)
+    progress.update("ok")
+    progress.update("error")
+    progress.close()
+    text = stream.getvalue()
+    assert "4/5" in text and "1 error" in text and "run/s" in text
