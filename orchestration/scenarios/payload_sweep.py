@@ -87,7 +87,7 @@ PAPER = {
 }
 
 
-#: the paper's pointing accuracy and stability (seed 004)
+#: the paper's pointing accuracy and stability ([Chang 2015])
 REQUIREMENTS = {"pointing_accuracy": {"max": ACCURACY}, "pointing_stability": {"max": STABILITY}}
 
 

@@ -89,7 +89,7 @@ PAPER = {
 }
 
 
-#: the imaging rate −0.8 ± 0.02 °/s (seed 003)
+#: the imaging rate −0.8 ± 0.02 °/s ([Zhao 2016])
 REQUIREMENTS = {"imaging_pitch_rate_mean": {"min": PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
                                             "max": PROFILE.scan_rate + SCAN_RATE_TOLERANCE}}
 
