@@ -32,6 +32,7 @@ short against the 300 s pitch envelope of the payload sweep.
 
 Stateless: outputs are a function of the inputs at the communication point.
 """
+
 from __future__ import annotations
 
 import math
@@ -42,10 +43,10 @@ from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
 from .variables import input_, output, parameter
 
-DESIGN_INERTIA = 150.0                 # kg·m² ([Chang 2015] satellite, each axis)
-DESIGN_BANDWIDTH = 0.2                 # rad/s
+DESIGN_INERTIA = 150.0  # kg·m² ([Chang 2015] satellite, each axis)
+DESIGN_BANDWIDTH = 0.2  # rad/s
 DESIGN_DAMPING = 1.0 / math.sqrt(2.0)
-KP = DESIGN_INERTIA * DESIGN_BANDWIDTH ** 2
+KP = DESIGN_INERTIA * DESIGN_BANDWIDTH**2
 KD = 2.0 * DESIGN_DAMPING * DESIGN_BANDWIDTH * DESIGN_INERTIA
 _ATTITUDE = ("q_BI", "q_ref")
 _RATE = ("q_BI", "w_BI_B", "q_ref", "w_ref")
@@ -56,38 +57,91 @@ class AttitudeController(Model):
     """Quaternion PD law tracking a reference frame, with device-momentum feedforward."""
 
     VARIABLES = (
-        parameter("kp", KP, "N.m/rad", "attitude gain per body axis (per rad of att_error)",
-                  shape=(3,)),
-        parameter("kd", KD, "N.m.s/rad", "rate gain per body axis (per rad/s of rate_error)",
-                  shape=(3,)),
-        parameter("inertia", np.zeros((3, 3)), "kg.m2", "hub inertia J for the "
-                  "acceleration feedforward, in B", shape=(3, 3)),
-        parameter("acceleration_feedforward", False, "1", "true: feed forward "
-                  "J d/dt(C_BR w_ref) + w_BI_B x J w_BI_B with inertia (which must then be "
-                  "non-zero)", type="Boolean"),
+        parameter(
+            "kp", KP, "N.m/rad", "attitude gain per body axis (per rad of att_error)", shape=(3,)
+        ),
+        parameter(
+            "kd", KD, "N.m.s/rad", "rate gain per body axis (per rad/s of rate_error)", shape=(3,)
+        ),
+        parameter(
+            "inertia",
+            np.zeros((3, 3)),
+            "kg.m2",
+            "hub inertia J for the acceleration feedforward, in B",
+            shape=(3, 3),
+        ),
+        parameter(
+            "acceleration_feedforward",
+            False,
+            "1",
+            "true: feed forward "
+            "J d/dt(C_BR w_ref) + w_BI_B x J w_BI_B with inertia (which must then be "
+            "non-zero)",
+            type="Boolean",
+        ),
         input_("q_BI", "1", "attitude of B relative to I", IDENTITY_Q, shape=(4,)),
-        input_("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
-               display_unit="deg/s"),
-        input_("q_ref", "1", "attitude of the reference frame R relative to I (identity: "
-               "inertial hold)", IDENTITY_Q, shape=(4,),
-               optional="identity: hold the inertial attitude (R = I)"),
-        input_("w_ref", "rad/s", "angular velocity of R relative to I, in R axes",
-               shape=(3,), optional="zero: the reference frame does not rotate",
-               display_unit="deg/s"),
-        input_("h_ff", "N.m.s", "momentum of a known disturbing device relative to the "
-               "body, in B (compensated)", shape=(3,),
-               optional="zero: no device momentum to compensate"),
-        input_("hdot_ff", "N.m", "time derivative of h_ff as seen in B", shape=(3,),
-               optional="zero: no device torque to compensate"),
-        input_("dw_ref", "rad/s2", "time derivative of w_ref, in R axes (for the "
-               "acceleration feedforward)", shape=(3,), display_unit="deg/s2",
-               optional="zero: no acceleration feedforward (constant reference rate)"),
-        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,),
-               depends=_ALL),
-        output("att_error", "rad", "rotation vector of B relative to R (angle <= pi), in B",
-               shape=(3,), depends=_ATTITUDE, display_unit="deg"),
-        output("rate_error", "rad/s", "angular velocity of B relative to R, in B",
-               shape=(3,), depends=_RATE, display_unit="deg/s"),
+        input_(
+            "w_BI_B",
+            "rad/s",
+            "angular velocity of B relative to I, in B",
+            shape=(3,),
+            display_unit="deg/s",
+        ),
+        input_(
+            "q_ref",
+            "1",
+            "attitude of the reference frame R relative to I (identity: inertial hold)",
+            IDENTITY_Q,
+            shape=(4,),
+            optional="identity: hold the inertial attitude (R = I)",
+        ),
+        input_(
+            "w_ref",
+            "rad/s",
+            "angular velocity of R relative to I, in R axes",
+            shape=(3,),
+            optional="zero: the reference frame does not rotate",
+            display_unit="deg/s",
+        ),
+        input_(
+            "h_ff",
+            "N.m.s",
+            "momentum of a known disturbing device relative to the body, in B (compensated)",
+            shape=(3,),
+            optional="zero: no device momentum to compensate",
+        ),
+        input_(
+            "hdot_ff",
+            "N.m",
+            "time derivative of h_ff as seen in B",
+            shape=(3,),
+            optional="zero: no device torque to compensate",
+        ),
+        input_(
+            "dw_ref",
+            "rad/s2",
+            "time derivative of w_ref, in R axes (for the acceleration feedforward)",
+            shape=(3,),
+            display_unit="deg/s2",
+            optional="zero: no acceleration feedforward (constant reference rate)",
+        ),
+        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,), depends=_ALL),
+        output(
+            "att_error",
+            "rad",
+            "rotation vector of B relative to R (angle <= pi), in B",
+            shape=(3,),
+            depends=_ATTITUDE,
+            display_unit="deg",
+        ),
+        output(
+            "rate_error",
+            "rad/s",
+            "angular velocity of B relative to R, in B",
+            shape=(3,),
+            depends=_RATE,
+            display_unit="deg/s",
+        ),
     )
 
     def initialize(self, t0):
@@ -97,10 +151,10 @@ class AttitudeController(Model):
         if not np.all(np.isfinite(J)) or not np.allclose(J, J.T, rtol=1e-9, atol=0.0):
             raise ModelError(f"inertia must be a finite symmetric matrix, got {J.tolist()}")
         if self.p.acceleration_feedforward and not J.any():
-            raise ModelError("acceleration_feedforward is on but inertia is zero: set the "
-                             "hub inertia it needs")
-        self.inertia = tuple(map(tuple, J.tolist())) if self.p.acceleration_feedforward \
-            else None
+            raise ModelError(
+                "acceleration_feedforward is on but inertia is zero: set the hub inertia it needs"
+            )
+        self.inertia = tuple(map(tuple, J.tolist())) if self.p.acceleration_feedforward else None
         self.t = t0
 
     def step(self, t, dt):
@@ -112,12 +166,14 @@ class AttitudeController(Model):
         q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), u.q_BI.tolist())
         norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
         if not 0.25 < norm2 < 4.0:
-            raise ModelError(f"t={self.t:.6g} s: q_BI and q_ref must be unit quaternions, got "
-                             f"{u.q_BI.tolist()} and {[r0, r1, r2, r3]}")
+            raise ModelError(
+                f"t={self.t:.6g} s: q_BI and q_ref must be unit quaternions, got "
+                f"{u.q_BI.tolist()} and {[r0, r1, r2, r3]}"
+            )
         if q0 < 0.0:
             q0, q1, q2, q3 = -q0, -q1, -q2, -q3
         s = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
-        f = 2.0 * math.atan2(s, q0) / s if s > 0.0 else 0.0   # angle / |q_v|, scale-free
+        f = 2.0 * math.atan2(s, q0) / s if s > 0.0 else 0.0  # angle / |q_v|, scale-free
         ex, ey, ez = f * q1, f * q2, f * q3
         k = 1.0 / norm2
         C_BR = dcm((q0, q1, q2, q3))
@@ -127,16 +183,21 @@ class AttitudeController(Model):
         hx, hy, hz = u.h_ff.tolist()
         dx, dy, dz = u.hdot_ff.tolist()
         kp, kd = self.kp, self.kd
-        tau = [-kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
-               -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
-               -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx)]
+        tau = [
+            -kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
+            -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
+            -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx),
+        ]
         if self.inertia is not None:
             J = self.inertia
             ax, ay, az = rotate(C_BR, u.dw_ref.tolist())
-            wrx, wry, wrz = k * wrx, k * wry, k * wrz           # C_BR w_ref
-            wdot = (k * ax - (ry * wrz - rz * wry), k * ay - (rz * wrx - rx * wrz),
-                    k * az - (rx * wry - ry * wrx))
-            jx, jy, jz = (Ji[0] * wx + Ji[1] * wy + Ji[2] * wz for Ji in J)   # J w
+            wrx, wry, wrz = k * wrx, k * wry, k * wrz  # C_BR w_ref
+            wdot = (
+                k * ax - (ry * wrz - rz * wry),
+                k * ay - (rz * wrx - rx * wrz),
+                k * az - (rx * wry - ry * wrx),
+            )
+            jx, jy, jz = (Ji[0] * wx + Ji[1] * wy + Ji[2] * wz for Ji in J)  # J w
             gyro = (wy * jz - wz * jy, wz * jx - wx * jz, wx * jy - wy * jx)
             for i, Ji in enumerate(J):
                 tau[i] += Ji[0] * wdot[0] + Ji[1] * wdot[1] + Ji[2] * wdot[2] + gyro[i]

@@ -21,6 +21,7 @@ Default geometry: the paper's five-pyramid cluster (α0 = 63.4°; gimbals 1–5 
 body, which is physical only if the rotor momentum is −h(A_s cos δ + A_c sin δ); with the
 printed spin the maneuver saturates the cluster (DESIGN.md §4.1).
 """
+
 from __future__ import annotations
 
 import math
@@ -31,7 +32,7 @@ from .model import Model, ModelError
 from .variables import input_, output, parameter
 
 N_GYROS = 6
-PYRAMID_HALF_ANGLE = math.radians(63.4)               # α0
+PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
 PYRAMID_AZIMUTHS = np.radians([90.0, 162.0, 234.0, 306.0, 18.0])
 
 
@@ -68,8 +69,9 @@ class ClusterGeometry:
         S = S - np.sum(S * G, axis=1)[:, None] * G  # spin must be perpendicular to gimbal
         spin_norms = np.linalg.norm(S, axis=1)
         if np.any(spin_norms < 1e-9):
-            raise ModelError("each reference spin must have a component perpendicular to "
-                             "its gimbal axis")
+            raise ModelError(
+                "each reference spin must have a component perpendicular to its gimbal axis"
+            )
         self.h_rotor = float(h_rotor)
         self.G = G
         self.S = S / spin_norms[:, None]
@@ -103,8 +105,9 @@ class ClusterGeometry:
         return det3(gram(np.asarray(A).T.tolist()))
 
 
-def zero_momentum_angles(geometry: ClusterGeometry, delta, iterations: int = 300,
-                         gain: float = 0.05) -> np.ndarray:
+def zero_momentum_angles(
+    geometry: ClusterGeometry, delta, iterations: int = 300, gain: float = 0.05
+) -> np.ndarray:
     """Gimbal angles near ``delta`` at which the cluster holds no momentum, moved along the
     null space toward the largest singularity measure Q (the best-conditioned such set)::
 
@@ -113,7 +116,7 @@ def zero_momentum_angles(geometry: ClusterGeometry, delta, iterations: int = 300
     (∂a_i/∂δ_i = −σ_i), then Newton steps alone.  Returns angles wrapped to [−π, π);
     ModelError if |h| does not reach 1e-12 h_rotor."""
     d = np.array(delta, dtype=float)
-    for k in range(iterations + 10):          # the last ten: Newton alone, to convergence
+    for k in range(iterations + 10):  # the last ten: Newton alone, to convergence
         spins, columns = (np.array(x) for x in geometry.axes(d))
         A = columns.T
         pinv = np.linalg.pinv(A)
@@ -149,9 +152,11 @@ def inv3(M) -> tuple:
     """Inverse of a 3×3 matrix (rows) by its adjugate."""
     (a, b, c), (d, e, f), (g, h, i) = M
     det = det3(M)
-    return ((( e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
-            ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
-            ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det))
+    return (
+        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
+        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
+        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
+    )
 
 
 def _sum(vectors) -> tuple:
@@ -185,19 +190,34 @@ class CmgCluster(Model):
 
     VARIABLES = (
         parameter("h_rotor", 16.65, "N.m.s", "rotor angular momentum of each gyro"),
-        parameter("gimbal_axis", GIMBAL_AXES, "1",
-                  "gimbal axis of each gyro in B (rows; five-pyramid default)", shape=(6, 3)),
-        parameter("spin_ref", DEFAULT_SPINS, "1",
-                  "rotor spin direction of each gyro at zero gimbal angle, in B (rows; "
-                  "default: the paper's A_s0 spin reversed)", shape=(6, 3)),
-        parameter("delta0", (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0),
-                  "rad", "initial gimbal angles", shape=(6,),
-                  display_unit="deg"),
+        parameter(
+            "gimbal_axis",
+            GIMBAL_AXES,
+            "1",
+            "gimbal axis of each gyro in B (rows; five-pyramid default)",
+            shape=(6, 3),
+        ),
+        parameter(
+            "spin_ref",
+            DEFAULT_SPINS,
+            "1",
+            "rotor spin direction of each gyro at zero gimbal angle, in B (rows; "
+            "default: the paper's A_s0 spin reversed)",
+            shape=(6, 3),
+        ),
+        parameter(
+            "delta0",
+            (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0),
+            "rad",
+            "initial gimbal angles",
+            shape=(6,),
+            display_unit="deg",
+        ),
         parameter("rate_limit", 0.6, "rad/s", "gimbal rate limit", display_unit="deg/s"),
-        parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit",
-                  display_unit="deg/s2"),
-        input_("delta_dot_cmd", "rad/s", "commanded gimbal rates", shape=(6,),
-               display_unit="deg/s"),
+        parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit", display_unit="deg/s2"),
+        input_(
+            "delta_dot_cmd", "rad/s", "commanded gimbal rates", shape=(6,), display_unit="deg/s"
+        ),
         output("delta", "rad", "gimbal angles", shape=(6,), display_unit="deg"),
         output("delta_dot", "rad/s", "gimbal rates", shape=(6,), display_unit="deg/s"),
         output("h", "N.m.s", "cluster angular momentum relative to the body, in B", shape=(3,)),
@@ -208,8 +228,9 @@ class CmgCluster(Model):
     def initialize(self, t0):
         p = self.p
         if not (p.rate_limit > 0 and p.accel_limit > 0):
-            raise ModelError(f"rate_limit ({p.rate_limit}) and accel_limit "
-                             f"({p.accel_limit}) must be positive")
+            raise ModelError(
+                f"rate_limit ({p.rate_limit}) and accel_limit ({p.accel_limit}) must be positive"
+            )
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
         self.rate_limit, self.accel_limit = p.rate_limit, p.accel_limit
         self.delta = p.delta0.tolist()
@@ -225,10 +246,12 @@ class CmgCluster(Model):
             self.warnings.append(
                 f"t={t:.3f} s: gimbal {worst + 1} rate command {command[worst]:.3f} rad/s "
                 f"exceeds the rate limit {self.rate_limit} rad/s (the cluster cannot deliver "
-                "the commanded torque)")
+                "the commanded torque)"
+            )
         self.saturated = saturated
-        self.delta, self.delta_dot = servo_step(self.delta, self.delta_dot, command, dt,
-                                                self.rate_limit, self.accel_limit)
+        self.delta, self.delta_dot = servo_step(
+            self.delta, self.delta_dot, command, dt, self.rate_limit, self.accel_limit
+        )
         self.t = t + dt
 
     def output(self):
@@ -238,6 +261,8 @@ class CmgCluster(Model):
         y.delta[:] = self.delta
         y.delta_dot[:] = self.delta_dot
         y.h[:] = [h_rotor * x for x in _sum(spins)]
-        y.hdot[:] = [h_rotor * x for x in _sum([(a[0] * r, a[1] * r, a[2] * r)
-                                                for a, r in zip(columns, self.delta_dot)])]
+        y.hdot[:] = [
+            h_rotor * x
+            for x in _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, self.delta_dot)])
+        ]
         y.singularity = det3(gram(columns))

@@ -20,16 +20,16 @@ The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque 
 
   which trades a small torque error near singularities for bounded gimbal rates.
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-from .cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES, CmgCluster, ClusterGeometry, det3,
-                          gram, inv3)
-from .rotations import rotate
+from .cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster, det3, gram, inv3
 from .model import Model, ModelError
+from .rotations import rotate
 from .variables import input_, output, parameter
 
 #: values of the ``law`` parameter
@@ -42,9 +42,12 @@ H_ROTOR = 16.65
 #: start values of the delta and h inputs: the cluster's default (CmgCluster.delta0, the
 #: paper's δ0, Q = 1.10) and its momentum there, so that the FMU at its defaults is the
 #: steering of a default cluster at t = 0, away from any singularity
-DELTA_START = tuple(next(v.start for v in CmgCluster.VARIABLES if v.name == "delta0"))
-H_START = tuple(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS).momentum(DELTA_START)
-                .tolist())
+DELTA_START: tuple[float, ...] = tuple(
+    np.asarray(
+        next(v.start for v in CmgCluster.VARIABLES if v.name == "delta0"), dtype=float
+    ).tolist()
+)
+H_START = tuple(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS).momentum(DELTA_START).tolist())
 
 
 class CmgSteering(Model):
@@ -52,33 +55,65 @@ class CmgSteering(Model):
 
     VARIABLES = (
         parameter("h_rotor", H_ROTOR, "N.m.s", "rotor angular momentum of each gyro"),
-        parameter("gimbal_axis", GIMBAL_AXES, "1", "gimbal axis of each gyro in B (rows)",
-                  shape=(6, 3)),
-        parameter("spin_ref", DEFAULT_SPINS, "1",
-                  "rotor spin direction of each gyro at zero gimbal angle, in B (rows)",
-                  shape=(6, 3)),
-        parameter("law", PSEUDO_INVERSE, "1", "steering law: 0 = PSEUDO_INVERSE "
-                  "(pseudo-inverse with null motion), 1 = SR_INVERSE (singularity-robust "
-                  "inverse)", type="Integer"),
+        parameter(
+            "gimbal_axis", GIMBAL_AXES, "1", "gimbal axis of each gyro in B (rows)", shape=(6, 3)
+        ),
+        parameter(
+            "spin_ref",
+            DEFAULT_SPINS,
+            "1",
+            "rotor spin direction of each gyro at zero gimbal angle, in B (rows)",
+            shape=(6, 3),
+        ),
+        parameter(
+            "law",
+            PSEUDO_INVERSE,
+            "1",
+            "steering law: 0 = PSEUDO_INVERSE "
+            "(pseudo-inverse with null motion), 1 = SR_INVERSE (singularity-robust "
+            "inverse)",
+            type="Integer",
+        ),
         parameter("null_gain", 0.0, "1", "null-motion gain epsilon (law 0)"),
         parameter("sr_lambda0", 0.01, "1", "singularity-robust weight lambda0 (law 1)"),
         parameter("sr_mu", 10.0, "1", "singularity-robust decay mu in lambda0 exp(-mu Q)"),
         input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
-        input_("delta", "rad", "gimbal angles (start: CmgCluster's default delta0)",
-               DELTA_START, shape=(6,), display_unit="deg"),
+        input_(
+            "delta",
+            "rad",
+            "gimbal angles (start: CmgCluster's default delta0)",
+            DELTA_START,
+            shape=(6,),
+            display_unit="deg",
+        ),
         input_("w_BI_B", "rad/s", "body angular velocity relative to I, in B", shape=(3,)),
-        input_("h", "N.m.s", "cluster angular momentum relative to the body, in B (start: "
-               "the default cluster's at delta0)", H_START, shape=(3,)),
-        output("delta_dot_cmd", "rad/s", "gimbal rate commands", shape=(6,),
-               depends=_INPUTS, display_unit="deg/s"),
+        input_(
+            "h",
+            "N.m.s",
+            "cluster angular momentum relative to the body, in B (start: "
+            "the default cluster's at delta0)",
+            H_START,
+            shape=(3,),
+        ),
+        output(
+            "delta_dot_cmd",
+            "rad/s",
+            "gimbal rate commands",
+            shape=(6,),
+            depends=_INPUTS,
+            display_unit="deg/s",
+        ),
         output("singularity", "1", "singularity measure Q = det(A A^T)", depends=("delta",)),
     )
 
     def initialize(self, t0):
         p = self.p
         if p.law not in LAWS:
-            raise ModelError("law must be one of " + ", ".join(
-                f"{value} ({name})" for value, name in LAWS.items()) + f", got {p.law}")
+            raise ModelError(
+                "law must be one of "
+                + ", ".join(f"{value} ({name})" for value, name in LAWS.items())
+                + f", got {p.law}"
+            )
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
@@ -101,15 +136,19 @@ class CmgSteering(Model):
         h_dot = (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
         if self.law == SR_INVERSE:
             lam = self.sr_lambda0 * math.exp(-self.sr_mu * Q)
-            M = tuple(tuple(m + (lam if i == j else 0.0) for j, m in enumerate(row))
-                      for i, row in enumerate(M))
+            M = tuple(
+                tuple(m + (lam if i == j else 0.0) for j, m in enumerate(row))
+                for i, row in enumerate(M)
+            )
         if self.law == SR_INVERSE or Q > SINGULAR_Q:
             M_inv = inv3(M)
             v = rotate(M_inv, h_dot)
             rates = [(a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) / g.h_rotor for a in columns]
             if self.law == PSEUDO_INVERSE and self.null_gain:
-                rates = [r + self.null_gain * n
-                         for r, n in zip(rates, _null_motion(columns, M_inv, Q, spins))]
+                rates = [
+                    r + self.null_gain * n
+                    for r, n in zip(rates, _null_motion(columns, M_inv, Q, spins))
+                ]
         else:
             rates = (np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / g.h_rotor).tolist()
         self._note_singularity(Q)
@@ -119,16 +158,19 @@ class CmgSteering(Model):
     def _note_singularity(self, Q):
         singular = Q <= SINGULAR_Q
         if singular and not self.singular:
-            self.warnings.append(f"t={self.t:.3f} s: singular gimbal configuration "
-                                 f"(Q = {Q:.2e}); torque along the singular direction is "
-                                 "not delivered")
+            self.warnings.append(
+                f"t={self.t:.3f} s: singular gimbal configuration "
+                f"(Q = {Q:.2e}); torque along the singular direction is "
+                "not delivered"
+            )
         self.singular = singular
 
 
 def _null_motion(columns, M_inv, Q, spins) -> list:
     """(1 − Aᵀ M⁻¹ A) ∂Q/∂δ with ∂Q/∂δ_i = −2 Q a_iᵀ M⁻¹ σ_i."""
-    gradient = [-2.0 * Q * sum(x * y for x, y in zip(a, rotate(M_inv, s)))
-                for a, s in zip(columns, spins)]
+    gradient = [
+        -2.0 * Q * sum(x * y for x, y in zip(a, rotate(M_inv, s))) for a, s in zip(columns, spins)
+    ]
     v = rotate(M_inv, _sum_weighted(columns, gradient))
     return [d - (a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) for a, d in zip(columns, gradient)]
 

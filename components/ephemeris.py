@@ -23,6 +23,7 @@ Two-line element sets are checked (length, line numbers, checksums, catalogue nu
 numeric fields) before the ``sgp4`` package reads them, so that a corrupted set is
 reported with what is wrong.
 """
+
 from __future__ import annotations
 
 import datetime
@@ -32,12 +33,12 @@ import re
 from .model import ModelError
 
 TWO_PI = 2.0 * math.pi
-DAY = 86400.0                            # s
+DAY = 86400.0  # s
 #: J2000.0, 2000-01-01 12:00:00 (JD 2451545.0), taken as UT1 = UTC
 J2000 = datetime.datetime(2000, 1, 1, 12, 0, 0)
 # IAU-82 GMST, Vallado (4th ed.) eq. 3-47, seconds of time, T in Julian centuries of UT1
 _GMST0, _GMST1, _GMST2, _GMST3 = 67310.54841, 8640184.812866, 0.093104, -6.2e-6
-_CENTURY = 36525.0                       # days
+_CENTURY = 36525.0  # days
 _EPOCH_FORMAT = re.compile(r"(\d{4})-(\d{2})-(\d{2})T(\d{2}):(\d{2}):(\d{2})(?:\.(\d{1,6}))?Z?")
 
 
@@ -62,8 +63,15 @@ def parse_epoch(epoch) -> datetime.datetime:
         raise ModelError(f"epoch {epoch!r} is not ISO-8601 UTC 'YYYY-MM-DDTHH:MM:SS[.ffffff]'")
     year, month, day, hour, minute, second, fraction = match.groups()
     try:
-        return datetime.datetime(int(year), int(month), int(day), int(hour), int(minute),
-                                 int(second), int((fraction or "0").ljust(6, "0")))
+        return datetime.datetime(
+            int(year),
+            int(month),
+            int(day),
+            int(hour),
+            int(minute),
+            int(second),
+            int((fraction or "0").ljust(6, "0")),
+        )
     except ValueError as exc:  # month 13, Feb 30, second 60 (leap seconds not supported)
         raise ModelError(f"epoch {epoch!r}: {exc}") from None
 
@@ -94,11 +102,13 @@ def sidereal_time(g0: float, T0: float, t: float) -> tuple[float, float]:
     The increment of eq. 3-47 is evaluated on its own (τ = t / 36525 days), so that θ
     is smooth in t to the round-off of g0 + Δg (≈ 1e-15 rad), not of 8.6e6 T (1e-14)."""
     tau = t / (DAY * _CENTURY)
-    dg = t + tau * (_GMST1 + _GMST2 * (2.0 * T0 + tau)
-                    + _GMST3 * (3.0 * T0 * T0 + tau * (3.0 * T0 + tau)))
+    dg = t + tau * (
+        _GMST1 + _GMST2 * (2.0 * T0 + tau) + _GMST3 * (3.0 * T0 * T0 + tau * (3.0 * T0 + tau))
+    )
     T = T0 + tau
-    rate = TWO_PI / DAY * (1.0 + (_GMST1 + T * (2.0 * _GMST2 + 3.0 * _GMST3 * T))
-                           / (_CENTURY * DAY))
+    rate = (
+        TWO_PI / DAY * (1.0 + (_GMST1 + T * (2.0 * _GMST2 + 3.0 * _GMST3 * T)) / (_CENTURY * DAY))
+    )
     return wrap_2pi(math.fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
 
 
@@ -111,9 +121,14 @@ def gmst(epoch, t: float = 0.0) -> float:
 # -- two-line elements -------------------------------------------------------------------
 _TLE_FIELDS = {  # 0-based column slices of the numeric fields (CelesTrak/NORAD format)
     1: (("epoch", 18, 32), ("mean motion derivative", 33, 43)),
-    2: (("inclination", 8, 16), ("right ascension of the node", 17, 25),
-        ("eccentricity", 26, 33), ("argument of perigee", 34, 42),
-        ("mean anomaly", 43, 51), ("mean motion", 52, 63)),
+    2: (
+        ("inclination", 8, 16),
+        ("right ascension of the node", 17, 25),
+        ("eccentricity", 26, 33),
+        ("argument of perigee", 34, 42),
+        ("mean anomaly", 43, 51),
+        ("mean motion", 52, 63),
+    ),
 }
 
 
@@ -133,25 +148,34 @@ def load_tle(line1: str, line2: str):
     for k, line in enumerate(lines, start=1):
         name = f"tle_line{k}"
         if not line.isascii() or len(line) != 69:
-            raise ModelError(f"{name} must be 69 ASCII characters (TLE format), got "
-                             f"{len(line)}: {line!r}")
+            raise ModelError(
+                f"{name} must be 69 ASCII characters (TLE format), got {len(line)}: {line!r}"
+            )
         if not line.startswith(f"{k} "):
-            raise ModelError(f"{name} must start with '{k} ', got {line[:2]!r}"
-                             + (" (lines swapped?)" if line.startswith(f"{3 - k} ") else ""))
+            raise ModelError(
+                f"{name} must start with '{k} ', got {line[:2]!r}"
+                + (" (lines swapped?)" if line.startswith(f"{3 - k} ") else "")
+            )
         expected = tle_checksum(line)
         if line[68] != str(expected):
-            raise ModelError(f"{name} checksum: the last digit is {line[68]!r} but the line "
-                             f"sums to {expected} (mod 10): a corrupted element set")
+            raise ModelError(
+                f"{name} checksum: the last digit is {line[68]!r} but the line "
+                f"sums to {expected} (mod 10): a corrupted element set"
+            )
         for field, start, stop in _TLE_FIELDS[k]:
             text = line[start:stop].strip()
             try:
                 float("." + text if field == "eccentricity" else text)
             except ValueError:
-                raise ModelError(f"{name}: {field} (columns {start + 1}-{stop}) is not a "
-                                 f"number: {line[start:stop]!r}") from None
+                raise ModelError(
+                    f"{name}: {field} (columns {start + 1}-{stop}) is not a "
+                    f"number: {line[start:stop]!r}"
+                ) from None
     if lines[0][2:7] != lines[1][2:7]:
-        raise ModelError(f"tle_line1 and tle_line2 are of different satellites "
-                         f"({lines[0][2:7].strip()!r} and {lines[1][2:7].strip()!r})")
+        raise ModelError(
+            f"tle_line1 and tle_line2 are of different satellites "
+            f"({lines[0][2:7].strip()!r} and {lines[1][2:7].strip()!r})"
+        )
     if not float(lines[1][52:63]) > 0.0:
         raise ModelError(f"tle_line2: mean motion must be > 0 rev/day, got {lines[1][52:63]!r}")
     try:
@@ -163,8 +187,10 @@ def load_tle(line1: str, line2: str):
     except (ValueError, RuntimeError) as exc:
         raise ModelError(f"the TLE could not be read: {exc}") from None
     if satrec.error:
-        raise ModelError(f"the TLE is rejected by SGP4: error {satrec.error}, "
-                         f"{SGP4_ERRORS.get(satrec.error, 'unknown error')}")
+        raise ModelError(
+            f"the TLE is rejected by SGP4: error {satrec.error}, "
+            f"{SGP4_ERRORS.get(satrec.error, 'unknown error')}"
+        )
     return satrec
 
 

@@ -45,6 +45,7 @@ friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses);
 friction 1e-5 N·m·s/rad, an estimate (6.3 mN·m drag at 6000 rpm, 3 % of the torque).
 Three wheels along x, y, z; the 4th row of ``axis`` zero (no 4th wheel).
 """
+
 from __future__ import annotations
 
 import math
@@ -56,19 +57,26 @@ from .variables import input_, output, parameter
 
 N_WHEELS = 4
 RPM = 2.0 * math.pi / 60.0
-HR12_TORQUE = 0.2                    # N·m
-HR12_MOMENTUM = 12.0                 # N·m·s (smallest of the 12 / 25 / 50 options)
-HR12_SPEED = 6000.0 * RPM            # rad/s at 12 N·m·s
+HR12_TORQUE = 0.2  # N·m
+HR12_MOMENTUM = 12.0  # N·m·s (smallest of the 12 / 25 / 50 options)
+HR12_SPEED = 6000.0 * RPM  # rad/s at 12 N·m·s
 HR12_INERTIA = HR12_MOMENTUM / HR12_SPEED
-HR12_COULOMB = 5e-4                  # N·m
-VISCOUS = 1e-5                       # N·m·s/rad (estimate)
+HR12_COULOMB = 5e-4  # N·m
+VISCOUS = 1e-5  # N·m·s/rad (estimate)
 DEFAULT_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0))
 _AXIS_TOLERANCE = 1e-9
 _INPUTS = ("tau_cmd", "w_BI_B")
 
 
-def wheel_step(speed: float, torque: float, dt: float, inertia: float, viscous: float,
-               coulomb: float, limit: float = math.inf) -> float:
+def wheel_step(
+    speed: float,
+    torque: float,
+    dt: float,
+    inertia: float,
+    viscous: float,
+    coulomb: float,
+    limit: float = math.inf,
+) -> float:
     """Wheel speed after ``dt`` with the motor torque held (exact, see the module notes).
 
     ``limit`` is the speed the drive's limiter clamps |Ω| to (it is never below the start
@@ -79,14 +87,14 @@ def wheel_step(speed: float, torque: float, dt: float, inertia: float, viscous: 
     for _ in range(2):  # at most: run down to rest, then one regime from rest
         if omega == 0.0:
             if abs(torque) <= coulomb:
-                return 0.0                       # stiction
+                return 0.0  # stiction
             sign = 1.0 if torque > 0.0 else -1.0
         else:
             sign = 1.0 if omega > 0.0 else -1.0
         accel = (torque - sign * coulomb - viscous * omega) / inertia
         phi = remaining if k == 0.0 else -math.expm1(-k * remaining) / k
         if omega != 0.0 and accel * sign < 0.0:
-            phi_zero = -omega / accel           # reaches rest if φ* ≤ φ (so k φ* < 1)
+            phi_zero = -omega / accel  # reaches rest if φ* ≤ φ (so k φ* < 1)
             if phi_zero <= phi:
                 remaining -= phi_zero if k == 0.0 else -math.log1p(-k * phi_zero) / k
                 omega = 0.0
@@ -103,32 +111,74 @@ class Flywheel(Model):
     """Reaction-wheel assembly: torque command to wheel motor torques, exact wheel dynamics."""
 
     VARIABLES = (
-        parameter("axis", DEFAULT_AXES, "1",
-                  "spin axis of each wheel in B (rows, normalised; a zero row = no wheel)",
-                  shape=(N_WHEELS, 3)),
+        parameter(
+            "axis",
+            DEFAULT_AXES,
+            "1",
+            "spin axis of each wheel in B (rows, normalised; a zero row = no wheel)",
+            shape=(N_WHEELS, 3),
+        ),
         parameter("J_wheel", HR12_INERTIA, "kg.m2", "spin-axis inertia of each wheel"),
-        parameter("torque_limit", HR12_TORQUE, "N.m",
-                  "motor torque limit of each wheel (0: motors off, wheels coast)"),
-        parameter("momentum_limit", HR12_MOMENTUM, "N.m.s",
-                  "momentum limit J_wheel |speed| of each wheel (not driven beyond)"),
-        parameter("viscous_friction", VISCOUS, "N.m.s/rad",
-                  "viscous bearing friction coefficient c_v"),
-        parameter("coulomb_friction", HR12_COULOMB, "N.m",
-                  "Coulomb (and static) bearing friction torque c_c"),
-        parameter("speed0", 0.0, "rad/s", "initial wheel speeds relative to the body",
-                  shape=(N_WHEELS,), display_unit="rpm"),
+        parameter(
+            "torque_limit",
+            HR12_TORQUE,
+            "N.m",
+            "motor torque limit of each wheel (0: motors off, wheels coast)",
+        ),
+        parameter(
+            "momentum_limit",
+            HR12_MOMENTUM,
+            "N.m.s",
+            "momentum limit J_wheel |speed| of each wheel (not driven beyond)",
+        ),
+        parameter(
+            "viscous_friction", VISCOUS, "N.m.s/rad", "viscous bearing friction coefficient c_v"
+        ),
+        parameter(
+            "coulomb_friction",
+            HR12_COULOMB,
+            "N.m",
+            "Coulomb (and static) bearing friction torque c_c",
+        ),
+        parameter(
+            "speed0",
+            0.0,
+            "rad/s",
+            "initial wheel speeds relative to the body",
+            shape=(N_WHEELS,),
+            display_unit="rpm",
+        ),
         input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
-        input_("w_BI_B", "rad/s", "body angular velocity relative to I, in B", shape=(3,),
-               display_unit="deg/s"),
+        input_(
+            "w_BI_B",
+            "rad/s",
+            "body angular velocity relative to I, in B",
+            shape=(3,),
+            display_unit="deg/s",
+        ),
         output("h", "N.m.s", "wheel angular momentum relative to the body, in B", shape=(3,)),
-        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,),
-               depends=_INPUTS),
-        output("speed", "rad/s", "wheel speeds relative to the body (0 for no wheel)",
-               shape=(N_WHEELS,), display_unit="rpm"),
-        output("motor_torque", "N.m", "motor torque on each wheel (held over the step)",
-               shape=(N_WHEELS,), depends=_INPUTS),
-        output("saturated", "1", "a motor torque is clipped or a wheel is held at the "
-               "momentum limit", type="Boolean", depends=_INPUTS),
+        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,), depends=_INPUTS),
+        output(
+            "speed",
+            "rad/s",
+            "wheel speeds relative to the body (0 for no wheel)",
+            shape=(N_WHEELS,),
+            display_unit="rpm",
+        ),
+        output(
+            "motor_torque",
+            "N.m",
+            "motor torque on each wheel (held over the step)",
+            shape=(N_WHEELS,),
+            depends=_INPUTS,
+        ),
+        output(
+            "saturated",
+            "1",
+            "a motor torque is clipped or a wheel is held at the momentum limit",
+            type="Boolean",
+            depends=_INPUTS,
+        ),
     )
 
     def initialize(self, t0):
@@ -138,21 +188,25 @@ class Flywheel(Model):
         if not p.momentum_limit > 0:
             raise ModelError(f"momentum_limit must be positive, got {p.momentum_limit}")
         if not (p.torque_limit >= 0 and p.viscous_friction >= 0 and p.coulomb_friction >= 0):
-            raise ModelError("torque_limit, viscous_friction and coulomb_friction must not be "
-                             f"negative, got {p.torque_limit}, {p.viscous_friction}, "
-                             f"{p.coulomb_friction}")
+            raise ModelError(
+                "torque_limit, viscous_friction and coulomb_friction must not be "
+                f"negative, got {p.torque_limit}, {p.viscous_friction}, "
+                f"{p.coulomb_friction}"
+            )
         axes = np.array(p.axis, dtype=float)
         norms = np.linalg.norm(axes, axis=1)
         self.wheels = [i for i in range(N_WHEELS) if norms[i] > _AXIS_TOLERANCE]
         if not self.wheels:
             raise ModelError("no wheel: every row of axis is zero")
-        A = (axes[self.wheels] / norms[self.wheels, None]).T           # 3 × n
+        A = (axes[self.wheels] / norms[self.wheels, None]).T  # 3 × n
         self.axes = [tuple(a) for a in A.T.tolist()]
         self.distribution = [tuple(row) for row in np.linalg.pinv(A, rcond=1e-9).tolist()]
         rank = np.linalg.matrix_rank(A, tol=1e-9)
         if rank < 3:
-            self.warnings.append(f"the wheel axes span only {rank} dimension(s): torque "
-                                 "outside their span is not delivered")
+            self.warnings.append(
+                f"the wheel axes span only {rank} dimension(s): torque "
+                "outside their span is not delivered"
+            )
         for i in range(N_WHEELS):
             if i not in self.wheels and p.speed0[i] != 0.0:
                 self.warnings.append(f"speed0[{i + 1}] ignored: wheel {i + 1} has no axis")
@@ -168,13 +222,17 @@ class Flywheel(Model):
         torques, _, limited, held = self._drive()
         new = limited - self.limited
         if new:
-            self.warnings.append(f"t={t:.3f} s: " + "; ".join(
-                f"wheel {self.wheels[i] + 1} {what}" for i, what in sorted(new)) +
-                " (the commanded torque is not delivered)")
+            self.warnings.append(
+                f"t={t:.3f} s: "
+                + "; ".join(f"wheel {self.wheels[i] + 1} {what}" for i, what in sorted(new))
+                + " (the commanded torque is not delivered)"
+            )
         self.limited = limited
         J, cv, cc, limit = self.inertia, self.viscous, self.coulomb, self.speed_limit
-        self.omega = [w if k in held else wheel_step(w, m, dt, J, cv, cc, limit)
-                      for k, (w, m) in enumerate(zip(self.omega, torques))]
+        self.omega = [
+            w if k in held else wheel_step(w, m, dt, J, cv, cc, limit)
+            for k, (w, m) in enumerate(zip(self.omega, torques))
+        ]
         self.t = t + dt
 
     def output(self):
@@ -215,7 +273,7 @@ class Flywheel(Model):
         tx, ty, tz = u.tau_cmd.tolist()
         wx, wy, wz = u.w_BI_B.tolist()
         hx, hy, hz = self._momentum()
-        rx = -tx - (wy * hz - wz * hy)      # hdot_req = −τ_cmd − w × h
+        rx = -tx - (wy * hz - wz * hy)  # hdot_req = −τ_cmd − w × h
         ry = -ty - (wz * hx - wx * hz)
         rz = -tz - (wx * hy - wy * hx)
         torques, net, limited, held = [], [], set(), set()
@@ -238,8 +296,7 @@ class Flywheel(Model):
         keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
         limit does not toggle from one step to the next.
         """
-        cv, cc, tau_max, speed_max = self.viscous, self.coulomb, self.torque_limit, \
-            self.speed_limit
+        cv, cc, tau_max, speed_max = self.viscous, self.coulomb, self.torque_limit, self.speed_limit
         limits, held = [], False
         if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
             n = 0.0

@@ -28,6 +28,7 @@ in-process :meth:`Model.start` leaves the inputs to its caller: no check).
 
 The same object runs in-process (tests, references) and inside the FMU wrapper.
 """
+
 from __future__ import annotations
 
 import copy
@@ -39,9 +40,15 @@ from .variables import Bus, Layout, Var, parameter
 
 #: parameters of every model, appended to each table
 COMMON_VARIABLES = (
-    parameter("warnings_return_ok", False, "1", "log limit, saturation and singularity "
-              "warnings (category logStatusWarning) but return fmi2OK, not fmi2Warning, for "
-              "hosts that stop on a warning", type="Boolean"),
+    parameter(
+        "warnings_return_ok",
+        False,
+        "1",
+        "log limit, saturation and singularity "
+        "warnings (category logStatusWarning) but return fmi2OK, not fmi2Warning, for "
+        "hosts that stop on a warning",
+        type="Boolean",
+    ),
 )
 
 _M = TypeVar("_M", bound="Model")
@@ -60,8 +67,7 @@ class Model:
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         names = {v.name for v in cls.VARIABLES}
-        cls.VARIABLES = cls.VARIABLES + tuple(v for v in COMMON_VARIABLES
-                                              if v.name not in names)
+        cls.VARIABLES = cls.VARIABLES + tuple(v for v in COMMON_VARIABLES if v.name not in names)
 
     def __init__(self, **parameters):
         cls = type(self)
@@ -90,6 +96,8 @@ class Model:
         raise NotImplementedError
 
     # -- inputs the initial state was computed from --------------------------------
+    _initial_inputs: dict | None = None
+
     def remember_initial_inputs(self) -> None:
         """End of ``initialize``: keep the INITIAL_STATE_DEPENDS inputs it used."""
         self._initial_inputs = self._initial_state_inputs()
@@ -101,27 +109,33 @@ class Model:
         used = getattr(self, "_initial_inputs", None)
         if used is None:
             return
-        self._initial_inputs = None   # only the first step is checked
+        self._initial_inputs = None  # only the first step is checked
         jumps = self.initial_input_jumps(used, dt)
         if jumps:
             detail = "; ".join(f"{name}: {text}" for name, text in jumps.items())
-            raise ModelError(f"at the first step the inputs {list(jumps)} are not those the "
-                             f"initial state was computed from ({detail}): the host set them "
-                             "only after initialisation. Set them before "
-                             "exitInitializationMode (FMI 2.0 allows it in initialisation "
-                             "mode); the run would start from another state")
+            raise ModelError(
+                f"at the first step the inputs {list(jumps)} are not those the "
+                f"initial state was computed from ({detail}): the host set them "
+                "only after initialisation. Set them before "
+                "exitInitializationMode (FMI 2.0 allows it in initialisation "
+                "mode); the run would start from another state"
+            )
 
     def initial_input_jumps(self, used: dict, dt: float) -> dict:
         """{input: description} of the INITIAL_STATE_DEPENDS inputs that moved since
         ``initialize`` (values ``used``) by more than one step of ``dt`` explains.  This
         default allows no change; models bound the change by their physics."""
         now = self._initial_state_inputs()
-        return {name: f"{used[name].tolist()} -> {now[name].tolist()}" for name in used
-                if not np.allclose(now[name], used[name], rtol=1e-9, atol=1e-12)}
+        return {
+            name: f"{used[name].tolist()} -> {now[name].tolist()}"
+            for name in used
+            if not np.allclose(now[name], used[name], rtol=1e-9, atol=1e-12)
+        }
 
     def _initial_state_inputs(self) -> dict:
-        return {name: self.values[self.layout.slice(name)].copy()
-                for name in self.INITIAL_STATE_DEPENDS}
+        return {
+            name: self.values[self.layout.slice(name)].copy() for name in self.INITIAL_STATE_DEPENDS
+        }
 
     # -- in-process convenience ------------------------------------------------------
     def set(self, name: str, value) -> None:
@@ -136,8 +150,9 @@ class Model:
             return
         array = np.asarray(value, dtype=float)
         if array.shape != v.shape and array.size != v.size:
-            raise ValueError(f"{type(self).__name__}.{name}: expected shape {v.shape}, "
-                             f"got {array.shape}")
+            raise ValueError(
+                f"{type(self).__name__}.{name}: expected shape {v.shape}, got {array.shape}"
+            )
         self.values[self.layout.slice(name)] = array.reshape(-1)
 
     def get(self, name: str):

@@ -91,27 +91,36 @@ Errors of SGP4 (its error codes: eccentricity out of range, decayed, ...) raise
 ModelError naming the code and the time; a TLE is checked for length, line numbers,
 checksums, matching catalogue numbers and readable numeric fields before SGP4 sees it.
 """
+
 from __future__ import annotations
 
 import math
 
-from .ephemeris import (DAY, TWO_PI, j2000_parts, load_tle, sidereal_base, sidereal_time,
-                        tle_epoch, wrap_2pi)
+from .ephemeris import (
+    DAY,
+    TWO_PI,
+    j2000_parts,
+    load_tle,
+    sidereal_base,
+    sidereal_time,
+    tle_epoch,
+    wrap_2pi,
+)
 from .model import Model, ModelError
 from .rotations import quat_from_dcm
 from .variables import output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
-WGS84_A = 6378137.0                      # m, semi-major axis
-WGS84_F = 1.0 / 298.257223563            # flattening
-WGS84_E2 = WGS84_F * (2.0 - WGS84_F)     # first eccentricity squared
-WGS84_B = WGS84_A * (1.0 - WGS84_F)      # m, semi-minor axis
-EARTH_RATE = 7.2921150e-5                # rad/s, ω_E
-MU_EARTH = 3.986004418e14                # m3/s2, GM (atmosphere included)
+WGS84_A = 6378137.0  # m, semi-major axis
+WGS84_F = 1.0 / 298.257223563  # flattening
+WGS84_E2 = WGS84_F * (2.0 - WGS84_F)  # first eccentricity squared
+WGS84_B = WGS84_A * (1.0 - WGS84_F)  # m, semi-minor axis
+EARTH_RATE = 7.2921150e-5  # rad/s, ω_E
+MU_EARTH = 3.986004418e14  # m3/s2, GM (atmosphere included)
 # Zonal harmonic: EGM96 (Lemoine et al., NASA/TP-1998-206861), unnormalised
 # J2 = −√5 C̄20, C̄20 = −4.84165371736e-4; reference radius = WGS-84 a
 J2 = 1.08262668e-3
-J2_RADIUS = 6378137.0                    # m
+J2_RADIUS = 6378137.0  # m
 #: default orbit: the [Zhao 2016] 681 km (DESIGN.md §4.1)
 DEFAULT_SEMI_MAJOR_AXIS = WGS84_A + 681000.0
 
@@ -145,18 +154,25 @@ def geodetic_to_ecef(lat: float, lon: float, alt: float) -> tuple[float, float, 
     """WGS-84 geodetic latitude, longitude (rad) and height (m) to Earth-fixed x, y, z (m)."""
     s, c = math.sin(lat), math.cos(lat)
     N = WGS84_A / math.sqrt(1.0 - WGS84_E2 * s * s)
-    return ((N + alt) * c * math.cos(lon), (N + alt) * c * math.sin(lon),
-            (N * (1.0 - WGS84_E2) + alt) * s)
+    return (
+        (N + alt) * c * math.cos(lon),
+        (N + alt) * c * math.sin(lon),
+        (N * (1.0 - WGS84_E2) + alt) * s,
+    )
 
 
-def secular_j2_rates(a: float, e: float, i: float, mu: float = MU_EARTH
-                     ) -> tuple[float, float, float]:
+def secular_j2_rates(
+    a: float, e: float, i: float, mu: float = MU_EARTH
+) -> tuple[float, float, float]:
     """(Ω̇, ω̇, Ṁ) of the first-order secular J2 model (module docstring)."""
     n = math.sqrt(mu / a**3)
-    k = 0.75 * n * J2 * (J2_RADIUS / (a * (1.0 - e * e)))**2
-    s2 = math.sin(i)**2
-    return (-2.0 * k * math.cos(i), k * (4.0 - 5.0 * s2),
-            n + k * math.sqrt(1.0 - e * e) * (2.0 - 3.0 * s2))
+    k = 0.75 * n * J2 * (J2_RADIUS / (a * (1.0 - e * e))) ** 2
+    s2 = math.sin(i) ** 2
+    return (
+        -2.0 * k * math.cos(i),
+        k * (4.0 - 5.0 * s2),
+        n + k * math.sqrt(1.0 - e * e) * (2.0 - 3.0 * s2),
+    )
 
 
 class OrbitEnvironment(Model):
@@ -165,59 +181,124 @@ class OrbitEnvironment(Model):
 
     VARIABLES = (
         # defaults: the [Zhao 2016] orbit, 681 km, 98.1° (DESIGN.md §4.1)
-        parameter("semi_major_axis", DEFAULT_SEMI_MAJOR_AXIS, "m",
-                  "semi-major axis a (mean value when j2 is set); not used with a TLE",
-                  display_unit="km"),
+        parameter(
+            "semi_major_axis",
+            DEFAULT_SEMI_MAJOR_AXIS,
+            "m",
+            "semi-major axis a (mean value when j2 is set); not used with a TLE",
+            display_unit="km",
+        ),
         parameter("eccentricity", 0.0, "1", "eccentricity e, 0 <= e < 1; not used with a TLE"),
-        parameter("inclination", math.radians(98.1), "rad", "inclination i, 0 <= i <= pi; "
-                  "not used with a TLE", display_unit="deg"),
-        parameter("raan", 0.0, "rad", "right ascension of the ascending node at t = 0; not "
-                  "used with a TLE", display_unit="deg"),
-        parameter("arg_perigee", 0.0, "rad", "argument of perigee at t = 0; not used with a TLE",
-                  display_unit="deg"),
-        parameter("true_anomaly0", 0.0, "rad", "true anomaly at t = 0; not used with a TLE",
-                  display_unit="deg"),
-        parameter("j2", False, "1", "add the secular J2 drift of raan, arg_perigee and "
-                  "mean anomaly; not used with a TLE", type="Boolean"),
-        parameter("earth_angle0", 0.0, "rad", "Earth rotation angle at t = 0 (Earth-fixed x "
-                  "from inertial x about z); must be 0 with an epoch or a TLE, the angle is "
-                  "then GMST", display_unit="deg"),
-        parameter("target_lat", 0.0, "rad", "ground target geodetic latitude (WGS-84)",
-                  display_unit="deg"),
-        parameter("target_lon", 0.0, "rad", "ground target longitude (WGS-84)",
-                  display_unit="deg"),
+        parameter(
+            "inclination",
+            math.radians(98.1),
+            "rad",
+            "inclination i, 0 <= i <= pi; not used with a TLE",
+            display_unit="deg",
+        ),
+        parameter(
+            "raan",
+            0.0,
+            "rad",
+            "right ascension of the ascending node at t = 0; not used with a TLE",
+            display_unit="deg",
+        ),
+        parameter(
+            "arg_perigee",
+            0.0,
+            "rad",
+            "argument of perigee at t = 0; not used with a TLE",
+            display_unit="deg",
+        ),
+        parameter(
+            "true_anomaly0",
+            0.0,
+            "rad",
+            "true anomaly at t = 0; not used with a TLE",
+            display_unit="deg",
+        ),
+        parameter(
+            "j2",
+            False,
+            "1",
+            "add the secular J2 drift of raan, arg_perigee and mean anomaly; not used with a TLE",
+            type="Boolean",
+        ),
+        parameter(
+            "earth_angle0",
+            0.0,
+            "rad",
+            "Earth rotation angle at t = 0 (Earth-fixed x "
+            "from inertial x about z); must be 0 with an epoch or a TLE, the angle is "
+            "then GMST",
+            display_unit="deg",
+        ),
+        parameter(
+            "target_lat", 0.0, "rad", "ground target geodetic latitude (WGS-84)", display_unit="deg"
+        ),
+        parameter("target_lon", 0.0, "rad", "ground target longitude (WGS-84)", display_unit="deg"),
         parameter("target_alt", 0.0, "m", "ground target height above the WGS-84 ellipsoid"),
-        parameter("mu", MU_EARTH, "m3/s2", "gravitational parameter of the Earth; not used "
-                  "with a TLE"),
-        parameter("epoch", "", "1", "UTC of t = 0, ISO 8601 'YYYY-MM-DDTHH:MM:SS[.ffffff]' "
-                  "(empty: none). With an epoch the Earth angle is the IAU-82 GMST of "
-                  "epoch + t (UT1 = UTC) and earth_angle0 must be 0", type="String"),
-        parameter("epoch_j2000", 0.0, "s", "the epoch as seconds since J2000.0 "
-                  "(2000-01-01T12:00:00 UTC, 86400 s per day, no leap seconds), for hosts "
-                  "without String parameters; 0: none. Not together with epoch"),
-        parameter("tle_line1", "", "1", "line 1 of a two-line element set (empty: use the "
-                  "classical elements). With a TLE the orbit is SGP4 (WGS-72) in TEME, taken "
-                  "as I; t = 0 is the epoch, or the TLE epoch without one", type="String"),
+        parameter(
+            "mu", MU_EARTH, "m3/s2", "gravitational parameter of the Earth; not used with a TLE"
+        ),
+        parameter(
+            "epoch",
+            "",
+            "1",
+            "UTC of t = 0, ISO 8601 'YYYY-MM-DDTHH:MM:SS[.ffffff]' "
+            "(empty: none). With an epoch the Earth angle is the IAU-82 GMST of "
+            "epoch + t (UT1 = UTC) and earth_angle0 must be 0",
+            type="String",
+        ),
+        parameter(
+            "epoch_j2000",
+            0.0,
+            "s",
+            "the epoch as seconds since J2000.0 "
+            "(2000-01-01T12:00:00 UTC, 86400 s per day, no leap seconds), for hosts "
+            "without String parameters; 0: none. Not together with epoch",
+        ),
+        parameter(
+            "tle_line1",
+            "",
+            "1",
+            "line 1 of a two-line element set (empty: use the "
+            "classical elements). With a TLE the orbit is SGP4 (WGS-72) in TEME, taken "
+            "as I; t = 0 is the epoch, or the TLE epoch without one",
+            type="String",
+        ),
         parameter("tle_line2", "", "1", "line 2 of the two-line element set", type="String"),
         output("r_I", "m", "satellite position in I", shape=(3,)),
-        output("v_I", "m/s", "satellite velocity in I (dr_I/dt; SGP4's own velocity with a "
-               "TLE)", shape=(3,)),
-        output("q_OI", "1", "attitude of the orbit frame O relative to I (scalar first)",
-               shape=(4,)),
-        output("w_OI_O", "rad/s", "angular velocity of O relative to I, in O", shape=(3,),
-               display_unit="deg/s"),
+        output(
+            "v_I",
+            "m/s",
+            "satellite velocity in I (dr_I/dt; SGP4's own velocity with a TLE)",
+            shape=(3,),
+        ),
+        output(
+            "q_OI", "1", "attitude of the orbit frame O relative to I (scalar first)", shape=(4,)
+        ),
+        output(
+            "w_OI_O",
+            "rad/s",
+            "angular velocity of O relative to I, in O",
+            shape=(3,),
+            display_unit="deg/s",
+        ),
         output("r_T_I", "m", "ground target position in I", shape=(3,)),
         output("v_T_I", "m/s", "ground target velocity in I", shape=(3,)),
-        output("earth_angle", "rad", "Earth rotation angle, wrapped to [0, 2 pi)",
-               display_unit="deg"),
+        output(
+            "earth_angle", "rad", "Earth rotation angle, wrapped to [0, 2 pi)", display_unit="deg"
+        ),
     )
     # the SGP4 record cannot be deep-copied and does not evolve: not part of the FMU state
     _NOT_STATE = Model._NOT_STATE | {"_satrec"}
 
     def initialize(self, t0):
         p = self.p
-        values = {v.name: getattr(p, v.name) for v in self.layout.group("parameter")
-                  if v.type != "String"}
+        values = {
+            v.name: getattr(p, v.name) for v in self.layout.group("parameter") if v.type != "String"
+        }
         bad = sorted(name for name, value in values.items() if not math.isfinite(value))
         if bad:
             raise ModelError(f"parameters {bad} must be finite")
@@ -228,10 +309,13 @@ class OrbitEnvironment(Model):
             raise ModelError("tle_line1 and tle_line2 must be given together (or both empty)")
 
         if epoch and p.epoch_j2000:
-            raise ModelError(f"the epoch is given twice, as epoch = {epoch!r} and as "
-                             f"epoch_j2000 = {p.epoch_j2000!r}: give one of them")
-        self._epoch = (j2000_parts(epoch) if epoch else
-                       _day_parts(p.epoch_j2000) if p.epoch_j2000 else None)
+            raise ModelError(
+                f"the epoch is given twice, as epoch = {epoch!r} and as "
+                f"epoch_j2000 = {p.epoch_j2000!r}: give one of them"
+            )
+        self._epoch = (
+            j2000_parts(epoch) if epoch else _day_parts(p.epoch_j2000) if p.epoch_j2000 else None
+        )
         self._satrec = None
         if line1:
             self._satrec = load_tle(line1, line2)
@@ -239,21 +323,25 @@ class OrbitEnvironment(Model):
             if self._epoch is None:
                 self._epoch = (days, seconds)
             offset = (self._epoch[0] - days) * DAY + (self._epoch[1] - seconds)
-            self._tsince0 = offset / 60.0          # minutes from the TLE epoch to t = 0
+            self._tsince0 = offset / 60.0  # minutes from the TLE epoch to t = 0
             if abs(offset) > TLE_AGE_WARNING * DAY:
-                self.warnings.append(f"the epoch is {offset / DAY:.1f} days from the TLE's: "
-                                     "SGP4 errors grow by km per day")
+                self.warnings.append(
+                    f"the epoch is {offset / DAY:.1f} days from the TLE's: "
+                    "SGP4 errors grow by km per day"
+                )
         else:
             self._init_kepler()
         self._gmst0 = None if self._epoch is None else sidereal_base(*self._epoch)
         if self._epoch is not None and p.earth_angle0 != 0.0:
-            raise ModelError("earth_angle0 must be 0 when an epoch or a TLE is given (the "
-                             f"Earth angle is then GMST(epoch + t)), got {p.earth_angle0}")
+            raise ModelError(
+                "earth_angle0 must be 0 when an epoch or a TLE is given (the "
+                f"Earth angle is then GMST(epoch + t)), got {p.earth_angle0}"
+            )
         self.earth_angle0 = p.earth_angle0
         self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
         self.t = t0
         if self._satrec is not None:
-            self._sgp4(t0)                         # SGP4 errors at the start: fail here
+            self._sgp4(t0)  # SGP4 errors at the start: fail here
 
     def _init_kepler(self):
         p = self.p
@@ -267,35 +355,44 @@ class OrbitEnvironment(Model):
         if not mu > 0.0:
             raise ModelError(f"mu must be > 0 m3/s2, got {mu}")
         if a * (1.0 - e) < WGS84_B:
-            self.warnings.append(f"perigee radius {a * (1.0 - e):.0f} m is below the Earth's "
-                                 "surface")
+            self.warnings.append(
+                f"perigee radius {a * (1.0 - e):.0f} m is below the Earth's surface"
+            )
 
-        E0 = 2.0 * math.atan2(math.sqrt(1.0 - e) * math.sin(p.true_anomaly0 / 2),
-                              math.sqrt(1.0 + e) * math.cos(p.true_anomaly0 / 2))
-        raan_rate, argp_rate, mean_motion = (secular_j2_rates(a, e, i, mu) if p.j2 else
-                                             (0.0, 0.0, math.sqrt(mu / a**3)))
+        E0 = 2.0 * math.atan2(
+            math.sqrt(1.0 - e) * math.sin(p.true_anomaly0 / 2),
+            math.sqrt(1.0 + e) * math.cos(p.true_anomaly0 / 2),
+        )
+        raan_rate, argp_rate, mean_motion = (
+            secular_j2_rates(a, e, i, mu) if p.j2 else (0.0, 0.0, math.sqrt(mu / a**3))
+        )
         self.a, self.e, self.b = a, e, a * math.sqrt(1.0 - e * e)
         self.M0 = E0 - e * math.sin(E0)
         self.mean_motion, self.raan_rate, self.argp_rate = mean_motion, raan_rate, argp_rate
         self.raan0, self.argp0 = p.raan, p.arg_perigee
         self.cos_i, self.sin_i = math.cos(i), math.sin(i)
-        self.mu_kepler = mean_motion**2 * a**3   # = mu without J2
+        self.mu_kepler = mean_motion**2 * a**3  # = mu without J2
 
     def step(self, t, dt):
         self.t = t + dt
 
     def elements(self, t: float) -> tuple[float, float, float]:
         """(Ω, ω, M) at time t: the secular model's drifting angles (classical elements)."""
-        return (self.raan0 + self.raan_rate * t, self.argp0 + self.argp_rate * t,
-                self.M0 + self.mean_motion * t)
+        return (
+            self.raan0 + self.raan_rate * t,
+            self.argp0 + self.argp_rate * t,
+            self.M0 + self.mean_motion * t,
+        )
 
     def _sgp4(self, t: float):
         """SGP4 position (km) and velocity (km/s) in TEME at time t; ModelError on error."""
         error, r, v = self._satrec.sgp4_tsince(self._tsince0 + t / 60.0)
         if error:
             from sgp4.api import SGP4_ERRORS
-            raise ModelError(f"SGP4 error {error} at t = {t} s: "
-                             f"{SGP4_ERRORS.get(error, 'unknown error')}")
+
+            raise ModelError(
+                f"SGP4 error {error} at t = {t} s: {SGP4_ERRORS.get(error, 'unknown error')}"
+            )
         return r, v
 
     def _kepler_state(self, t):
@@ -314,8 +411,14 @@ class OrbitEnvironment(Model):
         vxp, vyp = -a * sE * Edot, b * cE * Edot
 
         # perifocal axes P, Q, W in I: R = R3(−Ω) R1(−i) R3(−ω)
-        cO, sO, cw, sw, ci, si = (math.cos(raan), math.sin(raan), math.cos(argp),
-                                  math.sin(argp), self.cos_i, self.sin_i)
+        cO, sO, cw, sw, ci, si = (
+            math.cos(raan),
+            math.sin(raan),
+            math.cos(argp),
+            math.sin(argp),
+            self.cos_i,
+            self.sin_i,
+        )
         Px, Py, Pz = cO * cw - sO * sw * ci, sO * cw + cO * sw * ci, sw * si
         Qx, Qy, Qz = -cO * sw - sO * cw * ci, -sO * sw + cO * cw * ci, cw * si
         Wx, Wy, Wz = sO * si, -cO * si, ci
@@ -325,9 +428,8 @@ class OrbitEnvironment(Model):
         g = -self.mu_kepler / (r * r * r)
         if Wr or wr:  # frame rate Ω_R = Ω̇ ẑ + ω̇ Ŵ
             ox, oy, oz = wr * Wx, wr * Wy, Wr + wr * Wz
-            vx, vy, vz = (kx + oy * rz - oz * ry, ky + oz * rx - ox * rz,
-                          kz + ox * ry - oy * rx)
-            c = wr * Wr   # ω̇ Ω̇ (ẑ × Ŵ) × r, ẑ × Ŵ = (−Wy, Wx, 0)
+            vx, vy, vz = (kx + oy * rz - oz * ry, ky + oz * rx - ox * rz, kz + ox * ry - oy * rx)
+            c = wr * Wr  # ω̇ Ω̇ (ẑ × Ŵ) × r, ẑ × Ŵ = (−Wy, Wx, 0)
             ax = g * rx + (oy * kz - oz * ky) + (oy * vz - oz * vy) + c * (Wx * rz)
             ay = g * ry + (oz * kx - ox * kz) + (oz * vx - ox * vz) + c * (Wy * rz)
             az = g * rz + (ox * ky - oy * kx) + (ox * vy - oy * vx) - c * (Wx * rx + Wy * ry)
@@ -360,10 +462,12 @@ class OrbitEnvironment(Model):
         r = math.sqrt(rx * rx + ry * ry + rz * rz)
         ux, uy, uz = rx / r, ry / r, rz / r
         nx, ny, nz = hx / h, hy / h, hz / h
-        xx, xy, xz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux   # x_O = ĥ × r̂
-        w = (scale * (hd[0] * ux + hd[1] * uy + hd[2] * uz) / h,
-             -scale * (rd[0] * xx + rd[1] * xy + rd[2] * xz) / r,
-             scale * (hd[0] * xx + hd[1] * xy + hd[2] * xz) / h)
+        xx, xy, xz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux  # x_O = ĥ × r̂
+        w = (
+            scale * (hd[0] * ux + hd[1] * uy + hd[2] * uz) / h,
+            -scale * (rd[0] * xx + rd[1] * xy + rd[2] * xz) / r,
+            scale * (hd[0] * xx + hd[1] * xy + hd[2] * xz) / h,
+        )
         return ((1e3 * rx, 1e3 * ry, 1e3 * rz), (1e3 * vx, 1e3 * vy, 1e3 * vz), w)
 
     def output(self):

@@ -74,6 +74,7 @@ error e = θ − θ_cmd(s) then obeys ë + 2ζωn ė + ωn² e = 0, integrated i
 The accelerations in ḣ are the servo law evaluated with the current inputs.  The servo
 state starts at the commands at t0 (the payloads are parked at the sweep's start).
 """
+
 from __future__ import annotations
 
 import math
@@ -85,7 +86,7 @@ from .variables import input_, output, parameter
 
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
 _ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
-_NEAR_CRITICAL = 1e-6                   # |λ² s²| below which C, S are taken from series
+_NEAR_CRITICAL = 1e-6  # |λ² s²| below which C, S are taken from series
 
 
 def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
@@ -97,18 +98,20 @@ def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     Jx, Jy, Jz = J
     cf, sf = math.cos(phi), math.sin(phi)
     c, s = math.cos(theta), math.sin(theta)
-    wx, wy, wz = phi_dot * c, theta_dot, phi_dot * s           # Ω (eq. 1)
-    hx, hy, hz = Jx * wx, Jy * wy, Jz * wz                     # h_m = J Ω
+    wx, wy, wz = phi_dot * c, theta_dot, phi_dot * s  # Ω (eq. 1)
+    hx, hy, hz = Jx * wx, Jy * wy, Jz * wz  # h_m = J Ω
     pq = phi_dot * theta_dot
-    dx = Jx * (phi_ddot * c - pq * s) + wy * hz - wz * hy      # J Ω̇ + Ω × J Ω
+    dx = Jx * (phi_ddot * c - pq * s) + wy * hz - wz * hy  # J Ω̇ + Ω × J Ω
     dy = Jy * theta_ddot + wz * hx - wx * hz
     dz = Jz * (phi_ddot * s + pq * c) + wx * hy - wy * hx
     # R_mbᵀ v = R_x(φ)ᵀ (R_y(θ)ᵀ v)
     hx, hz = c * hx + s * hz, c * hz - s * hx
     dx, dz = c * dx + s * dz, c * dz - s * dx
-    return ((hx, cf * hy - sf * hz, sf * hy + cf * hz),
-            (dx, cf * dy - sf * dz, sf * dy + cf * dz),
-            (s, -sf * c, cf * c))
+    return (
+        (hx, cf * hy - sf * hz, sf * hy + cf * hz),
+        (dx, cf * dy - sf * dz, sf * dy + cf * dz),
+        (s, -sf * c, cf * c),
+    )
 
 
 def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
@@ -119,16 +122,16 @@ def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
     lam2 = omega2 * (zeta * zeta - 1.0)
     x = lam2 * dt * dt
     decay = math.exp(-sigma * dt)
-    if abs(x) < _NEAR_CRITICAL:          # cosh/cos and sinh/sin near ζ = 1, to O(x³)
+    if abs(x) < _NEAR_CRITICAL:  # cosh/cos and sinh/sin near ζ = 1, to O(x³)
         C = decay * (1.0 + x / 2.0 + x * x / 24.0)
         S = decay * dt * (1.0 + x / 6.0 + x * x / 120.0)
-    elif x < 0.0:                        # under-damped
+    elif x < 0.0:  # under-damped
         wd = math.sqrt(-lam2)
         C = decay * math.cos(wd * dt)
         S = decay * math.sin(wd * dt) / wd
-    else:                                # over-damped: e^{−σs} cosh λs without overflow
+    else:  # over-damped: e^{−σs} cosh λs without overflow
         lam = math.sqrt(lam2)
-        slow = math.exp(-omega2 / (sigma + lam) * dt)   # e^{(λ − σ) s}, λ − σ = −ωn²/(σ + λ)
+        slow = math.exp(-omega2 / (sigma + lam) * dt)  # e^{(λ − σ) s}, λ − σ = −ωn²/(σ + λ)
         fast = math.exp(-(sigma + lam) * dt)
         C = 0.5 * (slow + fast)
         S = 0.5 * (slow - fast) / lam
@@ -141,43 +144,125 @@ class PayloadGimbals(Model):
     """Two payloads, each on a roll-then-pitch gimbal: momentum relative to the body."""
 
     VARIABLES = (
-        parameter("J_payload", (45.5, 35.8, 36.7), "kg.m2",     # [Chang 2015] §2
-                  "principal inertia (Jx, Jy, Jz) of each payload about its centre of mass",
-                  shape=(3,)),
-        parameter("bandwidth", 0.0, "rad/s",
-                  "servo natural frequency of each gimbal axis (0 = ideal tracking)"),
+        parameter(
+            "J_payload",
+            (45.5, 35.8, 36.7),
+            "kg.m2",  # [Chang 2015] §2
+            "principal inertia (Jx, Jy, Jz) of each payload about its centre of mass",
+            shape=(3,),
+        ),
+        parameter(
+            "bandwidth",
+            0.0,
+            "rad/s",
+            "servo natural frequency of each gimbal axis (0 = ideal tracking)",
+        ),
         parameter("damping", 1.0, "1", "servo damping ratio"),
-        parameter("accel_inputs", False, "1", "ideal tracking: take the accelerations from "
-                  "roll_accel_cmd and pitch_accel_cmd (else from the rate commands' change)",
-                  type="Boolean"),
-        input_("roll_cmd", "rad", "commanded roll (about body x) of payloads 1 and 2",
-               shape=(2,), display_unit="deg"),
-        input_("pitch_cmd", "rad", "commanded pitch (about the support's y) of payloads 1 "
-               "and 2", shape=(2,), display_unit="deg"),
-        input_("roll_rate_cmd", "rad/s", "commanded roll rate of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s"),
-        input_("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s"),
-        input_("roll_accel_cmd", "rad/s2", "commanded roll acceleration of payloads 1 and 2 "
-               "(used with accel_inputs)", shape=(2,), display_unit="deg/s2",
-               optional="zero: unused unless accel_inputs (then no roll acceleration)"),
-        input_("pitch_accel_cmd", "rad/s2", "commanded pitch acceleration of payloads 1 and "
-               "2 (used with accel_inputs)", shape=(2,), display_unit="deg/s2",
-               optional="zero: unused unless accel_inputs (then no pitch acceleration)"),
-        output("roll", "rad", "roll of payloads 1 and 2", shape=(2,),
-               depends=("roll_cmd",), display_unit="deg"),
-        output("pitch", "rad", "pitch of payloads 1 and 2", shape=(2,),
-               depends=("pitch_cmd",), display_unit="deg"),
-        output("roll_rate", "rad/s", "roll rate of payloads 1 and 2", shape=(2,),
-               depends=("roll_rate_cmd",), display_unit="deg/s"),
-        output("pitch_rate", "rad/s", "pitch rate of payloads 1 and 2", shape=(2,),
-               depends=("pitch_rate_cmd",), display_unit="deg/s"),
-        output("h", "N.m.s", "angular momentum of both payloads relative to the body, in B",
-               shape=(3,), depends=_COMMANDS),
-        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,),
-               depends=_COMMANDS + _ACCELERATIONS),
-        output("los_B", "1", "unit boresight (payload +z axis) of payloads 1 and 2 in B "
-               "(rows)", shape=(2, 3), depends=("roll_cmd", "pitch_cmd")),
+        parameter(
+            "accel_inputs",
+            False,
+            "1",
+            "ideal tracking: take the accelerations from "
+            "roll_accel_cmd and pitch_accel_cmd (else from the rate commands' change)",
+            type="Boolean",
+        ),
+        input_(
+            "roll_cmd",
+            "rad",
+            "commanded roll (about body x) of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg",
+        ),
+        input_(
+            "pitch_cmd",
+            "rad",
+            "commanded pitch (about the support's y) of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg",
+        ),
+        input_(
+            "roll_rate_cmd",
+            "rad/s",
+            "commanded roll rate of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s",
+        ),
+        input_(
+            "pitch_rate_cmd",
+            "rad/s",
+            "commanded pitch rate of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s",
+        ),
+        input_(
+            "roll_accel_cmd",
+            "rad/s2",
+            "commanded roll acceleration of payloads 1 and 2 (used with accel_inputs)",
+            shape=(2,),
+            display_unit="deg/s2",
+            optional="zero: unused unless accel_inputs (then no roll acceleration)",
+        ),
+        input_(
+            "pitch_accel_cmd",
+            "rad/s2",
+            "commanded pitch acceleration of payloads 1 and 2 (used with accel_inputs)",
+            shape=(2,),
+            display_unit="deg/s2",
+            optional="zero: unused unless accel_inputs (then no pitch acceleration)",
+        ),
+        output(
+            "roll",
+            "rad",
+            "roll of payloads 1 and 2",
+            shape=(2,),
+            depends=("roll_cmd",),
+            display_unit="deg",
+        ),
+        output(
+            "pitch",
+            "rad",
+            "pitch of payloads 1 and 2",
+            shape=(2,),
+            depends=("pitch_cmd",),
+            display_unit="deg",
+        ),
+        output(
+            "roll_rate",
+            "rad/s",
+            "roll rate of payloads 1 and 2",
+            shape=(2,),
+            depends=("roll_rate_cmd",),
+            display_unit="deg/s",
+        ),
+        output(
+            "pitch_rate",
+            "rad/s",
+            "pitch rate of payloads 1 and 2",
+            shape=(2,),
+            depends=("pitch_rate_cmd",),
+            display_unit="deg/s",
+        ),
+        output(
+            "h",
+            "N.m.s",
+            "angular momentum of both payloads relative to the body, in B",
+            shape=(3,),
+            depends=_COMMANDS,
+        ),
+        output(
+            "hdot",
+            "N.m",
+            "time derivative of h as seen in B",
+            shape=(3,),
+            depends=_COMMANDS + _ACCELERATIONS,
+        ),
+        output(
+            "los_B",
+            "1",
+            "unit boresight (payload +z axis) of payloads 1 and 2 in B (rows)",
+            shape=(2, 3),
+            depends=("roll_cmd", "pitch_cmd"),
+        ),
     )
     INITIAL_STATE_DEPENDS = _COMMANDS
 
@@ -185,10 +270,16 @@ class PayloadGimbals(Model):
         p = self.p
         J = p.J_payload.tolist()
         Jx, Jy, Jz = J
-        if not (all(math.isfinite(j) and j > 0 for j in J)
-                and Jx <= Jy + Jz and Jy <= Jx + Jz and Jz <= Jx + Jy):
-            raise ModelError(f"J_payload must be the positive principal moments of a rigid "
-                             f"body (each <= the sum of the other two), got {J}")
+        if not (
+            all(math.isfinite(j) and j > 0 for j in J)
+            and Jx <= Jy + Jz
+            and Jy <= Jx + Jz
+            and Jz <= Jx + Jy
+        ):
+            raise ModelError(
+                f"J_payload must be the positive principal moments of a rigid "
+                f"body (each <= the sum of the other two), got {J}"
+            )
         if not (math.isfinite(p.bandwidth) and p.bandwidth >= 0):
             raise ModelError(f"bandwidth must be >= 0 (0 = ideal tracking), got {p.bandwidth}")
         if not (math.isfinite(p.damping) and p.damping > 0):
@@ -198,15 +289,15 @@ class PayloadGimbals(Model):
         self.ideal = p.bandwidth == 0.0
         self.accel_inputs = p.accel_inputs
         inputs, outputs = self.layout.range["input"], self.layout.range["output"]
-        self._inputs = slice(inputs.start, inputs.stop)     # angles, rates, accelerations
+        self._inputs = slice(inputs.start, inputs.stop)  # angles, rates, accelerations
         self._outputs = slice(outputs.start, outputs.stop)  # contiguous in table order
         commands = self.values[self._inputs].tolist()
-        self.angles = commands[:4]       # roll 1, roll 2, pitch 1, pitch 2
+        self.angles = commands[:4]  # roll 1, roll 2, pitch 1, pitch 2
         self.rates = commands[4:8]
-        self.last_rate_cmd = None        # ideal tracking: rate commands at the last step
+        self.last_rate_cmd = None  # ideal tracking: rate commands at the last step
         self.last_dt = 0.0
         self.t = t0
-        if not self.ideal:   # ideal tracking: the state is the commands, no initial state
+        if not self.ideal:  # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
 
     def initial_input_jumps(self, used, dt):
@@ -230,8 +321,9 @@ class PayloadGimbals(Model):
         else:
             omega, zeta, angles, rates = self.omega, self.zeta, self.angles, self.rates
             for i in range(4):
-                angles[i], rates[i] = servo_step(angles[i], rates[i], commands[i],
-                                                 commands[4 + i], dt, omega, zeta)
+                angles[i], rates[i] = servo_step(
+                    angles[i], rates[i], commands[i], commands[4 + i], dt, omega, zeta
+                )
         self.t = t + dt
 
     def output(self):
@@ -249,15 +341,25 @@ class PayloadGimbals(Model):
         else:
             angles, rates = self.angles, self.rates
             w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
-            accels = [w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i])
-                      for i in range(4)]
+            accels = [
+                w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
+            ]
         J = self.J
-        h1, d1, l1 = payload_momentum(J, angles[0], angles[2], rates[0], rates[2],
-                                      accels[0], accels[2])
-        h2, d2, l2 = payload_momentum(J, angles[1], angles[3], rates[1], rates[3],
-                                      accels[1], accels[3])
+        h1, d1, l1 = payload_momentum(
+            J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2]
+        )
+        h2, d2, l2 = payload_momentum(
+            J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3]
+        )
         self.values[self._outputs] = (
-            *angles, *rates,
-            h1[0] + h2[0], h1[1] + h2[1], h1[2] + h2[2],
-            d1[0] + d2[0], d1[1] + d2[1], d1[2] + d2[2],
-            *l1, *l2)
+            *angles,
+            *rates,
+            h1[0] + h2[0],
+            h1[1] + h2[1],
+            h1[2] + h2[2],
+            d1[0] + d2[0],
+            d1[1] + d2[1],
+            d1[2] + d2[2],
+            *l1,
+            *l2,
+        )

@@ -22,6 +22,7 @@ twist about body y, θ = 2 atan2(q2, q0), and the remaining swing q_BR = twist* 
 whose x and z components give the roll and yaw errors e = 2 (q_BR1, q_BR3) (q0 ≥ 0
 chosen, so that θ is in (−180°, 180°]).
 """
+
 from __future__ import annotations
 
 import math
@@ -45,16 +46,16 @@ class PitchProfile:
     cruise_fraction: float = 0.2
     imaging_fraction: float = 0.6
     # set by __post_init__: phase times t1..t5, θ̈m, θ̇m
-    times: tuple[float, float, float, float, float] = field(init=False, repr=False,
-                                                          compare=False)
+    times: tuple[float, float, float, float, float] = field(init=False, repr=False, compare=False)
     accel: float = field(init=False, repr=False, compare=False)
     rate_max: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         T, f2, f4 = self.duration, self.cruise_fraction, self.imaging_fraction
         if not (T > 0 and f2 >= 0 and f4 >= 0 and f2 + f4 < 1):
-            raise ModelError(f"need duration > 0 and cruise + imaging fractions < 1, got "
-                             f"T={T}, f2={f2}, f4={f4}")
+            raise ModelError(
+                f"need duration > 0 and cruise + imaging fractions < 1, got T={T}, f2={f2}, f4={f4}"
+            )
         t1 = T * (1 - f2 - f4) / 2
         t2 = t1 + f2 * T
         accel = (self.theta_f - self.theta0 - self.scan_rate * f4 * T) / (t1 * t2)
@@ -63,11 +64,13 @@ class PitchProfile:
         t4 = t3 + f4 * T
         t5 = t4 + self.scan_rate / accel
         if not (t1 <= t2 <= t3 <= t4 <= t5 and math.isclose(t5, T, rel_tol=1e-9)):
-            raise ModelError("the scan rate is not reachable with these phase fractions: "
-                             f"phase times {[t1, t2, t3, t4, t5]}")
+            raise ModelError(
+                "the scan rate is not reachable with these phase fractions: "
+                f"phase times {[t1, t2, t3, t4, t5]}"
+            )
         object.__setattr__(self, "times", (t1, t2, t3, t4, t5))
-        object.__setattr__(self, "accel", accel)          # θ̈m
-        object.__setattr__(self, "rate_max", rate_max)    # θ̇m
+        object.__setattr__(self, "accel", accel)  # θ̈m
+        object.__setattr__(self, "rate_max", rate_max)  # θ̇m
 
     def phase(self, t: float) -> int:
         """Phase 1..5 at time t (half-open on the left; 5 from t4 on).
@@ -86,8 +89,13 @@ class PitchProfile:
         t1, t2, t3, t4, t5 = self.times
         a, r, r0 = self.accel, self.rate_max, self.scan_rate
         theta = self.theta0
-        pieces = ((0.0, t1, 0.0, a), (t1, t2, r, 0.0), (t2, t3, r, -a), (t3, t4, r0, 0.0),
-                  (t4, t5, r0, -a))
+        pieces = (
+            (0.0, t1, 0.0, a),
+            (t1, t2, r, 0.0),
+            (t2, t3, r, -a),
+            (t3, t4, r0, 0.0),
+            (t4, t5, r0, -a),
+        )
         for start, end, rate, acc in pieces:
             s = min(max(t - start, 0.0), end - start)
             theta += rate * s + 0.5 * acc * s * s
@@ -105,8 +113,9 @@ class PitchManeuverController(Model):
         parameter("pitch0", 120 * DEG, "rad", "initial pitch theta0", display_unit="deg"),
         parameter("pitch_final", 0.0, "rad", "final pitch theta_f", display_unit="deg"),
         parameter("duration", 100.0, "s", "maneuver time T"),
-        parameter("scan_rate", -0.8 * DEG, "rad/s", "imaging-phase pitch rate",
-                  display_unit="deg/s"),
+        parameter(
+            "scan_rate", -0.8 * DEG, "rad/s", "imaging-phase pitch rate", display_unit="deg/s"
+        ),
         parameter("cruise_fraction", 0.2, "1", "(t2 - t1) / T"),
         parameter("imaging_fraction", 0.6, "1", "(t4 - t3) / T"),
         parameter("kp", 0.9, "N.m/rad", "phase-5 pitch gain c1"),
@@ -117,8 +126,7 @@ class PitchManeuverController(Model):
         parameter("kd_yaw", 574.0, "N.m.s/rad", "yaw-rate hold gain"),
         input_("q_BO", "1", "attitude of B relative to O", (1.0, 0.0, 0.0, 0.0), shape=(4,)),
         input_("w_BO_B", "rad/s", "angular velocity of B relative to O, in B", shape=(3,)),
-        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,),
-               depends=_ATTITUDE),
+        output("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,), depends=_ATTITUDE),
         output("phase", "1", "maneuver phase 1..5", type="Integer"),
         output("pitch_ref", "rad", "planned pitch", display_unit="deg"),
         output("pitch_rate_ref", "rad/s", "planned pitch rate", display_unit="deg/s"),
@@ -126,8 +134,9 @@ class PitchManeuverController(Model):
 
     def initialize(self, t0):
         p = self.p
-        self.profile = PitchProfile(p.pitch0, p.pitch_final, p.duration, p.scan_rate,
-                                    p.cruise_fraction, p.imaging_fraction)
+        self.profile = PitchProfile(
+            p.pitch0, p.pitch_final, p.duration, p.scan_rate, p.cruise_fraction, p.imaging_fraction
+        )
         self.inertia = p.inertia
         self.gains = (p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw)
         self.t = t0
@@ -149,7 +158,10 @@ class PitchManeuverController(Model):
             torque_y = kp * (profile.theta_f - pitch) + kd * (0.0 - wy)
         else:
             torque_y = {1: 1.0, 3: -1.0}.get(phase, 0.0) * self.inertia * profile.accel
-        y.tau_cmd[:] = (-kp_roll * roll_error - kd_roll * wx, torque_y,
-                        -kp_yaw * yaw_error - kd_yaw * wz)
+        y.tau_cmd[:] = (
+            -kp_roll * roll_error - kd_roll * wx,
+            torque_y,
+            -kp_yaw * yaw_error - kd_yaw * wz,
+        )
         y.phase = phase
         y.pitch_ref, y.pitch_rate_ref = profile.reference(self.t)

@@ -21,6 +21,7 @@ several times per co-simulation step on 3- and 4-vectors, where NumPy's per-call
 would dominate.  ``dcm``, ``rotate`` and ``qmul`` return tuples for such hot loops; the
 rest return NumPy arrays.
 """
+
 from __future__ import annotations
 
 import math
@@ -42,38 +43,43 @@ def _floats(x):
 def dcm(q) -> tuple:
     """C(q) as a tuple of rows."""
     q0, q1, q2, q3 = _floats(q)
-    return ((q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3),
-             2 * (q1 * q3 - q0 * q2)),
-            (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3,
-             2 * (q2 * q3 + q0 * q1)),
-            (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1),
-             q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
+    return (
+        (q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)),
+        (2 * (q1 * q2 - q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 + q0 * q1)),
+        (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3),
+    )
 
 
 def rotate(M, v) -> tuple:
     """M v for a 3×3 M given as rows (e.g. ``dcm(q)``)."""
     v0, v1, v2 = _floats(v)
-    return (M[0][0] * v0 + M[0][1] * v1 + M[0][2] * v2,
-            M[1][0] * v0 + M[1][1] * v1 + M[1][2] * v2,
-            M[2][0] * v0 + M[2][1] * v1 + M[2][2] * v2)
+    return (
+        M[0][0] * v0 + M[0][1] * v1 + M[0][2] * v2,
+        M[1][0] * v0 + M[1][1] * v1 + M[1][2] * v2,
+        M[2][0] * v0 + M[2][1] * v1 + M[2][2] * v2,
+    )
 
 
 def rotate_back(M, v) -> tuple:
     """Mᵀ v for a 3×3 M given as rows."""
     v0, v1, v2 = _floats(v)
-    return (M[0][0] * v0 + M[1][0] * v1 + M[2][0] * v2,
-            M[0][1] * v0 + M[1][1] * v1 + M[2][1] * v2,
-            M[0][2] * v0 + M[1][2] * v1 + M[2][2] * v2)
+    return (
+        M[0][0] * v0 + M[1][0] * v1 + M[2][0] * v2,
+        M[0][1] * v0 + M[1][1] * v1 + M[2][1] * v2,
+        M[0][2] * v0 + M[1][2] * v1 + M[2][2] * v2,
+    )
 
 
 def qmul(p, q) -> tuple:
     """Hamilton product p ⊗ q."""
     p0, p1, p2, p3 = _floats(p)
     q0, q1, q2, q3 = _floats(q)
-    return (p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
-            p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
-            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
-            p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0)
+    return (
+        p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
+        p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+        p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
+        p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
+    )
 
 
 # -- array API ---------------------------------------------------------------------------
@@ -203,8 +209,7 @@ def euler123_from_quat(q, previous=None) -> np.ndarray:
         return np.array([combination, theta, 0.0])
     phi0, _, psi0 = _floats(previous)
     change = wrap_pi(combination - (phi0 + sign * psi0))
-    return np.array(unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2),
-                                 previous))
+    return np.array(unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2), previous))
 
 
 def euler123_rates(euler, w) -> np.ndarray:

@@ -21,6 +21,7 @@ w_BO_B = w_BI_B − C_BO w_OI_O and the 1-2-3 Euler angles of B relative to O on
 continuous in time (pitch may pass through ±90°; see rotations.euler123_from_quat), with
 their rates (video-SAR eq. 13).
 """
+
 from __future__ import annotations
 
 import math
@@ -29,8 +30,17 @@ import numpy as np
 
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
-from .rotations import (IDENTITY_Q, dcm, dcm_from_euler123, euler123_from_quat,
-                        euler123_rates, qmul, quat_from_dcm, rotate, rotate_back)
+from .rotations import (
+    IDENTITY_Q,
+    dcm,
+    dcm_from_euler123,
+    euler123_from_quat,
+    euler123_rates,
+    qmul,
+    quat_from_dcm,
+    rotate,
+    rotate_back,
+)
 from .variables import input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
@@ -48,12 +58,20 @@ DEFAULT_R_I = (0.0, 0.0, -DEFAULT_SEMI_MAJOR_AXIS)
 
 def _device_inputs():
     for device in DEVICES:
-        yield input_(f"h_{device}", "N.m.s",
-                     f"{device} angular momentum relative to the body, in B", shape=(3,),
-                     optional=f"zero: no {device} momentum")
-        yield input_(f"hdot_{device}", "N.m",
-                     f"time derivative of h_{device} as seen in B", shape=(3,),
-                     optional=f"zero: constant {device} momentum")
+        yield input_(
+            f"h_{device}",
+            "N.m.s",
+            f"{device} angular momentum relative to the body, in B",
+            shape=(3,),
+            optional=f"zero: no {device} momentum",
+        )
+        yield input_(
+            f"hdot_{device}",
+            "N.m",
+            f"time derivative of h_{device} as seen in B",
+            shape=(3,),
+            optional=f"zero: constant {device} momentum",
+        )
 
 
 class SatelliteDynamics(Model):
@@ -62,39 +80,101 @@ class SatelliteDynamics(Model):
     _BO_DEPENDS = ("q_OI",)
     _RATE_DEPENDS = MOMENTUM_INPUTS + ("q_OI", "w_OI_O")
     VARIABLES = (
-        parameter("inertia", 956.0 * np.eye(3), "kg.m2",
-                  "hub inertia about the centre of mass, in B", shape=(3, 3)),
-        parameter("attitude0", 0.0, "rad",
-                  "initial 1-2-3 Euler angles (roll, pitch, yaw) of B relative to O",
-                  shape=(3,), display_unit="deg"),
-        parameter("rate0", 0.0, "rad/s", "initial angular velocity of B relative to O, in B",
-                  shape=(3,), display_unit="deg/s"),
-        parameter("gravity_gradient", True, "1", "apply the gravity-gradient torque",
-                  type="Boolean"),
+        parameter(
+            "inertia",
+            956.0 * np.eye(3),
+            "kg.m2",
+            "hub inertia about the centre of mass, in B",
+            shape=(3, 3),
+        ),
+        parameter(
+            "attitude0",
+            0.0,
+            "rad",
+            "initial 1-2-3 Euler angles (roll, pitch, yaw) of B relative to O",
+            shape=(3,),
+            display_unit="deg",
+        ),
+        parameter(
+            "rate0",
+            0.0,
+            "rad/s",
+            "initial angular velocity of B relative to O, in B",
+            shape=(3,),
+            display_unit="deg/s",
+        ),
+        parameter(
+            "gravity_gradient", True, "1", "apply the gravity-gradient torque", type="Boolean"
+        ),
         parameter("mu", 3.986004418e14, "m3/s2", "gravitational parameter of the Earth"),
         *_device_inputs(),
-        input_("tau_ext", "N.m", "other external torque on the body, in B", shape=(3,),
-               optional="zero: no other external torque"),
-        input_("r_I", "m", "satellite position in I (for the gravity gradient); the start "
-               "value is the default orbit's radius at nadir of the identity orbit frame",
-               DEFAULT_R_I, shape=(3,),
-               optional="a fixed position, the default orbit's radius at nadir of the "
-                        "identity orbit frame: connect it for the gravity gradient of a real "
-                        "orbit"),
-        input_("q_OI", "1", "attitude of the orbit frame O relative to I", IDENTITY_Q,
-               shape=(4,), optional="identity: O is the inertial frame (q_BO = q_BI)"),
-        input_("w_OI_O", "rad/s", "angular velocity of O relative to I, in O", shape=(3,),
-               optional="zero: O does not rotate"),
+        input_(
+            "tau_ext",
+            "N.m",
+            "other external torque on the body, in B",
+            shape=(3,),
+            optional="zero: no other external torque",
+        ),
+        input_(
+            "r_I",
+            "m",
+            "satellite position in I (for the gravity gradient); the start "
+            "value is the default orbit's radius at nadir of the identity orbit frame",
+            DEFAULT_R_I,
+            shape=(3,),
+            optional="a fixed position, the default orbit's radius at nadir of the "
+            "identity orbit frame: connect it for the gravity gradient of a real "
+            "orbit",
+        ),
+        input_(
+            "q_OI",
+            "1",
+            "attitude of the orbit frame O relative to I",
+            IDENTITY_Q,
+            shape=(4,),
+            optional="identity: O is the inertial frame (q_BO = q_BI)",
+        ),
+        input_(
+            "w_OI_O",
+            "rad/s",
+            "angular velocity of O relative to I, in O",
+            shape=(3,),
+            optional="zero: O does not rotate",
+        ),
         output("q_BI", "1", "attitude of B relative to I", shape=(4,)),
-        output("w_BI_B", "rad/s", "angular velocity of B relative to I, in B", shape=(3,),
-               depends=MOMENTUM_INPUTS, display_unit="deg/s"),
+        output(
+            "w_BI_B",
+            "rad/s",
+            "angular velocity of B relative to I, in B",
+            shape=(3,),
+            depends=MOMENTUM_INPUTS,
+            display_unit="deg/s",
+        ),
         output("q_BO", "1", "attitude of B relative to O", shape=(4,), depends=_BO_DEPENDS),
-        output("euler_BO", "rad", "1-2-3 Euler angles of B relative to O (continuous branch)",
-               shape=(3,), depends=_BO_DEPENDS, display_unit="deg"),
-        output("euler_rate_BO", "rad/s", "rates of euler_BO", shape=(3,),
-               depends=_RATE_DEPENDS, display_unit="deg/s"),
-        output("w_BO_B", "rad/s", "angular velocity of B relative to O, in B", shape=(3,),
-               depends=_RATE_DEPENDS, display_unit="deg/s"),
+        output(
+            "euler_BO",
+            "rad",
+            "1-2-3 Euler angles of B relative to O (continuous branch)",
+            shape=(3,),
+            depends=_BO_DEPENDS,
+            display_unit="deg",
+        ),
+        output(
+            "euler_rate_BO",
+            "rad/s",
+            "rates of euler_BO",
+            shape=(3,),
+            depends=_RATE_DEPENDS,
+            display_unit="deg/s",
+        ),
+        output(
+            "w_BO_B",
+            "rad/s",
+            "angular velocity of B relative to O, in B",
+            shape=(3,),
+            depends=_RATE_DEPENDS,
+            display_unit="deg/s",
+        ),
         output("H_I", "N.m.s", "total angular momentum (hub + devices), in I", shape=(3,)),
     )
     INITIAL_STATE_DEPENDS = MOMENTUM_INPUTS + ("q_OI", "w_OI_O")
@@ -135,13 +215,17 @@ class SatelliteDynamics(Model):
         tau = u.tau_ext.tolist()
         r_I = u.r_I.tolist()
         if self.needs_position and not any(r_I):
-            raise ModelError("gravity_gradient is on but r_I is zero: connect r_I or set "
-                             "gravity_gradient = false")
+            raise ModelError(
+                "gravity_gradient is on but r_I is zero: connect r_I or set "
+                "gravity_gradient = false"
+            )
         w = self._rate(self.q_BI, self.H_I, h0)
         n = max(1, math.ceil(max(map(abs, w)) * dt / MAX_ROTATION_PER_SUBSTEP))
         if n > MAX_SUBSTEPS:
-            raise ModelError(f"t={t:.6g} s: body rate {max(map(abs, w)):.3g} rad/s would need "
-                             f"{n} sub-steps of {dt:g} s: the state is unphysical")
+            raise ModelError(
+                f"t={t:.6g} s: body rate {max(map(abs, w)):.3g} rad/s would need "
+                f"{n} sub-steps of {dt:g} s: the state is unphysical"
+            )
         x = (*self.q_BI, *self.H_I)
         sub = dt / n
         for k in range(n):
@@ -212,8 +296,9 @@ class SatelliteDynamics(Model):
         k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
         k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
         sixth = ds / 6
-        return tuple(xi + sixth * (a + 2 * (b + c) + d)
-                     for xi, a, b, c, d in zip(x, k1, k2, k3, k4))
+        return tuple(
+            xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)
+        )
 
     def _derivative(self, x, s, h0, hdot, tau, r_I):
         """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
@@ -221,21 +306,31 @@ class SatelliteDynamics(Model):
         k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
         C = tuple((k * a, k * b, k * c) for a, b, c in dcm(q))
         H_B = rotate(C, x[4:])
-        wx, wy, wz = rotate(self.J_inv, (H_B[0] - h0[0] - hdot[0] * s,
-                                         H_B[1] - h0[1] - hdot[1] * s,
-                                         H_B[2] - h0[2] - hdot[2] * s))
-        q_dot = (0.5 * (-q1 * wx - q2 * wy - q3 * wz),
-                 0.5 * (q0 * wx + q2 * wz - q3 * wy),
-                 0.5 * (q0 * wy - q1 * wz + q3 * wx),
-                 0.5 * (q0 * wz + q1 * wy - q2 * wx))
+        wx, wy, wz = rotate(
+            self.J_inv,
+            (
+                H_B[0] - h0[0] - hdot[0] * s,
+                H_B[1] - h0[1] - hdot[1] * s,
+                H_B[2] - h0[2] - hdot[2] * s,
+            ),
+        )
+        q_dot = (
+            0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+            0.5 * (q0 * wx + q2 * wz - q3 * wy),
+            0.5 * (q0 * wy - q1 * wz + q3 * wx),
+            0.5 * (q0 * wz + q1 * wy - q2 * wx),
+        )
         if not self.gravity_gradient:
             return (*q_dot, *rotate_back(C, tau))
         rx, ry, rz = r_B = rotate(C, r_I)
         r2 = rx * rx + ry * ry + rz * rz
         g = 3.0 * self.mu / (r2 * r2 * math.sqrt(r2))
         jx, jy, jz = rotate(self.J, r_B)
-        torque = (tau[0] + g * (ry * jz - rz * jy), tau[1] + g * (rz * jx - rx * jz),
-                  tau[2] + g * (rx * jy - ry * jx))
+        torque = (
+            tau[0] + g * (ry * jz - rz * jy),
+            tau[1] + g * (rz * jx - rx * jz),
+            tau[2] + g * (rx * jy - ry * jx),
+        )
         return (*q_dot, *rotate_back(C, torque))
 
 
@@ -243,6 +338,5 @@ def _unit(q, name) -> tuple:
     q0, q1, q2, q3 = q.tolist()
     norm = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     if not 0.5 < norm < 2.0:
-        raise ModelError(f"{name} must be a unit quaternion, got {[q0, q1, q2, q3]} "
-                         f"(norm {norm})")
+        raise ModelError(f"{name} must be a unit quaternion, got {[q0, q1, q2, q3]} (norm {norm})")
     return q0 / norm, q1 / norm, q2 / norm, q3 / norm

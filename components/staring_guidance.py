@@ -82,6 +82,7 @@ the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ
 q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad); the state (captured
 g, anchors of the angle branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
 """
+
 from __future__ import annotations
 
 import math
@@ -90,14 +91,13 @@ import numpy as np
 
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import (cross, dcm_from_quat, euler123_from_quat, quat_from_dcm, unwrap_near,
-                        wrap_pi)
+from .rotations import cross, dcm_from_quat, euler123_from_quat, quat_from_dcm, unwrap_near, wrap_pi
 from .variables import input_, output, parameter
 
-CAPTURE_TOLERANCE = 1e-9      # s per s of max(1, |reference_time|): "t >= reference_time"
-Q_OI_TOLERANCE = 1e-6         # rad (max element of C_OI error): q_OI vs r_I, v_I
-PARALLEL_TOLERANCE = 1e-6     # rad: LOS against a reference direction, boresight against x
-MIN_SLANT_RANGE = 1e-3        # m
+CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"
+Q_OI_TOLERANCE = 1e-6  # rad (max element of C_OI error): q_OI vs r_I, v_I
+PARALLEL_TOLERANCE = 1e-6  # rad: LOS against a reference direction, boresight against x
+MIN_SLANT_RANGE = 1e-3  # m
 _INPUTS = ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")
 # Start values of the inputs: a consistent geometry (circular 567-km orbit over the
 # equator, the target below it at longitude 0, seen at nadir), so that the FMU can be
@@ -106,8 +106,9 @@ _START_R = (WGS84_A + 567e3, 0.0, 0.0)
 _START_V = (0.0, math.sqrt(MU_EARTH / _START_R[0]), 0.0)
 _START_T = (WGS84_A, 0.0, 0.0)
 _START_VT = (0.0, EARTH_RATE * WGS84_A, 0.0)
-_START_Q_OI = tuple(quat_from_dcm(((0.0, 1.0, 0.0), (0.0, 0.0, -1.0),
-                                   (-1.0, 0.0, 0.0))).tolist())   # rows x_O, y_O, z_O
+_START_Q_OI = tuple(
+    quat_from_dcm(((0.0, 1.0, 0.0), (0.0, 0.0, -1.0), (-1.0, 0.0, 0.0))).tolist()
+)  # rows x_O, y_O, z_O
 _GEOMETRY = ("r_I", "r_T_I")
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -123,14 +124,17 @@ def _orbit_axes(r, v, C_OI, t):
     h_vec = cross(r, v)
     h = _norm(h_vec)
     if not h > 1e-12 * r_norm * max(_norm(v), 1.0):
-        raise ModelError(f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit "
-                         "frame is undefined")
+        raise ModelError(
+            f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit frame is undefined"
+        )
     r_hat, h_hat = r / r_norm, h_vec / h
     mismatch = float(np.max(np.abs(C_OI - (cross(h_hat, r_hat), -h_hat, -r_hat))))
     if mismatch > Q_OI_TOLERANCE:
-        raise ModelError(f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
-                         f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
-                         f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I")
+        raise ModelError(
+            f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
+            f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
+            f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I"
+        )
     return r_norm, h, r_hat, C_OI[0]
 
 
@@ -154,8 +158,10 @@ def _polar_distance(r_T) -> tuple[float, float, float, float]:
     x, y, z = (float(c) for c in r_T)
     p = math.hypot(x, y)
     if not p > 1e-9 * max(1.0, abs(z)):
-        raise ModelError(f"r_T_I = {[x, y, z]} is on the Earth's axis: north (hence the "
-                         "footprint azimuth) is undefined at a pole")
+        raise ModelError(
+            f"r_T_I = {[x, y, z]} is on the Earth's axis: north (hence the "
+            "footprint azimuth) is undefined at a pole"
+        )
     return x, y, z, p
 
 
@@ -166,23 +172,29 @@ def geodetic_latitude(r_T) -> float:
     lat = math.atan2(z, p * (1.0 - WGS84_E2))
     for _ in range(20):
         s = math.sin(lat)
-        lat, previous = math.atan2(
-            z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s), p), lat
+        lat, previous = (
+            math.atan2(z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s), p),
+            lat,
+        )
         if abs(lat - previous) <= 1e-15:
             break
     return lat
 
 
-def local_tangent_frame(r_T, latitude: float | None = None
-                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def local_tangent_frame(
+    r_T, latitude: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(up, east, north) unit vectors at a point, in the axes of r_T (I or E: both share
     the polar axis ẑ).  up = WGS-84 ellipsoid normal at the geodetic latitude (computed
     unless given: an Earth-fixed point keeps it)."""
     x, y, _, p = _polar_distance(r_T)
     lat = geodetic_latitude(r_T) if latitude is None else latitude
     cl, sl, cx, sx = math.cos(lat), math.sin(lat), x / p, y / p
-    return (np.array([cl * cx, cl * sx, sl]), np.array([-sx, cx, 0.0]),
-            np.array([-sl * cx, -sl * sx, cl]))
+    return (
+        np.array([cl * cx, cl * sx, sl]),
+        np.array([-sx, cx, 0.0]),
+        np.array([-sl * cx, -sl * sx, cl]),
+    )
 
 
 def ground_line(beam, axis, up) -> np.ndarray:
@@ -193,8 +205,10 @@ def ground_line(beam, axis, up) -> np.ndarray:
 
 def _azimuth(d, east, north) -> float:
     if not _norm(d) > 1e-12:
-        raise ModelError("the footprint plane is parallel to the target's tangent plane "
-                         "(grazing view): footprint direction undefined")
+        raise ModelError(
+            "the footprint plane is parallel to the target's tangent plane "
+            "(grazing view): footprint direction undefined"
+        )
     return math.atan2(float(d @ east), float(d @ north))
 
 
@@ -215,9 +229,10 @@ def _line_of_sight(r, v, r_T, v_T, t):
     rho, drho = r_T - r, v_T - v
     s = _norm(rho)
     if not s > MIN_SLANT_RANGE:
-        raise ModelError(f"t={t:.6g} s: zero-length line of sight: r_T_I - r_I has length "
-                         f"{s:.3g} m")
-    ddrho = EARTH_RATE * cross(_Z, v_T) + (MU_EARTH / _norm(r)**3) * r
+        raise ModelError(
+            f"t={t:.6g} s: zero-length line of sight: r_T_I - r_I has length {s:.3g} m"
+        )
+    ddrho = EARTH_RATE * cross(_Z, v_T) + (MU_EARTH / _norm(r) ** 3) * r
     u = rho / s
     ds = float(drho @ u)
     du = (drho - ds * u) / s
@@ -230,8 +245,10 @@ def _aligned_axes(u, a, what: str):
     n = cross(u, a)
     m = _norm(n)
     if not m > PARALLEL_TOLERANCE:
-        raise ModelError(f"the line of sight (r_T_I - r_I) is parallel to {what}: the "
-                         "reference frame is undefined")
+        raise ModelError(
+            f"the line of sight (r_T_I - r_I) is parallel to {what}: the "
+            "reference frame is undefined"
+        )
     y = n / m
     return cross(y, u), y, n, m
 
@@ -245,8 +262,13 @@ def _aligned_frame(u, du, ddu, a, da, dda, what: str):
     w = np.array([-float(y @ du), float(x @ du), -dnx / m])
     w_I = w[0] * x + w[1] * y + w[2] * u
     dx, dy = cross(w_I, x), cross(w_I, y)
-    dw = np.array([-float(dy @ du) - float(y @ ddu), float(dx @ du) + float(x @ ddu),
-                   -(float(ddn @ x) + float(dn @ dx)) / m + dnx * float(dn @ y) / (m * m)])
+    dw = np.array(
+        [
+            -float(dy @ du) - float(y @ ddu),
+            float(dx @ du) + float(x @ ddu),
+            -(float(ddn @ x) + float(dn @ dx)) / m + dnx * float(dn @ y) / (m * m),
+        ]
+    )
     return np.array([x, y, u]), w, dw
 
 
@@ -254,35 +276,94 @@ class StaringGuidance(Model):
     """Reference attitude staring at a ground target, with yaw compensation ([Liang 2019])."""
 
     VARIABLES = (
-        parameter("yaw_compensation", True, "1", "true: hold the footprint direction fixed "
-                  "on the ground from reference_time on (eq 12); false: yaw 0 (eqs 10-11)",
-                  type="Boolean"),
-        parameter("boresight_B", (0.0, 0.0, 1.0), "1", "antenna boresight (beam centre) "
-                  "in B, normalised by the model", shape=(3,)),
-        parameter("reference_time", 0.0, "s", "t_ref: the footprint direction of the yaw-0 "
-                  "attitude is frozen on the ground at the first communication point >= it"),
+        parameter(
+            "yaw_compensation",
+            True,
+            "1",
+            "true: hold the footprint direction fixed "
+            "on the ground from reference_time on (eq 12); false: yaw 0 (eqs 10-11)",
+            type="Boolean",
+        ),
+        parameter(
+            "boresight_B",
+            (0.0, 0.0, 1.0),
+            "1",
+            "antenna boresight (beam centre) in B, normalised by the model",
+            shape=(3,),
+        ),
+        parameter(
+            "reference_time",
+            0.0,
+            "s",
+            "t_ref: the footprint direction of the yaw-0 "
+            "attitude is frozen on the ground at the first communication point >= it",
+        ),
         input_("r_I", "m", "satellite position in I", _START_R, shape=(3,)),
         input_("v_I", "m/s", "satellite velocity in I", _START_V, shape=(3,)),
         input_("r_T_I", "m", "ground target position in I", _START_T, shape=(3,)),
         input_("v_T_I", "m/s", "ground target velocity in I", _START_VT, shape=(3,)),
-        input_("q_OI", "1", "attitude of the orbit frame O relative to I (must match r_I, "
-               "v_I)", _START_Q_OI, shape=(4,)),
-        output("q_ref", "1", "attitude of the reference frame R relative to I (q_RI)",
-               shape=(4,), depends=_INPUTS),
-        output("w_ref", "rad/s", "angular velocity of R relative to I, in R axes",
-               shape=(3,), depends=_INPUTS, display_unit="deg/s"),
-        output("dw_ref", "rad/s2", "time derivative of w_ref (angular acceleration of R "
-               "relative to I, in R axes; extension for feedforward)", shape=(3,),
-               depends=_INPUTS, display_unit="deg/s2"),
-        output("euler_ref_BO", "rad", "1-2-3 Euler angles (roll, pitch, yaw) of R relative "
-               "to O, continuous branch", shape=(3,), depends=_INPUTS, display_unit="deg"),
-        output("look_angle", "rad", "off-nadir angle of the line of sight at the satellite "
-               "(from the geocentric nadir -r_I)", depends=_GEOMETRY, display_unit="deg"),
-        output("slant_range", "m", "distance satellite to target |r_T_I - r_I|",
-               depends=_GEOMETRY, display_unit="km"),
-        output("footprint_rotation", "rad", "azimuth of R's footprint direction on the "
-               "target's tangent plane minus its value at the capture time (0 before)",
-               depends=_INPUTS, display_unit="deg"),
+        input_(
+            "q_OI",
+            "1",
+            "attitude of the orbit frame O relative to I (must match r_I, v_I)",
+            _START_Q_OI,
+            shape=(4,),
+        ),
+        output(
+            "q_ref",
+            "1",
+            "attitude of the reference frame R relative to I (q_RI)",
+            shape=(4,),
+            depends=_INPUTS,
+        ),
+        output(
+            "w_ref",
+            "rad/s",
+            "angular velocity of R relative to I, in R axes",
+            shape=(3,),
+            depends=_INPUTS,
+            display_unit="deg/s",
+        ),
+        output(
+            "dw_ref",
+            "rad/s2",
+            "time derivative of w_ref (angular acceleration of R "
+            "relative to I, in R axes; extension for feedforward)",
+            shape=(3,),
+            depends=_INPUTS,
+            display_unit="deg/s2",
+        ),
+        output(
+            "euler_ref_BO",
+            "rad",
+            "1-2-3 Euler angles (roll, pitch, yaw) of R relative to O, continuous branch",
+            shape=(3,),
+            depends=_INPUTS,
+            display_unit="deg",
+        ),
+        output(
+            "look_angle",
+            "rad",
+            "off-nadir angle of the line of sight at the satellite "
+            "(from the geocentric nadir -r_I)",
+            depends=_GEOMETRY,
+            display_unit="deg",
+        ),
+        output(
+            "slant_range",
+            "m",
+            "distance satellite to target |r_T_I - r_I|",
+            depends=_GEOMETRY,
+            display_unit="km",
+        ),
+        output(
+            "footprint_rotation",
+            "rad",
+            "azimuth of R's footprint direction on the "
+            "target's tangent plane minus its value at the capture time (0 before)",
+            depends=_INPUTS,
+            display_unit="deg",
+        ),
     )
 
     def initialize(self, t0):
@@ -293,20 +374,20 @@ class StaringGuidance(Model):
         a_B = footprint_axis(b)
         b = b / _norm(b)
         C_RP = np.column_stack((a_B, cross(b, a_B), b))
-        self.C_RP = None if np.array_equal(C_RP, np.eye(3)) else C_RP   # None: R = P
+        self.C_RP = None if np.array_equal(C_RP, np.eye(3)) else C_RP  # None: R = P
         self.compensate = p.yaw_compensation
         self.tolerance = CAPTURE_TOLERANCE * max(1.0, abs(p.reference_time))
-        self.capture_time = None      # t_cap, then the captured g (I, at t_cap)
-        self.g_ref_I = None           # and the footprint azimuth at t_cap
+        self.capture_time = None  # t_cap, then the captured g (I, at t_cap)
+        self.g_ref_I = None  # and the footprint azimuth at t_cap
         self.azimuth_ref = 0.0
-        self.latitude = None          # the target's geodetic latitude, fixed at t_cap
-        self.anchor = self.last = None   # (q_ref, euler) at the previous / last point
+        self.latitude = None  # the target's geodetic latitude, fixed at t_cap
+        self.anchor = self.last = None  # (q_ref, euler) at the previous / last point
         inputs = self.layout.range["input"]
         self._inputs = slice(inputs.start, inputs.stop)
         self.t = t0
 
     def step(self, t, dt):
-        self.anchor = self.last   # outputs at t are the branch anchors for t + dt
+        self.anchor = self.last  # outputs at t are the branch anchors for t + dt
         self.t = t + dt
 
     def output(self):
@@ -315,7 +396,8 @@ class StaringGuidance(Model):
         r_norm, h, r_hat, x_O = _orbit_axes(r, v, C_OI, t)
         s, u, du, ddu = _line_of_sight(r, v, r_T, v_T, t)
         compensating, (x0, y0), (C_PI, w_P, dw_P) = self._pointing_frame(
-            t, r_T, u, du, ddu, (r_norm, h, r_hat, x_O), float(v @ r_hat))
+            t, r_T, u, du, ddu, (r_norm, h, r_hat, x_O), float(v @ r_hat)
+        )
         C_RI, w, dw = C_PI, w_P, dw_P
         if self.C_RP is not None:
             C_RI, w, dw = self.C_RP @ C_PI, self.C_RP @ w_P, self.C_RP @ dw_P
@@ -323,8 +405,9 @@ class StaringGuidance(Model):
         rotation = 0.0
         if self.capture_time is not None:
             up, east, north = local_tangent_frame(r_T, self.latitude)
-            rotation = wrap_pi(_azimuth(ground_line(u, C_PI[0], up), east, north)
-                               - self.azimuth_ref)
+            rotation = wrap_pi(
+                _azimuth(ground_line(u, C_PI[0], up), east, north) - self.azimuth_ref
+            )
         y.q_ref[:] = q
         y.w_ref[:] = w
         y.dw_ref[:] = dw
@@ -348,16 +431,17 @@ class StaringGuidance(Model):
         """(compensating, (x0, y0) axes of the yaw-0 frame P0, (C_PI, ω_P, ω̇_P)): P0 =
         F(û, x_O), or with yaw compensation F(û, g) after the capture (made here at t_cap)."""
         r_norm, h, r_hat, x_O = orbit
-        capturing = ((self.capture_time is None and t >= self.p.reference_time - self.tolerance)
-                     or self.capture_time == t)      # capture, or recapture at t_cap
+        capturing = (
+            self.capture_time is None and t >= self.p.reference_time - self.tolerance
+        ) or self.capture_time == t  # capture, or recapture at t_cap
         compensating = self.compensate and (capturing or self.capture_time is not None)
         what = "the orbit frame's x axis (pitch +-90 deg)"
         y0 = None
-        if compensating:                            # only the axes of the yaw-0 frame P0
+        if compensating:  # only the axes of the yaw-0 frame P0
             x0, y0, _, _ = _aligned_axes(u, x_O, what)
-        else:                                       # P0 = F(û, x_O) is the reference
+        else:  # P0 = F(û, x_O) is the reference
             dx_O = -(h / r_norm**2) * r_hat
-            ddx_O = (2.0 * h * r_dot / r_norm**3) * r_hat - (h / r_norm**2)**2 * x_O
+            ddx_O = (2.0 * h * r_dot / r_norm**3) * r_hat - (h / r_norm**2) ** 2 * x_O
             P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O, what)
             x0 = P[0][0]
         if capturing:
@@ -372,8 +456,15 @@ class StaringGuidance(Model):
             gx, gy, gz = self.g_ref_I
             g = np.array([c * gx - sn * gy, sn * gx + c * gy, gz])
             dg = EARTH_RATE * cross(_Z, g)
-            P = _aligned_frame(u, du, ddu, g, dg, EARTH_RATE * cross(_Z, dg),
-                               "the captured footprint direction g (grazing view)")
+            P = _aligned_frame(
+                u,
+                du,
+                ddu,
+                g,
+                dg,
+                EARTH_RATE * cross(_Z, dg),
+                "the captured footprint direction g (grazing view)",
+            )
         return compensating, (x0, y0), P
 
     def _attitude(self, C_RI, C_PI, C_OI, u, x0, y0, compensating):
@@ -383,10 +474,9 @@ class StaringGuidance(Model):
         anchor_q, anchor_euler = self.anchor if self.anchor is not None else (None, None)
         if anchor_q is not None and float(q @ anchor_q) < 0.0:
             q = -q
-        if self.C_RP is None:   # eq (11) and the yaw of eq (12), continued from the anchor
+        if self.C_RP is None:  # eq (11) and the yaw of eq (12), continued from the anchor
             x, y_, z = (C_OI @ u).tolist()
-            psi = (math.atan2(float(C_PI[0] @ y0), float(C_PI[0] @ x0))
-                   if compensating else 0.0)
+            psi = math.atan2(float(C_PI[0] @ y0), float(C_PI[0] @ x0)) if compensating else 0.0
             euler = (-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi)
             euler = np.array(euler if anchor_euler is None else unwrap_near(euler, anchor_euler))
         else:

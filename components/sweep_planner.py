@@ -37,6 +37,7 @@ price is on the satellite: every roll reversal swings the pair's yaw momentum by
 opposite").  False: payload 2 moves exactly as payload 1 (the non-compensating reference
 case, in which nothing cancels).
 """
+
 from __future__ import annotations
 
 import math
@@ -57,7 +58,7 @@ class SweepAxis:
     rate: float
     turnaround: float
     name: str = "axis"
-    period: float = field(init=False, repr=False, compare=False)   # set by __post_init__
+    period: float = field(init=False, repr=False, compare=False)  # set by __post_init__
 
     def __post_init__(self):
         A, r, tau, name = self.amplitude, self.rate, self.turnaround, self.name
@@ -75,7 +76,8 @@ class SweepAxis:
             raise ModelError(
                 f"turnaround_time {tau:g} s is too long for the {name} sweep: the reversal "
                 f"ramp (rate +r to -r) must fit in the stroke, turnaround_time <= "
-                f"4 * {name}_amplitude / {name}_rate = {stroke_time:g} s")
+                f"4 * {name}_amplitude / {name}_rate = {stroke_time:g} s"
+            )
         tau = min(tau, stroke_time)  # absorb rounding at the limit
         object.__setattr__(self, "turnaround", tau)
         object.__setattr__(self, "period", stroke_time + tau)
@@ -92,13 +94,19 @@ class SweepAxis:
             s -= half
             sign = -1.0
         ramp = 0.5 * tau
-        if s < ramp:                        # leaving the upper turning point
-            return (sign * (A - r * s * s / tau), sign * (-2.0 * r * s / tau),
-                    sign * (-2.0 * r / tau))
+        if s < ramp:  # leaving the upper turning point
+            return (
+                sign * (A - r * s * s / tau),
+                sign * (-2.0 * r * s / tau),
+                sign * (-2.0 * r / tau),
+            )
         w = half - s
-        if w < ramp:                        # arriving at the lower turning point
-            return (sign * (-A + r * w * w / tau), sign * (-2.0 * r * w / tau),
-                    sign * (2.0 * r / tau))
+        if w < ramp:  # arriving at the lower turning point
+            return (
+                sign * (-A + r * w * w / tau),
+                sign * (-2.0 * r * w / tau),
+                sign * (2.0 * r / tau),
+            )
         return sign * (A + 0.25 * r * tau - r * s), -sign * r, 0.0
 
 
@@ -106,32 +114,86 @@ class SweepPlanner(Model):
     """Roll/pitch sweep commands of two payloads ([Chang 2015] §1.2, Figs 3–4)."""
 
     VARIABLES = (
-        parameter("roll_amplitude", 15 * DEG, "rad", "roll sweep amplitude A (roll in +-A)",
-                  display_unit="deg"),
-        parameter("roll_rate", 6 * DEG, "rad/s", "constant roll rate between reversals",
-                  display_unit="deg/s"),
-        parameter("pitch_amplitude", 45 * DEG, "rad", "pitch sweep amplitude (pitch in +-A)",
-                  display_unit="deg"),
-        parameter("pitch_rate", 0.6 * DEG, "rad/s", "constant pitch rate between reversals",
-                  display_unit="deg/s"),
-        parameter("turnaround_time", DEFAULT_TURNAROUND, "s",
-                  "duration of each rate reversal (+r to -r at constant acceleration, "
-                  "centred on the turning point); 0 = triangle wave"),
-        parameter("symmetric", True, "1",
-                  "true: payload 2 = -payload 1; false: payload 2 = payload 1",
-                  type="Boolean"),
-        output("roll_cmd", "rad", "commanded roll of payloads 1 and 2", shape=(2,),
-               display_unit="deg"),
-        output("pitch_cmd", "rad", "commanded pitch of payloads 1 and 2", shape=(2,),
-               display_unit="deg"),
-        output("roll_rate_cmd", "rad/s", "commanded roll rate of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s"),
-        output("pitch_rate_cmd", "rad/s", "commanded pitch rate of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s"),
-        output("roll_accel_cmd", "rad/s2", "commanded roll acceleration of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s2"),
-        output("pitch_accel_cmd", "rad/s2", "commanded pitch acceleration of payloads 1 and 2",
-               shape=(2,), display_unit="deg/s2"),
+        parameter(
+            "roll_amplitude",
+            15 * DEG,
+            "rad",
+            "roll sweep amplitude A (roll in +-A)",
+            display_unit="deg",
+        ),
+        parameter(
+            "roll_rate",
+            6 * DEG,
+            "rad/s",
+            "constant roll rate between reversals",
+            display_unit="deg/s",
+        ),
+        parameter(
+            "pitch_amplitude",
+            45 * DEG,
+            "rad",
+            "pitch sweep amplitude (pitch in +-A)",
+            display_unit="deg",
+        ),
+        parameter(
+            "pitch_rate",
+            0.6 * DEG,
+            "rad/s",
+            "constant pitch rate between reversals",
+            display_unit="deg/s",
+        ),
+        parameter(
+            "turnaround_time",
+            DEFAULT_TURNAROUND,
+            "s",
+            "duration of each rate reversal (+r to -r at constant acceleration, "
+            "centred on the turning point); 0 = triangle wave",
+        ),
+        parameter(
+            "symmetric",
+            True,
+            "1",
+            "true: payload 2 = -payload 1; false: payload 2 = payload 1",
+            type="Boolean",
+        ),
+        output(
+            "roll_cmd", "rad", "commanded roll of payloads 1 and 2", shape=(2,), display_unit="deg"
+        ),
+        output(
+            "pitch_cmd",
+            "rad",
+            "commanded pitch of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg",
+        ),
+        output(
+            "roll_rate_cmd",
+            "rad/s",
+            "commanded roll rate of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s",
+        ),
+        output(
+            "pitch_rate_cmd",
+            "rad/s",
+            "commanded pitch rate of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s",
+        ),
+        output(
+            "roll_accel_cmd",
+            "rad/s2",
+            "commanded roll acceleration of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s2",
+        ),
+        output(
+            "pitch_accel_cmd",
+            "rad/s2",
+            "commanded pitch acceleration of payloads 1 and 2",
+            shape=(2,),
+            display_unit="deg/s2",
+        ),
     )
 
     def initialize(self, t0):
@@ -151,6 +213,17 @@ class SweepPlanner(Model):
         pitch, pitch_rate, pitch_accel = self.pitch(self.t)
         k = self.sign2
         # the outputs are contiguous in table order: one write instead of six
-        self.values[self._outputs] = (roll, k * roll, pitch, k * pitch,
-                                      roll_rate, k * roll_rate, pitch_rate, k * pitch_rate,
-                                      roll_accel, k * roll_accel, pitch_accel, k * pitch_accel)
+        self.values[self._outputs] = (
+            roll,
+            k * roll,
+            pitch,
+            k * pitch,
+            roll_rate,
+            k * roll_rate,
+            pitch_rate,
+            k * pitch_rate,
+            roll_accel,
+            k * roll_accel,
+            pitch_accel,
+            k * pitch_accel,
+        )

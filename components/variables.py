@@ -11,6 +11,7 @@ parameters, then inputs, then outputs, each group in table order; the offset of 
 in that array is its FMI value reference, so each group is one contiguous range.  String
 parameters follow the numeric ones and are kept in a dict.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -55,8 +56,10 @@ class Var:
         if self.depends and self.causality != "output":
             raise ValueError(f"{self.name}: only outputs have feedthrough dependencies")
         if not isinstance(self.optional, str):
-            raise TypeError(f"{self.name}: optional= is the text saying what the default "
-                            f"means, got {self.optional!r}")
+            raise TypeError(
+                f"{self.name}: optional= is the text saying what the default "
+                f"means, got {self.optional!r}"
+            )
         if self.optional and self.causality != "input":
             raise ValueError(f"{self.name}: only inputs can be optional")
         if self.type == "String" and (self.shape or self.causality != "parameter"):
@@ -75,8 +78,10 @@ class Var:
         """FMI names of the scalars of this variable, in row-major order."""
         if not self.shape:
             return [self.name]
-        return [f"{self.name}[{','.join(str(i + 1) for i in idx)}]"
-                for idx in itertools.product(*(range(n) for n in self.shape))]
+        return [
+            f"{self.name}[{','.join(str(i + 1) for i in idx)}]"
+            for idx in itertools.product(*(range(n) for n in self.shape))
+        ]
 
     def start_array(self) -> np.ndarray:
         """Start value as a flat float array of length ``size``."""
@@ -91,8 +96,10 @@ def parameter(name, start, unit, description, **kw) -> Var:
 def input_(name, unit, description, start=0.0, *, optional: str = "", **kw) -> Var:
     """An input; required unless ``optional`` says what its default (``start``) means."""
     if "required" in kw:
-        raise TypeError(f"{name}: declare an optional input with optional='what its "
-                        "default means' (there is no required=)")
+        raise TypeError(
+            f"{name}: declare an optional input with optional='what its "
+            "default means' (there is no required=)"
+        )
     if not isinstance(optional, str) or (optional and not optional.strip()):
         raise ValueError(f"{name}: optional= must say what the default means")
     return Var(name, "input", unit, description, start, optional=optional.strip(), **kw)
@@ -115,8 +122,9 @@ class Layout:
             unknown = set(v.depends) - inputs
             if unknown:
                 raise ValueError(f"{v.name}: depends on unknown inputs {sorted(unknown)}")
-        numeric = [v for c in CAUSALITIES for v in variables
-                   if v.causality == c and v.type != "String"]
+        numeric = [
+            v for c in CAUSALITIES for v in variables if v.causality == c and v.type != "String"
+        ]
         strings = [v for v in variables if v.type == "String"]
         self.variables = tuple(numeric + strings)
         self.by_name = {v.name: v for v in self.variables}
@@ -129,11 +137,13 @@ class Layout:
             position += v.size
         self.n_numeric = position
         #: contiguous value-reference range of each causality group
-        self.range = {c: range(min([self.offset[v.name] for v in numeric if v.causality == c],
-                                   default=0),
-                               max([self.offset[v.name] + v.size for v in numeric
-                                    if v.causality == c], default=0))
-                      for c in CAUSALITIES}
+        self.range = {
+            c: range(
+                min([self.offset[v.name] for v in numeric if v.causality == c], default=0),
+                max([self.offset[v.name] + v.size for v in numeric if v.causality == c], default=0),
+            )
+            for c in CAUSALITIES
+        }
         for v in strings:
             self.offset[v.name] = position
             position += 1

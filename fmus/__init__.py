@@ -8,6 +8,7 @@ the sources (nothing imported); :func:`slave_class` makes the pythonfmu slave,
 each FMU's entry module.  Adding an FMU = adding its component module (and a row in the
 README's table).  Nothing here imports pythonfmu at import time.
 """
+
 from __future__ import annotations
 
 import ast
@@ -28,8 +29,11 @@ def _find_fmus(directory: Path) -> dict[str, str]:
     for path in sorted(directory.glob("*.py")):
         name = _camel(path.stem)
         for node in ast.parse(path.read_text(encoding="utf-8"), str(path)).body:
-            if isinstance(node, ast.ClassDef) and node.name == name and any(
-                    isinstance(base, ast.Name) and base.id == "Model" for base in node.bases):
+            if (
+                isinstance(node, ast.ClassDef)
+                and node.name == name
+                and any(isinstance(base, ast.Name) and base.id == "Model" for base in node.bases)
+            ):
                 found[name] = path.stem
     return found
 
@@ -51,6 +55,14 @@ def slave_class(name: str):
     """The pythonfmu slave class of the FMU ``name``: a :class:`.slave.ModelSlave` on its
     model (one class per name and process)."""
     from .slave import ModelSlave
+
     model = model_class(name)
-    return type(name, (ModelSlave,), {"model_class": model, "__module__": __name__,
-                                      "__doc__": f"FMU ``{name}``: {model.__doc__ or ''}"})
+    return type(
+        name,
+        (ModelSlave,),
+        {
+            "model_class": model,
+            "__module__": __name__,
+            "__doc__": f"FMU ``{name}``: {model.__doc__ or ''}",
+        },
+    )

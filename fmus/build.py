@@ -17,6 +17,7 @@ package would shadow the FMU's copy.  So the code is packed under a package name
 the hash of its content: two FMUs share a module only if its bytes are identical.  The
 archive is deterministic (sorted entries, fixed timestamps): same sources, same file.
 """
+
 from __future__ import annotations
 
 import ast
@@ -68,9 +69,12 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     description = (model.__doc__ or name).strip().splitlines()[0]
     entries = {
         "modelDescription.xml": model_description(
-            name, model, str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
-            description, f"agilesat {metadata.version('agilesat')} "
-                         f"(pythonfmu {metadata.version('pythonfmu')})"),
+            name,
+            model,
+            str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
+            description,
+            f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
+        ),
         f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
         "resources/slavemodule.txt": entry.encode(),
@@ -116,7 +120,8 @@ def _entry_module(name: str, package: str) -> str:
         "ctypes.pythonapi.Py_IncRef(ctypes.py_object(globals()))\n"
         f"from {package}.fmus import slave_class as _slave_class  # noqa: E402\n"
         f"{name} = _slave_class({name!r})\n"
-        "del _slave_class\n")
+        "del _slave_class\n"
+    )
 
 
 def is_current(path: Path, name: str, digest: str | None = None) -> bool:
@@ -159,9 +164,11 @@ def _sources(name: str) -> tuple[dict[str, Path], str]:
 def _toolchain_digest() -> bytes:
     """What every FMU's content depends on besides our code (once per process): the
     pythonfmu binary and version, the Python runtime the shim starts."""
-    return hashlib.sha256(_pythonfmu_binary().read_bytes()
-                          + metadata.version("pythonfmu").encode()
-                          + "\0".join(python_runtime()).encode()).digest()
+    return hashlib.sha256(
+        _pythonfmu_binary().read_bytes()
+        + metadata.version("pythonfmu").encode()
+        + "\0".join(python_runtime()).encode()
+    ).digest()
 
 
 def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -> list[str]:
@@ -171,16 +178,16 @@ def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.ImportFrom) and node.level:
-            base = package.split("/")[:len(package.split("/")) - node.level + 1]
+            base = package.split("/")[: len(package.split("/")) - node.level + 1]
             module = "/".join(base + (node.module.split(".") if node.module else []))
-            if (root / module).is_dir():                # from ..components.analysis import x
+            if (root / module).is_dir():  # from ..components.analysis import x
                 found.append(f"{module}/__init__.py")
-                for alias in node.names:                # from . import slave, analysis
+                for alias in node.names:  # from . import slave, analysis
                     if (root / module / f"{alias.name}.py").is_file():
                         found.append(f"{module}/{alias.name}.py")
                     elif (root / module / alias.name).is_dir():
                         found.append(f"{module}/{alias.name}/__init__.py")
-            else:                                       # from .cmg_cluster import x
+            else:  # from .cmg_cluster import x
                 found.append(f"{module}.py")
     return found
 
@@ -208,8 +215,9 @@ def python_runtime() -> tuple[str, str]:
     """
     library = ""
     if sysconfig.get_config_var("Py_ENABLE_SHARED"):
-        path = Path(sysconfig.get_config_var("LIBDIR") or "",
-                    sysconfig.get_config_var("INSTSONAME") or "")
+        path = Path(
+            sysconfig.get_config_var("LIBDIR") or "", sysconfig.get_config_var("INSTSONAME") or ""
+        )
         library = str(path) if path.is_file() else ""
     return library, os.path.abspath(sys.executable)
 
@@ -218,26 +226,43 @@ def _shim_library(out_dir: Path) -> Path:
     """Compile the shim once per source version and Python runtime (cached in
     <out_dir>/.shim/)."""
     runtime = python_runtime()
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in SHIM_SOURCES)
-                            + "\0".join(runtime).encode()).hexdigest()[:12]
+    digest = hashlib.sha256(
+        b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(runtime).encode()
+    ).hexdigest()[:12]
     library = out_dir / ".shim" / f"agilesat_fmi2_{digest}.so"
     if library.exists():
         return library
     library.parent.mkdir(parents=True, exist_ok=True)
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not compiler:
-        raise BuildError("building FMUs needs a C compiler (cc or gcc, or set CC) for the "
-                         "FMI shim fmus/shim/agilesat_fmi2.c")
+        raise BuildError(
+            "building FMUs needs a C compiler (cc or gcc, or set CC) for the "
+            "FMI shim fmus/shim/agilesat_fmi2.c"
+        )
     partial = _partial(library)
-    defines = [f"-DAGILESAT_{key}={_c_string(value)}"
-               for key, value in zip(("LIBPYTHON", "PYTHON"), runtime)]
-    command = [compiler, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", *defines,
-               "-o", str(partial), str(SHIM_SOURCES[0]), "-ldl", "-lpthread"]
+    defines = [
+        f"-DAGILESAT_{key}={_c_string(value)}"
+        for key, value in zip(("LIBPYTHON", "PYTHON"), runtime)
+    ]
+    command = [
+        compiler,
+        "-shared",
+        "-fPIC",
+        "-O2",
+        "-fvisibility=hidden",
+        *defines,
+        "-o",
+        str(partial),
+        str(SHIM_SOURCES[0]),
+        "-ldl",
+        "-lpthread",
+    ]
     try:
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
-            raise BuildError(f"compiling the FMI shim failed:\n{' '.join(command)}\n"
-                             f"{result.stderr}")
+            raise BuildError(
+                f"compiling the FMI shim failed:\n{' '.join(command)}\n{result.stderr}"
+            )
         os.replace(partial, library)
     finally:
         partial.unlink(missing_ok=True)
@@ -271,14 +296,18 @@ def interface_rows(model):
 
 def interfaces_markdown() -> str:
     """fmus/INTERFACES.md: every FMU's variables, from the variable tables."""
-    parts = ["# FMU interfaces\n\nGenerated from the variable tables by `agilesat generate`; "
-             "do not edit.  Units are SI (angles in rad); structured names are 1-based "
-             "(`w_BI_B[1]`, `inertia[2,3]`).\n"]
+    parts = [
+        "# FMU interfaces\n\nGenerated from the variable tables by `agilesat generate`; "
+        "do not edit.  Units are SI (angles in rad); structured names are 1-based "
+        "(`w_BI_B[1]`, `inertia[2,3]`).\n"
+    ]
     for name in FMUS:
         model = model_class(name)
         doc = (model.__doc__ or "").strip()
-        parts.append(f"\n## {name}\n\n{doc}\n\n| variable | causality | type | unit | "
-                     "start | description |\n|---|---|---|---|---|---|")
+        parts.append(
+            f"\n## {name}\n\n{doc}\n\n| variable | causality | type | unit | "
+            "start | description |\n|---|---|---|---|---|---|"
+        )
         for row in interface_rows(model):
             parts.append("| " + " | ".join(str(c).replace("|", "\\|") for c in row) + " |")
     return "\n".join(parts) + "\n"
@@ -290,13 +319,17 @@ def _short(value) -> str:
 
 
 def _documentation(name: str, model) -> str:
-    rows = "\n".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
-                     for row in interface_rows(model))
+    rows = "\n".join(
+        "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
+        for row in interface_rows(model)
+    )
     doc = escape(model.__doc__ or "")
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
-            f"<body><h1>{name}</h1><pre>{doc}</pre><table border='1'>"
-            "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"
-            f"<th>description</th></tr>\n{rows}</table></body></html>\n")
+    return (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
+        f"<body><h1>{name}</h1><pre>{doc}</pre><table border='1'>"
+        "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"
+        f"<th>description</th></tr>\n{rows}</table></body></html>\n"
+    )
 
 
 if __name__ == "__main__":

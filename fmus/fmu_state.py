@@ -20,6 +20,7 @@ refused.  The payload is one value, a tag byte then its body:
 Every length is checked against the bytes left, nesting is limited, and any error gives
 :class:`StateError` with the reason.
 """
+
 from __future__ import annotations
 
 import struct
@@ -30,9 +31,10 @@ import numpy as np
 MAGIC = b"AGILESAT-FMU-STATE"
 VERSION = 1
 _MAX_DEPTH = 64
-_DTYPES = {np.dtype(d).str: np.dtype(d) for d in
-           ("<f8", "<f4", "<i8", "<i4", "<i2", "|i1", "<u8", "<u4", "<u2", "|u1", "|b1",
-            "<c16")}
+_DTYPES = {
+    np.dtype(d).str: np.dtype(d)
+    for d in ("<f8", "<f4", "<i8", "<i4", "<i2", "|i1", "<u8", "<u4", "<u2", "|u1", "|b1", "<c16")
+}
 
 
 class StateError(ValueError):
@@ -55,13 +57,13 @@ def decode(identity: str, data: bytes, package: str):
     reader = _Reader(memoryview(data), package)
     if bytes(reader.take(len(MAGIC))) != MAGIC:
         raise StateError("not an agilesat FMU state (bad magic bytes)")
-    version, = reader.unpack("<H")
+    (version,) = reader.unpack("<H")
     if version != VERSION:
         raise StateError(f"state format version {version}, this FMU reads version {VERSION}")
     theirs = reader.string()
     if theirs != identity:
         raise StateError(f"a state of FMU {theirs!r}, not of this FMU {identity!r}")
-    length, = reader.unpack("<Q")
+    (length,) = reader.unpack("<Q")
     if length > reader.left():
         raise StateError(f"truncated: the payload is {length} bytes, {reader.left()} given")
     end = reader.pos + length
@@ -100,8 +102,8 @@ def _encode(x, out: bytearray, depth: int, package: str) -> None:
     elif type(x) in (list, tuple, frozenset, dict):
         out += {list: b"l", tuple: b"t", frozenset: b"z", dict: b"d"}[type(x)]
         out += struct.pack("<I", len(x))
-        for item in (x.items() if type(x) is dict else x):
-            for part in (item if type(x) is dict else (item,)):
+        for item in x.items() if type(x) is dict else x:
+            for part in item if type(x) is dict else (item,):
                 _encode(part, out, depth + 1, package)
     elif type(x) is np.ndarray and x.dtype.str in _DTYPES:
         out += b"a"
@@ -115,22 +117,30 @@ def _encode(x, out: bytearray, depth: int, package: str) -> None:
         out += b"S"
         for part in (x.start, x.stop, x.step):
             _encode(part, out, depth + 1, package)
-    elif (type(x).__module__.startswith(package + ".") and _plain_class(type(x))
-          and hasattr(x, "__dict__")):
+    elif (
+        type(x).__module__.startswith(package + ".")
+        and _plain_class(type(x))
+        and hasattr(x, "__dict__")
+    ):
         out += b"o"
         _string(type(x).__module__, out)
         _string(type(x).__qualname__, out)
         _encode(dict(vars(x)), out, depth + 1, package)
     else:
-        raise StateError(f"cannot store a {type(x).__module__}.{type(x).__qualname__} in an "
-                         "FMU state")
+        raise StateError(
+            f"cannot store a {type(x).__module__}.{type(x).__qualname__} in an FMU state"
+        )
 
 
 def _plain_class(cls) -> bool:
     """A class whose instances are plain data: no custom construction or pickling hooks."""
-    return (cls.__new__ is object.__new__ and "__setstate__" not in vars(cls)
-            and "__reduce__" not in vars(cls) and "__reduce_ex__" not in vars(cls)
-            and "__slots__" not in vars(cls))
+    return (
+        cls.__new__ is object.__new__
+        and "__setstate__" not in vars(cls)
+        and "__reduce__" not in vars(cls)
+        and "__reduce_ex__" not in vars(cls)
+        and "__slots__" not in vars(cls)
+    )
 
 
 class _Reader:
@@ -142,9 +152,8 @@ class _Reader:
 
     def take(self, n: int) -> memoryview:
         if n > self.left():
-            raise StateError(f"truncated at byte {self.pos}: {n} bytes needed, "
-                             f"{self.left()} left")
-        chunk = self.data[self.pos:self.pos + n]
+            raise StateError(f"truncated at byte {self.pos}: {n} bytes needed, {self.left()} left")
+        chunk = self.data[self.pos : self.pos + n]
         self.pos += n
         return chunk
 
@@ -152,7 +161,7 @@ class _Reader:
         return struct.unpack(fmt, self.take(struct.calcsize(fmt)))
 
     def string(self) -> str:
-        n, = self.unpack("<I")
+        (n,) = self.unpack("<I")
         try:
             return bytes(self.take(n)).decode()
         except UnicodeDecodeError as exc:
@@ -177,18 +186,23 @@ class _Reader:
         if tag == b"s":
             return self.string()
         if tag in (b"l", b"t", b"z", b"d"):
-            n, = self.unpack("<I")
+            (n,) = self.unpack("<I")
             if n > self.left():
                 raise StateError(f"a container of {n} items in {self.left()} bytes")
             if tag == b"d":
                 items = [(self.value(depth + 1), self.value(depth + 1)) for _ in range(n)]
                 return self._hashed(dict, items)
             items = [self.value(depth + 1) for _ in range(n)]
-            return (self._hashed(frozenset, items) if tag == b"z"
-                    else tuple(items) if tag == b"t" else items)
+            return (
+                self._hashed(frozenset, items)
+                if tag == b"z"
+                else tuple(items)
+                if tag == b"t"
+                else items
+            )
         if tag == b"a":
             dtype = self.dtype()
-            ndim, = self.unpack("<B")
+            (ndim,) = self.unpack("<B")
             if ndim > 32:
                 raise StateError(f"an array of {ndim} dimensions")
             shape = self.unpack(f"<{ndim}Q")
@@ -211,8 +225,9 @@ class _Reader:
             cls = self._class(self.string(), self.string())
             fields = self.value(depth + 1)
             if type(fields) is not dict or not all(type(k) is str for k in fields):
-                raise StateError(f"the attributes of a {cls.__qualname__} must be a dict "
-                                 "keyed by name")
+                raise StateError(
+                    f"the attributes of a {cls.__qualname__} must be a dict keyed by name"
+                )
             obj = object.__new__(cls)
             vars(obj).update(fields)
             return obj

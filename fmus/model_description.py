@@ -6,6 +6,7 @@ display units), a description and start value for every variable, and the true
 dependencies: an output depends on the inputs its table row lists in ``depends``; at
 initialisation also on the inputs the initial state reads and on the parameters.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,28 +40,36 @@ LOG_CATEGORIES = {
 }
 
 
-def model_description(name: str, model_class, guid: str, description: str,
-                      generation_tool: str) -> bytes:
+def model_description(
+    name: str, model_class, guid: str, description: str, generation_tool: str
+) -> bytes:
     layout = Layout(model_class.VARIABLES)
-    root = Element("fmiModelDescription", {
-        "fmiVersion": "2.0",
-        "modelName": name,
-        "guid": "{" + guid + "}",
-        "description": description,
-        "generationTool": generation_tool,
-        "variableNamingConvention": "structured",
-        "numberOfEventIndicators": "0",
-    })
-    SubElement(root, "CoSimulation", {
-        "modelIdentifier": name,
-        "needsExecutionTool": "true",  # a Python 3 interpreter with numpy
-        "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false",
-        "canBeInstantiatedOnlyOncePerProcess": "false",
-        "canNotUseMemoryManagementFunctions": "true",
-        "canGetAndSetFMUstate": "true",
-        "canSerializeFMUstate": "true",
-    })
+    root = Element(
+        "fmiModelDescription",
+        {
+            "fmiVersion": "2.0",
+            "modelName": name,
+            "guid": "{" + guid + "}",
+            "description": description,
+            "generationTool": generation_tool,
+            "variableNamingConvention": "structured",
+            "numberOfEventIndicators": "0",
+        },
+    )
+    SubElement(
+        root,
+        "CoSimulation",
+        {
+            "modelIdentifier": name,
+            "needsExecutionTool": "true",  # a Python 3 interpreter with numpy
+            "canHandleVariableCommunicationStepSize": "true",
+            "canInterpolateInputs": "false",
+            "canBeInstantiatedOnlyOncePerProcess": "false",
+            "canNotUseMemoryManagementFunctions": "true",
+            "canGetAndSetFMUstate": "true",
+            "canSerializeFMUstate": "true",
+        },
+    )
     _unit_definitions(root, layout)
     categories = SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
@@ -94,18 +103,26 @@ def _input_annotation(root, layout):
     inputs = SubElement(tool, "Inputs")
     for var in layout.group("input"):
         for name in var.scalar_names():
-            SubElement(inputs, "Input", {"name": name} if var.required else
-                       {"name": name, "optional": var.optional})
+            SubElement(
+                inputs,
+                "Input",
+                {"name": name} if var.required else {"name": name, "optional": var.optional},
+            )
 
 
 def _model_variables(root, layout):
     variables = SubElement(root, "ModelVariables")
     for vr, (var, scalar_name) in enumerate(layout.scalars):
-        attributes = {"name": scalar_name, "valueReference": str(vr),
-                      "description": var.description, "causality": var.causality}
+        attributes = {
+            "name": scalar_name,
+            "valueReference": str(vr),
+            "description": var.description,
+            "causality": var.causality,
+        }
         continuous = var.type == "Real" and var.causality != "parameter"
         attributes["variability"] = {"parameter": "fixed"}.get(
-            var.causality, "continuous" if continuous else "discrete")
+            var.causality, "continuous" if continuous else "discrete"
+        )
         if var.causality == "parameter":
             attributes["initial"] = "exact"
         elif var.causality == "output":
@@ -142,10 +159,19 @@ def _model_structure(root, layout, initial_state_depends):
     initial = SubElement(structure, "InitialUnknowns")
     for var in layout.group("output"):
         step_inputs = sorted(i for name in var.depends for i in index[name])
-        init_inputs = sorted(set(step_inputs) | {i for name in initial_state_depends
-                                                 for i in index[name]} | set(parameters))
+        init_inputs = sorted(
+            set(step_inputs)
+            | {i for name in initial_state_depends for i in index[name]}
+            | set(parameters)
+        )
         for position in index[var.name]:
-            SubElement(outputs, "Unknown", {"index": str(position),
-                                            "dependencies": " ".join(map(str, step_inputs))})
-            SubElement(initial, "Unknown", {"index": str(position),
-                                            "dependencies": " ".join(map(str, init_inputs))})
+            SubElement(
+                outputs,
+                "Unknown",
+                {"index": str(position), "dependencies": " ".join(map(str, step_inputs))},
+            )
+            SubElement(
+                initial,
+                "Unknown",
+                {"index": str(position), "dependencies": " ".join(map(str, init_inputs))},
+            )

@@ -14,6 +14,7 @@ wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
 instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
 from the model.  FMU states are data (``fmu_state``), never pickles.
 """
+
 from __future__ import annotations
 
 import functools
@@ -31,12 +32,13 @@ PARAMETER, INPUT, OUTPUT = 0, 1, 2
 _CAUSALITY_CODE = {"parameter": PARAMETER, "input": INPUT, "output": OUTPUT}
 _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
 _PLAN_CACHE_SIZE = 64
-_PACKAGE = __name__.split(".")[0]   # agilesat_<hash> inside an FMU
+_PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 
 
 def _guarded(default):
     """Run an FMI entry point; turn any exception into a logged fmi2Error."""
+
     def decorate(method):
         @functools.wraps(method)
         def wrapper(self, *args):
@@ -45,10 +47,14 @@ def _guarded(default):
             except (_CallRejected, ModelError) as rejected:
                 self._error(f"{method.__name__}: {rejected}")
             except Exception as exc:  # noqa: BLE001 - the FMI boundary
-                self._error(f"{method.__name__}: {type(exc).__name__}: {exc}\n"
-                            f"{traceback.format_exc(limit=4)}")
+                self._error(
+                    f"{method.__name__}: {type(exc).__name__}: {exc}\n"
+                    f"{traceback.format_exc(limit=4)}"
+                )
             return default(*args) if callable(default) else default
+
         return wrapper
+
     return decorate
 
 
@@ -62,6 +68,7 @@ class _CallRejected(Exception):
 
 class _Rejected:
     """What deserializing bytes that are not a state of this FMU gives (never raised)."""
+
     __slots__ = ("reason",)
 
     def __init__(self, reason: str):
@@ -118,8 +125,10 @@ class ModelSlave(Fmi2Slave):
         if not (math.isfinite(step_size) and step_size > 0.0):
             raise _CallRejected(f"step size must be positive and finite, got {step_size!r}")
         if not math.isclose(current_time, self._next_time, rel_tol=1e-9, abs_tol=1e-12):
-            raise _CallRejected(f"time discontinuity: the last step ended at "
-                                f"t={self._next_time!r}, doStep starts at t={current_time!r}")
+            raise _CallRejected(
+                f"time discontinuity: the last step ended at "
+                f"t={self._next_time!r}, doStep starts at t={current_time!r}"
+            )
         self.model.step(current_time, step_size)
         self._flush_warnings()
         self._next_time = current_time + step_size
@@ -176,19 +185,26 @@ class ModelSlave(Fmi2Slave):
     # reason; the shim refuses such a state with fmi2Error and that reason.
     @_guarded(None)
     def _get_fmu_state(self):
-        wrapper = (self._mode, self._start_time, self._next_time,
-                   self._state_valid, self._outputs_valid)
+        wrapper = (
+            self._mode,
+            self._start_time,
+            self._next_time,
+            self._state_valid,
+            self._outputs_valid,
+        )
         return fmu_state.encode(self._identity(), (self.model.get_state(), wrapper), _PACKAGE)
 
     @_guarded(None)
     def _set_fmu_state(self, state):
         if type(state) is not bytes:
             raise _CallRejected(_rejection(state))
-        model_state, wrapper = self._check_state(fmu_state.decode(self._identity(), state,
-                                                                  _PACKAGE))
+        model_state, wrapper = self._check_state(
+            fmu_state.decode(self._identity(), state, _PACKAGE)
+        )
         self.model.set_state(model_state)
-        (self._mode, self._start_time, self._next_time,
-         self._state_valid, self._outputs_valid) = wrapper
+        (self._mode, self._start_time, self._next_time, self._state_valid, self._outputs_valid) = (
+            wrapper
+        )
 
     @classmethod
     def _identity(cls) -> str:
@@ -198,7 +214,7 @@ class ModelSlave(Fmi2Slave):
     def _check_state(cls, value):
         """The structure a state of this FMU has (everything not depending on an instance)."""
         model = cls.model_class
-        layout = model._layouts.get(model)          # set once a model was created
+        layout = model._layouts.get(model)  # set once a model was created
         size = layout.n_numeric if layout else None
         names = {v.name for v in layout.variables if v.type == "String"} if layout else None
         try:
@@ -206,21 +222,36 @@ class ModelSlave(Fmi2Slave):
             mode, start, next_time, state_valid, outputs_valid = wrapper
         except (TypeError, ValueError):
             raise fmu_state.StateError("not a (model state, wrapper state) pair") from None
-        if not (type(values) is np.ndarray and values.dtype == np.float64 and values.ndim == 1
-                and (size is None or values.size == size)):
+        if not (
+            type(values) is np.ndarray
+            and values.dtype == np.float64
+            and values.ndim == 1
+            and (size is None or values.size == size)
+        ):
             raise fmu_state.StateError(f"the value array must be float64 of {size} values")
-        if not (type(strings) is dict and all(type(k) is str and type(v) is str
-                                              for k, v in strings.items())
-                and (names is None or set(strings) == names)):
-            raise fmu_state.StateError(f"the string values must map {sorted(names or [])} "
-                                       "to strings")
-        if not (type(attributes) is dict and all(type(k) is str and k.isidentifier()
-                                                 and k not in model._NOT_STATE
-                                                 for k in attributes)):
+        if not (
+            type(strings) is dict
+            and all(type(k) is str and type(v) is str for k, v in strings.items())
+            and (names is None or set(strings) == names)
+        ):
+            raise fmu_state.StateError(
+                f"the string values must map {sorted(names or [])} to strings"
+            )
+        if not (
+            type(attributes) is dict
+            and all(
+                type(k) is str and k.isidentifier() and k not in model._NOT_STATE
+                for k in attributes
+            )
+        ):
             raise fmu_state.StateError("the model attributes must be a dict of names")
-        if not (mode in _MODES and type(start) is float
-                and (next_time is None or type(next_time) is float)
-                and type(state_valid) is bool and type(outputs_valid) is bool):
+        if not (
+            mode in _MODES
+            and type(start) is float
+            and (next_time is None or type(next_time) is float)
+            and type(state_valid) is bool
+            and type(outputs_valid) is bool
+        ):
             raise fmu_state.StateError("malformed FMI wrapper state")
         return value
 
@@ -239,18 +270,19 @@ class ModelSlave(Fmi2Slave):
             return _Rejected(f"{type(exc).__name__}: {exc}")
 
     # -- internals -----------------------------------------------------------------
-    _WHEN = {"instantiated": "after fmi2Instantiate", "initialization": "in initialization "
-             "mode", "step": "after fmi2ExitInitializationMode"}
+    _WHEN = {
+        "instantiated": "after fmi2Instantiate",
+        "initialization": "in initialization mode",
+        "step": "after fmi2ExitInitializationMode",
+    }
 
     def _require_mode(self, mode: str):
         """FMI 2.0 co-simulation state machine (section 4.2.4)."""
         if self._mode != mode:
-            raise _CallRejected(f"not allowed in mode '{self._mode}' (only "
-                                f"{self._WHEN[mode]})")
+            raise _CallRejected(f"not allowed in mode '{self._mode}' (only {self._WHEN[mode]})")
 
     def _error(self, message: str) -> None:
-        self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}",
-                 Fmi2Status.error)
+        self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}", Fmi2Status.error)
 
     def _plan(self, vrs, type_name: str, setting: bool = False):
         """Validate a value-reference list once; cached per (type, list, direction)."""
@@ -266,10 +298,10 @@ class ModelSlave(Fmi2Slave):
         if setting and self._mode == "terminated":
             raise _CallRejected("variables cannot be set after fmi2Terminate")
         if setting and touches_parameters and self._mode == "step":
-            names = [self._scalar_names[vr] for vr in vrs
-                     if self._causality[vr] == PARAMETER]
-            raise _CallRejected(f"parameters {names} are fixed: they can only be set before "
-                                "exitInitializationMode")
+            names = [self._scalar_names[vr] for vr in vrs if self._causality[vr] == PARAMETER]
+            raise _CallRejected(
+                f"parameters {names} are fixed: they can only be set before exitInitializationMode"
+            )
         return index
 
     def _make_plan(self, vrs, type_name, setting):
@@ -298,18 +330,25 @@ class ModelSlave(Fmi2Slave):
             self.model.output()
             outputs = values[self._outputs].tolist()
             if not math.isfinite(sum(outputs)) and not all(map(math.isfinite, outputs)):
-                bad = [name for name, x in zip(self._scalar_names[self._outputs], outputs)
-                       if not math.isfinite(x)]
-                raise _CallRejected(f"the model produced non-finite outputs {bad} at "
-                                    f"t={self.model.t!r}")
+                bad = [
+                    name
+                    for name, x in zip(self._scalar_names[self._outputs], outputs)
+                    if not math.isfinite(x)
+                ]
+                raise _CallRejected(
+                    f"the model produced non-finite outputs {bad} at t={self.model.t!r}"
+                )
             self._outputs_valid = True
         return values[index]
 
     def _write(self, vrs, values, type_name):
         index = self._plan(vrs, type_name, setting=True)
         if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
-            bad = [f"{self._scalar_names[vr]}={x!r}" for vr, x in zip(vrs, values)
-                   if not math.isfinite(x)]
+            bad = [
+                f"{self._scalar_names[vr]}={x!r}"
+                for vr, x in zip(vrs, values)
+                if not math.isfinite(x)
+            ]
             raise _CallRejected(f"non-finite values rejected: {bad}")
         self.model.values[index] = values
         if self._mode in ("instantiated", "initialization"):
@@ -328,6 +367,9 @@ class ModelSlave(Fmi2Slave):
         with debug logging off) without raising the call's status."""
         status = Fmi2Status.ok if self.model.p.warnings_return_ok else Fmi2Status.warning
         for message in self.model.warnings:
-            self.log(f"{self.model_class.__name__} '{self.instance_name}': {message}",
-                     status, "logStatusWarning")
+            self.log(
+                f"{self.model_class.__name__} '{self.instance_name}': {message}",
+                status,
+                "logStatusWarning",
+            )
         self.model.warnings.clear()

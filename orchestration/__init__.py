@@ -7,6 +7,7 @@ Python API::
     results = simulate("my_system.ssd", step=0.05, stop=100.0)       # any SSP system
     results["SatelliteDynamics.w_BI_B[2]"], results.vector("CmgCluster.delta")
 """
+
 from .master import SimulationError, simulate
 from .results import Results
 from .runner import run

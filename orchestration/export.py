@@ -8,6 +8,7 @@ is copied: in our master (``agilesat run FILE.ssp``), in libcosim
 are written into the package's SSD.  The archive is deterministic: the same sources give
 the same file.
 """
+
 from __future__ import annotations
 
 from pathlib import Path

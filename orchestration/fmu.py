@@ -14,6 +14,7 @@ unloaded (its GNU-unique C++ symbols make it NODELETE), so a campaign of thousan
 in one process would run out of memory mappings.  A run's components are reset and kept
 for the next run with the same FMU and instance name (see :meth:`Instance.free`).
 """
+
 from __future__ import annotations
 
 import atexit
@@ -29,9 +30,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fmpy import extract, platform, read_model_description, sharedLibraryExtension
-from fmpy.fmi2 import (FMU2Slave, calloc, fmi2CallbackAllocateMemoryTYPE,
-                       fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                       fmi2CallbackLoggerTYPE, free)
+from fmpy.fmi2 import (
+    FMU2Slave,
+    calloc,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    free,
+)
 from lxml import etree
 
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
@@ -44,8 +51,10 @@ class FmiCallError(RuntimeError):
     def __init__(self, instance: str, call: str, time: float, status: int, messages):
         self.instance, self.call, self.time, self.status = instance, call, time, status
         said = "".join(f"\n  {m}" for m in messages) or "\n  (the FMU logged nothing)"
-        super().__init__(f"{instance}: {call} at t={time:.6g} s returned "
-                         f"fmi2{STATUS[status]}; the FMU said:{said}")
+        super().__init__(
+            f"{instance}: {call} at t={time:.6g} s returned "
+            f"fmi2{STATUS[status]}; the FMU said:{said}"
+        )
 
 
 @dataclass
@@ -93,9 +102,11 @@ class Description:
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
         #: output names in value-reference order
-        self.outputs = [v.name for v in sorted(self.md.modelVariables,
-                                               key=lambda v: v.valueReference)
-                        if v.causality == "output"]
+        self.outputs = [
+            v.name
+            for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
+            if v.causality == "output"
+        ]
 
 
 class Instance(Description):
@@ -106,17 +117,20 @@ class Instance(Description):
         self.log = log
         self._key = _content_key(self.path)
         self.unzip_dir = _unpacked(self._key, str(path), self.md.coSimulation.modelIdentifier)
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzip_dir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier,
-                               instanceName=name)
+        self.slave = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=self.unzip_dir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
         dll = self.slave.dll
         self.fmi2DoStep = dll.fmi2DoStep
         self.fmi2GetReal, self.fmi2SetReal = dll.fmi2GetReal, dll.fmi2SetReal
         self.fmi2GetInteger, self.fmi2SetInteger = dll.fmi2GetInteger, dll.fmi2SetInteger
         self.fmi2GetBoolean, self.fmi2SetBoolean = dll.fmi2GetBoolean, dll.fmi2SetBoolean
         self.component = None
-        self.failed = False   # a call failed: the component is freed, not reused
-        self.fatal = False    # after fmi2Fatal nothing more is called (FMI 2.0 §2.1.3)
+        self.failed = False  # a call failed: the component is freed, not reused
+        self.fatal = False  # after fmi2Fatal nothing more is called (FMI 2.0 §2.1.3)
         self._log_mark = 0
 
     def instantiate(self, logging_on: bool = False) -> None:
@@ -135,16 +149,22 @@ class Instance(Description):
             self.slave.instantiate(callbacks=record.callbacks, loggingOn=logging_on)
         except Exception:
             self.failed = True
-            raise FmiCallError(self.name, "fmi2Instantiate", self.log.time, 4,
-                               self.log.of(self.name, self._log_mark)) from None
+            raise FmiCallError(
+                self.name,
+                "fmi2Instantiate",
+                self.log.time,
+                4,
+                self.log.of(self.name, self._log_mark),
+            ) from None
         self._record = record
         self.component = record.pointer = self.slave.component
 
     def call(self, name: str, *args) -> int:
         """Call an FMI function of this instance (component first) and check its status."""
         if self.fatal:
-            raise FmiCallError(self.name, name, self.log.time, 4,
-                               ["not called: the FMU returned fmi2Fatal before"])
+            raise FmiCallError(
+                self.name, name, self.log.time, 4, ["not called: the FMU returned fmi2Fatal before"]
+            )
         self._mark()
         status = getattr(self.slave.dll, name)(self.component, *args)
         self.check(status, name)
@@ -154,8 +174,9 @@ class Instance(Description):
         if status > 1:
             self.failed = True
             self.fatal = self.fatal or status == 4
-            raise FmiCallError(self.name, call, self.log.time, status,
-                               self.log.of(self.name, self._log_mark))
+            raise FmiCallError(
+                self.name, call, self.log.time, status, self.log.of(self.name, self._log_mark)
+            )
 
     def _mark(self):
         self._log_mark = len(self.log.entries)
@@ -175,8 +196,9 @@ class Instance(Description):
                 self.component = None
             elif self.component is not None:
                 component, self.component = self.component, None
-                if self.failed or not _keep_idle(self._key, self.name, self._record,
-                                                 self.slave.dll.fmi2Reset):
+                if self.failed or not _keep_idle(
+                    self._key, self.name, self._record, self.slave.dll.fmi2Reset
+                ):
                     self.slave.fmi2FreeInstance(component)
             if not self.fatal:
                 self.slave.freeLibrary()
@@ -201,11 +223,15 @@ class _Component:
     def _logger(self, _env, _name, status, category, message):
         user = self.user
         if user is not None:
-            user.log.add(user.name, status, (category or b"").decode(errors="replace"),
-                         (message or b"").decode(errors="replace"))
+            user.log.add(
+                user.name,
+                status,
+                (category or b"").decode(errors="replace"),
+                (message or b"").decode(errors="replace"),
+            )
 
 
-_idle: dict[tuple[str, str], list[_Component]] = {}   # (content key, name) -> reset ones
+_idle: dict[tuple[str, str], list[_Component]] = {}  # (content key, name) -> reset ones
 _IDLE_PER_NAME = 4
 
 
@@ -230,9 +256,9 @@ def _keep_idle(key: str, name: str, record: _Component, reset) -> bool:
 
 # -- one load per FMU file content, per process -----------------------------------------
 _lock = threading.Lock()
-_unpacked_dirs: dict[str, str] = {}      # content key -> extraction directory
-_descriptions: dict[str, tuple] = {}     # content key -> (model description, optional inputs)
-_pinned: list = []                       # one handle per loaded binary: never unloaded
+_unpacked_dirs: dict[str, str] = {}  # content key -> extraction directory
+_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
+_pinned: list = []  # one handle per loaded binary: never unloaded
 _KEYS_KEPT = 1024
 
 
@@ -270,8 +296,9 @@ def _unpacked(key: str, path: str, model_identifier: str) -> str:
         directory = _unpacked_dirs.get(key)
         if directory is None:
             directory = extract(path)
-            library = Path(directory, "binaries", platform,
-                           model_identifier + sharedLibraryExtension)
+            library = Path(
+                directory, "binaries", platform, model_identifier + sharedLibraryExtension
+            )
             if library.exists():
                 _pinned.append(ctypes.CDLL(str(library)))
             _unpacked_dirs[key] = directory
@@ -301,6 +328,8 @@ def _optional_inputs(path: Path) -> dict[str, str] | None:
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
         return None
-    return {e.get("name"): e.get("optional") for e in tool.findall("Inputs/Input")
-            if e.get("optional") is not None}
-
+    return {
+        e.get("name"): e.get("optional")
+        for e in tool.findall("Inputs/Input")
+        if e.get("optional") is not None
+    }

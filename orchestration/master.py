@@ -27,6 +27,7 @@ inputs follow the rule of :mod:`.validation` and the allowed ones are logged (an
 in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
 the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -45,9 +46,12 @@ from .ssp import SystemFile, SystemFileError, read_system
 from .validation import check_system, override
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
-MAX_STEPS = 10_000_000   # macro steps of one run (about 15 GB of CSV for scan_pitch)
+MAX_STEPS = 10_000_000  # macro steps of one run (about 15 GB of CSV for scan_pitch)
 _CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
-    "Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+    "Real": ctypes.c_double,
+    "Integer": ctypes.c_int,
+    "Boolean": ctypes.c_int,
+}
 
 
 class SimulationError(RuntimeError):
@@ -95,7 +99,7 @@ def stop_on_signals():
         _active = None
 
 
-TYPES = ("Real", "Integer", "Boolean")   # of the values the master passes on
+TYPES = ("Real", "Integer", "Boolean")  # of the values the master passes on
 
 
 def value_layout(descriptions: dict, order) -> dict[tuple[str, str], int]:
@@ -125,13 +129,13 @@ class _Port:
     """Variables of one type of one instance and their places in the value vector:
     value references, buffer, the bound FMI call."""
 
-    def __init__(self, instance: Instance, type_: str, names: list[str], direction: str,
-                 index: list[int]):
+    def __init__(
+        self, instance: Instance, type_: str, names: list[str], direction: str, index: list[int]
+    ):
         self.instance, self.call = instance, f"fmi2{direction}{type_}"
         self.n = len(names)
         self.buffer = np.zeros(self.n, dtype=np.float64 if type_ == "Real" else np.int32)
-        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[n].valueReference
-                                              for n in names))
+        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[n].valueReference for n in names))
         self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(_CTYPE[type_]))
         self.function = getattr(instance, self.call)
         self.index = np.array(index, dtype=np.intp)
@@ -169,10 +173,13 @@ class _Node:
         self.instance = instance
         self.position = {y: layout[(instance.name, y)] for y in instance.outputs}
         self.outputs = _ports(instance, instance.outputs, "Get", self.position)
-        connected = sorted((u for (b, u) in sources if b == instance.name),
-                           key=lambda u: instance.variables[u].valueReference)
-        self.inputs = _ports(instance, connected, "Set",
-                             {u: layout[sources[(instance.name, u)]] for u in connected})
+        connected = sorted(
+            (u for (b, u) in sources if b == instance.name),
+            key=lambda u: instance.variables[u].valueReference,
+        )
+        self.inputs = _ports(
+            instance, connected, "Set", {u: layout[sources[(instance.name, u)]] for u in connected}
+        )
 
     def set_inputs(self, values: np.ndarray) -> None:
         for port in self.inputs:
@@ -183,9 +190,18 @@ class _Node:
             port.read(values)
 
 
-def simulate(system, *, step: float | None = None, stop: float | None = None,
-             algorithm: str | None = None, parameters: dict | None = None,
-             out_dir=None, logging_on: bool = False, echo=None, progress=None) -> Results:
+def simulate(
+    system,
+    *,
+    step: float | None = None,
+    stop: float | None = None,
+    algorithm: str | None = None,
+    parameters: dict | None = None,
+    out_dir=None,
+    logging_on: bool = False,
+    echo=None,
+    progress=None,
+) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
     ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
@@ -213,16 +229,33 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
         try:
             for ref in system.components:
                 instances[ref.name] = _load(system, ref, log)
-            bindings = system.parameters + [override(instances, k, v)
-                                            for k, v in scalar_parameters(
-                                                instances, parameters or {}).items()]
+            bindings = system.parameters + [
+                override(instances, k, v)
+                for k, v in scalar_parameters(instances, parameters or {}).items()
+            ]
             plan = check_system(system, instances, bindings)
             for entry in plan.open_inputs:
-                log.add(entry["input"].partition(".")[0], 0 if entry["declared"] else 1,
-                        "master", f"input {entry['input']} is not connected: "
-                        f"{entry['meaning']}")
-            return _run(system, plan, instances, bindings, start, step, n_steps, algorithm,
-                        log, out_dir, logging_on, signals, progress)
+                log.add(
+                    entry["input"].partition(".")[0],
+                    0 if entry["declared"] else 1,
+                    "master",
+                    f"input {entry['input']} is not connected: {entry['meaning']}",
+                )
+            return _run(
+                system,
+                plan,
+                instances,
+                bindings,
+                start,
+                step,
+                n_steps,
+                algorithm,
+                log,
+                out_dir,
+                logging_on,
+                signals,
+                progress,
+            )
         finally:
             for instance in instances.values():
                 instance.free()
@@ -231,16 +264,21 @@ def simulate(system, *, step: float | None = None, stop: float | None = None,
 def _steps(path, start: float, step, stop) -> int:
     """The number of macro steps from start to stop, or a ValueError saying what is wrong."""
     if step is None or not (math.isfinite(step) and step > 0):
-        raise ValueError(f"{path}: the macro step must be a positive, finite number of "
-                         f"seconds (got {step}); give one or set it in the system's "
-                         "org.agilesat.master annotation")
+        raise ValueError(
+            f"{path}: the macro step must be a positive, finite number of "
+            f"seconds (got {step}); give one or set it in the system's "
+            "org.agilesat.master annotation"
+        )
     if stop is None or not math.isfinite(stop) or stop <= start:
-        raise ValueError(f"{path}: the stop time must be finite and after the start {start} s "
-                         f"(got {stop})")
+        raise ValueError(
+            f"{path}: the stop time must be finite and after the start {start} s (got {stop})"
+        )
     ratio = (stop - start) / step
-    if not ratio <= MAX_STEPS:   # also inf, from a tiny step
-        raise ValueError(f"{path}: {stop - start} s at a step of {step} s would be "
-                         f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have")
+    if not ratio <= MAX_STEPS:  # also inf, from a tiny step
+        raise ValueError(
+            f"{path}: {stop - start} s at a step of {step} s would be "
+            f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have"
+        )
     n_steps = int(round(ratio))
     if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
         raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
@@ -251,30 +289,60 @@ def _load(system, ref, log) -> Instance:
     try:
         return Instance(ref.name, ref.source, log)
     except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
-        raise SystemFileError(f"{system.path}:{ref.line}: component '{ref.name}': "
-                              f"{ref.source} is not a readable FMU: {exc}") from None
+        raise SystemFileError(
+            f"{system.path}:{ref.line}: component '{ref.name}': "
+            f"{ref.source} is not a readable FMU: {exc}"
+        ) from None
 
 
-def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log, out_dir,
-         logging_on, signals, progress=None) -> Results:
+def _run(
+    system,
+    plan,
+    instances,
+    bindings,
+    start,
+    step,
+    n_steps,
+    algorithm,
+    log,
+    out_dir,
+    logging_on,
+    signals,
+    progress=None,
+) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
-    nodes = {name: _Node(instances[name], layout, plan.sources)
-             for name in plan.steps.step_order}
+    nodes = {name: _Node(instances[name], layout, plan.sources) for name in plan.steps.step_order}
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
 
     values = np.zeros(len(layout))
     row = np.zeros(len(layout) + 1)
-    meta = {"system": str(system.path), "step": step, "start": start,
-            "stop": start + n_steps * step, "algorithm": algorithm, "log": log.entries,
-            "order": plan.steps.step_order, "unconnected_optional_inputs": plan.open_inputs,
-            "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout}}
+    meta = {
+        "system": str(system.path),
+        "step": step,
+        "start": start,
+        "stop": start + n_steps * step,
+        "algorithm": algorithm,
+        "log": log.entries,
+        "order": plan.steps.step_order,
+        "unconnected_optional_inputs": plan.open_inputs,
+        "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
+    }
     recorder = Recorder(columns, out_dir)
     failure, every = None, max(1, n_steps // 100)
     try:
-        _initialize(instances, nodes, init_sequence, bindings, values, start,
-                    start + n_steps * step, log, logging_on)
+        _initialize(
+            instances,
+            nodes,
+            init_sequence,
+            bindings,
+            values,
+            start,
+            start + n_steps * step,
+            log,
+            logging_on,
+        )
         row[0], row[1:] = start, values
         recorder.append(row)
         for n in range(n_steps):
@@ -299,16 +367,24 @@ def _run(system, plan, instances, bindings, start, step, n_steps, algorithm, log
     except (FmiCallError, OSError) as exc:
         failure = str(exc)
     results, problems = recorder.close(meta)
-    kept = [f"Kept {recorder.rows} recorded rows"
-            + (f" in {recorder.csv.path}" if out_dir is not None else "")] + problems
+    kept = [
+        f"Kept {recorder.rows} recorded rows"
+        + (f" in {recorder.csv.path}" if out_dir is not None else "")
+    ] + problems
     if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
         name = signal.Signals(signals.signal).name
-        raise Interrupted("\n".join([f"{system.path.name}: interrupted by {name} after "
-                                     f"t={results.time[-1]:.6g} s"] + kept), results,
-                          signals.signal)
+        raise Interrupted(
+            "\n".join(
+                [f"{system.path.name}: interrupted by {name} after t={results.time[-1]:.6g} s"]
+                + kept
+            ),
+            results,
+            signals.signal,
+        )
     if failure is not None or problems:
-        raise SimulationError("\n".join([f"{system.path.name}: {failure or 'results lost'}"]
-                                        + kept), results)
+        raise SimulationError(
+            "\n".join([f"{system.path.name}: {failure or 'results lost'}"] + kept), results
+        )
     return results
 
 
@@ -320,9 +396,16 @@ def _do_step(instance: Instance, t: float, step: float) -> None:
 
 def _sequence(schedule, nodes) -> list:
     """(node, output ports to read, first block?) for each block of a schedule."""
-    return [(nodes[name], nodes[name].outputs if first else
-             _ports(nodes[name].instance, block, "Get", nodes[name].position), first)
-            for name, block, first in evaluation_sequence(schedule)]
+    return [
+        (
+            nodes[name],
+            nodes[name].outputs
+            if first
+            else _ports(nodes[name].instance, block, "Get", nodes[name].position),
+            first,
+        )
+        for name, block, first in evaluation_sequence(schedule)
+    ]
 
 
 def _evaluate(sequence, values, t: float = 0.0, step: float | None = None) -> None:
@@ -336,8 +419,7 @@ def _evaluate(sequence, values, t: float = 0.0, step: float | None = None) -> No
             port.read(values)
 
 
-def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log,
-                logging_on):
+def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log, logging_on):
     log.time = start
     for node in nodes.values():
         inst = node.instance

@@ -11,6 +11,7 @@ A bare number for an array is refused, never broadcast: ``inertia=900`` could me
 every element or 900 times the identity, and an attitude engineer means the second as often
 as the first.  The error says which elements there are and shows both forms.
 """
+
 from __future__ import annotations
 
 import ast
@@ -31,7 +32,7 @@ class ArrayVariable:
 
     name: str
     shape: tuple[int, ...]
-    scalars: list                 # fmpy ScalarVariables, row-major
+    scalars: list  # fmpy ScalarVariables, row-major
 
     @property
     def first(self):
@@ -40,8 +41,11 @@ class ArrayVariable:
     def start(self):
         """The start value(s) as the model description gives them, shaped."""
         values = [_typed(v, v.start) for v in self.scalars]
-        return values[0] if not self.shape else np.array(values, dtype=object).reshape(
-            self.shape).tolist()
+        return (
+            values[0]
+            if not self.shape
+            else np.array(values, dtype=object).reshape(self.shape).tolist()
+        )
 
 
 def variables(description) -> dict[str, ArrayVariable]:
@@ -56,8 +60,7 @@ def variables(description) -> dict[str, ArrayVariable]:
         if len(scalars) == 1 and scalars[0].name == name:
             result[name] = ArrayVariable(name, (), scalars)
             continue
-        indices = [tuple(int(i) for i in _ELEMENT.match(v.name).group(2).split(","))
-                   for v in scalars]
+        indices = [tuple(int(i) for i in _element(v.name).group(2).split(",")) for v in scalars]
         shape = tuple(max(column) for column in zip(*indices))
         order = sorted(range(len(scalars)), key=lambda k: indices[k])
         result[name] = ArrayVariable(name, shape, [scalars[k] for k in order])
@@ -71,8 +74,9 @@ def parse_value(text):
         try:
             return ast.literal_eval(text.strip())
         except (ValueError, SyntaxError):
-            raise SystemFileError(f"cannot read {text!r} as an array: write it like "
-                                  "[1, 2, 3] or [[1, 0], [0, 1]]") from None
+            raise SystemFileError(
+                f"cannot read {text!r} as an array: write it like [1, 2, 3] or [[1, 0], [0, 1]]"
+            ) from None
     return text
 
 
@@ -83,21 +87,24 @@ def scalar_parameters(instances: dict, parameters: dict) -> dict:
     for key, value in parameters.items():
         name, _, variable = key.partition(".")
         if name not in instances or not variable:
-            raise SystemFileError(f"--set {key}: expected Instance.variable with an instance "
-                                  f"of {', '.join(instances)}" + did_you_mean(
-                                      name, instances))
+            raise SystemFileError(
+                f"--set {key}: expected Instance.variable with an instance "
+                f"of {', '.join(instances)}" + did_you_mean(name, instances)
+            )
         table = variables(instances[name])
         value = parse_value(value)
         if variable in instances[name].variables:
             if np.ndim(value):
-                raise SystemFileError(f"--set {key}: {name}.{variable} is a scalar, got "
-                                      f"an array {value}")
+                raise SystemFileError(
+                    f"--set {key}: {name}.{variable} is a scalar, got an array {value}"
+                )
             result[key] = value
             continue
         if variable not in table:
-            raise SystemFileError(f"--set {key}: {name} ({instances[name].path.name}) has "
-                                  f"no variable {variable!r}"
-                                  + did_you_mean(variable, table))
+            raise SystemFileError(
+                f"--set {key}: {name} ({instances[name].path.name}) has "
+                f"no variable {variable!r}" + did_you_mean(variable, table)
+            )
         array = table[variable]
         if np.shape(value) != array.shape:
             raise SystemFileError(
@@ -105,7 +112,8 @@ def scalar_parameters(instances: dict, parameters: dict) -> dict:
                 f"{'×'.join(map(str, array.shape))} [{array.first.unit or '1'}]; give it "
                 f"whole, e.g. {variable}={_literal(array.start())}, or one element, e.g. "
                 f"{array.first.name}={_typed(array.first, array.first.start)} (got "
-                f"{value!r}; a single number is not spread over the elements)")
+                f"{value!r}; a single number is not spread over the elements)"
+            )
         for scalar, element in zip(array.scalars, np.asarray(value, dtype=object).ravel()):
             result[f"{name}.{scalar.name}"] = element
     return result
@@ -132,3 +140,11 @@ def _typed(variable, text):
     if variable.type == "Boolean":
         return text in (True, 1, "true", "1") if not isinstance(text, bool) else text
     return str(text)
+
+
+def _element(name: str) -> re.Match:
+    """The match of a structured element name 'x[i,j]'."""
+    match = _ELEMENT.match(name)
+    if match is None:
+        raise ValueError(f"{name!r} is not an array element name")
+    return match

@@ -8,6 +8,7 @@ the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(val
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 """
+
 from __future__ import annotations
 
 import textwrap
@@ -32,21 +33,32 @@ def formats(path) -> list[Path]:
     return [Path(path).with_suffix(suffix) for suffix in FORMATS]
 
 
-def lines(path: Path, title: str, t, series: dict, ylabel: str,
-          xlabel: str = "time [s]", **marks) -> Path:
+def lines(
+    path: Path, title: str, t, series: dict, ylabel: str, xlabel: str = "time [s]", **marks
+) -> Path:
     """One axes: each named series against time (or ``xlabel``)."""
     return panels(path, title, [(t, series, ylabel, marks)], xlabel)
 
 
 def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
-    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 1.2 + 2.6 * len(rows)),
-                             squeeze=False, sharex=len({id(r[0]) for r in rows}) == 1)
+    fig, axes = plt.subplots(
+        len(rows),
+        1,
+        figsize=(8, 1.2 + 2.6 * len(rows)),
+        squeeze=False,
+        sharex=len({id(r[0]) for r in rows}) == 1,
+    )
     for ax, row in zip(axes[:, 0], rows):
         t, series, ylabel = row[:3]
         for k, (name, values) in enumerate(series.items()):
-            ax.plot(t, values, label=name, linewidth=_width(k, len(series)),
-                    linestyle="--" if name.startswith(("planned", "reference")) else "-")
+            ax.plot(
+                t,
+                values,
+                label=name,
+                linewidth=_width(k, len(series)),
+                linestyle="--" if name.startswith(("planned", "reference")) else "-",
+            )
         _mark(ax, **(row[3] if len(row) > 3 else {}))
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
@@ -68,13 +80,15 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
     if limit is not None:
         value, text = limit
         for k, y in enumerate(value if isinstance(value, (tuple, list)) else (-value, value)):
-            ax.axhline(y, color="tab:red", linestyle="--", linewidth=1,
-                       label=text if k == 0 else None)
+            ax.axhline(
+                y, color="tab:red", linestyle="--", linewidth=1, label=text if k == 0 else None
+            )
     if paper is not None:
         value, text = paper
         for k, y in enumerate(value if isinstance(value, (tuple, list)) else (value,)):
-            ax.axhline(y, color="0.35", linestyle=":", linewidth=1.2,
-                       label=text if k == 0 else None)
+            ax.axhline(
+                y, color="0.35", linestyle=":", linewidth=1.2, label=text if k == 0 else None
+            )
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
 
@@ -86,43 +100,62 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     for ax, (label, values, limit) in zip(axes[:, 0], rows):
         ax.plot(x, values, color="0.6", linewidth=1)
         for xi, v, ok in zip(x, values, met):
-            ax.plot(xi, v, "o", color="tab:green" if ok else "tab:red",
-                    fillstyle="full" if ok else "none")
+            ax.plot(
+                xi,
+                v,
+                "o",
+                color="tab:green" if ok else "tab:red",
+                fillstyle="full" if ok else "none",
+            )
         line = ax.axhline(limit, color="tab:blue", linestyle="--")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend([line, Line2D([], [], marker="o", color="tab:green", linestyle=""),
-                   Line2D([], [], marker="o", color="tab:red", fillstyle="none",
-                          linestyle="")],
-                  ["requirement", "meets both requirements", "fails one or both"], fontsize=8)
+        ax.legend(
+            [
+                line,
+                Line2D([], [], marker="o", color="tab:green", linestyle=""),
+                Line2D([], [], marker="o", color="tab:red", fillstyle="none", linestyle=""),
+            ],
+            ["requirement", "meets both requirements", "fails one or both"],
+            fontsize=8,
+        )
     return _save(fig, axes, path, title, xlabel)
 
 
-def signals(path: Path, runs: dict, variables, deg: bool = False,
-            instance: str | None = None) -> Path:
+def signals(
+    path: Path, runs: dict, variables, deg: bool = False, instance: str | None = None
+) -> Path:
     """Recorded variables (scalar columns or whole arrays by base name), one panel each,
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
     the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
     one), it is the title and the axes name the variables alone."""
-    fig, axes = plt.subplots(len(variables), 1, figsize=(8, 1.2 + 2.6 * len(variables)),
-                             squeeze=False, sharex=True)
+    fig, axes = plt.subplots(
+        len(variables), 1, figsize=(8, 1.2 + 2.6 * len(variables)), squeeze=False, sharex=True
+    )
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
             for column, v in zip(results.columns(name), values.T):
-                element = column[len(name):] or name.split(".")[-1]
-                ax.plot(results.time, v, linewidth=1.4, linestyle=_STYLES[k % len(_STYLES)],
-                        label=f"{run} {element}".strip())
+                element = column[len(name) :] or name.split(".")[-1]
+                ax.plot(
+                    results.time,
+                    v,
+                    linewidth=1.4,
+                    linestyle=_STYLES[k % len(_STYLES)],
+                    label=f"{run} {element}".strip(),
+                )
         unit = results.unit(name)
-        ax.set_ylabel(unit_label(name.split(".", 1)[1] if instance else name,
-                                 to_degrees(unit)[1] if deg else unit))
+        ax.set_ylabel(
+            unit_label(
+                name.split(".", 1)[1] if instance else name, to_degrees(unit)[1] if deg else unit
+            )
+        )
         ax.grid(True, alpha=0.3)
         if len(ax.get_lines()) > 1:
             ax.legend(fontsize=8, ncol=3)
-    return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90),
-                 "time [s]")
+    return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
 
 
 def overview(results, out_dir) -> list[Path]:
@@ -135,8 +168,14 @@ def overview(results, out_dir) -> list[Path]:
             variables.append(base)
     paths = []
     for instance, variables in by_instance.items():
-        paths.append(signals(Path(out_dir) / f"overview_{instance}.png", {"": results},
-                             variables, instance=instance))
+        paths.append(
+            signals(
+                Path(out_dir) / f"overview_{instance}.png",
+                {"": results},
+                variables,
+                instance=instance,
+            )
+        )
     return paths
 
 

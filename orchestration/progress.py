@@ -2,6 +2,7 @@
 ``interval`` seconds when the output is not a terminal (CI logs, files), nothing when quiet.
 Written to stderr, so stdout keeps only the results.
 """
+
 from __future__ import annotations
 
 import sys
@@ -11,8 +12,15 @@ import time
 class Progress:
     """``with Progress("scan_pitch", unit="step") as p: p(done, total)``."""
 
-    def __init__(self, label: str, *, unit: str = "step", quiet: bool = False,
-                 stream=None, interval: float = 10.0):
+    def __init__(
+        self,
+        label: str,
+        *,
+        unit: str = "step",
+        quiet: bool = False,
+        stream=None,
+        interval: float = 10.0,
+    ):
         self.label, self.unit, self.quiet = label, unit, quiet
         self.stream = stream or sys.stderr
         self.interval = interval
@@ -30,14 +38,23 @@ class Progress:
         if self.stream.isatty():
             if self.bar is None:
                 from tqdm import tqdm
-                self.bar = tqdm(total=total, desc=self.label, unit=self.unit,
-                                file=self.stream, leave=False, dynamic_ncols=True)
+
+                self.bar = tqdm(
+                    total=total,
+                    desc=self.label,
+                    unit=self.unit,
+                    file=self.stream,
+                    leave=False,
+                    dynamic_ncols=True,
+                )
             self.bar.update(done - self.bar.n)
         elif time.perf_counter() - self.last >= self.interval:
             self.last = time.perf_counter()
-            self.stream.write(f"{self.label}: {done}/{total} {self.unit}s "
-                              f"({100 * done / max(total, 1):.0f} %), "
-                              f"{self.last - self.start:.0f} s\n")
+            self.stream.write(
+                f"{self.label}: {done}/{total} {self.unit}s "
+                f"({100 * done / max(total, 1):.0f} %), "
+                f"{self.last - self.start:.0f} s\n"
+            )
             self.stream.flush()
 
     def __exit__(self, *exc):

@@ -11,19 +11,25 @@ Fixtures:
 Assertions (:mod:`agilesat.orchestration.checks`, re-exported here): ``assert_within``,
 ``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``.
 """
+
 from __future__ import annotations
 
 import json
 
 import pytest
 
-from .checks import (assert_momentum_conserved, assert_requirements_met,  # noqa: F401
-                     assert_settles, assert_within)
+from .checks import (  # noqa: F401
+    assert_momentum_conserved,
+    assert_requirements_met,
+    assert_settles,
+    assert_within,
+)
 
 
 @pytest.fixture(scope="session")
 def agilesat_run(tmp_path_factory):
     from .runner import run
+
     cache = {}
 
     def run_once(target, **options):

@@ -11,6 +11,7 @@ renamed when complete, and hands back :class:`Results` that map the raw rows fro
 
 Without an output directory the caller gets the rows in memory (a buffer grown by doubling).
 """
+
 from __future__ import annotations
 
 import errno
@@ -59,14 +60,20 @@ class Recorder:
     def close(self, meta: dict) -> tuple[Results, list[str]]:
         """(the rows recorded, problems writing the files); writes results.npz."""
         if not self._files:
-            return Results(self.columns, self._memory[:self.rows].copy(), meta), []
+            return Results(self.columns, self._memory[: self.rows].copy(), meta), []
+        assert self.out_dir is not None  # files are only written into an output directory
         problems = []
         for f in self._files:
             f.close()
         results = Results(self.columns, _map(self.raw.path, self.rows, len(self.columns)), meta)
         try:
-            write_npz(self.out_dir / "results.npz", self.columns, self.raw.path, self.rows,
-                      [results.units.get(n) or "" for n in self.columns])
+            write_npz(
+                self.out_dir / "results.npz",
+                self.columns,
+                self.raw.path,
+                self.rows,
+                [results.units.get(n) or "" for n in self.columns],
+            )
         except OSError as exc:
             problems.append(str(exc))
         self.raw.path.unlink(missing_ok=True)  # mapped already (POSIX keeps the pages)
@@ -78,9 +85,10 @@ class _File:
 
     def __init__(self, path: Path, header: bytes):
         self.path = path
-        self.fd = _checked(path, lambda: os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC,
-                                                 0o644))
-        self.size = 0   # bytes of whole records
+        self.fd = _checked(
+            path, lambda: os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        )
+        self.size = 0  # bytes of whole records
         self.write(header, 0)
         self.commit()
 
@@ -89,11 +97,12 @@ class _File:
         view = memoryview(data)
         try:
             while view:
-                view = view[os.write(self.fd, view):]
+                view = view[os.write(self.fd, view) :]
         except OSError as exc:
             self.truncate()
-            raise file_error(self.path, exc, f"; kept the {rows} complete rows written "
-                             "before") from None
+            raise file_error(
+                self.path, exc, f"; kept the {rows} complete rows written before"
+            ) from None
 
     def commit(self) -> None:
         self.size = self.pending
@@ -132,8 +141,9 @@ def _map(raw: Path, rows: int, n: int) -> np.ndarray:
     return np.memmap(raw, dtype="<f8", mode="c", shape=(rows, n))
 
 
-def write_npz(path: Path, names: list[str], raw: Path, rows: int, units: list[str],
-              chunk: int = 1 << 20) -> None:
+def write_npz(
+    path: Path, names: list[str], raw: Path, rows: int, units: list[str], chunk: int = 1 << 20
+) -> None:
     """results.npz (``names``, ``data``, ``units`` as :meth:`Results.to_npz` writes them) from
     the raw float64 rows in ``raw``, copied in chunks; written to a temporary name, then
     renamed."""
@@ -145,10 +155,13 @@ def write_npz(path: Path, names: list[str], raw: Path, rows: int, units: list[st
                 np.lib.format.write_array(stream, np.array(names))
             with archive.open("units.npy", "w") as stream:
                 np.lib.format.write_array(stream, np.array(units))
-            with archive.open("data.npy", "w", force_zip64=True) as stream, \
-                    open(raw, "rb") as source:
+            with (
+                archive.open("data.npy", "w", force_zip64=True) as stream,
+                open(raw, "rb") as source,
+            ):
                 np.lib.format.write_array_header_1_0(
-                    stream, {"descr": "<f8", "fortran_order": False, "shape": (rows, n)})
+                    stream, {"descr": "<f8", "fortran_order": False, "shape": (rows, n)}
+                )
                 left = rows * n * 8
                 while left:
                     block = source.read(min(chunk, left))

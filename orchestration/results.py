@@ -7,6 +7,7 @@ every value SI in the unit of its model description (``units``).  Written as CSV
 run is going, :mod:`.recorder` appends each row to the CSV, so a run that fails (or is
 killed) leaves everything recorded up to the failure on disk.
 """
+
 from __future__ import annotations
 
 import csv
@@ -75,10 +76,12 @@ class Results:
 
     def __repr__(self):
         instances = sorted({n.split(".")[0] for n in self.names if "." in n})
-        span = (f"t = {self.time[0]:g} … {self.time[-1]:g} s" if len(self) else "no rows")
+        span = f"t = {self.time[0]:g} … {self.time[-1]:g} s" if len(self) else "no rows"
         step = f", step {self.meta['step']:g} s" if "step" in self.meta else ""
-        return (f"<Results: {len(self)} rows, {span}{step}; {len(self.names) - 1} columns "
-                f"of {', '.join(instances)}>")
+        return (
+            f"<Results: {len(self)} rows, {span}{step}; {len(self.names) - 1} columns "
+            f"of {', '.join(instances)}>"
+        )
 
     def columns(self, name: str) -> list[str]:
         """The columns of a variable: [name] for a scalar, its elements for an array."""
@@ -111,8 +114,7 @@ class Results:
         """The unit of a column or an array variable (None if the run did not record it)."""
         return self.units.get(self.columns(name)[0])
 
-    def select(self, *names: str, start: float | None = None,
-               stop: float | None = None) -> "Results":
+    def select(self, *names: str, start: float | None = None, stop: float | None = None) -> Results:
         """A new Results with ``time`` and the named variables (all, if none are named),
         rows with start <= time <= stop."""
         t = self.time
@@ -121,8 +123,11 @@ class Results:
             rows &= t >= start - 1e-12
         if stop is not None:
             rows &= t <= stop + 1e-12
-        chosen = ["time"] + [c for n in names for c in self.columns(n) if c != "time"] \
-            if names else self.names
+        chosen = (
+            ["time"] + [c for n in names for c in self.columns(n) if c != "time"]
+            if names
+            else self.names
+        )
         units = self.units
         meta = dict(self.meta, units={c: units[c] for c in chosen if c in units})
         return Results(chosen, self.data[rows][:, [self._index[c] for c in chosen]], meta)
@@ -130,11 +135,11 @@ class Results:
     def _missing(self, name: str, what: str = "column") -> ColumnError:
         known = self.names + list(self._bases)
         close = difflib.get_close_matches(name, known, n=5, cutoff=0.6)
-        if not close:   # the right variable of another instance, or the right instance
+        if not close:  # the right variable of another instance, or the right instance
             tail = name.split(".")[-1].split("[")[0]
-            close = [k for k in self._bases if k.endswith("." + tail)][:5] or \
-                sorted({k for k in known if k.split(".")[0] == name.split(".")[0]
-                        and "[" not in k})[:8]
+            close = [k for k in self._bases if k.endswith("." + tail)][:5] or sorted(
+                {k for k in known if k.split(".")[0] == name.split(".")[0] and "[" not in k}
+            )[:8]
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         return ColumnError(f"no {what} {name!r} in these results{hint}")
 
@@ -144,8 +149,9 @@ class Results:
         try:
             import pandas
         except ImportError:
-            raise ImportError("Results.to_pandas needs pandas: pip install "
-                              "'agilesat[pandas]'") from None
+            raise ImportError(
+                "Results.to_pandas needs pandas: pip install 'agilesat[pandas]'"
+            ) from None
         units = self.units
         columns = [n for n in self.names if n != "time"]
         data = self.data[:, [self._index[c] for c in columns]]
@@ -153,8 +159,7 @@ class Results:
             factors = [to_degrees(units.get(c)) for c in columns]
             data = data * np.array([f for f, _ in factors])
             units = {c: u for c, (_, u) in zip(columns, factors)}
-        frame = pandas.DataFrame(data, columns=columns,
-                                 index=pandas.Index(self.time, name="time"))
+        frame = pandas.DataFrame(data, columns=columns, index=pandas.Index(self.time, name="time"))
         frame.attrs["units"] = {c: units.get(c) for c in columns}
         return frame
 
@@ -175,8 +180,12 @@ class Results:
 
     def to_npz(self, path) -> Path:
         units = self.units
-        np.savez_compressed(path, names=np.array(self.names), data=self.data,
-                            units=np.array([units.get(n) or "" for n in self.names]))
+        np.savez_compressed(
+            path,
+            names=np.array(self.names),
+            data=self.data,
+            units=np.array([units.get(n) or "" for n in self.names]),
+        )
         return Path(path)
 
     def to_mat(self, path) -> Path:
@@ -184,10 +193,11 @@ class Results:
         and one struct per instance with a field per variable, arrays as N×size matrices
         (``SatelliteDynamics.w_BI_B(:, 2)``); ``units`` the same structs of unit strings."""
         from scipy.io import savemat
+
         content = {"time": self.time.reshape(-1, 1), "units": {"time": "s"}}
-        units = self.units
-        for name in [n for n in self.names if "." in n and not _ELEMENT.match(n)] \
-                + list(self._bases):
+        for name in [n for n in self.names if "." in n and not _ELEMENT.match(n)] + list(
+            self._bases
+        ):
             instance, variable = name.split(".", 1)
             content.setdefault(instance, {})[variable] = self[name].reshape(len(self), -1)
             content["units"].setdefault(instance, {})[variable] = self.unit(name) or ""
@@ -214,13 +224,13 @@ class Results:
         return cls(names, archive["data"], meta)
 
     @classmethod
-    def load(cls, directory) -> "Results":
+    def load(cls, directory) -> Results:
         """The results of a run directory: results.npz, else results.csv."""
         directory = Path(directory)
         if (directory / "results.npz").exists():
             return cls.from_npz(directory / "results.npz")
         if (directory / "results.csv").exists():
             return cls.from_csv(directory / "results.csv")
-        raise FileNotFoundError(f"{directory}: no results.npz or results.csv (not a run "
-                                "directory of `agilesat run`?)")
-
+        raise FileNotFoundError(
+            f"{directory}: no results.npz or results.csv (not a run directory of `agilesat run`?)"
+        )

@@ -7,6 +7,7 @@ second), the metrics (a scenario's, each with unit, display unit, the paper's va
 requirement where there is one) or, for any other system, min/max/final of every recorded
 output and the momentum drift where ``H_I`` is recorded; the figures written.
 """
+
 from __future__ import annotations
 
 import json
@@ -37,19 +38,33 @@ def parse_target(target):
     if name in scenarios.NAMES:
         scenario = scenarios.get(name)
         if variant and variant not in scenario.variants:
-            raise KeyError(f"scenario {name} has no variant {variant!r}"
-                           + did_you_mean(variant, scenario.variants)
-                           + f" (variants: {', '.join(scenario.variants) or 'none'})")
+            raise KeyError(
+                f"scenario {name} has no variant {variant!r}"
+                + did_you_mean(variant, scenario.variants)
+                + f" (variants: {', '.join(scenario.variants) or 'none'})"
+            )
         return scenario, variant or None
     if Path(target).suffix in (".ssd", ".ssp"):
         return None, None
-    raise KeyError(f"{target!r} is neither a scenario ({', '.join(scenarios.NAMES)}) nor an "
-                   ".ssd/.ssp file" + did_you_mean(name, scenarios.NAMES))
+    raise KeyError(
+        f"{target!r} is neither a scenario ({', '.join(scenarios.NAMES)}) nor an "
+        ".ssd/.ssp file" + did_you_mean(name, scenarios.NAMES)
+    )
 
 
-def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_dir=None,
-        figures: bool = True, echo=None, build: bool = True,
-        progress=None) -> tuple[Results, dict]:
+def run(
+    target,
+    *,
+    step=None,
+    stop=None,
+    algorithm=None,
+    parameters=None,
+    out_dir=None,
+    figures: bool = True,
+    echo=None,
+    build: bool = True,
+    progress=None,
+) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
     (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
     elements (:mod:`.parameters`); ``progress``: see :func:`simulate`.
@@ -65,6 +80,7 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
     if scenario is not None:
         if build:
             from ..fmus.build import build_all
+
             build_all(names=scenario.components)
         system = scenario.ssd
         overrides = {**scenario.variant_parameters(variant), **overrides}
@@ -74,24 +90,35 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
     if out_dir is not None:
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
-    summary = {"scenario": scenario.name if scenario else None, "variant": variant,
-               "system": str(system),
-               "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()}}
+    summary = {
+        "scenario": scenario.name if scenario else None,
+        "variant": variant,
+        "system": str(system),
+        "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()},
+    }
     wall = time.perf_counter()
     with stop_on_signals() as signals:
         try:
-            results = simulate(system, step=step, stop=stop, algorithm=algorithm,
-                               parameters={k: p.value for k, p in typed.items()},
-                               out_dir=out_dir, echo=echo, progress=progress)
+            results = simulate(
+                system,
+                step=step,
+                stop=stop,
+                algorithm=algorithm,
+                parameters={k: p.value for k, p in typed.items()},
+                out_dir=out_dir,
+                echo=echo,
+                progress=progress,
+            )
         except SimulationError as failure:
             if out_dir is not None and failure.results is not None:
-                summary.update(_facts(failure.results, time.perf_counter() - wall),
-                               error=str(failure),
-                               status="interrupted" if isinstance(failure, Interrupted)
-                               else "error")
+                summary.update(
+                    _facts(failure.results, time.perf_counter() - wall),
+                    error=str(failure),
+                    status="interrupted" if isinstance(failure, Interrupted) else "error",
+                )
                 try:
                     _write_records(failure.results, summary, out_dir)
-                except OSError as exc:   # say both
+                except OSError as exc:  # say both
                     failure.args = (f"{failure}\n{exc}",)
             raise
         summary.update(_facts(results, time.perf_counter() - wall))
@@ -104,8 +131,12 @@ def run(target, *, step=None, stop=None, algorithm=None, parameters=None, out_di
             _write_records(results, summary, out_dir)
             if figures and signals.signal is None:
                 from . import plots
-                paths = scenario.figures(results, out_dir) if scenario is not None else \
-                    plots.overview(results, out_dir)
+
+                paths = (
+                    scenario.figures(results, out_dir)
+                    if scenario is not None
+                    else plots.overview(results, out_dir)
+                )
                 summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
                 _write_file(out_dir / "summary.json", _summary_text(summary))
     return results, summary
@@ -115,10 +146,14 @@ def _facts(results: Results, wall: float) -> dict:
     meta = results.meta
     settings = {k: meta[k] for k in ("start", "stop", "step", "algorithm")}
     simulated = float(results.time[-1]) - settings["start"] if len(results) else 0.0
-    return {"settings": settings, "rows": len(results), "wall_time": wall,
-            "real_time_factor": simulated / max(wall, 1e-9),
-            "unconnected_optional_inputs": meta["unconnected_optional_inputs"],
-            "fmu_messages": [str(e) for e in meta["log"] if e.status >= 1]}
+    return {
+        "settings": settings,
+        "rows": len(results),
+        "wall_time": wall,
+        "real_time_factor": simulated / max(wall, 1e-9),
+        "unconnected_optional_inputs": meta["unconnected_optional_inputs"],
+        "fmu_messages": [str(e) for e in meta["log"] if e.status >= 1],
+    }
 
 
 def _summary_text(summary: dict) -> str:
@@ -140,10 +175,14 @@ def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
     """The units of results.csv, log.txt and summary.json (the master writes results.csv
     row by row and results.npz); an OSError names each file not written."""
     problems = []
-    for path, text in ((units_path(out_dir / "results.csv"),
-                        json.dumps(results.units, indent=1, ensure_ascii=False) + "\n"),
-                       (out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
-                       (out_dir / "summary.json", _summary_text(summary))):
+    for path, text in (
+        (
+            units_path(out_dir / "results.csv"),
+            json.dumps(results.units, indent=1, ensure_ascii=False) + "\n",
+        ),
+        (out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+        (out_dir / "summary.json", _summary_text(summary)),
+    ):
         try:
             _write_file(path, text)
         except OSError as exc:
@@ -157,10 +196,11 @@ def typed_overrides(system, overrides: dict) -> dict:
     FMU's variable), checked against the system's model descriptions."""
     if not overrides:
         return {}
-    system_file = read_system(system)       # holds an .ssp's unpacked FMUs while we read
+    system_file = read_system(system)  # holds an .ssp's unpacked FMUs while we read
     described = {c.name: Description(c.name, c.source) for c in system_file.components}
-    return {k: override(described, k, v)
-            for k, v in scalar_parameters(described, overrides).items()}
+    return {
+        k: override(described, k, v) for k, v in scalar_parameters(described, overrides).items()
+    }
 
 
 def generic_summary(results: Results) -> dict:
@@ -168,14 +208,22 @@ def generic_summary(results: Results) -> dict:
     ``H_I`` (max |H(t) − H(0)| / |H(0)|); status ok (nothing is required of it)."""
     outputs = {}
     for name, column in zip(results.names[1:], results.data[:, 1:].T):
-        outputs[name] = {"min": float(np.min(column)), "max": float(np.max(column)),
-                         "final": float(column[-1]), "unit": results.units.get(name)}
+        outputs[name] = {
+            "min": float(np.min(column)),
+            "max": float(np.max(column)),
+            "final": float(column[-1]),
+            "unit": results.units.get(name),
+        }
     metrics = {}
-    for base in sorted({n.rsplit("[", 1)[0] for n in results.names
-                        if n.rsplit("[", 1)[0].endswith(".H_I")}):
+    for base in sorted(
+        {n.rsplit("[", 1)[0] for n in results.names if n.rsplit("[", 1)[0].endswith(".H_I")}
+    ):
         metrics[f"{base.split('.')[0]}.momentum_drift"] = {
-            "value": scenarios.relative_drift(results.vector(base)), "unit": "1",
-            "display_unit": "1", "description": f"max |H_I(t) − H_I(0)| / |H_I(0)| of {base}"}
+            "value": scenarios.relative_drift(results.vector(base)),
+            "unit": "1",
+            "display_unit": "1",
+            "description": f"max |H_I(t) − H_I(0)| / |H_I(0)| of {base}",
+        }
     return {"metrics": metrics, "outputs": outputs, "diagnostics": [], "status": "ok"}
 
 
@@ -217,23 +265,32 @@ def format_summary(summary: dict) -> str:
         unit, display = m["unit"], m.get("display_unit")
         value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
         text = "not reached" if value is None else _join(f"{value:.6g}", u)
-        paper = "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u) \
-            if "paper" in m else ""
-        required = f"required {_requirement(m['requirement'], unit, display)}" \
-            if "requirement" in m else ""
+        paper = (
+            "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
+            if "paper" in m
+            else ""
+        )
+        required = (
+            f"required {_requirement(m['requirement'], unit, display)}"
+            if "requirement" in m
+            else ""
+        )
         verdict = {True: "PASS", False: "FAIL"}.get(m.get("met"), "")
-        lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}"
-                     .rstrip())
+        lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}".rstrip())
     outputs = summary.get("outputs", {})
     if outputs:
         lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")
         for name, o in outputs.items():
-            lines.append(f"  {name:40s} {o['min']:12.5g} {o['max']:12.5g} {o['final']:12.5g}"
-                         f"  {pretty(o['unit'])}".rstrip())
+            lines.append(
+                f"  {name:40s} {o['min']:12.5g} {o['max']:12.5g} {o['final']:12.5g}"
+                f"  {pretty(o['unit'])}".rstrip()
+            )
     if "wall_time" in summary:
-        lines.append(f"  status {summary.get('status', '?')}, wall time "
-                     f"{summary['wall_time']:.2f} s, {summary['real_time_factor']:.3g}× real "
-                     "time")
+        lines.append(
+            f"  status {summary.get('status', '?')}, wall time "
+            f"{summary['wall_time']:.2f} s, {summary['real_time_factor']:.3g}× real "
+            "time"
+        )
     for problem in summary.get("diagnostics", []):
         lines.append(f"  FAILED: {problem}")
     return "\n".join(lines)

@@ -13,6 +13,7 @@ Each FMU steps at its first block (:attr:`Schedule.step_order`).  Among ready ou
 order prefers the FMU of the previous block, then the FMUs in the order of their dependency
 graph condensed into strongly connected parts, ties by their order in the system file.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -22,15 +23,15 @@ from .ssp import SystemFileError
 
 @dataclass
 class Schedule:
-    step_order: list[str]                       # every FMU once, at its first block
-    blocks: list[tuple[str, tuple[str, ...]]]   # (instance, outputs) in evaluation order
+    step_order: list[str]  # every FMU once, at its first block
+    blocks: list[tuple[str, tuple[str, ...]]]  # (instance, outputs) in evaluation order
 
 
 def schedule(instances: dict, sources: dict, kind: str, where: str) -> Schedule:
     """``kind``: "feedthrough" (stepping) or "initial_feedthrough" (initialisation)."""
     outputs = {name: inst.outputs for name, inst in instances.items()}
     needs = {(b, z): set() for b, names in outputs.items() for z in names}
-    via = {}                                       # (B, z), (A, y) -> input of B
+    via = {}  # (B, z), (A, y) -> input of B
     for (b, u), (a, y) in sources.items():
         dependencies = getattr(instances[b], kind)
         for z in outputs[b]:
@@ -46,8 +47,11 @@ def schedule(instances: dict, sources: dict, kind: str, where: str) -> Schedule:
         if not ready:
             raise SystemFileError(f"{where}: algebraic loop: {_cycle(needs, done, via)}")
         last = blocks[-1][0] if blocks else None
-        chosen: str = last if last is not None and any(v[0] == last for v in ready) else min(
-            (v[0] for v in ready), key=rank.__getitem__)
+        chosen: str = (
+            last
+            if last is not None and any(v[0] == last for v in ready)
+            else min((v[0] for v in ready), key=rank.__getitem__)
+        )
         block = [z for (b, z) in ready if b == chosen]
         done.update((chosen, z) for z in block)
         if blocks and blocks[-1][0] == chosen:
@@ -60,17 +64,19 @@ def schedule(instances: dict, sources: dict, kind: str, where: str) -> Schedule:
 
 def _fmu_rank(names: list[str], needs: dict) -> dict[str, tuple]:
     """Rank of each FMU: its strongly connected part's topological place, then file order."""
-    edges = {n: set() for n in names}               # B -> FMUs B needs
+    edges = {n: set() for n in names}  # B -> FMUs B needs
     for (b, _), sources in needs.items():
         edges[b].update(a for a, _ in sources if a != b)
     reach = {n: _reachable(n, edges) for n in names}
-    part = {n: frozenset(m for m in names if m in reach[n] and n in reach[m]) | {n}
-            for n in names}
+    part = {n: frozenset(m for m in names if m in reach[n] and n in reach[m]) | {n} for n in names}
     placed, rank = [], {}
     while len(placed) < len(set(part.values())):
-        candidates = [p for p in set(part.values()) if p not in placed
-                      and all(part[m] in placed or part[m] == p
-                              for n in p for m in edges[n])]
+        candidates = [
+            p
+            for p in set(part.values())
+            if p not in placed
+            and all(part[m] in placed or part[m] == p for n in p for m in edges[n])
+        ]
         nxt = min(candidates, key=lambda p: min(names.index(n) for n in p))
         placed.append(nxt)
     for position, p in enumerate(placed):
@@ -96,9 +102,11 @@ def _cycle(needs: dict, done: set, via: dict) -> str:
     while True:
         node = next(v for v in needs[node] if v not in done)
         if node in path:
-            loop = path[path.index(node):] + [node]
+            loop = path[path.index(node) :] + [node]
             break
         path.append(node)
-    steps = [f"{b}.{z} depends on input {b}.{via[((b, z), (a, y))]} driven by {a}.{y}"
-             for (b, z), (a, y) in zip(loop, loop[1:])]
+    steps = [
+        f"{b}.{z} depends on input {b}.{via[((b, z), (a, y))]} driven by {a}.{y}"
+        for (b, z), (a, y) in zip(loop, loop[1:])
+    ]
     return "; ".join(steps) + " (each output depends directly on the next)"

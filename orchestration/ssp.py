@@ -16,6 +16,7 @@ its component and parameter-binding sources must resolve inside the package.
 Write: :func:`render_ssd` expands a compact vector-level system description (see
 ``scenarios/``) into scalar SSD connectors and connections, with SSP unit definitions.
 """
+
 from __future__ import annotations
 
 import math
@@ -51,15 +52,15 @@ class SystemFileError(ValueError):
 class ConnectorRef:
     name: str
     kind: str
-    type: str | None      # Real, Integer, Boolean, String; None: not declared
-    unit: str | None      # of a Real; None: not declared
+    type: str | None  # Real, Integer, Boolean, String; None: not declared
+    unit: str | None  # of a Real; None: not declared
     line: int
 
 
 @dataclass
 class ComponentRef:
     name: str
-    source: Path          # absolute path of the FMU
+    source: Path  # absolute path of the FMU
     line: int
     connectors: list[ConnectorRef] = field(default_factory=list)
 
@@ -73,8 +74,10 @@ class ConnectionRef:
     line: int
 
     def __str__(self):
-        return (f"{self.start_element}.{self.start_connector} -> "
-                f"{self.end_element}.{self.end_connector}")
+        return (
+            f"{self.start_element}.{self.start_connector} -> "
+            f"{self.end_element}.{self.end_connector}"
+        )
 
 
 @dataclass
@@ -83,7 +86,7 @@ class ParameterValue:
     name: str
     type: str
     value: object
-    origin: str           # "file:line" where the value was given
+    origin: str  # "file:line" where the value was given
 
 
 @dataclass
@@ -134,15 +137,22 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
             members = archive.infolist()
             for info in members:
                 parts = PurePosixPath(info.filename.replace("\\", "/")).parts
-                if info.filename.startswith(("/", "\\")) or ".." in parts or (
-                        parts and ":" in parts[0]):
-                    raise SystemFileError(f"{path}: member '{info.filename}' would unpack "
-                                          "outside the package: refused")
+                if (
+                    info.filename.startswith(("/", "\\"))
+                    or ".." in parts
+                    or (parts and ":" in parts[0])
+                ):
+                    raise SystemFileError(
+                        f"{path}: member '{info.filename}' would unpack "
+                        "outside the package: refused"
+                    )
             declared = sum(info.file_size for info in members)
             if declared > limit:
-                raise SystemFileError(f"{path}: unpacks to {declared} bytes, more than the "
-                                      f"limit of {limit} (raise it with "
-                                      "AGILESAT_SSP_MAX_BYTES or max_unpacked=)")
+                raise SystemFileError(
+                    f"{path}: unpacks to {declared} bytes, more than the "
+                    f"limit of {limit} (raise it with "
+                    "AGILESAT_SSP_MAX_BYTES or max_unpacked=)"
+                )
             total = 0
             for info in members:
                 target = root.joinpath(*PurePosixPath(info.filename).parts)
@@ -154,8 +164,9 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
                     while chunk := source.read(1 << 20):
                         total += len(chunk)
                         if total > limit:
-                            raise SystemFileError(f"{path}: unpacks to more than the limit "
-                                                  f"of {limit} bytes")
+                            raise SystemFileError(
+                                f"{path}: unpacks to more than the limit of {limit} bytes"
+                            )
                         sink.write(chunk)
     except (zipfile.BadZipFile, EOFError) as exc:
         raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
@@ -163,8 +174,7 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
 
 def _inside(source: Path, package: Path | None, where: str, what: str) -> None:
     if package is not None and not source.is_relative_to(package):
-        raise SystemFileError(f"{where}: {what} resolves outside the package ({source}): "
-                              "refused")
+        raise SystemFileError(f"{where}: {what} resolves outside the package ({source}): refused")
 
 
 def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFile:
@@ -178,35 +188,46 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
         tag = etree.QName(element).localname
         where = f"{display}:{element.sourceline}"
         if tag != "Component":
-            raise SystemFileError(f"{where}: <{tag}> elements are not supported (flat systems "
-                                  "of FMU components only)")
+            raise SystemFileError(
+                f"{where}: <{tag}> elements are not supported (flat systems of FMU components only)"
+            )
         name = element.get("name")
         kind = element.get("type", "application/x-fmu-sharedlibrary")
         if kind != "application/x-fmu-sharedlibrary":
-            raise SystemFileError(f"{where}: component '{name}' has type '{kind}'; only FMUs "
-                                  "(application/x-fmu-sharedlibrary) are supported")
+            raise SystemFileError(
+                f"{where}: component '{name}' has type '{kind}'; only FMUs "
+                "(application/x-fmu-sharedlibrary) are supported"
+            )
         if any(c.name == name for c in components):
             raise SystemFileError(f"{where}: component name '{name}' is used twice")
         source = (path.parent / element.get("source")).resolve()
-        _inside(source, package, where, f"component '{name}': FMU source "
-                f"'{element.get('source')}'")
+        _inside(source, package, where, f"component '{name}': FMU source '{element.get('source')}'")
         if not source.is_file():
-            raise SystemFileError(f"{where}: component '{name}': FMU source "
-                                  f"'{element.get('source')}' not found (looked at {source})")
-        components.append(ComponentRef(name, source, element.sourceline,
-                                       _read_connectors(element)))
+            raise SystemFileError(
+                f"{where}: component '{name}': FMU source "
+                f"'{element.get('source')}' not found (looked at {source})"
+            )
+        components.append(ComponentRef(name, source, element.sourceline, _read_connectors(element)))
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
             parameters += _read_binding(binding, name, path, display, package)
     for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
         parameters += _read_binding(binding, None, path, display, package)
     connections = [
-        ConnectionRef(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
-                      c.get("endConnector"), c.sourceline)
-        for c in system.findall("ssd:Connections/ssd:Connection", NS)]
+        ConnectionRef(
+            c.get("startElement"),
+            c.get("startConnector"),
+            c.get("endElement"),
+            c.get("endConnector"),
+            c.sourceline,
+        )
+        for c in system.findall("ssd:Connections/ssd:Connection", NS)
+    ]
     for c in connections:
         if not c.start_element or not c.end_element:
-            raise SystemFileError(f"{display}:{c.line}: connection {c}: connections to the "
-                                  "system's own connectors are not supported")
+            raise SystemFileError(
+                f"{display}:{c.line}: connection {c}: connections to the "
+                "system's own connectors are not supported"
+            )
     result = SystemFile(path, root.get("name"), components, connections, parameters)
     experiment = root.find("ssd:DefaultExperiment", NS)
     if experiment is not None:
@@ -233,17 +254,24 @@ def _read_connectors(element) -> list[ConnectorRef]:
     return result
 
 
-def _read_binding(binding, component, ssd_path: Path, display: str,
-                  package: Path | None = None) -> list[ParameterValue]:
+def _read_binding(
+    binding, component, ssd_path: Path, display: str, package: Path | None = None
+) -> list[ParameterValue]:
     prefix = binding.get("prefix", "")
     source = binding.get("source")
     if source:
         ssv_path = (ssd_path.parent / source).resolve()
-        _inside(ssv_path, package, f"{display}:{binding.sourceline}",
-                f"parameter binding source '{source}'")
+        _inside(
+            ssv_path,
+            package,
+            f"{display}:{binding.sourceline}",
+            f"parameter binding source '{source}'",
+        )
         if not ssv_path.exists():
-            raise SystemFileError(f"{display}:{binding.sourceline}: parameter binding source "
-                                  f"'{source}' not found (looked at {ssv_path})")
+            raise SystemFileError(
+                f"{display}:{binding.sourceline}: parameter binding source "
+                f"'{source}' not found (looked at {ssv_path})"
+            )
         ssv_display = str(ssv_path)
         tree = _parse(ssv_path, ssv_display)
         _validate_schema(tree, "SystemStructureParameterValues.xsd", ssv_display)
@@ -252,8 +280,10 @@ def _read_binding(binding, component, ssd_path: Path, display: str,
         ssv_display = display
         parameter_set = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
         if parameter_set is None:
-            raise SystemFileError(f"{display}:{binding.sourceline}: parameter binding without "
-                                  "source or inline ssv:ParameterSet")
+            raise SystemFileError(
+                f"{display}:{binding.sourceline}: parameter binding without "
+                "source or inline ssv:ParameterSet"
+            )
     values = []
     for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
         name = prefix + parameter.get("name")
@@ -262,15 +292,17 @@ def _read_binding(binding, component, ssd_path: Path, display: str,
         if owner is None:  # system-level binding: "Component.variable"
             owner, _, name = name.partition(".")
             if not name:
-                raise SystemFileError(f"{origin}: system-level parameter "
-                                      f"'{parameter.get('name')}' must be 'Component.variable'")
+                raise SystemFileError(
+                    f"{origin}: system-level parameter "
+                    f"'{parameter.get('name')}' must be 'Component.variable'"
+                )
         typed = [child for child in parameter if etree.QName(child).localname in _TYPES]
         if len(typed) != 1:
-            raise SystemFileError(f"{origin}: parameter '{name}' needs exactly one of "
-                                  f"{_TYPES}")
+            raise SystemFileError(f"{origin}: parameter '{name}' needs exactly one of {_TYPES}")
         kind = etree.QName(typed[0]).localname
-        values.append(ParameterValue(owner, name, kind, _parse_value(kind, typed[0], origin),
-                                     origin))
+        values.append(
+            ParameterValue(owner, name, kind, _parse_value(kind, typed[0], origin), origin)
+        )
     return values
 
 
@@ -315,6 +347,7 @@ _schemas: dict[str, etree.XMLSchema] = {}
 def _schema(name: str) -> etree.XMLSchema:
     if name not in _schemas:
         import fmpy.ssp  # the SSP 1.0 XSDs ship with fmpy
+
         directory = Path(fmpy.ssp.__file__).parent / "schema"
         _schemas[name] = etree.XMLSchema(file=str(directory / name))
     return _schemas[name]
@@ -324,9 +357,18 @@ def _schema(name: str) -> etree.XMLSchema:
 # writing
 
 
-def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
-               connections, parameters: dict, units: dict, start: float, stop: float,
-               step: float, algorithm: str = "gauss-seidel") -> bytes:
+def render_ssd(
+    name: str,
+    components: dict[str, str],
+    tables: dict[str, tuple],
+    connections,
+    parameters: dict,
+    units: dict,
+    start: float,
+    stop: float,
+    step: float,
+    algorithm: str = "gauss-seidel",
+) -> bytes:
     """An SSD (schema-checked bytes) from a vector-level description.
 
     ``components`` maps instance name to FMU source (relative to the SSD), ``tables`` maps
@@ -341,8 +383,7 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
     (OpenModelica, on the system; it refuses a system without one) read.
     """
     E = _Maker()
-    root = E("ssd:SystemStructureDescription", version="1.0", name=name,
-             generationTool="agilesat")
+    root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
     system = E.sub(root, "ssd:System", name=name)
     elements = E.sub(system, "ssd:Elements")
     by_instance = {}
@@ -351,8 +392,13 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
     for instance, source in components.items():
         variables = {v.name: v for v in tables[instance]}
         by_instance[instance] = variables
-        component = E.sub(elements, "ssd:Component", name=instance, source=source,
-                          type="application/x-fmu-sharedlibrary")
+        component = E.sub(
+            elements,
+            "ssd:Component",
+            name=instance,
+            source=source,
+            type="application/x-fmu-sharedlibrary",
+        )
         connectors = E.sub(component, "ssd:Connectors")
         values = bound.get(instance, {})
         for v in tables[instance]:
@@ -368,8 +414,7 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
             bindings = E.sub(component, "ssd:ParameterBindings")
             binding = E.sub(bindings, "ssd:ParameterBinding")
             holder = E.sub(binding, "ssd:ParameterValues")
-            parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0",
-                                  name=name)
+            parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0", name=name)
             listing = E.sub(parameter_set, "ssv:Parameters")
             for scalar, (kind, text) in values.items():
                 parameter = E.sub(listing, "ssv:Parameter", name=scalar)
@@ -382,30 +427,40 @@ def render_ssd(name: str, components: dict[str, str], tables: dict[str, tuple],
         if va.shape != vb.shape:
             raise SystemFileError(f"{source} {va.shape} and {target} {vb.shape} differ in shape")
         for sa, sb in zip(va.scalar_names(), vb.scalar_names()):
-            E.sub(wires, "ssd:Connection", startElement=a, startConnector=sa, endElement=b,
-                  endConnector=sb)
+            E.sub(
+                wires,
+                "ssd:Connection",
+                startElement=a,
+                startConnector=sa,
+                endElement=b,
+                endConnector=sb,
+            )
     unit_list = E.sub(root, "ssd:Units")
     for unit in sorted(used_units):
         exponents, _ = units[unit]
         element = E.sub(unit_list, "ssc:Unit", name=unit)
         E.sub(element, "ssc:BaseUnit", **{k: str(e) for k, e in exponents.items()})
-    experiment = E.sub(root, "ssd:DefaultExperiment", startTime=repr(float(start)),
-                       stopTime=repr(float(stop)))
+    experiment = E.sub(
+        root, "ssd:DefaultExperiment", startTime=repr(float(start)), stopTime=repr(float(stop))
+    )
     annotations = E.sub(experiment, "ssd:Annotations")
     annotation = E.sub(annotations, "ssc:Annotation", type=MASTER_ANNOTATION)
-    E.sub(annotation, "agilesat:Master", nsmap={"agilesat": MASTER_NAMESPACE},
-          stepSize=repr(float(step)), algorithm=algorithm)
+    E.sub(
+        annotation,
+        "agilesat:Master",
+        nsmap={"agilesat": MASTER_NAMESPACE},
+        stepSize=repr(float(step)),
+        algorithm=algorithm,
+    )
     # libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
     # Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
     # takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
     # the namespace is declared on the annotation.
-    osp = E.sub(annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE},
-                type=OSP_ANNOTATION)
+    osp = E.sub(annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE}, type=OSP_ANNOTATION)
     E.sub(E.sub(osp, "osp:Algorithm"), "osp:FixedStepAlgorithm", baseStepSize=repr(float(step)))
     tree = etree.ElementTree(root)
     _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
-
 
 
 def _oms_annotation(E, system, step: float) -> None:
@@ -413,16 +468,20 @@ def _oms_annotation(E, system, step: float) -> None:
     ssd:Annotations/ssc:Annotation type="org.openmodelica"/oms:Annotations/
     oms:SimulationInformation/oms:FixedStepMaster, e.g. its testsuite's exported SSDs);
     after ssd:Connections, where the SSD schema puts a system's annotations."""
-    annotation = E.sub(E.sub(system, "ssd:Annotations"), "ssc:Annotation",
-                       nsmap={"oms": OMS_NAMESPACE}, type=OMS_ANNOTATION)
+    annotation = E.sub(
+        E.sub(system, "ssd:Annotations"),
+        "ssc:Annotation",
+        nsmap={"oms": OMS_NAMESPACE},
+        type=OMS_ANNOTATION,
+    )
     information = E.sub(E.sub(annotation, "oms:Annotations"), "oms:SimulationInformation")
-    E.sub(information, "oms:FixedStepMaster", description="oms-ma",
-          stepSize=repr(float(step)))
+    E.sub(information, "oms:FixedStepMaster", description="oms-ma", stepSize=repr(float(step)))
 
 
 def _expand_parameters(parameters: dict, tables: dict) -> dict:
     """{"A.p": value} -> {instance: {scalar name: (SSV type, text)}}, checked against tables."""
     import numpy as np
+
     result: dict[str, dict] = {}
     for key, value in parameters.items():
         instance, name = key.split(".", 1)
@@ -434,8 +493,10 @@ def _expand_parameters(parameters: dict, tables: dict) -> dict:
             continue
         array = np.broadcast_to(np.asarray(value, dtype=float), variable.shape).reshape(-1)
         for scalar, x in zip(variable.scalar_names(), array):
-            text = {"Boolean": lambda v: "true" if v else "false",
-                    "Integer": lambda v: str(int(v))}.get(variable.type, repr)(float(x))
+            text = {
+                "Boolean": lambda v: "true" if v else "false",
+                "Integer": lambda v: str(int(v)),
+            }.get(variable.type, repr)(float(x))
             result.setdefault(instance, {})[scalar] = (variable.type, text)
     return result
 
@@ -444,8 +505,7 @@ class _Maker:
     """Tiny helper for namespaced lxml elements: E("ssd:System", name=...)."""
 
     def __call__(self, tag, **attributes):
-        return etree.Element(self._qname(tag), {k: str(v) for k, v in attributes.items()},
-                             nsmap=NS)
+        return etree.Element(self._qname(tag), {k: str(v) for k, v in attributes.items()}, nsmap=NS)
 
     def sub(self, parent, tag, nsmap=None, **attributes):
         """A child element; ``nsmap`` declares further namespaces on it."""
@@ -456,4 +516,3 @@ class _Maker:
     def _qname(tag):
         prefix, local = tag.split(":")
         return f"{{{_PREFIXES[prefix]}}}{local}"
-

@@ -4,6 +4,7 @@ Inside, every value is SI in the unit strings of the model descriptions (``rad/s
 ``N.m.s``, ``1``).  :func:`pretty` writes them for people (``rad/s²``, ``N·m·s``, no unit
 for ``1``); :func:`to_degrees` gives the factor and unit of an angle-valued unit in degrees.
 """
+
 from __future__ import annotations
 
 import math

@@ -14,6 +14,7 @@ an array input is connected as a whole or not at all.  Any other open input of o
 error.  An FMU that is not ours declares nothing: its open inputs are listed too, as keeping
 their start value, and logged as warnings.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -26,15 +27,16 @@ from .ssp import ParameterValue, SystemFile, SystemFileError
 
 @dataclass
 class Plan:
-    steps: Schedule           # stepping: step order and output evaluation blocks
-    init: Schedule            # initialisation
+    steps: Schedule  # stepping: step order and output evaluation blocks
+    init: Schedule  # initialisation
     sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
     #: open inputs allowed to be open: {"input": "B.u", "meaning": ..., "declared": bool}
     open_inputs: list[dict] = field(default_factory=list)
 
 
-def check_system(system: SystemFile, instances: dict[str, Description],
-                 bindings: list[ParameterValue]) -> Plan:
+def check_system(
+    system: SystemFile, instances: dict[str, Description], bindings: list[ParameterValue]
+) -> Plan:
     """Check connections and parameters against the FMUs; return the schedules."""
     problems = []
     where = str(system.path)
@@ -44,25 +46,24 @@ def check_system(system: SystemFile, instances: dict[str, Description],
         a, b = instances.get(c.start_element), instances.get(c.end_element)
         for element, inst in ((c.start_element, a), (c.end_element, b)):
             if inst is None:
-                problems.append(f"{at}: unknown component '{element}' (components: "
-                                f"{', '.join(instances)})")
+                problems.append(
+                    f"{at}: unknown component '{element}' (components: {', '.join(instances)})"
+                )
         if a is None or b is None:
             continue
         va, vb = a.variables.get(c.start_connector), b.variables.get(c.end_connector)
         if va is None:
-            problems.append(f"{at}: {a.name} ({a.path.name}) has no variable "
-                            f"'{c.start_connector}'")
+            problems.append(f"{at}: {a.name} ({a.path.name}) has no variable '{c.start_connector}'")
         if vb is None:
-            problems.append(f"{at}: {b.name} ({b.path.name}) has no variable "
-                            f"'{c.end_connector}'")
+            problems.append(f"{at}: {b.name} ({b.path.name}) has no variable '{c.end_connector}'")
         if va is None or vb is None:
             continue
         if va.causality != "output":
-            problems.append(f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an "
-                            "output")
+            problems.append(
+                f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an output"
+            )
         if vb.causality != "input":
-            problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an "
-                            "input")
+            problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an input")
         if va.type != vb.type:
             problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
         elif va.type == "Real" and va.unit and vb.unit and va.unit != vb.unit:
@@ -71,33 +72,40 @@ def check_system(system: SystemFile, instances: dict[str, Description],
             problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
         key = (b.name, vb.name)
         if key in sources:
-            problems.append(f"{at}: input {b.name}.{vb.name} is already driven by "
-                            f"{'.'.join(sources[key])}")
+            problems.append(
+                f"{at}: input {b.name}.{vb.name} is already driven by {'.'.join(sources[key])}"
+            )
         sources[key] = (a.name, va.name)
     for value in bindings:
         inst = instances.get(value.component)
         if inst is None:
-            problems.append(f"{value.origin}: parameter for unknown component "
-                            f"'{value.component}'")
+            problems.append(f"{value.origin}: parameter for unknown component '{value.component}'")
             continue
         var = inst.variables.get(value.name)
         if var is None:
-            problems.append(f"{value.origin}: {inst.name} ({inst.path.name}) has no variable "
-                            f"'{value.name}'")
+            problems.append(
+                f"{value.origin}: {inst.name} ({inst.path.name}) has no variable '{value.name}'"
+            )
         elif var.causality not in ("parameter", "input") or var.variability == "constant":
-            problems.append(f"{value.origin}: {inst.name}.{value.name} is a {var.causality}, "
-                            "expected a parameter")
+            problems.append(
+                f"{value.origin}: {inst.name}.{value.name} is a {var.causality}, "
+                "expected a parameter"
+            )
         elif var.type != value.type:
-            problems.append(f"{value.origin}: {inst.name}.{value.name} is {var.type}, the "
-                            f"value is {value.type}")
+            problems.append(
+                f"{value.origin}: {inst.name}.{value.name} is {var.type}, the value is {value.type}"
+            )
     problems += _connector_problems(system, instances)
     open_inputs = _open_inputs(system, instances, sources, bindings, problems)
     problems += disagreements(instances, bindings, sources)
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    return Plan(schedule(instances, sources, "feedthrough", where),
-                schedule(instances, sources, "initial_feedthrough", where), sources,
-                open_inputs)
+    return Plan(
+        schedule(instances, sources, "feedthrough", where),
+        schedule(instances, sources, "initial_feedthrough", where),
+        sources,
+        open_inputs,
+    )
 
 
 def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
@@ -108,28 +116,43 @@ def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
         at = f"{where}:{system.component(inst.name).line}: component {inst.name}"
         inputs = [v for v in inst.md.modelVariables if v.causality == "input"]
         open_ = [v for v in inputs if (inst.name, v.name) not in given]
-        if inst.optional_inputs is None:   # not our FMU: nothing declared
-            result += [{"input": f"{inst.name}.{v.name}", "declared": False,
-                        "meaning": f"keeps its start value {v.start} (the FMU declares no "
-                                   "optional inputs)"} for v in open_]
+        if inst.optional_inputs is None:  # not our FMU: nothing declared
+            result += [
+                {
+                    "input": f"{inst.name}.{v.name}",
+                    "declared": False,
+                    "meaning": f"keeps its start value {v.start} (the FMU declares no "
+                    "optional inputs)",
+                }
+                for v in open_
+            ]
             continue
         groups: dict[str, list] = {}
         for v in open_:
             if v.name in inst.optional_inputs:
                 groups.setdefault(v.name.partition("[")[0], []).append(v.name)
             else:
-                problems.append(f"{at}: required input {inst.name}.{v.name} is not connected "
-                                "(connect it or give it a parameter value)")
+                problems.append(
+                    f"{at}: required input {inst.name}.{v.name} is not connected "
+                    "(connect it or give it a parameter value)"
+                )
         for variable, names in groups.items():
             members = [v.name for v in inputs if v.name.partition("[")[0] == variable]
             if len(names) < len(members):
                 given_ = [m for m in members if m not in names]
-                problems.append(f"{at}: input {inst.name}.{variable} is partly connected: "
-                                f"{', '.join(names)} open, {', '.join(given_)} connected or "
-                                "set (connect all of it or none)")
+                problems.append(
+                    f"{at}: input {inst.name}.{variable} is partly connected: "
+                    f"{', '.join(names)} open, {', '.join(given_)} connected or "
+                    "set (connect all of it or none)"
+                )
             else:
-                result.append({"input": f"{inst.name}.{variable}", "declared": True,
-                               "meaning": inst.optional_inputs[names[0]]})
+                result.append(
+                    {
+                        "input": f"{inst.name}.{variable}",
+                        "declared": True,
+                        "meaning": inst.optional_inputs[names[0]],
+                    }
+                )
     return result
 
 
@@ -142,17 +165,16 @@ def _connector_problems(system, instances) -> list[str]:
             at = f"{system.path}:{c.line}: connector {ref.name}.{c.name}"
             var = inst.variables.get(c.name)
             if var is None:
-                problems.append(f"{at}: {ref.name} ({inst.path.name}) has no variable "
-                                f"'{c.name}'")
+                problems.append(f"{at}: {ref.name} ({inst.path.name}) has no variable '{c.name}'")
                 continue
             if c.kind in ("input", "output", "parameter") and c.kind != var.causality:
-                problems.append(f"{at}: declared {c.kind}, the FMU's variable is a "
-                                f"{var.causality}")
+                problems.append(f"{at}: declared {c.kind}, the FMU's variable is a {var.causality}")
             if c.type is not None and c.type != var.type:
                 problems.append(f"{at}: declared {c.type}, the FMU's variable is {var.type}")
             elif c.unit is not None and var.type == "Real" and c.unit != (var.unit or ""):
-                problems.append(f"{at}: declared unit '{c.unit}', the FMU's variable has "
-                                f"'{var.unit or ''}'")
+                problems.append(
+                    f"{at}: declared unit '{c.unit}', the FMU's variable has '{var.unit or ''}'"
+                )
     return problems
 
 
@@ -160,8 +182,9 @@ def override(instances, key: str, value) -> ParameterValue:
     """A ``--set Instance.variable=value`` override, typed by the FMU's variable."""
     name, _, variable = key.partition(".")
     if name not in instances or not variable:
-        raise SystemFileError(f"--set {key}: expected Instance.variable with an instance of "
-                              f"{', '.join(instances)}")
+        raise SystemFileError(
+            f"--set {key}: expected Instance.variable with an instance of {', '.join(instances)}"
+        )
     var = instances[name].variables.get(variable)
     kind = var.type if var is not None else "Real"
     if kind == "Boolean" and isinstance(value, str):

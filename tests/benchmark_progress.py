@@ -4,6 +4,7 @@ non-terminal stream), best of N each; prints the ratios.
 
     .venv/bin/python tests/benchmark_progress.py [N]
 """
+
 import io
 import sys
 import time
@@ -18,8 +19,11 @@ def main(n: int) -> None:
     scenario = get("scan_pitch")
     build_all(names=scenario.components)
     calls = []
-    variants = {"none": lambda: None, "counting": lambda: lambda done, total: calls.append(done),
-                "Progress": lambda: Progress("scan_pitch", stream=io.StringIO(), interval=0.0)}
+    variants = {
+        "none": lambda: None,
+        "counting": lambda: lambda done, total: calls.append(done),
+        "Progress": lambda: Progress("scan_pitch", stream=io.StringIO(), interval=0.0),
+    }
     best = {name: float("inf") for name in variants}
     for _ in range(n):
         for name, make in variants.items():
@@ -34,8 +38,10 @@ def main(n: int) -> None:
     for i in range(k):
         progress(i, k)
     per_call = (time.perf_counter() - start) / k
-    print(f"  one Progress call (no terminal, between lines): {per_call * 1e6:.2f} µs; "
-          f"100 per run: {100 * per_call / best['none'] * 100:.4f} % of the run")
+    print(
+        f"  one Progress call (no terminal, between lines): {per_call * 1e6:.2f} µs; "
+        f"100 per run: {100 * per_call / best['none'] * 100:.4f} % of the run"
+    )
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ For macro steps 0.01, 0.05 and 0.1 s, on one core, best of N runs each:
   master, ctypes, pythonfmu and our slave and shim) and model compute (the rest).
 Targets (issue 2): ≥ 300× real time at 0.05 s, and ≤ 3× the monolithic reference.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -23,11 +24,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from reference import scan_pitch as reference
-
 from agilesat.fmus.build import build_all
 from agilesat.orchestration import simulate
 from agilesat.orchestration.scenarios import get
+from reference import scan_pitch as reference
 
 STEPS = (0.01, 0.05, 0.1)
 STOP = 150.0
@@ -59,6 +59,7 @@ def stub_models():
     def restore():
         for obj, method, function in saved:
             setattr(obj, method, function)
+
     return restore
 
 
@@ -70,10 +71,14 @@ def main() -> None:
     ssd = get("scan_pitch").ssd
     simulate(ssd, step=0.1, stop=1.0)  # load every FMU module once
     print(f"scan_pitch benchmark: {STOP:g} s simulated, best of {args.repeat} runs per entry")
-    print(f"  {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-          f"numpy {np.__version__}, one core\n")
-    header = (f"{'step':>6} {'co-sim':>9} {'RTF':>7} {'us/step':>8} {'reference':>10} "
-              f"{'ratio':>6} {'FMI us/step':>12} {'model us/step':>14}")
+    print(
+        f"  {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+        f"numpy {np.__version__}, one core\n"
+    )
+    header = (
+        f"{'step':>6} {'co-sim':>9} {'RTF':>7} {'us/step':>8} {'reference':>10} "
+        f"{'ratio':>6} {'FMI us/step':>12} {'model us/step':>14}"
+    )
     print(header)
     rows = {}
     for step in STEPS:
@@ -86,15 +91,19 @@ def main() -> None:
         finally:
             restore()
         rows[step] = (cosim, monolithic)
-        print(f"{step:>6} {cosim:>8.3f}s {STOP / cosim:>7.0f} {cosim / n * 1e6:>8.0f} "
-              f"{monolithic:>9.3f}s {cosim / monolithic:>6.2f} {overhead / n * 1e6:>12.0f} "
-              f"{(cosim - overhead) / n * 1e6:>14.0f}")
+        print(
+            f"{step:>6} {cosim:>8.3f}s {STOP / cosim:>7.0f} {cosim / n * 1e6:>8.0f} "
+            f"{monolithic:>9.3f}s {cosim / monolithic:>6.2f} {overhead / n * 1e6:>12.0f} "
+            f"{(cosim - overhead) / n * 1e6:>14.0f}"
+        )
     cosim, monolithic = rows[0.05]
     rtf = STOP / cosim
-    print(f"\ntargets at 0.05 s: real-time factor {rtf:.0f} (target >= 300: "
-          f"{'met' if rtf >= 300 else 'NOT met'}); co-simulation / reference "
-          f"{cosim / monolithic:.2f} "
-          f"(target <= 3: {'met' if cosim / monolithic <= 3 else 'NOT met'})")
+    print(
+        f"\ntargets at 0.05 s: real-time factor {rtf:.0f} (target >= 300: "
+        f"{'met' if rtf >= 300 else 'NOT met'}); co-simulation / reference "
+        f"{cosim / monolithic:.2f} "
+        f"(target <= 3: {'met' if cosim / monolithic <= 3 else 'NOT met'})"
+    )
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory {peak:.0f} MiB")
 

@@ -1,4 +1,5 @@
 """Shared fixtures (helpers that are not fixtures live in ``helpers.py``)."""
+
 import json
 
 import pytest
@@ -8,6 +9,7 @@ import pytest
 def fmus() -> dict:
     """Every FMU, built (if stale) into fmus/build: {name: path}."""
     from agilesat.fmus.build import build_all
+
     return {path.stem: path for path in build_all()}
 
 
@@ -18,8 +20,13 @@ def scan_pitch_run(fmus, tmp_path_factory):
     that need this very run share it instead of repeating it."""
     from agilesat.orchestration.results import Results
     from helpers import agilesat
+
     out = tmp_path_factory.mktemp("scan_pitch")
     result = agilesat("run", "scan_pitch", "--out", out)
     assert result.returncode == 0, result.stderr
-    return out, result, json.loads((out / "summary.json").read_text()), \
-        Results.from_csv(out / "results.csv")
+    return (
+        out,
+        result,
+        json.loads((out / "summary.json").read_text()),
+        Results.from_csv(out / "results.csv"),
+    )

@@ -9,6 +9,7 @@ read through ECOS's identifier "<instance>::<name>".  Columns "time", then COLUM
 rows after each step (as libcosim_run.py).  Exit status 2 with ECOS's message if a call
 fails; the rows recorded so far are saved all the same.
 """
+
 import sys
 
 import numpy as np

@@ -13,6 +13,7 @@ The child processes run this file: ``python fault_cases_fmu.py CASE [ARGS]`` pri
 case's observations as JSON.  They use ``fmi_host`` (a plain fmpy host, no agilesat).
 ``python tests/fault_cases_fmu.py figures N`` prints the resource figures.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -29,14 +30,19 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 BUILD = Path(os.environ.get("AGILESAT_FAULT_FMUS", ROOT / "fmus" / "build"))
-FMU, OTHER = "AttitudeController", "CmgCluster"   # two small FMUs
+FMU, OTHER = "AttitudeController", "CmgCluster"  # two small FMUs
 
 
 # -- the parent side: one child process per case ------------------------------------------
 def _child(case: str, *args, timeout: float = 300) -> tuple[dict | None, str]:
     """(the child's JSON answer or None, what happened to the process)."""
-    run = subprocess.run([sys.executable, str(Path(__file__)), case, *map(str, args)],
-                         capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+    run = subprocess.run(
+        [sys.executable, str(Path(__file__)), case, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=ROOT,
+    )
     if run.returncode < 0:
         return None, f"killed by signal {-run.returncode}; stderr: {run.stderr[-400:]}"
     lines = run.stdout.strip().splitlines()
@@ -47,54 +53,90 @@ def _child(case: str, *args, timeout: float = 300) -> tuple[dict | None, str]:
 
 def _case(fault: str, expected: str, child: str, want: dict, *args):
     """A case whose child answers a dict that must contain ``want``."""
+
     def run():
         answer, process = _child(child, *args)
         ok = answer is not None and all(answer.get(k) == v for k, v in want.items())
         observed = process if answer is None else f"{process}; {json.dumps(answer)}"
         return {"fault": fault, "expected": expected, "observed": observed, "ok": ok}
+
     run.__name__ = child
     return run
 
 
 ERROR = 3
 CASES = [
-    _case("fmi2FreeInstance twice, then exit", "no crash, clean exit",
-          "double_free", {"exit": "clean"}),
-    _case("fmi2DoStep, fmi2GetReal, fmi2SetReal, fmi2Terminate, fmi2GetFMUstate on a "
-          "freed instance", "fmi2Error for each, no crash", "call_after_free",
-          {"statuses": [ERROR] * 5}),
-    _case("calls on NULL and on a made-up instance handle", "fmi2Error for each, no crash",
-          "garbage_handle", {"statuses": [ERROR] * 4}),
-    _case("NULL value-reference, value and string arrays with n > 0; a NULL string; "
-          "NULL categories", "fmi2Error with a message for each; the instance still steps",
-          "null_arrays", {"statuses": [ERROR] * 7, "messages": 7, "step_after": 0}),
-    _case("fmi2SetFMUstate(NULL), a freed state, a state of another instance and of "
-          "another FMU; fmi2FreeFMUstate twice",
-          "fmi2Error with a message for each; both instances still step", "wrong_states",
-          {"statuses": [ERROR] * 5, "messages": 5, "steps_after": [0, 0]}),
-    _case("fmi2DeSerializeFMUstate of random bytes, of truncated bytes, of another FMU's "
-          "state, of a wrong format version, and of empty bytes",
-          "fmi2Error naming the reason for each; the instance still steps and restores a "
-          "valid state", "garbage_bytes",
-          {"statuses": [ERROR] * 5, "reasons": True, "step_after": 0, "valid_restore": 0}),
-    _case("fmi2DeSerializeFMUstate of a pickle that runs a command when unpickled",
-          "fmi2Error; the command never runs", "pickle_bytes",
-          {"status": ERROR, "command_ran": False}),
-    _case("fmi2SerializeFMUstate into a buffer one byte too small, and into one 16 bytes "
-          "too large", "fmi2Error for the small one; the large one (NUL-padded) "
-          "deserializes and restores", "buffer_sizes",
-          {"small": ERROR, "large": 0, "large_restores": [0, 0]}),
-    _case("fmi2GetFMUstate into a state it handed out before", "the same handle, updated "
-          "(FMI 2.0 section 2.1.8)", "state_reuse", {"same_handle": True, "restores": 0}),
-    _case("fmi2SetupExperiment and fmi2EnterInitializationMode after initialisation, "
-          "fmi2ExitInitializationMode twice, fmi2DoStep before initialisation, "
-          "fmi2Terminate twice, fmi2SetReal after fmi2Terminate",
-          "fmi2Error with a message for each", "mode_rules",
-          {"statuses": [ERROR] * 6, "messages": 6}),
-    _case("a KeyboardInterrupt inside the FMU (fmi2Fatal), then more calls, then "
-          "fmi2FreeInstance", "the later calls refused with fmi2Error (only "
-          "fmi2FreeInstance is allowed); no crash, clean exit", "after_fatal",
-          {"fatal": True, "after": [ERROR, ERROR, ERROR], "refused": True, "exit": "clean"}),
+    _case(
+        "fmi2FreeInstance twice, then exit",
+        "no crash, clean exit",
+        "double_free",
+        {"exit": "clean"},
+    ),
+    _case(
+        "fmi2DoStep, fmi2GetReal, fmi2SetReal, fmi2Terminate, fmi2GetFMUstate on a freed instance",
+        "fmi2Error for each, no crash",
+        "call_after_free",
+        {"statuses": [ERROR] * 5},
+    ),
+    _case(
+        "calls on NULL and on a made-up instance handle",
+        "fmi2Error for each, no crash",
+        "garbage_handle",
+        {"statuses": [ERROR] * 4},
+    ),
+    _case(
+        "NULL value-reference, value and string arrays with n > 0; a NULL string; NULL categories",
+        "fmi2Error with a message for each; the instance still steps",
+        "null_arrays",
+        {"statuses": [ERROR] * 7, "messages": 7, "step_after": 0},
+    ),
+    _case(
+        "fmi2SetFMUstate(NULL), a freed state, a state of another instance and of "
+        "another FMU; fmi2FreeFMUstate twice",
+        "fmi2Error with a message for each; both instances still step",
+        "wrong_states",
+        {"statuses": [ERROR] * 5, "messages": 5, "steps_after": [0, 0]},
+    ),
+    _case(
+        "fmi2DeSerializeFMUstate of random bytes, of truncated bytes, of another FMU's "
+        "state, of a wrong format version, and of empty bytes",
+        "fmi2Error naming the reason for each; the instance still steps and restores a valid state",
+        "garbage_bytes",
+        {"statuses": [ERROR] * 5, "reasons": True, "step_after": 0, "valid_restore": 0},
+    ),
+    _case(
+        "fmi2DeSerializeFMUstate of a pickle that runs a command when unpickled",
+        "fmi2Error; the command never runs",
+        "pickle_bytes",
+        {"status": ERROR, "command_ran": False},
+    ),
+    _case(
+        "fmi2SerializeFMUstate into a buffer one byte too small, and into one 16 bytes too large",
+        "fmi2Error for the small one; the large one (NUL-padded) deserializes and restores",
+        "buffer_sizes",
+        {"small": ERROR, "large": 0, "large_restores": [0, 0]},
+    ),
+    _case(
+        "fmi2GetFMUstate into a state it handed out before",
+        "the same handle, updated (FMI 2.0 section 2.1.8)",
+        "state_reuse",
+        {"same_handle": True, "restores": 0},
+    ),
+    _case(
+        "fmi2SetupExperiment and fmi2EnterInitializationMode after initialisation, "
+        "fmi2ExitInitializationMode twice, fmi2DoStep before initialisation, "
+        "fmi2Terminate twice, fmi2SetReal after fmi2Terminate",
+        "fmi2Error with a message for each",
+        "mode_rules",
+        {"statuses": [ERROR] * 6, "messages": 6},
+    ),
+    _case(
+        "a KeyboardInterrupt inside the FMU (fmi2Fatal), then more calls, then fmi2FreeInstance",
+        "the later calls refused with fmi2Error (only "
+        "fmi2FreeInstance is allowed); no crash, clean exit",
+        "after_fatal",
+        {"fatal": True, "after": [ERROR, ERROR, ERROR], "refused": True, "exit": "clean"},
+    ),
 ]
 
 
@@ -106,47 +148,78 @@ def _late_case(mode: str, fault: str):
             with zipfile.ZipFile(BUILD / f"{FMU}.fmu") as archive:
                 archive.extractall(directory)
                 guid = archive.read("modelDescription.xml").decode().split('guid="')[1]
-            run = subprocess.run([str(host), str(directory), FMU, guid.split('"')[0], mode],
-                                 capture_output=True, text=True, timeout=300,
-                                 env={"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"})
+            run = subprocess.run(
+                [str(host), str(directory), FMU, guid.split('"')[0], mode],
+                capture_output=True,
+                text=True,
+                timeout=300,
+                env={"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"},
+            )
         finally:
             shutil.rmtree(directory, ignore_errors=True)
         lines = run.stdout.strip().splitlines()
         ok = run.returncode == 0 and any("fmi2FreeInstance returned" in l for l in lines)
-        observed = (f"exit code {run.returncode}" if run.returncode >= 0 else
-                    f"killed by signal {-run.returncode}") + "; " + " | ".join(lines[-3:])
-        return {"fault": fault, "expected": "the late calls are harmless (fmi2Error, no "
-                "crash), clean exit", "observed": observed, "ok": ok}
+        observed = (
+            (
+                f"exit code {run.returncode}"
+                if run.returncode >= 0
+                else f"killed by signal {-run.returncode}"
+            )
+            + "; "
+            + " | ".join(lines[-3:])
+        )
+        return {
+            "fault": fault,
+            "expected": "the late calls are harmless (fmi2Error, no crash), clean exit",
+            "observed": observed,
+            "ok": ok,
+        }
+
     run.__name__ = f"late_calls_{mode}"
     return run
 
 
 CASES += [
-    _late_case("finalize", "a C host finalizes its embedded Python, then calls "
-               "fmi2Terminate and fmi2FreeInstance"),
-    _late_case("destructor", "a C host calls fmi2Terminate and fmi2FreeInstance from a "
-               "static destructor, after the exit handlers"),
+    _late_case(
+        "finalize",
+        "a C host finalizes its embedded Python, then calls fmi2Terminate and fmi2FreeInstance",
+    ),
+    _late_case(
+        "destructor",
+        "a C host calls fmi2Terminate and fmi2FreeInstance from a "
+        "static destructor, after the exit handlers",
+    ),
 ]
 
 
 def _warning_case():
     directory = Path(tempfile.mkdtemp(prefix="agilesat-fake-"))
     try:
-        _compile(HERE / "c_host" / "fake_inner.c", directory / "pythonfmu-export.so",
-                 "-shared", "-fPIC")
-        _compile(ROOT / "fmus" / "shim" / "agilesat_fmi2.c", directory / "Fake.so", "-shared",
-                 "-fPIC", "-fvisibility=hidden", '-DAGILESAT_LIBPYTHON=""',
-                 '-DAGILESAT_PYTHON=""', "-lpthread")
+        _compile(
+            HERE / "c_host" / "fake_inner.c", directory / "pythonfmu-export.so", "-shared", "-fPIC"
+        )
+        _compile(
+            ROOT / "fmus" / "shim" / "agilesat_fmi2.c",
+            directory / "Fake.so",
+            "-shared",
+            "-fPIC",
+            "-fvisibility=hidden",
+            '-DAGILESAT_LIBPYTHON=""',
+            '-DAGILESAT_PYTHON=""',
+            "-lpthread",
+        )
         answer, process = _child("warning_as_ok", directory / "Fake.so")
     finally:
         shutil.rmtree(directory, ignore_errors=True)
     want = {"step": 0, "messages": [[0, "logStatusWarning", "gimbal rate command limited"]]}
-    return {"fault": "the slave logs a warning at status OK, category logStatusWarning "
-            "(the shim alone, on a stand-in for pythonfmu's binary), logging off",
-            "expected": "the host's logger gets it as OK with that category; fmi2DoStep "
-            "returns fmi2OK; OK-level debug messages stay filtered",
-            "observed": process if answer is None else f"{process}; {json.dumps(answer)}",
-            "ok": answer == want}
+    return {
+        "fault": "the slave logs a warning at status OK, category logStatusWarning "
+        "(the shim alone, on a stand-in for pythonfmu's binary), logging off",
+        "expected": "the host's logger gets it as OK with that category; fmi2DoStep "
+        "returns fmi2OK; OK-level debug messages stay filtered",
+        "observed": process if answer is None else f"{process}; {json.dumps(answer)}",
+        "ok": answer == want,
+    }
 
 
 _warning_case.__name__ = "warning_as_ok"
@@ -155,8 +228,22 @@ CASES.append(_warning_case)
 
 def _compile(source: Path, output: Path, *flags: str) -> None:
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-I", str(ROOT / "fmus" / "shim"),
-                    *flags, "-o", str(output), str(source), "-ldl"], check=True)
+    subprocess.run(
+        [
+            compiler,
+            "-O2",
+            "-Wall",
+            "-Werror",
+            "-I",
+            str(ROOT / "fmus" / "shim"),
+            *flags,
+            "-o",
+            str(output),
+            str(source),
+            "-ldl",
+        ],
+        check=True,
+    )
 
 
 @functools.cache
@@ -174,22 +261,32 @@ def resource_figures(n: int) -> list[tuple[str, str]]:
     raw, _ = _child("raw_cycles", n, timeout=36000)
     master, _ = _child("instance_cycles", n, timeout=36000)
     live, _ = _child("live_instances", min(n, 200), timeout=36000)
-    for label, answer in ((f"{n} simulate() calls of scan_pitch (0.1 s) in one process",
-                           simulate),
-                          (f"{n} instantiate/free cycles of {FMU} through the master's "
-                           "Instance (reset and reused)", master),
-                          (f"{n} raw fmi2Instantiate/fmi2FreeInstance cycles of {FMU} "
-                           "(fmpy)", raw)):
+    for label, answer in (
+        (f"{n} simulate() calls of scan_pitch (0.1 s) in one process", simulate),
+        (
+            f"{n} instantiate/free cycles of {FMU} through the master's "
+            "Instance (reset and reused)",
+            master,
+        ),
+        (f"{n} raw fmi2Instantiate/fmi2FreeInstance cycles of {FMU} (fmpy)", raw),
+    ):
         if answer is None:
             rows.append((label, "failed"))
             continue
-        rows.append((f"{label}: resident memory growth",
-                     f"{answer['rss_mb']:.1f} MB ({answer['rss_mb'] * 1024 / n:.2f} KB per "
-                     "call)"))
+        rows.append(
+            (
+                f"{label}: resident memory growth",
+                f"{answer['rss_mb']:.1f} MB ({answer['rss_mb'] * 1024 / n:.2f} KB per call)",
+            )
+        )
         rows.append((f"{label}: memory mappings growth", str(answer["maps"])))
     if live is not None:
-        rows.append((f"resident memory per live {FMU} instance ({live['count']} instances)",
-                     f"{live['rss_mb'] * 1024 / live['count']:.0f} KB"))
+        rows.append(
+            (
+                f"resident memory per live {FMU} instance ({live['count']} instances)",
+                f"{live['rss_mb'] * 1024 / live['count']:.0f} KB",
+            )
+        )
     return rows
 
 
@@ -197,6 +294,7 @@ def resource_figures(n: int) -> list[tuple[str, str]]:
 def _host():
     sys.path.insert(0, str(HERE))
     import fmi_host
+
     return fmi_host
 
 
@@ -247,10 +345,15 @@ def call_after_free():
     fmu.dll.fmi2FreeInstance(fmu.c)
     vr, value = (ctypes.c_uint * 1)(0), (ctypes.c_double * 1)()
     state = ctypes.c_void_p()
-    return {"statuses": [fmu.step(0.0, 0.05), fmu.dll.fmi2GetReal(fmu.c, vr, 1, value),
-                         fmu.dll.fmi2SetReal(fmu.c, vr, 1, value),
-                         fmu.dll.fmi2Terminate(fmu.c),
-                         fmu.dll.fmi2GetFMUstate(fmu.c, ctypes.byref(state))]}
+    return {
+        "statuses": [
+            fmu.step(0.0, 0.05),
+            fmu.dll.fmi2GetReal(fmu.c, vr, 1, value),
+            fmu.dll.fmi2SetReal(fmu.c, vr, 1, value),
+            fmu.dll.fmi2Terminate(fmu.c),
+            fmu.dll.fmi2GetFMUstate(fmu.c, ctypes.byref(state)),
+        ]
+    }
 
 
 def garbage_handle():
@@ -258,10 +361,14 @@ def garbage_handle():
     junk = ctypes.create_string_buffer(b"\xff" * 256)
     made_up = ctypes.cast(junk, ctypes.c_void_p)
     vr, value = (ctypes.c_uint * 1)(0), (ctypes.c_double * 1)()
-    return {"statuses": [fmu.dll.fmi2DoStep(None, 0.0, 0.05, 1),
-                         fmu.dll.fmi2DoStep(made_up, 0.0, 0.05, 1),
-                         fmu.dll.fmi2GetReal(made_up, vr, 1, value),
-                         fmu.dll.fmi2SetupExperiment(made_up, 0, 0.0, 0.0, 0, 0.0)]}
+    return {
+        "statuses": [
+            fmu.dll.fmi2DoStep(None, 0.0, 0.05, 1),
+            fmu.dll.fmi2DoStep(made_up, 0.0, 0.05, 1),
+            fmu.dll.fmi2GetReal(made_up, vr, 1, value),
+            fmu.dll.fmi2SetupExperiment(made_up, 0, 0.0, 0.0, 0, 0.0),
+        ]
+    }
 
 
 def null_arrays():
@@ -270,13 +377,20 @@ def null_arrays():
     vr, value = (ctypes.c_uint * 3)(0, 1, 2), (ctypes.c_double * 3)()
     strings = (ctypes.c_char_p * 2)(b"x", None)
     dll, c = fmu.dll, fmu.c
-    statuses = [dll.fmi2GetReal(c, None, 3, value), dll.fmi2GetReal(c, vr, 3, None),
-                dll.fmi2SetReal(c, None, 2, None), dll.fmi2GetString(c, vr, 2, None),
-                dll.fmi2SetString(c, vr, 2, strings),
-                dll.fmi2SetDebugLogging(c, 1, 2, None),
-                dll.fmi2GetRealStatus(c, 2, None)]
-    return {"statuses": statuses, "messages": len(_errors(fmu, mark)),
-            "step_after": fmu.step(0.0, 0.05)}
+    statuses = [
+        dll.fmi2GetReal(c, None, 3, value),
+        dll.fmi2GetReal(c, vr, 3, None),
+        dll.fmi2SetReal(c, None, 2, None),
+        dll.fmi2GetString(c, vr, 2, None),
+        dll.fmi2SetString(c, vr, 2, strings),
+        dll.fmi2SetDebugLogging(c, 1, 2, None),
+        dll.fmi2GetRealStatus(c, 2, None),
+    ]
+    return {
+        "statuses": statuses,
+        "messages": len(_errors(fmu, mark)),
+        "step_after": fmu.step(0.0, 0.05),
+    }
 
 
 def wrong_states():
@@ -284,32 +398,46 @@ def wrong_states():
     mark = len(a.messages)
     freed = _state(a)
     assert a.dll.fmi2FreeFMUstate(a.c, ctypes.byref(ctypes.c_void_p(freed.value))) == 0
-    statuses = [a.dll.fmi2SetFMUstate(a.c, None),
-                a.dll.fmi2SetFMUstate(a.c, freed),
-                a.dll.fmi2SetFMUstate(a.c, _state(twin)),
-                a.dll.fmi2SetFMUstate(a.c, _state(other)),
-                a.dll.fmi2FreeFMUstate(a.c, ctypes.byref(freed))]
-    return {"statuses": statuses, "messages": len(_errors(a, mark)),
-            "steps_after": [a.step(0.0, 0.05), other.step(0.0, 0.05)]}
+    statuses = [
+        a.dll.fmi2SetFMUstate(a.c, None),
+        a.dll.fmi2SetFMUstate(a.c, freed),
+        a.dll.fmi2SetFMUstate(a.c, _state(twin)),
+        a.dll.fmi2SetFMUstate(a.c, _state(other)),
+        a.dll.fmi2FreeFMUstate(a.c, ctypes.byref(freed)),
+    ]
+    return {
+        "statuses": statuses,
+        "messages": len(_errors(a, mark)),
+        "steps_after": [a.step(0.0, 0.05), other.step(0.0, 0.05)],
+    }
 
 
 def garbage_bytes():
     import random
+
     a, other = _ready(), _ready(OTHER, "other")
     valid = _serialize(a, _state(a))
     version = bytearray(valid)
-    version[18] ^= 0xFF                          # the u16 after the 18 magic bytes
+    version[18] ^= 0xFF  # the u16 after the 18 magic bytes
     random.seed(1)
-    inputs = [bytes(random.randrange(256) for _ in range(len(valid))), valid[:-9],
-              _serialize(other, _state(other)), bytes(version), b""]
+    inputs = [
+        bytes(random.randrange(256) for _ in range(len(valid))),
+        valid[:-9],
+        _serialize(other, _state(other)),
+        bytes(version),
+        b"",
+    ]
     mark = len(a.messages)
     statuses = [_deserialize(a, data)[0] for data in inputs]
     reasons = _errors(a, mark)
     status, state = _deserialize(a, valid)
-    return {"statuses": statuses, "reasons": len(reasons) == 5 and all(
-                "fmi2DeSerializeFMUstate" in r for r in reasons), "messages": reasons,
-            "step_after": a.step(0.0, 0.05),
-            "valid_restore": status or a.dll.fmi2SetFMUstate(a.c, state)}
+    return {
+        "statuses": statuses,
+        "reasons": len(reasons) == 5 and all("fmi2DeSerializeFMUstate" in r for r in reasons),
+        "messages": reasons,
+        "step_after": a.step(0.0, 0.05),
+        "valid_restore": status or a.dll.fmi2SetFMUstate(a.c, state),
+    }
 
 
 class _Command:
@@ -322,6 +450,7 @@ class _Command:
 
 def pickle_bytes():
     import pickle
+
     a = _ready()
     marker = Path(tempfile.mkdtemp()) / "pwned"
     status, _ = _deserialize(a, pickle.dumps(_Command(marker)))
@@ -335,11 +464,16 @@ def buffer_sizes():
     assert a.dll.fmi2SerializedFMUstateSize(a.c, state, ctypes.byref(size)) == 0
     small = (ctypes.c_char * (size.value - 1))()
     large = (ctypes.c_char * (size.value + 16))()
-    statuses = {"small": a.dll.fmi2SerializeFMUstate(a.c, state, small, size.value - 1),
-                "large": a.dll.fmi2SerializeFMUstate(a.c, state, large, size.value + 16)}
+    statuses = {
+        "small": a.dll.fmi2SerializeFMUstate(a.c, state, small, size.value - 1),
+        "large": a.dll.fmi2SerializeFMUstate(a.c, state, large, size.value + 16),
+    }
     status, restored = _deserialize(a, bytes(large))
-    return {**statuses, "large_restores": [status, a.dll.fmi2SetFMUstate(a.c, restored)],
-            "messages": _errors(a, 0)}
+    return {
+        **statuses,
+        "large_restores": [status, a.dll.fmi2SetFMUstate(a.c, restored)],
+        "messages": _errors(a, 0),
+    }
 
 
 def state_reuse():
@@ -348,8 +482,10 @@ def state_reuse():
     first = state.value
     assert a.step(0.0, 0.05) == 0
     status = a.dll.fmi2GetFMUstate(a.c, ctypes.byref(state))
-    return {"same_handle": status == 0 and state.value == first,
-            "restores": a.dll.fmi2SetFMUstate(a.c, state)}
+    return {
+        "same_handle": status == 0 and state.value == first,
+        "restores": a.dll.fmi2SetFMUstate(a.c, state),
+    }
 
 
 def mode_rules():
@@ -357,14 +493,19 @@ def mode_rules():
     fresh = fmi_host.Fmu(_path(), "fresh")
     a = _ready()
     vr, value = (ctypes.c_uint * 1)(a.vr[a.names("input")[0]]), (ctypes.c_double * 1)(0.5)
-    statuses = [fresh.step(0.0, 0.05),
-                a.dll.fmi2SetupExperiment(a.c, 0, 0.0, 0.0, 0, 0.0),
-                a.dll.fmi2EnterInitializationMode(a.c),
-                a.dll.fmi2ExitInitializationMode(a.c)]
+    statuses = [
+        fresh.step(0.0, 0.05),
+        a.dll.fmi2SetupExperiment(a.c, 0, 0.0, 0.0, 0, 0.0),
+        a.dll.fmi2EnterInitializationMode(a.c),
+        a.dll.fmi2ExitInitializationMode(a.c),
+    ]
     assert a.dll.fmi2Terminate(a.c) == 0
     statuses += [a.dll.fmi2Terminate(a.c), a.dll.fmi2SetReal(a.c, vr, 1, value)]
-    return {"statuses": statuses, "messages": len(_errors(a, 0)) + len(_errors(fresh, 0)),
-            "texts": _errors(a, 0)}
+    return {
+        "statuses": statuses,
+        "messages": len(_errors(a, 0)) + len(_errors(fresh, 0)),
+        "texts": _errors(a, 0),
+    }
 
 
 def after_fatal():
@@ -377,6 +518,7 @@ def after_fatal():
     def interrupt(*_):
         if armed[0]:
             raise KeyboardInterrupt
+
     fmi_host = _host()
     a = _ready()
     inputs = fmi_host.plausible_inputs(a)
@@ -405,19 +547,29 @@ def after_fatal():
 
 def warning_as_ok(library):
     from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
     messages = []
     callbacks = fmi2CallbackFunctions()
     callbacks.logger = fmi2CallbackLoggerTYPE(
         lambda env, name, status, category, message: messages.append(
-            [status, category.decode(), message.decode()]))
+            [status, category.decode(), message.decode()]
+        )
+    )
     dll = ctypes.CDLL(library)
     dll.fmi2Instantiate.restype = ctypes.c_void_p
-    dll.fmi2Instantiate.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                                    ctypes.c_char_p, ctypes.c_void_p, ctypes.c_int,
-                                    ctypes.c_int]
+    dll.fmi2Instantiate.argtypes = [
+        ctypes.c_char_p,
+        ctypes.c_int,
+        ctypes.c_char_p,
+        ctypes.c_char_p,
+        ctypes.c_void_p,
+        ctypes.c_int,
+        ctypes.c_int,
+    ]
     dll.fmi2DoStep.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
-    c = dll.fmi2Instantiate(b"fake", 1, b"{0}", b"file:///nonexistent", ctypes.addressof(callbacks),
-                            0, 0)
+    c = dll.fmi2Instantiate(
+        b"fake", 1, b"{0}", b"file:///nonexistent", ctypes.addressof(callbacks), 0, 0
+    )
     return {"step": dll.fmi2DoStep(c, 0.0, 0.05, 1), "messages": messages}
 
 
@@ -440,14 +592,16 @@ def simulate_loop(n):
     """On a copy of the system and its FMUs (a rebuild meanwhile is a new FMU)."""
     from agilesat.orchestration.master import simulate
     from agilesat.orchestration.scenarios import get
+
     copy = Path(tempfile.mkdtemp(prefix="agilesat-loop-"))
     ssd = get("scan_pitch").ssd
     shutil.copytree(BUILD, copy / "fmus" / "build", ignore=shutil.ignore_patterns(".*"))
     (copy / "orchestration" / "systems").mkdir(parents=True)
     shutil.copy(ssd, copy / "orchestration" / "systems" / ssd.name)
     try:
-        return _growth(lambda: simulate(copy / "orchestration" / "systems" / ssd.name,
-                                        stop=0.1), int(n))
+        return _growth(
+            lambda: simulate(copy / "orchestration" / "systems" / ssd.name, stop=0.1), int(n)
+        )
     finally:
         shutil.rmtree(copy, ignore_errors=True)
 
@@ -459,6 +613,7 @@ def instance_cycles(n):
         instance = Instance("a", _path(), Log())
         instance.instantiate()
         instance.free()
+
     return _growth(cycle, int(n))
 
 
@@ -469,6 +624,7 @@ def raw_cycles(n):
         slave, callbacks = shared
         slave.instantiate(callbacks=callbacks)
         slave.fmi2FreeInstance(slave.component)
+
     probe = fmi_host.Fmu(_path(), "raw")
     probe.dll.fmi2FreeInstance(probe.c)
     shared = (probe.slave, probe._callbacks)
@@ -487,7 +643,7 @@ def live_instances(n):
 
 if __name__ == "__main__":
     case, *arguments = sys.argv[1:]
-    if case == "figures":             # python tests/fault_cases_fmu.py figures N
+    if case == "figures":  # python tests/fault_cases_fmu.py figures N
         for figure, value in resource_figures(int(arguments[0])):
             print(f"{figure}: {value}")
     else:

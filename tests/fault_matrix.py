@@ -7,6 +7,7 @@ resource figures of both, as Markdown tables for the README.
 ``--n`` sizes the resource loops (default 1000; the test suite uses smaller ones).  Every
 row is measured in fresh processes as the script runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -34,8 +35,11 @@ def main(argv=None) -> int:
             result = case()
             verdict = "skipped" if "skipped" in result else "ok" if result["ok"] else "FAILED"
             failed += verdict == "FAILED"
-            print("| " + " | ".join(_cell(result[k]) for k in ("fault", "expected",
-                                                               "observed")) + f" | {verdict} |")
+            print(
+                "| "
+                + " | ".join(_cell(result[k]) for k in ("fault", "expected", "observed"))
+                + f" | {verdict} |"
+            )
             sys.stdout.flush()
     print("\n| resource figure | value |\n|---|---|")
     for module in (fault_cases_master, fault_cases_fmu):

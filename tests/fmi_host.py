@@ -3,15 +3,22 @@
 It does not import agilesat: it uses built FMUs the way any third-party importer does and
 prints its findings as JSON.  Usage: ``python fmi_host.py COMMAND FMU...``
 """
+
 import ctypes
 import json
 import math
 import sys
 
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import (FMU2Slave, calloc, fmi2CallbackAllocateMemoryTYPE,
-                       fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                       fmi2CallbackLoggerTYPE, free)
+from fmpy.fmi2 import (
+    FMU2Slave,
+    calloc,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    free,
+)
 
 
 class Fmu:
@@ -21,12 +28,16 @@ class Fmu:
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(path),
-                               modelIdentifier=self.md.coSimulation.modelIdentifier,
-                               instanceName=name)
+        self.slave = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=extract(path),
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
         callbacks = fmi2CallbackFunctions()
         callbacks.logger = fmi2CallbackLoggerTYPE(
-            lambda env, inst, status, cat, msg: self.messages.append((status, msg.decode())))
+            lambda env, inst, status, cat, msg: self.messages.append((status, msg.decode()))
+        )
         callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self._callbacks = callbacks
@@ -35,8 +46,9 @@ class Fmu:
         self.dll = self.slave.dll
 
     def names(self, causality, type_="Real"):
-        return [v.name for v in self.md.modelVariables
-                if v.causality == causality and v.type == type_]
+        return [
+            v.name for v in self.md.modelVariables if v.causality == causality and v.type == type_
+        ]
 
     def set_real(self, values: dict) -> int:
         vr = (ctypes.c_uint * len(values))(*(self.vr[n] for n in values))
@@ -68,13 +80,21 @@ def orbit_geometry(k):
     u = 0.01 * k
     c, s = math.cos(u), math.sin(u)
     speed = math.sqrt(mu / a)
-    C = ((-s, c, 0.0), (0.0, 0.0, -1.0), (-c, -s, 0.0))   # rows x_O, y_O, z_O in I
-    q0 = 0.5 * math.sqrt(1.0 + C[0][0] + C[1][1] + C[2][2])   # C = (q0² − q·q) 1 + 2 q qᵀ
-    q = [q0, (C[1][2] - C[2][1]) / (4 * q0), (C[2][0] - C[0][2]) / (4 * q0),   # − 2 q0 [q×]
-         (C[0][1] - C[1][0]) / (4 * q0)]
-    return {"r_I": [a * c, a * s, 0.0], "v_I": [-speed * s, speed * c, 0.0], "q_OI": q,
-            "r_T_I": [radius * c, radius * s, 1.0e5],
-            "v_T_I": [-earth_rate * radius * s, earth_rate * radius * c, 0.0]}
+    C = ((-s, c, 0.0), (0.0, 0.0, -1.0), (-c, -s, 0.0))  # rows x_O, y_O, z_O in I
+    q0 = 0.5 * math.sqrt(1.0 + C[0][0] + C[1][1] + C[2][2])  # C = (q0² − q·q) 1 + 2 q qᵀ
+    q = [
+        q0,
+        (C[1][2] - C[2][1]) / (4 * q0),
+        (C[2][0] - C[0][2]) / (4 * q0),  # − 2 q0 [q×]
+        (C[0][1] - C[1][0]) / (4 * q0),
+    ]
+    return {
+        "r_I": [a * c, a * s, 0.0],
+        "v_I": [-speed * s, speed * c, 0.0],
+        "q_OI": q,
+        "r_T_I": [radius * c, radius * s, 1.0e5],
+        "v_T_I": [-earth_rate * radius * s, earth_rate * radius * c, 0.0],
+    }
 
 
 def plausible_inputs(fmu, k=0):
@@ -127,8 +147,12 @@ def state(path):
     assert fmu.dll.fmi2SetFMUstate(fmu.c, restored) == 0
     third = run(t)
     changed = any(a != b for a, b in zip(first[0], first[-1]))
-    return {"restored_identical": first == second, "deserialized_identical": first == third,
-            "outputs_change": changed, "n_outputs": len(outputs)}
+    return {
+        "restored_identical": first == second,
+        "deserialized_identical": first == third,
+        "outputs_change": changed,
+        "n_outputs": len(outputs),
+    }
 
 
 def errors(path):
@@ -143,12 +167,15 @@ def errors(path):
         "negative_step": fmu.step(0.0, -0.1),
         "nan_step": fmu.step(0.0, float("nan")),
         "time_jump": fmu.step(5.0, 0.1),
-        "unknown_vr_get": fmu.dll.fmi2GetReal(fmu.c, (ctypes.c_uint * 1)(10 ** 6), 1,
-                                              (ctypes.c_double * 1)()),
-        "unknown_vr_set": fmu.dll.fmi2SetReal(fmu.c, (ctypes.c_uint * 1)(10 ** 6), 1,
-                                              (ctypes.c_double * 1)(1.0)),
-        "wrong_type": fmu.dll.fmi2GetInteger(fmu.c, (ctypes.c_uint * 1)(fmu.vr[output]), 1,
-                                             (ctypes.c_int * 1)()),
+        "unknown_vr_get": fmu.dll.fmi2GetReal(
+            fmu.c, (ctypes.c_uint * 1)(10**6), 1, (ctypes.c_double * 1)()
+        ),
+        "unknown_vr_set": fmu.dll.fmi2SetReal(
+            fmu.c, (ctypes.c_uint * 1)(10**6), 1, (ctypes.c_double * 1)(1.0)
+        ),
+        "wrong_type": fmu.dll.fmi2GetInteger(
+            fmu.c, (ctypes.c_uint * 1)(fmu.vr[output]), 1, (ctypes.c_int * 1)()
+        ),
         "set_output": fmu.set_real({output: 1.0}),
         "set_parameter_after_init": fmu.set_real({parameter: 1.0}),
     }
@@ -172,8 +199,11 @@ def together(*paths):
             statuses.append(fmu.step(n * 0.05, 0.05))
     first, twin = fmus[0], fmus[-1]
     outputs = first.names("output")
-    return {"all_ok": all(s == 0 for s in statuses), "instances": len(fmus),
-            "twin_differs": first.get_real(outputs)[1] != twin.get_real(outputs)[1]}
+    return {
+        "all_ok": all(s == 0 for s in statuses),
+        "instances": len(fmus),
+        "twin_differs": first.get_real(outputs)[1] != twin.get_real(outputs)[1],
+    }
 
 
 def singularity(*paths):
@@ -187,11 +217,14 @@ def singularity(*paths):
 def shadowed(path):
     """Import and patch the host's own agilesat copy first: the FMU must not see it."""
     import agilesat.components.cmg_cluster as host_copy
+
     host_copy.det3 = lambda M: 123.0
     fmu = Fmu(path, "c")
     fmu.initialize()
-    return {"singularity": fmu.get_real(["singularity"])[1][0],
-            "host_patched": host_copy.det3(None)}
+    return {
+        "singularity": fmu.get_real(["singularity"])[1][0],
+        "host_patched": host_copy.det3(None),
+    }
 
 
 def many(path, count):

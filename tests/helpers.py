@@ -4,6 +4,7 @@ Built FMUs are only ever *run* in a separate, fresh interpreter (``run_python`` 
 ``agilesat``): pythonfmu executes FMU code inside the host's interpreter, where modules
 this pytest process imported could mask a file missing from an FMU.
 """
+
 import subprocess
 import sys
 from pathlib import Path
@@ -11,20 +12,32 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: a real satellite's two-line elements: the ISS set printed in the python-sgp4 README
 #: (https://pypi.org/project/sgp4/), epoch 2019-12-09 16:38:29 UTC
-ISS_TLE = ("1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
-           "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482")
+ISS_TLE = (
+    "1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
+    "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482",
+)
 
 
 def run_python(code: str, *args, timeout: float = 600, cwd=None) -> subprocess.CompletedProcess:
     """Run ``code`` in a fresh interpreter of this environment (nothing pre-imported)."""
-    return subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True,
-                          text=True, timeout=timeout, cwd=cwd or ROOT)
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=cwd or ROOT,
+    )
 
 
 def agilesat(*args, timeout: float = 900, cwd=None) -> subprocess.CompletedProcess:
     """The ``agilesat`` command line, in a fresh interpreter."""
-    return subprocess.run([sys.executable, "-m", "agilesat.orchestration", *map(str, args)],
-                          capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "agilesat.orchestration", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=cwd or ROOT,
+    )
 
 
 def slave(name: str, start_time: float = 0.0):
@@ -32,6 +45,7 @@ def slave(name: str, start_time: float = 0.0):
     initialisation mode: drive it with ``set_real``/``do_step``/``get_real`` as a host
     would (pythonfmu's own tests do the same with their slaves)."""
     from agilesat.fmus import slave_class
+
     instance = slave_class(name)(instance_name=f"test_{name}")
     instance.setup_experiment(start_time)
     instance.enter_initialization_mode()
@@ -47,7 +61,9 @@ def operating_point(name: str, rng) -> dict:
     """Input values (by variable) away from zero: quaternions unit, the staring guidance
     fed a real orbit and target (from OrbitEnvironment's defaults)."""
     import numpy as np
+
     from agilesat.fmus import model_class as _model_class
+
     if name == "StaringGuidance":
         orbit = _model_class("OrbitEnvironment")().start(0.0)
         return {v: orbit.get(v) for v in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}

@@ -13,20 +13,27 @@ Real outputs after the step.  ``warning``: CmgSteering at an exactly singular gi
 off; reads the outputs and steps once; reports the worst status of the two calls and the
 messages the host received.
 """
+
 import ctypes
 import json
 import sys
 
 import fmpy
 from fmpy import read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
 from fmpy.logging import addLoggerProxy
 
 
 def logger_into(messages):
     def log(_env, _name, status, category, message):
         messages.append([int(status), category.decode(), message.decode()])
+
     return log
 
 
@@ -40,9 +47,13 @@ def defaults(path):
 def open_slave(path, messages):
     md = read_model_description(path)
     unzipped = fmpy.extract(path)
-    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x")
-    callbacks = fmi2CallbackFunctions()      # as fmpy.simulate_fmu builds them
+    slave = FMU2Slave(
+        guid=md.guid,
+        unzipDirectory=unzipped,
+        modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName="x",
+    )
+    callbacks = fmi2CallbackFunctions()  # as fmpy.simulate_fmu builds them
     callbacks.logger = fmi2CallbackLoggerTYPE(logger_into(messages))
     callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
@@ -58,8 +69,9 @@ def raw_do_step(slave, t, h) -> int:
 
 def raw_get_real(slave, refs) -> int:
     n = len(refs)
-    return slave.dll.fmi2GetReal(slave.component, (ctypes.c_uint * n)(*refs), n,
-                                 (ctypes.c_double * n)())
+    return slave.dll.fmi2GetReal(
+        slave.component, (ctypes.c_uint * n)(*refs), n, (ctypes.c_double * n)()
+    )
 
 
 def late(path, read, inputs):
@@ -75,9 +87,11 @@ def late(path, read, inputs):
     for name, values in json.loads(inputs).items():
         slave.setReal([refs[f"{name}[{i + 1}]"] for i in range(len(values))], values)
     status = raw_do_step(slave, 0.0, 0.1)
-    values = (dict(zip([v.name for v in outputs], slave.getReal([v.valueReference
-                                                              for v in outputs])))
-              if status == 0 else {})
+    values = (
+        dict(zip([v.name for v in outputs], slave.getReal([v.valueReference for v in outputs])))
+        if status == 0
+        else {}
+    )
     slave.terminate()
     slave.freeInstance()
     return {"status": status, "messages": messages, "outputs": values}

@@ -8,18 +8,21 @@ every libcosimpy call is checked.  Columns as in our master: "time", "<instance>
 Exit status 2 with libcosim's error message if a call fails; the rows recorded so far are
 saved all the same.
 """
+
 import sys
 
 import numpy as np
+from libcosimpy._internal import get_last_error_message
 from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
 from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
 from libcosimpy.CosimObserver import CosimObserver
-from libcosimpy._internal import get_last_error_message
 
-READERS = {CosimVariableType.REAL.value: "last_real_values",
-           CosimVariableType.INTEGER.value: "last_integer_values",
-           CosimVariableType.BOOLEAN.value: "last_boolean_values"}
+READERS = {
+    CosimVariableType.REAL.value: "last_real_values",
+    CosimVariableType.INTEGER.value: "last_integer_values",
+    CosimVariableType.BOOLEAN.value: "last_boolean_values",
+}
 
 
 def check(ok, call):
@@ -30,21 +33,28 @@ def check(ok, call):
 def main(path, stop, out, step=None):
     log_output_level(CosimLogLevel.WARNING)
     try:
-        execution = (CosimExecution.from_ssp_file(path) if step is None else
-                     CosimExecution.from_ssp_file(path, step_size=round(float(step) * 1e9)))
+        execution = (
+            CosimExecution.from_ssp_file(path)
+            if step is None
+            else CosimExecution.from_ssp_file(path, step_size=round(float(step) * 1e9))
+        )
     except AssertionError:
         raise RuntimeError(f"libcosim cannot load {path}: {get_last_error_message()}") from None
     observer = CosimObserver.create_last_value()
     check(execution.add_observer(observer), "add_observer")
     reads, names = [], ["time"]
     for slave in execution.slave_infos():
-        outputs = [v for v in execution.slave_variables(slave.index)
-                   if v.causality == CosimVariableCausality.OUTPUT.value and v.type in READERS]
+        outputs = [
+            v
+            for v in execution.slave_variables(slave.index)
+            if v.causality == CosimVariableCausality.OUTPUT.value and v.type in READERS
+        ]
         for kind, reader in READERS.items():
             chosen = [v for v in outputs if v.type == kind]
             if chosen:
-                reads.append((getattr(observer, reader), slave.index,
-                              [v.reference for v in chosen]))
+                reads.append(
+                    (getattr(observer, reader), slave.index, [v.reference for v in chosen])
+                )
                 names += [f"{slave.name.decode()}.{v.name.decode()}" for v in chosen]
     rows = []
     try:

@@ -1,4 +1,5 @@
 """Quaternion PD law with feedforward: signs, shortest path, continuity, closed loops."""
+
 import math
 
 import numpy as np
@@ -7,9 +8,14 @@ import pytest
 from agilesat.components.attitude_controller import AttitudeController
 from agilesat.components.flywheel import Flywheel
 from agilesat.components.model import ModelError
+from agilesat.components.rotations import (
+    dcm_from_quat,
+    euler123_from_quat,
+    quat_conj,
+    quat_from_axis_angle,
+    quat_mul,
+)
 from agilesat.components.satellite_dynamics import SatelliteDynamics
-from agilesat.components.rotations import (dcm_from_quat, euler123_from_quat, quat_conj,
-                                           quat_from_axis_angle, quat_mul)
 
 RNG = np.random.default_rng(17)
 AXES = np.eye(3)
@@ -25,11 +31,24 @@ def random_axis():
     return v / np.linalg.norm(v)
 
 
-def control(q_BI, w_BI_B=(0, 0, 0), q_ref=(1, 0, 0, 0), w_ref=(0, 0, 0), h_ff=(0, 0, 0),
-            hdot_ff=(0, 0, 0), **parameters):
+def control(
+    q_BI,
+    w_BI_B=(0, 0, 0),
+    q_ref=(1, 0, 0, 0),
+    w_ref=(0, 0, 0),
+    h_ff=(0, 0, 0),
+    hdot_ff=(0, 0, 0),
+    **parameters,
+):
     c = AttitudeController(**parameters)
-    for name, value in (("q_BI", q_BI), ("w_BI_B", w_BI_B), ("q_ref", q_ref),
-                        ("w_ref", w_ref), ("h_ff", h_ff), ("hdot_ff", hdot_ff)):
+    for name, value in (
+        ("q_BI", q_BI),
+        ("w_BI_B", w_BI_B),
+        ("q_ref", q_ref),
+        ("w_ref", w_ref),
+        ("h_ff", h_ff),
+        ("hdot_ff", hdot_ff),
+    ):
         c.set(name, value)
     return c.start()
 
@@ -74,7 +93,7 @@ def test_error_takes_the_short_way_round(theta_deg):
     theta = math.radians(theta_deg)
     c = control(quat_mul(q_ref, quat_from_axis_angle(n, theta)), q_ref=q_ref)
     assert np.allclose(c.get("att_error"), -(2 * math.pi - theta) * n, atol=1e-12)
-    assert n @ c.get("tau_cmd") > 0          # pushed on the way the angle is shortest
+    assert n @ c.get("tau_cmd") > 0  # pushed on the way the angle is shortest
 
 
 def test_error_is_continuous_through_90_degrees_and_up_to_180():
@@ -99,7 +118,7 @@ def test_error_is_bounded_at_and_near_180_degrees(offset):
     c = control(quat_mul(q_ref, quat_from_axis_angle(n, math.pi + offset)), q_ref=q_ref)
     error = c.get("att_error")
     assert np.linalg.norm(error) == pytest.approx(math.pi - abs(offset), abs=1e-9)
-    assert abs(abs(error @ n) - np.linalg.norm(error)) < 1e-9      # along ±n
+    assert abs(abs(error @ n) - np.linalg.norm(error)) < 1e-9  # along ±n
     assert np.all(np.isfinite(c.get("tau_cmd")))
 
 
@@ -123,10 +142,13 @@ def body_rate(q_of_t, t, h=1e-6):
 
 def test_rate_error_is_the_rate_of_B_relative_to_a_rotating_reference():
     u1, u2, u3 = random_axis(), random_axis(), random_axis()
-    q_RI = lambda t: quat_mul(quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t),
-                              quat_from_axis_angle(u2, -0.1 * t))
-    for q_BR in (lambda t: quat_from_axis_angle(u3, 0.7),               # rides with R
-                 lambda t: quat_from_axis_angle(u3, 0.7 + 0.05 * t)):     # turns within R
+    q_RI = lambda t: quat_mul(
+        quat_from_axis_angle(u1, 0.3 * t + 0.02 * t * t), quat_from_axis_angle(u2, -0.1 * t)
+    )
+    for q_BR in (
+        lambda t: quat_from_axis_angle(u3, 0.7),  # rides with R
+        lambda t: quat_from_axis_angle(u3, 0.7 + 0.05 * t),
+    ):  # turns within R
         q_BI = lambda t: quat_mul(q_RI(t), q_BR(t))
         for t in (0.0, 1.3, 4.0):
             c = control(q_BI(t), body_rate(q_BI, t), q_RI(t), body_rate(q_RI, t))
@@ -138,9 +160,13 @@ def test_gains_act_per_axis():
     kp, kd = np.array([1.0, 2.0, 3.0]), np.array([10.0, 20.0, 30.0])
     q_BI, w = random_quat(), RNG.normal(scale=0.01, size=3)
     c = control(q_BI, w, kp=kp, kd=kd)
-    assert np.allclose(c.get("tau_cmd"), -kp * c.get("att_error") - kd * c.get("rate_error"),
-                       rtol=1e-14, atol=1e-15)
-    assert np.allclose(c.get("rate_error"), w, atol=1e-17)   # inertial reference at rest
+    assert np.allclose(
+        c.get("tau_cmd"),
+        -kp * c.get("att_error") - kd * c.get("rate_error"),
+        rtol=1e-14,
+        atol=1e-15,
+    )
+    assert np.allclose(c.get("rate_error"), w, atol=1e-17)  # inertial reference at rest
 
 
 # -- feedforward -------------------------------------------------------------------------
@@ -149,7 +175,7 @@ def test_feedforward_exactly_cancels_the_device_torque():
     for _ in range(20):
         q, w = random_quat(), RNG.normal(scale=0.05, size=3)
         h, hdot = RNG.normal(scale=5, size=3), RNG.normal(scale=0.2, size=3)
-        w_ref = w                                     # R = B: no attitude or rate error
+        w_ref = w  # R = B: no attitude or rate error
         c = control(q, w, q, w_ref, h, hdot)
         assert np.allclose(c.get("att_error"), 0, atol=1e-15)
         assert np.allclose(c.get("rate_error"), 0, atol=1e-15)
@@ -165,12 +191,12 @@ def test_feedforward_adds_to_the_pd_torque():
 
 
 # -- closed loops ------------------------------------------------------------------------
-J_SAT = 150.0   # kg·m², the [Chang 2015] satellite the default gains are designed for
+J_SAT = 150.0  # kg·m², the [Chang 2015] satellite the default gains are designed for
 
 
 def second_order(theta0, t, wn, zeta):
     """θ(t) of J θ̈ + kd θ̇ + kp θ = 0 from rest at θ0 (underdamped)."""
-    root = math.sqrt(1 - zeta ** 2)
+    root = math.sqrt(1 - zeta**2)
     wd = wn * root
     return theta0 * math.exp(-zeta * wn * t) * (math.cos(wd * t) + zeta / root * math.sin(wd * t))
 
@@ -180,8 +206,9 @@ def run_loop(theta0, axis, dt, n_steps, wheels=None, device=None, feedforward=Tr
     states first (wheel h), then body rates, control law, wheel hdot.  Starts at rest,
     turned θ0 about ``axis``; returns times, angle about ``axis``, H_I."""
     q0 = quat_from_axis_angle(axis, theta0)
-    body = SatelliteDynamics(inertia=J_SAT * np.eye(3), gravity_gradient=False,
-                             attitude0=euler123_from_quat(q0)).start()
+    body = SatelliteDynamics(
+        inertia=J_SAT * np.eye(3), gravity_gradient=False, attitude0=euler123_from_quat(q0)
+    ).start()
     assert np.allclose(abs(body.get("q_BI") @ q0), 1.0, atol=1e-14)
     ctrl = AttitudeController().start()
     if wheels is not None:
@@ -193,7 +220,7 @@ def run_loop(theta0, axis, dt, n_steps, wheels=None, device=None, feedforward=Tr
         body.set("h_payload", h_dev)
         body.set("hdot_payload", hdot_dev)
         if wheels is not None:
-            body.set("h_wheel", wheels.get("h"))        # state output: no feedthrough
+            body.set("h_wheel", wheels.get("h"))  # state output: no feedthrough
         body.output()
         ctrl.set("q_BI", body.get("q_BI"))
         ctrl.set("w_BI_B", body.get("w_BI_B"))
@@ -213,7 +240,7 @@ def run_loop(theta0, axis, dt, n_steps, wheels=None, device=None, feedforward=Tr
             wheels.set("w_BI_B", body.get("w_BI_B"))
             wheels.output()
             body.set("hdot_wheel", wheels.get("hdot"))
-            wheels.advance(t, dt)                       # state and h at t + dt
+            wheels.advance(t, dt)  # state and h at t + dt
         body.step(t, dt)
         ctrl.step(t, dt)
     return np.array(times), np.array(angles), np.array(momenta)
@@ -224,7 +251,7 @@ def test_default_gains_give_the_designed_second_order_response():
     theta0, axis = math.radians(1.0), random_axis()
     t, angle, _ = run_loop(theta0, axis, 0.05, 1200)
     expected = np.array([second_order(theta0, x, 0.2, 1 / math.sqrt(2)) for x in t])
-    assert np.abs(angle - expected).max() < 0.01 * theta0     # sample-and-hold lag only
+    assert np.abs(angle - expected).max() < 0.01 * theta0  # sample-and-hold lag only
 
 
 def test_wheels_in_the_loop_deliver_the_commanded_torque():
@@ -249,17 +276,26 @@ def test_feedforward_removes_a_periodic_device_disturbance(feedforward, dt):
     the wheels hold the compensating torque over a step while the device's torque moves
     on, a residual torque of A ω · ω dt/2 in amplitude, so the error shrinks by ω dt/2."""
     A, omega = 0.2, 2 * math.pi / 10
-    device = lambda t: (np.array([0, 0, A * math.sin(omega * t)]),
-                        np.array([0, 0, A * omega * math.cos(omega * t)]))
-    kp, kd = J_SAT * 0.2 ** 2, 2 / math.sqrt(2) * 0.2 * J_SAT
-    forced = A * omega / abs(J_SAT * (kp / J_SAT - omega ** 2) + 1j * kd * omega)
+    device = lambda t: (
+        np.array([0, 0, A * math.sin(omega * t)]),
+        np.array([0, 0, A * omega * math.cos(omega * t)]),
+    )
+    kp, kd = J_SAT * 0.2**2, 2 / math.sqrt(2) * 0.2 * J_SAT
+    forced = A * omega / abs(J_SAT * (kp / J_SAT - omega**2) + 1j * kd * omega)
     wheels = Flywheel()
-    t, angle, _ = run_loop(0.0, np.array([0, 0, 1.0]), dt, round(200 / dt), wheels=wheels,
-                           device=device, feedforward=feedforward)
-    late = np.abs(angle[t >= 150]).max()      # transients (e^{-ζ ω_n t}) long gone
+    t, angle, _ = run_loop(
+        0.0,
+        np.array([0, 0, 1.0]),
+        dt,
+        round(200 / dt),
+        wheels=wheels,
+        device=device,
+        feedforward=feedforward,
+    )
+    late = np.abs(angle[t >= 150]).max()  # transients (e^{-ζ ω_n t}) long gone
     expected = forced * (omega * dt / 2 if feedforward else 1.0)
     assert late == pytest.approx(expected, rel=0.05)
-    assert not wheels.warnings                # within the wheels' torque and momentum
+    assert not wheels.warnings  # within the wheels' torque and momentum
 
 
 # -- acceleration feedforward (extension) --------------------------------------------------
@@ -274,17 +310,21 @@ def track_spin_up(feedforward: bool, dt=0.01, T=20.0, alpha=0.002):
     Returns the largest attitude error (rad)."""
     n = np.array([1.0, 2.0, 2.0]) / 3.0
     body = SatelliteDynamics(inertia=J_TILTED, gravity_gradient=False).start()
-    ctrl = AttitudeController(kp=[1.0] * 3, kd=[30.0] * 3,
-                              inertia=J_TILTED, acceleration_feedforward=feedforward).start()
+    ctrl = AttitudeController(
+        kp=[1.0] * 3, kd=[30.0] * 3, inertia=J_TILTED, acceleration_feedforward=feedforward
+    ).start()
     worst = 0.0
     for k in range(int(round(T / dt)) + 1):
         t = k * dt
         phi = 0.5 * alpha * t * t
         body.output()
-        for name, value in (("q_BI", body.get("q_BI")), ("w_BI_B", body.get("w_BI_B")),
-                            ("q_ref", np.concatenate(([math.cos(phi / 2)],
-                                                      n * math.sin(phi / 2)))),
-                            ("w_ref", alpha * t * n), ("dw_ref", alpha * n)):
+        for name, value in (
+            ("q_BI", body.get("q_BI")),
+            ("w_BI_B", body.get("w_BI_B")),
+            ("q_ref", np.concatenate(([math.cos(phi / 2)], n * math.sin(phi / 2)))),
+            ("w_ref", alpha * t * n),
+            ("dw_ref", alpha * n),
+        ):
             ctrl.set(name, value)
         ctrl.output()
         worst = max(worst, np.linalg.norm(ctrl.get("att_error")))
@@ -300,7 +340,7 @@ def test_acceleration_feedforward_makes_the_body_follow_an_accelerating_referenc
     O(α dt) against the PD-only lag, which grows with the reference rate."""
     with_ff, without = track_spin_up(True), track_spin_up(False)
     assert with_ff < 1e-5 and without > 0.05
-    assert track_spin_up(True, dt=0.005) < 0.6 * with_ff        # and shrinks with dt
+    assert track_spin_up(True, dt=0.005) < 0.6 * with_ff  # and shrinks with dt
 
 
 def test_no_acceleration_feedforward_unless_switched_on():
@@ -331,24 +371,32 @@ def test_feedforward_keeps_the_rate_error_constant_for_any_reference_motion():
     whatever the reference does (axis moving in R, non-principal J, body off the
     reference).  Rigid body, body and reference integrated together here with RK4, the
     law evaluated at every stage (continuous time)."""
+
     def w_ref(t):
         return np.array([0.02 * math.sin(0.3 * t), 0.03 * math.cos(0.2 * t), 0.01 + 0.002 * t])
 
     def dw_ref(t):
         return np.array([0.006 * math.cos(0.3 * t), -0.006 * math.sin(0.2 * t), 0.002])
 
-    ctrl = AttitudeController(kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED,
-                              acceleration_feedforward=True).start()
+    ctrl = AttitudeController(
+        kp=[0.0] * 3, kd=[0.0] * 3, inertia=J_TILTED, acceleration_feedforward=True
+    ).start()
 
     def f(t, x):
         qB, w, qR = x[:4], x[4:7], x[7:]
-        for name, value in (("q_BI", qB), ("w_BI_B", w), ("q_ref", qR), ("w_ref", w_ref(t)),
-                            ("dw_ref", dw_ref(t))):
+        for name, value in (
+            ("q_BI", qB),
+            ("w_BI_B", w),
+            ("q_ref", qR),
+            ("w_ref", w_ref(t)),
+            ("dw_ref", dw_ref(t)),
+        ):
             ctrl.set(name, value)
         ctrl.output()
         wdot = np.linalg.solve(J_TILTED, ctrl.get("tau_cmd") - np.cross(w, J_TILTED @ w))
-        return np.concatenate((0.5 * quat_mul(qB, np.r_[0.0, w]), wdot,
-                               0.5 * quat_mul(qR, np.r_[0.0, w_ref(t)])))
+        return np.concatenate(
+            (0.5 * quat_mul(qB, np.r_[0.0, w]), wdot, 0.5 * quat_mul(qR, np.r_[0.0, w_ref(t)]))
+        )
 
     def rate_error(x, t):
         C_BR = dcm_from_quat(x[:4]) @ dcm_from_quat(x[7:]).T

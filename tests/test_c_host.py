@@ -5,25 +5,26 @@ PATH): the FMU binary itself must load libpython and find numpy in the environme
 was built in.  Fed the master's own sequence of FMI calls (tests/c_host/script.py), it
 must reproduce the master's results bit for bit.
 """
-import re
+
 import os
+import re
 import shutil
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
+from c_host.script import write_script
 
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
-from c_host.script import write_script
 from helpers import ISS_TLE, ROOT, run_python
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
 HOST_SOURCE = ROOT / "tests" / "c_host" / "fmi2_host.c"
 CLEAN_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"}
-STOP = 60.0   # s of each scenario: 1200 macro steps
+STOP = 60.0  # s of each scenario: 1200 macro steps
 
 
 @pytest.fixture(scope="module")
@@ -31,14 +32,28 @@ def host(tmp_path_factory) -> Path:
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     assert compiler, "the C host test needs a C compiler (cc or gcc); building FMUs does too"
     binary = tmp_path_factory.mktemp("host") / "fmi2_host"
-    subprocess.run([compiler, "-O2", "-Wall", "-Werror", "-I", str(ROOT / "fmus" / "shim"),
-                    "-o", str(binary), str(HOST_SOURCE), "-ldl"], check=True)
+    subprocess.run(
+        [
+            compiler,
+            "-O2",
+            "-Wall",
+            "-Werror",
+            "-I",
+            str(ROOT / "fmus" / "shim"),
+            "-o",
+            str(binary),
+            str(HOST_SOURCE),
+            "-ldl",
+        ],
+        check=True,
+    )
     return binary
 
 
 def run_host(host, script, results, env=CLEAN_ENV):
-    return subprocess.run([str(host), str(script), str(results)], capture_output=True,
-                          text=True, timeout=600, env=env)
+    return subprocess.run(
+        [str(host), str(script), str(results)], capture_output=True, text=True, timeout=600, env=env
+    )
 
 
 def read_csv(path):
@@ -51,7 +66,11 @@ def master_results(ssd, stop, out):
     result = run_python(
         "import sys\n"
         "from agilesat.orchestration.master import simulate\n"
-        "simulate(sys.argv[1], stop=float(sys.argv[2])).to_npz(sys.argv[3])\n", ssd, stop, out)
+        "simulate(sys.argv[1], stop=float(sys.argv[2])).to_npz(sys.argv[3])\n",
+        ssd,
+        stop,
+        out,
+    )
     assert result.returncode == 0, result.stderr
     results = Results.from_npz(out)
     return results.names, results.data
@@ -76,6 +95,7 @@ def test_a_real_satellites_orbit_through_the_c_host(fmus, host, tmp_path):
     which only the build environment has: the C host's interpreter must be that
     environment's.  Bit-identical to the master on the same system."""
     from agilesat.orchestration.scenarios import video_sar
+
     orbit, _, _ = video_sar.tle_pass(*ISS_TLE)
     ssd = video_sar.pass_scenario(orbit, tmp_path).ssd
     script = tmp_path / "script.txt"
@@ -101,6 +121,7 @@ def test_an_environment_under_a_non_ascii_path(host, tmp_path, fmus):
     host's locale (an alias of the build environment under 'vé/')."""
     import sys
     import sysconfig
+
     venv = Path(sys.prefix)
     alias = tmp_path / "vé"
     (alias / "bin").mkdir(parents=True)
@@ -110,8 +131,12 @@ def test_an_environment_under_a_non_ascii_path(host, tmp_path, fmus):
     assert Path(sysconfig.get_paths()["purelib"]).is_relative_to(venv)
     script = tmp_path / "script.txt"
     write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
-    run = run_host(host, script, tmp_path / "c.csv",
-                   {**CLEAN_ENV, "LANG": "C", "AGILESAT_PYTHON": str(alias / "bin" / "python")})
+    run = run_host(
+        host,
+        script,
+        tmp_path / "c.csv",
+        {**CLEAN_ENV, "LANG": "C", "AGILESAT_PYTHON": str(alias / "bin" / "python")},
+    )
     assert run.returncode == 0, run.stderr
 
 
@@ -127,8 +152,11 @@ def test_a_missing_python_environment_is_named(host, scan_pitch_script, tmp_path
     run = run_host(host, scan_pitch_script, tmp_path / "c.csv", env)
     assert run.returncode == 2
     assert "fmi2Instantiate returned NULL" in run.stderr
-    assert re.search(r"runs Python as .*gone/bin/python, which does not exist here.*"
-                     "AGILESAT_PYTHON", run.stderr)
+    assert re.search(
+        r"runs Python as .*gone/bin/python, which does not exist here.*"
+        "AGILESAT_PYTHON",
+        run.stderr,
+    )
 
 
 def test_a_missing_libpython_is_named(host, scan_pitch_script, tmp_path):
@@ -138,17 +166,23 @@ def test_a_missing_libpython_is_named(host, scan_pitch_script, tmp_path):
     assert re.search(r"cannot load .*libpython3.so.*AGILESAT_LIBPYTHON", run.stderr)
 
 
-def test_an_error_mid_run_is_reported_and_the_rows_so_far_are_kept(host, scan_pitch_script,
-                                                                  tmp_path):
+def test_an_error_mid_run_is_reported_and_the_rows_so_far_are_kept(
+    host, scan_pitch_script, tmp_path
+):
     """A NaN input at t = 1 s: fmi2Error from the FMU, named by the host; 21 rows kept."""
     lines = scan_pitch_script.read_text().splitlines()
-    body = lines[lines.index(next(l for l in lines if l.startswith("loop"))) + 1:
-                 lines.index("end") + 1]
-    k = next(l.split()[1] for l in lines if l.startswith("fmu") and
-             l.endswith(" SatelliteDynamics"))
+    body = lines[
+        lines.index(next(l for l in lines if l.startswith("loop"))) + 1 : lines.index("end") + 1
+    ]
+    k = next(
+        l.split()[1] for l in lines if l.startswith("fmu") and l.endswith(" SatelliteDynamics")
+    )
     vr = next(l.split()[3] for l in body if l.startswith(f"put {k} R"))
-    lines[lines.index("end") + 1:lines.index("end") + 1] = [
-        f"set {k} R {vr} nan", "loop 1 1.0 0.05", *body]
+    lines[lines.index("end") + 1 : lines.index("end") + 1] = [
+        f"set {k} R {vr} nan",
+        "loop 1 1.0 0.05",
+        *body,
+    ]
     scan_pitch_script.write_text("\n".join(lines) + "\n")
     run = run_host(host, scan_pitch_script, tmp_path / "c.csv")
     assert run.returncode == 2

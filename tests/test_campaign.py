@@ -2,6 +2,7 @@
 ``agilesat run``, resume after a real interruption, extension, recorded failures, a real
 scheduler with two workers (one killed mid-campaign), and bit identity of a reused worker.
 """
+
 import csv
 import json
 import os
@@ -18,19 +19,34 @@ from helpers import ROOT, agilesat, run_python
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
 STOP = "4"
-VARY = ["--vary", "SatelliteDynamics.inertia=inertia(0.03, 1deg)",
-        "--vary", "CmgCluster.delta0=+normal(0, 0.5deg)",
-        "--vary", "CmgCluster.gimbal_axis=rotate(0.1deg)",
-        "--vary", "SatelliteDynamics.rate0[2]=+normal(0, 0.01deg)"]
-COMMAND = ["campaign", "scan_pitch", "--stop", STOP, "--seed", "11", *VARY,
-           "--keep", "SatelliteDynamics.w_BO_B[2]", "--no-progress"]
-MACHINE = ("worker", "seconds")   # where and how fast: the only columns that may differ
+VARY = [
+    "--vary",
+    "SatelliteDynamics.inertia=inertia(0.03, 1deg)",
+    "--vary",
+    "CmgCluster.delta0=+normal(0, 0.5deg)",
+    "--vary",
+    "CmgCluster.gimbal_axis=rotate(0.1deg)",
+    "--vary",
+    "SatelliteDynamics.rate0[2]=+normal(0, 0.01deg)",
+]
+COMMAND = [
+    "campaign",
+    "scan_pitch",
+    "--stop",
+    STOP,
+    "--seed",
+    "11",
+    *VARY,
+    "--keep",
+    "SatelliteDynamics.w_BO_B[2]",
+    "--no-progress",
+]
+MACHINE = ("worker", "seconds")  # where and how fast: the only columns that may differ
 
 
 def rows(out):
     with (out / "runs.csv").open() as stream:
-        return [{k: v for k, v in r.items() if k not in MACHINE}
-                for r in csv.DictReader(stream)]
+        return [{k: v for k, v in r.items() if k not in MACHINE} for r in csv.DictReader(stream)]
 
 
 def journal(out):
@@ -62,11 +78,10 @@ def test_same_command_gives_the_identical_table(three, tmp_path):
 
 def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
     row = rows(three)[2]
-    dispersed = list(row)[list(row).index("grid") + 1:list(row).index("status")]
+    dispersed = list(row)[list(row).index("grid") + 1 : list(row).index("status")]
     assert len(dispersed) == 9 + 6 + 18 + 1
     sets = [arg for key in dispersed for arg in ("--set", f"{key}={row[key]}")]
-    result = agilesat("run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path,
-                      "--no-figures")
+    result = agilesat("run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path, "--no-figures")
     assert result.returncode in (0, 3), result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     for name, metric in summary["metrics"].items():
@@ -79,18 +94,35 @@ def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
 
 def test_resume_after_an_interruption_and_extend(three, tmp_path):
     out = tmp_path / "resumed"
-    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", *COMMAND,
-                                "--runs", "8", "--workers", "1", "--out", str(out)],
-                               cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                               text=True)
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "agilesat.orchestration",
+            *COMMAND,
+            "--runs",
+            "8",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 300
-        while not ((out / "runs.jsonl").exists() and
-                   len((out / "runs.jsonl").read_text().splitlines()) >= 2):
-            assert process.poll() is None and time.monotonic() < deadline, \
+        while not (
+            (out / "runs.jsonl").exists()
+            and len((out / "runs.jsonl").read_text().splitlines()) >= 2
+        ):
+            assert process.poll() is None and time.monotonic() < deadline, (
                 process.stdout.read() if process.poll() is not None else "timeout"
+            )
             time.sleep(0.2)
-        process.send_signal(signal.SIGTERM)   # handled as Ctrl-C (KeyboardInterrupt)
+        process.send_signal(signal.SIGTERM)  # handled as Ctrl-C (KeyboardInterrupt)
         output, _ = process.communicate(timeout=120)
     finally:
         if process.poll() is None:
@@ -106,9 +138,9 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
     assert result.returncode in (0, 3), result.stderr
     assert f"{len(made)} already made" in result.stderr
     after = journal(out)
-    assert after[:len(made)] == made                 # finished runs not redone
+    assert after[: len(made)] == made  # finished runs not redone
     assert sorted(r["index"] for r in after) == list(range(8))
-    assert rows(out)[:3] == rows(three)               # run i is run i, whatever N
+    assert rows(out)[:3] == rows(three)  # run i is run i, whatever N
 
     result = agilesat(*COMMAND, "--runs", "10", "--workers", "1", "--out", out, "--resume")
     assert result.returncode in (0, 3), result.stderr
@@ -125,9 +157,23 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
 def test_resume_after_the_process_is_killed(three, tmp_path):
     """SIGKILL: no clean-up at all; the journal and the spec written at the start suffice."""
     out = tmp_path / "killed"
-    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", *COMMAND,
-                                "--runs", "3", "--workers", "1", "--out", str(out)],
-                               cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "agilesat.orchestration",
+            *COMMAND,
+            "--runs",
+            "3",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         deadline = time.monotonic() + 300
         while not ((out / "runs.jsonl").exists() and (out / "runs.jsonl").read_text()):
@@ -140,7 +186,7 @@ def test_resume_after_the_process_is_killed(three, tmp_path):
     assert 1 <= len(made) < 3 and not (out / "runs.csv").exists()
     result = agilesat(*COMMAND, "--runs", "3", "--workers", "1", "--out", out, "--resume")
     assert result.returncode in (0, 3), result.stderr
-    assert journal(out)[:len(made)] == made
+    assert journal(out)[: len(made)] == made
     assert rows(out) == rows(three)
 
 
@@ -148,10 +194,21 @@ def test_failures_are_recorded_outcomes(tmp_path, fmus):
     """A run that stops (bad value) and one that is diagnosed (exit 3 in run) are rows
     with their messages; the campaign goes on and exits 3."""
     out = tmp_path / "failures"
-    result = agilesat("campaign", "scan_pitch", "--stop", "100", "--workers", "2",
-                      "--vary", "PitchManeuverController.scan_rate=values(-0.8deg, -0.7deg)",
-                      "--vary", "CmgCluster.rate_limit=values(0.6, -1)", "--out", out,
-                      "--no-progress")
+    result = agilesat(
+        "campaign",
+        "scan_pitch",
+        "--stop",
+        "100",
+        "--workers",
+        "2",
+        "--vary",
+        "PitchManeuverController.scan_rate=values(-0.8deg, -0.7deg)",
+        "--vary",
+        "CmgCluster.rate_limit=values(0.6, -1)",
+        "--out",
+        out,
+        "--no-progress",
+    )
     assert result.returncode == 3, result.stderr
     table = rows(out)
     assert [r["status"] for r in table] == ["ok", "error", "failed", "error"]
@@ -175,21 +232,48 @@ def dask_cluster(tmp_path):
     processes = []
 
     def start(*args):
-        processes.append(subprocess.Popen([os.path.join(bin_dir, "dask"), *args], cwd=tmp_path,
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                          start_new_session=True))
+        processes.append(
+            subprocess.Popen(
+                [os.path.join(bin_dir, "dask"), *args],
+                cwd=tmp_path,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+        )
         return processes[-1]
+
     try:
-        start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-              "--scheduler-file", str(file))
+        start(
+            "scheduler",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--no-dashboard",
+            "--scheduler-file",
+            str(file),
+        )
         deadline = time.monotonic() + 60
         while not file.exists():
             assert time.monotonic() < deadline, "no scheduler"
             time.sleep(0.2)
         address = json.loads(file.read_text())["address"]
-        workers = [start("worker", address, "--nthreads", "1", "--no-nanny",
-                         "--no-dashboard", "--host", "127.0.0.1") for _ in range(2)]
+        workers = [
+            start(
+                "worker",
+                address,
+                "--nthreads",
+                "1",
+                "--no-nanny",
+                "--no-dashboard",
+                "--host",
+                "127.0.0.1",
+            )
+            for _ in range(2)
+        ]
         from distributed import Client
+
         with Client(address, timeout="30s") as client:
             client.wait_for_workers(2, timeout=60)
         yield address, workers
@@ -203,11 +287,29 @@ def dask_cluster(tmp_path):
 def test_distributed_campaign_survives_a_worker_killed_midway(dask_cluster, tmp_path, fmus):
     address, workers = dask_cluster
     out = tmp_path / "remote"
-    process = subprocess.Popen([sys.executable, "-m", "agilesat.orchestration", "campaign",
-                                "scan_pitch", "--stop", "20", "--runs", "10", *VARY,
-                                "--scheduler", address, "--out", str(out), "--no-progress"],
-                               cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                               text=True)
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "agilesat.orchestration",
+            "campaign",
+            "scan_pitch",
+            "--stop",
+            "20",
+            "--runs",
+            "10",
+            *VARY,
+            "--scheduler",
+            address,
+            "--out",
+            str(out),
+            "--no-progress",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 300
         while not ((out / "runs.jsonl").exists() and (out / "runs.jsonl").read_text()):
@@ -229,16 +331,23 @@ def test_distributed_campaign_survives_a_worker_killed_midway(dask_cluster, tmp_
     assert len(summary["lost_workers"]) == 1, output
     assert "left; Dask re-runs the runs it held" in output
     # after the kill, every run is made by the surviving worker
-    later = journal(out)[len(journal(out)) // 2:]
+    later = journal(out)[len(journal(out)) // 2 :]
     assert {r["pid"] for r in later} == {workers[1].pid}
 
 
 def test_python_api_returns_the_table(dask_cluster, tmp_path):
     from agilesat.orchestration.campaign import campaign
+
     address, _ = dask_cluster
-    table = campaign("payload_sweep", stop=2.0, scheduler=address, out_dir=tmp_path / "api",
-                     vary=["Flywheel.torque_limit=values(0.2, 2.0)"], progress=False,
-                     as_frame=False)
+    table = campaign(
+        "payload_sweep",
+        stop=2.0,
+        scheduler=address,
+        out_dir=tmp_path / "api",
+        vary=["Flywheel.torque_limit=values(0.2, 2.0)"],
+        progress=False,
+        as_frame=False,
+    )
     assert table.dtype.names[:4] == ("index", "seed", "grid", "Flywheel.torque_limit")
     assert list(table["Flywheel.torque_limit"]) == [0.2, 2.0]
     # within 2 s the 0.2 N·m wheel already misses the pointing requirement, 2 N·m meets it
@@ -270,6 +379,6 @@ def test_a_reused_worker_is_bit_identical_to_a_fresh_process(tmp_path, fmus):
     assert result.returncode == 0, result.stderr
     runs, alone = np.load(reused), np.load(fresh)[0]
     assert not np.isnan(alone).any()
-    assert not np.array_equal(runs[1], alone)      # the other parameters do differ
+    assert not np.array_equal(runs[1], alone)  # the other parameters do differ
     for k in (0, 2, 3):
         assert np.array_equal(runs[k], alone)

@@ -1,5 +1,6 @@
 """Campaign building blocks that need no FMU run: the dispersion language, run indexing,
 pass-rate intervals, the table and requirements in scenario summaries."""
+
 import json
 import math
 
@@ -22,17 +23,20 @@ def test_parse_numbers_degrees_and_modes():
     assert dispersion.parse("A.x=values(-1, .5)").grid() == [-1.0, 0.5]
 
 
-@pytest.mark.parametrize("text, match", [
-    ("A.x", "expected Instance.variable=DIST"),
-    ("A=normal(0,1)", "expected Instance.variable=DIST"),
-    ("A.x=gauss(0,1)", "unknown distribution 'gauss'"),
-    ("A.x=normal(0)", "normal takes 2 argument"),
-    ("A.x=normal(0, -1)", "standard deviation must be ≥ 0"),
-    ("A.x=uniform(2, 1)", "lo <= hi"),
-    ("A.x=linspace(0, 1, 2.5)", "positive integer"),
-    ("A.x=normal(0, one)", "'one' is not a number"),
-    ("A.x=+rotate(1deg)", "drop the '\\+'"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("A.x", "expected Instance.variable=DIST"),
+        ("A=normal(0,1)", "expected Instance.variable=DIST"),
+        ("A.x=gauss(0,1)", "unknown distribution 'gauss'"),
+        ("A.x=normal(0)", "normal takes 2 argument"),
+        ("A.x=normal(0, -1)", "standard deviation must be ≥ 0"),
+        ("A.x=uniform(2, 1)", "lo <= hi"),
+        ("A.x=linspace(0, 1, 2.5)", "positive integer"),
+        ("A.x=normal(0, one)", "'one' is not a number"),
+        ("A.x=+rotate(1deg)", "drop the '\\+'"),
+    ],
+)
 def test_parse_errors_name_the_problem(text, match):
     with pytest.raises(ValueError, match=match):
         dispersion.parse(text)
@@ -72,7 +76,7 @@ def test_draws_depend_on_seed_and_index_only():
     assert np.array_equal(a.draw(1, 5, nominal), a.draw(1, 5, nominal))
     assert not np.array_equal(a.draw(1, 5, nominal), a.draw(1, 6, nominal))
     assert not np.array_equal(a.draw(1, 5, nominal), a.draw(2, 5, nominal))
-    b = dispersion.parse("A.y=normal(0, 1)")   # another key: an independent stream
+    b = dispersion.parse("A.y=normal(0, 1)")  # another key: an independent stream
     assert not np.array_equal(a.draw(1, 5, nominal), b.draw(1, 5, nominal))
 
 
@@ -85,56 +89,83 @@ def test_mode_adds_to_or_multiplies_the_nominal():
 
 
 def test_plan_grid_full_factorial_and_index_mapping():
-    plan = Plan(Spec("payload_sweep", runs=3, seed=4, vary=[
-        "Flywheel.torque_limit=values(0.2, 2.0)",
-        "SweepPlanner.turnaround_time=linspace(1, 10, 3)",
-        "SatelliteDynamics.rate0[3]=normal(0, 1e-5)"]))
+    plan = Plan(
+        Spec(
+            "payload_sweep",
+            runs=3,
+            seed=4,
+            vary=[
+                "Flywheel.torque_limit=values(0.2, 2.0)",
+                "SweepPlanner.turnaround_time=linspace(1, 10, 3)",
+                "SatelliteDynamics.rate0[3]=normal(0, 1e-5)",
+            ],
+        )
+    )
     assert plan.total == 3 * 6 and len(plan.grid) == 6
-    seen = {(plan.run_values(i)["Flywheel.torque_limit"],
-             plan.run_values(i)["SweepPlanner.turnaround_time"]) for i in range(6)}
+    seen = {
+        (
+            plan.run_values(i)["Flywheel.torque_limit"],
+            plan.run_values(i)["SweepPlanner.turnaround_time"],
+        )
+        for i in range(6)
+    }
     assert seen == {(t, r) for t in (0.2, 2.0) for r in (1.0, 5.5, 10.0)}
     # run i is grid point i % 6: the same point, another draw, one replicate later
-    assert plan.run_values(1)["Flywheel.torque_limit"] == plan.run_values(7)["Flywheel.torque_limit"]
-    assert plan.run_values(1)["SatelliteDynamics.rate0[3]"] != \
-        plan.run_values(7)["SatelliteDynamics.rate0[3]"]
+    assert (
+        plan.run_values(1)["Flywheel.torque_limit"] == plan.run_values(7)["Flywheel.torque_limit"]
+    )
+    assert (
+        plan.run_values(1)["SatelliteDynamics.rate0[3]"]
+        != plan.run_values(7)["SatelliteDynamics.rate0[3]"]
+    )
     # extending --runs keeps every run already planned
     longer = Plan(Spec("payload_sweep", runs=5, seed=4, vary=plan.spec.vary))
     assert all(longer.run_values(i) == plan.run_values(i) for i in range(plan.total))
 
 
 def test_plan_whole_variables_start_from_the_system_values():
-    plan = Plan(Spec("scan_pitch", vary=["CmgCluster.delta0=+normal(0, 0)",
-                                         "SatelliteDynamics.inertia=inertia(0, 0)"]))
+    plan = Plan(
+        Spec(
+            "scan_pitch",
+            vary=["CmgCluster.delta0=+normal(0, 0)", "SatelliteDynamics.inertia=inertia(0, 0)"],
+        )
+    )
     values = plan.run_values(0)
     from agilesat.orchestration.scenarios.scan_pitch import PARAMETERS
-    assert [values[f"CmgCluster.delta0[{i}]"] for i in range(1, 7)] == \
-        pytest.approx(PARAMETERS["CmgCluster.delta0"], abs=1e-15)
+
+    assert [values[f"CmgCluster.delta0[{i}]"] for i in range(1, 7)] == pytest.approx(
+        PARAMETERS["CmgCluster.delta0"], abs=1e-15
+    )
     assert values["SatelliteDynamics.inertia[2,2]"] == pytest.approx(956.0, rel=1e-14)
     assert values["SatelliteDynamics.inertia[1,2]"] == pytest.approx(0.0, abs=1e-12)
     assert plan.columns[:6] == [f"CmgCluster.delta0[{i}]" for i in range(1, 7)]
 
 
-@pytest.mark.parametrize("vary, match", [
-    ("Nobody.x=normal(0,1)", "no component 'Nobody'"),
-    ("CmgCluster.nothing=normal(0,1)", "CmgCluster has no variable 'nothing'"),
-    ("CmgCluster.delta0[7]=normal(0,1)", "has shape \\(6,\\)"),
-    ("CmgCluster.delta=normal(0,1)", "only numeric parameters"),
-    ("CmgSteering.law=normal(0,1)", "Integer parameter: use choice"),
-    ("CmgCluster.delta0=values(0, 1)", "grids take scalar names"),
-    ("CmgCluster.h_rotor=rotate(1deg)", "rotate\\(\\) turns a 3-vector"),
-    ("CmgCluster.gimbal_axis=inertia(0.1, 0)", "disperses a 3×3 inertia"),
-])
+@pytest.mark.parametrize(
+    "vary, match",
+    [
+        ("Nobody.x=normal(0,1)", "no component 'Nobody'"),
+        ("CmgCluster.nothing=normal(0,1)", "CmgCluster has no variable 'nothing'"),
+        ("CmgCluster.delta0[7]=normal(0,1)", "has shape \\(6,\\)"),
+        ("CmgCluster.delta=normal(0,1)", "only numeric parameters"),
+        ("CmgSteering.law=normal(0,1)", "Integer parameter: use choice"),
+        ("CmgCluster.delta0=values(0, 1)", "grids take scalar names"),
+        ("CmgCluster.h_rotor=rotate(1deg)", "rotate\\(\\) turns a 3-vector"),
+        ("CmgCluster.gimbal_axis=inertia(0.1, 0)", "disperses a 3×3 inertia"),
+    ],
+)
 def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
     with pytest.raises(ValueError, match=match):
         Plan(Spec("scan_pitch", vary=[vary]))
 
 
 def test_dispersion_files_toml_and_json_agree(tmp_path):
-    (tmp_path / "d.toml").write_text('[vary]\n"A.x" = "normal(1, 2)"\n"A.y[2]" = '
-                                     '"values(1, 2)"\n[set]\n"A.z" = 3.0\n')
-    (tmp_path / "d.json").write_text(json.dumps({"vary": {"A.x": "normal(1, 2)",
-                                                          "A.y[2]": "values(1, 2)"},
-                                                 "set": {"A.z": 3.0}}))
+    (tmp_path / "d.toml").write_text(
+        '[vary]\n"A.x" = "normal(1, 2)"\n"A.y[2]" = "values(1, 2)"\n[set]\n"A.z" = 3.0\n'
+    )
+    (tmp_path / "d.json").write_text(
+        json.dumps({"vary": {"A.x": "normal(1, 2)", "A.y[2]": "values(1, 2)"}, "set": {"A.z": 3.0}})
+    )
     assert dispersion.load(tmp_path / "d.toml") == dispersion.load(tmp_path / "d.json")
     (tmp_path / "bad.toml").write_text('[vary]\n"A.x" = "normal(1"\n')
     with pytest.raises(ValueError, match="bad.toml A.x"):
@@ -153,12 +184,12 @@ def test_clopper_pearson_against_closed_forms_and_a_table():
 
 
 def test_summarize_declares_requirements_and_met():
-    entries = summarize({"a": (1.0, "rad", "deg", ""), "b": (None, "s", "s", ""),
-                         "c": (-0.5, "1", "1", "")},
-                        requirements={"a": {"max": 2.0}, "b": {"min": 0.0},
-                                      "c": {"min": -1.0, "max": -0.6}})
+    entries = summarize(
+        {"a": (1.0, "rad", "deg", ""), "b": (None, "s", "s", ""), "c": (-0.5, "1", "1", "")},
+        requirements={"a": {"max": 2.0}, "b": {"min": 0.0}, "c": {"min": -1.0, "max": -0.6}},
+    )
     assert entries["a"]["requirement"] == {"max": 2.0} and entries["a"]["met"] is True
-    assert entries["b"]["met"] is False            # not reached: not met
+    assert entries["b"]["met"] is False  # not reached: not met
     assert entries["c"]["met"] is False
     with pytest.raises(ValueError, match="expected 'min' and/or 'max'"):
         summarize({"a": (1.0, "1", "1", "")}, requirements={"a": {"below": 1}})
@@ -167,13 +198,25 @@ def test_summarize_declares_requirements_and_met():
 def test_table_round_trips_floats_exactly_through_csv(tmp_path):
     plan = Plan(Spec("scan_pitch", runs=2, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
     metrics = {"m": {"unit": "rad", "display_unit": "deg", "requirement": {"max": 1.0}}}
-    records = {i: {"index": i, "seed": 0, "grid": 0, "values": plan.run_values(i),
-                   "status": "ok", "message": "", "worker": "w", "seconds": 0.1,
-                   "metrics": {"m": {"value": 1 / 3 + i, "met": i == 0}}} for i in (1, 0)}
+    records = {
+        i: {
+            "index": i,
+            "seed": 0,
+            "grid": 0,
+            "values": plan.run_values(i),
+            "status": "ok",
+            "message": "",
+            "worker": "w",
+            "seconds": 0.1,
+            "metrics": {"m": {"value": 1 / 3 + i, "met": i == 0}},
+        }
+        for i in (1, 0)
+    }
     array = report.table(plan, records, metrics)
     assert list(array["index"]) == [0, 1] and list(array["met_m"]) == [True, False]
     report.write_table(array, tmp_path)
     import csv
+
     rows = list(csv.DictReader((tmp_path / "runs.csv").open()))
     assert float(rows[1]["m"]) == 1 / 3 + 1
     assert float(rows[0]["CmgCluster.h_rotor"]) == plan.run_values(0)["CmgCluster.h_rotor"]
@@ -183,6 +226,7 @@ def test_table_round_trips_floats_exactly_through_csv(tmp_path):
 
 def test_progress_prints_plain_lines_off_a_terminal(capsys):
     import sys
+
     progress = report.Progress(4, 1, period=0.0, stream=sys.stdout)
     progress.update("ok")
     progress.update("failed")
@@ -197,6 +241,7 @@ def test_progress_is_a_bar_on_a_terminal():
     class Terminal(io.StringIO):
         def isatty(self):
             return True
+
     stream = Terminal()
     progress = report.Progress(5, 2, stream=stream)
     progress.update("ok")

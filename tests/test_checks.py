@@ -1,14 +1,20 @@
 """The shipped assertions (agilesat.orchestration.checks), the progress reporter and the
 unit spelling, on synthetic data: each check passes where it should and fails with a
 message that says where."""
+
 import io
 import math
 
 import numpy as np
 import pytest
 
-from agilesat.orchestration.checks import (assert_momentum_conserved, assert_requirements_met,
-                                           assert_settles, assert_within, requirement_met)
+from agilesat.orchestration.checks import (
+    assert_momentum_conserved,
+    assert_requirements_met,
+    assert_settles,
+    assert_within,
+    requirement_met,
+)
 from agilesat.orchestration.progress import Progress
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.units import pretty
@@ -27,13 +33,16 @@ def decaying():
 
 def test_settles_after_the_settling_time(decaying):
     assert_settles(decaying, "C.err", bound=math.exp(-5), after=50.0)
-    with pytest.raises(AssertionError, match=r"C\.err does not settle within ±0\.001 rad "
-                       r"after t = 50 s: max 0\.006.* last outside at t = 69 s"):
+    with pytest.raises(
+        AssertionError,
+        match=r"C\.err does not settle within ±0\.001 rad "
+        r"after t = 50 s: max 0\.006.* last outside at t = 69 s",
+    ):
         assert_settles(decaying, "C.err", bound=1e-3, after=50.0)
 
 
 def test_settles_in_degrees(decaying):
-    assert_settles(decaying, "C.err[1]", bound=0.4, after=50.0, deg=True)   # 0.386°
+    assert_settles(decaying, "C.err[1]", bound=0.4, after=50.0, deg=True)  # 0.386°
     with pytest.raises(AssertionError, match="°"):
         assert_settles(decaying, "C.err[1]", bound=0.38, after=50.0, deg=True)
 
@@ -48,18 +57,21 @@ def test_within_a_band_over_a_window(decaying):
 
 
 def test_momentum_conserved(decaying):
-    assert_momentum_conserved(decaying, rtol=1e-10, name="S.H_I")   # 1e-10 / 5 drift
+    assert_momentum_conserved(decaying, rtol=1e-10, name="S.H_I")  # 1e-10 / 5 drift
     with pytest.raises(AssertionError, match=r"drifts by 2e-11 .* t = 100 s"):
         assert_momentum_conserved(decaying, rtol=1e-11, name="S.H_I")
 
 
 def test_requirements_from_the_summary():
-    summary = {"metrics": {
-        "a": {"value": 0.5, "unit": "rad", "requirement": 1.0},
-        "b": {"value": -0.81, "unit": "rad/s", "requirement": [-0.82, -0.78]},
-        "c": {"value": 2.0, "unit": "1", "requirement": {"max": 1.0}},
-        "d": {"value": 9.0, "unit": "1", "requirement": 1.0, "met": True},   # the flag wins
-        "e": {"value": 9.0, "unit": "1"}}}
+    summary = {
+        "metrics": {
+            "a": {"value": 0.5, "unit": "rad", "requirement": 1.0},
+            "b": {"value": -0.81, "unit": "rad/s", "requirement": [-0.82, -0.78]},
+            "c": {"value": 2.0, "unit": "1", "requirement": {"max": 1.0}},
+            "d": {"value": 9.0, "unit": "1", "requirement": 1.0, "met": True},  # the flag wins
+            "e": {"value": 9.0, "unit": "1"},
+        }
+    }
     assert [requirement_met(summary["metrics"][k]) for k in "abcd"] == [True, True, False, True]
     assert_requirements_met(summary, "a", "b", "d")
     with pytest.raises(AssertionError, match=r"requirement not met: c = 2\.0 1"):
@@ -85,15 +97,24 @@ def test_progress_plain_lines_without_a_terminal_bar_in_one_nothing_when_quiet()
     tty = _Stream(True)
     with Progress("run", stream=tty) as progress:
         progress(50, 100)
-    assert "run:" in tty.getvalue() and "|" in tty.getvalue()       # tqdm's bar
+    assert "run:" in tty.getvalue() and "|" in tty.getvalue()  # tqdm's bar
     quiet = _Stream(True)
     with Progress("run", stream=quiet, quiet=True, interval=0.0) as progress:
         progress(50, 100)
     assert quiet.getvalue() == ""
 
 
-@pytest.mark.parametrize("unit, text", [("rad/s2", "rad/s²"), ("N.m.s", "N·m·s"),
-                                        ("kg.m2", "kg·m²"), ("1", ""), ("deg/s", "°/s"),
-                                        ("m3/s2", "m³/s²"), ("rad", "rad")])
+@pytest.mark.parametrize(
+    "unit, text",
+    [
+        ("rad/s2", "rad/s²"),
+        ("N.m.s", "N·m·s"),
+        ("kg.m2", "kg·m²"),
+        ("1", ""),
+        ("deg/s", "°/s"),
+        ("m3/s2", "m³/s²"),
+        ("rad", "rad"),
+    ],
+)
 def test_units_as_people_write_them(unit, text):
     assert pretty(unit) == text

@@ -1,13 +1,14 @@
 """The command line as an engineer uses it every day: list, info, --set with arrays, the
 summary, plot, build, --version and exit codes.  Numbers are read from summary.json."""
+
 import json
 import struct
 
 import numpy as np
 import pytest
 
-from agilesat.orchestration.parameters import scalar_parameters, variables
 from agilesat.orchestration.fmu import Description
+from agilesat.orchestration.parameters import scalar_parameters, variables
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import get
 from agilesat.orchestration.ssp import SystemFileError
@@ -30,9 +31,14 @@ def test_arrays_are_grouped_with_their_shape(described):
 
 
 def test_a_whole_array_splits_into_its_elements(described):
-    values = scalar_parameters(described, {"SatelliteDynamics.inertia": IDENTITY_900,
-                                           "SatelliteDynamics.rate0[2]": "0.01",
-                                           "Flywheel.speed0": [1, 2, 3, 4]})
+    values = scalar_parameters(
+        described,
+        {
+            "SatelliteDynamics.inertia": IDENTITY_900,
+            "SatelliteDynamics.rate0[2]": "0.01",
+            "Flywheel.speed0": [1, 2, 3, 4],
+        },
+    )
     assert values["SatelliteDynamics.inertia[2,2]"] == 900
     assert values["SatelliteDynamics.inertia[2,3]"] == 0
     assert values["SatelliteDynamics.rate0[2]"] == "0.01"
@@ -40,15 +46,22 @@ def test_a_whole_array_splits_into_its_elements(described):
     assert len(values) == 9 + 1 + 4
 
 
-@pytest.mark.parametrize("key, value, message", [
-    ("SatelliteDynamics.inertia", "900", r"array of shape 3×3 \[kg.m2\]; give it whole, e.g. "
-     r"inertia=\[\[956.0,0.0,0.0\],.*or one element, e.g. inertia\[1,1\]=956.0 .*not spread"),
-    ("SatelliteDynamics.inertia", "[900, 900, 900]", "array of shape 3×3"),
-    ("SatelliteDynamics.inerta", "1", "has no variable 'inerta'; did you mean inertia"),
-    ("SateliteDynamics.inertia", "1", "did you mean SatelliteDynamics"),
-    ("SatelliteDynamics.mu", "[1, 2]", "is a scalar"),
-    ("SatelliteDynamics.inertia", "[[1,0", "cannot read"),
-])
+@pytest.mark.parametrize(
+    "key, value, message",
+    [
+        (
+            "SatelliteDynamics.inertia",
+            "900",
+            r"array of shape 3×3 \[kg.m2\]; give it whole, e.g. "
+            r"inertia=\[\[956.0,0.0,0.0\],.*or one element, e.g. inertia\[1,1\]=956.0 .*not spread",
+        ),
+        ("SatelliteDynamics.inertia", "[900, 900, 900]", "array of shape 3×3"),
+        ("SatelliteDynamics.inerta", "1", "has no variable 'inerta'; did you mean inertia"),
+        ("SateliteDynamics.inertia", "1", "did you mean SatelliteDynamics"),
+        ("SatelliteDynamics.mu", "[1, 2]", "is a scalar"),
+        ("SatelliteDynamics.inertia", "[[1,0", "cannot read"),
+    ],
+)
 def test_a_wrong_override_says_what_is_expected(described, key, value, message):
     with pytest.raises(SystemFileError, match=message):
         scalar_parameters(described, {key: value})
@@ -64,8 +77,9 @@ def test_list_and_info_show_scenarios_variants_and_array_parameters(fmus):
         assert all(f":{v}" in listing.stdout for v in get(name).variants)
     info = agilesat("info", "scan_pitch")
     assert info.returncode == 0, info.stderr
-    row = next(line for line in info.stdout.splitlines()
-               if "SatelliteDynamics.inertia[3×3]" in line)
+    row = next(
+        line for line in info.stdout.splitlines() if "SatelliteDynamics.inertia[3×3]" in line
+    )
     assert "kg·m²" in row and "[[956,0,0],[0,956,0],[0,0,956]]" in row and row.startswith(" *")
     assert "CmgCluster.h -> SatelliteDynamics.h_cmg" in info.stdout
     fmu = agilesat("info", "Flywheel")
@@ -79,7 +93,7 @@ def test_list_and_info_show_scenarios_variants_and_array_parameters(fmus):
 def test_misspelt_scenario_variant_and_usage_errors(fmus):
     scenario = agilesat("run", "scan_pich")
     assert scenario.returncode == 1 and "did you mean scan_pitch?" in scenario.stderr
-    assert 'error: "' not in scenario.stderr                      # not a KeyError's repr
+    assert 'error: "' not in scenario.stderr  # not a KeyError's repr
     variant = agilesat("run", "payload_sweep:no_contrl")
     assert variant.returncode == 1 and "did you mean no_control," in variant.stderr
     usage = agilesat("run", "scan_pitch", "--stpo", "1")
@@ -87,8 +101,16 @@ def test_misspelt_scenario_variant_and_usage_errors(fmus):
     version = agilesat("--version")
     assert version.returncode == 0 and version.stdout.startswith("agilesat 0.")
     helptext = agilesat("--help").stdout
-    assert all(code in helptext for code in ("0 success", "1 bad input", "2 a usage error",
-                                              "3 a scenario", "130 interrupted"))
+    assert all(
+        code in helptext
+        for code in (
+            "0 success",
+            "1 bad input",
+            "2 a usage error",
+            "3 a scenario",
+            "130 interrupted",
+        )
+    )
 
 
 @pytest.mark.slow
@@ -96,8 +118,10 @@ def test_misspelt_scenario_variant_and_usage_errors(fmus):
 def test_build_with_nothing_to_do_says_so(fmus):
     result = agilesat("build")
     assert result.returncode == 0
-    assert result.stdout.strip().splitlines() == [
-        result.stdout.strip()] and "up to date" in result.stdout
+    assert (
+        result.stdout.strip().splitlines() == [result.stdout.strip()]
+        and "up to date" in result.stdout
+    )
 
 
 def _png_width(path):
@@ -110,9 +134,19 @@ def _png_width(path):
 def short_run(fmus, tmp_path_factory):
     """scan_pitch over 20 s with the inertia set as a whole matrix."""
     out = tmp_path_factory.mktemp("short")
-    result = agilesat("run", "scan_pitch", "--stop", 20, "--out", out, "--mat",
-                      "--set", f"SatelliteDynamics.inertia={IDENTITY_900}",
-                      "--set", "SatelliteDynamics.gravity_gradient=false")
+    result = agilesat(
+        "run",
+        "scan_pitch",
+        "--stop",
+        20,
+        "--out",
+        out,
+        "--mat",
+        "--set",
+        f"SatelliteDynamics.inertia={IDENTITY_900}",
+        "--set",
+        "SatelliteDynamics.gravity_gradient=false",
+    )
     assert result.returncode == 0, result.stderr
     return out, result, json.loads((out / "summary.json").read_text(encoding="utf-8"))
 
@@ -124,10 +158,10 @@ def test_set_a_whole_array_and_record_it_typed(short_run):
     parameters = summary["parameters"]
     assert parameters["SatelliteDynamics.inertia[1,1]"] == {"value": 900.0, "type": "Real"}
     assert parameters["SatelliteDynamics.inertia[1,2]"] == {"value": 0.0, "type": "Real"}
-    assert parameters["SatelliteDynamics.gravity_gradient"] == {"value": False,
-                                                                 "type": "Boolean"}
+    assert parameters["SatelliteDynamics.gravity_gradient"] == {"value": False, "type": "Boolean"}
     # the dynamics FMU got the matrix: its H_I = C_BIᵀ (J w + h) with J = 900 I
     from agilesat.orchestration.scenarios import inertial_momentum
+
     results = Results.load(out)
     H = results["SatelliteDynamics.H_I"]
     for J, close in ((900.0, True), (956.0, False)):
@@ -159,6 +193,7 @@ def test_summary_is_readable_text_with_units_requirements_and_figures(short_run)
 def test_results_mat_and_fmpy_csv(short_run):
     from fmpy.util import read_csv
     from scipy.io import loadmat
+
     out = short_run[0]
     results = Results.load(out)
     mat = loadmat(out / "results.mat", squeeze_me=False, struct_as_record=False)
@@ -172,8 +207,16 @@ def test_results_mat_and_fmpy_csv(short_run):
 def test_plot_overlays_runs_by_base_name_in_degrees(short_run, tmp_path):
     out = short_run[0]
     figure = tmp_path / "delta.png"
-    result = agilesat("plot", out, out, "CmgCluster.delta", "SatelliteDynamics.euler_BO[2]",
-                      "--deg", "--out", figure)
+    result = agilesat(
+        "plot",
+        out,
+        out,
+        "CmgCluster.delta",
+        "SatelliteDynamics.euler_BO[2]",
+        "--deg",
+        "--out",
+        figure,
+    )
     assert result.returncode == 0, result.stderr
     assert figure.exists() and figure.with_suffix(".svg").exists()
     svg = figure.with_suffix(".svg").read_text()
@@ -205,11 +248,20 @@ def test_own_system_gets_a_generic_summary_and_figures(fmus, tmp_path):
 def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
     package = tmp_path / "scan_pitch.ssp"
     assert agilesat("export", "scan_pitch", "--out", package).returncode == 0
-    result = agilesat("run", package, "--stop", 1, "--no-figures", "--out", tmp_path / "run",
-                      "--set", "SatelliteDynamics.rate0=[0.001,0,0]")
+    result = agilesat(
+        "run",
+        package,
+        "--stop",
+        1,
+        "--no-figures",
+        "--out",
+        tmp_path / "run",
+        "--set",
+        "SatelliteDynamics.rate0=[0.001,0,0]",
+    )
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
-    assert summary["parameters"]["SatelliteDynamics.rate0[1]"] == {"value": 0.001,
-                                                                   "type": "Real"}
+    assert summary["parameters"]["SatelliteDynamics.rate0[1]"] == {"value": 0.001, "type": "Real"}
     assert Results.load(tmp_path / "run")["SatelliteDynamics.w_BO_B[1]"][0] == pytest.approx(
-        0.001, rel=1e-12)
+        0.001, rel=1e-12
+    )

@@ -1,18 +1,24 @@
 """CMG cluster and steering law against the paper's formulas and first principles."""
+
 import math
 
 import numpy as np
 import pytest
 
-from agilesat.components.cmg_cluster import (DEFAULT_SPINS, GIMBAL_AXES,
-                                     ClusterGeometry, CmgCluster, servo_step,
-                                     zero_momentum_angles)
-from agilesat.components.model import ModelError
+from agilesat.components.cmg_cluster import (
+    DEFAULT_SPINS,
+    GIMBAL_AXES,
+    ClusterGeometry,
+    CmgCluster,
+    servo_step,
+    zero_momentum_angles,
+)
 from agilesat.components.cmg_steering import PSEUDO_INVERSE, SR_INVERSE, CmgSteering
+from agilesat.components.model import ModelError
 from agilesat.orchestration.scenarios.scan_pitch import PAPER_DELTA0, PAPER_SPINS
 
 DEG = math.pi / 180
-A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG   # α0, α1, α2 of [Zhao 2016] §3.2
+A0, A1, A2 = 63.4 * DEG, 36 * DEG, 18 * DEG  # α0, α1, α2 of [Zhao 2016] §3.2
 
 
 def paper_matrices(d):
@@ -22,20 +28,56 @@ def paper_matrices(d):
     (−sδ06, cδ06, 0), so the second entry must be sδ06 (a misprint, used corrected).
     """
     s, c = np.sin(d), np.cos(d)
-    sa0, ca0, sa1, ca1, sa2, ca2 = (math.sin(A0), math.cos(A0), math.sin(A1), math.cos(A1),
-                                    math.sin(A2), math.cos(A2))
-    A_s = np.array([
-        [-s[0], -s[1] * sa2 - c[1] * ca0 * ca2, s[2] * ca1 - c[2] * ca0 * sa1,
-         s[3] * ca1 + c[3] * ca0 * sa1, -s[4] * sa2 + c[4] * ca0 * ca2, c[5]],
-        [c[0] * ca0, -s[1] * ca2 + c[1] * ca0 * sa2, -s[2] * sa1 - c[2] * ca0 * ca1,
-         s[3] * sa1 - c[3] * ca0 * ca1, s[4] * ca2 + c[4] * ca0 * sa2, s[5]],
-        [c[0] * sa0, c[1] * sa0, c[2] * sa0, c[3] * sa0, c[4] * sa0, 0.0]])
-    A_c = np.array([
-        [-c[0], -c[1] * sa2 + s[1] * ca0 * ca2, c[2] * ca1 + s[2] * ca0 * sa1,
-         c[3] * ca1 - s[3] * ca0 * sa1, -c[4] * sa2 - s[4] * ca0 * ca2, -s[5]],
-        [-s[0] * ca0, -c[1] * ca2 - s[1] * ca0 * sa2, -c[2] * sa1 + s[2] * ca0 * ca1,
-         c[3] * sa1 + s[3] * ca0 * ca1, c[4] * ca2 - s[4] * ca0 * sa2, c[5]],
-        [-s[0] * sa0, -s[1] * sa0, -s[2] * sa0, -s[3] * sa0, -s[4] * sa0, 0.0]])
+    sa0, ca0, sa1, ca1, sa2, ca2 = (
+        math.sin(A0),
+        math.cos(A0),
+        math.sin(A1),
+        math.cos(A1),
+        math.sin(A2),
+        math.cos(A2),
+    )
+    A_s = np.array(
+        [
+            [
+                -s[0],
+                -s[1] * sa2 - c[1] * ca0 * ca2,
+                s[2] * ca1 - c[2] * ca0 * sa1,
+                s[3] * ca1 + c[3] * ca0 * sa1,
+                -s[4] * sa2 + c[4] * ca0 * ca2,
+                c[5],
+            ],
+            [
+                c[0] * ca0,
+                -s[1] * ca2 + c[1] * ca0 * sa2,
+                -s[2] * sa1 - c[2] * ca0 * ca1,
+                s[3] * sa1 - c[3] * ca0 * ca1,
+                s[4] * ca2 + c[4] * ca0 * sa2,
+                s[5],
+            ],
+            [c[0] * sa0, c[1] * sa0, c[2] * sa0, c[3] * sa0, c[4] * sa0, 0.0],
+        ]
+    )
+    A_c = np.array(
+        [
+            [
+                -c[0],
+                -c[1] * sa2 + s[1] * ca0 * ca2,
+                c[2] * ca1 + s[2] * ca0 * sa1,
+                c[3] * ca1 - s[3] * ca0 * sa1,
+                -c[4] * sa2 - s[4] * ca0 * ca2,
+                -s[5],
+            ],
+            [
+                -s[0] * ca0,
+                -c[1] * ca2 - s[1] * ca0 * sa2,
+                -c[2] * sa1 + s[2] * ca0 * ca1,
+                c[3] * sa1 + s[3] * ca0 * ca1,
+                c[4] * ca2 - s[4] * ca0 * sa2,
+                c[5],
+            ],
+            [-s[0] * sa0, -s[1] * sa0, -s[2] * sa0, -s[3] * sa0, -s[4] * sa0, 0.0],
+        ]
+    )
     return A_s, A_c
 
 
@@ -65,7 +107,7 @@ def test_momentum_derivative_is_h_rotor_times_jacobian_times_rates():
     cluster = CmgCluster(accel_limit=100.0).start()
     rates = np.array([0.1, -0.2, 0.05, 0.3, -0.15, 0.2])
     cluster.set("delta_dot_cmd", rates)
-    cluster.advance(0.0, 0.5)       # rates reached after 3 ms, then held
+    cluster.advance(0.0, 0.5)  # rates reached after 3 ms, then held
     h0, hdot = cluster.get("h"), cluster.get("hdot")
     dt = 1e-5
     cluster.advance(0.5, dt)
@@ -89,12 +131,15 @@ def test_singularity_measure_is_det_of_A_At():
     assert geometry.singularity(A) == pytest.approx(np.linalg.det(A @ A.T), rel=1e-12)
 
 
-@pytest.mark.parametrize("rate, command, dt", [
-    (0.0, 0.3, 1.0),      # reaches the command after 0.6 s, then holds it
-    (0.2, -0.4, 0.5),     # still accelerating at the end of the step
-    (0.1, 5.0, 3.0),      # command above the rate limit: clipped to 0.6
-    (0.25, 0.25, 0.7),    # already there
-])
+@pytest.mark.parametrize(
+    "rate, command, dt",
+    [
+        (0.0, 0.3, 1.0),  # reaches the command after 0.6 s, then holds it
+        (0.2, -0.4, 0.5),  # still accelerating at the end of the step
+        (0.1, 5.0, 3.0),  # command above the rate limit: clipped to 0.6
+        (0.25, 0.25, 0.7),  # already there
+    ],
+)
 @pytest.mark.slow
 def test_servo_step_matches_fine_integration(rate, command, dt):
     angle, rate_end = servo_step([0.5], [rate], [command], dt, 0.6, 0.5)
@@ -149,20 +194,21 @@ def test_null_motion_follows_the_gradient_of_Q_without_torque():
     delta = np.array([0.3, -1.0, 2.0, 0.1, 0.7, -0.4])
     geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
     free = steering([0, 0, 0], delta, [0, 0, 0], [0, 0, 0], null_gain=1.0).get("delta_dot_cmd")
-    assert np.allclose(geometry.jacobian(delta) @ free, 0, atol=1e-13)   # no torque
+    assert np.allclose(geometry.jacobian(delta) @ free, 0, atol=1e-13)  # no torque
     Q = lambda d: geometry.singularity(geometry.jacobian(d))
     gradient = np.array([(Q(delta + e) - Q(delta - e)) / 2e-6 for e in np.eye(6) * 1e-6])
     projected = gradient - np.linalg.pinv(geometry.jacobian(delta)) @ (
-        geometry.jacobian(delta) @ gradient)
-    assert np.allclose(free, projected, rtol=1e-6, atol=1e-9)            # the paper's term
-    assert gradient @ free > 0                                          # Q increases
+        geometry.jacobian(delta) @ gradient
+    )
+    assert np.allclose(free, projected, rtol=1e-6, atol=1e-9)  # the paper's term
+    assert gradient @ free > 0  # Q increases
 
 
 def test_singularity_robust_inverse_bounds_the_rates_near_a_singularity():
     geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
     y = np.array([0.0, 1.0, 0.0])
-    delta = np.arctan2(geometry.T @ y, geometry.S @ y) + 1e-4   # just off the envelope
-    tau = np.array([0.0, -1.0, 0.0])                               # push further along +y
+    delta = np.arctan2(geometry.T @ y, geometry.S @ y) + 1e-4  # just off the envelope
+    tau = np.array([0.0, -1.0, 0.0])  # push further along +y
     pinv = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=PSEUDO_INVERSE).get("delta_dot_cmd")
     robust = steering(tau, delta, [0, 0, 0], [0, 0, 0], law=SR_INVERSE).get("delta_dot_cmd")
     assert np.abs(pinv).max() > 50 * np.abs(robust).max()
@@ -179,8 +225,11 @@ def test_exact_singularity_gives_finite_rates_and_a_warning():
 
 
 def test_unknown_steering_law_is_rejected():
-    with pytest.raises(ModelError, match=r"law must be one of 0 \(PSEUDO_INVERSE\), "
-                                         r"1 \(SR_INVERSE\), got 2"):
+    with pytest.raises(
+        ModelError,
+        match=r"law must be one of 0 \(PSEUDO_INVERSE\), "
+        r"1 \(SR_INVERSE\), got 2",
+    ):
         CmgSteering(law=2).start()
 
 
@@ -191,7 +240,7 @@ def test_zero_momentum_angles_hold_no_momentum_at_a_local_maximum_of_q():
     Q = geometry.singularity(geometry.jacobian(delta))
     # along the zero-momentum set (Newton back onto h = 0 after a null-space step) Q falls
     A = geometry.jacobian(delta)
-    null = np.linalg.svd(A)[2][3:]                       # basis of the null space of A
+    null = np.linalg.svd(A)[2][3:]  # basis of the null space of A
     for direction in null:
         for sign in (-1.0, 1.0):
             moved = zero_momentum_angles(geometry, delta + sign * 0.05 * direction, iterations=0)

@@ -1,5 +1,6 @@
 """The same FMU files give bit-identical results: twice in one process (the FMUs loaded,
 freed and loaded again by the same interpreter) and in two separate processes."""
+
 import numpy as np
 import pytest
 

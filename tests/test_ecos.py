@@ -11,6 +11,7 @@ shrink the difference about as fast as first order.
 
 ECOS needs Intel TBB at run time: ``apt-get install -y libtbb12`` (Debian/Ubuntu).
 """
+
 import ctypes.util
 import math
 import shutil
@@ -29,10 +30,23 @@ pytestmark = [pytest.mark.slow, pytest.mark.integration]
 #: run length [s] and the compared attitude columns of each scenario (as test_libcosim)
 CASES = {
     "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
-    "payload_sweep": (150.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
-                              "SatelliteDynamics.euler_BO[3]", "SatelliteDynamics.w_BO_B[3]"]),
-    "video_sar": (200.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
-                          "SatelliteDynamics.euler_BO[3]"]),
+    "payload_sweep": (
+        150.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+            "SatelliteDynamics.w_BO_B[3]",
+        ],
+    ),
+    "video_sar": (
+        200.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+        ],
+    ),
 }
 
 
@@ -52,16 +66,39 @@ def packages(fmus, tmp_path_factory):
 
 
 def ecos(package, stop, step, parameter_set, columns, out):
-    run = subprocess.run([sys.executable, str(ROOT / "tests" / "ecos_run.py"), str(package),
-                          str(stop), str(step), parameter_set, str(out), *columns],
-                         capture_output=True, text=True, timeout=900, cwd=out.parent)
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "tests" / "ecos_run.py"),
+            str(package),
+            str(stop),
+            str(step),
+            parameter_set,
+            str(out),
+            *columns,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=out.parent,
+    )
     assert run.returncode == 0, run.stderr
     return Results.from_npz(out)
 
 
 def ours(package, stop, step, out_dir):
-    run = agilesat("run", package, "--stop", stop, "--step", step, "--out", out_dir,
-                   "--no-figures", cwd=out_dir.parent)
+    run = agilesat(
+        "run",
+        package,
+        "--stop",
+        stop,
+        "--step",
+        step,
+        "--out",
+        out_dir,
+        "--no-figures",
+        cwd=out_dir.parent,
+    )
     assert run.returncode == 0, run.stderr
     return Results.from_npz(out_dir / "results.npz")
 
@@ -79,15 +116,13 @@ def test_ecos_agrees_with_our_master_to_the_coupling_error(scenario, packages, t
         theirs = ecos(packages[scenario], stop, h, scenario, columns, tmp_path / f"ecos_{h}.npz")
         mine = ours(packages[scenario], stop, h, tmp_path / f"ours_{h}")
         assert len(theirs.time) == round(stop / h)
-        assert np.allclose(theirs.time, mine.time[1:], rtol=0, atol=1e-9)   # after steps
-        differences.append([np.max(np.abs(theirs[c] - mine[c][1:]))
-                            for c in columns])
+        assert np.allclose(theirs.time, mine.time[1:], rtol=0, atol=1e-9)  # after steps
+        differences.append([np.max(np.abs(theirs[c] - mine[c][1:])) for c in columns])
     coarse, fine = np.array(differences)
     for column, c, f in zip(columns, coarse, fine):
-        print(f"{scenario}: max |ECOS - ours| of {column}: {c:.3g} at H = {step} s, "
-              f"{f:.3g} at H/2")
+        print(f"{scenario}: max |ECOS - ours| of {column}: {c:.3g} at H = {step} s, {f:.3g} at H/2")
     assert np.all(coarse < np.radians(1.0))
-    assert np.all(fine <= 0.65 * coarse), fine / coarse   # first order, with 30 % margin
+    assert np.all(fine <= 0.65 * coarse), fine / coarse  # first order, with 30 % margin
 
 
 def test_without_the_parameter_set_ecos_applies_nothing(packages, tmp_path):

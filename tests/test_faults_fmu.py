@@ -1,9 +1,9 @@
 """Fault injection on our FMU binary, each case in its own process (tests/fault_cases_fmu.py),
 and the resource figures with a small N (the full N: tests/fault_matrix.py)."""
+
 import re
 
 import pytest
-
 from fault_cases_fmu import CASES, resource_figures
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
@@ -31,17 +31,20 @@ def test_repeated_runs_and_instances_do_not_grow_memory_or_mappings(fmus):
 def test_runs_on_reused_fmus_are_bit_identical_to_a_fresh_process(fmus, tmp_path):
     """Three runs in one process (the second with another inertia, so a reused component
     that kept anything from its last run would show) against one run per fresh process."""
-    code = ("import sys\n"
-            "from agilesat.orchestration.master import simulate\n"
-            "from agilesat.orchestration.scenarios import get\n"
-            "ssd, out = get('scan_pitch').ssd, sys.argv[1]\n"
-            "for k, changed in enumerate(sys.argv[2:]):\n"
-            "    parameters = {'SatelliteDynamics.inertia[1,1]': 900.0} if changed == '1' else {}\n"
-            "    simulate(ssd, stop=2.0, parameters=parameters).to_npz(f'{out}{k}.npz')\n"
-            "from agilesat.orchestration import fmu\n"
-            "assert sum(map(len, fmu._idle.values())) == 5  # the components were reused\n")
-    from helpers import run_python
+    code = (
+        "import sys\n"
+        "from agilesat.orchestration.master import simulate\n"
+        "from agilesat.orchestration.scenarios import get\n"
+        "ssd, out = get('scan_pitch').ssd, sys.argv[1]\n"
+        "for k, changed in enumerate(sys.argv[2:]):\n"
+        "    parameters = {'SatelliteDynamics.inertia[1,1]': 900.0} if changed == '1' else {}\n"
+        "    simulate(ssd, stop=2.0, parameters=parameters).to_npz(f'{out}{k}.npz')\n"
+        "from agilesat.orchestration import fmu\n"
+        "assert sum(map(len, fmu._idle.values())) == 5  # the components were reused\n"
+    )
     from agilesat.orchestration.results import Results
+    from helpers import run_python
+
     assert run_python(code, tmp_path / "same", 0, 1, 0).returncode == 0
     assert run_python(code, tmp_path / "fresh", 0).returncode == 0
     assert run_python(code, tmp_path / "fresh_changed", 1).returncode == 0

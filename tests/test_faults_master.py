@@ -4,16 +4,17 @@ disk full, parallel builds, hostile .ssp packages.
 The cases of ``fault_cases_master.CASES`` run the CLI in fresh processes (slow); the rest
 checks the pieces in this process without loading any FMU.
 """
+
 import os
 import re
 import signal
 import threading
 from pathlib import Path
 
+import fault_cases_master
 import numpy as np
 import pytest
 
-import fault_cases_master
 from agilesat.orchestration import master, recorder
 from agilesat.orchestration.fmu import Description
 from agilesat.orchestration.results import Results
@@ -41,8 +42,9 @@ def _without(ssd: Path, index: int, directory: Path) -> Path:
     connections = [i for i, line in enumerate(lines) if "<ssd:Connection " in line]
     del lines[connections[index]]
     build = (ssd.parent / "../../fmus/build").resolve()
-    text = "".join(lines).replace('source="../../fmus/build/',
-                                  f'source="{os.path.relpath(build, directory)}/')
+    text = "".join(lines).replace(
+        'source="../../fmus/build/', f'source="{os.path.relpath(build, directory)}/'
+    )
     path = directory / ssd.name
     path.write_text(text)
     return path
@@ -57,8 +59,9 @@ def test_removing_any_connection_is_an_error_or_a_listed_open_input(fmus, ssd, t
     system = read_system(ssd)
     descriptions = {c.name: Description(c.name, c.source) for c in system.components}
     assert check_system(system, descriptions, system.parameters).open_inputs is not None
-    baseline = {e["input"] for e in check_system(system, descriptions,
-                                                 system.parameters).open_inputs}
+    baseline = {
+        e["input"] for e in check_system(system, descriptions, system.parameters).open_inputs
+    }
     outcomes = {"error": 0, "listed": 0}
     for index, c in enumerate(system.connections):
         path = _without(ssd, index, tmp_path)
@@ -94,23 +97,34 @@ CONNECTOR = '<ssd:Connector name="r_I[1]" kind="input">\n            <ssc:Real u
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("new, message", [
-    (CONNECTOR.replace('"m"', '"km"'), "declared unit 'km', the FMU's variable has 'm'"),
-    (CONNECTOR.replace('kind="input"', 'kind="output"'),
-     "declared output, the FMU's variable is a input"),
-    (CONNECTOR.replace('<ssc:Real unit="m"/>', '<ssc:Integer/>'),
-     "declared Integer, the FMU's variable is Real"),
-    (CONNECTOR.replace('r_I[1]', 'r_I[9]'), "SatelliteDynamics (SatelliteDynamics.fmu) has no "
-                                            "variable 'r_I[9]'"),
-])
+@pytest.mark.parametrize(
+    "new, message",
+    [
+        (CONNECTOR.replace('"m"', '"km"'), "declared unit 'km', the FMU's variable has 'm'"),
+        (
+            CONNECTOR.replace('kind="input"', 'kind="output"'),
+            "declared output, the FMU's variable is a input",
+        ),
+        (
+            CONNECTOR.replace('<ssc:Real unit="m"/>', "<ssc:Integer/>"),
+            "declared Integer, the FMU's variable is Real",
+        ),
+        (
+            CONNECTOR.replace("r_I[1]", "r_I[9]"),
+            "SatelliteDynamics (SatelliteDynamics.fmu) has no variable 'r_I[9]'",
+        ),
+    ],
+)
 def test_a_connector_that_disagrees_with_the_fmu_is_refused(fmus, tmp_path, new, message):
     ssd = ROOT / "orchestration" / "systems" / "scan_pitch.ssd"
     path = fault_cases_master.system_copy(tmp_path, lambda s: s.replace(CONNECTOR, new, 1))
     system = read_system(path)
     descriptions = {c.name: Description(c.name, c.source) for c in system.components}
-    with pytest.raises(SystemFileError, match=rf"scan_pitch.ssd:\d+: connector "
-                                              rf"SatelliteDynamics.r_I\[[19]\]: .*"
-                                              + re.escape(message)):
+    with pytest.raises(
+        SystemFileError,
+        match=r"scan_pitch.ssd:\d+: connector "
+        r"SatelliteDynamics.r_I\[[19]\]: .*" + re.escape(message),
+    ):
         check_system(system, descriptions, system.parameters)
     assert ssd.read_text().count(CONNECTOR) == 1
 
@@ -119,8 +133,11 @@ def test_a_connector_unit_is_read_from_the_ssd():
     system = read_system(ROOT / "orchestration" / "systems" / "scan_pitch.ssd")
     dynamics = system.component("SatelliteDynamics")
     declared = {c.name: c for c in dynamics.connectors}
-    assert (declared["r_I[1]"].kind, declared["r_I[1]"].type, declared["r_I[1]"].unit) == \
-        ("input", "Real", "m")
+    assert (declared["r_I[1]"].kind, declared["r_I[1]"].type, declared["r_I[1]"].unit) == (
+        "input",
+        "Real",
+        "m",
+    )
 
 
 # ---------------------------------------------------------------------------------------
@@ -131,9 +148,9 @@ def test_signals_set_a_flag_while_inside_and_the_old_handlers_come_back():
     before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     with master.stop_on_signals() as stop:
         with master.stop_on_signals() as inner:
-            assert inner is stop                       # nested: one flag
-        os.kill(os.getpid(), signal.SIGTERM)           # would end this process otherwise
-        os.kill(os.getpid(), signal.SIGINT)            # would raise KeyboardInterrupt
+            assert inner is stop  # nested: one flag
+        os.kill(os.getpid(), signal.SIGTERM)  # would end this process otherwise
+        os.kill(os.getpid(), signal.SIGINT)  # would raise KeyboardInterrupt
         assert stop.signal == signal.SIGINT
     assert {s: signal.getsignal(s) for s in before} == before
 
@@ -144,6 +161,7 @@ def test_signal_handlers_are_left_alone_outside_the_main_thread():
     def worker():
         with master.stop_on_signals() as stop:
             seen.append((stop.signal, signal.getsignal(signal.SIGINT)))
+
     thread = threading.Thread(target=worker)
     thread.start()
     thread.join()
@@ -166,7 +184,7 @@ def test_each_row_is_in_the_file_once_appended_and_npz_matches(tmp_path):
     assert np.array_equal(Results.from_npz(tmp_path / "results.npz").data, rows)
     assert np.array_equal(Results.from_csv(tmp_path / "results.csv").data, rows)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv", "results.npz"]
-    results.data[0, 0] = 99.0                          # the caller's copy may be changed
+    results.data[0, 0] = 99.0  # the caller's copy may be changed
 
 
 def test_a_short_write_is_cut_back_to_the_last_whole_row(tmp_path, monkeypatch):
@@ -174,19 +192,21 @@ def test_a_short_write_is_cut_back_to_the_last_whole_row(tmp_path, monkeypatch):
     rec.append(np.array([0.0, 1.0]))
     real_write = os.write
 
-    def full(fd, data):                                # the disk fills mid-row
+    def full(fd, data):  # the disk fills mid-row
         if len(data) > 16 and fd == rec.csv.fd:
             real_write(fd, bytes(data[:5]))
             raise OSError(28, "No space left on device")
         return real_write(fd, data)
+
     monkeypatch.setattr(recorder.os, "write", full)
     with pytest.raises(OSError, match=r"results.csv: No space left on device; kept the 1 "):
         rec.append(np.array([0.1, 2.0 / 3.0]))
     monkeypatch.undo()
     results, _ = rec.close({})
     assert (tmp_path / "results.csv").read_text() == "time,a\n0.0,1.0\n"
-    assert len(results) == 1 and np.array_equal(Results.from_npz(
-        tmp_path / "results.npz").data, [[0.0, 1.0]])
+    assert len(results) == 1 and np.array_equal(
+        Results.from_npz(tmp_path / "results.npz").data, [[0.0, 1.0]]
+    )
 
 
 def test_without_an_output_directory_rows_stay_in_memory():
@@ -211,26 +231,33 @@ def test_a_failed_npz_leaves_no_file_under_either_name(tmp_path):
 
 def _package(path, members):
     import zipfile
+
     with zipfile.ZipFile(path, "w") as archive:
         for name, data in members.items():
             archive.writestr(name, data)
     return path
 
 
-@pytest.mark.parametrize("members, kwargs, message", [
-    ({"SystemStructure.ssd": b"x", "big": bytes(5000)}, {"max_unpacked": 4000},
-     "more than the limit of 4000"),
-    ({"SystemStructure.ssd": b"x", "/etc/x": b"x"}, {}, "member '/etc/x' would unpack outside"),
-    ({"SystemStructure.ssd": b"x", "a/../../x": b"x"}, {}, "would unpack outside"),
-])
+@pytest.mark.parametrize(
+    "members, kwargs, message",
+    [
+        (
+            {"SystemStructure.ssd": b"x", "big": bytes(5000)},
+            {"max_unpacked": 4000},
+            "more than the limit of 4000",
+        ),
+        ({"SystemStructure.ssd": b"x", "/etc/x": b"x"}, {}, "member '/etc/x' would unpack outside"),
+        ({"SystemStructure.ssd": b"x", "a/../../x": b"x"}, {}, "would unpack outside"),
+    ],
+)
 def test_an_ssp_is_unpacked_within_bounds_or_refused(tmp_path, members, kwargs, message):
     with pytest.raises(SystemFileError, match=message):
         read_system(_package(tmp_path / "p.ssp", members), **kwargs)
 
 
-def test_the_ssp_limit_has_a_documented_default_and_an_environment_override(tmp_path,
-                                                                             monkeypatch):
+def test_the_ssp_limit_has_a_documented_default_and_an_environment_override(tmp_path, monkeypatch):
     from agilesat.orchestration import ssp
+
     assert ssp.MAX_UNPACKED_BYTES == 256 * 2**20
     monkeypatch.setenv("AGILESAT_SSP_MAX_BYTES", "100")
     with pytest.raises(SystemFileError, match="more than the limit of 100 "):
@@ -239,9 +266,12 @@ def test_the_ssp_limit_has_a_documented_default_and_an_environment_override(tmp_
 
 def test_ssp_sources_outside_the_package_are_refused(tmp_path):
     ssd = (ROOT / "orchestration" / "systems" / "scan_pitch.ssd").read_text()
-    with pytest.raises(SystemFileError, match=r"component 'OrbitEnvironment': FMU source "
-                                              r"'../../fmus/build/OrbitEnvironment.fmu' "
-                                              "resolves outside the package"):
+    with pytest.raises(
+        SystemFileError,
+        match=r"component 'OrbitEnvironment': FMU source "
+        r"'../../fmus/build/OrbitEnvironment.fmu' "
+        "resolves outside the package",
+    ):
         read_system(_package(tmp_path / "p.ssp", {"SystemStructure.ssd": ssd}))
 
 

@@ -6,6 +6,7 @@ references of the built FMU's modelDescription.xml.  After one step from a gener
 point, each input variable is perturbed in turn and the outputs are read again at the same
 time: an output that moves depends on that input, one that stays does not.
 """
+
 import re
 
 import numpy as np
@@ -18,18 +19,23 @@ from helpers import logged, operating_point, slave
 STEP = 0.1
 #: parameters that switch on every path the table declares (the defaults leave some off)
 PATHS_ON = {
-    "PayloadGimbals": {"accel_inputs": [True]},                         # hdot <- accel_cmd
-    "AttitudeController": {"acceleration_feedforward": [True],             # tau <- dw_ref
-                           **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)}},
-    "StaringGuidance": {"yaw_compensation": [False]},      # q_ref <- q_OI after the capture
+    "PayloadGimbals": {"accel_inputs": [True]},  # hdot <- accel_cmd
+    "AttitudeController": {
+        "acceleration_feedforward": [True],  # tau <- dw_ref
+        **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)},
+    },
+    "StaringGuidance": {"yaw_compensation": [False]},  # q_ref <- q_OI after the capture
 }
 #: declared, but measured not to feed through: the reference frame's orientation follows
 #: from the positions and q_OI alone, the velocities only enter its rates.  Conservative
 #: declarations are allowed (a master then orders more than it must); a real dependency
 #: left undeclared is not (a master would read a stale value) and fails the test.
 CONSERVATIVE = {
-    "StaringGuidance": {(out, v) for out in ("q_ref", "euler_ref_BO", "footprint_rotation")
-                        for v in ("v_I", "v_T_I")},
+    "StaringGuidance": {
+        (out, v)
+        for out in ("q_ref", "euler_ref_BO", "footprint_rotation")
+        for v in ("v_I", "v_T_I")
+    },
 }
 _GET = {"Real": "get_real", "Integer": "get_integer", "Boolean": "get_boolean"}
 _SET = {"Real": "set_real", "Integer": "set_integer", "Boolean": "set_boolean"}
@@ -53,8 +59,9 @@ def test_outputs_move_with_exactly_the_declared_inputs(fmus, name):
     variables = {v.name: v for v in md.modelVariables}
     vr = {name: v.valueReference for name, v in variables.items()}
     outputs = [u.variable.name for u in md.outputs]
-    declared = {(base_name(u.variable.name), base_name(d.name))
-                for u in md.outputs for d in u.dependencies}
+    declared = {
+        (base_name(u.variable.name), base_name(d.name)) for u in md.outputs for d in u.dependencies
+    }
     rng = np.random.default_rng(13)
     point = operating_point(name, rng)
     scalars = {var: [n for n in vr if base_name(n) == var] for var in point}
@@ -66,11 +73,12 @@ def test_outputs_move_with_exactly_the_declared_inputs(fmus, name):
         fmu.set_real([vr[n] for n in scalars[var]], value.tolist())
 
     def read_outputs():
-        return np.array([getattr(fmu, _GET[variables[n].type])([vr[n]])[0] for n in outputs],
-                        dtype=float)
+        return np.array(
+            [getattr(fmu, _GET[variables[n].type])([vr[n]])[0] for n in outputs], dtype=float
+        )
 
     fmu.exit_initialization_mode()
-    read_outputs()                       # as a host would at t0 (StaringGuidance captures)
+    read_outputs()  # as a host would at t0 (StaringGuidance captures)
     assert fmu.do_step(0.0, STEP)
     reference = read_outputs()
 
@@ -80,18 +88,23 @@ def test_outputs_move_with_exactly_the_declared_inputs(fmus, name):
         moved = read_outputs() != reference
         measured |= {(base_name(out), var) for out, m in zip(outputs, moved) if m}
         fmu.set_real([vr[n] for n in scalars[var]], value.tolist())
-        assert np.array_equal(read_outputs(), reference)   # back where it was
+        assert np.array_equal(read_outputs(), reference)  # back where it was
     assert logged(fmu) == []
     assert measured - declared == set(), "feedthrough not declared in modelDescription.xml"
     # a small perturbation moves a Boolean or Integer output only at a threshold
-    discrete = {(out, var) for out, var in declared - measured
-                if variables[f"{out}" if out in variables else f"{out}[1]"].type != "Real"}
+    discrete = {
+        (out, var)
+        for out, var in declared - measured
+        if variables[f"{out}" if out in variables else f"{out}[1]"].type != "Real"
+    }
     assert declared - measured - discrete == CONSERVATIVE.get(name, set())
 
 
 def test_the_measurement_sees_feedthrough_where_there_is_some(fmus):
     """Control: not every model is declared free of feedthrough."""
-    with_feedthrough = [name for name in FMUS
-                        if any(u.dependencies for u in
-                               read_model_description(str(fmus[name])).outputs)]
+    with_feedthrough = [
+        name
+        for name in FMUS
+        if any(u.dependencies for u in read_model_description(str(fmus[name])).outputs)
+    ]
     assert {"SatelliteDynamics", "CmgSteering", "AttitudeController"} <= set(with_feedthrough)

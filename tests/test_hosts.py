@@ -2,6 +2,7 @@
 ``simulate_fmu`` at every FMU's own defaults, ``fmutool -check``, a host that sets inputs
 only after initialisation, a host that stops on fmi2Warning; and what the exported SSDs
 offer hosts (one parameter-set name, no unbound Strings, OMSimulator's annotation)."""
+
 import json
 import math
 import subprocess
@@ -24,12 +25,14 @@ from agilesat.orchestration.ssp import NS, OMS_NAMESPACE
 from helpers import ROOT, run_python
 
 HOST = ROOT / "tests" / "late_input_host.py"
-FMUTOOL = Path(sys.executable).parent / "fmutool"   # fmu-manipulation-toolbox's CLI
+FMUTOOL = Path(sys.executable).parent / "fmutool"  # fmu-manipulation-toolbox's CLI
 
 
 def host(*args):
-    result = run_python(f"import runpy, sys; sys.argv = ['host'] + {[str(a) for a in args]!r}; "
-                        f"runpy.run_path({str(HOST)!r}, run_name='__main__')")
+    result = run_python(
+        f"import runpy, sys; sys.argv = ['host'] + {[str(a) for a in args]!r}; "
+        f"runpy.run_path({str(HOST)!r}, run_name='__main__')"
+    )
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout.strip().splitlines()[-1])
 
@@ -40,7 +43,7 @@ def host(*args):
 @pytest.mark.parametrize("name", FMUS)
 def test_fmpy_simulate_fmu_runs_every_fmu_at_its_defaults_without_a_message(fmus, name):
     answer = host("defaults", fmus[name])
-    assert answer["messages"] == []          # no error, no warning, nothing
+    assert answer["messages"] == []  # no error, no warning, nothing
     assert answer["rows"] == 501 and answer["finite"]
 
 
@@ -48,14 +51,19 @@ def test_fmpy_simulate_fmu_runs_every_fmu_at_its_defaults_without_a_message(fmus
 @pytest.mark.integration
 @pytest.mark.parametrize("name", FMUS)
 def test_fmutool_check_finds_every_fmu_compliant(fmus, name):
-    run = subprocess.run([str(FMUTOOL), "-input", str(fmus[name]), "-check"], capture_output=True,
-                         text=True, timeout=300)
+    run = subprocess.run(
+        [str(FMUTOOL), "-input", str(fmus[name]), "-check"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     output = run.stdout + run.stderr
     assert run.returncode == 0, output
     assert "This FMU seems to be compliant with FMI-2.0" in output, output
     assert "No semantic error against the FMI-2 standard" in output, output
-    assert not [line for line in output.splitlines()
-                if line.startswith(("CRITICAL", "ERROR", "WARNING"))], output
+    assert not [
+        line for line in output.splitlines() if line.startswith(("CRITICAL", "ERROR", "WARNING"))
+    ], output
 
 
 def test_satellite_defaults_are_a_satellite_at_the_default_orbit_radius_at_nadir():
@@ -64,9 +72,10 @@ def test_satellite_defaults_are_a_satellite_at_the_default_orbit_radius_at_nadir
     r_I = SatelliteDynamics().get("r_I")
     radius = np.linalg.norm(OrbitEnvironment().start(0.0).get("r_I"))
     assert np.allclose(r_I, [0.0, 0.0, -radius], rtol=1e-15)
-    body = SatelliteDynamics(inertia=np.diag([900.0, 1000.0, 1100.0]),
-                             attitude0=[0.1, 0.0, 0.0]).start()
-    body.advance(0.0, 1.0)                    # gravity gradient on, no error
+    body = SatelliteDynamics(
+        inertia=np.diag([900.0, 1000.0, 1100.0]), attitude0=[0.1, 0.0, 0.0]
+    ).start()
+    body.advance(0.0, 1.0)  # gravity gradient on, no error
     assert SatelliteDynamics().get("gravity_gradient")
 
 
@@ -92,7 +101,7 @@ def fmi_like(attitude0=(0.0, 2.0, 0.0)):
 
 def test_inputs_given_only_after_initialisation_are_an_error():
     body = fmi_like()
-    body.set("q_OI", ORBIT_Q)                 # the host's first input: too late
+    body.set("q_OI", ORBIT_Q)  # the host's first input: too late
     body.set("h_cmg", [0.0, 57.0, 0.0])
     with pytest.raises(ModelError, match=r"\['h_cmg', 'q_OI'\]|\['q_OI', 'h_cmg'\]") as error:
         body.step(0.0, 0.05)
@@ -101,19 +110,24 @@ def test_inputs_given_only_after_initialisation_are_an_error():
 
 def test_inputs_moving_by_one_gauss_seidel_step_are_accepted():
     """A Gauss-Seidel host passes the inputs at the step's end: that is not a late start."""
-    w, h, hdot, dt = np.array([0.0, -1.06e-3, 0.0]), np.array([1.0, 30.0, -4.0]), \
-        np.array([0.5, -4.0, 2.0]), 0.05
+    w, h, hdot, dt = (
+        np.array([0.0, -1.06e-3, 0.0]),
+        np.array([1.0, 30.0, -4.0]),
+        np.array([0.5, -4.0, 2.0]),
+        0.05,
+    )
     body = SatelliteDynamics(gravity_gradient=False)
     body.set("q_OI", ORBIT_Q)
     body.set("w_OI_O", w)
     body.set("h_cmg", h)
     body.initialize(0.0)
-    turned = quat_mul(ORBIT_Q, np.array([math.cos(w[1] * dt / 2), 0.0,
-                                         math.sin(w[1] * dt / 2), 0.0]))
+    turned = quat_mul(
+        ORBIT_Q, np.array([math.cos(w[1] * dt / 2), 0.0, math.sin(w[1] * dt / 2), 0.0])
+    )
     body.set("q_OI", turned)
     body.set("h_cmg", h + hdot * dt)
     body.set("hdot_cmg", hdot)
-    body.step(0.0, dt)                        # no error
+    body.step(0.0, dt)  # no error
     assert body.t == dt
 
 
@@ -131,6 +145,7 @@ def test_a_servo_payload_commanded_only_after_initialisation_is_an_error(late, e
     """PayloadGimbals with a servo starts its angles at the commands: 15° roll set late is
     an error; the same command moved by one step at 6°/s is not."""
     from agilesat.components.payload_gimbals import PayloadGimbals
+
     model = PayloadGimbals(bandwidth=5.0)
     rate = math.radians(6.0)
     if not late:
@@ -153,8 +168,8 @@ def test_a_host_setting_inputs_only_after_initialisation_gets_fmi2Error(fmus, re
     the inputs before the first doStep (reading the outputs first or not)."""
     inputs = {"q_OI": ORBIT_Q.tolist(), "h_cmg": [0.0, 57.0, 0.0]}
     answer = host("late", fmus["SatelliteDynamics"], read_first, json.dumps(inputs))
-    assert answer["status"] == 3                                   # fmi2Error
-    (status, category, message), = answer["messages"]
+    assert answer["status"] == 3  # fmi2Error
+    ((status, category, message),) = answer["messages"]
     assert status == 3 and "q_OI" in message and "h_cmg" in message
     assert "before exitInitializationMode" in message
 
@@ -169,6 +184,7 @@ def test_a_host_changing_no_input_after_initialisation_runs(fmus):
 # -- warnings for hosts that stop on fmi2Warning ---------------------------------------
 def test_every_model_has_the_warnings_return_ok_parameter():
     from agilesat.fmus import model_class
+
     for name in FMUS:
         v = model_class(name)().layout.by_name["warnings_return_ok"]
         assert (v.causality, v.type, v.start) == ("parameter", "Boolean", False)
@@ -178,21 +194,24 @@ def test_every_model_has_the_warnings_return_ok_parameter():
 @pytest.mark.integration
 def test_a_warning_returns_fmi2Warning_by_default(fmus):
     answer = host("warning", fmus["CmgSteering"], 0)
-    assert answer["status"] == 1                                   # fmi2Warning
+    assert answer["status"] == 1  # fmi2Warning
     assert [m[:2] for m in answer["messages"]] == [[1, "logStatusWarning"]]
     assert "singular gimbal configuration" in answer["messages"][0][2]
 
 
 @pytest.mark.slow
 @pytest.mark.integration
-@pytest.mark.xfail(strict=True, reason="needs the shim side of the protocol (branch i8b: "
-                   "forward fmi2OK messages of category logStatusWarning with logging off); "
-                   "remove this marker when both are merged")
+@pytest.mark.xfail(
+    strict=True,
+    reason="needs the shim side of the protocol (branch i8b: "
+    "forward fmi2OK messages of category logStatusWarning with logging off); "
+    "remove this marker when both are merged",
+)
 def test_with_warnings_return_ok_the_warning_is_logged_and_the_call_returns_fmi2OK(fmus):
     """Needs both sides: the slave logs at fmi2OK, category logStatusWarning; the shim
     forwards such a message to the host even with debug logging off."""
     answer = host("warning", fmus["CmgSteering"], 1)
-    assert answer["status"] == 0                                   # fmi2OK
+    assert answer["status"] == 0  # fmi2OK
     assert [m[:2] for m in answer["messages"]] == [[0, "logStatusWarning"]]
     assert "singular gimbal configuration" in answer["messages"][0][2]
 
@@ -227,8 +246,11 @@ def test_video_sar_needs_no_string():
 def test_omsimulator_fixed_step_annotation_is_on_the_system(name):
     tree = system_file(name)
     ns = {**NS, "oms": OMS_NAMESPACE}
-    master, = tree.findall("ssd:System/ssd:Annotations/ssc:Annotation[@type='org.openmodelica']"
-                           "/oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster", ns)
+    (master,) = tree.findall(
+        "ssd:System/ssd:Annotations/ssc:Annotation[@type='org.openmodelica']"
+        "/oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster",
+        ns,
+    )
     assert float(master.get("stepSize")) == get(name).step
 
 

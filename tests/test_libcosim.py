@@ -12,6 +12,7 @@ error of order H: halving H must shrink the attitude difference about as fast as
 null motion makes the gimbal path depend on the coupling, only the delivered torque (hence
 the attitude) is what the runs must share.
 """
+
 import shutil
 import subprocess
 import sys
@@ -28,10 +29,23 @@ pytestmark = [pytest.mark.slow, pytest.mark.integration]
 #: run length [s] and the compared attitude columns of each scenario
 CASES = {
     "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
-    "payload_sweep": (150.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
-                              "SatelliteDynamics.euler_BO[3]", "SatelliteDynamics.w_BO_B[3]"]),
-    "video_sar": (200.0, ["SatelliteDynamics.euler_BO[1]", "SatelliteDynamics.euler_BO[2]",
-                          "SatelliteDynamics.euler_BO[3]"]),
+    "payload_sweep": (
+        150.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+            "SatelliteDynamics.w_BO_B[3]",
+        ],
+    ),
+    "video_sar": (
+        200.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+        ],
+    ),
 }
 
 
@@ -54,9 +68,20 @@ def packages(fmus, tmp_path_factory):
 
 
 def libcosim(package, stop, step, out):
-    run = subprocess.run([sys.executable, str(ROOT / "tests" / "libcosim_run.py"),
-                          str(package), str(stop), str(out), str(step)],
-                         capture_output=True, text=True, timeout=900, cwd=out.parent)
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "tests" / "libcosim_run.py"),
+            str(package),
+            str(stop),
+            str(out),
+            str(step),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=out.parent,
+    )
     assert run.returncode == 0, run.stderr
     results = Results.from_npz(out)
     return results.names, results.data
@@ -69,8 +94,18 @@ def ours(package, stop, step, out_dir):
     """Our master on ``package`` in a fresh process (each run once per session)."""
     key = (str(package), stop, step)
     if key not in _OURS:
-        run = agilesat("run", package, "--stop", stop, "--step", step, "--out", out_dir,
-                       "--no-figures", cwd=out_dir.parent)
+        run = agilesat(
+            "run",
+            package,
+            "--stop",
+            stop,
+            "--step",
+            step,
+            "--out",
+            out_dir,
+            "--no-figures",
+            cwd=out_dir.parent,
+        )
         assert run.returncode == 0, run.stderr
         results = Results.from_npz(out_dir / "results.npz")
         _OURS[key] = results.names, results.data
@@ -87,20 +122,27 @@ def test_libcosim_agrees_with_our_master_to_the_coupling_error(scenario, package
         our_names, our = ours(packages[scenario], stop, h, tmp_path / f"ours_{h}")
         n_steps = round(stop / h)
         assert len(lc) == n_steps and len(our) == n_steps + 1
-        assert np.allclose(lc[:, 0], our[1:, 0], rtol=0, atol=1e-9)   # libcosim: after steps
-        assert set(lc_names) == set(our_names)                        # every output observed
-        differences.append([np.max(np.abs(lc[:, lc_names.index(c)] - our[1:, our_names.index(c)]))
-                            for c in columns])
+        assert np.allclose(lc[:, 0], our[1:, 0], rtol=0, atol=1e-9)  # libcosim: after steps
+        assert set(lc_names) == set(our_names)  # every output observed
+        differences.append(
+            [
+                np.max(np.abs(lc[:, lc_names.index(c)] - our[1:, our_names.index(c)]))
+                for c in columns
+            ]
+        )
     coarse, fine = np.array(differences)
     for column, c, f in zip(columns, coarse, fine):
-        print(f"{scenario}: max |libcosim - ours| of {column}: {c:.3g} at H = {step} s, "
-              f"{f:.3g} at H/2")
+        print(
+            f"{scenario}: max |libcosim - ours| of {column}: {c:.3g} at H = {step} s, "
+            f"{f:.3g} at H/2"
+        )
     assert np.all(coarse < np.radians(1.0))
-    assert np.all(fine <= 0.65 * coarse), fine / coarse   # first order, with 30 % margin
+    assert np.all(fine <= 0.65 * coarse), fine / coarse  # first order, with 30 % margin
 
 
-def test_the_exported_package_runs_exactly_like_the_repository_system(packages, tmp_path,
-                                                                     scan_pitch_run):
+def test_the_exported_package_runs_exactly_like_the_repository_system(
+    packages, tmp_path, scan_pitch_run
+):
     """Same FMUs, same parameters: our master gives the same numbers from either file
     (the repository's run is the session's shared nominal scan_pitch run)."""
     scenario = get("scan_pitch")
@@ -112,19 +154,24 @@ def test_the_exported_package_runs_exactly_like_the_repository_system(packages, 
 
 def test_a_variant_is_written_into_the_package(tmp_path):
     from agilesat.orchestration.ssp import read_system
+
     run = agilesat("export", "scan_pitch:literal_spin", "--out", tmp_path / "v.ssp")
     assert run.returncode == 0, run.stderr
     values = {(p.component, p.name): p.value for p in read_system(tmp_path / "v.ssp").parameters}
-    default = {(p.component, p.name): p.value
-               for p in read_system(get("scan_pitch").ssd).parameters}
+    default = {
+        (p.component, p.name): p.value for p in read_system(get("scan_pitch").ssd).parameters
+    }
     changed = {key for key in values if values[key] != default.get(key)}
     assert changed and all(name.startswith("spin_ref[") for _, name in changed)
 
 
-@pytest.mark.parametrize("target, message", [
-    ("scan_pitch:nope", "no variant 'nope'"),
-    ("orchestration/systems/scan_pitch.ssd", "export takes a scenario"),
-])
+@pytest.mark.parametrize(
+    "target, message",
+    [
+        ("scan_pitch:nope", "no variant 'nope'"),
+        ("orchestration/systems/scan_pitch.ssd", "export takes a scenario"),
+    ],
+)
 def test_export_errors_are_named(target, message, tmp_path):
     run = agilesat("export", target, "--out", tmp_path / "x.ssp")
     assert run.returncode == 1

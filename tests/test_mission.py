@@ -1,14 +1,15 @@
 """Mission analysis of the video-SAR paper ([Liang 2019]): frame overlap (eqs 1–5) and Walker
 sizing (eqs 14–20), against the printed formulas, independent geometry and the paper's
 numbers under the readings stated in components/analysis/mission.py."""
+
 import math
 
 import numpy as np
 import pytest
 
 from agilesat.components.analysis import mission as m
-from agilesat.components.orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment
 from agilesat.components.analysis.passes import sun_synchronous_inclination
+from agilesat.components.orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment
 
 DEG = math.pi / 180.0
 H = 567e3
@@ -29,22 +30,25 @@ def circular(r, inc, u):
 # Overlap ratio: formulas
 # ---------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("t_i", [0.0, 12.5, -40.0, 100.0])
 @pytest.mark.parametrize("rate", [1.0, 5.0, 25.0])
 def test_overlap_equals_eq5_as_printed(t_i, rate):
     res = m.overlap_ratio(rate, t_i=t_i)
     rc, v, tf = res.slant_range, res.velocity, 1.0 / rate
-    printed = 0.5 + (LAM * (rc**2 + v**2 * (t_i - tf) ** 2) ** 1.5
-                     - 4 * tf * v * rc**2 * RHO) / (2 * LAM * (rc**2 + v**2 * t_i**2) ** 1.5)
+    printed = 0.5 + (LAM * (rc**2 + v**2 * (t_i - tf) ** 2) ** 1.5 - 4 * tf * v * rc**2 * RHO) / (
+        2 * LAM * (rc**2 + v**2 * t_i**2) ** 1.5
+    )
     assert float(res.overlap) == pytest.approx(printed, rel=1e-12)
     # eq 4 and the definition α = C_L / L_i
     assert float(res.overlap_length) == pytest.approx(
-        0.5 * (res.aperture_length + res.previous_aperture_length) - v * tf, rel=1e-12)
+        0.5 * (res.aperture_length + res.previous_aperture_length) - v * tf, rel=1e-12
+    )
 
 
 def test_aperture_length_first_and_second_forms_of_eq3_agree():
     res = m.overlap_ratio(5.0, t_i=np.array([0.0, 30.0, 90.0]))
-    first = res.aperture_angle * res.slant_range / np.cos(res.squint) ** 2   # θ_i Rc / cos²θc
+    first = res.aperture_angle * res.slant_range / np.cos(res.squint) ** 2  # θ_i Rc / cos²θc
     np.testing.assert_allclose(res.aperture_length, first, rtol=1e-12)
     # resolution below eq 2 from the exact eq 2 bandwidth: ρ = V / B_a (θ_i ≈ 0.005 rad)
     np.testing.assert_allclose(res.velocity / res.doppler_bandwidth, RHO, rtol=1e-5)
@@ -63,7 +67,7 @@ def test_broadside_overlap_is_one_minus_frame_period_over_aperture_time():
 def test_overlap_grows_away_from_broadside():
     res = m.overlap_ratio(5.0, t_i=np.array([0.0, 25.0, 50.0, 100.0]))
     assert np.all(np.diff(res.overlap) > 0)
-    assert float(res.overlap[-1]) == pytest.approx(0.8717, abs=1e-4)   # end of the 200-s stare
+    assert float(res.overlap[-1]) == pytest.approx(0.8717, abs=1e-4)  # end of the 200-s stare
     start = m.overlap_ratio(5.0, t_i=-100.0)
     assert float(start.overlap) == pytest.approx(0.8751, abs=1e-4)
 
@@ -71,6 +75,7 @@ def test_overlap_grows_away_from_broadside():
 # ---------------------------------------------------------------------------------------
 # Overlap ratio: independent geometry (what the velocity must be)
 # ---------------------------------------------------------------------------------------
+
 
 def los_rate_broadside(look, earth_rotation, inc=None):
     """Line-of-sight angular rate seen from an Earth-fixed target on a sphere of radius
@@ -81,10 +86,10 @@ def los_rate_broadside(look, earth_rotation, inc=None):
     u0 = math.radians(33.0)
     s0 = circular(r, inc, u0)
     normal = np.array([0.0, -math.sin(inc), math.cos(inc)])
-    d = -math.cos(look) * unit(s0) - math.sin(look) * normal          # right-looking ray
+    d = -math.cos(look) * unit(s0) - math.sin(look) * normal  # right-looking ray
     b = float(np.dot(s0, d))
     rng = -b - math.sqrt(b * b - (r * r - WGS84_A**2))
-    target = s0 + rng * d                                             # on the sphere at t=0
+    target = s0 + rng * d  # on the sphere at t=0
     we = EARTH_RATE if earth_rotation else 0.0
 
     def sat_ecef(t):
@@ -93,16 +98,18 @@ def los_rate_broadside(look, earth_rotation, inc=None):
         return np.array([c * s[0] + si * s[1], -si * s[0] + c * s[1], s[2]])
 
     def range_rate(t, h=1e-3):
-        return (np.linalg.norm(sat_ecef(t + h) - target)
-                - np.linalg.norm(sat_ecef(t - h) - target)) / (2 * h)
+        return (
+            np.linalg.norm(sat_ecef(t + h) - target) - np.linalg.norm(sat_ecef(t - h) - target)
+        ) / (2 * h)
 
-    lo, hi = -5.0, 5.0                                                # zero Doppler
+    lo, hi = -5.0, 5.0  # zero Doppler
     for _ in range(60):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if range_rate(mid) < 0 else (lo, mid)
     t0, h = 0.5 * (lo + hi), 1e-2
-    rate = np.linalg.norm(unit(sat_ecef(t0 + h) - target)
-                          - unit(sat_ecef(t0 - h) - target)) / (2 * h)
+    rate = np.linalg.norm(unit(sat_ecef(t0 + h) - target) - unit(sat_ecef(t0 - h) - target)) / (
+        2 * h
+    )
     speed = np.linalg.norm(sat_ecef(t0 + h) - sat_ecef(t0 - h)) / (2 * h)
     return rate, np.linalg.norm(sat_ecef(t0) - target), speed
 
@@ -115,8 +122,7 @@ def test_overlap_from_line_of_sight_rotation_without_earth_rotation():
     res = m.overlap_ratio(np.array([5.0, 25.0]), velocity="inertial", slant_range_model="sphere")
     assert res.slant_range == pytest.approx(rc, rel=1e-9)
     assert res.velocity / res.slant_range == pytest.approx(rate, rel=1e-6)
-    np.testing.assert_allclose(res.overlap, 1 - res.frame_period * rate * 2 * RHO / LAM,
-                               atol=2e-5)
+    np.testing.assert_allclose(res.overlap, 1 - res.frame_period * rate * 2 * RHO / LAM, atol=2e-5)
 
 
 def test_overlap_from_line_of_sight_rotation_with_earth_rotation():
@@ -125,7 +131,7 @@ def test_overlap_from_line_of_sight_rotation_with_earth_rotation():
     rate, rc, speed = los_rate_broadside(30 * DEG, earth_rotation=True)
     assert rate == pytest.approx(speed / rc, rel=1e-6)
     v_closed = m.platform_velocity(H, "earth_fixed", latitude=33.0 * DEG)
-    assert v_closed == pytest.approx(speed, rel=2e-3)   # closed form: sat. over the latitude
+    assert v_closed == pytest.approx(speed, rel=2e-3)  # closed form: sat. over the latitude
     assert v_closed / m.circular_speed(H) == pytest.approx(1.0104, abs=5e-4)
 
 
@@ -156,8 +162,9 @@ READINGS = {
 def test_readings_table(reading):
     """The table of readings reported with this module (values to 0.01 point)."""
     kind, rc, v, t_i = reading
-    res = m.overlap_ratio(np.array([5.0, 25.0]), look_angle_kind=kind, slant_range_model=rc,
-                          velocity=v, t_i=t_i)
+    res = m.overlap_ratio(
+        np.array([5.0, 25.0]), look_angle_kind=kind, slant_range_model=rc, velocity=v, t_i=t_i
+    )
     np.testing.assert_allclose(100 * res.overlap, READINGS[reading], atol=0.006)
 
 
@@ -233,6 +240,7 @@ def test_sun_synchronous_inclination_matches_the_orbit_model_drift():
 # Walker sizing
 # ---------------------------------------------------------------------------------------
 
+
 def test_eq14_is_the_incidence_angle_relation():
     w = m.walker_sizing(H, 65 * DEG, beta_kind="incidence")
     r, a, b = w.radius, w.central_angle, w.beta
@@ -281,8 +289,9 @@ def test_walker_numbers_under_eq14_as_printed():
 def test_eq15_against_the_visibility_arc_without_earth_rotation(kind):
     w = m.walker_sizing(H, 65 * DEG, beta_kind=kind)
     for ascending in (True, False):
-        v = m.visibility_time(H, 65 * DEG, angle_kind=kind, earth_rotation=False,
-                              ascending=ascending)
+        v = m.visibility_time(
+            H, 65 * DEG, angle_kind=kind, earth_rotation=False, ascending=ascending
+        )
         assert v.duration == pytest.approx(w.visibility_time, abs=1e-4)
         assert v.start == pytest.approx(-v.end, abs=1e-4)
 
@@ -314,17 +323,26 @@ def test_coverage_of_a_single_satellite_matches_eq15():
     """One satellite, Earth at rest, target in its plane: one pass per orbit of 2α/ω."""
     inc = sun_synchronous_inclination(WGS84_A + H)
     w = m.walker_sizing(H, 65 * DEG)
-    lat = 30 * DEG                     # a point of the RAAN-0 orbit: u = asin(sin φ/sin i)
+    lat = 30 * DEG  # a point of the RAAN-0 orbit: u = asin(sin φ/sin i)
     u = math.asin(math.sin(lat) / math.sin(inc))
     p = circular(1.0, inc, u)
-    c = m.walker_coverage(1, 1, 0, latitude=lat, longitude=math.atan2(p[1], p[0]),
-                          earth_rotation=False, duration=w.period, step=0.5)
+    c = m.walker_coverage(
+        1,
+        1,
+        0,
+        latitude=lat,
+        longitude=math.atan2(p[1], p[0]),
+        earth_rotation=False,
+        duration=w.period,
+        step=0.5,
+    )
     assert c.covered_fraction * c.duration == pytest.approx(w.visibility_time, abs=2.0)
 
 
 # ---------------------------------------------------------------------------------------
 # Input checking
 # ---------------------------------------------------------------------------------------
+
 
 def test_bad_inputs_raise():
     with pytest.raises(ValueError):
@@ -338,6 +356,6 @@ def test_bad_inputs_raise():
     with pytest.raises(ValueError):
         m.walker_sizing(H, 95 * DEG)
     with pytest.raises(ValueError):
-        m.slant_range(H, 80 * DEG)              # misses the Earth
+        m.slant_range(H, 80 * DEG)  # misses the Earth
     with pytest.raises(ValueError):
-        m.walker_sizing(H, 70 * DEG, beta_kind="look")   # beyond the horizon
+        m.walker_sizing(H, 70 * DEG, beta_kind="look")  # beyond the horizon

@@ -1,6 +1,7 @@
 """The README's "Your own system" guide, run as it stands: the user's pythonfmu FMU with two
 of ours, the .ssd written from Python, run, plot, and the example's pytest file (with the
 plugin).  Also checks that the README quotes the example's tests as they are."""
+
 import os
 import shlex
 import subprocess
@@ -11,7 +12,7 @@ import pytest
 from helpers import ROOT
 
 README = (ROOT / "README.md").read_text()
-GUIDE = README[README.index("## Your own system"):]
+GUIDE = README[README.index("## Your own system") :]
 
 
 def commands():
@@ -30,10 +31,10 @@ def test_readme_quotes_the_example_tests_verbatim():
 def test_the_guide_runs_as_written(fmus, tmp_path):
     bindir = os.path.dirname(sys.executable)
     for line in commands():
-        line = line.replace("out/own_system", str(tmp_path)).replace(".venv/bin/",
-                                                                         bindir + "/")
-        result = subprocess.run(["bash", "-c", line], cwd=ROOT, capture_output=True,
-                                text=True, timeout=600)
+        line = line.replace("out/own_system", str(tmp_path)).replace(".venv/bin/", bindir + "/")
+        result = subprocess.run(
+            ["bash", "-c", line], cwd=ROOT, capture_output=True, text=True, timeout=600
+        )
         assert result.returncode == 0, f"{line}\n{result.stdout}\n{result.stderr}"
         if "-m pytest" in line:
             assert "3 passed" in result.stdout

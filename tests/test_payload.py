@@ -1,4 +1,5 @@
 """Payload gimbals and sweep planner ([Chang 2015]) against closed forms and first principles."""
+
 import math
 
 import numpy as np
@@ -10,9 +11,9 @@ from agilesat.components.rotations import rot1, rot2
 from agilesat.components.sweep_planner import SweepAxis, SweepPlanner
 
 DEG = math.pi / 180
-JX, JY, JZ = 45.5, 35.8, 36.7            # [Chang 2015] §2, each payload, kg·m²
+JX, JY, JZ = 45.5, 35.8, 36.7  # [Chang 2015] §2, each payload, kg·m²
 J = np.diag([JX, JY, JZ])
-ROLL_A, ROLL_R, PITCH_A, PITCH_R = 15 * DEG, 6 * DEG, 45 * DEG, 0.6 * DEG   # §1.2
+ROLL_A, ROLL_R, PITCH_A, PITCH_R = 15 * DEG, 6 * DEG, 45 * DEG, 0.6 * DEG  # §1.2
 COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
 
 
@@ -29,18 +30,28 @@ def yaw_closed_form(phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     """(h_z, ḣ_z) of the symmetric pair, derived by hand from h_b = R_mbᵀ J Ω."""
     sf, cf, s, c = math.sin(phi), math.cos(phi), math.sin(theta), math.cos(theta)
     h_z = 2 * (JY * theta_dot * sf + (JZ - JX) * phi_dot * s * c * cf)
-    hdot_z = 2 * (JY * (theta_ddot * sf + phi_dot * theta_dot * cf)
-                  + (JZ - JX) * (phi_ddot * s * c * cf
-                                 + phi_dot * theta_dot * math.cos(2 * theta) * cf
-                                 - phi_dot ** 2 * s * c * sf))
+    hdot_z = 2 * (
+        JY * (theta_ddot * sf + phi_dot * theta_dot * cf)
+        + (JZ - JX)
+        * (
+            phi_ddot * s * c * cf
+            + phi_dot * theta_dot * math.cos(2 * theta) * cf
+            - phi_dot**2 * s * c * sf
+        )
+    )
     return h_z, hdot_z
 
 
 def trajectory(t):
     """A smooth, generic gimbal motion: (φ, θ, φ̇, θ̇, φ̈, θ̈) at t."""
-    return (0.3 * math.sin(0.7 * t) + 0.1, 0.8 * math.cos(0.3 * t) - 0.2,
-            0.21 * math.cos(0.7 * t), -0.24 * math.sin(0.3 * t),
-            -0.147 * math.sin(0.7 * t), -0.072 * math.cos(0.3 * t))
+    return (
+        0.3 * math.sin(0.7 * t) + 0.1,
+        0.8 * math.cos(0.3 * t) - 0.2,
+        0.21 * math.cos(0.7 * t),
+        -0.24 * math.sin(0.3 * t),
+        -0.147 * math.sin(0.7 * t),
+        -0.072 * math.cos(0.3 * t),
+    )
 
 
 def gimbals(commands=None, **parameters):
@@ -118,19 +129,24 @@ def test_hdot_is_the_time_derivative_of_h_including_the_transport_term(t):
     phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot = trajectory(t)
     c, s = math.cos(theta), math.sin(theta)
     omega = np.array([phi_dot * c, theta_dot, phi_dot * s])
-    omega_dot = [phi_ddot * c - phi_dot * theta_dot * s, theta_ddot,
-                 phi_ddot * s + phi_dot * theta_dot * c]
+    omega_dot = [
+        phi_ddot * c - phi_dot * theta_dot * s,
+        theta_ddot,
+        phi_ddot * s + phi_dot * theta_dot * c,
+    ]
     R = paper_R_mb(phi, theta)
-    assert np.allclose(R.T @ J @ omega_dot + R.T @ np.cross(omega, J @ omega), numeric,
-                       atol=1e-9)
+    assert np.allclose(R.T @ J @ omega_dot + R.T @ np.cross(omega, J @ omega), numeric, atol=1e-9)
     assert np.linalg.norm(R.T @ J @ omega_dot - numeric) > 1e-3
 
 
-@pytest.mark.parametrize("roll, pitch, boresight", [
-    (0.0, 0.0, (0, 0, 1)),                                    # nadir
-    (15 * DEG, 0.0, (0, -math.sin(15 * DEG), math.cos(15 * DEG))),   # +roll looks to −y
-    (0.0, 45 * DEG, (math.sin(45 * DEG), 0, math.cos(45 * DEG))),    # +pitch looks to +x
-])
+@pytest.mark.parametrize(
+    "roll, pitch, boresight",
+    [
+        (0.0, 0.0, (0, 0, 1)),  # nadir
+        (15 * DEG, 0.0, (0, -math.sin(15 * DEG), math.cos(15 * DEG))),  # +roll looks to −y
+        (0.0, 45 * DEG, (math.sin(45 * DEG), 0, math.cos(45 * DEG))),  # +pitch looks to +x
+    ],
+)
 def test_boresight_of_each_payload(roll, pitch, boresight):
     model = gimbals({"roll_cmd": [roll, -roll], "pitch_cmd": [pitch, -pitch]})
     los = model.get("los_B")
@@ -168,8 +184,10 @@ def test_swept_pair_follows_the_yaw_closed_forms():
         assert model.get("h")[2] == pytest.approx(h_z, rel=1e-12, abs=1e-13)
         # ideal tracking differences the rate command over the last step: exact when the
         # commanded acceleration was constant across it
-        if t > 0 and all(accelerations(planner, t - dt * f) == accelerations(planner, t)
-                         for f in (0.999, 0.5, 0.001)):
+        if t > 0 and all(
+            accelerations(planner, t - dt * f) == accelerations(planner, t)
+            for f in (0.999, 0.5, 0.001)
+        ):
             assert model.get("hdot")[2] == pytest.approx(hdot_z, rel=1e-9, abs=1e-12)
             checked += 1
     assert checked > 6000
@@ -212,8 +230,12 @@ def test_ideal_reversal_is_a_yaw_momentum_jump_delivered_in_one_step():
 
 # -- ideal tracking and servo ----------------------------------------------------------
 def test_ideal_tracking_outputs_are_the_commands_exactly():
-    commands = {"roll_cmd": [0.2, -0.3], "pitch_cmd": [0.7, -0.1],
-                "roll_rate_cmd": [0.05, -0.02], "pitch_rate_cmd": [0.01, 0.03]}
+    commands = {
+        "roll_cmd": [0.2, -0.3],
+        "pitch_cmd": [0.7, -0.1],
+        "roll_rate_cmd": [0.05, -0.02],
+        "pitch_rate_cmd": [0.01, 0.03],
+    }
     model = gimbals(commands)
     for name, value in commands.items():
         assert model.get(name.replace("_cmd", "")).tolist() == value
@@ -224,16 +246,21 @@ def test_ideal_tracking_outputs_are_the_commands_exactly():
 
 def test_declared_dependencies_are_the_true_feedthrough():
     """Each output changes with exactly the inputs its row names (ideal tracking)."""
-    base = {"roll_cmd": [0.2, -0.3], "pitch_cmd": [0.7, -0.1],
-            "roll_rate_cmd": [0.05, -0.02], "pitch_rate_cmd": [0.01, 0.03]}
+    base = {
+        "roll_cmd": [0.2, -0.3],
+        "pitch_cmd": [0.7, -0.1],
+        "roll_rate_cmd": [0.05, -0.02],
+        "pitch_rate_cmd": [0.01, 0.03],
+    }
     model = gimbals(base)
     model.advance(0.0, 0.1)
     reference = {v.name: model.get(v.name) for v in model.layout.group("output")}
     for name in COMMANDS:
         model.set(name, np.array(base[name]) + 0.01)
         model.output()
-        changed = {out for out, value in reference.items()
-                   if not np.array_equal(model.get(out), value)}
+        changed = {
+            out for out, value in reference.items() if not np.array_equal(model.get(out), value)
+        }
         declared = {v.name for v in model.layout.group("output") if name in v.depends}
         assert changed == declared, name
         model.set(name, base[name])
@@ -242,22 +269,26 @@ def test_declared_dependencies_are_the_true_feedthrough():
 def step_response(zeta, w, t):
     """Unit step response of θ̈ + 2ζω θ̇ + ω² θ = ω² from rest: (θ, θ̇) (textbook)."""
     if zeta < 1:
-        wd = w * math.sqrt(1 - zeta ** 2)
+        wd = w * math.sqrt(1 - zeta**2)
         e = math.exp(-zeta * w * t)
-        return (1 - e * (math.cos(wd * t) + zeta / math.sqrt(1 - zeta ** 2) * math.sin(wd * t)),
-                w / math.sqrt(1 - zeta ** 2) * e * math.sin(wd * t))
+        return (
+            1 - e * (math.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * math.sin(wd * t)),
+            w / math.sqrt(1 - zeta**2) * e * math.sin(wd * t),
+        )
     if zeta == 1:
         return 1 - math.exp(-w * t) * (1 + w * t), w * w * t * math.exp(-w * t)
-    s1, s2 = -zeta * w + w * math.sqrt(zeta ** 2 - 1), -zeta * w - w * math.sqrt(zeta ** 2 - 1)
-    return (1 - (s2 * math.exp(s1 * t) - s1 * math.exp(s2 * t)) / (s2 - s1),
-            -s1 * s2 * (math.exp(s1 * t) - math.exp(s2 * t)) / (s2 - s1))
+    s1, s2 = -zeta * w + w * math.sqrt(zeta**2 - 1), -zeta * w - w * math.sqrt(zeta**2 - 1)
+    return (
+        1 - (s2 * math.exp(s1 * t) - s1 * math.exp(s2 * t)) / (s2 - s1),
+        -s1 * s2 * (math.exp(s1 * t) - math.exp(s2 * t)) / (s2 - s1),
+    )
 
 
 @pytest.mark.parametrize("zeta", [0.3, 1.0 - 1e-9, 1.0, 1.0 + 1e-9, 2.5, 40.0])
 @pytest.mark.parametrize("dt", [0.7, 0.01])
 def test_servo_step_response_is_the_damped_second_order_closed_form(zeta, dt):
     w, size = 2.0, (0.1, -0.2)
-    model = gimbals(bandwidth=w, damping=zeta)            # parked at zero
+    model = gimbals(bandwidth=w, damping=zeta)  # parked at zero
     model.set("roll_cmd", size)
     model.set("pitch_cmd", [0.3, 0.05])
     # near ζ = 1 the textbook forms cancel badly: compare with the critical one, to O(ζ − 1)
@@ -273,9 +304,16 @@ def test_servo_step_response_is_the_damped_second_order_closed_form(zeta, dt):
 
 
 def test_servo_tracks_a_commanded_ramp_without_error():
-    model = gimbals({"roll_cmd": [0.2, -0.2], "roll_rate_cmd": [0.05, -0.05],
-                     "pitch_cmd": [0.4, -0.4], "pitch_rate_cmd": [-0.01, 0.01]},
-                    bandwidth=3.0, damping=0.7)
+    model = gimbals(
+        {
+            "roll_cmd": [0.2, -0.2],
+            "roll_rate_cmd": [0.05, -0.05],
+            "pitch_cmd": [0.4, -0.4],
+            "pitch_rate_cmd": [-0.01, 0.01],
+        },
+        bandwidth=3.0,
+        damping=0.7,
+    )
     for k in range(50):
         t = 0.3 * (k + 1)
         model.advance(0.3 * k, 0.3)
@@ -288,11 +326,18 @@ def test_servo_tracks_a_commanded_ramp_without_error():
 
 def test_servo_hdot_is_the_derivative_of_h():
     """A transient of the servo (commands on a ramp, state displaced): central differences."""
-    model = gimbals({"roll_cmd": [0.1, 0.3], "pitch_cmd": [0.5, -0.2],
-                     "roll_rate_cmd": [0.08, -0.05], "pitch_rate_cmd": [0.02, 0.01]},
-                    bandwidth=1.5, damping=0.6)
+    model = gimbals(
+        {
+            "roll_cmd": [0.1, 0.3],
+            "pitch_cmd": [0.5, -0.2],
+            "roll_rate_cmd": [0.08, -0.05],
+            "pitch_rate_cmd": [0.02, 0.01],
+        },
+        bandwidth=1.5,
+        damping=0.6,
+    )
     start = {"roll_cmd": [0.1, 0.3], "pitch_cmd": [0.5, -0.2]}
-    model.set("roll_cmd", [0.3, 0.1])            # a step on top of the ramp
+    model.set("roll_cmd", [0.3, 0.1])  # a step on top of the ramp
     model.output()
     dt, h, hdot = 1e-4, [], []
     for k in range(3000):
@@ -321,12 +366,15 @@ def test_ideal_tracking_hdot_is_the_derivative_of_h_inside_a_reversal():
     assert np.allclose(samples[0][1], numeric, rtol=1e-6, atol=1e-9)
 
 
-@pytest.mark.parametrize("parameters, message", [
-    ({"J_payload": [45.5, 0.0, 36.7]}, "J_payload"),
-    ({"J_payload": [90.0, 35.8, 36.7]}, "sum of the other two"),
-    ({"bandwidth": -1.0}, "bandwidth must be >= 0"),
-    ({"damping": 0.0}, "damping must be > 0"),
-])
+@pytest.mark.parametrize(
+    "parameters, message",
+    [
+        ({"J_payload": [45.5, 0.0, 36.7]}, "J_payload"),
+        ({"J_payload": [90.0, 35.8, 36.7]}, "sum of the other two"),
+        ({"bandwidth": -1.0}, "bandwidth must be >= 0"),
+        ({"damping": 0.0}, "damping must be > 0"),
+    ],
+)
 def test_bad_gimbal_parameters_are_rejected(parameters, message):
     with pytest.raises(ModelError, match=message):
         PayloadGimbals(**parameters).start()
@@ -340,17 +388,20 @@ def planner_at(t, **parameters):
     return planner
 
 
-@pytest.mark.parametrize("t, roll, pitch, roll_rate, pitch_rate", [
-    (0.0, 15, 45, -6, -0.6),       # payload 1 starts at (+15°, +45°) toward negative
-    (2.5, 0, 43.5, -6, -0.6),
-    (5.0, -15, 42, 6, -0.6),
-    (7.5, 0, 40.5, 6, -0.6),
-    (10.0, 15, 39, -6, -0.6),      # roll period 10 s
-    (75.0, -15, 0, 6, -0.6),
-    (150.0, 15, -45, -6, 0.6),
-    (225.0, -15, 0, 6, 0.6),
-    (300.0, 15, 45, -6, -0.6),     # pitch period 300 s
-])
+@pytest.mark.parametrize(
+    "t, roll, pitch, roll_rate, pitch_rate",
+    [
+        (0.0, 15, 45, -6, -0.6),  # payload 1 starts at (+15°, +45°) toward negative
+        (2.5, 0, 43.5, -6, -0.6),
+        (5.0, -15, 42, 6, -0.6),
+        (7.5, 0, 40.5, 6, -0.6),
+        (10.0, 15, 39, -6, -0.6),  # roll period 10 s
+        (75.0, -15, 0, 6, -0.6),
+        (150.0, 15, -45, -6, 0.6),
+        (225.0, -15, 0, 6, 0.6),
+        (300.0, 15, 45, -6, -0.6),  # pitch period 300 s
+    ],
+)
 def test_zero_turnaround_is_the_papers_triangle_wave(t, roll, pitch, roll_rate, pitch_rate):
     planner = planner_at(t, turnaround_time=0.0)
     got = [planner.get(n)[0] / DEG for n in COMMANDS]
@@ -370,13 +421,14 @@ def test_reversal_at_constant_acceleration_keeps_the_amplitude(tau):
     for t0, sign in ((period, 1.0), (period / 2, -1.0)):
         for f in (-0.5, -0.25, 0.25, 0.5):
             assert axis(t0 + f * tau)[1] == pytest.approx(-sign * 2 * f * ROLL_R, abs=1e-12)
-            if abs(f) < 0.5:   # the ends of the ramp belong to the constant-rate pieces
+            if abs(f) < 0.5:  # the ends of the ramp belong to the constant-rate pieces
                 assert axis(t0 + f * tau)[2] == pytest.approx(-sign * 2 * ROLL_R / tau)
     t = np.linspace(0, 3 * period, 20001)
     angles = np.array([axis(x)[0] for x in t])
     assert angles.max() <= ROLL_A + 1e-15 and angles.min() >= -ROLL_A - 1e-15
-    assert np.allclose([axis(x + period)[:2] for x in t[:500]], [axis(x)[:2] for x in t[:500]],
-                       atol=1e-12)
+    assert np.allclose(
+        [axis(x + period)[:2] for x in t[:500]], [axis(x)[:2] for x in t[:500]], atol=1e-12
+    )
 
 
 @pytest.mark.parametrize("tau", [0.0, 1.0, 10.0])
@@ -420,12 +472,18 @@ def test_a_zero_amplitude_parks_the_axis():
     assert planner.get("pitch_rate_cmd").tolist() == [0.0, 0.0]
 
 
-@pytest.mark.parametrize("parameters, message", [
-    ({"turnaround_time": 10.5}, r"turnaround_time 10.5 s is too long for the roll sweep.*= 10 s"),
-    ({"turnaround_time": -1.0}, "turnaround_time must be finite and >= 0"),
-    ({"roll_rate": 0.0}, "roll_rate must be finite and > 0"),
-    ({"pitch_amplitude": -0.1}, "pitch_amplitude must be finite and >= 0"),
-])
+@pytest.mark.parametrize(
+    "parameters, message",
+    [
+        (
+            {"turnaround_time": 10.5},
+            r"turnaround_time 10.5 s is too long for the roll sweep.*= 10 s",
+        ),
+        ({"turnaround_time": -1.0}, "turnaround_time must be finite and >= 0"),
+        ({"roll_rate": 0.0}, "roll_rate must be finite and > 0"),
+        ({"pitch_amplitude": -0.1}, "pitch_amplitude must be finite and >= 0"),
+    ],
+)
 def test_bad_planner_parameters_are_rejected(parameters, message):
     with pytest.raises(ModelError, match=message):
         SweepPlanner(**parameters).start()

@@ -1,4 +1,5 @@
 """payload_sweep end to end through the CLI ([Chang 2015]): the physics, and the paper's claims."""
+
 import json
 import math
 
@@ -37,7 +38,7 @@ def test_roll_and_pitch_momentum_and_torque_cancel(paper):
     _, summary, results = paper
     assert value(summary, "payload_momentum_xy_max") <= 1e-12
     assert value(summary, "payload_torque_xy_max") <= 1e-12
-    assert np.abs(results.vector("PayloadGimbals.h")[:, 2]).max() > 0.5   # yaw remains
+    assert np.abs(results.vector("PayloadGimbals.h")[:, 2]).max() > 0.5  # yaw remains
 
 
 def test_yaw_has_the_pitch_envelope_and_the_roll_ripple(paper):
@@ -72,14 +73,14 @@ def test_without_control_the_payloads_turn_the_satellite(fmus, tmp_path):
     assert result.returncode == 0 and summary["diagnostics"] == []
     yaw_rate = results["SatelliteDynamics.w_BI_B[3]"]
     h_z = results["PayloadGimbals.h[3]"]
-    assert np.allclose(150.0 * yaw_rate, -h_z, atol=1e-6)   # H = 0: J w_z = −h_z
+    assert np.allclose(150.0 * yaw_rate, -h_z, atol=1e-6)  # H = 0: J w_z = −h_z
     assert value(summary, "momentum_drift") <= 1e-9
 
 
 def test_at_rest_in_inertial_space_the_attitude_drifts_off_the_orbit_frame(fmus, tmp_path):
     result, summary, results = run(tmp_path, "payload_sweep:no_control_inertial")
     assert result.returncode == 0
-    pitch = results["SatelliteDynamics.euler_BO[2]"]   # O turns at −n about y_O: w_BO = +n
+    pitch = results["SatelliteDynamics.euler_BO[2]"]  # O turns at −n about y_O: w_BO = +n
     assert pitch[-1] == pytest.approx(ORBIT_RATE * results.time[-1], abs=0.5 * DEG)
 
 
@@ -89,7 +90,7 @@ def test_flywheel_sizing_finds_the_torque_of_the_reversals(fmus, tmp_path):
     sizing = json.loads((tmp_path / "sizing.json").read_text())
     peak = 2 * abs(JZ - JX) * (2 * ROLL_R / 1.0) * 0.5 * math.cos(ROLL_A)
     assert 0.9 * peak <= sizing["torque"] <= 1.15 * peak
-    assert 0.95 <= sizing["momentum"] <= 1.15      # the yaw momentum the wheel takes over
+    assert 0.95 <= sizing["momentum"] <= 1.15  # the yaw momentum the wheel takes over
     smaller = [p for p in sizing["points"] if p["torque"] < sizing["torque"]]
     assert smaller and not any(p["met"] for p in smaller)
     assert (tmp_path / "sizing.png").exists()

@@ -1,4 +1,5 @@
 """The five-phase pitch law of [Zhao 2016] (eqs 6–11) and its errata."""
+
 import math
 
 import numpy as np
@@ -23,14 +24,14 @@ def test_phase_times_follow_the_papers_planning():
 def test_acceleration_rate_and_torque_match_eqs_8_to_10():
     assert PAPER.accel / DEG == pytest.approx(-0.24)
     assert PAPER.rate_max / DEG == pytest.approx(-2.4)
-    assert 956 * PAPER.accel == pytest.approx(-4.0, abs=0.01)   # T_cym ≈ −4.0 N·m
+    assert 956 * PAPER.accel == pytest.approx(-4.0, abs=0.01)  # T_cym ≈ −4.0 N·m
 
 
 def test_printed_closed_forms_have_the_wrong_sign():
     """Paper: θ̈m = −100θ_T/(3T²) − 20θ̇0/T; the physics needs +100θ_T/(3T²) − 20θ̇0/T."""
     theta_T, T, rate0 = -120.0, 100.0, -0.8
-    printed = -100 * theta_T / (3 * T ** 2) - 20 * rate0 / T
-    corrected = 100 * theta_T / (3 * T ** 2) - 20 * rate0 / T
+    printed = -100 * theta_T / (3 * T**2) - 20 * rate0 / T
+    corrected = 100 * theta_T / (3 * T**2) - 20 * rate0 / T
     assert printed == pytest.approx(0.56) and corrected == pytest.approx(PAPER.accel / DEG)
     printed_rate = -10 * theta_T / (3 * T) - 2 * rate0
     assert printed_rate == pytest.approx(5.6)
@@ -63,8 +64,10 @@ def controller_at(t, q_BO, w_BO_B=(0.0, 0.0, 0.0)):
     return c
 
 
-@pytest.mark.parametrize("t, phase, torque", [
-    (0.0, 1, -4.0045), (9.99, 1, -4.0045), (10.0, 2, 0.0), (35.0, 3, 4.0045), (50.0, 4, 0.0)])
+@pytest.mark.parametrize(
+    "t, phase, torque",
+    [(0.0, 1, -4.0045), (9.99, 1, -4.0045), (10.0, 2, 0.0), (35.0, 3, 4.0045), (50.0, 4, 0.0)],
+)
 def test_feedforward_torque_by_phase(t, phase, torque):
     c = controller_at(t, quat_from_axis_angle([0, 1, 0], PAPER.reference(t)[0]))
     assert c.get("phase") == phase

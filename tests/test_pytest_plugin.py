@@ -1,10 +1,11 @@
 """The shipped pytest plugin, as a user's test suite sees it (``pytester``, in a separate
 process: the plugin comes from the installed entry point, the FMUs run there)."""
+
 import pytest
 
 pytest_plugins = ["pytester"]
 
-USER_TESTS = '''
+USER_TESTS = """
 import math
 import pytest
 from agilesat.orchestration.checks import (assert_momentum_conserved, assert_requirements_met,
@@ -45,7 +46,7 @@ def test_too_tight_a_bound_fails(slew):
 
 def test_requirement_not_reached_fails(slew):
     assert_requirements_met(slew[1], "imaging_pitch_rate_mean")
-'''
+"""
 
 
 @pytest.mark.slow
@@ -54,6 +55,9 @@ def test_plugin_fixtures_and_assertions_in_a_user_suite(pytester, fmus):
     pytester.makepyfile(test_user=USER_TESTS)
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-q", timeout=600)
     result.assert_outcomes(passed=4, failed=2)
-    result.stdout.fnmatch_lines([
-        "*SatelliteDynamics.w_BO_B[[]2[]] does not settle within ±1 °/s after t = 12 s*",
-        "*requirement not met: imaging_pitch_rate_mean = None*"])
+    result.stdout.fnmatch_lines(
+        [
+            "*SatelliteDynamics.w_BO_B[[]2[]] does not settle within ±1 °/s after t = 12 s*",
+            "*requirement not met: imaging_pitch_rate_mean = None*",
+        ]
+    )

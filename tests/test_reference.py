@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from reference import scan_pitch as sp   # tests/ is on sys.path (rootdir-less test modules)
+from reference import scan_pitch as sp  # tests/ is on sys.path (rootdir-less test modules)
 
 DEG = math.pi / 180.0
 
@@ -80,8 +80,8 @@ def test_orbit_frame_quaternion_matches_definition():
 
 
 def test_orbit_rate_and_period():
-    assert 2 * math.pi / sp.N_ORBIT / 60.0 == pytest.approx(98.4, abs=0.3)   # ≈ 98 min
-    assert sp.N_ORBIT / DEG == pytest.approx(0.0612, abs=5e-4)      # 0.06099 °/s
+    assert 2 * math.pi / sp.N_ORBIT / 60.0 == pytest.approx(98.4, abs=0.3)  # ≈ 98 min
+    assert sp.N_ORBIT / DEG == pytest.approx(0.0612, abs=5e-4)  # 0.06099 °/s
     # Ċ_OI = −[w_OI_O×] C_OI with w_OI_O = (0, −n, 0)
     t, eps = 123.0, 1e-3
     Cdot = (sp.dcm(sp.q_oi(t + eps)) - sp.dcm(sp.q_oi(t - eps))) / (2 * eps)
@@ -104,7 +104,7 @@ def test_cmg_axes():
     np.testing.assert_allclose(np.einsum("ij,ij->j", G, S), 0.0, atol=1e-15)
     np.testing.assert_allclose(T, np.cross(G.T, S.T).T, atol=1e-15)
     np.testing.assert_allclose(G[:, 5], [0, 0, 1])
-    np.testing.assert_allclose(S[:, 5], [-1, 0, 0])        # reversed spin of gyro 6
+    np.testing.assert_allclose(S[:, 5], [-1, 0, 0])  # reversed spin of gyro 6
     _, P, _ = sp.cmg_axes(reversed_spin=False)
     np.testing.assert_allclose(S, -P)
     # gyro 1 (az = 90°): g = (0, −sin α0, cos α0), paper spin (0, cos α0, sin α0)
@@ -127,7 +127,7 @@ def test_jacobian_is_derivative_of_spin():
 
 def test_initial_momentum_bias():
     h0 = sp.cluster_momentum(sp.DELTA0)
-    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)   # DESIGN.md §4.1: "about 57 N m s"
+    assert np.linalg.norm(h0) == pytest.approx(57.0, abs=0.5)  # DESIGN.md §4.1: "about 57 N m s"
     assert sp.singularity_measure(np.array(sp.DELTA0))[0] > 0.5
 
 
@@ -146,8 +146,9 @@ def test_steering_delivers_commanded_torque():
         np.testing.assert_allclose(null @ cmd, 0.0, atol=1e-12)
 
 
-@pytest.mark.parametrize("r0,cmd", [(0.0, 0.3), (0.2, -0.1), (-0.55, 2.0), (0.4, 0.4),
-                                    (0.6, -5.0), (0.1, 0.1004)])
+@pytest.mark.parametrize(
+    "r0,cmd", [(0.0, 0.3), (0.2, -0.1), (-0.55, 2.0), (0.4, 0.4), (0.6, -5.0), (0.1, 0.1004)]
+)
 def test_servo_closed_form_matches_fine_integration(r0, cmd):
     tau = 2.5
     n = 250000
@@ -177,7 +178,8 @@ def test_servo_closed_form_matches_fine_integration(r0, cmd):
 def test_plan_phase_times_and_profile():
     p = sp.plan()
     assert [p[k] for k in ("t1", "t2", "t3", "t4", "t5")] == pytest.approx(
-        [10.0, 30.0, 36.0 + 2.0 / 3.0, 96.0 + 2.0 / 3.0, 100.0], abs=1e-12)
+        [10.0, 30.0, 36.0 + 2.0 / 3.0, 96.0 + 2.0 / 3.0, 100.0], abs=1e-12
+    )
     assert p["acc"] / DEG == pytest.approx(-0.24, abs=1e-12)
     assert p["rate"] / DEG == pytest.approx(-2.4, abs=1e-12)
     # integrate the planned acceleration profile exactly: ends at θf with zero rate
@@ -187,7 +189,7 @@ def test_plan_phase_times_and_profile():
         th += rt * dur + 0.5 * acc * dur * dur
         rt += acc * dur
         if dur == t4 - t3:
-            assert rt == pytest.approx(sp.SCAN_RATE, abs=1e-15)   # imaging phase at −0.8 °/s
+            assert rt == pytest.approx(sp.SCAN_RATE, abs=1e-15)  # imaging phase at −0.8 °/s
     assert th == pytest.approx(sp.THETAF, abs=1e-12)
     assert rt == pytest.approx(0.0, abs=1e-15)
     assert sp.TAU_FF == pytest.approx(-4.0045, abs=1e-4)
@@ -224,8 +226,9 @@ def test_recorded_torque_and_phase():
     r = run(1e-3)
     t, ph, tau = r["time"], r["phase"], r["tau_cmd"]
     p = sp.plan()
-    expect = np.select([t < p["t1"] - 1e-9, t < p["t2"] - 1e-9, t < p["t3"], t < p["t4"]],
-                       [1, 2, 3, 4], 5)
+    expect = np.select(
+        [t < p["t1"] - 1e-9, t < p["t2"] - 1e-9, t < p["t3"], t < p["t4"]], [1, 2, 3, 4], 5
+    )
     np.testing.assert_array_equal(ph, expect)
     ff = sp.I_AXIS * p["acc"]
     np.testing.assert_array_equal(tau[ph == 1, 1], ff)
@@ -234,8 +237,9 @@ def test_recorded_torque_and_phase():
     assert tau[ph == 1, 1][0] == pytest.approx(-4.0045, abs=1e-4)
     # phase 5: PD on the twist angle
     k = np.nonzero(ph == 5)[0]
-    np.testing.assert_allclose(tau[k, 1], sp.C1 * (0 - r["pitch"][k]) - sp.C2 * r["w_BO_B"][k, 1],
-                               atol=1e-13)
+    np.testing.assert_allclose(
+        tau[k, 1], sp.C1 * (0 - r["pitch"][k]) - sp.C2 * r["w_BO_B"][k, 1], atol=1e-13
+    )
     # roll / yaw PD on the singularity-free errors
     for j in (0, len(t) // 3, len(t) - 1):
         _, ex, ez = sp.pitch_errors(tuple(r["q_BO"][j]))
@@ -247,9 +251,19 @@ def test_recorded_torque_and_phase():
 def test_output_shapes_and_time_grid():
     r = run(0.1)
     n = 1501
-    shapes = {"time": (n,), "q_BO": (n, 4), "w_BO_B": (n, 3), "w_BI_B": (n, 3), "pitch": (n,),
-              "delta": (n, 6), "delta_dot": (n, 6), "h": (n, 3), "H_I": (n, 3),
-              "tau_cmd": (n, 3), "phase": (n,)}
+    shapes = {
+        "time": (n,),
+        "q_BO": (n, 4),
+        "w_BO_B": (n, 3),
+        "w_BI_B": (n, 3),
+        "pitch": (n,),
+        "delta": (n, 6),
+        "delta_dot": (n, 6),
+        "h": (n, 3),
+        "H_I": (n, 3),
+        "tau_cmd": (n, 3),
+        "phase": (n,),
+    }
     for key, shape in shapes.items():
         assert r[key].shape == shape, key
         assert np.all(np.isfinite(r[key])), key
@@ -267,8 +281,9 @@ def test_initial_state():
     np.testing.assert_array_equal(r["delta_dot"][0], 0.0)
     np.testing.assert_allclose(r["h"][0], sp.cluster_momentum(sp.DELTA0), atol=1e-14)
     # w_BI_B(0) = C_BO w_OI_O: the body only co-rotates with the orbit frame
-    np.testing.assert_allclose(r["w_BI_B"][0], sp.dcm(r["q_BO"][0]) @ np.array(sp.W_OI_O),
-                               atol=1e-16)
+    np.testing.assert_allclose(
+        r["w_BI_B"][0], sp.dcm(r["q_BO"][0]) @ np.array(sp.W_OI_O), atol=1e-16
+    )
 
 
 @pytest.mark.slow
@@ -288,12 +303,16 @@ def test_outputs_consistent_with_hub_equation():
     r = run(1e-3)
     dt = 1e-3
     w, h = r["w_BI_B"], r["h"]
-    A = (np.swapaxes(sp.T_AX[None] * np.cos(r["delta"])[:, None, :]
-                     - sp.S_AX[None] * np.sin(r["delta"])[:, None, :], 1, 2))
+    A = np.swapaxes(
+        sp.T_AX[None] * np.cos(r["delta"])[:, None, :]
+        - sp.S_AX[None] * np.sin(r["delta"])[:, None, :],
+        1,
+        2,
+    )
     hdot = sp.H_ROTOR * np.einsum("kij,ki->kj", A, r["delta_dot"])
     wdot = (w[2:] - w[:-2]) / (2 * dt)
     rhs = (-np.cross(w[1:-1], sp.J_HUB * w[1:-1] + h[1:-1]) - hdot[1:-1]) / sp.J_HUB
-    res = sp.J_HUB * np.abs(wdot - rhs).max(axis=1)       # N·m
+    res = sp.J_HUB * np.abs(wdot - rhs).max(axis=1)  # N·m
     # central differences are O(dt²) where the servo is smooth and O(dt) at its kinks (ramp
     # ends, phase switches); a wrong sign of w × h would give ~|w||h| ≈ 2 N·m
     assert np.median(res) < 1e-4
@@ -381,7 +400,7 @@ def test_self_convergence():
     assert dw < 2e-5
     c = run(0.01)
     dp_coarse = np.abs(c["pitch"] - b["pitch"][::20]).max()
-    assert dp_coarse > 3 * dp           # the error shrinks with the step
+    assert dp_coarse > 3 * dp  # the error shrinks with the step
 
 
 @pytest.mark.slow
@@ -414,7 +433,7 @@ def test_maneuver_physics():
 def test_twist_angle_equals_euler_pitch_away_from_90_degrees():
     r = run(0.1)
     C = sp._dcm_batch(r["q_BO"])
-    theta_euler = -np.arcsin(np.clip(C[:, 0, 2], -1, 1))   # C_BO[1,3] = −sin θ for 1-2-3
+    theta_euler = -np.arcsin(np.clip(C[:, 0, 2], -1, 1))  # C_BO[1,3] = −sin θ for 1-2-3
     ok = np.abs(r["pitch"]) < 80 * DEG
     assert ok.sum() > 500
     np.testing.assert_allclose(r["pitch"][ok], theta_euler[ok], atol=1e-5)

@@ -10,6 +10,7 @@ which the open-loop pitch channel integrates for up to T: |Δθ| ≤ θ̈m·H·T
 torque step is the terminal PD's start, c2·|θ̇0| (8.1 N·m); held up to a step early or late
 it bounds the rate error by 2·c2·|θ̇0|·H / I.
 """
+
 import math
 
 import numpy as np
@@ -23,8 +24,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
 DEG = math.pi / 180
 STEPS = (0.1, 0.05, 0.025)
-ACCEL, DURATION = 0.24 * DEG, 100.0   # θ̈m and T of the plan
-PD_START = 578.0 * 0.8 * DEG / 956.0   # c2·|θ̇0| / I, rad/s²
+ACCEL, DURATION = 0.24 * DEG, 100.0  # θ̈m and T of the plan
+PD_START = 578.0 * 0.8 * DEG / 956.0  # c2·|θ̇0| / I, rad/s²
 
 
 def twist(q):
@@ -54,8 +55,10 @@ def errors(fmus, truth, scan_pitch_run, tmp_path_factory):
         every = round(step / 1e-3)
         pitch_ref, w_ref = twist(truth["q_BO"])[::every], truth["w_BO_B"][::every]
         assert np.allclose(truth["time"][::every], cosim.time)
-        result[step] = (np.abs(twist(cosim.vector("SatelliteDynamics.q_BO")) - pitch_ref).max(),
-                        np.abs(cosim.vector("SatelliteDynamics.w_BO_B") - w_ref).max())
+        result[step] = (
+            np.abs(twist(cosim.vector("SatelliteDynamics.q_BO")) - pitch_ref).max(),
+            np.abs(cosim.vector("SatelliteDynamics.w_BO_B") - w_ref).max(),
+        )
     return result
 
 

@@ -1,4 +1,5 @@
 """Repository-level promises: CI runs the README's test command; every model is an FMU."""
+
 import importlib
 import re
 
@@ -9,7 +10,7 @@ from helpers import ROOT
 def test_ci_runs_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
     commands = re.findall(r"```\n(python3 -m venv[^\n]*)\n```", readme)
-    assert len(commands) == 2, commands   # set up and run; set up and test
+    assert len(commands) == 2, commands  # set up and run; set up and test
     test_command = next(c for c in commands if "pytest" in c)
     assert test_command in (ROOT / ".ci" / "run").read_text().splitlines()
 
@@ -17,12 +18,20 @@ def test_ci_runs_the_readme_test_command():
 def test_every_component_model_is_an_fmu_named_after_its_module():
     """The registry is read from the sources: it must be what importing them finds."""
     from agilesat.components.model import Model
+
     found = {}
     for path in sorted((ROOT / "components").glob("*.py")):
         module = importlib.import_module(f"agilesat.components.{path.stem}")
-        found.update({name: path.stem for name, obj in vars(module).items()
-                      if isinstance(obj, type) and issubclass(obj, Model) and obj is not Model
-                      and obj.__module__ == module.__name__})
+        found.update(
+            {
+                name: path.stem
+                for name, obj in vars(module).items()
+                if isinstance(obj, type)
+                and issubclass(obj, Model)
+                and obj is not Model
+                and obj.__module__ == module.__name__
+            }
+        )
     assert FMUS == found
     assert all(model_class(name).VARIABLES for name in FMUS)
     assert all(slave_class(name).model_class is model_class(name) for name in FMUS)
@@ -30,10 +39,17 @@ def test_every_component_model_is_an_fmu_named_after_its_module():
 
 def _tracked_text_files():
     import subprocess
-    names = subprocess.run(["git", "ls-files", "*.py", "*.md", "*.c", "*.toml"], cwd=ROOT,
-                           capture_output=True, text=True, check=True).stdout.split()
-    return {name: (ROOT / name).read_text(encoding="utf-8") for name in names
-            if (ROOT / name).is_file()}
+
+    names = subprocess.run(
+        ["git", "ls-files", "*.py", "*.md", "*.c", "*.toml"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
+    return {
+        name: (ROOT / name).read_text(encoding="utf-8") for name in names if (ROOT / name).is_file()
+    }
 
 
 def test_references_resolve_inside_the_repository():
@@ -45,7 +61,7 @@ def test_references_resolve_inside_the_repository():
     assert keys == {"Zhao 2016", "Chang 2015", "Liang 2019"}
     sections = set(re.findall(r"^#+ (\d+(?:\.\d+)?)\.? ", design, re.M))
     for name, text in _tracked_text_files().items():
-        if name != "tests/test_repository.py":                  # which spells them out
+        if name != "tests/test_repository.py":  # which spells them out
             assert not re.search(r"\.\./shared|/work/|\bseeds? ?\d{3}", text), name
         for key in re.findall(r"\[([A-Z][a-z]+ (?:19|20)\d\d)\]", text):
             assert key in keys, f"{name}: [{key}] is not in DESIGN.md's References"

@@ -1,4 +1,5 @@
 """Results as a user handles it: units, selection, degrees, names, pandas, MATLAB, CSV."""
+
 import math
 
 import numpy as np
@@ -6,19 +7,45 @@ import pytest
 
 from agilesat.orchestration.results import ColumnError, Results, units_path
 
-NAMES = ["time", "Sat.w_BI_B[1]", "Sat.w_BI_B[2]", "Sat.w_BI_B[3]", "Sat.inertia[1,1]",
-         "Sat.inertia[1,2]", "Sat.inertia[2,1]", "Sat.inertia[2,2]", "Sat.angle", "Sat.mode"]
-UNITS = {"Sat.w_BI_B[1]": "rad/s", "Sat.w_BI_B[2]": "rad/s", "Sat.w_BI_B[3]": "rad/s",
-         "Sat.inertia[1,1]": "kg.m2", "Sat.inertia[1,2]": "kg.m2",
-         "Sat.inertia[2,1]": "kg.m2", "Sat.inertia[2,2]": "kg.m2", "Sat.angle": "rad",
-         "Sat.mode": "1"}
+NAMES = [
+    "time",
+    "Sat.w_BI_B[1]",
+    "Sat.w_BI_B[2]",
+    "Sat.w_BI_B[3]",
+    "Sat.inertia[1,1]",
+    "Sat.inertia[1,2]",
+    "Sat.inertia[2,1]",
+    "Sat.inertia[2,2]",
+    "Sat.angle",
+    "Sat.mode",
+]
+UNITS = {
+    "Sat.w_BI_B[1]": "rad/s",
+    "Sat.w_BI_B[2]": "rad/s",
+    "Sat.w_BI_B[3]": "rad/s",
+    "Sat.inertia[1,1]": "kg.m2",
+    "Sat.inertia[1,2]": "kg.m2",
+    "Sat.inertia[2,1]": "kg.m2",
+    "Sat.inertia[2,2]": "kg.m2",
+    "Sat.angle": "rad",
+    "Sat.mode": "1",
+}
 
 
 @pytest.fixture
 def results():
     t = np.arange(11) * 0.5
-    data = np.column_stack([t, np.sin(t), np.cos(t), t / 10, *[np.full_like(t, v) for v in
-                            (10, 1, 1, 20)], math.pi / 2 * np.ones_like(t), np.round(t) % 2])
+    data = np.column_stack(
+        [
+            t,
+            np.sin(t),
+            np.cos(t),
+            t / 10,
+            *[np.full_like(t, v) for v in (10, 1, 1, 20)],
+            math.pi / 2 * np.ones_like(t),
+            np.round(t) % 2,
+        ]
+    )
     return Results(NAMES, data, {"units": UNITS, "step": 0.5})
 
 
@@ -53,7 +80,7 @@ def test_a_wrong_name_says_what_was_meant(results):
     with pytest.raises(ColumnError, match=r"did you mean Sat\.w_BI_B") as error:
         results["Sat.w_BI"]
     assert "np.str_" not in str(error.value)
-    assert isinstance(error.value, KeyError)          # code catching KeyError still works
+    assert isinstance(error.value, KeyError)  # code catching KeyError still works
     with pytest.raises(KeyError, match="did you mean Sat.angle"):
         results.vector("Sat.angel")
 
@@ -64,6 +91,7 @@ def test_repr_reads(results):
 
 def test_csv_keeps_units_in_a_sidecar_and_stays_readable_by_fmpy(results, tmp_path):
     from fmpy.util import read_csv
+
     path = results.to_csv(tmp_path / "results.csv")
     assert units_path(path).exists()
     back = Results.from_csv(path)
@@ -90,11 +118,10 @@ def test_pandas_frame_indexed_by_time_with_units(results):
 
 def test_matlab_file_has_one_struct_per_instance(results, tmp_path):
     from scipy.io import loadmat
-    mat = loadmat(results.to_mat(tmp_path / "r.mat"), squeeze_me=False,
-                  struct_as_record=False)
+
+    mat = loadmat(results.to_mat(tmp_path / "r.mat"), squeeze_me=False, struct_as_record=False)
     sat = mat["Sat"][0, 0]
     assert np.array_equal(sat.w_BI_B, results["Sat.w_BI_B"])
     assert np.array_equal(sat.inertia, results["Sat.inertia"])
     assert np.array_equal(mat["time"][:, 0], results.time)
     assert str(mat["units"][0, 0].Sat[0, 0].w_BI_B[0]) == "rad/s"
-

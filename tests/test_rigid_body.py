@@ -1,11 +1,16 @@
 """SatelliteDynamics against closed-form rigid-body solutions and conservation laws."""
+
 import numpy as np
 import pytest
 
 from agilesat.components.model import ModelError
+from agilesat.components.rotations import (
+    dcm_from_quat,
+    quat_from_axis_angle,
+    quat_from_euler123,
+    quat_mul,
+)
 from agilesat.components.satellite_dynamics import SatelliteDynamics
-from agilesat.components.rotations import (dcm_from_quat, quat_from_axis_angle,
-                                           quat_from_euler123, quat_mul)
 
 
 def body(**parameters):
@@ -50,7 +55,7 @@ def test_constant_torque_spins_up_about_a_principal_axis():
         m.advance(k * dt, dt)
     t = 250 * dt
     assert m.get("w_BI_B") == pytest.approx([0, 0, tau * t / J3], abs=1e-13)
-    expected = quat_from_axis_angle([0, 0, 1], 0.5 * tau * t ** 2 / J3)
+    expected = quat_from_axis_angle([0, 0, 1], 0.5 * tau * t**2 / J3)
     assert np.allclose(m.get("q_BI"), expected, atol=1e-11)
 
 
@@ -60,13 +65,13 @@ def test_internal_momentum_counter_rotates_the_hub():
     m = body(inertia=np.diag([60.0, 70.0, J3])).start()
     m.set("hdot_wheel", [0.0, 0.0, hdot])
     for k in range(100):
-        m.set("h_wheel", [0.0, 0.0, hdot * k * dt])   # h at the start of each step
+        m.set("h_wheel", [0.0, 0.0, hdot * k * dt])  # h at the start of each step
         m.advance(k * dt, dt)
     t = 100 * dt
     m.set("h_wheel", [0.0, 0.0, hdot * t])
     m.output()
     assert m.get("w_BI_B") == pytest.approx([0, 0, -hdot * t / J3], abs=1e-14)
-    expected = quat_from_axis_angle([0, 0, 1], -0.5 * hdot * t ** 2 / J3)
+    expected = quat_from_axis_angle([0, 0, 1], -0.5 * hdot * t**2 / J3)
     assert np.allclose(m.get("q_BI"), expected, atol=1e-12)
     assert np.allclose(m.get("H_I"), 0.0, atol=1e-14)
 
@@ -123,16 +128,20 @@ def test_initial_state_relative_to_a_rotating_orbit_frame():
     q_BO = quat_from_euler123(attitude)
     assert np.allclose(m.get("euler_BO"), attitude, atol=1e-12)
     assert np.allclose(m.get("w_BO_B"), rate, atol=1e-15)
-    assert np.allclose(dcm_from_quat(m.get("q_BI")), dcm_from_quat(quat_mul(q_OI, q_BO)),
-                       atol=1e-14)
+    assert np.allclose(
+        dcm_from_quat(m.get("q_BI")), dcm_from_quat(quat_mul(q_OI, q_BO)), atol=1e-14
+    )
     C_BO = dcm_from_quat(q_BO)
     assert np.allclose(m.get("w_BI_B"), rate + C_BO @ w_OI_O, atol=1e-15)
 
 
-@pytest.mark.parametrize("inertia, message", [
-    (np.array([[1.0, 0.5, 0], [0, 1.0, 0], [0, 0, 1.0]]), "symmetric"),
-    (np.diag([1.0, -1.0, 1.0]), "positive definite"),
-])
+@pytest.mark.parametrize(
+    "inertia, message",
+    [
+        (np.array([[1.0, 0.5, 0], [0, 1.0, 0], [0, 0, 1.0]]), "symmetric"),
+        (np.diag([1.0, -1.0, 1.0]), "positive definite"),
+    ],
+)
 def test_bad_inertia_is_rejected(inertia, message):
     with pytest.raises(ModelError, match=message):
         body(inertia=inertia).start()

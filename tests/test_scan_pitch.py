@@ -1,4 +1,5 @@
 """scan_pitch end to end through the CLI: the numbers the issue asks for, from real runs."""
+
 import json
 import math
 
@@ -17,8 +18,9 @@ DEG = math.pi / 180
 
 def run(out, *args):
     result = agilesat("run", *args, "--out", out)
-    summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() \
-        else None
+    summary = (
+        json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() else None
+    )
     return result, summary
 
 
@@ -36,10 +38,10 @@ def test_pitch_goes_from_120_to_0_degrees(nominal):
     pitch = results["SatelliteDynamics.euler_BO[2]"]
     assert pitch[0] == pytest.approx(120 * DEG, abs=1e-9)
     assert abs(value(summary, "pitch_at_T")) < 1.0 * DEG
-    assert np.all(np.diff(pitch[results.time <= 97]) <= 1e-6)   # a monotonic slew
-    assert value(summary, "max_roll_yaw_error") < 0.1 * DEG     # pitch axis held on y_O
+    assert np.all(np.diff(pitch[results.time <= 97]) <= 1e-6)  # a monotonic slew
+    assert value(summary, "max_roll_yaw_error") < 0.1 * DEG  # pitch axis held on y_O
     roll_yaw = np.abs(results.vector("SatelliteDynamics.euler_BO")[:, [0, 2]])
-    assert roll_yaw.max() < 135 * DEG         # no 180° flip of the Euler branch anywhere
+    assert roll_yaw.max() < 135 * DEG  # no 180° flip of the Euler branch anywhere
     # near the lock 1-2-3 roll and yaw amplify the tilt by 1/cos θ; with |cos θ| ≥ ½:
     away = np.abs(pitch - 90 * DEG) > 30 * DEG
     assert roll_yaw[away].max() < 2 * value(summary, "max_roll_yaw_error")
@@ -71,7 +73,7 @@ def test_summary_reports_paper_values_and_status(nominal):
     out, result, summary, _ = nominal
     assert summary["status"] == "ok" and summary["diagnostics"] == []
     assert summary["metrics"]["imaging_pitch_rate_mean"]["paper"] == pytest.approx(-0.8075 * DEG)
-    assert format_summary(summary) in result.stdout        # the CLI prints what it wrote
+    assert format_summary(summary) in result.stdout  # the CLI prints what it wrote
     assert "paper -0.8075 °/s" in result.stdout
     assert len(list(out.glob("fig*.png"))) == 8
 
@@ -94,8 +96,16 @@ def test_momentum_is_conserved_at_any_macro_step(fmus, tmp_path, step):
     """Unequal inertia (gyroscopic coupling on), no external torque: H constant to 1e-9."""
     J = np.diag([900.0, 1000.0, 1100.0])
     overrides = [f"SatelliteDynamics.inertia[{i},{i}]={J[i - 1, i - 1]}" for i in (1, 2, 3)]
-    args = ["scan_pitch", "--step", step, "--stop", 60, "--no-figures",
-            "--set", "SatelliteDynamics.gravity_gradient=false"]
+    args = [
+        "scan_pitch",
+        "--step",
+        step,
+        "--stop",
+        60,
+        "--no-figures",
+        "--set",
+        "SatelliteDynamics.gravity_gradient=false",
+    ]
     for override in overrides:
         args += ["--set", override]
     result, _ = run(tmp_path, *args)
@@ -121,8 +131,8 @@ def test_literal_spin_is_diagnosed_not_flown_silently(fmus, tmp_path):
 
 @pytest.mark.parametrize("step", [0.05])
 def test_jacobi_also_meets_the_requirement(fmus, tmp_path, step):
-    result, summary = run(tmp_path, "scan_pitch", "--algorithm", "jacobi", "--step", step,
-                          "--no-figures")
+    result, summary = run(
+        tmp_path, "scan_pitch", "--algorithm", "jacobi", "--step", step, "--no-figures"
+    )
     assert result.returncode == 0, result.stderr
-    assert value(summary, "imaging_pitch_rate_mean") == pytest.approx(-0.8 * DEG,
-                                                                       abs=0.02 * DEG)
+    assert value(summary, "imaging_pitch_rate_mean") == pytest.approx(-0.8 * DEG, abs=0.02 * DEG)

@@ -1,6 +1,7 @@
 """The generic FMU wrapper (``fmus/slave.py``) in-process: instantiated and driven with
 set_real/do_step/get_real as a host drives it, the way pythonfmu's own tests exercise their
 slaves.  The same calls through built FMUs in other processes are in test_fmus.py."""
+
 import math
 
 import numpy as np
@@ -15,8 +16,11 @@ STEP = 0.05
 def scalars(model, causality):
     """(value reference, scalar name) of the Real scalars of one causality, in order."""
     layout = model.layout
-    return [(vr, name) for vr, (v, name) in enumerate(layout.scalars)
-            if v.causality == causality and v.type == "Real"]
+    return [
+        (vr, name)
+        for vr, (v, name) in enumerate(layout.scalars)
+        if v.causality == causality and v.type == "Real"
+    ]
 
 
 @pytest.mark.parametrize("name", FMUS)
@@ -32,28 +36,35 @@ def test_the_slave_computes_exactly_what_the_model_computes(name):
         x = model.values[[vr for vr, _ in inputs]] + 1e-7 * rng.standard_normal(len(inputs))
         fmu.set_real([vr for vr, _ in inputs], x.tolist())
         model.values[[vr for vr, _ in inputs]] = x
-        if k == 0:   # the first inputs before initialisation ends, as FMI 2.0 asks
+        if k == 0:  # the first inputs before initialisation ends, as FMI 2.0 asks
             fmu.exit_initialization_mode()
             model.start(0.0)
         else:
             model.output()
-        assert fmu.get_real([vr for vr, _ in outputs]) == model.values[
-            [vr for vr, _ in outputs]].tolist()
+        assert (
+            fmu.get_real([vr for vr, _ in outputs])
+            == model.values[[vr for vr, _ in outputs]].tolist()
+        )
         assert fmu.do_step(t, STEP)
         model.step(t, STEP)
     assert logged(fmu) == []
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda f: f.get_real([10 ** 6]), "unknown value references [1000000]"),
-    (lambda f: f.get_integer([0]), "not of type Integer"),
-    (lambda f: f.set_real([f.model.layout.range["output"].start], [1.0]), "cannot be set"),
-    (lambda f: f.set_real([0], [1.0]), "are fixed"),
-    (lambda f: f.set_real([f.model.layout.range["input"].start], [math.nan]),
-     "non-finite values rejected"),
-    (lambda f: f.do_step(0.0, 0.0), "step size must be positive"),
-    (lambda f: f.do_step(1.0, STEP), "time discontinuity"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda f: f.get_real([10**6]), "unknown value references [1000000]"),
+        (lambda f: f.get_integer([0]), "not of type Integer"),
+        (lambda f: f.set_real([f.model.layout.range["output"].start], [1.0]), "cannot be set"),
+        (lambda f: f.set_real([0], [1.0]), "are fixed"),
+        (
+            lambda f: f.set_real([f.model.layout.range["input"].start], [math.nan]),
+            "non-finite values rejected",
+        ),
+        (lambda f: f.do_step(0.0, 0.0), "step size must be positive"),
+        (lambda f: f.do_step(1.0, STEP), "time discontinuity"),
+    ],
+)
 def test_a_bad_call_is_logged_as_an_error_and_the_instance_carries_on(call, message):
     fmu = slave("CmgCluster")
     fmu.exit_initialization_mode()
@@ -63,14 +74,14 @@ def test_a_bad_call_is_logged_as_an_error_and_the_instance_carries_on(call, mess
     errors = logged(fmu)
     assert len(errors) == 1 and errors[0].startswith("CmgCluster 'test_CmgCluster': ")
     assert message in errors[0]
-    assert fmu.get_real(outputs) == before                     # nothing changed
-    assert fmu.do_step(0.0, STEP) and logged(fmu) == errors     # and it still steps
+    assert fmu.get_real(outputs) == before  # nothing changed
+    assert fmu.do_step(0.0, STEP) and logged(fmu) == errors  # and it still steps
 
 
 def test_answers_to_rejected_calls_are_harmless():
     fmu = slave("CmgCluster")
     fmu.exit_initialization_mode()
-    assert fmu.get_real([10 ** 6, 10 ** 6 + 1]) == [0, 0]
+    assert fmu.get_real([10**6, 10**6 + 1]) == [0, 0]
     assert fmu.do_step(5.0, STEP) is False
     assert len(logged(fmu)) == 2
 
@@ -86,8 +97,10 @@ def test_a_model_error_is_logged_with_the_instance_name():
     bandwidth = next(vr for vr, name in scalars(fmu.model, "parameter") if name == "bandwidth")
     fmu.set_real([bandwidth], [-1.0])
     fmu.exit_initialization_mode()
-    assert "PayloadGimbals 'test_PayloadGimbals': exit_initialization_mode: bandwidth must " \
-           "be >= 0" in logged(fmu)[0]
+    assert (
+        "PayloadGimbals 'test_PayloadGimbals': exit_initialization_mode: bandwidth must "
+        "be >= 0" in logged(fmu)[0]
+    )
 
 
 def test_parameters_set_before_initialisation_take_effect():
@@ -102,8 +115,10 @@ def test_parameters_set_before_initialisation_take_effect():
 def test_fmu_state_round_trips_through_bytes_bit_identically(name):
     fmu = slave(name)
     for var, value in operating_point(name, np.random.default_rng(3)).items():
-        fmu.set_real(list(range(fmu.model.layout.slice(var).start,
-                                fmu.model.layout.slice(var).stop)), value.tolist())
+        fmu.set_real(
+            list(range(fmu.model.layout.slice(var).start, fmu.model.layout.slice(var).stop)),
+            value.tolist(),
+        )
     fmu.exit_initialization_mode()
     outputs = [vr for vr, _ in scalars(fmu.model, "output")]
     assert fmu.do_step(0.0, STEP)
@@ -112,6 +127,6 @@ def test_fmu_state_round_trips_through_bytes_bit_identically(name):
     after = fmu.get_real(outputs)
     assert fmu.do_step(2 * STEP, STEP)
     fmu._set_fmu_state(fmu._fmu_state_from_bytes(saved))
-    assert fmu.do_step(STEP, STEP)                  # the clock came back with the state
+    assert fmu.do_step(STEP, STEP)  # the clock came back with the state
     assert fmu.get_real(outputs) == after
     assert logged(fmu) == []

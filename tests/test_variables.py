@@ -1,4 +1,5 @@
 """The variable-table machinery every model and FMU is built on."""
+
 import numpy as np
 import pytest
 
@@ -31,23 +32,38 @@ class Toy(Model):
 
 def test_structured_names_are_one_based_row_major():
     assert Var("m", "parameter", "1", "d", shape=(2, 3)).scalar_names()[:4] == [
-        "m[1,1]", "m[1,2]", "m[1,3]", "m[2,1]"]
+        "m[1,1]",
+        "m[1,2]",
+        "m[1,3]",
+        "m[2,1]",
+    ]
 
 
 def test_value_references_group_parameters_inputs_outputs():
-    layout = Layout(Toy.VARIABLES)   # its table + the common warnings_return_ok
-    assert layout.range == {"parameter": range(0, 7), "input": range(7, 10),
-                            "output": range(10, 14)}
-    assert [name for _, name in layout.scalars][-1] == "label"   # strings after numerics
+    layout = Layout(Toy.VARIABLES)  # its table + the common warnings_return_ok
+    assert layout.range == {
+        "parameter": range(0, 7),
+        "input": range(7, 10),
+        "output": range(10, 14),
+    }
+    assert [name for _, name in layout.scalars][-1] == "label"  # strings after numerics
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(name="a", causality="state", unit="1", description=""), "causality"),
-    (dict(name="a", causality="input", unit="1", description="", depends=("b",)), "only outputs"),
-    (dict(name="a", causality="output", unit="1", description="", optional="zero"),
-     "only inputs"),
-    (dict(name="a", causality="input", unit="1", description="", type="String"), "String"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(name="a", causality="state", unit="1", description=""), "causality"),
+        (
+            dict(name="a", causality="input", unit="1", description="", depends=("b",)),
+            "only outputs",
+        ),
+        (
+            dict(name="a", causality="output", unit="1", description="", optional="zero"),
+            "only inputs",
+        ),
+        (dict(name="a", causality="input", unit="1", description="", type="String"), "String"),
+    ],
+)
 def test_bad_rows_are_rejected(kwargs, message):
     with pytest.raises(ValueError, match=message):
         Var(**kwargs)
@@ -96,7 +112,7 @@ def test_state_roundtrip_is_a_deep_copy():
     m.output()
     assert m.steps == 1 and m.t == 1.0 and m.get("y").tolist() == [0.0, 0.0, 0.0]
     m.advance(1.0, 1.0)
-    assert saved[2]["steps"] == 1   # the saved copy is untouched
+    assert saved[2]["steps"] == 1  # the saved copy is untouched
 
 
 def test_bus_reads_scalars_with_their_type():
@@ -106,11 +122,14 @@ def test_bus_reads_scalars_with_their_type():
     assert bus.gain == 2.0 and bus.label == "z" and bus.inertia.shape == (2, 2)
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    (dict(required=False), TypeError, "optional='what its default means'"),
-    (dict(optional="  "), ValueError, "must say what the default means"),
-    (dict(optional=True), ValueError, "must say what the default means"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        (dict(required=False), TypeError, "optional='what its default means'"),
+        (dict(optional="  "), ValueError, "must say what the default means"),
+        (dict(optional=True), ValueError, "must say what the default means"),
+    ],
+)
 def test_an_optional_input_must_say_what_its_default_means(kwargs, error, message):
     with pytest.raises(error, match=message):
         input_("u", "N.m", "torque", **kwargs)
@@ -125,6 +144,7 @@ def test_inputs_are_required_unless_declared_optional():
 
 def test_every_shipped_input_is_required_or_says_what_its_default_means():
     from agilesat.fmus import FMUS, model_class
+
     for name in FMUS:
         for v in model_class(name).VARIABLES:
             if v.causality == "input":

@@ -132,6 +132,7 @@ Against the paper's numbers (tests/test_mission.py holds the full table of readi
   own 21 × 15 does (≤ 85 % of the time, gaps of 8.5–17.5 min).  With the Earth's rotation
   T_v is 1.0 % shorter; S is unchanged under both readings.
 """
+
 from __future__ import annotations
 
 import math
@@ -139,27 +140,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import passes
 from ..orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2, geodetic_to_ecef
+from . import passes
 
-SPEED_OF_LIGHT = 299792458.0             # m/s, exact (SI)
+SPEED_OF_LIGHT = 299792458.0  # m/s, exact (SI)
 SIDEREAL_DAY = 2.0 * math.pi / EARTH_RATE  # s, Earth rotation period 2π/ω_E
-SOLAR_DAY = 86400.0                      # s, mean solar day
+SOLAR_DAY = 86400.0  # s, mean solar day
 TROPICAL_YEAR = passes.TROPICAL_YEAR_DAYS * SOLAR_DAY  # s
 
 DEG = math.pi / 180.0
 
 # The paper's case ([Liang 2019] §1, §3, §4)
-VIDEO_SAR_ALTITUDE = 567e3               # m
-VIDEO_SAR_CARRIER = 9.6e9                # Hz
-VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG        # 下视角
-VIDEO_SAR_AZIMUTH_RESOLUTION = 3.0       # m
-VIDEO_SAR_TARGET_LAT = 33.16 * DEG       # Sasebo, geodetic
+VIDEO_SAR_ALTITUDE = 567e3  # m
+VIDEO_SAR_CARRIER = 9.6e9  # Hz
+VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG  # 下视角
+VIDEO_SAR_AZIMUTH_RESOLUTION = 3.0  # m
+VIDEO_SAR_TARGET_LAT = 33.16 * DEG  # Sasebo, geodetic
 VIDEO_SAR_TARGET_LON = 129.72 * DEG
-VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG     # β of §3
-VIDEO_SAR_STARE = 200.0                  # s, 08:08:03–08:11:23
+VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG  # β of §3
+VIDEO_SAR_STARE = 200.0  # s, 08:08:03–08:11:23
 
-_ROUND_SLACK = 1e-9                      # relative, for ceil of near-integers
+_ROUND_SLACK = 1e-9  # relative, for ceil of near-integers
 
 
 def _ceil(x: float) -> int:
@@ -168,8 +169,11 @@ def _ceil(x: float) -> int:
 
 def _inclination(altitude: float, inclination: float | None) -> float:
     """The given inclination, or the sun-synchronous one at this altitude (a = R_e + h)."""
-    return passes.sun_synchronous_inclination(WGS84_A + altitude) if inclination is None \
+    return (
+        passes.sun_synchronous_inclination(WGS84_A + altitude)
+        if inclination is None
         else inclination
+    )
 
 
 def _check(condition: bool, message: str) -> None:
@@ -181,14 +185,17 @@ def _check(condition: bool, message: str) -> None:
 # Orbit helpers
 # --------------------------------------------------------------------------------------
 
-def circular_speed(altitude: float, *, earth_radius: float = WGS84_A,
-                   mu: float = MU_EARTH) -> float:
+
+def circular_speed(
+    altitude: float, *, earth_radius: float = WGS84_A, mu: float = MU_EARTH
+) -> float:
     """Inertial speed √(μ/r) of a circular orbit, r = earth_radius + altitude."""
     return math.sqrt(mu / (earth_radius + altitude))
 
 
-def orbital_period(altitude: float, *, earth_radius: float = WGS84_A,
-                   mu: float = MU_EARTH) -> float:
+def orbital_period(
+    altitude: float, *, earth_radius: float = WGS84_A, mu: float = MU_EARTH
+) -> float:
     """Keplerian period 2π √(r³/μ) of a circular orbit, r = earth_radius + altitude."""
     return 2.0 * math.pi * math.sqrt((earth_radius + altitude) ** 3 / mu)
 
@@ -208,6 +215,7 @@ def geocentric_latitude(latitude: float) -> float:
 # Slant range and platform velocity
 # --------------------------------------------------------------------------------------
 
+
 def look_to_incidence(look_angle: float, r: float, R: float) -> tuple[float, float]:
     """(incidence angle η at the ground, Earth central angle α) for an off-nadir look angle
     θ from radius r onto a sphere of radius R: sin η = r sin θ / R, α = η − θ."""
@@ -224,21 +232,22 @@ def incidence_to_look(incidence: float, r: float, R: float) -> tuple[float, floa
     return theta, incidence - theta
 
 
-def _ellipsoid_slant_range(altitude: float, look_angle: float, latitude: float,
-                           inclination: float, right_looking: bool) -> float:
+def _ellipsoid_slant_range(
+    altitude: float, look_angle: float, latitude: float, inclination: float, right_looking: bool
+) -> float:
     """Ray from the satellite (circular orbit r = a + h, broadside) at ``look_angle`` off
     −r̂ towards ∓ orbit normal, to the WGS-84 ellipsoid; the satellite's position along
     its orbit is iterated until the ray lands at the geodetic ``latitude``."""
     r = WGS84_A + altitude
     si, ci = math.sin(inclination), math.cos(inclination)
-    normal = np.array([0.0, -si, ci])                            # ĥ for Ω = 0
-    side = -1.0 if right_looking else 1.0                        # right of the velocity = −ĥ
-    w = np.array([1.0, 1.0, 1.0 / (1.0 - WGS84_E2)])            # (x/a)² + (y/a)² + (z/b)² = 1
-    lat_s = geocentric_latitude(latitude)                        # satellite latitude, first guess
+    normal = np.array([0.0, -si, ci])  # ĥ for Ω = 0
+    side = -1.0 if right_looking else 1.0  # right of the velocity = −ĥ
+    w = np.array([1.0, 1.0, 1.0 / (1.0 - WGS84_E2)])  # (x/a)² + (y/a)² + (z/b)² = 1
+    lat_s = geocentric_latitude(latitude)  # satellite latitude, first guess
     for _ in range(50):
         s = math.sin(lat_s) / si
         _check(abs(s) <= 1.0, "the orbit never flies over this latitude")
-        u = math.asin(s)                                         # ascending pass
+        u = math.asin(s)  # ascending pass
         rhat = np.array([math.cos(u), ci * math.sin(u), si * math.sin(u)])
         d = -math.cos(look_angle) * rhat + side * math.sin(look_angle) * normal
         p0 = r * rhat
@@ -256,18 +265,27 @@ def _ellipsoid_slant_range(altitude: float, look_angle: float, latitude: float,
     return rng
 
 
-def slant_range(altitude: float, look_angle: float, model: str | float = "sphere", *,
-                look_angle_kind: str = "look", earth_radius: float = WGS84_A,
-                latitude: float = VIDEO_SAR_TARGET_LAT, inclination: float | None = None,
-                right_looking: bool = True) -> float:
+def slant_range(
+    altitude: float,
+    look_angle: float,
+    model: str | float = "sphere",
+    *,
+    look_angle_kind: str = "look",
+    earth_radius: float = WGS84_A,
+    latitude: float = VIDEO_SAR_TARGET_LAT,
+    inclination: float | None = None,
+    right_looking: bool = True,
+) -> float:
     """Closest (zero-Doppler) slant range Rc, m, for the models listed in the module doc.
 
     ``look_angle_kind="incidence"`` takes ``look_angle`` as the incidence angle at the
     ground and converts it on the sphere of ``earth_radius`` first.  ``latitude`` and
     ``inclination`` (default: sun-synchronous) are used by ``"ellipsoid"`` only.
     """
-    _check(look_angle_kind in ("look", "incidence"),
-           f"look_angle_kind must be 'look' or 'incidence', got {look_angle_kind!r}")
+    _check(
+        look_angle_kind in ("look", "incidence"),
+        f"look_angle_kind must be 'look' or 'incidence', got {look_angle_kind!r}",
+    )
     if not isinstance(model, str):
         return float(model)
     r = earth_radius + altitude
@@ -282,15 +300,21 @@ def slant_range(altitude: float, look_angle: float, model: str | float = "sphere
     if model == "ellipsoid":
         inc = _inclination(altitude, inclination)
         return _ellipsoid_slant_range(altitude, theta, latitude, inc, right_looking)
-    raise ValueError(f"unknown slant-range model {model!r}: 'sphere', 'ellipsoid', "
-                     "'flat' or a number")
+    raise ValueError(
+        f"unknown slant-range model {model!r}: 'sphere', 'ellipsoid', 'flat' or a number"
+    )
 
 
-def platform_velocity(altitude: float, model: str | float = "inertial", *,
-                      earth_radius: float = WGS84_A, mu: float = MU_EARTH,
-                      latitude: float = VIDEO_SAR_TARGET_LAT,
-                      inclination: float | None = None,
-                      ground_radius: float | None = None) -> float:
+def platform_velocity(
+    altitude: float,
+    model: str | float = "inertial",
+    *,
+    earth_radius: float = WGS84_A,
+    mu: float = MU_EARTH,
+    latitude: float = VIDEO_SAR_TARGET_LAT,
+    inclination: float | None = None,
+    ground_radius: float | None = None,
+) -> float:
     """The velocity V (the paper's V_r), m/s, for the models listed in the module doc.
 
     ``ground_radius`` (default ``earth_radius``) is the radius R_t of the sphere on which
@@ -312,22 +336,28 @@ def platform_velocity(altitude: float, model: str | float = "inertial", *,
         inc = _inclination(altitude, inclination)
         we = EARTH_RATE
         lat_c = geocentric_latitude(latitude)
-        return math.sqrt(vs * vs - 2.0 * vs * we * r * math.cos(inc)
-                         + (we * r * math.cos(lat_c)) ** 2)
-    raise ValueError(f"unknown velocity model {model!r}: 'inertial', 'earth_fixed', "
-                     "'effective', 'ground' or a number")
+        return math.sqrt(
+            vs * vs - 2.0 * vs * we * r * math.cos(inc) + (we * r * math.cos(lat_c)) ** 2
+        )
+    raise ValueError(
+        f"unknown velocity model {model!r}: 'inertial', 'earth_fixed', "
+        "'effective', 'ground' or a number"
+    )
 
 
 # --------------------------------------------------------------------------------------
 # Frame overlap, eqs 1–5
 # --------------------------------------------------------------------------------------
 
-def aperture_length(t, wavelength: float, resolution: float, slant_range_c: float,
-                    velocity: float):
+
+def aperture_length(t, wavelength: float, resolution: float, slant_range_c: float, velocity: float):
     """Eq 3: along-track data length L(t) = λ (Rc² + V² t²)^{3/2} / (2 ρ_a Rc²), m."""
     t = np.asarray(t, dtype=float)
-    return wavelength * (slant_range_c**2 + (velocity * t) ** 2) ** 1.5 / (
-        2.0 * resolution * slant_range_c**2)
+    return (
+        wavelength
+        * (slant_range_c**2 + (velocity * t) ** 2) ** 1.5
+        / (2.0 * resolution * slant_range_c**2)
+    )
 
 
 @dataclass(frozen=True)
@@ -337,40 +367,46 @@ class OverlapResult:
     Array fields follow the shape of ``frame_rate`` (and ``t_i``) broadcast together.
     """
 
-    frame_rate: np.ndarray              # Hz
-    overlap: np.ndarray                 # α_i, eq 5 (fraction, 0.57 = 57 %)
-    frame_period: np.ndarray            # T_f = 1 / frame rate, s
-    t_i: np.ndarray                     # data-centre time of frame i from zero Doppler, s
-    wavelength: float                   # λ = c / f, m
-    resolution: float                   # ρ_a, m
-    altitude: float                     # h = a − R_e, m
-    look_angle: float                   # off-nadir at the satellite (sphere of R_e), rad
-    incidence_angle: float              # at the ground (sphere of R_e), rad
-    velocity: float                     # V used as the paper's V_r, m/s
+    frame_rate: np.ndarray  # Hz
+    overlap: np.ndarray  # α_i, eq 5 (fraction, 0.57 = 57 %)
+    frame_period: np.ndarray  # T_f = 1 / frame rate, s
+    t_i: np.ndarray  # data-centre time of frame i from zero Doppler, s
+    wavelength: float  # λ = c / f, m
+    resolution: float  # ρ_a, m
+    altitude: float  # h = a − R_e, m
+    look_angle: float  # off-nadir at the satellite (sphere of R_e), rad
+    incidence_angle: float  # at the ground (sphere of R_e), rad
+    velocity: float  # V used as the paper's V_r, m/s
     velocity_model: str
-    slant_range: float                  # Rc, m
+    slant_range: float  # Rc, m
     slant_range_model: str
-    squint: np.ndarray                  # θc_i, rad
-    aperture_angle: np.ndarray          # θ_i = λ / (2 ρ_a cos θc_i), rad
-    aperture_length: np.ndarray         # L_i, m (eq 3)
+    squint: np.ndarray  # θc_i, rad
+    aperture_angle: np.ndarray  # θ_i = λ / (2 ρ_a cos θc_i), rad
+    aperture_length: np.ndarray  # L_i, m (eq 3)
     previous_aperture_length: np.ndarray  # L_{i−1} = L(t_i − T_f), m
-    frame_spacing: np.ndarray           # ΔL = V T_f, m
-    overlap_length: np.ndarray          # C_L, m (eq 4)
-    aperture_time: np.ndarray           # L_i / V, s
-    doppler_bandwidth: np.ndarray       # B_a, eq 2 exact form, Hz
+    frame_spacing: np.ndarray  # ΔL = V T_f, m
+    overlap_length: np.ndarray  # C_L, m (eq 4)
+    aperture_time: np.ndarray  # L_i / V, s
+    doppler_bandwidth: np.ndarray  # B_a, eq 2 exact form, Hz
     overlap_broadside_linear: np.ndarray  # 1 − T_f / T_a(t_i = 0), the small-T_f form
 
 
-def overlap_ratio(frame_rate, *, carrier_frequency: float = VIDEO_SAR_CARRIER,
-                  look_angle: float = VIDEO_SAR_LOOK_ANGLE,
-                  resolution: float = VIDEO_SAR_AZIMUTH_RESOLUTION,
-                  altitude: float = VIDEO_SAR_ALTITUDE, t_i=0.0,
-                  velocity: str | float = "inertial",
-                  slant_range_model: str | float = "ellipsoid",
-                  look_angle_kind: str = "look",
-                  latitude: float = VIDEO_SAR_TARGET_LAT,
-                  inclination: float | None = None,
-                  earth_radius: float = WGS84_A, mu: float = MU_EARTH) -> OverlapResult:
+def overlap_ratio(
+    frame_rate,
+    *,
+    carrier_frequency: float = VIDEO_SAR_CARRIER,
+    look_angle: float = VIDEO_SAR_LOOK_ANGLE,
+    resolution: float = VIDEO_SAR_AZIMUTH_RESOLUTION,
+    altitude: float = VIDEO_SAR_ALTITUDE,
+    t_i=0.0,
+    velocity: str | float = "inertial",
+    slant_range_model: str | float = "ellipsoid",
+    look_angle_kind: str = "look",
+    latitude: float = VIDEO_SAR_TARGET_LAT,
+    inclination: float | None = None,
+    earth_radius: float = WGS84_A,
+    mu: float = MU_EARTH,
+) -> OverlapResult:
     """Overlap ratio α_i of consecutive video frames versus frame rate (eqs 1–5).
 
     Reading (see the module doc for the derivation): straight-line geometry with closest
@@ -385,8 +421,10 @@ def overlap_ratio(frame_rate, *, carrier_frequency: float = VIDEO_SAR_CARRIER,
     """
     fr = np.asarray(frame_rate, dtype=float)
     _check(bool(np.all(fr > 0)), "frame_rate must be > 0")
-    _check(carrier_frequency > 0 and resolution > 0 and altitude > 0,
-           "carrier_frequency, resolution and altitude must be > 0")
+    _check(
+        carrier_frequency > 0 and resolution > 0 and altitude > 0,
+        "carrier_frequency, resolution and altitude must be > 0",
+    )
     lam = SPEED_OF_LIGHT / carrier_frequency
     r = earth_radius + altitude
     if look_angle_kind == "incidence":
@@ -395,13 +433,27 @@ def overlap_ratio(frame_rate, *, carrier_frequency: float = VIDEO_SAR_CARRIER,
     else:
         look = look_angle
         inc, _ = look_to_incidence(look_angle, r, earth_radius)
-    rc = slant_range(altitude, look_angle, slant_range_model, look_angle_kind=look_angle_kind,
-                     earth_radius=earth_radius, latitude=latitude, inclination=inclination)
-    ground_radius = (geocentric_radius(latitude) if slant_range_model == "ellipsoid"
-                     else earth_radius)
-    v = platform_velocity(altitude, velocity, earth_radius=earth_radius, mu=mu,
-                          latitude=latitude, inclination=inclination,
-                          ground_radius=ground_radius)
+    rc = slant_range(
+        altitude,
+        look_angle,
+        slant_range_model,
+        look_angle_kind=look_angle_kind,
+        earth_radius=earth_radius,
+        latitude=latitude,
+        inclination=inclination,
+    )
+    ground_radius = (
+        geocentric_radius(latitude) if slant_range_model == "ellipsoid" else earth_radius
+    )
+    v = platform_velocity(
+        altitude,
+        velocity,
+        earth_radius=earth_radius,
+        mu=mu,
+        latitude=latitude,
+        inclination=inclination,
+        ground_radius=ground_radius,
+    )
     tf = 1.0 / fr
     ti = np.asarray(t_i, dtype=float)
     tf, ti = np.broadcast_arrays(tf, ti)
@@ -414,52 +466,70 @@ def overlap_ratio(frame_rate, *, carrier_frequency: float = VIDEO_SAR_CARRIER,
     bandwidth = 4.0 * v * np.cos(squint) * np.sin(theta_i / 2.0) / lam
     t_a0 = lam * rc / (2.0 * resolution * v)
     return OverlapResult(
-        frame_rate=fr * np.ones_like(tf), overlap=c_l / L_i, frame_period=tf, t_i=ti,
-        wavelength=lam, resolution=resolution, altitude=altitude, look_angle=look,
-        incidence_angle=inc, velocity=v,
+        frame_rate=fr * np.ones_like(tf),
+        overlap=c_l / L_i,
+        frame_period=tf,
+        t_i=ti,
+        wavelength=lam,
+        resolution=resolution,
+        altitude=altitude,
+        look_angle=look,
+        incidence_angle=inc,
+        velocity=v,
         velocity_model=velocity if isinstance(velocity, str) else "given",
         slant_range=rc,
-        slant_range_model=(slant_range_model if isinstance(slant_range_model, str)
-                           else "given"),
-        squint=squint, aperture_angle=theta_i, aperture_length=L_i,
-        previous_aperture_length=L_prev, frame_spacing=spacing, overlap_length=c_l,
-        aperture_time=L_i / v, doppler_bandwidth=bandwidth,
-        overlap_broadside_linear=1.0 - tf / t_a0)
+        slant_range_model=(slant_range_model if isinstance(slant_range_model, str) else "given"),
+        squint=squint,
+        aperture_angle=theta_i,
+        aperture_length=L_i,
+        previous_aperture_length=L_prev,
+        frame_spacing=spacing,
+        overlap_length=c_l,
+        aperture_time=L_i / v,
+        doppler_bandwidth=bandwidth,
+        overlap_broadside_linear=1.0 - tf / t_a0,
+    )
 
 
 # --------------------------------------------------------------------------------------
 # Walker sizing, eqs 14–20
 # --------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class WalkerSizing:
     """Walker-constellation size of eqs 14–20 with its intermediate quantities (SI, rad)."""
 
-    altitude: float                 # h, m
-    radius: float                   # r = R_e + h, m
-    earth_radius: float             # R_e, m
-    beta: float                     # the β given, rad
-    beta_kind: str                  # "incidence" (at the ground, eq 14) or "look"
-    incidence_angle: float          # η at the edge of visibility, rad
-    look_angle: float               # θ at the edge of visibility, rad
-    central_angle: float            # α, half the visibility arc, rad (eq 14)
-    edge_slant_range: float         # satellite–target distance at the edge, m
-    orbit_rate: float               # ω = √(μ/r³), rad/s
-    period: float                   # T, s
-    visibility_time: float          # T_v = 2α/ω, s (eq 15)
+    altitude: float  # h, m
+    radius: float  # r = R_e + h, m
+    earth_radius: float  # R_e, m
+    beta: float  # the β given, rad
+    beta_kind: str  # "incidence" (at the ground, eq 14) or "look"
+    incidence_angle: float  # η at the edge of visibility, rad
+    look_angle: float  # θ at the edge of visibility, rad
+    central_angle: float  # α, half the visibility arc, rad (eq 14)
+    edge_slant_range: float  # satellite–target distance at the edge, m
+    orbit_rate: float  # ω = √(μ/r³), rad/s
+    period: float  # T, s
+    visibility_time: float  # T_v = 2α/ω, s (eq 15)
     satellites_per_plane_exact: float  # T / T_v
-    satellites_per_plane: int       # S = ⌈T/T_v⌉ (eq 16)
-    earth_period: float             # T_e, s
-    track_shift: float              # Δφ = −2π T/T_e, rad (eq 17)
-    planes_exact: float             # 2π/|Δφ| = T_e/T
-    planes: int                     # P (eq 19), rounded up
-    satellites: int                 # N = P S (eq 20)
+    satellites_per_plane: int  # S = ⌈T/T_v⌉ (eq 16)
+    earth_period: float  # T_e, s
+    track_shift: float  # Δφ = −2π T/T_e, rad (eq 17)
+    planes_exact: float  # 2π/|Δφ| = T_e/T
+    planes: int  # P (eq 19), rounded up
+    satellites: int  # N = P S (eq 20)
 
 
-def walker_sizing(altitude: float = VIDEO_SAR_ALTITUDE,
-                  max_incidence: float = VIDEO_SAR_MAX_INCIDENCE, *,
-                  beta_kind: str = "incidence", earth_period: float = SIDEREAL_DAY,
-                  earth_radius: float = WGS84_A, mu: float = MU_EARTH) -> WalkerSizing:
+def walker_sizing(
+    altitude: float = VIDEO_SAR_ALTITUDE,
+    max_incidence: float = VIDEO_SAR_MAX_INCIDENCE,
+    *,
+    beta_kind: str = "incidence",
+    earth_period: float = SIDEREAL_DAY,
+    earth_radius: float = WGS84_A,
+    mu: float = MU_EARTH,
+) -> WalkerSizing:
     """Walker constellation for continuous visibility of one target (eqs 14–20).
 
     ``beta_kind="incidence"`` (default) takes β as the incidence angle at the ground,
@@ -468,10 +538,11 @@ def walker_sizing(altitude: float = VIDEO_SAR_ALTITUDE,
     Earth of radius R_e (WGS-84 a), circular orbit r = R_e + h, Earth rotation ignored in
     T_v (as in the paper), T_e = sidereal day by default.  S and P are rounded up.
     """
-    _check(beta_kind in ("incidence", "look"),
-           f"beta_kind must be 'incidence' or 'look', got {beta_kind!r}")
-    _check(altitude > 0 and 0 < max_incidence < math.pi / 2,
-           "need altitude > 0 and 0 < β < 90°")
+    _check(
+        beta_kind in ("incidence", "look"),
+        f"beta_kind must be 'incidence' or 'look', got {beta_kind!r}",
+    )
+    _check(altitude > 0 and 0 < max_incidence < math.pi / 2, "need altitude > 0 and 0 < β < 90°")
     r = earth_radius + altitude
     if beta_kind == "incidence":
         eta = max_incidence
@@ -488,17 +559,32 @@ def walker_sizing(altitude: float = VIDEO_SAR_ALTITUDE,
     p_exact = 2.0 * math.pi / abs(shift)
     S, P = _ceil(s_exact), _ceil(p_exact)
     return WalkerSizing(
-        altitude=altitude, radius=r, earth_radius=earth_radius, beta=max_incidence,
-        beta_kind=beta_kind, incidence_angle=eta, look_angle=theta, central_angle=alpha,
-        edge_slant_range=edge, orbit_rate=omega, period=period, visibility_time=tv,
-        satellites_per_plane_exact=s_exact, satellites_per_plane=S,
-        earth_period=earth_period, track_shift=shift, planes_exact=p_exact, planes=P,
-        satellites=P * S)
+        altitude=altitude,
+        radius=r,
+        earth_radius=earth_radius,
+        beta=max_incidence,
+        beta_kind=beta_kind,
+        incidence_angle=eta,
+        look_angle=theta,
+        central_angle=alpha,
+        edge_slant_range=edge,
+        orbit_rate=omega,
+        period=period,
+        visibility_time=tv,
+        satellites_per_plane_exact=s_exact,
+        satellites_per_plane=S,
+        earth_period=earth_period,
+        track_shift=shift,
+        planes_exact=p_exact,
+        planes=P,
+        satellites=P * S,
+    )
 
 
 # --------------------------------------------------------------------------------------
 # Independent numerical checks
 # --------------------------------------------------------------------------------------
+
 
 def _angles_at_target(sat, tgt, kind: str):
     """Incidence (angle of the line of sight from the target's vertical) or look angle
@@ -520,21 +606,27 @@ def _angles_at_target(sat, tgt, kind: str):
 class VisibilityResult:
     """Numerically found visibility interval of an overflown target."""
 
-    start: float                    # s, relative to the overflight (satellite at zenith)
-    end: float                      # s
-    duration: float                 # end − start, s
+    start: float  # s, relative to the overflight (satellite at zenith)
+    end: float  # s
+    duration: float  # end − start, s
     earth_rotation: bool
-    inclination: float              # rad
-    latitude: float                 # geocentric latitude of the target (sphere), rad
+    inclination: float  # rad
+    latitude: float  # geocentric latitude of the target (sphere), rad
 
 
-def visibility_time(altitude: float = VIDEO_SAR_ALTITUDE,
-                    max_angle: float = VIDEO_SAR_MAX_INCIDENCE, *,
-                    angle_kind: str = "incidence", earth_rotation: bool = True,
-                    latitude: float = VIDEO_SAR_TARGET_LAT,
-                    inclination: float | None = None, ascending: bool = True,
-                    earth_radius: float = WGS84_A, mu: float = MU_EARTH,
-                    tol: float = 1e-6) -> VisibilityResult:
+def visibility_time(
+    altitude: float = VIDEO_SAR_ALTITUDE,
+    max_angle: float = VIDEO_SAR_MAX_INCIDENCE,
+    *,
+    angle_kind: str = "incidence",
+    earth_rotation: bool = True,
+    latitude: float = VIDEO_SAR_TARGET_LAT,
+    inclination: float | None = None,
+    ascending: bool = True,
+    earth_radius: float = WGS84_A,
+    mu: float = MU_EARTH,
+    tol: float = 1e-6,
+) -> VisibilityResult:
     """Time a target stays within ``max_angle`` (incidence at the target or look angle at
     the satellite) during an overhead pass, found by bisection on the actual geometry.
 
@@ -560,8 +652,9 @@ def visibility_time(altitude: float = VIDEO_SAR_ALTITUDE,
         u = u0 + n * t
         sat = r * np.array([math.cos(u), ci * math.sin(u), si * math.sin(u)])
         c, s = math.cos(we * t), math.sin(we * t)
-        tgt = np.array([c * target0[0] - s * target0[1], s * target0[0] + c * target0[1],
-                        target0[2]])
+        tgt = np.array(
+            [c * target0[0] - s * target0[1], s * target0[0] + c * target0[1], target0[2]]
+        )
         a = _angles_at_target(sat, tgt, angle_kind)
         return math.inf if np.isnan(a) else float(a)
 
@@ -582,9 +675,14 @@ def visibility_time(altitude: float = VIDEO_SAR_ALTITUDE,
 
     _check(angle(0.0) <= max_angle, "target not visible at the overflight")
     start, end = edge(-1.0), edge(1.0)
-    return VisibilityResult(start=start, end=end, duration=end - start,
-                            earth_rotation=earth_rotation, inclination=inc,
-                            latitude=latitude)
+    return VisibilityResult(
+        start=start,
+        end=end,
+        duration=end - start,
+        earth_rotation=earth_rotation,
+        inclination=inc,
+        latitude=latitude,
+    )
 
 
 @dataclass(frozen=True)
@@ -594,23 +692,31 @@ class CoverageResult:
     satellites_per_plane: int
     planes: int
     phasing: int
-    covered_fraction: float         # fraction of sampled instants with ≥ 1 satellite
-    longest_gap: float              # s (sampling resolution: ``step``)
+    covered_fraction: float  # fraction of sampled instants with ≥ 1 satellite
+    longest_gap: float  # s (sampling resolution: ``step``)
     min_visible: int
     mean_visible: float
-    duration: float                 # s simulated
-    step: float                     # s
+    duration: float  # s simulated
+    step: float  # s
 
 
-def walker_coverage(satellites_per_plane: int, planes: int, phasing: int = 0, *,
-                    altitude: float = VIDEO_SAR_ALTITUDE,
-                    max_angle: float = VIDEO_SAR_MAX_INCIDENCE,
-                    angle_kind: str = "incidence", inclination: float | None = None,
-                    latitude: float = VIDEO_SAR_TARGET_LAT,
-                    longitude: float = VIDEO_SAR_TARGET_LON,
-                    duration: float = SOLAR_DAY, step: float = 10.0,
-                    earth_rotation: bool = True, earth_radius: float = WGS84_A,
-                    mu: float = MU_EARTH) -> CoverageResult:
+def walker_coverage(
+    satellites_per_plane: int,
+    planes: int,
+    phasing: int = 0,
+    *,
+    altitude: float = VIDEO_SAR_ALTITUDE,
+    max_angle: float = VIDEO_SAR_MAX_INCIDENCE,
+    angle_kind: str = "incidence",
+    inclination: float | None = None,
+    latitude: float = VIDEO_SAR_TARGET_LAT,
+    longitude: float = VIDEO_SAR_TARGET_LON,
+    duration: float = SOLAR_DAY,
+    step: float = 10.0,
+    earth_rotation: bool = True,
+    earth_radius: float = WGS84_A,
+    mu: float = MU_EARTH,
+) -> CoverageResult:
     """Simulate a Walker-delta constellation S·P/P/F (RAAN 2πk/P, in-plane 2πj/S +
     2πFk/(SP)) on circular orbits (two-body, no J2) over a spherical rotating Earth and
     count, every ``step`` seconds, the satellites that see the target within ``max_angle``
@@ -633,24 +739,34 @@ def walker_coverage(satellites_per_plane: int, planes: int, phasing: int = 0, *,
     cO, sO = np.cos(raan), np.sin(raan)
     ci, si = math.cos(inc), math.sin(inc)
     for start in range(0, t.size, 512):
-        tt = t[start:start + 512, None]
+        tt = t[start : start + 512, None]
         u = u0[None, :] + n * tt
         cu, su = np.cos(u), np.sin(u)
         sat = r * np.stack([cO * cu - sO * ci * su, sO * cu + cO * ci * su, si * su], axis=-1)
         lon = longitude + we * tt[:, 0]
-        tgt = earth_radius * np.stack([math.cos(lat_c) * np.cos(lon),
-                                       math.cos(lat_c) * np.sin(lon),
-                                       np.full(lon.shape, math.sin(lat_c))], axis=-1)
+        tgt = earth_radius * np.stack(
+            [
+                math.cos(lat_c) * np.cos(lon),
+                math.cos(lat_c) * np.sin(lon),
+                np.full(lon.shape, math.sin(lat_c)),
+            ],
+            axis=-1,
+        )
         ang = _angles_at_target(sat, tgt[:, None, :], angle_kind)
-        visible[start:start + 512] = np.sum(np.nan_to_num(ang, nan=np.inf) <= max_angle,
-                                            axis=1)
+        visible[start : start + 512] = np.sum(np.nan_to_num(ang, nan=np.inf) <= max_angle, axis=1)
     covered = visible > 0
     longest = run = 0
     for c in covered:
         run = 0 if c else run + 1
         longest = max(longest, run)
     return CoverageResult(
-        satellites_per_plane=S, planes=P, phasing=phasing,
-        covered_fraction=float(np.mean(covered)), longest_gap=longest * step,
-        min_visible=int(visible.min()), mean_visible=float(visible.mean()),
-        duration=float(t[-1]), step=step)
+        satellites_per_plane=S,
+        planes=P,
+        phasing=phasing,
+        covered_fraction=float(np.mean(covered)),
+        longest_gap=longest * step,
+        min_visible=int(visible.min()),
+        mean_visible=float(visible.mean()),
+        duration=float(t[-1]),
+        step=step,
+    )

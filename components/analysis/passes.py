@@ -55,6 +55,7 @@ the target u_T has cos u_T > 0 is the ascending pass, the other the descending o
 u = u_T.  Newton then adds Earth rotation, oblateness of the target position and the J2
 velocity terms (3–5 iterations, to 1e-13 rad).
 """
+
 from __future__ import annotations
 
 import datetime
@@ -63,10 +64,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import ModelError
 from ..ephemeris import DAY, format_epoch, gmst, parse_epoch, wrap_2pi
-from ..orbit_environment import (MU_EARTH, WGS84_A, OrbitEnvironment, geodetic_to_ecef,
-                                 secular_j2_rates)
+from ..model import ModelError
+from ..orbit_environment import (
+    MU_EARTH,
+    WGS84_A,
+    OrbitEnvironment,
+    geodetic_to_ecef,
+    secular_j2_rates,
+)
 
 #: mean tropical year (days), IERS / Astronomical Almanac value for J2000
 TROPICAL_YEAR_DAYS = 365.2421897
@@ -78,15 +84,15 @@ SUN_SYNCHRONOUS_RATE = 2.0 * math.pi / (TROPICAL_YEAR_DAYS * DAY)
 class PassGeometry:
     """Satellite-target geometry at one time (SI units, angles in rad)."""
 
-    time: float             # s, simulation time
-    look_angle: float       # off-nadir angle of the target at the satellite (geocentric nadir)
-    slant_range: float      # m, |r_I − r_T_I|
-    range_rate: float       # m/s, d|ρ|/dt (0 at zero Doppler)
-    squint: float           # asin(ρ̂·v̂_rel), 0 at zero Doppler
+    time: float  # s, simulation time
+    look_angle: float  # off-nadir angle of the target at the satellite (geocentric nadir)
+    slant_range: float  # m, |r_I − r_T_I|
+    range_rate: float  # m/s, d|ρ|/dt (0 at zero Doppler)
+    squint: float  # asin(ρ̂·v̂_rel), 0 at zero Doppler
     incidence_angle: float  # at the target, from its WGS-84 normal
-    elevation: float        # of the satellite seen from the target, 90° − incidence
-    side: str               # "right" or "left" of the satellite's velocity
-    ascending: bool         # satellite moving north (v_z > 0)
+    elevation: float  # of the satellite seen from the target, 90° − incidence
+    side: str  # "right" or "left" of the satellite's velocity
+    ascending: bool  # satellite moving north (v_z > 0)
 
     @property
     def visible(self) -> bool:
@@ -103,16 +109,24 @@ class _Orbit:
         self.model = OrbitEnvironment(**parameters).start(0.0)
         p = self.model.p
         lat, lon = p.target_lat, p.target_lon
-        self.normal_E = (math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon),
-                         math.sin(lat))
+        self.normal_E = (
+            math.cos(lat) * math.cos(lon),
+            math.cos(lat) * math.sin(lon),
+            math.sin(lat),
+        )
 
     def outputs(self, t: float):
         m = self.model
         m.step(0.0, t)
         m.output()
         y = m.y
-        return (np.array(y.r_I), np.array(y.v_I), np.array(y.r_T_I), np.array(y.v_T_I),
-                y.earth_angle)
+        return (
+            np.array(y.r_I),
+            np.array(y.v_I),
+            np.array(y.r_T_I),
+            np.array(y.v_T_I),
+            y.earth_angle,
+        )
 
     def doppler(self, t: float) -> float:
         """ρ·v_rel (m²/s), the zero-Doppler function."""
@@ -131,8 +145,7 @@ def _rotate_to_inertial(vector_E, theta: float) -> np.ndarray:
     return np.array([c * x - s * y, s * x + c * y, z])
 
 
-def look_geometry(r_I, v_I, r_T_I, v_T_I, target_normal_I=None, time: float = 0.0
-                  ) -> PassGeometry:
+def look_geometry(r_I, v_I, r_T_I, v_T_I, target_normal_I=None, time: float = 0.0) -> PassGeometry:
     """Look angle, slant range, range rate, squint, incidence, side from the states.
 
     ``target_normal_I``: the target's ellipsoid normal in I (default: geocentric r̂_T,
@@ -143,18 +156,29 @@ def look_geometry(r_I, v_I, r_T_I, v_T_I, target_normal_I=None, time: float = 0.
     v_rel = v - vT
     slant = float(np.linalg.norm(rho))
     r_hat = r / np.linalg.norm(r)
-    los = -rho / slant                                    # satellite to target
+    los = -rho / slant  # satellite to target
     look = math.acos(min(1.0, max(-1.0, float(-r_hat @ los))))
     rate = float(rho @ v_rel) / slant
     squint = math.asin(min(1.0, max(-1.0, rate / float(np.linalg.norm(v_rel)))))
-    normal = rT / np.linalg.norm(rT) if target_normal_I is None else np.asarray(
-        target_normal_I, dtype=float) / np.linalg.norm(target_normal_I)
+    normal = (
+        rT / np.linalg.norm(rT)
+        if target_normal_I is None
+        else np.asarray(target_normal_I, dtype=float) / np.linalg.norm(target_normal_I)
+    )
     incidence = math.acos(min(1.0, max(-1.0, float(normal @ rho) / slant)))
     h = np.cross(r, v)
     side = "right" if float(los @ -h) > 0.0 else "left"  # y_O = −ĥ is to the right
-    return PassGeometry(time=float(time), look_angle=look, slant_range=slant, range_rate=rate,
-                        squint=squint, incidence_angle=incidence,
-                        elevation=math.pi / 2 - incidence, side=side, ascending=bool(v[2] > 0))
+    return PassGeometry(
+        time=float(time),
+        look_angle=look,
+        slant_range=slant,
+        range_rate=rate,
+        squint=squint,
+        incidence_angle=incidence,
+        elevation=math.pi / 2 - incidence,
+        side=side,
+        ascending=bool(v[2] > 0),
+    )
 
 
 def _illinois(f, a: float, b: float, fa: float, fb: float, tol: float) -> float:
@@ -182,9 +206,16 @@ def _illinois(f, a: float, b: float, fa: float, fb: float, tol: float) -> float:
     raise ModelError(f"zero-Doppler search did not converge in [{a}, {b}]")
 
 
-def find_passes(parameters: dict, t_start: float = 0.0, t_stop: float = DAY, *,
-                target=None, grid: float = 30.0, time_tol: float = 1e-7,
-                visible_only: bool = True) -> list[PassGeometry]:
+def find_passes(
+    parameters: dict,
+    t_start: float = 0.0,
+    t_stop: float = DAY,
+    *,
+    target=None,
+    grid: float = 30.0,
+    time_tol: float = 1e-7,
+    visible_only: bool = True,
+) -> list[PassGeometry]:
     """Every closest approach (range minimum, zero Doppler) to the target in the window.
 
     ``parameters``: OrbitEnvironment parameters (classical elements or a TLE, epoch,
@@ -202,41 +233,61 @@ def find_passes(parameters: dict, t_start: float = 0.0, t_stop: float = DAY, *,
     passes = []
     for k in range(n - 1):
         fa, fb = values[k], values[k + 1]
-        if fa < 0.0 <= fb:                       # − to +: a range minimum in (t_k, t_k+1]
-            t = times[k + 1] if fb == 0.0 else _illinois(orbit.doppler, times[k],
-                                                         times[k + 1], fa, fb, time_tol)
+        if fa < 0.0 <= fb:  # − to +: a range minimum in (t_k, t_k+1]
+            t = (
+                times[k + 1]
+                if fb == 0.0
+                else _illinois(orbit.doppler, times[k], times[k + 1], fa, fb, time_tol)
+            )
             geometry = orbit.geometry(t)
             if geometry.visible or not visible_only:
                 passes.append(geometry)
     return passes
 
 
-def find_pass(parameters: dict, t_start: float = 0.0, t_stop: float = DAY, *, target=None,
-              grid: float = 30.0, time_tol: float = 1e-7) -> PassGeometry:
+def find_pass(
+    parameters: dict,
+    t_start: float = 0.0,
+    t_stop: float = DAY,
+    *,
+    target=None,
+    grid: float = 30.0,
+    time_tol: float = 1e-7,
+) -> PassGeometry:
     """The closest approach to the target in the window: of the visible zero-Doppler
     range minima (see :func:`find_passes`), the one with the smallest slant range.
     ModelError if the target is never visible at a range minimum in the window."""
-    passes = find_passes(parameters, t_start, t_stop, target=target, grid=grid,
-                         time_tol=time_tol)
+    passes = find_passes(parameters, t_start, t_stop, target=target, grid=grid, time_tol=time_tol)
     if not passes:
         raise ModelError(f"no visible pass over the target in [{t_start}, {t_stop}] s")
     return min(passes, key=lambda g: g.slant_range)
 
 
-def sun_synchronous_inclination(semi_major_axis: float, eccentricity: float = 0.0,
-                                mu: float = MU_EARTH) -> float:
+def sun_synchronous_inclination(
+    semi_major_axis: float, eccentricity: float = 0.0, mu: float = MU_EARTH
+) -> float:
     """Inclination (rad) at which the secular J2 node rate of :mod:`.orbit` is one turn
     per tropical year: cos i = −Ω̇_ss / (3/2 n J2 (R/p)²)."""
     a, e = semi_major_axis, eccentricity
-    c = SUN_SYNCHRONOUS_RATE / secular_j2_rates(a, e, 0.0, mu)[0]     # Ω̇ ∝ cos i
+    c = SUN_SYNCHRONOUS_RATE / secular_j2_rates(a, e, 0.0, mu)[0]  # Ω̇ ∝ cos i
     if not -1.0 <= c <= 1.0:
         raise ModelError(f"no sun-synchronous inclination for a = {a} m, e = {e}")
     return math.acos(c)
 
 
-def design_pass(altitude: float, target_lat: float, target_lon: float, target_alt: float,
-                epoch, look_angle: float, side: str = "right", node: str = "ascending", *,
-                t0: float = 0.0, j2: bool = True) -> dict:
+def design_pass(
+    altitude: float,
+    target_lat: float,
+    target_lon: float,
+    target_alt: float,
+    epoch,
+    look_angle: float,
+    side: str = "right",
+    node: str = "ascending",
+    *,
+    t0: float = 0.0,
+    j2: bool = True,
+) -> dict:
     """A circular sun-synchronous orbit that is at zero Doppler over the target at ``epoch``
     and sees it at ``look_angle`` off nadir on ``side`` ("right"/"left") of the velocity,
     on an ``node`` ("ascending"/"descending") pass.
@@ -261,20 +312,39 @@ def design_pass(altitude: float, target_lat: float, target_lon: float, target_al
     rho_T = math.sqrt(sum(x * x for x in r_T_E))
     horizon = math.asin(min(1.0, rho_T / a))
     if not 0.0 < look_angle < horizon:
-        raise ModelError(f"look_angle must be in (0, {horizon:.4f}) rad (the horizon from "
-                         f"{altitude:.0f} m), got {look_angle}")
+        raise ModelError(
+            f"look_angle must be in (0, {horizon:.4f}) rad (the horizon from "
+            f"{altitude:.0f} m), got {look_angle}"
+        )
     inclination = sun_synchronous_inclination(a)
-    parameters = dict(semi_major_axis=a, eccentricity=0.0, inclination=inclination,
-                      arg_perigee=0.0, j2=bool(j2), earth_angle0=0.0,
-                      epoch=format_epoch(zero_doppler - datetime.timedelta(seconds=t0)),
-                      target_lat=target_lat, target_lon=target_lon, target_alt=target_alt)
-    guess = _spherical_guess(_rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T,
-                             a, rho_T, look_angle, inclination, side, node)
+    parameters = dict(
+        semi_major_axis=a,
+        eccentricity=0.0,
+        inclination=inclination,
+        arg_perigee=0.0,
+        j2=bool(j2),
+        earth_angle0=0.0,
+        epoch=format_epoch(zero_doppler - datetime.timedelta(seconds=t0)),
+        target_lat=target_lat,
+        target_lon=target_lon,
+        target_alt=target_alt,
+    )
+    guess = _spherical_guess(
+        _rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T,
+        a,
+        rho_T,
+        look_angle,
+        inclination,
+        side,
+        node,
+    )
     if guess is None:
-        raise ModelError(f"the target at latitude {math.degrees(target_lat):.2f}° cannot be "
-                         f"seen {side} at {math.degrees(look_angle):.2f}° from an orbit of "
-                         f"inclination {math.degrees(inclination):.2f}°")
-    model = OrbitEnvironment(**parameters).start(0.0)      # secular rates to go back by t0
+        raise ModelError(
+            f"the target at latitude {math.degrees(target_lat):.2f}° cannot be "
+            f"seen {side} at {math.degrees(look_angle):.2f}° from an orbit of "
+            f"inclination {math.degrees(inclination):.2f}°"
+        )
+    model = OrbitEnvironment(**parameters).start(0.0)  # secular rates to go back by t0
     guess -= t0 * np.array([model.raan_rate, model.argp_rate + model.mean_motion])
 
     def residual(z):
@@ -283,21 +353,26 @@ def design_pass(altitude: float, target_lat: float, target_lon: float, target_al
 
     z = _newton(residual, guess)
     F, geometry = residual(z)
-    if np.max(np.abs(F)) > 1e-10 or geometry.side != side or \
-            geometry.ascending != (node == "ascending") or not geometry.visible:
+    if (
+        np.max(np.abs(F)) > 1e-10
+        or geometry.side != side
+        or geometry.ascending != (node == "ascending")
+        or not geometry.visible
+    ):
         raise ModelError(f"pass design did not converge (residuals {F}, {geometry})")
     parameters.update(raan=wrap_2pi(float(z[0])), true_anomaly0=wrap_2pi(float(z[1])))
     return parameters
 
 
-def _spherical_guess(r_T, a: float, rho_T: float, look_angle: float, inclination: float,
-                     side: str, node: str) -> np.ndarray | None:
+def _spherical_guess(
+    r_T, a: float, rho_T: float, look_angle: float, inclination: float, side: str, node: str
+) -> np.ndarray | None:
     """First guess (Ω, u) at the zero-Doppler time: spherical Earth, no rotation, target
     direction ``r_T`` (unit, I axes) at radius ``rho_T``, orbit radius ``a``.  None if no
     orbit of this inclination sees it."""
     alpha, beta = math.atan2(r_T[1], r_T[0]), math.asin(r_T[2])
     gamma = math.asin(a * math.sin(look_angle) / rho_T) - look_angle
-    s = (-1.0 if side == "right" else 1.0) * math.sin(gamma)   # r̂_T·ĥ
+    s = (-1.0 if side == "right" else 1.0) * math.sin(gamma)  # r̂_T·ĥ
     ci, si = math.cos(inclination), math.sin(inclination)
     x = (s - ci * math.sin(beta)) / (si * math.cos(beta))
     if abs(x) > 1.0:

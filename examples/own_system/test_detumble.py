@@ -3,17 +3,18 @@
 Run: python -m pytest examples/own_system/test_detumble.py  (after make_system.py; set
 DETUMBLE_SSD to use a system written elsewhere).
 """
+
 import math
 import os
 from pathlib import Path
 
 import numpy as np
 import pytest
-from agilesat.orchestration.checks import (assert_momentum_conserved, assert_settles,
-                                           assert_within)
+
+from agilesat.orchestration.checks import assert_momentum_conserved, assert_settles, assert_within
 
 SYSTEM = Path(os.environ.get("DETUMBLE_SSD", "out/own_system/detumble.ssd"))
-J, GAIN = 50.0, 5.0          # kg·m², N·m·s/rad: as make_system.py sets them
+J, GAIN = 50.0, 5.0  # kg·m², N·m·s/rad: as make_system.py sets them
 
 
 @pytest.fixture(scope="session")

@@ -9,6 +9,7 @@
 The dispersion language is in :mod:`.dispersion`, run indexing in :mod:`.plan`, execution
 and files in :mod:`.engine`, statistics, pass rates and figures in :mod:`.report`.
 """
+
 from __future__ import annotations
 
 import json
@@ -37,6 +38,7 @@ class Campaign:
     def frame(self):
         """The table as a pandas DataFrame (pandas must be installed)."""
         import pandas
+
         return pandas.DataFrame.from_records(self.table)
 
 
@@ -44,20 +46,54 @@ def shipped(name: str) -> Path:
     """The shipped dispersion file of a scenario (``shipped/<name>.toml``)."""
     path = SHIPPED_DIR / f"{name}.toml"
     if not path.exists():
-        raise KeyError(f"no shipped campaign {name!r}; shipped: "
-                       f"{', '.join(p.stem for p in sorted(SHIPPED_DIR.glob('*.toml')))}")
+        raise KeyError(
+            f"no shipped campaign {name!r}; shipped: "
+            f"{', '.join(p.stem for p in sorted(SHIPPED_DIR.glob('*.toml')))}"
+        )
     return path
 
 
-def campaign(target: str, runs: int = 1, *, seed: int = 0, vary=(), files=(), set=None,
-             keep=(), step=None, stop=None, algorithm=None, out_dir=None, resume=False,
-             workers=None, scheduler=None, progress=True, as_frame=None):
+def campaign(
+    target: str,
+    runs: int = 1,
+    *,
+    seed: int = 0,
+    vary=(),
+    files=(),
+    set=None,
+    keep=(),
+    step=None,
+    stop=None,
+    algorithm=None,
+    out_dir=None,
+    resume=False,
+    workers=None,
+    scheduler=None,
+    progress=True,
+    as_frame=None,
+):
     """Run a campaign; returns the table (a NumPy structured array, or a pandas DataFrame
     when pandas is installed and ``as_frame`` is not False).  ``out_dir`` defaults to
     ``out/campaign-<target>``; everything is also written there (:mod:`.engine`)."""
-    result = run_campaign(Spec(target, runs, seed, list(vary), [str(f) for f in files],
-                               dict(set or {}), list(keep), step, stop, algorithm),
-                          out_dir, resume, workers, scheduler, progress)
+    result = run_campaign(
+        Spec(
+            target,
+            runs,
+            seed,
+            list(vary),
+            [str(f) for f in files],
+            dict(set or {}),
+            list(keep),
+            step,
+            stop,
+            algorithm,
+        ),
+        out_dir,
+        resume,
+        workers,
+        scheduler,
+        progress,
+    )
     if as_frame is False:
         return result.table
     try:
@@ -68,8 +104,9 @@ def campaign(target: str, runs: int = 1, *, seed: int = 0, vary=(), files=(), se
         return result.table
 
 
-def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler=None,
-                 progress=True) -> Campaign:
+def run_campaign(
+    spec: Spec, out_dir=None, resume=False, workers=None, scheduler=None, progress=True
+) -> Campaign:
     """:func:`campaign` returning a :class:`Campaign` (table, summary, directory)."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
@@ -83,20 +120,27 @@ def run_campaign(spec: Spec, out_dir=None, resume=False, workers=None, scheduler
         metrics = json.loads((out / "metrics.json").read_text())
     if plan.scenario is not None:
         from ...fmus.build import build_all
+
         build_all(names=plan.scenario.components)
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
     if len(done) < plan.total:
-        print(f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
-              f"grid points), {len(done)} already made in {out}", file=sys.stderr)
+        print(
+            f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
+            f"grid points), {len(done)} already made in {out}",
+            file=sys.stderr,
+        )
     with engine.cluster(workers, scheduler) as client:
-        environment = {"scheduler": scheduler or "LocalCluster",
-                       "workers": len(client.scheduler_info()["workers"])}
+        environment = {
+            "scheduler": scheduler or "LocalCluster",
+            "workers": len(client.scheduler_info()["workers"]),
+        }
         records, lost, status = engine.execute(plan, out, client, done, bar, metrics)
     return finish(plan, out, records, metrics, lost, status, environment)
 
 
-def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, status: str,
-           environment: dict) -> Campaign:
+def finish(
+    plan: Plan, out: Path, records: dict, metrics: dict, lost: list, status: str, environment: dict
+) -> Campaign:
     """runs.csv (+ Parquet), campaign.json and the figures, from the records so far."""
     table = report.table(plan, records, metrics)
     files = report.write_table(table, out)
@@ -110,8 +154,12 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
         "runs": {"planned": plan.total, "made": len(records), **counts},
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),
-        "settings": {"start": plan.start, "stop": plan.stop, "step": plan.step,
-                     "algorithm": plan.spec.algorithm or plan.system.algorithm},
+        "settings": {
+            "start": plan.start,
+            "stop": plan.stop,
+            "step": plan.step,
+            "algorithm": plan.spec.algorithm or plan.system.algorithm,
+        },
         "replay": replay_template(plan),
         "versions": versions(),
         "cluster": environment,
@@ -119,12 +167,24 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
         "statistics": report.statistics(table, metrics),
         "pass_rates": report.pass_rates(table, metrics),
         "grid_pass_rates": report.grid_pass_rates(plan, table, metrics),
-        "failures": [{"index": int(r["index"]), "status": str(r["status"]),
-                      "message": str(r["message"]),
-                      "replay": shlex.join(replay_arguments(plan, int(r["index"])))}
-                     for r in table[table["status"] != "ok"][:100]],
-        "kept": {"file": "signals.npy", "signals": plan.signals, "start": plan.start,
-                 "step": plan.step, "points": plan.points} if plan.signals else None,
+        "failures": [
+            {
+                "index": int(r["index"]),
+                "status": str(r["status"]),
+                "message": str(r["message"]),
+                "replay": shlex.join(replay_arguments(plan, int(r["index"]))),
+            }
+            for r in table[table["status"] != "ok"][:100]
+        ],
+        "kept": {
+            "file": "signals.npy",
+            "signals": plan.signals,
+            "start": plan.start,
+            "step": plan.step,
+            "points": plan.points,
+        }
+        if plan.signals
+        else None,
         "files": [p.name for p in files],
     }
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
@@ -140,8 +200,11 @@ def finish(plan: Plan, out: Path, records: dict, metrics: dict, lost: list, stat
 def replay_arguments(plan: Plan, index: int) -> list[str]:
     """``agilesat run`` arguments that make run ``index`` again, exactly."""
     args = ["agilesat", "run", plan.spec.target]
-    for option, value in (("--step", plan.spec.step), ("--stop", plan.spec.stop),
-                          ("--algorithm", plan.spec.algorithm)):
+    for option, value in (
+        ("--step", plan.spec.step),
+        ("--stop", plan.spec.stop),
+        ("--algorithm", plan.spec.algorithm),
+    ):
         if value is not None:
             args += [option, repr(value) if isinstance(value, float) else str(value)]
     for key, value in plan.parameters(index).items():
@@ -150,15 +213,16 @@ def replay_arguments(plan: Plan, index: int) -> list[str]:
 
 
 def replay_template(plan: Plan) -> str:
-    return (shlex.join(replay_arguments(plan, 0)[:3]) + " [--step/--stop/--algorithm as "
-            "the spec] --set KEY=VALUE for every --set of the spec and every dispersed "
-            "column of the run's row in runs.csv")
+    return (
+        shlex.join(replay_arguments(plan, 0)[:3]) + " [--step/--stop/--algorithm as "
+        "the spec] --set KEY=VALUE for every --set of the spec and every dispersed "
+        "column of the run's row in runs.csv"
+    )
 
 
 def versions() -> dict:
     result = {"python": platform.python_version(), "platform": platform.platform()}
-    for package in ("agilesat", "numpy", "fmpy", "pythonfmu", "dask", "distributed",
-                    "scipy"):
+    for package in ("agilesat", "numpy", "fmpy", "pythonfmu", "dask", "distributed", "scipy"):
         try:
             result[package] = metadata.version(package)
         except metadata.PackageNotFoundError:

@@ -4,6 +4,7 @@ Exit status: 0 every run met every requirement; 3 the campaign finished but some
 failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
 130 interrupted (``--resume`` continues).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -16,28 +17,45 @@ from .report import display
 
 def add_parser(commands) -> argparse.ArgumentParser:
     p = commands.add_parser(
-        "campaign", help="Monte Carlo campaign or parameter sweep of a scenario on Dask",
+        "campaign",
+        help="Monte Carlo campaign or parameter sweep of a scenario on Dask",
         description="Run TARGET many times with dispersed parameters.  DIST: normal(mean,sd), "
         "uniform(lo,hi), choice(a,b,...), rotate(sd) (unit vectors), inertia(sd_rel,sd_angle) "
         "(3×3 inertia), linspace(lo,hi,n), values(a,b,...) (grids: full factorial); a "
         "leading + or * applies it to the nominal value; SI, 'deg' after a number for "
-        "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.")
+        "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.",
+    )
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
     p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
     p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
     p.add_argument("--vary", action="append", default=[], metavar="INSTANCE.VAR=DIST")
-    p.add_argument("--dispersions", action="append", default=[], type=Path, metavar="FILE",
-                   help="TOML/JSON file with a [vary] table of \"Instance.var\" = \"DIST\"")
+    p.add_argument(
+        "--dispersions",
+        action="append",
+        default=[],
+        type=Path,
+        metavar="FILE",
+        help='TOML/JSON file with a [vary] table of "Instance.var" = "DIST"',
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="local worker processes (default: cores)")
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
-    p.add_argument("--keep", action="append", default=[], metavar="SIGNAL",
-                   help="keep this output per run (signals.npy, envelope figure); a whole "
-                   "vector (SatelliteDynamics.w_BO_B) or one element")
+    where.add_argument(
+        "--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786"
+    )
+    p.add_argument(
+        "--keep",
+        action="append",
+        default=[],
+        metavar="SIGNAL",
+        help="keep this output per run (signals.npy, envelope figure); a whole "
+        "vector (SatelliteDynamics.w_BO_B) or one element",
+    )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
-    p.add_argument("--resume", action="store_true",
-                   help="continue (or extend with a larger --runs) the campaign in --out")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue (or extend with a larger --runs) the campaign in --out",
+    )
     p.add_argument("--step", type=float, help="macro step [s]")
     p.add_argument("--stop", type=float, help="stop time [s]")
     p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VAR=VALUE")
@@ -59,23 +77,34 @@ def main(args) -> int:
         try:
             files = [str(shipped(name))]
         except KeyError:
-            raise ValueError(f"campaign {args.target}: nothing to vary: give --vary or "
-                             "--dispersions") from None
+            raise ValueError(
+                f"campaign {args.target}: nothing to vary: give --vary or --dispersions"
+            ) from None
         print(f"dispersions: {files[0]} (the shipped campaign)")
-    spec = Spec(args.target, args.runs, args.seed, list(args.vary), files, overrides,
-                list(args.keep), args.step, args.stop, args.algorithm)
-    signal.signal(signal.SIGTERM, _interrupt)   # a batch system's stop: as Ctrl-C
+    spec = Spec(
+        args.target,
+        args.runs,
+        args.seed,
+        list(args.vary),
+        files,
+        overrides,
+        list(args.keep),
+        args.step,
+        args.stop,
+        args.algorithm,
+    )
+    signal.signal(signal.SIGTERM, _interrupt)  # a batch system's stop: as Ctrl-C
     try:
-        result = run_campaign(spec, args.out, args.resume, args.workers, args.scheduler,
-                              progress=not args.no_progress)
+        result = run_campaign(
+            spec, args.out, args.resume, args.workers, args.scheduler, progress=not args.no_progress
+        )
     except KeyboardInterrupt:
         print("interrupted before the first run finished")
         return 130
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if result.summary["status"] == "interrupted":
-        print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` "
-              "continues it")
+        print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
         return 130
     runs = result.summary["runs"]
     unmet = any(r["met"] < r["runs"] for r in result.summary["pass_rates"].values())
@@ -88,33 +117,45 @@ def _interrupt(signum, frame):
 
 def format_campaign(summary: dict) -> str:
     runs = summary["runs"]
-    lines = [f"runs: {runs['made']}/{runs['planned']} made: {runs['ok']} ok, "
-             f"{runs['failed']} failed (diagnosed), {runs['error']} stopped, "
-             f"{runs['lost']} lost with their workers"]
+    lines = [
+        f"runs: {runs['made']}/{runs['planned']} made: {runs['ok']} ok, "
+        f"{runs['failed']} failed (diagnosed), {runs['error']} stopped, "
+        f"{runs['lost']} lost with their workers"
+    ]
     for lost in summary["lost_workers"]:
-        lines.append(f"  worker {lost['worker']} died; Dask re-ran runs "
-                     f"{lost['runs_in_flight']} elsewhere")
-    lines.append(f"  {'metric':32s} {'mean':>11s} {'sd':>10s} {'1 %':>11s} {'median':>11s} "
-                 f"{'99 %':>11s}  unit")
+        lines.append(
+            f"  worker {lost['worker']} died; Dask re-ran runs {lost['runs_in_flight']} elsewhere"
+        )
+    lines.append(
+        f"  {'metric':32s} {'mean':>11s} {'sd':>10s} {'1 %':>11s} {'median':>11s} "
+        f"{'99 %':>11s}  unit"
+    )
     for name, s in summary["statistics"].items():
         if not s["count"]:
             continue
         scale, unit = display(s)
         p = s["percentiles"]
-        lines.append(f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
-                     f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
-                     f"  {unit}")
+        lines.append(
+            f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
+            f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
+            f"  {unit}"
+        )
     for name, r in summary["pass_rates"].items():
         low, high = r["ci95"]
         bound = ""
         if name != "all":
             scale, unit = display(summary["statistics"][name])
             req = summary["statistics"][name]["requirement"]
-            bound = " and ".join(f"{'≥' if k == 'min' else '≤'} {v * scale:.4g} {unit}"
-                                 for k, v in req.items())
-        lines.append(f"  requirement {name} {bound}: met in {r['met']}/{r['runs']} runs, "
-                     f"{100 * r['rate']:.2f} % (95 % CI {100 * low:.2f}–{100 * high:.2f} %, "
-                     f"{r['method']})" if r["runs"] else f"  requirement {name}: no runs")
+            bound = " and ".join(
+                f"{'≥' if k == 'min' else '≤'} {v * scale:.4g} {unit}" for k, v in req.items()
+            )
+        lines.append(
+            f"  requirement {name} {bound}: met in {r['met']}/{r['runs']} runs, "
+            f"{100 * r['rate']:.2f} % (95 % CI {100 * low:.2f}–{100 * high:.2f} %, "
+            f"{r['method']})"
+            if r["runs"]
+            else f"  requirement {name}: no runs"
+        )
     for point in summary["grid_pass_rates"]:
         rates = point["pass_rates"]
         met = rates.get("all") or next(iter(rates.values()), None)
@@ -124,6 +165,5 @@ def format_campaign(summary: dict) -> str:
     for failure in summary["failures"][:5]:
         lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")
     if summary["failures"]:
-        lines.append("  (campaign.json \"failures\" has the `agilesat run` command replaying each)")
+        lines.append('  (campaign.json "failures" has the `agilesat run` command replaying each)')
     return "\n".join(lines)
-

@@ -26,6 +26,7 @@ Reproducibility: the draws of run i for a dispersion come from
 ``SeedSequence(seed, spawn_key=(i, crc32(key)))`` alone, so they do not depend on the
 number of workers, on the order of completion, on the other dispersions or on N.
 """
+
 from __future__ import annotations
 
 import json
@@ -46,11 +47,11 @@ _KEY = re.compile(r"^[A-Za-z_]\w*\.[A-Za-z_]\w*(\[\d+(,\d+)*\])?$")
 
 @dataclass(frozen=True)
 class Dispersion:
-    key: str                  # "Instance.variable" or "Instance.variable[i,j]"
-    kind: str                 # one of RANDOM or GRIDS
+    key: str  # "Instance.variable" or "Instance.variable[i,j]"
+    kind: str  # one of RANDOM or GRIDS
     args: tuple[float, ...]
-    mode: str = ""            # "" replace, "+" add to nominal, "*" multiply nominal
-    text: str = ""            # as written
+    mode: str = ""  # "" replace, "+" add to nominal, "*" multiply nominal
+    text: str = ""  # as written
 
     @property
     def is_grid(self) -> bool:
@@ -80,8 +81,9 @@ class Dispersion:
 
     def draw(self, seed: int, index: int, nominal: np.ndarray) -> np.ndarray:
         """This dispersion's value for run ``index`` (same shape as ``nominal``)."""
-        rng = np.random.default_rng(np.random.SeedSequence(
-            seed, spawn_key=(index, zlib.crc32(self.key.encode()))))
+        rng = np.random.default_rng(
+            np.random.SeedSequence(seed, spawn_key=(index, zlib.crc32(self.key.encode())))
+        )
         shape = nominal.shape
         if self.kind == "normal":
             return self.apply(rng.normal(self.args[0], self.args[1], shape), nominal)
@@ -101,31 +103,39 @@ def parse(text: str, origin: str = "--vary") -> Dispersion:
     key, sep, expression = text.partition("=")
     key = key.strip().replace(" ", "")
     if not sep or not _KEY.match(key):
-        raise ValueError(f"{origin} {text!r}: expected Instance.variable=DIST, e.g. "
-                         "SatelliteDynamics.inertia[1,1]=normal(956, 10)")
+        raise ValueError(
+            f"{origin} {text!r}: expected Instance.variable=DIST, e.g. "
+            "SatelliteDynamics.inertia[1,1]=normal(956, 10)"
+        )
     return expression_to_dispersion(key, expression, origin)
 
 
 def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersion:
     match = _EXPR.match(expression)
     if not match:
-        raise ValueError(f"{origin} {key}={expression}: expected DIST(args), DIST one of "
-                         f"{', '.join([*RANDOM, *GRIDS])}, optionally after + or *")
+        raise ValueError(
+            f"{origin} {key}={expression}: expected DIST(args), DIST one of "
+            f"{', '.join([*RANDOM, *GRIDS])}, optionally after + or *"
+        )
     mode, kind, body = match.groups()
     if kind not in RANDOM and kind not in GRIDS:
-        raise ValueError(f"{origin} {key}: unknown distribution {kind!r}; known: "
-                         f"{', '.join([*RANDOM, *GRIDS])}")
+        raise ValueError(
+            f"{origin} {key}: unknown distribution {kind!r}; known: {', '.join([*RANDOM, *GRIDS])}"
+        )
     args = []
     for item in body.split(","):
         number = _NUMBER.match(item)
         if not number:
-            raise ValueError(f"{origin} {key}={expression}: {item.strip()!r} is not a number "
-                             "(SI, or degrees with a 'deg' suffix)")
+            raise ValueError(
+                f"{origin} {key}={expression}: {item.strip()!r} is not a number "
+                "(SI, or degrees with a 'deg' suffix)"
+            )
         args.append(float(number.group(1)) * (math.pi / 180 if number.group(2) else 1.0))
     wanted = {**RANDOM, **GRIDS}[kind]
     if wanted is not None and len(args) != wanted or not args:
-        raise ValueError(f"{origin} {key}: {kind} takes {wanted or 'one or more'} "
-                         f"argument(s), got {len(args)}")
+        raise ValueError(
+            f"{origin} {key}: {kind} takes {wanted or 'one or more'} argument(s), got {len(args)}"
+        )
     if kind in ("normal", "rotate") and args[-1] < 0 or kind == "inertia" and min(args) < 0:
         raise ValueError(f"{origin} {key}: a standard deviation must be ≥ 0, got {args}")
     if kind == "uniform" and args[0] > args[1]:
@@ -133,8 +143,9 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
     if kind == "linspace" and (args[2] < 1 or args[2] != int(args[2])):
         raise ValueError(f"{origin} {key}: linspace's n must be a positive integer")
     if kind in ("rotate", "inertia") and mode:
-        raise ValueError(f"{origin} {key}: {kind} already acts on the nominal value; drop "
-                         f"the {mode!r}")
+        raise ValueError(
+            f"{origin} {key}: {kind} already acts on the nominal value; drop the {mode!r}"
+        )
     return Dispersion(key, kind, tuple(args), mode, f"{key}={expression.strip()}")
 
 
@@ -147,27 +158,29 @@ def load(path) -> tuple[list[Dispersion], dict]:
         if path.suffix == ".toml":
             try:
                 import tomllib
-            except ModuleNotFoundError:   # Python 3.10
+            except ModuleNotFoundError:  # Python 3.10
                 import tomli as tomllib
             data = tomllib.loads(path.read_text())
         elif path.suffix == ".json":
             data = json.loads(path.read_text())
         else:
             raise ValueError(f"{path}: a dispersion file is .toml or .json")
-    except (OSError, ValueError) as exc:   # TOMLDecodeError and JSONDecodeError are these
+    except (OSError, ValueError) as exc:  # TOMLDecodeError and JSONDecodeError are these
         raise ValueError(f"{path}: {exc}") from None
     vary = data.get("vary") if isinstance(data, dict) else None
     if not isinstance(vary, dict) or not vary:
-        raise ValueError(f"{path}: expected a table 'vary' of \"Instance.variable\" = "
-                         "\"DIST\" entries")
+        raise ValueError(
+            f'{path}: expected a table \'vary\' of "Instance.variable" = "DIST" entries'
+        )
     result = []
     for key, expression in vary.items():
         if not isinstance(expression, str) or not _KEY.match(key):
-            raise ValueError(f"{path}: vary.{key}: expected \"Instance.variable\" = \"DIST\"")
+            raise ValueError(f'{path}: vary.{key}: expected "Instance.variable" = "DIST"')
         result.append(expression_to_dispersion(key, expression, str(path)))
     fixed = data.get("set", {})
     if not isinstance(fixed, dict) or not all(
-            _KEY.match(k) and isinstance(v, (int, float, bool)) for k, v in fixed.items()):
+        _KEY.match(k) and isinstance(v, (int, float, bool)) for k, v in fixed.items()
+    ):
         raise ValueError(f"{path}: 'set' must map \"Instance.variable\" to numbers")
     return result, fixed
 

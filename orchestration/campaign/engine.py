@@ -18,6 +18,7 @@ Files in the output directory, written as runs finish:
 - at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
   ``campaign.json`` and the figures (:mod:`.report`).
 """
+
 from __future__ import annotations
 
 import json
@@ -57,17 +58,21 @@ def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
     if not journal.exists():
         out.mkdir(parents=True, exist_ok=True)
         # the spec first: a campaign killed before it finishes can still be resumed
-        (out / "campaign.json").write_text(json.dumps(
-            {"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n")
+        (out / "campaign.json").write_text(
+            json.dumps({"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n"
+        )
         return {}
     if not resume:
-        raise CampaignExistsError(f"{out} already holds a campaign (runs.jsonl): --resume to "
-                                  "finish or extend it, or choose another --out")
+        raise CampaignExistsError(
+            f"{out} already holds a campaign (runs.jsonl): --resume to "
+            "finish or extend it, or choose another --out"
+        )
     saved = json.loads((out / "campaign.json").read_text())
     differences = plan.spec.differences(Spec(**saved["spec"]))
     if differences:
-        raise CampaignExistsError(f"--resume {out}: the campaign there differs: "
-                                  + "; ".join(differences))
+        raise CampaignExistsError(
+            f"--resume {out}: the campaign there differs: " + "; ".join(differences)
+        )
     # a truncated last line would be glued to the next record: rewrite the journal clean
     records = read_journal(journal)
     journal.write_text("".join(json.dumps(r) + "\n" for r in records.values()))
@@ -86,14 +91,14 @@ def signals_file(plan: Plan, out: Path):
             return np.load(path, mmap_mode="r+")
         if old.shape[1:] != shape[1:]:
             raise CampaignExistsError(f"{path}: shape {old.shape} does not fit {shape}")
-        data = np.array(old[:shape[0]])
+        data = np.array(old[: shape[0]])
         del old
     else:
         data = None
     memory = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=shape)
     memory[:] = np.nan
     if data is not None:
-        memory[:len(data)] = data
+        memory[: len(data)] = data
     return memory
 
 
@@ -104,36 +109,55 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
     import logging
 
     from distributed import Client, LocalCluster
+
     if scheduler:
         with Client(scheduler, timeout="30s") as client:
             yield client
         return
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                      dashboard_address=":0", silence_logs=logging.ERROR) as local, \
-            Client(local) as client:
+    with (
+        LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+        ) as local,
+        Client(local) as client,
+    ):
         yield client
 
 
-def execute(plan: Plan, out: Path, client, done: dict, progress,
-            metrics: dict) -> tuple[dict, list, str]:
+def execute(
+    plan: Plan, out: Path, client, done: dict, progress, metrics: dict
+) -> tuple[dict, list, str]:
     """Run what is not in ``done`` on ``client``; returns (records by index, lost workers,
     "complete" or "interrupted").  Every finished run is in the journal at once;
     ``metrics`` collects each metric's unit, description and requirement."""
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
+
     records = dict(done)
     signals = signals_file(plan, out)
     todo = iter([i for i in range(plan.total) if i not in records])
     watcher = WorkerWatch(client)
     futures = {}
-    token = uuid.uuid4().hex[:8]   # keys unique on a shared scheduler
+    token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
 
     def submit():
         for index in todo:
-            future = client.submit(run_one, index, plan.spec.target, plan.parameters(index),
-                                   plan.step, plan.stop, plan.spec.algorithm, plan.signals,
-                                   plan.points, key=f"agilesat-run-{index}-{token}",
-                                   pure=False)
+            future = client.submit(
+                run_one,
+                index,
+                plan.spec.target,
+                plan.parameters(index),
+                plan.step,
+                plan.stop,
+                plan.spec.algorithm,
+                plan.signals,
+                plan.points,
+                key=f"agilesat-run-{index}-{token}",
+                pure=False,
+            )
             futures[future] = index
             return future
         return None
@@ -148,25 +172,36 @@ def execute(plan: Plan, out: Path, client, done: dict, progress,
                 try:
                     record = future.result()
                 except KilledWorker as exc:
-                    record = {"index": index, "status": "lost", "metrics": {},
-                              "message": f"every worker that ran it died (Dask gives up after "
-                              f"distributed.scheduler.allowed-failures): {exc}"}
-                except Exception as exc:   # the task itself could not run there
-                    record = {"index": index, "status": "error", "metrics": {},
-                              "message": f"{type(exc).__name__}: {exc}"}
+                    record = {
+                        "index": index,
+                        "status": "lost",
+                        "metrics": {},
+                        "message": f"every worker that ran it died (Dask gives up after "
+                        f"distributed.scheduler.allowed-failures): {exc}",
+                    }
+                except Exception as exc:  # the task itself could not run there
+                    record = {
+                        "index": index,
+                        "status": "error",
+                        "metrics": {},
+                        "message": f"{type(exc).__name__}: {exc}",
+                    }
                 signal = record.pop("signals", None)
                 if signals is not None and signal is not None:
                     signals[index] = signal
-                record.update(seed=plan.spec.seed, values=plan.run_values(index),
-                              grid=index % len(plan.grid))
+                record.update(
+                    seed=plan.spec.seed, values=plan.run_values(index), grid=index % len(plan.grid)
+                )
                 if set(record["metrics"]) - set(metrics):
                     for name, m in record["metrics"].items():
-                        metrics.setdefault(name, {k: v for k, v in m.items()
-                                                  if k not in ("value", "met", "paper")})
+                        metrics.setdefault(
+                            name, {k: v for k, v in m.items() if k not in ("value", "met", "paper")}
+                        )
                     (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
-                record["metrics"] = {k: {"value": m["value"], **({"met": m["met"]}
-                                                                 if "met" in m else {})}
-                                     for k, m in record["metrics"].items()}
+                record["metrics"] = {
+                    k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
+                    for k, m in record["metrics"].items()
+                }
                 journal.write(json.dumps(record) + "\n")
                 journal.flush()
                 records[index] = record
@@ -208,7 +243,10 @@ class WorkerWatch:
         for address in sorted(self.workers - workers):
             held = sorted(keys[k] for k in self.processing.get(address, ()) if k in keys)
             self.lost.append({"worker": address, "runs_in_flight": held})
-            print(f"campaign: worker {address} left; Dask re-runs the runs it held "
-                  f"({held or 'none'}) on the others", file=sys.stderr)
+            print(
+                f"campaign: worker {address} left; Dask re-runs the runs it held "
+                f"({held or 'none'}) on the others",
+                file=sys.stderr,
+            )
         self.workers = workers
         self.processing = self.client.processing()

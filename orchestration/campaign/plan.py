@@ -6,6 +6,7 @@ Run index i (0 ≤ i < runs × grid points) is grid point ``i % G`` and replicat
 already made.  Run i's values are the system's (its ``.ssd``, the variant, ``--set``) with
 the grid point's values and the draws of :meth:`Dispersion.draw` for index i on top.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -24,13 +25,14 @@ from . import dispersion as dispersions
 class Spec:
     """What the user asked for (``campaign.json``'s ``spec``; a resumed campaign must match
     it in everything but ``runs``)."""
+
     target: str
-    runs: int = 1                  # per grid point
+    runs: int = 1  # per grid point
     seed: int = 0
-    vary: list[str] = field(default_factory=list)      # "A.x=DIST", as written
-    files: list[str] = field(default_factory=list)     # dispersion files they came from
-    set: dict = field(default_factory=dict)            # "A.x" -> value (as for `run --set`)
-    keep: list[str] = field(default_factory=list)      # signals to keep per run
+    vary: list[str] = field(default_factory=list)  # "A.x=DIST", as written
+    files: list[str] = field(default_factory=list)  # dispersion files they came from
+    set: dict = field(default_factory=dict)  # "A.x" -> value (as for `run --set`)
+    keep: list[str] = field(default_factory=list)  # signals to keep per run
     step: float | None = None
     stop: float | None = None
     algorithm: str | None = None
@@ -38,10 +40,13 @@ class Spec:
     def to_dict(self) -> dict:
         return asdict(self)
 
-    def differences(self, other: "Spec") -> list[str]:
+    def differences(self, other: Spec) -> list[str]:
         a, b = self.to_dict(), other.to_dict()
-        return [f"{k}: {a[k]!r} here, {b[k]!r} in the campaign" for k in a
-                if k != "runs" and a[k] != b[k]]
+        return [
+            f"{k}: {a[k]!r} here, {b[k]!r} in the campaign"
+            for k in a
+            if k != "runs" and a[k] != b[k]
+        ]
 
 
 class Plan:
@@ -71,15 +76,18 @@ class Plan:
         if twice:
             raise ValueError(f"dispersed twice: {', '.join(twice)}")
         self.nominal = {d.key: self._check(d) for d in self.dispersions}
-        self.columns = [name for d in self.dispersions
-                        for name in _scalar_names(d.key, self.nominal[d.key].shape)]
+        self.columns = [
+            name
+            for d in self.dispersions
+            for name in _scalar_names(d.key, self.nominal[d.key].shape)
+        ]
         overlap = set(self.columns) & set(spec.set)
         if overlap:
             raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
         grids = [d for d in self.dispersions if d.is_grid]
         self.grid_keys = [d.key for d in grids]
         self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
-        self.units = {}    # of the kept signals, where the variable table says
+        self.units = {}  # of the kept signals, where the variable table says
         self.signals = [name for key in spec.keep for name in self._signal(key)]
 
     @property
@@ -92,8 +100,11 @@ class Plan:
         result = {}
         for d in self.dispersions:
             nominal = self.nominal[d.key]
-            value = (d.apply(grid[d.key], nominal) if d.is_grid
-                     else d.draw(self.spec.seed, index, nominal))
+            value = (
+                d.apply(grid[d.key], nominal)
+                if d.is_grid
+                else d.draw(self.spec.seed, index, nominal)
+            )
             for name, x in zip(_scalar_names(d.key, nominal.shape), np.ravel(value)):
                 result[name] = x.item()
         return result
@@ -106,16 +117,20 @@ class Plan:
         instance, _, rest = key.partition(".")
         name = rest.partition("[")[0]
         if instance not in self.fmus:
-            raise ValueError(f"{what} {key}: no component {instance!r} in {self.system.path}; "
-                             f"components: {', '.join(self.fmus)}")
+            raise ValueError(
+                f"{what} {key}: no component {instance!r} in {self.system.path}; "
+                f"components: {', '.join(self.fmus)}"
+            )
         if self.fmus[instance] not in FMUS:
-            return None   # not one of ours: the master checks the name when it runs
+            return None  # not one of ours: the master checks the name when it runs
         for var in model_class(self.fmus[instance]).VARIABLES:
             if var.name == name:
                 if "[" in rest and rest not in var.scalar_names():
-                    raise ValueError(f"{what} {key}: {instance}.{name} has shape {var.shape}; "
-                                     f"elements are {var.scalar_names()[0]} .. "
-                                     f"{var.scalar_names()[-1]}")
+                    raise ValueError(
+                        f"{what} {key}: {instance}.{name} has shape {var.shape}; "
+                        f"elements are {var.scalar_names()[0]} .. "
+                        f"{var.scalar_names()[-1]}"
+                    )
                 return var
         raise ValueError(f"{what} {key}: {self.fmus[instance]} has no variable {name!r}")
 
@@ -126,35 +141,47 @@ class Plan:
         whole = "[" not in d.key
         if var is None:
             if d.kind in ("rotate", "inertia") or whole and d.mode:
-                raise ValueError(f"--vary {d.text}: whole-variable dispersions need one of "
-                                 f"our FMUs, {self.fmus[d.instance]} is not")
+                raise ValueError(
+                    f"--vary {d.text}: whole-variable dispersions need one of "
+                    f"our FMUs, {self.fmus[d.instance]} is not"
+                )
             return np.asarray(float(self.values.get(d.key, 0.0)))
         if var.causality != "parameter" or var.type == "String":
-            raise ValueError(f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
-                             f"{var.causality}; only numeric parameters can be dispersed")
+            raise ValueError(
+                f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
+                f"{var.causality}; only numeric parameters can be dispersed"
+            )
         if var.type != "Real" and d.kind not in ("choice", "values"):
             raise ValueError(f"--vary {d.text}: {var.type} parameter: use choice() or values()")
         names = var.scalar_names()
         start = var.start_array()
-        flat = np.array([float(self.values.get(f"{d.instance}.{n}", s))
-                         for n, s in zip(names, start)])
+        flat = np.array(
+            [float(self.values.get(f"{d.instance}.{n}", s)) for n, s in zip(names, start)]
+        )
         if not whole:
             return np.asarray(flat[names.index(d.key.partition(".")[2])])
         shape = var.shape
         if d.is_grid and shape:
-            raise ValueError(f"--vary {d.text}: grids take scalar names, e.g. {d.instance}."
-                             f"{names[0]}")
+            raise ValueError(
+                f"--vary {d.text}: grids take scalar names, e.g. {d.instance}.{names[0]}"
+            )
         if d.kind == "rotate" and not (shape == (3,) or len(shape) == 2 and shape[1] == 3):
-            raise ValueError(f"--vary {d.text}: rotate() turns a 3-vector or the rows of an "
-                             f"n×3 matrix; {d.instance}.{var.name} has shape {shape}")
+            raise ValueError(
+                f"--vary {d.text}: rotate() turns a 3-vector or the rows of an "
+                f"n×3 matrix; {d.instance}.{var.name} has shape {shape}"
+            )
         if d.kind == "inertia" and shape != (3, 3):
-            raise ValueError(f"--vary {d.text}: inertia() disperses a 3×3 inertia; "
-                             f"{d.instance}.{var.name} has shape {shape}")
+            raise ValueError(
+                f"--vary {d.text}: inertia() disperses a 3×3 inertia; "
+                f"{d.instance}.{var.name} has shape {shape}"
+            )
         nominal = flat.reshape(shape)
-        if d.kind == "inertia" and not (np.allclose(nominal, nominal.T)
-                                        and np.linalg.eigvalsh(nominal).min() > 0):
-            raise ValueError(f"--vary {d.text}: nominal {nominal.tolist()} is not symmetric "
-                             "positive definite")
+        if d.kind == "inertia" and not (
+            np.allclose(nominal, nominal.T) and np.linalg.eigvalsh(nominal).min() > 0
+        ):
+            raise ValueError(
+                f"--vary {d.text}: nominal {nominal.tolist()} is not symmetric positive definite"
+            )
         return nominal
 
     def _signal(self, key: str) -> list[str]:
@@ -163,8 +190,11 @@ class Plan:
             return [key]
         instance = key.partition(".")[0]
         self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
-        return [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()] \
-            if "[" not in key else [key]
+        return (
+            [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()]
+            if "[" not in key
+            else [key]
+        )
 
 
 def _scalar_names(key: str, shape) -> list[str]:

@@ -7,6 +7,7 @@ B the beta quantile (scipy).  It never undercovers, and with k = n it gives the 
 bound (α/2)^(1/n) engineers quote ("n passes out of n: p ≥ … at 97.5 % one-sided").  Every
 run counts in n: a run that stopped (``error``) or was ``lost`` meets nothing.
 """
+
 from __future__ import annotations
 
 import csv
@@ -17,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plots import plt
 from ...fmus.model_description import UNITS
+from ..plots import plt
 
 PERCENTILES = (1, 5, 50, 95, 99)
 STATUSES = ("ok", "failed", "error", "lost")
@@ -26,6 +27,7 @@ STATUSES = ("ok", "failed", "error", "lost")
 
 def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     from scipy.stats import beta
+
     if n == 0:
         return (0.0, 1.0)
     alpha = 1 - confidence
@@ -60,8 +62,9 @@ def table(plan, records: dict, metrics: dict):
     """The runs as a NumPy structured array, in index order."""
     cols = columns(plan, metrics)
     rows = [tuple(_cell(records[i], n, k) for n, k in cols) for i in sorted(records)]
-    width = {n: max([1] + [len(str(r[j])) for r in rows]) for j, (n, k) in enumerate(cols)
-             if k == "s"}
+    width = {
+        n: max([1] + [len(str(r[j])) for r in rows]) for j, (n, k) in enumerate(cols) if k == "s"
+    }
     dtype = [(n, {"i": "i8", "f": "f8", "b": "?"}.get(k) or f"U{width[n]}") for n, k in cols]
     return np.array(rows, dtype=dtype)
 
@@ -89,14 +92,20 @@ def statistics(array: np.ndarray, metrics: dict) -> dict:
     stats = {}
     for name, meta in metrics.items():
         values = array[name][np.isfinite(array[name])]
-        entry = {"unit": meta["unit"], "display_unit": meta.get("display_unit"),
-                 "description": meta.get("description"), "count": int(len(values))}
+        entry = {
+            "unit": meta["unit"],
+            "display_unit": meta.get("display_unit"),
+            "description": meta.get("description"),
+            "count": int(len(values)),
+        }
         if len(values):
-            entry.update(mean=float(values.mean()),
-                         sd=float(values.std(ddof=1)) if len(values) > 1 else 0.0,
-                         min=float(values.min()), max=float(values.max()),
-                         percentiles={str(p): float(np.percentile(values, p))
-                                      for p in PERCENTILES})
+            entry.update(
+                mean=float(values.mean()),
+                sd=float(values.std(ddof=1)) if len(values) > 1 else 0.0,
+                min=float(values.min()),
+                max=float(values.max()),
+                percentiles={str(p): float(np.percentile(values, p)) for p in PERCENTILES},
+            )
         if "requirement" in meta:
             entry["requirement"] = meta["requirement"]
         stats[name] = entry
@@ -109,12 +118,19 @@ def pass_rates(array: np.ndarray, metrics: dict, rows=None) -> dict:
     names = [n for n, m in metrics.items() if "requirement" in m]
     rates = {}
     for name, met in [(n, array[f"met_{n}"][rows]) for n in names] + (
-            [("all", np.all([array[f"met_{n}"][rows] for n in names], axis=0))]
-            if len(names) > 1 else []):
+        [("all", np.all([array[f"met_{n}"][rows] for n in names], axis=0))]
+        if len(names) > 1
+        else []
+    ):
         k, n = int(np.sum(met)), int(len(met))
         low, high = clopper_pearson(k, n)
-        rates[name] = {"met": k, "runs": n, "rate": k / n if n else None,
-                       "ci95": [low, high], "method": "Clopper-Pearson"}
+        rates[name] = {
+            "met": k,
+            "runs": n,
+            "rate": k / n if n else None,
+            "ci95": [low, high],
+            "method": "Clopper-Pearson",
+        }
     return rates
 
 
@@ -122,9 +138,13 @@ def grid_pass_rates(plan, array: np.ndarray, metrics: dict) -> list[dict]:
     """For a sweep: each grid point's values and pass rates."""
     if not plan.grid_keys:
         return []
-    return [{"values": dict(zip(plan.grid_keys, point)),
-             "pass_rates": pass_rates(array, metrics, array["grid"] == g)}
-            for g, point in enumerate(plan.grid)]
+    return [
+        {
+            "values": dict(zip(plan.grid_keys, point)),
+            "pass_rates": pass_rates(array, metrics, array["grid"] == g),
+        }
+        for g, point in enumerate(plan.grid)
+    ]
 
 
 def display(meta: dict) -> tuple[float, str]:
@@ -141,11 +161,16 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
         scale, unit = display(meta)
         fig, ax = plt.subplots(figsize=(6, 3.6))
         spread = np.ptp(values) > 1e-9 * max(np.abs(values).max(), 1e-300)
-        ax.hist(values * scale, bins=min(50, max(5, int(np.sqrt(len(values)))))
-                if spread else 1, color="tab:blue", alpha=0.75)
+        ax.hist(
+            values * scale,
+            bins=min(50, max(5, int(np.sqrt(len(values))))) if spread else 1,
+            color="tab:blue",
+            alpha=0.75,
+        )
         for bound, value in meta.get("requirement", {}).items():
-            ax.axvline(value * scale, color="tab:red", linestyle="--",
-                       label=f"requirement ({bound})")
+            ax.axvline(
+                value * scale, color="tab:red", linestyle="--", label=f"requirement ({bound})"
+            )
         if "requirement" in meta:
             ax.legend(fontsize=8)
         ax.set_xlabel(f"{name} [{unit}]")
@@ -190,8 +215,9 @@ class Progress:
     """Runs done / failed, rate and ETA: a tqdm bar on a terminal, plain lines every
     ``period`` seconds otherwise (logs, CI)."""
 
-    def __init__(self, total: int, done: int, enabled: bool = True, period: float = 10.0,
-                 stream=None):
+    def __init__(
+        self, total: int, done: int, enabled: bool = True, period: float = 10.0, stream=None
+    ):
         self.stream = stream or sys.stderr
         self.total, self.done, self.todo = total, done, total - done
         self.counts = dict.fromkeys(STATUSES, 0)
@@ -200,8 +226,10 @@ class Progress:
         self.bar = None
         if enabled and getattr(self.stream, "isatty", lambda: False)():
             from tqdm import tqdm
-            self.bar = tqdm(total=total, initial=done, unit="run", file=self.stream,
-                            dynamic_ncols=True)
+
+            self.bar = tqdm(
+                total=total, initial=done, unit="run", file=self.stream, dynamic_ncols=True
+            )
 
     def update(self, status: str) -> None:
         self.counts[status] = self.counts.get(status, 0) + 1
@@ -209,22 +237,27 @@ class Progress:
         if self.bar is not None:
             self.bar.set_postfix_str(self._outcomes(), refresh=False)
             self.bar.update(1)
-        elif self.enabled and (time.monotonic() - self.last >= self.period
-                               or self.done == self.total):
+        elif self.enabled and (
+            time.monotonic() - self.last >= self.period or self.done == self.total
+        ):
             self.last = time.monotonic()
             print(self.line(), file=self.stream, flush=True)
 
     def _outcomes(self) -> str:
-        return ", ".join(f"{v} {k}" for k, v in self.counts.items() if v and k != "ok") \
+        return (
+            ", ".join(f"{v} {k}" for k, v in self.counts.items() if v and k != "ok")
             or "none failed"
+        )
 
     def line(self) -> str:
         elapsed = time.monotonic() - self.began
         made = sum(self.counts.values())
         rate = made / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else math.inf
-        return (f"campaign: {self.done}/{self.total} runs done ({self._outcomes()}), "
-                f"{rate:.2f} runs/s, ETA {_duration(eta)}")
+        return (
+            f"campaign: {self.done}/{self.total} runs done ({self._outcomes()}), "
+            f"{rate:.2f} runs/s, ETA {_duration(eta)}"
+        )
 
     def close(self) -> None:
         if self.bar is not None:

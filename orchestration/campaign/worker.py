@@ -5,6 +5,7 @@ Outcomes: ``ok``; ``failed`` — the scenario ran but did not fly as required (e
 bad values; the message says where).  Nothing raised here ends a campaign.  The worker
 process keeps its loaded FMUs between runs (``orchestration.fmu``).
 """
+
 from __future__ import annotations
 
 import os
@@ -13,17 +14,39 @@ import time
 import numpy as np
 
 
-def run_one(index: int, target: str, parameters: dict, step, stop, algorithm,
-            signals: list[str], points: int) -> dict:
+def run_one(
+    index: int,
+    target: str,
+    parameters: dict,
+    step,
+    stop,
+    algorithm,
+    signals: list[str],
+    points: int,
+) -> dict:
     from ..master import SimulationError
     from ..runner import run
+
     began = time.perf_counter()
-    record = {"index": index, "status": "ok", "message": "", "metrics": {},
-              "worker": _worker(), "pid": os.getpid()}
+    record = {
+        "index": index,
+        "status": "ok",
+        "message": "",
+        "metrics": {},
+        "worker": _worker(),
+        "pid": os.getpid(),
+    }
     results = None
     try:
-        results, summary = run(target, step=step, stop=stop, algorithm=algorithm,
-                               parameters=parameters, figures=False, build=False)
+        results, summary = run(
+            target,
+            step=step,
+            stop=stop,
+            algorithm=algorithm,
+            parameters=parameters,
+            figures=False,
+            build=False,
+        )
         record["metrics"] = summary.get("metrics", {})
         if summary.get("status") == "failed":
             record["status"] = "failed"
@@ -31,7 +54,7 @@ def run_one(index: int, target: str, parameters: dict, step, stop, algorithm,
     except SimulationError as failure:
         record.update(status="error", message=str(failure))
         results = failure.results
-    except Exception as exc:   # a bad value for one run is that run's outcome
+    except Exception as exc:  # a bad value for one run is that run's outcome
         record.update(status="error", message=f"{type(exc).__name__}: {exc}")
     record["signals"] = _signals(results, signals, points)
     record["seconds"] = time.perf_counter() - began
@@ -53,6 +76,7 @@ def _signals(results, names, points) -> np.ndarray | None:
 def _worker() -> str:
     try:
         from distributed import get_worker
+
         return get_worker().address
     except (ImportError, ValueError):
         return "local"

@@ -6,14 +6,15 @@ by ``agilesat generate`` (the ``.ssd`` files are committed; a test keeps them in
 Running reads only the ``.ssd`` and the FMUs.  A variant is a set of parameter values
 applied on top of the system's: ``agilesat run scan_pitch:literal_spin``.
 """
+
 from __future__ import annotations
 
 import importlib
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Callable
 
 import numpy as np
 
@@ -25,16 +26,16 @@ NAMES = ("scan_pitch", "payload_sweep", "video_sar")
 class Scenario:
     name: str
     title: str
-    components: tuple[str, ...]               # instance name = FMU name
+    components: tuple[str, ...]  # instance name = FMU name
     connections: tuple[tuple[str, str], ...]  # ("A.output", "B.input"), whole variables
-    parameters: dict                          # "A.parameter" -> value (scalar or array)
+    parameters: dict  # "A.parameter" -> value (scalar or array)
     stop: float
     step: float
-    metrics: Callable                         # Results -> {"metrics", "diagnostics"}
-    figures: Callable                         # (Results, out_dir) -> [paths]
+    metrics: Callable  # Results -> {"metrics", "diagnostics"}
+    figures: Callable  # (Results, out_dir) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     algorithm: str = "gauss-seidel"
-    system: Path | None = None                # the .ssd, if not the shipped systems/<name>
+    system: Path | None = None  # the .ssd, if not the shipped systems/<name>
 
     @property
     def ssd(self) -> Path:
@@ -45,8 +46,10 @@ class Scenario:
         if not variant:
             return {}
         if variant not in self.variants:
-            raise KeyError(f"scenario {self.name} has no variant {variant!r}; variants: "
-                           f"{', '.join(self.variants) or 'none'}")
+            raise KeyError(
+                f"scenario {self.name} has no variant {variant!r}; variants: "
+                f"{', '.join(self.variants) or 'none'}"
+            )
         return scalar_values(self.variants[variant][1])
 
     def render_ssd(self, sources: dict | None = None, variant: str | None = None) -> bytes:
@@ -56,17 +59,29 @@ class Scenario:
         from ...fmus.build import BUILD_DIR
         from ...fmus.model_description import UNITS
         from ..ssp import render_ssd
+
         tables = {}
         for name in self.components:
             tables[name] = model_class(name).VARIABLES
         sources = sources or {
             name: Path(os.path.relpath(BUILD_DIR / f"{name}.fmu", SYSTEMS_DIR)).as_posix()
-            for name in self.components}
-        self.variant_parameters(variant)   # unknown variant: KeyError
+            for name in self.components
+        }
+        self.variant_parameters(variant)  # unknown variant: KeyError
         parameters = {**self.parameters, **(self.variants[variant][1] if variant else {})}
         title = f"{self.name}:{variant}" if variant else self.name
-        return render_ssd(title, sources, tables, self.connections, parameters, UNITS, 0.0,
-                          self.stop, self.step, self.algorithm)
+        return render_ssd(
+            title,
+            sources,
+            tables,
+            self.connections,
+            parameters,
+            UNITS,
+            0.0,
+            self.stop,
+            self.step,
+            self.algorithm,
+        )
 
 
 def get(name: str) -> Scenario:
@@ -75,8 +90,7 @@ def get(name: str) -> Scenario:
     return importlib.import_module(f"{__name__}.{name}").SCENARIO
 
 
-def summarize(metrics: dict, paper: dict | None = None,
-              requirements: dict | None = None) -> dict:
+def summarize(metrics: dict, paper: dict | None = None, requirements: dict | None = None) -> dict:
     """{name: (value, unit, display unit, description)} -> the summary's metric entries,
     with the paper's value beside each one it gives (value None: not reached).
 
@@ -85,18 +99,24 @@ def summarize(metrics: dict, paper: dict | None = None,
     (lo <= value <= hi; a value not reached does not meet it).  Campaign pass rates count
     ``met`` per run.
     """
-    entries = {name: {"value": None if v is None else float(v), "unit": u, "display_unit": d,
-                      "description": text,
-                      **({"paper": paper[name]} if paper and name in paper else {})}
-               for name, (v, u, d, text) in metrics.items()}
+    entries = {
+        name: {
+            "value": None if v is None else float(v),
+            "unit": u,
+            "display_unit": d,
+            "description": text,
+            **({"paper": paper[name]} if paper and name in paper else {}),
+        }
+        for name, (v, u, d, text) in metrics.items()
+    }
     for name, bounds in (requirements or {}).items():
         if not bounds or set(bounds) - {"min", "max"}:
             raise ValueError(f"requirement on {name}: expected 'min' and/or 'max', got {bounds}")
         value = entries[name]["value"]
-        entries[name]["requirement"] = {k: float(bounds[k]) for k in ("min", "max")
-                                        if k in bounds}
+        entries[name]["requirement"] = {k: float(bounds[k]) for k in ("min", "max") if k in bounds}
         entries[name]["met"] = value is not None and bool(
-            bounds.get("min", -math.inf) <= value <= bounds.get("max", math.inf))
+            bounds.get("min", -math.inf) <= value <= bounds.get("max", math.inf)
+        )
     return entries
 
 
@@ -104,6 +124,7 @@ def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:
     """C_BIᵀ (J w + Σ h) per row (N, 3), from the recorded SatelliteDynamics attitude and
     rate and the named devices' momentum columns."""
     from ...components.rotations import dcm, rotate_back
+
     w = results.vector("SatelliteDynamics.w_BI_B")
     body = w @ np.asarray(inertia).T + sum(results.vector(d) for d in devices)
     C = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
@@ -126,4 +147,3 @@ def scalar_values(values: dict) -> dict:
         for index in np.ndindex(array.shape):
             result[f"{key}[{','.join(str(i + 1) for i in index)}]"] = array[index].item()
     return result
-

@@ -1,5 +1,6 @@
 """Parameter values two FMUs of a scenario must share, each produced once here (the rules
 and the validator's check of any system are in :mod:`..agreement`)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -11,8 +12,11 @@ def cmg_hardware(**values) -> dict:
     unknown = set(values) - {"h_rotor", "gimbal_axis", "spin_ref"}
     if unknown:
         raise ValueError(f"not CMG hardware parameters: {sorted(unknown)}")
-    return {f"{fmu}.{name}": value for fmu in ("CmgCluster", "CmgSteering")
-            for name, value in values.items()}
+    return {
+        f"{fmu}.{name}": value
+        for fmu in ("CmgCluster", "CmgSteering")
+        for name, value in values.items()
+    }
 
 
 def hub_inertia(inertia, *controllers: str) -> dict:

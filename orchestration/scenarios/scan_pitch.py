@@ -5,6 +5,7 @@ Variant ``literal_spin``: the rotor spin exactly as printed in the paper's A_s0.
 cluster momentum bias then lies along +y and the maneuver pushes it beyond the cluster's
 capacity: the run is diagnosed as failed instead of flying a wrong maneuver silently.
 """
+
 from __future__ import annotations
 
 import math
@@ -16,13 +17,13 @@ from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.orbit_environment import WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
+from .. import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
-from .. import plots
 
 DEG = math.pi / 180
 # the paper's case ([Zhao 2016], DESIGN.md §4.1)
-ALTITUDE = 681000.0                    # m, sun-synchronous
+ALTITUDE = 681000.0  # m, sun-synchronous
 INCLINATION = math.radians(98.1)
 INERTIA = 956.0
 H_ROTOR = 16.65
@@ -30,7 +31,7 @@ H_ROTOR = 16.65
 PAPER_DELTA0 = (math.pi / 4, 0.0, -math.pi / 4, math.pi / 2, math.pi / 4, 0.0)
 #: the rotor spin as printed in A_s0 (the cluster's default is its reverse)
 PAPER_SPINS = five_pyramid()[1]
-RATE_LIMIT = 0.6                       # rad/s, gimbal rate limit (DESIGN.md §3)
+RATE_LIMIT = 0.6  # rad/s, gimbal rate limit (DESIGN.md §3)
 PROFILE = PitchProfile(theta0=120 * DEG, theta_f=0.0, duration=100.0, scan_rate=-0.8 * DEG)
 SCAN_RATE_TOLERANCE = 0.02 * DEG
 SETTLED_RATE = 0.01 * DEG  # |pitch rate| below this counts as stable
@@ -73,8 +74,10 @@ PARAMETERS = {
 }
 
 VARIANTS = {
-    "literal_spin": ("rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
-                     cmg_hardware(spin_ref=PAPER_SPINS)),
+    "literal_spin": (
+        "rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
+        cmg_hardware(spin_ref=PAPER_SPINS),
+    ),
 }
 
 #: the paper's results (Figs 4–11 and their text), SI
@@ -90,8 +93,12 @@ PAPER = {
 
 
 #: the imaging rate −0.8 ± 0.02 °/s ([Zhao 2016])
-REQUIREMENTS = {"imaging_pitch_rate_mean": {"min": PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
-                                            "max": PROFILE.scan_rate + SCAN_RATE_TOLERANCE}}
+REQUIREMENTS = {
+    "imaging_pitch_rate_mean": {
+        "min": PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
+        "max": PROFILE.scan_rate + SCAN_RATE_TOLERANCE,
+    }
+}
 
 
 def metrics(results) -> dict:
@@ -109,42 +116,96 @@ def metrics(results) -> dict:
     unsettled = (t >= PROFILE.times[3]) & (np.abs(body_rate) > SETTLED_RATE)
     t_need, h_need = required_momentum(results)
     m = {  # name: (value, unit, display unit, description)
-        "imaging_pitch_rate_mean": (_stat(np.mean, pitch_rate[imaging]), "rad/s", "deg/s",
-                                    "mean pitch rate relative to O over the imaging phase "
-                                    "(t3, t4]"),
-        "imaging_pitch_rate_span": (_stat(np.ptp, pitch_rate[imaging]), "rad/s", "deg/s",
-                                    "max − min pitch rate over the imaging phase"),
-        "pitch_at_T": (np.interp(PROFILE.duration, t, pitch) if t[-1] >= PROFILE.duration
-                       else None, "rad", "deg",
-                       "pitch at the end of the maneuver time T = 100 s (target 0)"),
+        "imaging_pitch_rate_mean": (
+            _stat(np.mean, pitch_rate[imaging]),
+            "rad/s",
+            "deg/s",
+            "mean pitch rate relative to O over the imaging phase (t3, t4]",
+        ),
+        "imaging_pitch_rate_span": (
+            _stat(np.ptp, pitch_rate[imaging]),
+            "rad/s",
+            "deg/s",
+            "max − min pitch rate over the imaging phase",
+        ),
+        "pitch_at_T": (
+            np.interp(PROFILE.duration, t, pitch) if t[-1] >= PROFILE.duration else None,
+            "rad",
+            "deg",
+            "pitch at the end of the maneuver time T = 100 s (target 0)",
+        ),
         "pitch_final": (pitch[-1], "rad", "deg", "pitch at the end of the run"),
-        "settling_time": (t[unsettled][-1] + step if unsettled.any() else
-                          PROFILE.times[3] if t[-1] >= PROFILE.times[3] else None,
-                          "s", "s", "from then on |body pitch rate| < 0.01 °/s"),
+        "settling_time": (
+            t[unsettled][-1] + step
+            if unsettled.any()
+            else PROFILE.times[3]
+            if t[-1] >= PROFILE.times[3]
+            else None,
+            "s",
+            "s",
+            "from then on |body pitch rate| < 0.01 °/s",
+        ),
         "max_gimbal_rate": (np.abs(delta_dot).max(), "rad/s", "rad/s", "max |gimbal rate|"),
-        "max_gimbal_accel": (np.abs(np.diff(delta_dot, axis=0)).max() / step, "rad/s2",
-                             "rad/s2", "max |gimbal acceleration| (rate change over a step)"),
-        "feedforward_torque_phase1": (_stat(np.mean, tau_cmd[phase == 1, 1]), "N.m", "N.m",
-                                      "commanded pitch torque in phase 1 (I θ̈m)"),
-        "feedforward_torque_phase3": (_stat(np.mean, tau_cmd[phase == 3, 1]), "N.m", "N.m",
-                                      "commanded pitch torque in phase 3 (−I θ̈m)"),
-        "max_abs_output_torque": (np.abs(delivered).max(), "N.m", "N.m",
-                                  "max |torque delivered by the cluster| (−ḣ − ω × h), any axis"),
+        "max_gimbal_accel": (
+            np.abs(np.diff(delta_dot, axis=0)).max() / step,
+            "rad/s2",
+            "rad/s2",
+            "max |gimbal acceleration| (rate change over a step)",
+        ),
+        "feedforward_torque_phase1": (
+            _stat(np.mean, tau_cmd[phase == 1, 1]),
+            "N.m",
+            "N.m",
+            "commanded pitch torque in phase 1 (I θ̈m)",
+        ),
+        "feedforward_torque_phase3": (
+            _stat(np.mean, tau_cmd[phase == 3, 1]),
+            "N.m",
+            "N.m",
+            "commanded pitch torque in phase 3 (−I θ̈m)",
+        ),
+        "max_abs_output_torque": (
+            np.abs(delivered).max(),
+            "N.m",
+            "N.m",
+            "max |torque delivered by the cluster| (−ḣ − ω × h), any axis",
+        ),
         "max_abs_output_torque_phases_1_4": (
-            np.abs(delivered[t <= PROFILE.times[3]]).max(), "N.m", "N.m",
-            "the same over phases 1–4 (feedforward only)"),
-        "min_singularity": (results["CmgCluster.singularity"].min(), "1", "1",
-                            "min det(A Aᵀ) of the cluster"),
-        "required_momentum_peak": (np.linalg.norm(h_need), "N.m.s", "N.m.s",
-                                   f"largest cluster momentum the planned maneuver needs "
-                                   f"(at t = {t_need:.1f} s)"),
-        "momentum_capacity_there": (momentum_capacity(h_need), "N.m.s", "N.m.s",
-                                    "the cluster's largest momentum in that direction"),
-        "max_roll_yaw_error": (roll_yaw_error(results).max(), "rad", "deg",
-                               "max tilt of the pitch axis from the orbit's y axis"),
-        "momentum_drift": (relative_drift(results.vector("SatelliteDynamics.H_I")), "1", "1",
-                           "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an "
-                           "isotropic hub)"),
+            np.abs(delivered[t <= PROFILE.times[3]]).max(),
+            "N.m",
+            "N.m",
+            "the same over phases 1–4 (feedforward only)",
+        ),
+        "min_singularity": (
+            results["CmgCluster.singularity"].min(),
+            "1",
+            "1",
+            "min det(A Aᵀ) of the cluster",
+        ),
+        "required_momentum_peak": (
+            np.linalg.norm(h_need),
+            "N.m.s",
+            "N.m.s",
+            f"largest cluster momentum the planned maneuver needs (at t = {t_need:.1f} s)",
+        ),
+        "momentum_capacity_there": (
+            momentum_capacity(h_need),
+            "N.m.s",
+            "N.m.s",
+            "the cluster's largest momentum in that direction",
+        ),
+        "max_roll_yaw_error": (
+            roll_yaw_error(results).max(),
+            "rad",
+            "deg",
+            "max tilt of the pitch axis from the orbit's y axis",
+        ),
+        "momentum_drift": (
+            relative_drift(results.vector("SatelliteDynamics.H_I")),
+            "1",
+            "1",
+            "max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an isotropic hub)",
+        ),
     }
     summary = summarize(m, PAPER, REQUIREMENTS)
     return {"metrics": summary, "diagnostics": diagnose(results, summary, t_need, h_need)}
@@ -171,11 +232,14 @@ def diagnose(results, summary, t_need, h_need) -> list[str]:
             f"{np.abs(commands).max():.2f} rad/s); the planned maneuver needs a cluster "
             f"momentum of {np.linalg.norm(h_need):.1f} N·m·s (at t = {t_need:.1f} s) where "
             f"the cluster holds at most {momentum_capacity(direction):.1f} N·m·s in that "
-            f"direction; min singularity measure Q = {summary['min_singularity']['value']:.3g}")
+            f"direction; min singularity measure Q = {summary['min_singularity']['value']:.3g}"
+        )
     rate = summary["imaging_pitch_rate_mean"]["value"]
     if t[-1] >= PROFILE.times[3] and not summary["imaging_pitch_rate_mean"]["met"]:
-        problems.append(f"imaging-phase pitch rate {rate / DEG:.4f} °/s is outside the "
-                        f"required {PROFILE.scan_rate / DEG:.2f} ± 0.02 °/s")
+        problems.append(
+            f"imaging-phase pitch rate {rate / DEG:.4f} °/s is outside the "
+            f"required {PROFILE.scan_rate / DEG:.2f} ± 0.02 °/s"
+        )
     return problems
 
 
@@ -204,12 +268,15 @@ def required_momentum(results) -> tuple[float, np.ndarray]:
     t = results.time
     pitch, rate = np.array([PROFILE.reference(x) for x in t]).T
     zero = np.zeros_like(pitch)
-    q_BO = (np.cos(pitch / 2), zero, np.sin(pitch / 2), zero)     # pitch about y
+    q_BO = (np.cos(pitch / 2), zero, np.sin(pitch / 2), zero)  # pitch about y
     C_BI = dcm(qmul(tuple(results.vector("OrbitEnvironment.q_OI").T), q_BO))
-    w_BI = np.column_stack((zero, rate, zero)) + np.array(
-        rotate(dcm(q_BO), tuple(results.vector("OrbitEnvironment.w_OI_O").T))).T
-    needed = np.array(rotate(C_BI, tuple(results.vector("SatelliteDynamics.H_I").T))).T \
-        - INERTIA * w_BI
+    w_BI = (
+        np.column_stack((zero, rate, zero))
+        + np.array(rotate(dcm(q_BO), tuple(results.vector("OrbitEnvironment.w_OI_O").T))).T
+    )
+    needed = (
+        np.array(rotate(C_BI, tuple(results.vector("SatelliteDynamics.H_I").T))).T - INERTIA * w_BI
+    )
     k = int(np.argmax(np.linalg.norm(needed, axis=1)))
     return float(t[k]), needed[k]
 
@@ -229,64 +296,133 @@ def figures(results, out_dir) -> list:
     rate = results["SatelliteDynamics.w_BO_B[2]"] * deg  # Euler rates spike at the lock
     reference = np.array([PROFILE.reference(x) for x in t]) * deg
     delta_dot = results.vector("CmgCluster.delta_dot")
-    accel = np.diff(delta_dot, axis=0) / (t[1] - t[0])        # as max_gimbal_accel
+    accel = np.diff(delta_dot, axis=0) / (t[1] - t[0])  # as max_gimbal_accel
     t3, t4 = PROFILE.times[2], PROFILE.times[3]
     imaging, settling, start = (t > t3) & (t <= t4), t >= t4, t <= 2.0
     gyros = [f"gimbal {i + 1}" for i in range(6)]
     scan, tolerance = PROFILE.scan_rate * deg, SCAN_RATE_TOLERANCE * deg
-    rate_limit = {"limit": (RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s"),
-                  "paper": ((-PAPER["max_gimbal_rate"], PAPER["max_gimbal_rate"]),
-                            f"paper: max {PAPER['max_gimbal_rate']:g} rad/s")}
+    rate_limit = {
+        "limit": (RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s"),
+        "paper": (
+            (-PAPER["max_gimbal_rate"], PAPER["max_gimbal_rate"]),
+            f"paper: max {PAPER['max_gimbal_rate']:g} rad/s",
+        ),
+    }
     accel_limit = PARAMETERS["CmgCluster.accel_limit"]
     torque = delivered_torque(results)
     paper_torque = PAPER["max_abs_output_torque"]
     return [
-        plots.panels(out_dir / "fig04_pitch.png", "Fig. 4 pitch angle (B rel. O)",
-                     [(t, {"achieved": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
-                      (t, {"achieved − planned": pitch - reference[:, 0]}, "error [deg]")]),
-        plots.panels(out_dir / "fig05_pitch_rate.png", "Fig. 5 pitch rate",
-                     [(t, {"body pitch rate ω_y (B rel. O, in B)": rate,
-                           "planned": reference[:, 1]}, "pitch rate [°/s]"),
-                      (t, {"achieved − planned": rate - reference[:, 1]}, "error [°/s]")]),
-        plots.panels(out_dir / "fig06_imaging_and_settling.png",
-                     "Fig. 6 imaging-phase and settling pitch rate (B rel. O, in B)",
-                     [(t[imaging], {"pitch rate": rate[imaging]}, "imaging [°/s]",
-                       {"band": (scan - tolerance, scan + tolerance,
-                                 f"required {scan:g} ± {tolerance:g} °/s"),
-                        "paper": (PAPER["imaging_pitch_rate_mean"] * deg,
-                                  f"paper: mean {PAPER['imaging_pitch_rate_mean'] * deg:g} °/s")}),
-                      (t[settling], {"pitch rate": rate[settling]}, "settling [°/s]")]),
-        plots.lines(out_dir / "fig07_gimbal_rates.png", "Fig. 7 gimbal rates", t,
-                    dict(zip(gyros, delta_dot.T)), "gimbal rate [rad/s]", **rate_limit),
-        plots.panels(out_dir / "fig08_initial_gimbal_rates.png",
-                     "Fig. 8 gimbal rates and accelerations, first 2 s",
-                     [(t[start], dict(zip(gyros, delta_dot[start].T)), "gimbal rate [rad/s]",
-                       rate_limit),
-                      (t[1:][start[1:]], dict(zip(gyros, accel[start[1:]].T)),
-                       "gimbal accel. [rad/s²]",
-                       {"limit": (accel_limit, f"limit ±{accel_limit:g} rad/s²"),
-                        "paper": ((-PAPER["max_gimbal_accel"], PAPER["max_gimbal_accel"]),
-                                  f"paper: max {PAPER['max_gimbal_accel']:g} rad/s²")})]),
-        plots.lines(out_dir / "fig09_gimbal_angles.png", "Fig. 9 gimbal angles", t,
-                    dict(zip(gyros, results.vector("CmgCluster.delta").T * deg)),
-                    "gimbal angle [°]"),
-        plots.lines(out_dir / "fig10_singularity.png", "Fig. 10 singularity measure", t,
-                    {"Q": results["CmgCluster.singularity"]},
-                    "Q = det(A Aᵀ) [-], A = [a₁ … a₆] torque axes", bottom=0.0),
-        plots.panels(out_dir / "fig11_output_torque.png",
-                     "Fig. 11 cluster output torque −ḣ − ω × h, in B",
-                     [(t, {f"τ_{axis} (B)": torque[:, i]}, f"τ_{axis} [N·m]",
-                       {"paper": ((-paper_torque, paper_torque),
-                                  f"paper: ±{paper_torque:g} N·m")})
-                      for i, axis in enumerate("xyz")]),
+        plots.panels(
+            out_dir / "fig04_pitch.png",
+            "Fig. 4 pitch angle (B rel. O)",
+            [
+                (t, {"achieved": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
+                (t, {"achieved − planned": pitch - reference[:, 0]}, "error [deg]"),
+            ],
+        ),
+        plots.panels(
+            out_dir / "fig05_pitch_rate.png",
+            "Fig. 5 pitch rate",
+            [
+                (
+                    t,
+                    {"body pitch rate ω_y (B rel. O, in B)": rate, "planned": reference[:, 1]},
+                    "pitch rate [°/s]",
+                ),
+                (t, {"achieved − planned": rate - reference[:, 1]}, "error [°/s]"),
+            ],
+        ),
+        plots.panels(
+            out_dir / "fig06_imaging_and_settling.png",
+            "Fig. 6 imaging-phase and settling pitch rate (B rel. O, in B)",
+            [
+                (
+                    t[imaging],
+                    {"pitch rate": rate[imaging]},
+                    "imaging [°/s]",
+                    {
+                        "band": (
+                            scan - tolerance,
+                            scan + tolerance,
+                            f"required {scan:g} ± {tolerance:g} °/s",
+                        ),
+                        "paper": (
+                            PAPER["imaging_pitch_rate_mean"] * deg,
+                            f"paper: mean {PAPER['imaging_pitch_rate_mean'] * deg:g} °/s",
+                        ),
+                    },
+                ),
+                (t[settling], {"pitch rate": rate[settling]}, "settling [°/s]"),
+            ],
+        ),
+        plots.lines(
+            out_dir / "fig07_gimbal_rates.png",
+            "Fig. 7 gimbal rates",
+            t,
+            dict(zip(gyros, delta_dot.T)),
+            "gimbal rate [rad/s]",
+            **rate_limit,
+        ),
+        plots.panels(
+            out_dir / "fig08_initial_gimbal_rates.png",
+            "Fig. 8 gimbal rates and accelerations, first 2 s",
+            [
+                (t[start], dict(zip(gyros, delta_dot[start].T)), "gimbal rate [rad/s]", rate_limit),
+                (
+                    t[1:][start[1:]],
+                    dict(zip(gyros, accel[start[1:]].T)),
+                    "gimbal accel. [rad/s²]",
+                    {
+                        "limit": (accel_limit, f"limit ±{accel_limit:g} rad/s²"),
+                        "paper": (
+                            (-PAPER["max_gimbal_accel"], PAPER["max_gimbal_accel"]),
+                            f"paper: max {PAPER['max_gimbal_accel']:g} rad/s²",
+                        ),
+                    },
+                ),
+            ],
+        ),
+        plots.lines(
+            out_dir / "fig09_gimbal_angles.png",
+            "Fig. 9 gimbal angles",
+            t,
+            dict(zip(gyros, results.vector("CmgCluster.delta").T * deg)),
+            "gimbal angle [°]",
+        ),
+        plots.lines(
+            out_dir / "fig10_singularity.png",
+            "Fig. 10 singularity measure",
+            t,
+            {"Q": results["CmgCluster.singularity"]},
+            "Q = det(A Aᵀ) [-], A = [a₁ … a₆] torque axes",
+            bottom=0.0,
+        ),
+        plots.panels(
+            out_dir / "fig11_output_torque.png",
+            "Fig. 11 cluster output torque −ḣ − ω × h, in B",
+            [
+                (
+                    t,
+                    {f"τ_{axis} (B)": torque[:, i]},
+                    f"τ_{axis} [N·m]",
+                    {"paper": ((-paper_torque, paper_torque), f"paper: ±{paper_torque:g} N·m")},
+                )
+                for i, axis in enumerate("xyz")
+            ],
+        ),
     ]
 
 
 SCENARIO = Scenario(
     name="scan_pitch",
     title="CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase",
-    components=("OrbitEnvironment", "SatelliteDynamics", "CmgCluster", "CmgSteering",
-                "PitchManeuverController"),
+    components=(
+        "OrbitEnvironment",
+        "SatelliteDynamics",
+        "CmgCluster",
+        "CmgSteering",
+        "PitchManeuverController",
+    ),
     connections=CONNECTIONS,
     parameters=PARAMETERS,
     stop=150.0,

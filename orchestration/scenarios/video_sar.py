@@ -29,6 +29,7 @@ two-line elements, a target and a search window, the zero-Doppler passes (SGP4 i
 OrbitEnvironment), and :func:`pass_scenario` makes this scenario for one of them: 200 s
 centred on zero Doppler, the satellite starting on the reference.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -38,24 +39,27 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.analysis.mission import (VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT,
-                                            VIDEO_SAR_TARGET_LON)
+from ...components.analysis.mission import (
+    VIDEO_SAR_STARE,
+    VIDEO_SAR_TARGET_LAT,
+    VIDEO_SAR_TARGET_LON,
+)
 from ...components.analysis.passes import find_passes, look_geometry
 from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
+from .. import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
-from .. import plots
 from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
 
 DEG = math.pi / 180
 TARGET = (VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON, 0.0)
 ZERO_DOPPLER = "2016-11-25T08:09:43"
-HALF_STARE = VIDEO_SAR_STARE / 2          # s each side of zero Doppler
-BANDWIDTH, DAMPING = 0.5, 0.7            # rad/s, 1: the attitude loop
+HALF_STARE = VIDEO_SAR_STARE / 2  # s each side of zero Doppler
+BANDWIDTH, DAMPING = 0.5, 0.7  # rad/s, 1: the attitude loop
 #: pointing accuracy the run is held to (ours: the paper states none; a tenth of a
 #: typical X-band spotlight beam of ~0.5°)
 POINTING_REQUIREMENT = 0.05 * DEG
@@ -80,10 +84,18 @@ def real_epoch(orbit: dict) -> dict:
 #: VIDEO_SAR_LOOK_ANGLE, "right", "ascending", t0=HALF_STARE)`` rounded to 12 digits
 #: (tests/test_passes.py solves it again and compares).
 PASS = {
-    "semi_major_axis": 6945137.0, "eccentricity": 0.0, "inclination": 1.704466827309,
-    "arg_perigee": 0.0, "j2": True, "earth_angle0": 0.0, "epoch": "2016-11-25T08:08:03",
-    "target_lat": 0.578751179961, "target_lon": 2.264041105687, "target_alt": 0.0,
-    "raan": 5.554027575477, "true_anomaly0": 0.462124375447,
+    "semi_major_axis": 6945137.0,
+    "eccentricity": 0.0,
+    "inclination": 1.704466827309,
+    "arg_perigee": 0.0,
+    "j2": True,
+    "earth_angle0": 0.0,
+    "epoch": "2016-11-25T08:08:03",
+    "target_lat": 0.578751179961,
+    "target_lon": 2.264041105687,
+    "target_alt": 0.0,
+    "raan": 5.554027575477,
+    "true_anomaly0": 0.462124375447,
 }
 #: the shipped pass, its epoch as a Real: the system sets no String
 ORBIT = real_epoch(PASS)
@@ -100,8 +112,10 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
     reference.start(0.0)
     C_RO = dcm_from_quat(quat_mul(quat_conj(env.get("q_OI")), reference.get("q_ref")))
     rate = reference.get("w_ref") - C_RO @ env.get("w_OI_O")
-    return ([_rounded(float(x)) for x in reference.get("euler_ref_BO")],
-            [_rounded(float(x)) for x in rate])
+    return (
+        [_rounded(float(x)) for x in reference.get("euler_ref_BO")],
+        [_rounded(float(x)) for x in rate],
+    )
 
 
 #: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set,
@@ -110,10 +124,14 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
 DELTA0 = [0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566]
 #: (attitude0, rate0) on the reference at t = 0, frozen: ``initial_state(ORBIT, GUIDANCE)``
 #: and with yaw 0 (tests/test_passes.py computes them again)
-ON_REFERENCE = ([-0.446370651122, 0.804885764925, 0.0],
-                [-0.000684611902, -0.004466724288, -0.000198845573])
-ON_REFERENCE_YAW_0 = ([-0.446370651122, 0.804885764925, 0.0],
-                      [-0.000684611902, -0.004466724288, -0.000711599654])
+ON_REFERENCE = (
+    [-0.446370651122, 0.804885764925, 0.0],
+    [-0.000684611902, -0.004466724288, -0.000198845573],
+)
+ON_REFERENCE_YAW_0 = (
+    [-0.446370651122, 0.804885764925, 0.0],
+    [-0.000684611902, -0.004466724288, -0.000711599654],
+)
 
 CONNECTIONS = (
     *((f"OrbitEnvironment.{name}", f"StaringGuidance.{name}") for name in _GUIDANCE_INPUTS),
@@ -133,7 +151,6 @@ CONNECTIONS = (
     ("CmgCluster.h", "SatelliteDynamics.h_cmg"),
     ("CmgCluster.hdot", "SatelliteDynamics.hdot_cmg"),
 )
-
 
 
 def parameters(orbit: dict, guidance: dict, on_reference: tuple | None = None) -> dict:
@@ -161,17 +178,31 @@ def parameters(orbit: dict, guidance: dict, on_reference: tuple | None = None) -
 PARAMETERS = parameters(ORBIT, GUIDANCE, ON_REFERENCE)
 
 VARIANTS = {
-    "no_yaw_compensation": ("yaw 0 (eq 11 only): the footprint turns on the ground",
-                            {"StaringGuidance.yaw_compensation": False,
-                             **dict(zip(("SatelliteDynamics.attitude0",
-                                         "SatelliteDynamics.rate0"), ON_REFERENCE_YAW_0))}),
-    "no_feedforward": ("PD attitude law alone, no feedforward of the reference acceleration",
-                       {"AttitudeController.acceleration_feedforward": False}),
+    "no_yaw_compensation": (
+        "yaw 0 (eq 11 only): the footprint turns on the ground",
+        {
+            "StaringGuidance.yaw_compensation": False,
+            **dict(
+                zip(("SatelliteDynamics.attitude0", "SatelliteDynamics.rate0"), ON_REFERENCE_YAW_0)
+            ),
+        },
+    ),
+    "no_feedforward": (
+        "PD attitude law alone, no feedforward of the reference acceleration",
+        {"AttitudeController.acceleration_feedforward": False},
+    ),
 }
 
 
-def tle_pass(line1: str, line2: str, target=TARGET, epoch=None, hours: float = 24.0,
-             look_angle: float | None = None, max_look_angle: float = 60 * DEG):
+def tle_pass(
+    line1: str,
+    line2: str,
+    target=TARGET,
+    epoch=None,
+    hours: float = 24.0,
+    look_angle: float | None = None,
+    max_look_angle: float = 60 * DEG,
+):
     """(OrbitEnvironment parameters of the stare, the chosen pass, every pass found).
 
     Searches ``hours`` from ``epoch`` (default: the TLE's epoch) for zero-Doppler passes
@@ -179,23 +210,35 @@ def tle_pass(line1: str, line2: str, target=TARGET, epoch=None, hours: float = 2
     look angle is closest to ``look_angle``, or the first.  The parameters date t = 0 at
     zero Doppler − 100 s.  ValueError if there is no such pass.
     """
-    search = {"tle_line1": line1, "tle_line2": line2, "epoch": "" if epoch is None else
-              format_epoch(epoch), **dict(zip(("target_lat", "target_lon", "target_alt"),
-                                              target))}
+    search = {
+        "tle_line1": line1,
+        "tle_line2": line2,
+        "epoch": "" if epoch is None else format_epoch(epoch),
+        **dict(zip(("target_lat", "target_lon", "target_alt"), target)),
+    }
     if epoch is None:
         days, seconds = tle_epoch(load_tle(line1, line2))
         start = J2000 + datetime.timedelta(days=days, seconds=seconds)
     else:
         start = parse_epoch(epoch)
-    passes = [g for g in find_passes(search, 0.0, hours * 3600.0)
-              if g.look_angle <= max_look_angle and g.time >= HALF_STARE]
+    passes = [
+        g
+        for g in find_passes(search, 0.0, hours * 3600.0)
+        if g.look_angle <= max_look_angle and g.time >= HALF_STARE
+    ]
     if not passes:
-        raise ValueError(f"no pass within {math.degrees(max_look_angle):g}° off nadir in "
-                         f"{hours:g} h from {format_epoch(start)}")
-    chosen = passes[0] if look_angle is None else min(
-        passes, key=lambda g: abs(g.look_angle - look_angle))
-    orbit = dict(search, epoch=format_epoch(
-        start + datetime.timedelta(seconds=chosen.time - HALF_STARE)))
+        raise ValueError(
+            f"no pass within {math.degrees(max_look_angle):g}° off nadir in "
+            f"{hours:g} h from {format_epoch(start)}"
+        )
+    chosen = (
+        passes[0]
+        if look_angle is None
+        else min(passes, key=lambda g: abs(g.look_angle - look_angle))
+    )
+    orbit = dict(
+        search, epoch=format_epoch(start + datetime.timedelta(seconds=chosen.time - HALF_STARE))
+    )
     return orbit, chosen, passes
 
 
@@ -204,14 +247,18 @@ def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> 
     start of the stare), its system written to ``out_dir/video_sar_pass.ssd`` with the FMUs
     of fmus/build."""
     from ...fmus.build import BUILD_DIR
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     scenario = dataclasses.replace(
-        SCENARIO, parameters=parameters(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation)),
+        SCENARIO,
+        parameters=parameters(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation)),
         variants={},
-                                   system=out_dir / "video_sar_pass.ssd")
-    scenario.system.write_bytes(scenario.render_ssd(
-        {name: str(BUILD_DIR / f"{name}.fmu") for name in scenario.components}))
+        system=out_dir / "video_sar_pass.ssd",
+    )
+    scenario.system.write_bytes(
+        scenario.render_ssd({name: str(BUILD_DIR / f"{name}.fmu") for name in scenario.components})
+    )
     return scenario
 
 
@@ -225,10 +272,9 @@ def boresight_B(results) -> np.ndarray:
 def boresight_error(results) -> np.ndarray:
     """Angle (rad) between the body boresight and the line of sight to the target."""
     C_BI = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
-    beam = np.array(rotate_back(C_BI, tuple(boresight_B(results)))).T   # the beam in I
+    beam = np.array(rotate_back(C_BI, tuple(boresight_B(results)))).T  # the beam in I
     los = results.vector("OrbitEnvironment.r_T_I") - results.vector("OrbitEnvironment.r_I")
-    return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1),
-                      np.einsum("ij,ij->i", beam, los))
+    return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1), np.einsum("ij,ij->i", beam, los))
 
 
 def footprint_rotation(results) -> np.ndarray:
@@ -242,8 +288,10 @@ def footprint_rotation(results) -> np.ndarray:
 
 
 def _geometry(results, k):
-    return look_geometry(*(results.vector(f"OrbitEnvironment.{n}")[k]
-                           for n in ("r_I", "v_I", "r_T_I", "v_T_I")), time=results.time[k])
+    return look_geometry(
+        *(results.vector(f"OrbitEnvironment.{n}")[k] for n in ("r_I", "v_I", "r_T_I", "v_T_I")),
+        time=results.time[k],
+    )
 
 
 def metrics(results) -> dict:
@@ -257,43 +305,86 @@ def metrics(results) -> dict:
     euler = results.vector("SatelliteDynamics.euler_BO")
     euler_rate = results.vector("SatelliteDynamics.euler_rate_BO")
     m = {  # name: (value, unit, display unit, description)
-        "zero_doppler_time": (t[closest], "s", "s", "communication point nearest zero "
-                              "Doppler (designed: 100 s, 08:09:43 UTC)"),
-        "look_angle_zero_doppler": (geometry.look_angle, "rad", "deg",
-                                    "off-nadir look angle there (designed: 30°)"),
+        "zero_doppler_time": (
+            t[closest],
+            "s",
+            "s",
+            "communication point nearest zero Doppler (designed: 100 s, 08:09:43 UTC)",
+        ),
+        "look_angle_zero_doppler": (
+            geometry.look_angle,
+            "rad",
+            "deg",
+            "off-nadir look angle there (designed: 30°)",
+        ),
         "slant_range_zero_doppler": (geometry.slant_range, "m", "km", "slant range there"),
         "pointing_error_max": (error.max(), "rad", "deg", "max angle boresight to target"),
-        "pointing_error_rms": (math.sqrt(np.mean(error**2)), "rad", "deg",
-                               "RMS angle boresight to target"),
-        "footprint_rotation_max": (np.abs(rotation).max(), "rad", "deg",
-                                   "max turn of the achieved footprint on the ground"),
-        "footprint_rotation_end": (rotation[-1], "rad", "deg",
-                                   "turn of the achieved footprint at the end of the stare"),
+        "pointing_error_rms": (
+            math.sqrt(np.mean(error**2)),
+            "rad",
+            "deg",
+            "RMS angle boresight to target",
+        ),
+        "footprint_rotation_max": (
+            np.abs(rotation).max(),
+            "rad",
+            "deg",
+            "max turn of the achieved footprint on the ground",
+        ),
+        "footprint_rotation_end": (
+            rotation[-1],
+            "rad",
+            "deg",
+            "turn of the achieved footprint at the end of the stare",
+        ),
         "roll_range": (np.ptp(euler[:, 0]), "rad", "deg", "max − min roll (B rel. O)"),
         "pitch_range": (np.ptp(euler[:, 1]), "rad", "deg", "max − min pitch"),
         "yaw_range": (np.ptp(euler[:, 2]), "rad", "deg", "max − min yaw"),
-        "max_abs_euler_rate": (np.abs(euler_rate).max(), "rad/s", "deg/s",
-                               "max |Euler angle rate| (any axis)"),
-        "max_gimbal_rate": (np.abs(results.vector("CmgCluster.delta_dot")).max(), "rad/s",
-                            "rad/s", "max |gimbal rate|"),
-        "max_cmg_momentum": (np.linalg.norm(results.vector("CmgCluster.h"), axis=1).max(),
-                             "N.m.s", "N.m.s", "max |cluster momentum|"),
-        "min_singularity": (results["CmgCluster.singularity"].min(), "1", "1",
-                            "min det(A Aᵀ) of the cluster"),
-        "momentum_drift": (relative_drift(results.vector("SatelliteDynamics.H_I")), "1", "1",
-                           "max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external "
-                           "torque)"),
+        "max_abs_euler_rate": (
+            np.abs(euler_rate).max(),
+            "rad/s",
+            "deg/s",
+            "max |Euler angle rate| (any axis)",
+        ),
+        "max_gimbal_rate": (
+            np.abs(results.vector("CmgCluster.delta_dot")).max(),
+            "rad/s",
+            "rad/s",
+            "max |gimbal rate|",
+        ),
+        "max_cmg_momentum": (
+            np.linalg.norm(results.vector("CmgCluster.h"), axis=1).max(),
+            "N.m.s",
+            "N.m.s",
+            "max |cluster momentum|",
+        ),
+        "min_singularity": (
+            results["CmgCluster.singularity"].min(),
+            "1",
+            "1",
+            "min det(A Aᵀ) of the cluster",
+        ),
+        "momentum_drift": (
+            relative_drift(results.vector("SatelliteDynamics.H_I")),
+            "1",
+            "1",
+            "max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external torque)",
+        ),
     }
     summary = summarize(m, requirements={"pointing_error_max": {"max": POINTING_REQUIREMENT}})
     problems = []
     if error.max() > POINTING_REQUIREMENT:
         worst = int(np.argmax(error))
-        problems.append(f"pointing error {error.max() / DEG:.4f}° at t = {t[worst]:.2f} s "
-                        f"exceeds the {POINTING_REQUIREMENT / DEG}° assumed requirement")
+        problems.append(
+            f"pointing error {error.max() / DEG:.4f}° at t = {t[worst]:.2f} s "
+            f"exceeds the {POINTING_REQUIREMENT / DEG}° assumed requirement"
+        )
     commands = np.abs(results.vector("CmgSteering.delta_dot_cmd")).max()
     if commands > RATE_LIMIT:
-        problems.append(f"gimbal rate commands reached {commands:.2f} rad/s, above the "
-                        f"cluster's {RATE_LIMIT} rad/s limit")
+        problems.append(
+            f"gimbal rate commands reached {commands:.2f} rad/s, above the "
+            f"cluster's {RATE_LIMIT} rad/s limit"
+        )
     return {"metrics": summary, "diagnostics": problems}
 
 
@@ -308,37 +399,74 @@ def figures(results, out_dir) -> list:
     ref_rate = np.gradient(ref, t, axis=0)
     axes = ("roll", "pitch", "yaw")
     return [
-        plots.panels(out_dir / "fig07_euler_angles.png", "Fig. 7 Euler angles (B rel. O)",
-                     [(t, {name: euler[:, i], "reference": ref[:, i]}, f"{name} [°]")
-                      for i, name in enumerate(axes)]),
-        plots.panels(out_dir / "fig07_euler_rates.png", "Fig. 7 Euler angle rates (B rel. O)",
-                     [(t, {name: rate[:, i], "reference": ref_rate[:, i]}, f"{name} [°/s]")
-                      for i, name in enumerate(axes)]),
-        plots.lines(out_dir / "pointing_error.png", "Boresight to target", t,
-                    {"pointing error": boresight_error(results) * deg}, "angle [°]",
-                    limit=((POINTING_REQUIREMENT * deg,),
-                           f"required ≤ {POINTING_REQUIREMENT * deg:g}° (ours)"), bottom=0.0),
-        plots.lines(out_dir / "footprint_rotation.png", "Footprint rotation on the ground", t,
-                    {"achieved": footprint_rotation(results) * deg,
-                     "reference": results["StaringGuidance.footprint_rotation"] * deg},
-                    "rotation [deg]"),
-        plots.panels(out_dir / "look_geometry.png", "Look geometry",
-                     [(t, {"look angle": results["StaringGuidance.look_angle"] * deg},
-                       "off nadir [deg]"),
-                      (t, {"slant range": results["StaringGuidance.slant_range"] / 1e3},
-                       "range [km]")]),
-        plots.lines(out_dir / "gimbal_rates.png", "Gimbal rates", t,
-                    {f"gimbal {i + 1}": x for i, x in
-                     enumerate(results.vector("CmgCluster.delta_dot").T)}, "rate [rad/s]",
-                    limit=(RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s")),
+        plots.panels(
+            out_dir / "fig07_euler_angles.png",
+            "Fig. 7 Euler angles (B rel. O)",
+            [
+                (t, {name: euler[:, i], "reference": ref[:, i]}, f"{name} [°]")
+                for i, name in enumerate(axes)
+            ],
+        ),
+        plots.panels(
+            out_dir / "fig07_euler_rates.png",
+            "Fig. 7 Euler angle rates (B rel. O)",
+            [
+                (t, {name: rate[:, i], "reference": ref_rate[:, i]}, f"{name} [°/s]")
+                for i, name in enumerate(axes)
+            ],
+        ),
+        plots.lines(
+            out_dir / "pointing_error.png",
+            "Boresight to target",
+            t,
+            {"pointing error": boresight_error(results) * deg},
+            "angle [°]",
+            limit=(
+                (POINTING_REQUIREMENT * deg,),
+                f"required ≤ {POINTING_REQUIREMENT * deg:g}° (ours)",
+            ),
+            bottom=0.0,
+        ),
+        plots.lines(
+            out_dir / "footprint_rotation.png",
+            "Footprint rotation on the ground",
+            t,
+            {
+                "achieved": footprint_rotation(results) * deg,
+                "reference": results["StaringGuidance.footprint_rotation"] * deg,
+            },
+            "rotation [deg]",
+        ),
+        plots.panels(
+            out_dir / "look_geometry.png",
+            "Look geometry",
+            [
+                (t, {"look angle": results["StaringGuidance.look_angle"] * deg}, "off nadir [deg]"),
+                (t, {"slant range": results["StaringGuidance.slant_range"] / 1e3}, "range [km]"),
+            ],
+        ),
+        plots.lines(
+            out_dir / "gimbal_rates.png",
+            "Gimbal rates",
+            t,
+            {f"gimbal {i + 1}": x for i, x in enumerate(results.vector("CmgCluster.delta_dot").T)},
+            "rate [rad/s]",
+            limit=(RATE_LIMIT, f"limit ±{RATE_LIMIT:g} rad/s"),
+        ),
     ]
 
 
 SCENARIO = Scenario(
     name="video_sar",
     title="200-s stare at Sasebo from a 567 km sun-synchronous orbit, yaw-compensated",
-    components=("OrbitEnvironment", "StaringGuidance", "AttitudeController", "CmgSteering",
-                "CmgCluster", "SatelliteDynamics"),
+    components=(
+        "OrbitEnvironment",
+        "StaringGuidance",
+        "AttitudeController",
+        "CmgSteering",
+        "CmgCluster",
+        "SatelliteDynamics",
+    ),
     connections=CONNECTIONS,
     parameters=PARAMETERS,
     stop=2 * HALF_STARE,

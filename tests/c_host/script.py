@@ -5,6 +5,7 @@ that the C host's results must equal the master's bit for bit.
 
 Only model descriptions are read here; no FMU is loaded in this process.
 """
+
 from __future__ import annotations
 
 import zipfile
@@ -35,8 +36,7 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
         directory = unzip_root / name
         with zipfile.ZipFile(d.path) as archive:
             archive.extractall(directory)
-        lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} "
-                     f"{name}")
+        lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} {name}")
     lines.append(f"slots {len(slots)}")
     lines += [f"column {k} {name}.{output}" for (name, output), k in slots.items()]
 
@@ -45,8 +45,11 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
         return f"{ids[name]} {TYPES[v.type]} {v.valueReference}"
 
     def put_inputs(name):
-        return [f"put {var(name, u)} {slots[plan.sources[(b, u)]]}"
-                for (b, u) in plan.sources if b == name]
+        return [
+            f"put {var(name, u)} {slots[plan.sources[(b, u)]]}"
+            for (b, u) in plan.sources
+            if b == name
+        ]
 
     def get(name, outputs):
         return [f"get {var(name, y)} {slots[(name, y)]}" for y in outputs]
@@ -62,9 +65,10 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     components = [c.name for c in system.components]
     for name in ids:
         lines += [f"instantiate {ids[name]}", f"setup {ids[name]} {start!r} {stop!r}"]
-    lines += [f"set {var(p.component, p.name)} "
-              f"{p.value if p.type == 'String' else repr(float(p.value))}"
-              for p in system.parameters]
+    lines += [
+        f"set {var(p.component, p.name)} {p.value if p.type == 'String' else repr(float(p.value))}"
+        for p in system.parameters
+    ]
     lines += [f"enter {ids[name]}" for name in components]
     lines += evaluate(plan.init, stepping=False)
     for name in ids:
@@ -72,8 +76,13 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     lines += [f"exit {ids[name]}" for name in components]
     for name in ids:
         lines += get(name, descriptions[name].outputs)
-    lines += ["record", f"loop {n_steps} {start!r} {step!r}", *evaluate(plan.steps, True),
-              "record", "end"]
+    lines += [
+        "record",
+        f"loop {n_steps} {start!r} {step!r}",
+        *evaluate(plan.steps, True),
+        "record",
+        "end",
+    ]
     lines += [f"terminate {ids[name]}" for name in components]
     Path(script).write_text("\n".join(lines) + "\n")
     return [f"{name}.{output}" for (name, output) in slots]

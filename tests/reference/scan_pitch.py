@@ -125,8 +125,8 @@ T_MAN = 100.0
 F2 = 0.2
 F4 = 0.6
 I_AXIS = 956.0
-KP_RY, KD_RY = 86.0, 574.0   # roll / yaw PD
-C1, C2 = 0.9, 578.0          # pitch PD in phase 5
+KP_RY, KD_RY = 86.0, 574.0  # roll / yaw PD
+C1, C2 = 0.9, 578.0  # pitch PD in phase 5
 
 
 # --- small quaternion helpers (plain floats, tuples) -------------------------------------------
@@ -134,10 +134,12 @@ def qmul(a, b):
     """Hamilton product a ⊗ b (scalar first)."""
     a0, a1, a2, a3 = a
     b0, b1, b2, b3 = b
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+    return (
+        a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+        a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+        a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+        a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0,
+    )
 
 
 def qconj(q):
@@ -159,9 +161,11 @@ def rot(q, v):
     k = q0 * q0 - q1 * q1 - q2 * q2 - q3 * q3
     d = 2.0 * (q1 * v1 + q2 * v2 + q3 * v3)
     c0 = 2.0 * q0
-    return (k * v1 + d * q1 - c0 * (q2 * v3 - q3 * v2),
-            k * v2 + d * q2 - c0 * (q3 * v1 - q1 * v3),
-            k * v3 + d * q3 - c0 * (q1 * v2 - q2 * v1))
+    return (
+        k * v1 + d * q1 - c0 * (q2 * v3 - q3 * v2),
+        k * v2 + d * q2 - c0 * (q3 * v1 - q1 * v3),
+        k * v3 + d * q3 - c0 * (q1 * v2 - q2 * v1),
+    )
 
 
 def dcm_to_quat(C) -> tuple:
@@ -241,7 +245,7 @@ def q_oi(t: float) -> tuple:
     """q_OI(t) = q1(i) ⊗ q3(n t) ⊗ q(M0), continuous in t."""
     hu = 0.5 * N_ORBIT * t
     cu, su = math.cos(hu), math.sin(hu)
-    p = (_CI2 * cu, _SI2 * cu, -_SI2 * su, _CI2 * su)   # q1(i) ⊗ q3(u)
+    p = (_CI2 * cu, _SI2 * cu, -_SI2 * su, _CI2 * su)  # q1(i) ⊗ q3(u)
     return qmul(p, Q_M0)
 
 
@@ -362,10 +366,12 @@ def _qdot(q, H, h):
     wx = (cx * inv - h[0]) / J_HUB
     wy = (cy * inv - h[1]) / J_HUB
     wz = (cz * inv - h[2]) / J_HUB
-    return (0.5 * (-q1 * wx - q2 * wy - q3 * wz),
-            0.5 * (q0 * wx + q2 * wz - q3 * wy),
-            0.5 * (q0 * wy + q3 * wx - q1 * wz),
-            0.5 * (q0 * wz + q1 * wy - q2 * wx))
+    return (
+        0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+        0.5 * (q0 * wx + q2 * wz - q3 * wy),
+        0.5 * (q0 * wy + q3 * wx - q1 * wz),
+        0.5 * (q0 * wz + q1 * wy - q2 * wx),
+    )
 
 
 def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
@@ -385,7 +391,7 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
     jinv = 1.0 / J_HUB
     hr = H_ROTOR
     rmax, acc = RATE_MAX, ACCEL_MAX
-    nw = -N_ORBIT                                   # w_OI_O = (0, nw, 0)
+    nw = -N_ORBIT  # w_OI_O = (0, nw, 0)
     hq = 0.5 * N_ORBIT
     ci2, si2 = _CI2, _SI2
     m0, m1, m2, m3 = Q_M0
@@ -406,8 +412,9 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
     hy = hr * sum(g[1] * ci + g[4] * si for g, ci, si in zip(gyro, c, s))
     hz = hr * sum(g[2] * ci + g[5] * si for g, ci, si in zip(gyro, c, s))
     w0 = rot(q_bo0, W_OI_O)
-    Hx, Hy, Hz = rot((q0, -q1, -q2, -q3), (J_HUB * w0[0] + hx, J_HUB * w0[1] + hy,
-                                             J_HUB * w0[2] + hz))   # C_BIᵀ (J w + h)
+    Hx, Hy, Hz = rot(
+        (q0, -q1, -q2, -q3), (J_HUB * w0[0] + hx, J_HUB * w0[1] + hy, J_HUB * w0[2] + hz)
+    )  # C_BIᵀ (J w + h)
 
     def qdot(a0, a1, a2, a3, bx, by, bz):
         # ½ q ⊗ (0, w),  w = (C(q/|q|) H − h)/J
@@ -418,12 +425,14 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
         wx = ((kk * Hx + dd * a1 - c0 * (a2 * Hz - a3 * Hy)) * inv - bx) * jinv
         wy = ((kk * Hy + dd * a2 - c0 * (a3 * Hx - a1 * Hz)) * inv - by) * jinv
         wz = ((kk * Hz + dd * a3 - c0 * (a1 * Hy - a2 * Hx)) * inv - bz) * jinv
-        return (-0.5 * (a1 * wx + a2 * wy + a3 * wz),
-                0.5 * (a0 * wx + a2 * wz - a3 * wy),
-                0.5 * (a0 * wy + a3 * wx - a1 * wz),
-                0.5 * (a0 * wz + a1 * wy - a2 * wx))
+        return (
+            -0.5 * (a1 * wx + a2 * wy + a3 * wz),
+            0.5 * (a0 * wx + a2 * wz - a3 * wy),
+            0.5 * (a0 * wy + a3 * wx - a1 * wz),
+            0.5 * (a0 * wz + a1 * wy - a2 * wx),
+        )
 
-    rec_state = []      # (q_BI, q_BO, w_BI, w_BO, pitch, h, tau, phase, Q)
+    rec_state = []  # (q_BI, q_BO, w_BI, w_BO, pitch, h, tau, phase, Q)
     rec_d = []
     rec_r = []
     Q = 0.0
@@ -493,10 +502,35 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
         A11 = myy * mzz - myz * myz
         A12 = mxz * myz - mxy * mzz
         A13 = mxy * myz - mxz * myy
-        Q = mxx * A11 + mxy * A12 + mxz * A13          # det(A Aᵀ)
+        Q = mxx * A11 + mxy * A12 + mxz * A13  # det(A Aᵀ)
 
-        rec_state.append((q0, q1, q2, q3, b0, b1, b2, b3, wx, wy, wz, vx, vy, vz, theta,
-                          hx, hy, hz, tx, ty, tz, phase, Q))
+        rec_state.append(
+            (
+                q0,
+                q1,
+                q2,
+                q3,
+                b0,
+                b1,
+                b2,
+                b3,
+                wx,
+                wy,
+                wz,
+                vx,
+                vy,
+                vz,
+                theta,
+                hx,
+                hy,
+                hz,
+                tx,
+                ty,
+                tz,
+                phase,
+                Q,
+            )
+        )
         rec_d.append(tuple(d))
         rec_r.append(tuple(r))
         if k == n_steps:
@@ -525,7 +559,7 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
                 sg, tr = acc, df / acc
             else:
                 sg, tr = -acc, -df / acc
-            if tr >= dt:                                   # still ramping at the step end
+            if tr >= dt:  # still ramping at the step end
                 dm = d0 + (r0 + 0.5 * sg * half) * half
                 de = d0 + (r0 + 0.5 * sg * dt) * dt
                 r[i] = r0 + sg * dt
@@ -553,13 +587,16 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
 
         # --- RK4 on q_BI (H_I constant: Ḣ_I = 0 integrated exactly)
         k10, k11, k12, k13 = qdot(q0, q1, q2, q3, hx, hy, hz)
-        k20, k21, k22, k23 = qdot(q0 + half * k10, q1 + half * k11, q2 + half * k12,
-                                  q3 + half * k13, mhx, mhy, mhz)
-        k30, k31, k32, k33 = qdot(q0 + half * k20, q1 + half * k21, q2 + half * k22,
-                                  q3 + half * k23, mhx, mhy, mhz)
+        k20, k21, k22, k23 = qdot(
+            q0 + half * k10, q1 + half * k11, q2 + half * k12, q3 + half * k13, mhx, mhy, mhz
+        )
+        k30, k31, k32, k33 = qdot(
+            q0 + half * k20, q1 + half * k21, q2 + half * k22, q3 + half * k23, mhx, mhy, mhz
+        )
         hx, hy, hz = hr * ehx, hr * ehy, hr * ehz
-        k40, k41, k42, k43 = qdot(q0 + dt * k30, q1 + dt * k31, q2 + dt * k32,
-                                  q3 + dt * k33, hx, hy, hz)
+        k40, k41, k42, k43 = qdot(
+            q0 + dt * k30, q1 + dt * k31, q2 + dt * k32, q3 + dt * k33, hx, hy, hz
+        )
         q0 += sixth * (k10 + 2.0 * (k20 + k30) + k40)
         q1 += sixth * (k11 + 2.0 * (k21 + k31) + k41)
         q2 += sixth * (k12 + 2.0 * (k22 + k32) + k42)
