@@ -2,7 +2,7 @@
 
 Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 a run interrupted by SIGINT (Ctrl-C)
+as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C)
 or SIGTERM (everything recorded so far is kept).
 """
 

@@ -35,7 +35,7 @@ class Recorder:
         self._memory = np.empty((64, len(columns)))
         self._files = []
         if self.out_dir is not None:
-            header = (",".join(self.columns) + "\n").encode()
+            header = (",".join(map(_csv_field, self.columns)) + "\n").encode()
             self.csv = _File(self.out_dir / "results.csv", header)
             self.raw = _File(self.out_dir / RAW, b"")
             self._files = [self.raw, self.csv]
@@ -133,6 +133,11 @@ def _checked(path, action):
         return action()
     except OSError as exc:
         raise file_error(path, exc) from None
+
+
+def _csv_field(name: str) -> str:
+    """A header field as CSV has it: quoted when it holds a comma (``los_B[1,2]``)."""
+    return '"' + name.replace('"', '""') + '"' if "," in name or '"' in name else name
 
 
 def _map(raw: Path, rows: int, n: int) -> np.ndarray:

@@ -510,13 +510,18 @@ def mode_rules():
 
 def after_fatal():
     """SIGALRM every 0.3 ms raises KeyboardInterrupt wherever Python runs; one landing in
-    the FMU's Python code is an exception pythonfmu turns into fmi2Fatal."""
+    the FMU's Python code is an exception pythonfmu turns into fmi2Fatal.  One interrupt is
+    in flight at a time (the handler disarms itself; the host re-arms it when the interrupt
+    landed in its own code): a second one raised while pythonfmu 0.7.0 formats the first
+    crashes inside pythonfmu (PySlaveInstance::handle_py_exception passes the NULL of a
+    failed PyObject_Str to PyUnicode_AsEncodedString), which no code of ours runs in."""
     import signal
 
     armed = [True]
 
     def interrupt(*_):
         if armed[0]:
+            armed[0] = False
             raise KeyboardInterrupt
 
     fmi_host = _host()
@@ -531,6 +536,7 @@ def after_fatal():
                 fatal = True
                 break
         except KeyboardInterrupt:
+            armed[0] = True
             continue
     while armed[0]:
         try:

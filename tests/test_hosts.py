@@ -201,12 +201,6 @@ def test_a_warning_returns_fmi2Warning_by_default(fmus):
 
 @pytest.mark.slow
 @pytest.mark.integration
-@pytest.mark.xfail(
-    strict=True,
-    reason="needs the shim side of the protocol (branch i8b: "
-    "forward fmi2OK messages of category logStatusWarning with logging off); "
-    "remove this marker when both are merged",
-)
 def test_with_warnings_return_ok_the_warning_is_logged_and_the_call_returns_fmi2OK(fmus):
     """Needs both sides: the slave logs at fmi2OK, category logStatusWarning; the shim
     forwards such a message to the host even with debug logging off."""

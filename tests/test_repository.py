@@ -9,7 +9,7 @@ from helpers import ROOT
 
 def test_ci_runs_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
-    commands = re.findall(r"```\n(python3 -m venv[^\n]*)\n```", readme)
+    commands = re.findall(r"```\n((?:apt-get [^\n]*&& )?python3 -m venv[^\n]*)\n```", readme)
     assert len(commands) == 2, commands  # set up and run; set up and test
     test_command = next(c for c in commands if "pytest" in c)
     assert test_command in (ROOT / ".ci" / "run").read_text().splitlines()
