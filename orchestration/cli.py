@@ -283,15 +283,11 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
+    from .parameters import parse_set
     from .progress import Progress
     from .runner import run
 
-    overrides = {}
-    for item in args.set:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
-        overrides[key.strip()] = value.strip()
+    overrides = parse_set(args.set)
     out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
     with Progress(args.target, quiet=args.quiet) as progress:
         results, summary = run(

@@ -73,3 +73,45 @@ def operating_point(name: str, rng) -> dict:
             x = rng.uniform(-0.3, 0.3, v.size)
             values[v.name] = x / np.linalg.norm(x) if v.name.startswith("q_") else x
     return values
+
+
+#: run length [s] and the attitude columns compared between our master and another host
+#: (libcosim, ECOS), per scenario
+HOST_CASES = {
+    "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
+    "payload_sweep": (
+        150.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+            "SatelliteDynamics.w_BO_B[3]",
+        ],
+    ),
+    "video_sar": (
+        200.0,
+        [
+            "SatelliteDynamics.euler_BO[1]",
+            "SatelliteDynamics.euler_BO[2]",
+            "SatelliteDynamics.euler_BO[3]",
+        ],
+    ),
+}
+
+
+def export_elsewhere(tmp_path_factory) -> dict:
+    """{scenario: .ssp}: each shipped scenario exported by the CLI, then moved to a
+    directory outside the repository (as a user hands it to another host)."""
+    import shutil
+
+    from agilesat.orchestration.scenarios import NAMES
+
+    elsewhere = tmp_path_factory.mktemp("elsewhere")
+    result = {}
+    for name in NAMES:
+        built = tmp_path_factory.mktemp("export") / f"{name}.ssp"
+        run = agilesat("export", name, "--out", built)
+        assert run.returncode == 0, run.stderr
+        result[name] = shutil.move(built, elsewhere / built.name)
+    assert not str(elsewhere).startswith(str(ROOT))
+    return result

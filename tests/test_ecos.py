@@ -14,7 +14,6 @@ ECOS needs Intel TBB at run time: ``apt-get install -y libtbb12`` (Debian/Ubuntu
 
 import ctypes.util
 import math
-import shutil
 import subprocess
 import sys
 
@@ -23,31 +22,9 @@ import pytest
 
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
-from helpers import ROOT, agilesat
+from helpers import HOST_CASES, ROOT, agilesat, export_elsewhere
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
-
-#: run length [s] and the compared attitude columns of each scenario (as test_libcosim)
-CASES = {
-    "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
-    "payload_sweep": (
-        150.0,
-        [
-            "SatelliteDynamics.euler_BO[1]",
-            "SatelliteDynamics.euler_BO[2]",
-            "SatelliteDynamics.euler_BO[3]",
-            "SatelliteDynamics.w_BO_B[3]",
-        ],
-    ),
-    "video_sar": (
-        200.0,
-        [
-            "SatelliteDynamics.euler_BO[1]",
-            "SatelliteDynamics.euler_BO[2]",
-            "SatelliteDynamics.euler_BO[3]",
-        ],
-    ),
-}
 
 
 @pytest.fixture(scope="module")
@@ -55,14 +32,7 @@ def packages(fmus, tmp_path_factory):
     """Each scenario exported, then moved out of the repository."""
     if ctypes.util.find_library("tbb") is None:
         pytest.fail("ECOS (ecospy) needs the TBB runtime library: apt-get install -y libtbb12")
-    elsewhere = tmp_path_factory.mktemp("elsewhere")
-    result = {}
-    for name in NAMES:
-        built = tmp_path_factory.mktemp("export") / f"{name}.ssp"
-        run = agilesat("export", name, "--out", built)
-        assert run.returncode == 0, run.stderr
-        result[name] = shutil.move(built, elsewhere / built.name)
-    return result
+    return export_elsewhere(tmp_path_factory)
 
 
 def ecos(package, stop, step, parameter_set, columns, out):
@@ -104,12 +74,12 @@ def ours(package, stop, step, out_dir):
 
 
 def test_every_shipped_scenario_is_covered():
-    assert set(CASES) == set(NAMES)
+    assert set(HOST_CASES) == set(NAMES)
 
 
 @pytest.mark.parametrize("scenario", NAMES)
 def test_ecos_agrees_with_our_master_to_the_coupling_error(scenario, packages, tmp_path):
-    stop, columns = CASES[scenario]
+    stop, columns = HOST_CASES[scenario]
     step = get(scenario).step
     differences = []
     for h in (step, step / 2):

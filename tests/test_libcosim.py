@@ -13,7 +13,6 @@ null motion makes the gimbal path depend on the coupling, only the delivered tor
 the attitude) is what the runs must share.
 """
 
-import shutil
 import subprocess
 import sys
 
@@ -22,49 +21,19 @@ import pytest
 
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
-from helpers import ROOT, agilesat
+from helpers import HOST_CASES, ROOT, agilesat, export_elsewhere
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
-#: run length [s] and the compared attitude columns of each scenario
-CASES = {
-    "scan_pitch": (150.0, ["SatelliteDynamics.euler_BO[2]", "SatelliteDynamics.w_BO_B[2]"]),
-    "payload_sweep": (
-        150.0,
-        [
-            "SatelliteDynamics.euler_BO[1]",
-            "SatelliteDynamics.euler_BO[2]",
-            "SatelliteDynamics.euler_BO[3]",
-            "SatelliteDynamics.w_BO_B[3]",
-        ],
-    ),
-    "video_sar": (
-        200.0,
-        [
-            "SatelliteDynamics.euler_BO[1]",
-            "SatelliteDynamics.euler_BO[2]",
-            "SatelliteDynamics.euler_BO[3]",
-        ],
-    ),
-}
-
 
 def test_every_shipped_scenario_is_covered():
-    assert set(CASES) == set(NAMES)
+    assert set(HOST_CASES) == set(NAMES)
 
 
 @pytest.fixture(scope="module")
 def packages(fmus, tmp_path_factory):
     """Each scenario exported, then moved to a directory outside the repository."""
-    elsewhere = tmp_path_factory.mktemp("elsewhere")
-    result = {}
-    for name in NAMES:
-        built = tmp_path_factory.mktemp("export") / f"{name}.ssp"
-        run = agilesat("export", name, "--out", built)
-        assert run.returncode == 0, run.stderr
-        result[name] = shutil.move(built, elsewhere / built.name)
-    assert not str(elsewhere).startswith(str(ROOT))
-    return result
+    return export_elsewhere(tmp_path_factory)
 
 
 def libcosim(package, stop, step, out):
@@ -114,7 +83,7 @@ def ours(package, stop, step, out_dir):
 
 @pytest.mark.parametrize("scenario", NAMES)
 def test_libcosim_agrees_with_our_master_to_the_coupling_error(scenario, packages, tmp_path):
-    stop, columns = CASES[scenario]
+    stop, columns = HOST_CASES[scenario]
     step = get(scenario).step
     differences = []
     for h in (step, step / 2):

@@ -65,12 +65,9 @@ def add_parser(commands) -> argparse.ArgumentParser:
 
 
 def main(args) -> int:
-    overrides = {}
-    for item in args.set:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
-        overrides[key.strip()] = value.strip()
+    from ..parameters import parse_set
+
+    overrides = parse_set(args.set)
     files = [str(f) for f in args.dispersions]
     if not args.vary and not files:
         name = args.target.partition(":")[0]
