@@ -178,12 +178,29 @@ def _inside(source: Path, package: Path | None, where: str, what: str) -> None:
 
 
 def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFile:
+    """One ``.ssd`` file, schema-checked: its components (with their parameter bindings),
+    the system-level bindings, the connections and the default experiment."""
     tree = _parse(path, display)
     _validate_schema(tree, "SystemStructureDescription.xsd", display)
     root = tree.getroot()
     system = root.find("ssd:System", NS)
-    components = []
-    parameters = []
+    components, parameters = _read_components(system, path, display, package)
+    for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+        parameters += _read_binding(binding, None, path, display, package)
+    connections = _read_connections(system, display)
+    result = SystemFile(path, root.get("name"), components, connections, parameters)
+    _read_experiment(root, result)
+    return result
+
+
+def _read_components(
+    system, path: Path, display: str, package: Path | None
+) -> tuple[list[ComponentRef], list[ParameterValue]]:
+    """The system's elements and their parameter values.  The rule: every element is a
+    ``<Component>`` of type ``application/x-fmu-sharedlibrary`` with a unique name and an
+    FMU source that exists (inside the package, for an ``.ssp``)."""
+    components: list[ComponentRef] = []
+    parameters: list[ParameterValue] = []
     for element in system.findall("ssd:Elements/*", NS):
         tag = etree.QName(element).localname
         where = f"{display}:{element.sourceline}"
@@ -210,8 +227,11 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
         components.append(ComponentRef(name, source, element.sourceline, _read_connectors(element)))
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
             parameters += _read_binding(binding, name, path, display, package)
-    for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
-        parameters += _read_binding(binding, None, path, display, package)
+    return components, parameters
+
+
+def _read_connections(system, display: str) -> list[ConnectionRef]:
+    """The connections; the rule: both ends are components (no system-level connectors)."""
     connections = [
         ConnectionRef(
             c.get("startElement"),
@@ -228,19 +248,24 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
                 f"{display}:{c.line}: connection {c}: connections to the "
                 "system's own connectors are not supported"
             )
-    result = SystemFile(path, root.get("name"), components, connections, parameters)
+    return connections
+
+
+def _read_experiment(root, result: SystemFile) -> None:
+    """Start and stop time from ``ssd:DefaultExperiment``; step size and algorithm from
+    its ``org.agilesat.master`` annotation (other hosts' annotations are ignored)."""
     experiment = root.find("ssd:DefaultExperiment", NS)
-    if experiment is not None:
-        result.start_time = float(experiment.get("startTime", 0.0))
-        if experiment.get("stopTime") is not None:
-            result.stop_time = float(experiment.get("stopTime"))
-        for annotation in experiment.findall("ssd:Annotations/ssc:Annotation", NS):
-            if annotation.get("type") == MASTER_ANNOTATION and len(annotation):
-                settings = annotation[0]
-                if settings.get("stepSize") is not None:
-                    result.step_size = float(settings.get("stepSize"))
-                result.algorithm = settings.get("algorithm")
-    return result
+    if experiment is None:
+        return
+    result.start_time = float(experiment.get("startTime", 0.0))
+    if experiment.get("stopTime") is not None:
+        result.stop_time = float(experiment.get("stopTime"))
+    for annotation in experiment.findall("ssd:Annotations/ssc:Annotation", NS):
+        if annotation.get("type") == MASTER_ANNOTATION and len(annotation):
+            settings = annotation[0]
+            if settings.get("stepSize") is not None:
+                result.step_size = float(settings.get("stepSize"))
+            result.algorithm = settings.get("algorithm")
 
 
 def _read_connectors(element) -> list[ConnectorRef]:
@@ -386,41 +411,60 @@ def render_ssd(
     root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
     system = E.sub(root, "ssd:System", name=name)
     elements = E.sub(system, "ssd:Elements")
-    by_instance = {}
-    used_units = set()
     bound = _expand_parameters(parameters, tables)
+    used_units: set[str] = set()
     for instance, source in components.items():
-        variables = {v.name: v for v in tables[instance]}
-        by_instance[instance] = variables
-        component = E.sub(
-            elements,
-            "ssd:Component",
-            name=instance,
-            source=source,
-            type="application/x-fmu-sharedlibrary",
+        used_units |= _write_component(
+            E, elements, instance, source, tables[instance], bound.get(instance, {}), name
         )
-        connectors = E.sub(component, "ssd:Connectors")
-        values = bound.get(instance, {})
-        for v in tables[instance]:
-            if v.type == "String" and v.name not in values:
-                continue
-            for scalar in v.scalar_names():
-                connector = E.sub(connectors, "ssd:Connector", name=scalar, kind=v.causality)
-                attributes = {"unit": v.unit} if v.type == "Real" else {}
-                if v.type == "Real":
-                    used_units.add(v.unit)
-                E.sub(connector, f"ssc:{v.type}", **attributes)
-        if values:
-            bindings = E.sub(component, "ssd:ParameterBindings")
-            binding = E.sub(bindings, "ssd:ParameterBinding")
-            holder = E.sub(binding, "ssd:ParameterValues")
-            parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0", name=name)
-            listing = E.sub(parameter_set, "ssv:Parameters")
-            for scalar, (kind, text) in values.items():
-                parameter = E.sub(listing, "ssv:Parameter", name=scalar)
-                E.sub(parameter, f"ssv:{kind}", value=text)
     wires = E.sub(system, "ssd:Connections")
     _oms_annotation(E, system, step)
+    _write_connections(E, wires, connections, {i: tables[i] for i in components})
+    _write_units(E, root, used_units, units)
+    _write_experiment(E, root, start, stop, step, algorithm)
+    tree = etree.ElementTree(root)
+    _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
+    return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
+
+
+def _write_component(E, elements, instance, source, table, values: dict, set_name) -> set[str]:
+    """One ``ssd:Component``: a scalar connector per element of every variable (a Real with
+    its unit; a String only when it is given a value), then its bound parameter values in
+    one inline ``ssv:ParameterSet`` named ``set_name``.  Returns the units it used."""
+    component = E.sub(
+        elements,
+        "ssd:Component",
+        name=instance,
+        source=source,
+        type="application/x-fmu-sharedlibrary",
+    )
+    connectors = E.sub(component, "ssd:Connectors")
+    used_units = set()
+    for v in table:
+        if v.type == "String" and v.name not in values:
+            continue
+        for scalar in v.scalar_names():
+            connector = E.sub(connectors, "ssd:Connector", name=scalar, kind=v.causality)
+            attributes = {"unit": v.unit} if v.type == "Real" else {}
+            if v.type == "Real":
+                used_units.add(v.unit)
+            E.sub(connector, f"ssc:{v.type}", **attributes)
+    if values:
+        bindings = E.sub(component, "ssd:ParameterBindings")
+        binding = E.sub(bindings, "ssd:ParameterBinding")
+        holder = E.sub(binding, "ssd:ParameterValues")
+        parameter_set = E.sub(holder, "ssv:ParameterSet", version="1.0", name=set_name)
+        listing = E.sub(parameter_set, "ssv:Parameters")
+        for scalar, (kind, text) in values.items():
+            parameter = E.sub(listing, "ssv:Parameter", name=scalar)
+            E.sub(parameter, f"ssv:{kind}", value=text)
+    return used_units
+
+
+def _write_connections(E, wires, connections, tables: dict) -> None:
+    """("A.x", "B.y") pairs of whole variables, expanded to one ``ssd:Connection`` per
+    element; the rule: both sides have the same shape."""
+    by_instance = {instance: {v.name: v for v in table} for instance, table in tables.items()}
     for source, target in connections:
         (a, x), (b, y) = source.split(".", 1), target.split(".", 1)
         va, vb = by_instance[a][x], by_instance[b][y]
@@ -435,11 +479,24 @@ def render_ssd(
                 endElement=b,
                 endConnector=sb,
             )
+
+
+def _write_units(E, root, used_units: set[str], units: dict) -> None:
+    """``ssd:Units``: each unit used by a connector, sorted by name, with its SI exponents."""
     unit_list = E.sub(root, "ssd:Units")
     for unit in sorted(used_units):
         exponents, _ = units[unit]
         element = E.sub(unit_list, "ssc:Unit", name=unit)
         E.sub(element, "ssc:BaseUnit", **{k: str(e) for k, e in exponents.items()})
+
+
+def _write_experiment(E, root, start: float, stop: float, step: float, algorithm: str) -> None:
+    """``ssd:DefaultExperiment`` with our master's settings and libcosim's step annotation.
+
+    libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
+    Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
+    takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
+    the namespace is declared on the annotation."""
     experiment = E.sub(
         root, "ssd:DefaultExperiment", startTime=repr(float(start)), stopTime=repr(float(stop))
     )
@@ -452,15 +509,8 @@ def render_ssd(
         stepSize=repr(float(step)),
         algorithm=algorithm,
     )
-    # libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
-    # Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
-    # takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
-    # the namespace is declared on the annotation.
     osp = E.sub(annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE}, type=OSP_ANNOTATION)
     E.sub(E.sub(osp, "osp:Algorithm"), "osp:FixedStepAlgorithm", baseStepSize=repr(float(step)))
-    tree = etree.ElementTree(root)
-    _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
-    return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 
 def _oms_annotation(E, system, step: float) -> None:

@@ -37,12 +37,34 @@ class Plan:
 def check_system(
     system: SystemFile, instances: dict[str, Description], bindings: list[ParameterValue]
 ) -> Plan:
-    """Check connections and parameters against the FMUs; return the schedules."""
-    problems = []
+    """Check connections and parameters against the FMUs; return the schedules.
+
+    Every problem is collected first (connections, parameter values, SSD connectors, open
+    inputs, parameters that must agree between FMUs), then all are raised together."""
     where = str(system.path)
-    sources = {}
+    problems: list[str] = []
+    sources = _connections(system, instances, problems)
+    problems += _binding_problems(instances, bindings)
+    problems += _connector_problems(system, instances)
+    open_inputs = _open_inputs(system, instances, sources, bindings, problems)
+    problems += disagreements(instances, bindings, sources)
+    if problems:
+        raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
+    return Plan(
+        schedule(instances, sources, "feedthrough", where),
+        schedule(instances, sources, "initial_feedthrough", where),
+        sources,
+        open_inputs,
+    )
+
+
+def _connections(system, instances, problems) -> dict[tuple[str, str], tuple[str, str]]:
+    """The connections that check out, as {(B, input): (A, output)}; the others go to
+    problems.  The rule: both components and variables exist, an output drives an input,
+    types agree, units agree where both sides declare one, no input is driven twice."""
+    sources: dict[tuple[str, str], tuple[str, str]] = {}
     for c in system.connections:
-        at = f"{where}:{c.line}: connection {c}"
+        at = f"{system.path}:{c.line}: connection {c}"
         a, b = instances.get(c.start_element), instances.get(c.end_element)
         for element, inst in ((c.start_element, a), (c.end_element, b)):
             if inst is None:
@@ -58,24 +80,36 @@ def check_system(
             problems.append(f"{at}: {b.name} ({b.path.name}) has no variable '{c.end_connector}'")
         if va is None or vb is None:
             continue
-        if va.causality != "output":
-            problems.append(
-                f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an output"
-            )
-        if vb.causality != "input":
-            problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an input")
-        if va.type != vb.type:
-            problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
-        elif va.type == "Real" and va.unit and vb.unit and va.unit != vb.unit:
-            # a Real without a unit (FMI 2.0: optional; e.g. pythonfmu 0.7 writes none) is
-            # unspecified, not dimensionless: checked only where both sides declare one
-            problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
+        problems += _variable_pair_problems(at, a, va, b, vb)
         key = (b.name, vb.name)
         if key in sources:
             problems.append(
                 f"{at}: input {b.name}.{vb.name} is already driven by {'.'.join(sources[key])}"
             )
         sources[key] = (a.name, va.name)
+    return sources
+
+
+def _variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
+    """One connection's ends: an output of ``a`` to an input of ``b``, same type and unit."""
+    problems = []
+    if va.causality != "output":
+        problems.append(f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an output")
+    if vb.causality != "input":
+        problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an input")
+    if va.type != vb.type:
+        problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
+    elif va.type == "Real" and va.unit and vb.unit and va.unit != vb.unit:
+        # a Real without a unit (FMI 2.0: optional; e.g. pythonfmu 0.7 writes none) is
+        # unspecified, not dimensionless: checked only where both sides declare one
+        problems.append(f"{at}: unit mismatch, '{va.unit}' -> '{vb.unit}'")
+    return problems
+
+
+def _binding_problems(instances, bindings) -> list[str]:
+    """Parameter values; the rule: each names a variable of a known component that is a
+    parameter or an input (not a constant), and has that variable's type."""
+    problems = []
     for value in bindings:
         inst = instances.get(value.component)
         if inst is None:
@@ -95,17 +129,7 @@ def check_system(
             problems.append(
                 f"{value.origin}: {inst.name}.{value.name} is {var.type}, the value is {value.type}"
             )
-    problems += _connector_problems(system, instances)
-    open_inputs = _open_inputs(system, instances, sources, bindings, problems)
-    problems += disagreements(instances, bindings, sources)
-    if problems:
-        raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    return Plan(
-        schedule(instances, sources, "feedthrough", where),
-        schedule(instances, sources, "initial_feedthrough", where),
-        sources,
-        open_inputs,
-    )
+    return problems
 
 
 def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
