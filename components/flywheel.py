@@ -238,16 +238,11 @@ class Flywheel(Model):
     def output(self):
         torques, accel_torques, limited, _ = self._drive()
         y = self.y
-        dx = dy = dz = 0.0
-        for (ax, ay, az), n in zip(self.axes, accel_torques):
-            dx += ax * n
-            dy += ay * n
-            dz += az * n
         speed, motor = [0.0] * N_WHEELS, [0.0] * N_WHEELS
         for i, w, m in zip(self.wheels, self.omega, torques):
             speed[i], motor[i] = w, m
         y.h[:] = self._momentum()
-        y.hdot[:] = (dx, dy, dz)
+        y.hdot[:] = self._along_axes(accel_torques)
         y.speed[:] = speed
         y.motor_torque[:] = motor
         y.saturated = bool(limited)
@@ -255,13 +250,18 @@ class Flywheel(Model):
     # -- internals -----------------------------------------------------------------
     def _momentum(self) -> tuple[float, float, float]:
         """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
-        hx = hy = hz = 0.0
-        for (ax, ay, az), w in zip(self.axes, self.omega):
-            hx += ax * w
-            hy += ay * w
-            hz += az * w
+        hx, hy, hz = self._along_axes(self.omega)
         J = self.inertia
         return J * hx, J * hy, J * hz
+
+    def _along_axes(self, values) -> tuple[float, float, float]:
+        """Σ a_i v_i over the wheels, in B (v_i: speeds for h, J Ω̇_i for ḣ)."""
+        x = y = z = 0.0
+        for (ax, ay, az), v in zip(self.axes, values):
+            x += ax * v
+            y += ay * v
+            z += az * v
+        return x, y, z
 
     def _drive(self):
         """(motor torques m_i, J Ω̇_i at the communication point, active limits, held wheels).

@@ -316,11 +316,10 @@ def design_pass(
             f"look_angle must be in (0, {horizon:.4f}) rad (the horizon from "
             f"{altitude:.0f} m), got {look_angle}"
         )
-    inclination = sun_synchronous_inclination(a)
     parameters = dict(
         semi_major_axis=a,
         eccentricity=0.0,
-        inclination=inclination,
+        inclination=sun_synchronous_inclination(a),
         arg_perigee=0.0,
         j2=bool(j2),
         earth_angle0=0.0,
@@ -329,23 +328,33 @@ def design_pass(
         target_lon=target_lon,
         target_alt=target_alt,
     )
-    guess = _spherical_guess(
-        _rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T,
-        a,
-        rho_T,
-        look_angle,
-        inclination,
-        side,
-        node,
-    )
+    r_T = _rotate_to_inertial(r_T_E, gmst(zero_doppler)) / rho_T
+    guess = _first_guess(parameters, r_T, rho_T, look_angle, side, node, t0)
+    raan, true_anomaly0 = _solve_zero_doppler(parameters, guess, look_angle, side, node, t0)
+    parameters.update(raan=raan, true_anomaly0=true_anomaly0)
+    return parameters
+
+
+def _first_guess(parameters, r_T, rho_T, look_angle, side, node, t0) -> np.ndarray:
+    """(Ω, u) at t = 0 to start Newton from: the spherical, non-rotating guess at the
+    zero-Doppler time (:func:`_spherical_guess`), taken back by ``t0`` at the orbit's
+    secular rates (Ω̇, ω̇ + n); an error if no orbit of this inclination sees the target."""
+    a, inclination = parameters["semi_major_axis"], parameters["inclination"]
+    guess = _spherical_guess(r_T, a, rho_T, look_angle, inclination, side, node)
     if guess is None:
         raise ModelError(
-            f"the target at latitude {math.degrees(target_lat):.2f}° cannot be "
+            f"the target at latitude {math.degrees(parameters['target_lat']):.2f}° cannot be "
             f"seen {side} at {math.degrees(look_angle):.2f}° from an orbit of "
             f"inclination {math.degrees(inclination):.2f}°"
         )
     model = OrbitEnvironment(**parameters).start(0.0)  # secular rates to go back by t0
-    guess -= t0 * np.array([model.raan_rate, model.argp_rate + model.mean_motion])
+    return guess - t0 * np.array([model.raan_rate, model.argp_rate + model.mean_motion])
+
+
+def _solve_zero_doppler(parameters, guess, look_angle, side, node, t0) -> tuple[float, float]:
+    """(Ω, ν0) in [0, 2π) such that at t = ``t0`` the squint is zero and the look angle is
+    ``look_angle`` (Newton on the full model, residuals ≤ 1e-10), seen on ``side`` on an
+    ``node`` pass; an error otherwise."""
 
     def residual(z):
         g = _Orbit(dict(parameters, raan=float(z[0]), true_anomaly0=float(z[1]))).geometry(t0)
@@ -360,8 +369,7 @@ def design_pass(
         or not geometry.visible
     ):
         raise ModelError(f"pass design did not converge (residuals {F}, {geometry})")
-    parameters.update(raan=wrap_2pi(float(z[0])), true_anomaly0=wrap_2pi(float(z[1])))
-    return parameters
+    return wrap_2pi(float(z[0])), wrap_2pi(float(z[1]))
 
 
 def _spherical_guess(
