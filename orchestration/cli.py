@@ -19,7 +19,7 @@ import numpy as np
 from ..components.analysis import mission
 from . import scenarios
 from .master import Interrupted
-from .scenarios import payload_sweep
+from .scenarios import constants, payload_sweep
 
 DEG = math.pi / 180
 
@@ -119,7 +119,7 @@ def main(argv=None) -> int:
         nargs=2,
         type=float,
         metavar=("LAT", "LON"),
-        default=(mission.VIDEO_SAR_TARGET_LAT / DEG, mission.VIDEO_SAR_TARGET_LON / DEG),
+        default=(constants.VIDEO_SAR_TARGET_LAT / DEG, constants.VIDEO_SAR_TARGET_LON / DEG),
         help="geodetic target [deg] (default Sasebo)",
     )
     stare.add_argument(
@@ -151,14 +151,14 @@ def main(argv=None) -> int:
         help="frame rates to tabulate [Hz]",
     )
     analysis.add_argument(
-        "--altitude", type=float, default=mission.VIDEO_SAR_ALTITUDE / 1e3, help="[km]"
+        "--altitude", type=float, default=constants.VIDEO_SAR_ALTITUDE / 1e3, help="[km]"
     )
     analysis.add_argument(
         "--angle",
         type=float,
         help="look angle [deg] (overlap, default "
-        f"{mission.VIDEO_SAR_LOOK_ANGLE / DEG:g}) or largest angle β "
-        f"(walker, default {mission.VIDEO_SAR_MAX_INCIDENCE / DEG:g})",
+        f"{constants.VIDEO_SAR_LOOK_ANGLE / DEG:g}) or largest angle β "
+        f"(walker, default {constants.VIDEO_SAR_MAX_INCIDENCE / DEG:g})",
     )
     analysis.add_argument("--out", type=Path, default=Path("out/mission"))
 
@@ -392,8 +392,10 @@ def _mission(args) -> int:
     if args.analysis == "overlap":
         from . import plots
 
-        look = mission.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
-        table = mission.overlap_ratio(args.frame_rates, altitude=altitude, look_angle=look)
+        look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
+        # the paper's carrier, resolution and target latitude; altitude and look as asked
+        case = dict(constants.VIDEO_SAR_OVERLAP, altitude=altitude, look_angle=look)
+        table = mission.overlap_ratio(args.frame_rates, **case)
         print(
             f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / DEG:g}°, "
             f"slant range {table.slant_range / 1e3:.1f} km, V = {table.velocity:.1f} m/s "
@@ -406,7 +408,7 @@ def _mission(args) -> int:
                 + ("   (negative: the frames leave gaps)" if overlap < 0 else "")
             )
         rates = np.linspace(1.0, 30.0, 146)
-        overlap = 100 * mission.overlap_ratio(rates, altitude=altitude, look_angle=look).overlap
+        overlap = 100 * mission.overlap_ratio(rates, **case).overlap
         gaps = rates[overlap < 0]  # frames leave gaps: no overlap to plot
         title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
             f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else ""
@@ -422,7 +424,7 @@ def _mission(args) -> int:
         )
         print(f"figure: {path}")
     else:
-        beta = mission.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
+        beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
         print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
         for kind, reading in (
             ("incidence", "β = incidence at the ground (eq 14, the paper's words)"),

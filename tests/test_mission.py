@@ -10,6 +10,9 @@ import pytest
 from agilesat.components.analysis import mission as m
 from agilesat.components.analysis.passes import sun_synchronous_inclination
 from agilesat.components.orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, OrbitEnvironment
+from agilesat.orchestration.scenarios.constants import VIDEO_SAR_OVERLAP as CASE
+from agilesat.orchestration.scenarios.constants import VIDEO_SAR_TARGET_LAT as LAT
+from agilesat.orchestration.scenarios.constants import VIDEO_SAR_TARGET_LON as LON
 
 DEG = math.pi / 180.0
 H = 567e3
@@ -34,7 +37,7 @@ def circular(r, inc, u):
 @pytest.mark.parametrize("t_i", [0.0, 12.5, -40.0, 100.0])
 @pytest.mark.parametrize("rate", [1.0, 5.0, 25.0])
 def test_overlap_equals_eq5_as_printed(t_i, rate):
-    res = m.overlap_ratio(rate, t_i=t_i)
+    res = m.overlap_ratio(rate, **CASE, t_i=t_i)
     rc, v, tf = res.slant_range, res.velocity, 1.0 / rate
     printed = 0.5 + (LAM * (rc**2 + v**2 * (t_i - tf) ** 2) ** 1.5 - 4 * tf * v * rc**2 * RHO) / (
         2 * LAM * (rc**2 + v**2 * t_i**2) ** 1.5
@@ -47,7 +50,7 @@ def test_overlap_equals_eq5_as_printed(t_i, rate):
 
 
 def test_aperture_length_first_and_second_forms_of_eq3_agree():
-    res = m.overlap_ratio(5.0, t_i=np.array([0.0, 30.0, 90.0]))
+    res = m.overlap_ratio(5.0, **CASE, t_i=np.array([0.0, 30.0, 90.0]))
     first = res.aperture_angle * res.slant_range / np.cos(res.squint) ** 2  # θ_i Rc / cos²θc
     np.testing.assert_allclose(res.aperture_length, first, rtol=1e-12)
     # resolution below eq 2 from the exact eq 2 bandwidth: ρ = V / B_a (θ_i ≈ 0.005 rad)
@@ -55,7 +58,7 @@ def test_aperture_length_first_and_second_forms_of_eq3_agree():
 
 
 def test_broadside_overlap_is_one_minus_frame_period_over_aperture_time():
-    res = m.overlap_ratio(np.array([2.0, 5.0, 25.0, 100.0]))
+    res = m.overlap_ratio(np.array([2.0, 5.0, 25.0, 100.0]), **CASE)
     t_a = LAM * res.slant_range / (2 * RHO * res.velocity)
     # L_{i-1} = L(−T_f) is longer by the factor (1 + V²T_f²/Rc²)^{3/2}
     bound = 0.75 * (res.velocity * res.frame_period / res.slant_range) ** 2 * 1.01
@@ -65,10 +68,10 @@ def test_broadside_overlap_is_one_minus_frame_period_over_aperture_time():
 
 
 def test_overlap_grows_away_from_broadside():
-    res = m.overlap_ratio(5.0, t_i=np.array([0.0, 25.0, 50.0, 100.0]))
+    res = m.overlap_ratio(5.0, **CASE, t_i=np.array([0.0, 25.0, 50.0, 100.0]))
     assert np.all(np.diff(res.overlap) > 0)
     assert float(res.overlap[-1]) == pytest.approx(0.8717, abs=1e-4)  # end of the 200-s stare
-    start = m.overlap_ratio(5.0, t_i=-100.0)
+    start = m.overlap_ratio(5.0, **CASE, t_i=-100.0)
     assert float(start.overlap) == pytest.approx(0.8751, abs=1e-4)
 
 
@@ -119,7 +122,9 @@ def test_overlap_from_line_of_sight_rotation_without_earth_rotation():
     T_f apart is then 1 − T_f ω_LOS 2ρ/λ.  With the Earth at rest this is the paper's
     formula with V = inertial speed and Rc = the slant range on the sphere."""
     rate, rc, _ = los_rate_broadside(30 * DEG, earth_rotation=False)
-    res = m.overlap_ratio(np.array([5.0, 25.0]), velocity="inertial", slant_range_model="sphere")
+    res = m.overlap_ratio(
+        np.array([5.0, 25.0]), **CASE, velocity="inertial", slant_range_model="sphere"
+    )
     assert res.slant_range == pytest.approx(rc, rel=1e-9)
     assert res.velocity / res.slant_range == pytest.approx(rate, rel=1e-6)
     np.testing.assert_allclose(res.overlap, 1 - res.frame_period * rate * 2 * RHO / LAM, atol=2e-5)
@@ -163,7 +168,12 @@ def test_readings_table(reading):
     """The table of readings reported with this module (values to 0.01 point)."""
     kind, rc, v, t_i = reading
     res = m.overlap_ratio(
-        np.array([5.0, 25.0]), look_angle_kind=kind, slant_range_model=rc, velocity=v, t_i=t_i
+        np.array([5.0, 25.0]),
+        **CASE,
+        look_angle_kind=kind,
+        slant_range_model=rc,
+        velocity=v,
+        t_i=t_i,
     )
     np.testing.assert_allclose(100 * res.overlap, READINGS[reading], atol=0.006)
 
@@ -172,9 +182,9 @@ def test_paper_57_percent_at_5hz_under_the_physical_reading():
     """Look angle 30° off nadir, Rc to the WGS-84 ellipsoid at the paper's 33.16° N target,
     V = the satellite's orbital speed (the paper's V_r; Earth rotation neglected as in its
     straight-line model), broadside frame: 56.7 %, which the paper's integer rounds to 57.
-    These are the defaults."""
-    res = m.overlap_ratio(5.0, slant_range_model="ellipsoid", velocity="inertial")
-    assert float(m.overlap_ratio(5.0).overlap) == float(res.overlap)
+    These are the model defaults (slant range and velocity)."""
+    res = m.overlap_ratio(5.0, **CASE, slant_range_model="ellipsoid", velocity="inertial")
+    assert float(m.overlap_ratio(5.0, **CASE).overlap) == float(res.overlap)
     assert round(100 * float(res.overlap)) == 57
     assert res.slant_range == pytest.approx(672.3e3, abs=0.1e3)
     assert res.velocity == pytest.approx(7575.8, abs=0.1)
@@ -183,7 +193,7 @@ def test_paper_57_percent_at_5hz_under_the_physical_reading():
 def test_paper_91_4_percent_at_25hz_is_not_reproduced_by_the_physics():
     """The same reading gives 91.34 %; the paper's 91.4 % (±0.05) needs a line-of-sight rate
     0.7 % lower than any physical reading gives.  The physics value is asserted."""
-    res = m.overlap_ratio(25.0, slant_range_model="ellipsoid", velocity="inertial")
+    res = m.overlap_ratio(25.0, **CASE, slant_range_model="ellipsoid", velocity="inertial")
     assert 100 * float(res.overlap) == pytest.approx(91.34, abs=0.01)
     assert abs(100 * float(res.overlap) - 91.4) > 0.05
     # the paper's two numbers are mutually consistent: 1 − α = k T_f with k = 2.15 /s
@@ -194,7 +204,7 @@ def test_paper_91_4_percent_at_25hz_is_not_reproduced_by_the_physics():
 
 
 def test_wavelength_and_slant_ranges():
-    res = m.overlap_ratio(5.0, slant_range_model="sphere")
+    res = m.overlap_ratio(5.0, **CASE, slant_range_model="sphere")
     assert res.wavelength == pytest.approx(0.031228, abs=1e-6)
     assert res.slant_range == pytest.approx(664.7e3, abs=0.1e3)
     assert res.incidence_angle / DEG == pytest.approx(32.99, abs=0.01)
@@ -209,11 +219,11 @@ def test_ellipsoid_slant_range_on_the_equator_equals_the_sphere():
 
 
 def test_ellipsoid_slant_range_lands_on_the_target_latitude_either_side():
-    right = m.slant_range(H, 30 * DEG, "ellipsoid", right_looking=True)
-    left = m.slant_range(H, 30 * DEG, "ellipsoid", right_looking=False)
+    right = m.slant_range(H, 30 * DEG, "ellipsoid", latitude=LAT, right_looking=True)
+    left = m.slant_range(H, 30 * DEG, "ellipsoid", latitude=LAT, right_looking=False)
     assert right == pytest.approx(left, abs=1.0)
     # local-sphere check: a sphere of the geocentric radius at 33.16° N, satellite at a + h
-    R = m.geocentric_radius(m.VIDEO_SAR_TARGET_LAT)
+    R = m.geocentric_radius(LAT)
     r = WGS84_A + H
     c = math.cos(30 * DEG)
     local = r * c - math.sqrt((r * c) ** 2 - (r * r - R * R))
@@ -259,9 +269,11 @@ def test_period_and_planes():
         w = m.walker_sizing(H, 65 * DEG, earth_period=te)
         assert round(w.period / 3600, 1) == 1.6
         assert w.planes == 15
-    assert m.walker_sizing(earth_period=m.SOLAR_DAY).planes_exact == pytest.approx(15.0, abs=1e-3)
-    assert m.walker_sizing().planes_exact == pytest.approx(14.959, abs=1e-3)
-    assert m.walker_sizing().track_shift / DEG == pytest.approx(-24.07, abs=0.01)
+    assert m.walker_sizing(H, 65 * DEG, earth_period=m.SOLAR_DAY).planes_exact == pytest.approx(
+        15.0, abs=1e-3
+    )
+    assert m.walker_sizing(H, 65 * DEG).planes_exact == pytest.approx(14.959, abs=1e-3)
+    assert m.walker_sizing(H, 65 * DEG).track_shift / DEG == pytest.approx(-24.07, abs=0.01)
 
 
 def test_paper_walker_numbers_follow_only_if_beta_is_the_look_angle():
@@ -290,7 +302,7 @@ def test_eq15_against_the_visibility_arc_without_earth_rotation(kind):
     w = m.walker_sizing(H, 65 * DEG, beta_kind=kind)
     for ascending in (True, False):
         v = m.visibility_time(
-            H, 65 * DEG, angle_kind=kind, earth_rotation=False, ascending=ascending
+            H, 65 * DEG, latitude=LAT, angle_kind=kind, earth_rotation=False, ascending=ascending
         )
         assert v.duration == pytest.approx(w.visibility_time, abs=1e-4)
         assert v.start == pytest.approx(-v.end, abs=1e-4)
@@ -299,14 +311,16 @@ def test_eq15_against_the_visibility_arc_without_earth_rotation(kind):
 @pytest.mark.parametrize("kind,S", [("incidence", 21), ("look", 12)])
 def test_eq15_with_earth_rotation_is_one_percent_shorter_and_keeps_S(kind, S):
     w = m.walker_sizing(H, 65 * DEG, beta_kind=kind)
-    v = m.visibility_time(H, 65 * DEG, angle_kind=kind, earth_rotation=True)
+    v = m.visibility_time(H, 65 * DEG, latitude=LAT, angle_kind=kind, earth_rotation=True)
     assert v.duration / w.visibility_time == pytest.approx(0.9897, abs=1e-3)
     assert math.ceil(w.period / v.duration) == S
 
 
 @pytest.mark.slow
 def test_180_satellites_cover_the_target_continuously_under_the_look_reading():
-    c = m.walker_coverage(12, 15, 0, angle_kind="look", max_angle=65 * DEG, step=10.0)
+    c = m.walker_coverage(
+        12, 15, 0, altitude=H, max_angle=65 * DEG, latitude=LAT, longitude=LON, angle_kind="look"
+    )
     assert c.covered_fraction == 1.0 and c.min_visible >= 1 and c.longest_gap == 0.0
 
 
@@ -315,7 +329,7 @@ def test_180_satellites_cover_the_target_continuously_under_the_look_reading():
 def test_eqs_14_to_20_do_not_give_continuous_cover_under_the_incidence_reading(S):
     """With β = 65° incidence, S from eq 16 only covers targets on the ground track:
     neither 12×15 nor the formulas' own 21×15 sees the target all the time."""
-    c = m.walker_coverage(S, 15, 0, angle_kind="incidence", max_angle=65 * DEG, step=10.0)
+    c = m.walker_coverage(S, 15, 0, altitude=H, max_angle=65 * DEG, latitude=LAT, longitude=LON)
     assert c.min_visible == 0 and c.covered_fraction < 0.9 and c.longest_gap > 300
 
 
@@ -330,6 +344,8 @@ def test_coverage_of_a_single_satellite_matches_eq15():
         1,
         1,
         0,
+        altitude=H,
+        max_angle=65 * DEG,
         latitude=lat,
         longitude=math.atan2(p[1], p[0]),
         earth_rotation=False,
@@ -346,11 +362,11 @@ def test_coverage_of_a_single_satellite_matches_eq15():
 
 def test_bad_inputs_raise():
     with pytest.raises(ValueError):
-        m.overlap_ratio(0.0)
+        m.overlap_ratio(0.0, **CASE)
     with pytest.raises(ValueError):
-        m.overlap_ratio(5.0, velocity="warp")
+        m.overlap_ratio(5.0, **CASE, velocity="warp")
     with pytest.raises(ValueError):
-        m.overlap_ratio(5.0, slant_range_model="cube")
+        m.overlap_ratio(5.0, **CASE, slant_range_model="cube")
     with pytest.raises(ValueError):
         m.walker_sizing(H, 65 * DEG, beta_kind="elevation")
     with pytest.raises(ValueError):
@@ -359,3 +375,9 @@ def test_bad_inputs_raise():
         m.slant_range(H, 80 * DEG)  # misses the Earth
     with pytest.raises(ValueError):
         m.walker_sizing(H, 70 * DEG, beta_kind="look")  # beyond the horizon
+    with pytest.raises(ValueError, match="'ellipsoid' slant range needs the target's latitude"):
+        m.slant_range(H, 30 * DEG, "ellipsoid")
+    with pytest.raises(ValueError, match="'earth_fixed' velocity needs the target's latitude"):
+        m.platform_velocity(H, "earth_fixed")
+    with pytest.raises(ValueError, match="'ellipsoid' slant range needs"):
+        m.overlap_ratio(5.0, **dict(CASE, latitude=None))

@@ -265,7 +265,6 @@ def test_pass_geometry_is_a_plain_record():
 def test_the_frozen_video_sar_design_values_are_the_solved_ones():
     """video_sar ships its pass, cluster start and initial state as literals (the committed
     .ssd must not depend on the solver's last bits); solving again reproduces them."""
-    from agilesat.components.analysis import mission
     from agilesat.components.cmg_cluster import (
         DEFAULT_SPINS,
         GIMBAL_AXES,
@@ -273,13 +272,14 @@ def test_the_frozen_video_sar_design_values_are_the_solved_ones():
         zero_momentum_angles,
     )
     from agilesat.orchestration.scenarios import video_sar as v
+    from agilesat.orchestration.scenarios.constants import VIDEO_SAR_ALTITUDE, VIDEO_SAR_LOOK_ANGLE
     from agilesat.orchestration.scenarios.scan_pitch import PAPER_DELTA0
 
     solved = design_pass(
-        mission.VIDEO_SAR_ALTITUDE,
+        VIDEO_SAR_ALTITUDE,
         *v.TARGET,
         v.ZERO_DOPPLER,
-        mission.VIDEO_SAR_LOOK_ANGLE,
+        VIDEO_SAR_LOOK_ANGLE,
         "right",
         "ascending",
         t0=v.HALF_STARE,

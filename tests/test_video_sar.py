@@ -248,14 +248,15 @@ def test_stare_reports_a_bad_tle(tmp_path):
 
 def test_mission_analysis_commands_print_the_functions_results(tmp_path):
     from agilesat.components.analysis.mission import overlap_ratio, walker_sizing
+    from agilesat.orchestration.scenarios import constants as c
 
     result = agilesat("mission", "overlap", "--frame-rates", "5", "25", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
-    for rate, overlap in zip((5, 25), overlap_ratio([5.0, 25.0]).overlap):
+    for rate, overlap in zip((5, 25), overlap_ratio([5.0, 25.0], **c.VIDEO_SAR_OVERLAP).overlap):
         assert f"{rate:.2f} Hz   overlap {100 * overlap:6.2f} %" in result.stdout
     assert (tmp_path / "overlap_vs_frame_rate.png").stat().st_size > 0
     result = agilesat("mission", "walker", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
     for kind in ("incidence", "look"):
-        w = walker_sizing(beta_kind=kind)
+        w = walker_sizing(c.VIDEO_SAR_ALTITUDE, c.VIDEO_SAR_MAX_INCIDENCE, beta_kind=kind)
         assert f"S = {w.satellites_per_plane}, P = {w.planes}, N = {w.satellites}" in result.stdout

@@ -150,16 +150,6 @@ TROPICAL_YEAR = passes.TROPICAL_YEAR_DAYS * SOLAR_DAY  # s
 
 DEG = math.pi / 180.0
 
-# The paper's case ([Liang 2019] §1, §3, §4)
-VIDEO_SAR_ALTITUDE = 567e3  # m
-VIDEO_SAR_CARRIER = 9.6e9  # Hz
-VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG  # 下视角
-VIDEO_SAR_AZIMUTH_RESOLUTION = 3.0  # m
-VIDEO_SAR_TARGET_LAT = 33.16 * DEG  # Sasebo, geodetic
-VIDEO_SAR_TARGET_LON = 129.72 * DEG
-VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG  # β of §3
-VIDEO_SAR_STARE = 200.0  # s, 08:08:03–08:11:23
-
 _ROUND_SLACK = 1e-9  # relative, for ceil of near-integers
 
 
@@ -272,7 +262,7 @@ def slant_range(
     *,
     look_angle_kind: str = "look",
     earth_radius: float = WGS84_A,
-    latitude: float = VIDEO_SAR_TARGET_LAT,
+    latitude: float | None = None,
     inclination: float | None = None,
     right_looking: bool = True,
 ) -> float:
@@ -298,6 +288,8 @@ def slant_range(
     if model == "flat":
         return altitude / math.cos(theta)
     if model == "ellipsoid":
+        if latitude is None:
+            raise ValueError("the 'ellipsoid' slant range needs the target's latitude")
         inc = _inclination(altitude, inclination)
         return _ellipsoid_slant_range(altitude, theta, latitude, inc, right_looking)
     raise ValueError(
@@ -311,7 +303,7 @@ def platform_velocity(
     *,
     earth_radius: float = WGS84_A,
     mu: float = MU_EARTH,
-    latitude: float = VIDEO_SAR_TARGET_LAT,
+    latitude: float | None = None,
     inclination: float | None = None,
     ground_radius: float | None = None,
 ) -> float:
@@ -333,6 +325,8 @@ def platform_velocity(
     if model == "effective":
         return math.sqrt(vs * vg)
     if model == "earth_fixed":
+        if latitude is None:
+            raise ValueError("the 'earth_fixed' velocity needs the target's latitude")
         inc = _inclination(altitude, inclination)
         we = EARTH_RATE
         lat_c = geocentric_latitude(latitude)
@@ -394,15 +388,15 @@ class OverlapResult:
 def overlap_ratio(
     frame_rate,
     *,
-    carrier_frequency: float = VIDEO_SAR_CARRIER,
-    look_angle: float = VIDEO_SAR_LOOK_ANGLE,
-    resolution: float = VIDEO_SAR_AZIMUTH_RESOLUTION,
-    altitude: float = VIDEO_SAR_ALTITUDE,
+    carrier_frequency: float,
+    look_angle: float,
+    resolution: float,
+    altitude: float,
     t_i=0.0,
     velocity: str | float = "inertial",
     slant_range_model: str | float = "ellipsoid",
     look_angle_kind: str = "look",
-    latitude: float = VIDEO_SAR_TARGET_LAT,
+    latitude: float | None = None,
     inclination: float | None = None,
     earth_radius: float = WGS84_A,
     mu: float = MU_EARTH,
@@ -412,12 +406,14 @@ def overlap_ratio(
     Reading (see the module doc for the derivation): straight-line geometry with closest
     slant range Rc and platform speed V; frame i's data centred at ``t_i`` seconds from
     zero Doppler (default 0: the broadside frame, smallest overlap), frame i−1 centred at
-    t_i − T_f; α_i = ((L_i + L_{i−1})/2 − V T_f) / L_i with L from eq 3.  Defaults are the
-    paper's case: 9.6 GHz, 30° off-nadir look angle, ρ_a = 3 m, h = 567 km (a − R_e),
-    V = inertial circular speed (the paper's V_r, Earth rotation neglected as in its
-    straight-line model), Rc to the WGS-84 ellipsoid at the paper's target latitude
-    (33.16° N, sun-synchronous inclination).  These give 56.7 % at 5 Hz and 91.34 % at
-    25 Hz (paper: 57 %, 91.4 %).  A negative α means the frames do not touch (gap).
+    t_i − T_f; α_i = ((L_i + L_{i−1})/2 − V T_f) / L_i with L from eq 3.  The radar and
+    target are arguments (``latitude``: needed by the ``"ellipsoid"`` slant range); the
+    model defaults are V = inertial circular speed (the paper's V_r, Earth rotation
+    neglected as in its straight-line model) and Rc to the WGS-84 ellipsoid
+    (sun-synchronous inclination).  The paper's case (9.6 GHz, 30° off-nadir look angle,
+    ρ_a = 3 m, h = 567 km = a − R_e, target at 33.16° N: ``VIDEO_SAR_OVERLAP`` in
+    orchestration/scenarios/constants.py) gives 56.7 % at 5 Hz and 91.34 % at 25 Hz
+    (paper: 57 %, 91.4 %).  A negative α means the frames do not touch (gap).
     """
     fr = np.asarray(frame_rate, dtype=float)
     _check(bool(np.all(fr > 0)), "frame_rate must be > 0")
@@ -442,8 +438,10 @@ def overlap_ratio(
         latitude=latitude,
         inclination=inclination,
     )
-    ground_radius = (
-        geocentric_radius(latitude) if slant_range_model == "ellipsoid" else earth_radius
+    ground_radius = (  # latitude is given: the ellipsoid's slant range above needs it
+        geocentric_radius(latitude)
+        if slant_range_model == "ellipsoid" and latitude is not None
+        else earth_radius
     )
     v = platform_velocity(
         altitude,
@@ -522,8 +520,8 @@ class WalkerSizing:
 
 
 def walker_sizing(
-    altitude: float = VIDEO_SAR_ALTITUDE,
-    max_incidence: float = VIDEO_SAR_MAX_INCIDENCE,
+    altitude: float,
+    max_incidence: float,
     *,
     beta_kind: str = "incidence",
     earth_period: float = SIDEREAL_DAY,
@@ -615,12 +613,12 @@ class VisibilityResult:
 
 
 def visibility_time(
-    altitude: float = VIDEO_SAR_ALTITUDE,
-    max_angle: float = VIDEO_SAR_MAX_INCIDENCE,
+    altitude: float,
+    max_angle: float,
     *,
+    latitude: float,
     angle_kind: str = "incidence",
     earth_rotation: bool = True,
-    latitude: float = VIDEO_SAR_TARGET_LAT,
     inclination: float | None = None,
     ascending: bool = True,
     earth_radius: float = WGS84_A,
@@ -705,12 +703,12 @@ def walker_coverage(
     planes: int,
     phasing: int = 0,
     *,
-    altitude: float = VIDEO_SAR_ALTITUDE,
-    max_angle: float = VIDEO_SAR_MAX_INCIDENCE,
+    altitude: float,
+    max_angle: float,
+    latitude: float,
+    longitude: float,
     angle_kind: str = "incidence",
     inclination: float | None = None,
-    latitude: float = VIDEO_SAR_TARGET_LAT,
-    longitude: float = VIDEO_SAR_TARGET_LON,
     duration: float = SOLAR_DAY,
     step: float = 10.0,
     earth_rotation: bool = True,

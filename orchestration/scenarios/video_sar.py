@@ -39,11 +39,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.analysis.mission import (
-    VIDEO_SAR_STARE,
-    VIDEO_SAR_TARGET_LAT,
-    VIDEO_SAR_TARGET_LON,
-)
 from ...components.analysis.passes import find_passes, look_geometry
 from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
@@ -53,6 +48,7 @@ from ...components.staring_guidance import StaringGuidance, footprint_azimuth
 from .. import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
+from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
 from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
 
 DEG = math.pi / 180

@@ -1,0 +1,29 @@
+"""The papers' cases: the values the scenarios and the CLI's defaults take from the papers.
+
+The analysis layer (``components/analysis/``) takes every one of them as an argument; this
+is their one home.  Video SAR: [Liang 2019] §1, §3, §4 (DESIGN.md, References).
+"""
+
+from __future__ import annotations
+
+import math
+
+DEG = math.pi / 180.0
+
+VIDEO_SAR_ALTITUDE = 567e3  # m
+VIDEO_SAR_CARRIER = 9.6e9  # Hz
+VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG  # 下视角
+VIDEO_SAR_AZIMUTH_RESOLUTION = 3.0  # m
+VIDEO_SAR_TARGET_LAT = 33.16 * DEG  # Sasebo, geodetic
+VIDEO_SAR_TARGET_LON = 129.72 * DEG
+VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG  # β of §3
+VIDEO_SAR_STARE = 200.0  # s, 08:08:03–08:11:23
+
+#: :func:`~agilesat.components.analysis.mission.overlap_ratio`'s paper case (§1, Fig. 3)
+VIDEO_SAR_OVERLAP = dict(
+    carrier_frequency=VIDEO_SAR_CARRIER,
+    look_angle=VIDEO_SAR_LOOK_ANGLE,
+    resolution=VIDEO_SAR_AZIMUTH_RESOLUTION,
+    altitude=VIDEO_SAR_ALTITUDE,
+    latitude=VIDEO_SAR_TARGET_LAT,
+)
