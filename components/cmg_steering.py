@@ -3,7 +3,11 @@
 The cluster exerts −ḣ − w × h on the body (DESIGN.md §2), so the torque τ_cmd needs
 ḣ = −τ_cmd − w × h = h_rotor A(δ) δ̇  (eq. 14 with the gyroscopic term kept), solved as
 
-``law`` names the solution (an Integer parameter; the names are the constants below):
+``law`` names the solution: a named choice (an Integer parameter whose values 0, 1 the
+variable table names, :data:`LAW_CHOICES`; ``--set CmgSteering.law=SR_INVERSE`` on the
+command line, ``CmgSteering(law="SR_INVERSE")`` in Python).  FMI 2.0 would call it an
+Enumeration, but pythonfmu 0.7 has no Enumeration variables (NTNU-IHB/PythonFMU PR #255,
+open) and libcosim does not read them (open-simulation-platform/libcosim#246):
 
 ``law = 0`` (PSEUDO_INVERSE) — pseudo-inverse with null motion (the paper)::
 
@@ -30,11 +34,14 @@ import numpy as np
 from .cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster, det3, gram, inv3
 from .model import Model, ModelError
 from .rotations import rotate
-from .variables import input_, output, parameter
+from .variables import choice, input_, output, parameter
 
-#: values of the ``law`` parameter
+#: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
 PSEUDO_INVERSE, SR_INVERSE = 0, 1
-LAWS = {PSEUDO_INVERSE: "PSEUDO_INVERSE", SR_INVERSE: "SR_INVERSE"}
+LAW_CHOICES = (
+    ("PSEUDO_INVERSE", "pseudo-inverse with null motion"),
+    ("SR_INVERSE", "singularity-robust inverse"),
+)
 
 SINGULAR_Q = 1e-12
 _INPUTS = ("tau_cmd", "delta", "w_BI_B", "h")
@@ -65,15 +72,7 @@ class CmgSteering(Model):
             "rotor spin direction of each gyro at zero gimbal angle, in B (rows)",
             shape=(6, 3),
         ),
-        parameter(
-            "law",
-            PSEUDO_INVERSE,
-            "1",
-            "steering law: 0 = PSEUDO_INVERSE "
-            "(pseudo-inverse with null motion), 1 = SR_INVERSE (singularity-robust "
-            "inverse)",
-            type="Integer",
-        ),
+        choice("law", PSEUDO_INVERSE, "steering law", LAW_CHOICES),
         parameter("null_gain", 0.0, "1", "null-motion gain epsilon (law 0)"),
         parameter("sr_lambda0", 0.01, "1", "singularity-robust weight lambda0 (law 1)"),
         parameter("sr_mu", 10.0, "1", "singularity-robust decay mu in lambda0 exp(-mu Q)"),
@@ -108,12 +107,8 @@ class CmgSteering(Model):
 
     def initialize(self, t0):
         p = self.p
-        if p.law not in LAWS:
-            raise ModelError(
-                "law must be one of "
-                + ", ".join(f"{value} ({name})" for value, name in LAWS.items())
-                + f", got {p.law}"
-            )
+        if p.law not in range(len(LAW_CHOICES)):
+            raise ModelError(self.layout.by_name["law"].choice_error(p.law))
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)

@@ -139,7 +139,8 @@ class Model:
 
     # -- in-process convenience ------------------------------------------------------
     def set(self, name: str, value) -> None:
-        """Set a parameter or input by name (whole arrays at once)."""
+        """Set a parameter or input by name (whole arrays at once; a named choice by its
+        name or number)."""
         v = self.layout.by_name.get(name)
         if v is None:
             raise KeyError(f"{type(self).__name__} has no variable {name!r}")
@@ -148,6 +149,8 @@ class Model:
         if v.type == "String":
             self.strings[name] = str(value)
             return
+        if v.choices and isinstance(value, str):  # a number is checked by initialize
+            value = v.choice_value(value)
         array = np.asarray(value, dtype=float)
         if array.shape != v.shape and array.size != v.size:
             raise ValueError(

@@ -34,7 +34,10 @@ class Var:
     a parameter value); else the input may be left open and keeps its start value, and the
     text says what that default means ("zero: no wheel momentum"): a master lists each open
     optional input with it.  An array input is connected as a whole or not at all.
-    ``start`` is a scalar (broadcast) or a nested sequence of ``shape``.
+    ``start`` is a scalar (broadcast) or a nested sequence of ``shape``.  ``choices``
+    (scalar Integer parameters only, made by :func:`choice`): the (NAME, meaning) of the
+    values 0, 1, …: a named choice instead of a bare number; :meth:`choice_value` reads a
+    name or a number.
     """
 
     name: str
@@ -47,6 +50,7 @@ class Var:
     display_unit: str | None = None
     depends: tuple[str, ...] = ()
     optional: str = ""
+    choices: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self):
         if self.causality not in CAUSALITIES:
@@ -64,6 +68,36 @@ class Var:
             raise ValueError(f"{self.name}: only inputs can be optional")
         if self.type == "String" and (self.shape or self.causality != "parameter"):
             raise ValueError(f"{self.name}: String variables must be scalar parameters")
+        if self.choices:
+            self._check_choices()
+
+    def _check_choices(self) -> None:
+        names = [name for name, _ in self.choices]
+        if self.type != "Integer" or self.shape or self.causality != "parameter":
+            raise ValueError(f"{self.name}: only scalar Integer parameters have choices")
+        if len(set(names)) < len(names) or not all(n.isidentifier() for n in names):
+            raise ValueError(f"{self.name}: choice names must be distinct identifiers: {names}")
+        if self.start not in range(len(names)):
+            raise ValueError(f"{self.name}: start {self.start!r} is not a choice ({names})")
+
+    def choice_value(self, value) -> int:
+        """The value of a choice given by its name (any case) or its number; ValueError
+        listing the choices for anything else."""
+        names = [name for name, _ in self.choices]
+        text = str(value).strip()
+        if text.upper() in names:
+            return names.index(text.upper())
+        number = value if isinstance(value, int) and not isinstance(value, bool) else None
+        if number is None and text.isdigit():
+            number = int(text)
+        if number is None or number not in range(len(names)):
+            raise ValueError(self.choice_error(value))
+        return number
+
+    def choice_error(self, value) -> str:
+        """'law must be one of 0 (PSEUDO_INVERSE), 1 (SR_INVERSE), got 2'."""
+        listing = ", ".join(f"{i} ({name})" for i, (name, _) in enumerate(self.choices))
+        return f"{self.name} must be one of {listing}, got {value!r}"
 
     @property
     def required(self) -> bool:
@@ -91,6 +125,18 @@ class Var:
 
 def parameter(name, start, unit, description, **kw) -> Var:
     return Var(name, "parameter", unit, description, start, **kw)
+
+
+def choice(name, start: int, description, choices) -> Var:
+    """A scalar Integer parameter whose values 0, 1, … are the named ``choices``
+    ((NAME, meaning) pairs); the description lists them ("steering law: 0 = PSEUDO_INVERSE
+    (pseudo-inverse with null motion), 1 = …"), so the model description, the docs and the
+    command line (``--set CmgSteering.law=SR_INVERSE``) all read them from this one row."""
+    choices = tuple((str(name_), str(meaning)) for name_, meaning in choices)
+    listing = ", ".join(f"{i} = {n} ({meaning})" for i, (n, meaning) in enumerate(choices))
+    return Var(
+        name, "parameter", "1", f"{description}: {listing}", start, type="Integer", choices=choices
+    )
 
 
 def input_(name, unit, description, start=0.0, *, optional: str = "", **kw) -> Var:

@@ -203,7 +203,8 @@ def _connector_problems(system, instances) -> list[str]:
 
 
 def override(instances, key: str, value) -> ParameterValue:
-    """A ``--set Instance.variable=value`` override, typed by the FMU's variable."""
+    """A ``--set Instance.variable=value`` override, typed by the FMU's variable; a named
+    choice of our FMUs (``CmgSteering.law=SR_INVERSE``) by its name or its number."""
     name, _, variable = key.partition(".")
     if name not in instances or not variable:
         raise SystemFileError(
@@ -211,7 +212,13 @@ def override(instances, key: str, value) -> ParameterValue:
         )
     var = instances[name].variables.get(variable)
     kind = var.type if var is not None else "Real"
-    if kind == "Boolean" and isinstance(value, str):
+    named = _choices(instances[name], variable) if kind == "Integer" else None
+    if named is not None:
+        try:
+            value = named.choice_value(value)
+        except ValueError as exc:
+            raise SystemFileError(f"--set {key}={value}: {exc}") from None
+    elif kind == "Boolean" and isinstance(value, str):
         value = value.lower() in ("1", "true", "yes")
     elif kind in ("Real", "Integer"):
         try:
@@ -219,3 +226,15 @@ def override(instances, key: str, value) -> ParameterValue:
         except ValueError:
             raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
     return ParameterValue(name, variable, kind, value, f"--set {key}")
+
+
+def _choices(inst: Description, variable: str):
+    """The variable-table row of a named choice of one of our FMUs (the table of the model
+    the FMU is named after), or None."""
+    from ..fmus import FMUS, model_class
+
+    identifier = inst.md.coSimulation.modelIdentifier
+    if inst.optional_inputs is None or identifier not in FMUS:
+        return None
+    row = next((v for v in model_class(identifier).VARIABLES if v.name == variable), None)
+    return row if row is not None and row.choices else None

@@ -12,6 +12,7 @@ from agilesat.orchestration.parameters import scalar_parameters, variables
 from agilesat.orchestration.results import Results
 from agilesat.orchestration.scenarios import get
 from agilesat.orchestration.ssp import SystemFileError
+from agilesat.orchestration.validation import override
 from helpers import agilesat
 
 IDENTITY_900 = "[[900,0,0],[0,900,0],[0,0,900]]"
@@ -65,6 +66,34 @@ def test_a_whole_array_splits_into_its_elements(described):
 def test_a_wrong_override_says_what_is_expected(described, key, value, message):
     with pytest.raises(SystemFileError, match=message):
         scalar_parameters(described, {key: value})
+
+
+def test_a_named_choice_is_set_by_its_name_or_its_number(fmus):
+    described = {"CmgSteering": Description("CmgSteering", fmus["CmgSteering"])}
+    for text, value in (("SR_INVERSE", 1), ("sr_inverse", 1), ("PSEUDO_INVERSE", 0), ("1", 1)):
+        assert override(described, "CmgSteering.law", text).value == value
+    for bad in ("FOO", "2"):
+        with pytest.raises(
+            SystemFileError,
+            match=rf"--set CmgSteering.law={bad}: law must be one of 0 \(PSEUDO_INVERSE\), "
+            rf"1 \(SR_INVERSE\), got '{bad}'",
+        ):
+            override(described, "CmgSteering.law", bad)
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_set_a_named_choice_on_the_command_line(fmus, tmp_path):
+    result = agilesat(
+        "run", "scan_pitch", "--stop", 0.5, "--out", tmp_path, "--no-figures",
+        "--set", "CmgSteering.law=SR_INVERSE",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
+    assert summary["parameters"]["CmgSteering.law"] == {"value": 1, "type": "Integer"}
+    result = agilesat("run", "scan_pitch", "--out", tmp_path, "--set", "CmgSteering.law=SR")
+    assert result.returncode != 0
+    assert "law must be one of 0 (PSEUDO_INVERSE), 1 (SR_INVERSE), got 'SR'" in result.stderr
 
 
 @pytest.mark.slow

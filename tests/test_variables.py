@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from agilesat.components.model import Model
-from agilesat.components.variables import Bus, Layout, Var, input_, output, parameter
+from agilesat.components.variables import Bus, Layout, Var, choice, input_, output, parameter
 
 
 class Toy(Model):
@@ -149,3 +149,40 @@ def test_every_shipped_input_is_required_or_says_what_its_default_means():
         for v in model_class(name).VARIABLES:
             if v.causality == "input":
                 assert v.required or len(v.optional) > 5, (name, v.name)
+
+
+LAWS = (("FIRST", "the first way"), ("SECOND", "the second way"))
+
+
+def test_a_named_choice_lists_its_names_in_the_description_and_reads_a_name_or_number():
+    law = choice("law", 0, "the way", LAWS)
+    assert (law.type, law.causality, law.unit) == ("Integer", "parameter", "1")
+    assert law.description == "the way: 0 = FIRST (the first way), 1 = SECOND (the second way)"
+    assert [law.choice_value(v) for v in ("SECOND", "second", " 1 ", 0, "0")] == [1, 1, 1, 0, 0]
+    for bad in ("THIRD", 2, "-1", "1.0", True):
+        with pytest.raises(ValueError, match=r"law must be one of 0 \(FIRST\), 1 \(SECOND\), got"):
+            law.choice_value(bad)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(start=2), "start 2 is not a choice"),
+        (dict(choices=(("A", ""), ("A", ""))), "distinct identifiers"),
+        (dict(choices=(("not a name", ""),)), "distinct identifiers"),
+        (dict(type="Real"), "only scalar Integer parameters"),
+        (dict(shape=(2,)), "only scalar Integer parameters"),
+    ],
+)
+def test_bad_choices_are_rejected(kwargs, message):
+    row = dict(name="law", causality="parameter", unit="1", description="", start=0, type="Integer")
+    with pytest.raises(ValueError, match=message):
+        Var(**{**row, "choices": LAWS, **kwargs})
+
+
+def test_a_model_takes_a_choice_by_name_and_checks_a_number_at_initialize():
+    from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
+
+    assert CmgSteering(law="sr_inverse").p.law == SR_INVERSE
+    with pytest.raises(ValueError, match=r"law must be one of .*got 'SR'"):
+        CmgSteering(law="SR")
