@@ -23,6 +23,26 @@ import numpy as np
 CAUSALITIES = ("parameter", "input", "output")
 TYPES = ("Real", "Integer", "Boolean", "String")
 
+#: every unit a table may use: name -> (SI base-unit exponents, {display unit: factor}),
+#: display = factor * value (modelDescription.xml's UnitDefinitions, the SSDs' Units)
+UNITS = {
+    "1": ({}, {}),
+    "s": ({"s": 1}, {}),
+    "m": ({"m": 1}, {"km": 1e-3}),
+    "m/s": ({"m": 1, "s": -1}, {"km/s": 1e-3}),
+    "m3/s2": ({"m": 3, "s": -2}, {}),
+    "rad": ({"rad": 1}, {"deg": 180 / math.pi}),
+    "rad/s": ({"rad": 1, "s": -1}, {"deg/s": 180 / math.pi, "rpm": 30 / math.pi}),
+    "rad/s2": ({"rad": 1, "s": -2}, {"deg/s2": 180 / math.pi}),
+    "kg": ({"kg": 1}, {}),
+    "kg.m2": ({"kg": 1, "m": 2}, {}),
+    "N.m": ({"kg": 1, "m": 2, "s": -2}, {}),
+    "N.m.s": ({"kg": 1, "m": 2, "s": -1}, {}),
+    "N.m/rad": ({"kg": 1, "m": 2, "s": -2, "rad": -1}, {}),
+    "N.m.s/rad": ({"kg": 1, "m": 2, "s": -1, "rad": -1}, {}),
+    "Hz": ({"s": -1}, {}),
+}
+
 
 @dataclass(frozen=True)
 class Var:
@@ -57,6 +77,11 @@ class Var:
             raise ValueError(f"{self.name}: causality {self.causality!r} not in {CAUSALITIES}")
         if self.type not in TYPES:
             raise ValueError(f"{self.name}: type {self.type!r} not in {TYPES}")
+        if self.unit not in UNITS:
+            raise ValueError(
+                f"{self.name}: unit {self.unit!r} is not in UNITS (components/variables.py): "
+                "add it there with its SI base-unit exponents"
+            )
         if self.depends and self.causality != "output":
             raise ValueError(f"{self.name}: only outputs have feedthrough dependencies")
         if not isinstance(self.optional, str):

@@ -9,29 +9,9 @@ initialisation also on the inputs the initial state reads and on the parameters.
 
 from __future__ import annotations
 
-import math
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
-from ..components.variables import Layout
-
-#: unit name -> (SI base-unit exponents, {display unit: factor}); display = factor * value
-UNITS = {
-    "1": ({}, {}),
-    "s": ({"s": 1}, {}),
-    "m": ({"m": 1}, {"km": 1e-3}),
-    "m/s": ({"m": 1, "s": -1}, {"km/s": 1e-3}),
-    "m3/s2": ({"m": 3, "s": -2}, {}),
-    "rad": ({"rad": 1}, {"deg": 180 / math.pi}),
-    "rad/s": ({"rad": 1, "s": -1}, {"deg/s": 180 / math.pi, "rpm": 30 / math.pi}),
-    "rad/s2": ({"rad": 1, "s": -2}, {"deg/s2": 180 / math.pi}),
-    "kg": ({"kg": 1}, {}),
-    "kg.m2": ({"kg": 1, "m": 2}, {}),
-    "N.m": ({"kg": 1, "m": 2, "s": -2}, {}),
-    "N.m.s": ({"kg": 1, "m": 2, "s": -1}, {}),
-    "N.m/rad": ({"kg": 1, "m": 2, "s": -2, "rad": -1}, {}),
-    "N.m.s/rad": ({"kg": 1, "m": 2, "s": -1, "rad": -1}, {}),
-    "Hz": ({"s": -1}, {}),
-}
+from ..components.variables import UNITS, Layout
 
 LOG_CATEGORIES = {
     "logStatusWarning": "Messages with status fmi2Warning",
@@ -85,7 +65,7 @@ def _unit_definitions(root, layout):
     used = sorted({v.unit for v in layout.variables if v.type == "Real"})
     unknown = [u for u in used if u not in UNITS]
     if unknown:
-        raise ValueError(f"units {unknown} are not in fmus/model_description.py UNITS")
+        raise ValueError(f"units {unknown} are not in components/variables.py UNITS")
     definitions = SubElement(root, "UnitDefinitions")
     for unit in used:
         exponents, display_units = UNITS[unit]

@@ -399,7 +399,7 @@ def render_ssd(
     ``components`` maps instance name to FMU source (relative to the SSD), ``tables`` maps
     instance name to its variable table, ``connections`` are ("A.x", "B.y") pairs of whole
     variables (arrays are expanded element by element), ``parameters`` maps "A.p" to a
-    value (scalar or array), ``units`` is the FMU unit table of fmus/model_description.py.
+    value (scalar or array), ``units`` is the unit table (``components.variables.UNITS``).
 
     For third-party hosts: every component's parameter set is named ``name`` (ECOS applies
     only the one set named at its init); String connectors without a bound value are left

@@ -62,6 +62,7 @@ def test_value_references_group_parameters_inputs_outputs():
             "only inputs",
         ),
         (dict(name="a", causality="input", unit="1", description="", type="String"), "String"),
+        (dict(name="a", causality="input", unit="furlong", description=""), "not in UNITS"),
     ],
 )
 def test_bad_rows_are_rejected(kwargs, message):

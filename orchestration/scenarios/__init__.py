@@ -55,9 +55,9 @@ class Scenario:
     def render_ssd(self, sources: dict | None = None, variant: str | None = None) -> bytes:
         """The system as SSD.  FMU sources default to ``fmus/build`` relative to
         ``systems/``; a variant's parameter values replace the defaults."""
+        from ...components.variables import UNITS
         from ...fmus import model_class
         from ...fmus.build import BUILD_DIR
-        from ...fmus.model_description import UNITS
         from ..ssp import render_ssd
 
         tables = {}
