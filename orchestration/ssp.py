@@ -282,33 +282,11 @@ def _read_connectors(element) -> list[ConnectorRef]:
 def _read_binding(
     binding, component, ssd_path: Path, display: str, package: Path | None = None
 ) -> list[ParameterValue]:
+    """The values of one ``ssd:ParameterBinding`` (of ``component``, or system-level when
+    None).  The rule: each parameter has exactly one typed value; a system-level name is
+    ``Component.variable``; the binding's ``prefix`` is put before every name."""
     prefix = binding.get("prefix", "")
-    source = binding.get("source")
-    if source:
-        ssv_path = (ssd_path.parent / source).resolve()
-        _inside(
-            ssv_path,
-            package,
-            f"{display}:{binding.sourceline}",
-            f"parameter binding source '{source}'",
-        )
-        if not ssv_path.exists():
-            raise SystemFileError(
-                f"{display}:{binding.sourceline}: parameter binding source "
-                f"'{source}' not found (looked at {ssv_path})"
-            )
-        ssv_display = str(ssv_path)
-        tree = _parse(ssv_path, ssv_display)
-        _validate_schema(tree, "SystemStructureParameterValues.xsd", ssv_display)
-        parameter_set = tree.getroot()
-    else:
-        ssv_display = display
-        parameter_set = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
-        if parameter_set is None:
-            raise SystemFileError(
-                f"{display}:{binding.sourceline}: parameter binding without "
-                "source or inline ssv:ParameterSet"
-            )
+    parameter_set, ssv_display = _parameter_set(binding, ssd_path, display, package)
     values = []
     for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
         name = prefix + parameter.get("name")
@@ -329,6 +307,32 @@ def _read_binding(
             ParameterValue(owner, name, kind, _parse_value(kind, typed[0], origin), origin)
         )
     return values
+
+
+def _parameter_set(binding, ssd_path: Path, display: str, package: Path | None):
+    """(``ssv:ParameterSet`` element, file it is in) of a binding: from its ``source``
+    ``.ssv`` file (schema-checked, inside the package), else inline."""
+    source = binding.get("source")
+    if not source:
+        parameter_set = binding.find("ssd:ParameterValues/ssv:ParameterSet", NS)
+        if parameter_set is None:
+            raise SystemFileError(
+                f"{display}:{binding.sourceline}: parameter binding without "
+                "source or inline ssv:ParameterSet"
+            )
+        return parameter_set, display
+    ssv_path = (ssd_path.parent / source).resolve()
+    _inside(
+        ssv_path, package, f"{display}:{binding.sourceline}", f"parameter binding source '{source}'"
+    )
+    if not ssv_path.exists():
+        raise SystemFileError(
+            f"{display}:{binding.sourceline}: parameter binding source "
+            f"'{source}' not found (looked at {ssv_path})"
+        )
+    tree = _parse(ssv_path, str(ssv_path))
+    _validate_schema(tree, "SystemStructureParameterValues.xsd", str(ssv_path))
+    return tree.getroot(), str(ssv_path)
 
 
 def _parse_value(kind, element, origin):
