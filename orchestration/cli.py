@@ -387,56 +387,64 @@ def _stare(args) -> int:
 
 
 def _mission(args) -> int:
-    altitude = args.altitude * 1e3
+    """``agilesat mission overlap|walker``: the paper's case ([Liang 2019]) at the asked
+    altitude and angle."""
     args.out.mkdir(parents=True, exist_ok=True)
-    if args.analysis == "overlap":
-        from . import plots
-
-        look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
-        # the paper's carrier, resolution and target latitude; altitude and look as asked
-        case = dict(constants.VIDEO_SAR_OVERLAP, altitude=altitude, look_angle=look)
-        table = mission.overlap_ratio(args.frame_rates, **case)
-        print(
-            f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / DEG:g}°, "
-            f"slant range {table.slant_range / 1e3:.1f} km, V = {table.velocity:.1f} m/s "
-            f"({table.velocity_model}), λ = {table.wavelength * 100:.3f} cm, "
-            f"ρ_a = {table.resolution:g} m"
-        )
-        for rate, overlap in zip(table.frame_rate, table.overlap):
-            print(
-                f"  {rate:6.2f} Hz   overlap {100 * overlap:6.2f} %"
-                + ("   (negative: the frames leave gaps)" if overlap < 0 else "")
-            )
-        rates = np.linspace(1.0, 30.0, 146)
-        overlap = 100 * mission.overlap_ratio(rates, **case).overlap
-        gaps = rates[overlap < 0]  # frames leave gaps: no overlap to plot
-        title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
-            f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else ""
-        )
-        path = plots.lines(
-            args.out / "overlap_vs_frame_rate.png",
-            title,
-            rates,
-            {"overlap": np.where(overlap >= 0, overlap, np.nan)},
-            "overlap [%]",
-            xlabel="frame rate [Hz]",
-            bottom=0.0,
-        )
-        print(f"figure: {path}")
-    else:
-        beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
-        print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
-        for kind, reading in (
-            ("incidence", "β = incidence at the ground (eq 14, the paper's words)"),
-            ("look", "β = look angle at the satellite"),
-        ):
-            w = mission.walker_sizing(altitude, beta, beta_kind=kind)
-            print(
-                f"  {reading}: α = {w.central_angle / DEG:.2f}°, T = {w.period / 3600:.3f} h, "
-                f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
-                f"P = {w.planes}, N = {w.satellites}"
-            )
+    (_overlap if args.analysis == "overlap" else _walker)(args, args.altitude * 1e3)
     return 0
+
+
+def _overlap(args, altitude: float) -> None:
+    """Frame overlap (eqs 1-5) at the asked frame rates, and its figure over 1-30 Hz."""
+    from . import plots
+
+    look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
+    # the paper's carrier, resolution and target latitude; altitude and look as asked
+    case = dict(constants.VIDEO_SAR_OVERLAP, altitude=altitude, look_angle=look)
+    table = mission.overlap_ratio(args.frame_rates, **case)
+    print(
+        f"frame overlap (eqs 1-5): h = {args.altitude:g} km, look {look / DEG:g}°, "
+        f"slant range {table.slant_range / 1e3:.1f} km, V = {table.velocity:.1f} m/s "
+        f"({table.velocity_model}), λ = {table.wavelength * 100:.3f} cm, "
+        f"ρ_a = {table.resolution:g} m"
+    )
+    for rate, overlap in zip(table.frame_rate, table.overlap):
+        print(
+            f"  {rate:6.2f} Hz   overlap {100 * overlap:6.2f} %"
+            + ("   (negative: the frames leave gaps)" if overlap < 0 else "")
+        )
+    rates = np.linspace(1.0, 30.0, 146)
+    overlap = 100 * mission.overlap_ratio(rates, **case).overlap
+    gaps = rates[overlap < 0]  # frames leave gaps: no overlap to plot
+    title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
+        f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else ""
+    )
+    path = plots.lines(
+        args.out / "overlap_vs_frame_rate.png",
+        title,
+        rates,
+        {"overlap": np.where(overlap >= 0, overlap, np.nan)},
+        "overlap [%]",
+        xlabel="frame rate [Hz]",
+        bottom=0.0,
+    )
+    print(f"figure: {path}")
+
+
+def _walker(args, altitude: float) -> None:
+    """Walker sizing (eqs 14-20) under both readings of the paper's β."""
+    beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
+    print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
+    for kind, reading in (
+        ("incidence", "β = incidence at the ground (eq 14, the paper's words)"),
+        ("look", "β = look angle at the satellite"),
+    ):
+        w = mission.walker_sizing(altitude, beta, beta_kind=kind)
+        print(
+            f"  {reading}: α = {w.central_angle / DEG:.2f}°, T = {w.period / 3600:.3f} h, "
+            f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
+            f"P = {w.planes}, N = {w.satellites}"
+        )
 
 
 def _size_flywheel(args) -> int:
