@@ -11,9 +11,11 @@ Run (:func:`simulate`):
    The outputs are read block by block in the order of :mod:`.schedule` (each block after
    setting that FMU's inputs from the newest outputs).  Gauss-Seidel: an FMU steps at its
    first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
-   steps with the inputs of t_n, then the blocks are read.  Either way the recorded outputs
-   at t_{n+1} are consistent with each other (feedthrough outputs see the inputs of
-   t_{n+1}).
+   has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
+   input was last set at its FMU's block, before the FMUs of later blocks had their t_n
+   outputs: setting them again before the step keeps it from lagging a step).  Either way
+   the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
+   the inputs of t_{n+1}).
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
@@ -354,6 +356,7 @@ def _run(
                 _evaluate(sequence, values, t, step)
             else:
                 for node in nodes.values():
+                    node.set_inputs(values)
                     _do_step(node.instance, t, step)
                 _evaluate(sequence, values)
             row[0], row[1:] = start + (n + 1) * step, values
