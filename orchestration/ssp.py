@@ -28,6 +28,8 @@ from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
+from . import multirate
+
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -63,6 +65,7 @@ class ComponentRef:
     source: Path  # absolute path of the FMU
     line: int
     connectors: list[ConnectorRef] = field(default_factory=list)
+    step_size: float | None = None  # its own communication step (multirate.py), if any
 
 
 @dataclass
@@ -208,6 +211,7 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
                 f"'{element.get('source')}' not found (looked at {source})"
             )
         components.append(ComponentRef(name, source, element.sourceline, _read_connectors(element)))
+        components[-1].step_size = multirate.read_step(element, where)
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
             parameters += _read_binding(binding, name, path, display, package)
     for binding in system.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
@@ -368,6 +372,7 @@ def render_ssd(
     stop: float,
     step: float,
     algorithm: str = "gauss-seidel",
+    steps: dict | None = None,
 ) -> bytes:
     """An SSD (schema-checked bytes) from a vector-level description.
 
@@ -380,7 +385,8 @@ def render_ssd(
     only the one set named at its init); String connectors without a bound value are left
     out (hosts that cannot set Strings); the step is also written in the annotations
     that libcosim (Open Simulation Platform, on the default experiment) and OMSimulator
-    (OpenModelica, on the system; it refuses a system without one) read.
+    (OpenModelica, on the system; it refuses a system without one) read.  ``steps`` maps
+    an instance to its own communication step (:mod:`.multirate`).
     """
     E = _Maker()
     root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
@@ -419,6 +425,7 @@ def render_ssd(
             for scalar, (kind, text) in values.items():
                 parameter = E.sub(listing, "ssv:Parameter", name=scalar)
                 E.sub(parameter, f"ssv:{kind}", value=text)
+        multirate.write_step(component, (steps or {}).get(instance))
     wires = E.sub(system, "ssd:Connections")
     _oms_annotation(E, system, step)
     for source, target in connections:

@@ -13,12 +13,14 @@ O(H²) globally.  Gauss-Seidel in our order (cluster before hub) hands the hub h
 as the value at t_n: the cluster torque arrives a step early, a first-order error.
 """
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from agilesat.orchestration.results import Results
+from agilesat.orchestration.scenarios import get
 from helpers import agilesat
 from reference import scan_pitch as reference
 
@@ -42,7 +44,8 @@ def sampled():
 
 def cosim(tmp_path_factory, *args):
     out = tmp_path_factory.mktemp("run")
-    run = agilesat("run", "scan_pitch", *args, "--out", out, "--no-figures", "-q")
+    args = args if str(args[0]).endswith(".ssd") else ("scan_pitch", *args)
+    run = agilesat("run", *args, "--out", out, "--no-figures", "-q")
     assert run.returncode == 0, run.stderr
     return Results.from_csv(out / "results.csv")
 
@@ -72,6 +75,25 @@ def test_jacobi_coupling_error_is_second_order_and_below_a_hundredth_of_a_degree
         for H in (0.05, 0.025)
     }
     assert errors[0.05] <= 0.01 * DEG
+    assert math.log2(errors[0.05] / errors[0.025]) >= 1.9, errors
+
+
+def test_multirate_plant_steps_shrink_the_coupling_error_at_second_order(
+    fmus, sampled, tmp_path_factory
+):
+    """Controller and steering at 0.05 s (the sampled reference's period) and the plant at
+    0.05 s and 0.025 s: the same sampled-data system, coupled more finely."""
+    scenario = dataclasses.replace(
+        get("scan_pitch"), steps=dict.fromkeys(("PitchManeuverController", "CmgSteering"), 0.05)
+    )
+    path = tmp_path_factory.mktemp("system") / "multirate.ssd"
+    path.write_bytes(scenario.render_ssd({n: str(fmus[n]) for n in scenario.components}))
+    errors = {
+        H: pitch_error(
+            cosim(tmp_path_factory, path, "--step", H, "--algorithm", "jacobi"), sampled[0.05], H
+        ).max()
+        for H in (0.05, 0.025)
+    }
     assert math.log2(errors[0.05] / errors[0.025]) >= 1.9, errors
 
 
