@@ -15,7 +15,8 @@ Run (:func:`simulate`):
    input was last set at its FMU's block, before the FMUs of later blocks had their t_n
    outputs: setting them again before the step keeps it from lagging a step).  Either way
    the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
-   the inputs of t_{n+1}).
+   the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
+   over m H at every m-th communication point and holds its outputs in between.
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is

@@ -1,7 +1,7 @@
 """Coupling accuracy of the co-simulation: prints a report (not a test).
 
     python tests/benchmark_coupling.py [--coupling gauss-seidel|jacobi|all] [--control 0.05]
-                                       [--plant 0.05 0.025 0.0125] [--quick] [--repeat N]
+                                       [--plant 0.05 0.025 0.01] [--quick] [--repeat N]
 
 scan_pitch (the one scenario with an independent monolithic reference,
 tests/reference/scan_pitch.py):
@@ -59,6 +59,8 @@ def system_file(control: float, fmus: dict, where: Path) -> Path:
 
 def errors(results, truth, step: float) -> tuple[float, float]:
     every = round(step / FINE)
+    if not math.isclose(every * FINE, step):
+        raise SystemExit(f"step {step} s is not a multiple of the reference's {FINE} s")
     assert np.allclose(truth["time"][::every], results.time)
     pitch = np.abs(twist(results.vector("SatelliteDynamics.q_BO")) - twist(truth["q_BO"])[::every])
     rate = np.abs(results.vector("SatelliteDynamics.w_BO_B") - truth["w_BO_B"][::every])
@@ -99,7 +101,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--coupling", choices=(*SCHEMES, "all"), default="all")
     parser.add_argument("--control", type=float, default=0.05, help="control period P [s]")
-    parser.add_argument("--plant", type=float, nargs="+", default=[0.05, 0.025, 0.0125])
+    parser.add_argument("--plant", type=float, nargs="+", default=[0.05, 0.025, 0.01])
     parser.add_argument(
         "--single", type=float, nargs="+", default=[0.1, 0.05, 0.025], help="single-rate steps"
     )
