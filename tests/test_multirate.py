@@ -101,3 +101,38 @@ def test_the_master_holds_a_slow_component_between_its_communication_points(fmus
         assert np.all(np.any(plant[1:] != plant[:-1], axis=1)[k[1:] > 1])
         H = results.vector("SatelliteDynamics.H_I")
         assert np.abs(H - H[0]).max() <= 1e-12 * np.linalg.norm(H[0])
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_libcosim_reads_its_own_equivalent_of_the_step(fmus, tmp_path):
+    """The exported osp:StepSizeHint: libcosim steps the controller every second base
+    step, so its torque command changes only at multiples of 0.1 s."""
+    import subprocess
+    import sys
+
+    from agilesat.fmus.build import write_archive
+    from helpers import ROOT
+
+    scenario = dataclasses.replace(get("scan_pitch"), steps={"PitchManeuverController": 0.1})
+    entries = {f"resources/{n}.fmu": fmus[n].read_bytes() for n in scenario.components}
+    entries["SystemStructure.ssd"] = scenario.render_ssd(
+        {n: f"resources/{n}.fmu" for n in scenario.components}
+    )
+    package = write_archive(tmp_path / "multirate.ssp", entries)
+    out = tmp_path / "libcosim.npz"
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "tests" / "libcosim_run.py"), str(package), "3", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+    )
+    assert run.returncode == 0, run.stderr
+    results = Results.from_npz(out)
+    k = np.rint(results.time / 0.05).astype(int)
+    tau = results.vector("PitchManeuverController.tau_cmd")
+    changed = np.any(tau[1:] != tau[:-1], axis=1)
+    assert changed.any() and np.all(k[1:][changed] % 2 == 0)
+    h = results.vector("CmgCluster.h")
+    assert np.any(np.any(h[1:] != h[:-1], axis=1)[k[1:] % 2 == 1])  # the plant at 0.05 s
