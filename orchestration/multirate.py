@@ -59,8 +59,8 @@ def read_step(component, where: str) -> float | None:
         settings = annotation.find(f"{{{NAMESPACE}}}Step")
         text = None if settings is None else settings.get("stepSize")
         try:
-            return float(text)
-        except (TypeError, ValueError):
+            return float(text or "")
+        except ValueError:
             raise StepError(
                 f"{where}: component '{component.get('name')}': the {STEP_ANNOTATION} "
                 f'annotation needs <agilesat:Step stepSize="seconds"/> (got {text!r})'
