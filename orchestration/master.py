@@ -11,9 +11,12 @@ Run (:func:`simulate`):
    The outputs are read block by block in the order of :mod:`.schedule` (each block after
    setting that FMU's inputs from the newest outputs).  Gauss-Seidel: an FMU steps at its
    first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
-   steps with the inputs of t_n, then the blocks are read.  Either way the recorded outputs
-   at t_{n+1} are consistent with each other (feedthrough outputs see the inputs of
-   t_{n+1}).
+   has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
+   input was last set at its FMU's block, before the FMUs of later blocks had their t_n
+   outputs: setting them again before the step keeps it from lagging a step).  Either way
+   the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
+   the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
+   over m H at every m-th communication point and holds its outputs in between.
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
@@ -38,6 +41,7 @@ import threading
 
 import numpy as np
 
+from . import multirate
 from .fmu import FmiCallError, Instance, Log
 from .parameters import scalar_parameters
 from .recorder import Recorder
@@ -167,10 +171,11 @@ def _ports(instance: Instance, names, direction: str, index: dict) -> list[_Port
 
 
 class _Node:
-    """One instance: its output ports and its connected-input ports."""
+    """One instance: its output ports, its connected-input ports and its step in base
+    steps (``every``)."""
 
-    def __init__(self, instance: Instance, layout: dict, sources: dict):
-        self.instance = instance
+    def __init__(self, instance: Instance, layout: dict, sources: dict, every: int = 1):
+        self.instance, self.every = instance, every
         self.position = {y: layout[(instance.name, y)] for y in instance.outputs}
         self.outputs = _ports(instance, instance.outputs, "Get", self.position)
         connected = sorted(
@@ -219,6 +224,7 @@ def simulate(
     stop = system.stop_time if stop is None else stop
     algorithm = algorithm or system.algorithm or "gauss-seidel"
     n_steps = _steps(system.path, start, step, stop)
+    every = multirate.multiples(system, step, n_steps)
     if algorithm not in ALGORITHMS:
         raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
 
@@ -244,6 +250,7 @@ def simulate(
             return _run(
                 system,
                 plan,
+                every,
                 instances,
                 bindings,
                 start,
@@ -298,6 +305,7 @@ def _load(system, ref, log) -> Instance:
 def _run(
     system,
     plan,
+    every,
     instances,
     bindings,
     start,
@@ -311,7 +319,10 @@ def _run(
     progress=None,
 ) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
-    nodes = {name: _Node(instances[name], layout, plan.sources) for name in plan.steps.step_order}
+    nodes = {
+        name: _Node(instances[name], layout, plan.sources, every[name])
+        for name in plan.steps.step_order
+    }
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
@@ -324,13 +335,14 @@ def _run(
         "start": start,
         "stop": start + n_steps * step,
         "algorithm": algorithm,
+        "component_steps": {name: m * step for name, m in every.items() if m > 1},
         "log": log.entries,
         "order": plan.steps.step_order,
         "unconnected_optional_inputs": plan.open_inputs,
         "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
     }
     recorder = Recorder(columns, out_dir)
-    failure, every = None, max(1, n_steps // 100)
+    failure, report_every = None, max(1, n_steps // 100)
     try:
         _initialize(
             instances,
@@ -351,14 +363,16 @@ def _run(
             t = start + n * step
             log.time = t
             if algorithm == "gauss-seidel":
-                _evaluate(sequence, values, t, step)
+                _evaluate(sequence, values, n + 1, t, step)
             else:
                 for node in nodes.values():
-                    _do_step(node.instance, t, step)
-                _evaluate(sequence, values)
+                    if n % node.every == 0:
+                        node.set_inputs(values)
+                        _do_step(node.instance, t, step * node.every)
+                _evaluate(sequence, values, n + 1)
             row[0], row[1:] = start + (n + 1) * step, values
             recorder.append(row)
-            if progress and (n + 1) % every == 0:
+            if progress and (n + 1) % report_every == 0:
                 progress(n + 1, n_steps)
         else:
             log.time = start + n_steps * step
@@ -408,15 +422,21 @@ def _sequence(schedule, nodes) -> list:
     ]
 
 
-def _evaluate(sequence, values, t: float = 0.0, step: float | None = None) -> None:
-    """Bring every output to the current communication point, block by block; with a
-    step, each FMU first steps from t at its first block (Gauss-Seidel)."""
+def _evaluate(sequence, values, k: int, t: float = 0.0, step: float | None = None) -> None:
+    """Bring every output to communication point k, block by block; with a step, each FMU
+    first steps from t = t_{k-1} at its first block (Gauss-Seidel).  An FMU with its own
+    step m·H (:mod:`.multirate`) steps only from t_{k-1} with k − 1 a multiple of m, and
+    has its inputs set and outputs read only at k a multiple of m (else they hold)."""
     for node, reads, first in sequence:
-        node.set_inputs(values)
-        if first and step is not None:
-            _do_step(node.instance, t, step)
-        for port in reads:
-            port.read(values)
+        stepping = first and step is not None and (k - 1) % node.every == 0
+        reading = k % node.every == 0
+        if stepping or reading:
+            node.set_inputs(values)
+        if stepping:
+            _do_step(node.instance, t, step * node.every)
+        if reading:
+            for port in reads:
+                port.read(values)
 
 
 def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log, logging_on):
@@ -429,7 +449,7 @@ def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, 
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    _evaluate(init_sequence, values)
+    _evaluate(init_sequence, values, 0)
     for node in nodes.values():
         node.set_inputs(values)
     for inst in instances.values():

@@ -28,6 +28,8 @@ from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
+from . import multirate
+
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -63,6 +65,7 @@ class ComponentRef:
     source: Path  # absolute path of the FMU
     line: int
     connectors: list[ConnectorRef] = field(default_factory=list)
+    step_size: float | None = None  # its own communication step (multirate.py), if any
 
 
 @dataclass
@@ -224,7 +227,15 @@ def _read_components(
                 f"{where}: component '{name}': FMU source "
                 f"'{element.get('source')}' not found (looked at {source})"
             )
-        components.append(ComponentRef(name, source, element.sourceline, _read_connectors(element)))
+        components.append(
+            ComponentRef(
+                name,
+                source,
+                element.sourceline,
+                _read_connectors(element),
+                multirate.read_step(element, where),
+            )
+        )
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
             parameters += _read_binding(binding, name, path, display, package)
     return components, parameters
@@ -397,6 +408,7 @@ def render_ssd(
     stop: float,
     step: float,
     algorithm: str = "gauss-seidel",
+    steps: dict | None = None,
 ) -> bytes:
     """An SSD (schema-checked bytes) from a vector-level description.
 
@@ -409,7 +421,8 @@ def render_ssd(
     only the one set named at its init); String connectors without a bound value are left
     out (hosts that cannot set Strings); the step is also written in the annotations
     that libcosim (Open Simulation Platform, on the default experiment) and OMSimulator
-    (OpenModelica, on the system; it refuses a system without one) read.
+    (OpenModelica, on the system; it refuses a system without one) read.  ``steps`` maps
+    an instance to its own communication step (:mod:`.multirate`).
     """
     E = _Maker()
     root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
@@ -421,6 +434,7 @@ def render_ssd(
         used_units |= _write_component(
             E, elements, instance, source, tables[instance], bound.get(instance, {}), name
         )
+        multirate.write_step(elements[-1], (steps or {}).get(instance))
     wires = E.sub(system, "ssd:Connections")
     _oms_annotation(E, system, step)
     _write_connections(E, wires, connections, {i: tables[i] for i in components})

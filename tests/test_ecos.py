@@ -91,7 +91,10 @@ def test_ecos_agrees_with_our_master_to_the_coupling_error(scenario, packages, t
     coarse, fine = np.array(differences)
     for column, c, f in zip(columns, coarse, fine):
         print(f"{scenario}: max |ECOS - ours| of {column}: {c:.3g} at H = {step} s, {f:.3g} at H/2")
-    assert np.all(coarse < np.radians(1.0))
+    # the host's two extra steps of command delay (controller -> steering -> cluster) hold
+    # scan_pitch's 4 N·m torque switches 2 H too long, open loop for the 60 s imaging
+    # phase: 2 H · 4 / 956 · 60 = 1.4° at H = 0.05 s, the largest of the scenarios
+    assert np.all(coarse < np.radians(2.0))
     assert np.all(fine <= 0.65 * coarse), fine / coarse  # first order, with 30 % margin
 
 

@@ -35,6 +35,7 @@ class Scenario:
     figures: Callable  # (Results, out_dir) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     algorithm: str = "gauss-seidel"
+    steps: dict = field(default_factory=dict)  # instance -> its own step (multirate.py)
     system: Path | None = None  # the .ssd, if not the shipped systems/<name>
 
     @property
@@ -81,6 +82,7 @@ class Scenario:
             self.stop,
             self.step,
             self.algorithm,
+            self.steps,
         )
 
 

@@ -92,6 +92,12 @@ The largest first-order term is the quantisation of the phase switches t3, t4 (n
 phase 3 lasts until the first sample ≥ t3, e.g. 36.7 s at h = 0.1 s, an extra 0.033 s of 4 N m).
 Measured: max |pitch(1e-3) − pitch(5e-4)| = 0.0043°, max |Δw_BO_B| = 4.6e-6 rad/s; ≈ 23 µs/step.
 
+Sampled-data reference: with ``control_period = m h`` the controller and the steering run only
+at ``t = j m h`` and their commands (τ_cmd, phase, δ̇_cmd) are held for m plant steps (zero-order
+hold); the plant still advances at h.  That is the system a co-simulation with its controller
+at that period computes, so co-simulation − sampled reference is the coupling error alone and
+sampled − continuous reference (control_period → 0) the effect of the sample period.
+
 Outputs are recorded at t_k before the step: ``tau_cmd`` is the command computed at t_k and held
 over [t_k, t_k+1); ``delta_dot`` is the actual gimbal rate at t_k; ``H_I`` is recomputed from the
 outputs as C_BIᵀ (J w_BI_B + h); ``Q`` is det(A Aᵀ).
@@ -374,8 +380,16 @@ def _qdot(q, H, h):
     )
 
 
-def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
+def simulate(
+    step: float, stop: float = 150.0, control_period: float | None = None
+) -> dict[str, np.ndarray]:
     """Run the monolithic reference with step ``step`` up to ``stop``; samples at t = k·step.
+
+    ``control_period`` (an integer multiple of ``step``; default ``step``): the controller
+    and the steering are sampled only at t = j·control_period and their commands (τ_cmd,
+    the phase, the gimbal-rate commands) held in between, a zero-order hold, while the plant
+    (hub RK4, exact gimbal servo) advances at ``step``: the sampled-data system the
+    co-simulation computes when its controller runs at that period.
 
     Returns arrays over the N+1 samples: ``time``, ``q_BO``, ``q_BI``, ``w_BO_B``, ``w_BI_B``,
     ``pitch``, ``delta``, ``delta_dot``, ``h``, ``H_I``, ``tau_cmd``, ``phase`` and ``Q``
@@ -385,6 +399,9 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
     n_steps = int(round(stop / step))
     if n_steps < 1 or abs(n_steps * step - stop) > 1e-9 * max(1.0, stop):
         raise ValueError(f"stop={stop} is not an integer multiple of step={step}")
+    every = 1 if control_period is None else int(round(control_period / step))
+    if every < 1 or abs(every * step - (control_period or step)) > 1e-9 * step:
+        raise ValueError(f"control_period={control_period} is not a multiple of step={step}")
     dt = float(step)
     half = 0.5 * dt
     sixth = dt / 6.0
@@ -470,18 +487,20 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
         theta = 2.0 * math.atan2(e2, e0)
         ex = 2.0 * (cc * e1 - ss * e3)
         ez = 2.0 * (cc * e3 + ss * e1)
-        if t < t1:
-            phase, ty = 1, tff
-        elif t < t2:
-            phase, ty = 2, 0.0
-        elif t < t3:
-            phase, ty = 3, -tff
-        elif t < t4:
-            phase, ty = 4, 0.0
-        else:
-            phase, ty = 5, C1 * (THETAF - theta) + C2 * (0.0 - vy)
-        tx = -KP_RY * ex - KD_RY * vx
-        tz = -KP_RY * ez - KD_RY * vz
+        sample = k % every == 0  # the controller and the steering run at this t
+        if sample:
+            if t < t1:
+                phase, ty = 1, tff
+            elif t < t2:
+                phase, ty = 2, 0.0
+            elif t < t3:
+                phase, ty = 3, -tff
+            elif t < t4:
+                phase, ty = 4, 0.0
+            else:
+                phase, ty = 5, C1 * (THETAF - theta) + C2 * (0.0 - vy)
+            tx = -KP_RY * ex - KD_RY * vx
+            tz = -KP_RY * ez - KD_RY * vz
 
         # --- steering: M = A Aᵀ, ḣ_req = −τ − w × h, δ̇_cmd = Aᵀ M⁻¹ ḣ_req / h_r
         a = []
@@ -536,22 +555,23 @@ def simulate(step: float, stop: float = 150.0) -> dict[str, np.ndarray]:
         if k == n_steps:
             break
 
-        A22 = mxx * mzz - mxz * mxz
-        A23 = mxy * mxz - mxx * myz
-        A33 = mxx * myy - mxy * mxy
-        fx = -tx - (wy * hz - wz * hy)
-        fy = -ty - (wz * hx - wx * hz)
-        fz = -tz - (wx * hy - wy * hx)
-        scale = 1.0 / (Q * hr)
-        yx = (A11 * fx + A12 * fy + A13 * fz) * scale
-        yy = (A12 * fx + A22 * fy + A23 * fz) * scale
-        yz = (A13 * fx + A23 * fy + A33 * fz) * scale
+        if sample:
+            A22 = mxx * mzz - mxz * mxz
+            A23 = mxy * mxz - mxx * myz
+            A33 = mxx * myy - mxy * mxy
+            fx = -tx - (wy * hz - wz * hy)
+            fy = -ty - (wz * hx - wx * hz)
+            fz = -tz - (wx * hy - wy * hx)
+            scale = 1.0 / (Q * hr)
+            yx = (A11 * fx + A12 * fy + A13 * fz) * scale
+            yy = (A12 * fx + A22 * fy + A23 * fz) * scale
+            yz = (A13 * fx + A23 * fy + A33 * fz) * scale
+            cmds = [ax * yx + ay * yy + az * yz for ax, ay, az in a]
 
         # --- gimbals: exact servo at τ = h/2 and τ = h;  h(τ) from the exact angles
         mhx = mhy = mhz = ehx = ehy = ehz = 0.0
         for i in idx:
-            ax, ay, az = a[i]
-            cmd = ax * yx + ay * yy + az * yz
+            cmd = cmds[i]
             tg = rmax if cmd > rmax else (-rmax if cmd < -rmax else cmd)
             d0, r0 = d[i], r[i]
             df = tg - r0
