@@ -1,5 +1,5 @@
-"""Write the call script of ``fmi2_host.c`` for a system: our master's Gauss-Seidel run
-(orchestration/master.py) call for call — the same calls in the same order with the same
+"""Write the call script of ``fmi2_host.c`` for a system: our master's run
+(orchestration/master.py, Gauss-Seidel or Jacobi, single rate) call for call — the same calls in the same order with the same
 values, except that each array get/set of the master becomes one call per variable — so
 that the C host's results must equal the master's bit for bit.
 
@@ -26,6 +26,8 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     descriptions = {c.name: Description(c.name, c.source) for c in system.components}
     plan = check_system(system, descriptions, system.parameters)
     start, step = system.start_time, system.step_size
+    if any(c.step_size for c in system.components):
+        raise NotImplementedError(f"{system_path}: the C host script is single rate")
     stop = system.stop_time if stop is None else stop
     n_steps = round((stop - start) / step)
     ids = {name: k for k, name in enumerate(plan.steps.step_order)}
@@ -79,7 +81,14 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     lines += [
         "record",
         f"loop {n_steps} {start!r} {step!r}",
-        *evaluate(plan.steps, True),
+        *(
+            evaluate(plan.steps, True)
+            if (system.algorithm or "gauss-seidel") == "gauss-seidel"
+            else [  # Jacobi: every FMU steps with the inputs of t_n, then the read-out
+                *(call for name in ids for call in [*put_inputs(name), f"step {ids[name]}"]),
+                *evaluate(plan.steps, False),
+            ]
+        ),
         "record",
         "end",
     ]
