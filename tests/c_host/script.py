@@ -1,7 +1,8 @@
 """Write the call script of ``fmi2_host.c`` for a system: our master's run
-(orchestration/master.py, Gauss-Seidel or Jacobi, single rate) call for call — the same calls in the same order with the same
-values, except that each array get/set of the master becomes one call per variable — so
-that the C host's results must equal the master's bit for bit.
+(orchestration/master.py, Gauss-Seidel or Jacobi, single rate) call for call — the same
+calls in the same order with the same values, except that each array get/set of the
+master becomes one call per variable — so that the C host's results must equal the
+master's bit for bit.
 
 Only model descriptions are read here; no FMU is loaded in this process.
 """
