@@ -1,0 +1,102 @@
+"""What a campaign worker keeps between runs, and that keeping it changes no result: the
+system file read once per content (an edited ``.ssd`` or ``.ssv`` is read again), and the
+worker's memory bounded over many runs.  Each runs in a fresh process, as a worker would.
+"""
+
+import json
+import re
+
+import pytest
+
+from agilesat.orchestration.scenarios import get
+from helpers import run_python
+
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
+EDITS = """
+import json, sys
+from pathlib import Path
+import numpy as np
+from agilesat.orchestration import ssp
+from agilesat.orchestration.campaign.worker import run_one
+
+ssd, ssv = Path(sys.argv[1]), Path(sys.argv[2])
+reads = []
+read_ssd = ssp._read_ssd  # what every read of a system goes through
+ssp._read_ssd = lambda path, *a, **kw: reads.append(Path(path).name) or read_ssd(path, *a, **kw)
+keep = ["SatelliteDynamics.w_BI_B[2]", "CmgCluster.delta[1]", "CmgCluster.h[2]"]
+
+def signals(parameters=None):
+    r = run_one(0, str(ssd), parameters or {}, None, 4.0, None, keep, 81)
+    assert r["status"] == "ok", r["message"]
+    return r["signals"]
+
+def edit(path, old, new):
+    text = path.read_text()
+    assert text.count(old) == 1, old
+    path.write_text(text.replace(old, new))
+
+G = '<ssv:Parameter name="delta0[2]">\\n                    <ssv:Real value="0.0"/>'
+R = '<ssv:Parameter name="rate0[2]">\\n                    <ssv:Real value="0.0"/>'
+nominal = signals()
+again = signals()
+edit(ssd, G, G.replace("0.0", "0.01"))
+gimbal = signals()
+edit(ssv, R, R.replace("0.0", "0.001"))
+both = signals()
+edit(ssd, G.replace("0.0", "0.01"), G)
+edit(ssv, R.replace("0.0", "0.001"), R)
+set_gimbal = signals({"CmgCluster.delta0[2]": 0.01})
+set_both = signals({"CmgCluster.delta0[2]": 0.01, "SatelliteDynamics.rate0[2]": 0.001})
+print(json.dumps({
+    "reads": reads,
+    "again": bool(np.array_equal(nominal, again)),
+    "gimbal differs": not np.array_equal(gimbal, nominal),
+    "both differs": not np.array_equal(both, gimbal),
+    "gimbal as set": bool(np.array_equal(gimbal, set_gimbal)),
+    "both as set": bool(np.array_equal(both, set_both)),
+}))
+"""
+
+
+@pytest.fixture
+def system_with_ssv(fmus, tmp_path):
+    """scan_pitch.ssd with absolute FMU sources, SatelliteDynamics' parameters moved to an
+    .ssv file: (ssd, ssv)."""
+    text = get("scan_pitch").ssd.read_text()
+    for name, path in fmus.items():
+        text = text.replace(f'source="../../fmus/build/{name}.fmu"', f'source="{path}"')
+    component = text.index('<ssd:Component name="SatelliteDynamics"')
+    binding = re.compile(r"<ssd:ParameterBinding>.*?</ssd:ParameterBinding>", re.S)
+    match = binding.search(text, component)
+    parameter_set = re.search(r"<ssv:ParameterSet.*?</ssv:ParameterSet>", match.group(), re.S)
+    ssv = tmp_path / "dynamics.ssv"
+    ssv.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        + parameter_set.group().replace(
+            "<ssv:ParameterSet",
+            '<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"',
+            1,
+        )
+        + "\n"
+    )
+    ssd = tmp_path / "system.ssd"
+    ssd.write_text(
+        text[: match.start()]
+        + '<ssd:ParameterBinding source="dynamics.ssv"/>'
+        + text[match.end() :]
+    )
+    return ssd, ssv
+
+
+def test_a_worker_reads_the_system_once_per_content(system_with_ssv):
+    """Runs of one worker read the .ssd once while it and its .ssv are unchanged; an edit
+    of either is read again and gives the result of setting the same value (--set) on
+    the original files."""
+    result = run_python(EDITS, *system_with_ssv)
+    assert result.returncode == 0, result.stderr
+    facts = json.loads(result.stdout.splitlines()[-1])
+    # nominal (read), again (kept), ssd edited (read), ssv edited (read), both restored
+    # (the nominal content: kept)
+    assert facts.pop("reads") == ["system.ssd"] * 3
+    assert all(facts.values()), facts
