@@ -100,3 +100,29 @@ def test_a_worker_reads_the_system_once_per_content(system_with_ssv):
     # (the nominal content: kept)
     assert facts.pop("reads") == ["system.ssd"] * 3
     assert all(facts.values()), facts
+
+
+QUIET = """
+import json
+from agilesat.orchestration.campaign import engine
+
+def facts(dask_worker):
+    import dask
+    tick = dask.config.get("distributed.admin.tick.interval")
+    return sorted(dask_worker.periodic_callbacks), tick
+
+with engine.cluster(1) as client:
+    print(json.dumps(list(client.run(facts).values())[0]))
+"""
+
+
+def test_the_local_cluster_leaves_the_cpu_to_the_runs():
+    """The workers of our LocalCluster do not sample their stacks every 10 ms (Dask's
+    statistical profiler, for a dashboard page nobody opens) and tick every 1 s rather
+    than 20 ms: together about 45 ms of CPU per second per worker at Dask's defaults."""
+    result = run_python(QUIET)
+    assert result.returncode == 0, result.stderr
+    callbacks, tick = json.loads(result.stdout.splitlines()[-1])
+    assert "heartbeat" in callbacks  # the worker's own callbacks are there
+    assert not {"profile", "profile-cycle"} & set(callbacks)
+    assert tick == "1s"
