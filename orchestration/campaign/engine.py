@@ -39,11 +39,13 @@ IN_FLIGHT_PER_WORKER = 2
 #: the worker, nanny and client processes, taken from the runs: the worker's statistical
 #: profiler (a stack sample every 10 ms on its event loop, for the dashboard's profile
 #: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
-#: for more than 3 s) and the system monitor every 0.5 s.  With these, about 5-9 ms/s.
+#: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
+#: pause, terminate) every 0.1 s.  With these, 5-10 ms/s (tests/benchmark_campaign.py).
 LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "500ms",
 }
 
 
@@ -154,15 +156,17 @@ def execute(
     todo = iter([i for i in range(plan.total) if i not in records])
     watcher = WorkerWatch(client)
     futures = {}
+    values = {}  # of the runs in flight (drawn once)
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
 
     def submit():
         for index in todo:
+            values[index] = plan.run_values(index)
             future = client.submit(
                 run_one,
                 index,
                 plan.spec.target,
-                plan.parameters(index),
+                {**plan.spec.set, **values[index]},
                 plan.step,
                 plan.stop,
                 plan.spec.algorithm,
@@ -203,7 +207,7 @@ def execute(
                 if signals is not None and signal is not None:
                     signals[index] = signal
                 record.update(
-                    seed=plan.spec.seed, values=plan.run_values(index), grid=index % len(plan.grid)
+                    seed=plan.spec.seed, values=values.pop(index), grid=index % len(plan.grid)
                 )
                 if set(record["metrics"]) - set(metrics):
                     for name, m in record["metrics"].items():
