@@ -40,7 +40,8 @@ IN_FLIGHT_PER_WORKER = 2
 #: profiler (a stack sample every 10 ms on its event loop, for the dashboard's profile
 #: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
 #: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
-#: pause, terminate) every 0.1 s.  With these, 5-10 ms/s (tests/benchmark_campaign.py).
+#: pause, terminate) every 0.1 s (idle Dask processes using CPU: dask/distributed#5000,
+#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).
 LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
