@@ -83,7 +83,7 @@ def parse_value(text):
 def scalar_parameters(instances: dict, parameters: dict) -> dict:
     """{"A.x": value} -> {"A.x" or "A.x[i,j]": scalar value}: whole arrays split into their
     elements; unknown instances and variables answered with the closest names."""
-    result = {}
+    result, tables = {}, {}
     for key, value in parameters.items():
         name, _, variable = key.partition(".")
         if name not in instances or not variable:
@@ -91,7 +91,7 @@ def scalar_parameters(instances: dict, parameters: dict) -> dict:
                 f"--set {key}: expected Instance.variable with an instance "
                 f"of {', '.join(instances)}" + did_you_mean(name, instances)
             )
-        table = variables(instances[name])
+        table = tables.get(name) or tables.setdefault(name, variables(instances[name]))
         value = parse_value(value)
         if variable in instances[name].variables:
             if np.ndim(value):

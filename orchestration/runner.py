@@ -10,12 +10,15 @@ output and the momentum drift where ``H_I`` is recorded; the figures written.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
+from lxml import etree
 
 from ..fmus.model_description import UNITS
 from . import scenarios
@@ -24,7 +27,7 @@ from .master import Interrupted, SimulationError, simulate, stop_on_signals
 from .parameters import did_you_mean, scalar_parameters
 from .recorder import file_error
 from .results import Results, units_path
-from .ssp import read_system
+from .ssp import NS, SystemFile, read_system
 from .units import pretty
 from .validation import override
 
@@ -82,10 +85,11 @@ def run(
             from ..fmus.build import build_all
 
             build_all(names=scenario.components)
-        system = scenario.ssd
+        path = scenario.ssd
         overrides = {**scenario.variant_parameters(variant), **overrides}
     else:
-        system = Path(target)
+        path = Path(target)
+    system = system_file(path)
     typed = typed_overrides(system, overrides)
     if out_dir is not None:
         out_dir = Path(out_dir)
@@ -93,7 +97,7 @@ def run(
     summary = {
         "scenario": scenario.name if scenario else None,
         "variant": variant,
-        "system": str(system),
+        "system": str(path),
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()},
     }
     wall = time.perf_counter()
@@ -193,14 +197,65 @@ def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
 
 def typed_overrides(system, overrides: dict) -> dict:
     """{"A.x[i]": ParameterValue} of the overrides (whole arrays split, each typed by the
-    FMU's variable), checked against the system's model descriptions."""
+    FMU's variable), checked against the system's model descriptions (``system``: a path or
+    a :class:`SystemFile`)."""
     if not overrides:
         return {}
-    system_file = read_system(system)  # holds an .ssp's unpacked FMUs while we read
-    described = {c.name: Description(c.name, c.source) for c in system_file.components}
+    if not isinstance(system, SystemFile):
+        system = read_system(system)  # holds an .ssp's unpacked FMUs while we read
+    described = {c.name: Description(c.name, c.source) for c in system.components}
     return {
         k: override(described, k, v) for k, v in scalar_parameters(described, overrides).items()
     }
+
+
+_systems: dict[tuple, SystemFile] = {}  # content key -> the system read from it
+_systems_lock = threading.Lock()
+_SYSTEMS_KEPT = 8
+
+
+def system_file(path) -> SystemFile:
+    """:func:`read_system` once per content: a run of a campaign worker (or any repeated
+    run) takes the system read before when the file, and every ``.ssv`` file its parameter
+    bindings name, hold the same bytes (SHA-256; an edited file is read again).  Reading
+    and checking an ``.ssd`` against the SSP schema takes about as long as the first 2 s
+    of a scan_pitch run; the systems of the last :data:`_SYSTEMS_KEPT` contents are kept
+    (an ``.ssp``'s with its unpacked FMUs)."""
+    path = Path(path).resolve()
+    key = _content_key(path)
+    if key is None:
+        return read_system(path)  # which says what is wrong
+    with _systems_lock:
+        system = _systems.get(key)
+    if system is None:
+        system = read_system(path)
+        with _systems_lock:
+            if len(_systems) >= _SYSTEMS_KEPT:
+                _systems.pop(next(iter(_systems)))
+            _systems[key] = system
+    return system
+
+
+def _content_key(path: Path) -> tuple | None:
+    """(path, SHA-256 of its bytes and of each .ssv it binds); None if a file is missing
+    or the XML malformed."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    key = [str(path), hashlib.sha256(data).hexdigest()]
+    if path.suffix != ".ssp":  # an .ssp holds its .ssv files
+        try:
+            root = etree.fromstring(data)
+        except etree.XMLSyntaxError:
+            return None
+        for binding in root.iterfind(".//ssd:ParameterBinding[@source]", NS):
+            ssv = (path.parent / binding.get("source")).resolve()
+            try:
+                key.append(hashlib.sha256(ssv.read_bytes()).hexdigest())
+            except OSError:
+                return None
+    return tuple(key)
 
 
 def generic_summary(results: Results) -> dict:

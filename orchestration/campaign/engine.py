@@ -34,6 +34,20 @@ from .plan import Plan, Spec
 from .worker import run_one
 
 IN_FLIGHT_PER_WORKER = 2
+#: Settings of the LocalCluster we start (a cluster given by its address keeps its own).
+#: Dask's periodic work, at its defaults, costs about 50 ms of CPU per second in each of
+#: the worker, nanny and client processes, taken from the runs: the worker's statistical
+#: profiler (a stack sample every 10 ms on its event loop, for the dashboard's profile
+#: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
+#: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
+#: pause, terminate) every 0.1 s (idle Dask processes using CPU: dask/distributed#5000,
+#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "500ms",
+}
 
 
 class CampaignExistsError(ValueError):
@@ -108,6 +122,7 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
     ``workers`` single-threaded processes (default: one per core)."""
     import logging
 
+    import dask
     from distributed import Client, LocalCluster
 
     if scheduler:
@@ -115,6 +130,7 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
             yield client
         return
     with (
+        dask.config.set(LOCAL_CLUSTER_CONFIG),
         LocalCluster(
             n_workers=workers,
             threads_per_worker=1,
@@ -141,15 +157,17 @@ def execute(
     todo = iter([i for i in range(plan.total) if i not in records])
     watcher = WorkerWatch(client)
     futures = {}
+    values = {}  # of the runs in flight (drawn once)
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
 
     def submit():
         for index in todo:
+            values[index] = plan.run_values(index)
             future = client.submit(
                 run_one,
                 index,
                 plan.spec.target,
-                plan.parameters(index),
+                {**plan.spec.set, **values[index]},
                 plan.step,
                 plan.stop,
                 plan.spec.algorithm,
@@ -190,7 +208,7 @@ def execute(
                 if signals is not None and signal is not None:
                     signals[index] = signal
                 record.update(
-                    seed=plan.spec.seed, values=plan.run_values(index), grid=index % len(plan.grid)
+                    seed=plan.spec.seed, values=values.pop(index), grid=index % len(plan.grid)
                 )
                 if set(record["metrics"]) - set(metrics):
                     for name, m in record["metrics"].items():
