@@ -432,9 +432,15 @@ def render_ssd(
     used_units: set[str] = set()
     for instance, source in components.items():
         used_units |= _write_component(
-            E, elements, instance, source, tables[instance], bound.get(instance, {}), name
+            E,
+            elements,
+            instance,
+            source,
+            tables[instance],
+            bound.get(instance, {}),
+            name,
+            (steps or {}).get(instance),
         )
-        multirate.write_step(elements[-1], (steps or {}).get(instance))
     wires = E.sub(system, "ssd:Connections")
     _oms_annotation(E, system, step)
     _write_connections(E, wires, connections, {i: tables[i] for i in components})
@@ -445,10 +451,13 @@ def render_ssd(
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 
-def _write_component(E, elements, instance, source, table, values: dict, set_name) -> set[str]:
+def _write_component(
+    E, elements, instance, source, table, values: dict, set_name, step: float | None
+) -> set[str]:
     """One ``ssd:Component``: a scalar connector per element of every variable (a Real with
     its unit; a String only when it is given a value), then its bound parameter values in
-    one inline ``ssv:ParameterSet`` named ``set_name``.  Returns the units it used."""
+    one inline ``ssv:ParameterSet`` named ``set_name``, then its own communication step, if
+    it has one (:func:`.multirate.write_step`).  Returns the units it used."""
     component = E.sub(
         elements,
         "ssd:Component",
@@ -476,6 +485,7 @@ def _write_component(E, elements, instance, source, table, values: dict, set_nam
         for scalar, (kind, text) in values.items():
             parameter = E.sub(listing, "ssv:Parameter", name=scalar)
             E.sub(parameter, f"ssv:{kind}", value=text)
+    multirate.write_step(component, step)
     return used_units
 
 
