@@ -25,6 +25,35 @@ DEG = math.pi / 180
 
 
 def main(argv=None) -> int:
+    from .campaign import cli as campaign_cli
+
+    args = _parser().parse_args(argv)
+    try:
+        return {
+            "list": _list,
+            "info": _info,
+            "build": _build,
+            "validate": _validate,
+            "run": _run,
+            "plot": _plot,
+            "export": _export,
+            "stare": _stare,
+            "mission": _mission,
+            "size-flywheel": _size_flywheel,
+            "generate": _generate,
+            "campaign": campaign_cli.main,
+        }[args.command](args)
+    except (Interrupted, KeyboardInterrupt) as exc:
+        print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
+        return 130
+    except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
+        return 1
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The command line: the options of every subcommand (each one's --help)."""
     doc = __doc__.split("\n\n")
     parser = argparse.ArgumentParser(
         prog="agilesat",
@@ -40,7 +69,16 @@ def main(argv=None) -> int:
         "-q", "--quiet", action="store_true", help="no progress bar or progress lines"
     )
     commands = parser.add_subparsers(dest="command", required=True)
+    _system_commands(commands, quiet)
+    _analysis_commands(commands, quiet)
+    from .campaign import cli as campaign_cli
 
+    campaign_cli.add_parser(commands)
+    return parser
+
+
+def _system_commands(commands, quiet) -> None:
+    """Subcommands on FMUs, scenarios and system files, and the generated files."""
     commands.add_parser("list", help="the scenarios and their variants")
     info = commands.add_parser(
         "info",
@@ -102,6 +140,18 @@ def main(argv=None) -> int:
     export.add_argument("target", help=f"one of {', '.join(scenarios.NAMES)} (optionally :variant)")
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
+    generate = commands.add_parser(
+        "generate",
+        help="write the files generated from the "
+        "variable tables and scenarios (.ssd, fmus/INTERFACES.md)",
+    )
+    generate.add_argument(
+        "--check", action="store_true", help="only check that the committed files are up to date"
+    )
+
+
+def _analysis_commands(commands, quiet) -> None:
+    """Subcommands of the mission and sizing analyses (video_sar passes, payload_sweep's wheel)."""
     stare = commands.add_parser(
         "stare",
         parents=[quiet],
@@ -185,43 +235,6 @@ def main(argv=None) -> int:
     size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
     size.add_argument("--stop", type=float, help="run length [s] (default: one pitch sweep)")
     size.add_argument("--out", type=Path, default=Path("out/size-flywheel"))
-
-    generate = commands.add_parser(
-        "generate",
-        help="write the files generated from the "
-        "variable tables and scenarios (.ssd, fmus/INTERFACES.md)",
-    )
-    generate.add_argument(
-        "--check", action="store_true", help="only check that the committed files are up to date"
-    )
-
-    from .campaign import cli as campaign_cli
-
-    campaign_cli.add_parser(commands)
-
-    args = parser.parse_args(argv)
-    try:
-        return {
-            "list": _list,
-            "info": _info,
-            "build": _build,
-            "validate": _validate,
-            "run": _run,
-            "plot": _plot,
-            "export": _export,
-            "stare": _stare,
-            "mission": _mission,
-            "size-flywheel": _size_flywheel,
-            "generate": _generate,
-            "campaign": campaign_cli.main,
-        }[args.command](args)
-    except (Interrupted, KeyboardInterrupt) as exc:
-        print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
-        return 130
-    except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
-        return 1
 
 
 def _list(args) -> int:
