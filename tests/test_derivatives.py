@@ -1,0 +1,172 @@
+"""FMI 2.0 input and output derivatives (``fmi2SetRealInputDerivatives``,
+``fmi2GetRealOutputDerivatives``): second-order coupling without the explicit ḣ wires.
+
+The system: scan_pitch with its ``SatelliteDynamics.hdot_*`` connections removed, so the hub
+learns the cluster's ḣ only through the FMI derivative calls (the master passes them where
+both FMUs declare them).  The yardstick is the monolithic sampled-data reference
+(tests/reference/scan_pitch.py, ``control_period=P``); coupling error = max over the 150 s
+run of |pitch(co-simulation) − pitch(reference)|.  Controller and steering run at
+P = 0.05 s, the plant FMUs at H (multi-rate), so a smaller H changes the coupling only.
+
+``python tests/test_derivatives.py`` prints the table the README quotes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from agilesat.orchestration.master import simulate  # noqa: E402
+from agilesat.orchestration.scenarios import get  # noqa: E402
+from agilesat.orchestration.ssp import read_system  # noqa: E402
+from reference import scan_pitch as reference  # noqa: E402
+
+DEG = math.pi / 180
+FINE, P, STOP = 1e-3, 0.05, 150.0
+STEPS = (0.05, 0.025)
+CONTROLLERS = ("PitchManeuverController", "CmgSteering")
+
+
+def twist(q):
+    """Pitch as the twist of q_BO about y (well defined through 90°)."""
+    q = np.where(q[:, :1] < 0, -q, q)
+    return 2 * np.arctan2(q[:, 2], q[:, 0])
+
+
+def system(directory: Path, fmus: dict, wired: bool, step: float):
+    """scan_pitch with controller and steering at P and the plant at ``step``; without the
+    ḣ wires unless ``wired``."""
+    scenario = get("scan_pitch")
+    if step != P:
+        scenario = dataclasses.replace(scenario, steps=dict.fromkeys(CONTROLLERS, P))
+    path = directory / f"scan_pitch_{step}.ssd"
+    path.write_bytes(scenario.render_ssd({n: str(fmus[n]) for n in scenario.components}))
+    result = read_system(path)
+    if not wired:
+        result.connections = [
+            c for c in result.connections if not c.end_connector.startswith("hdot_")
+        ]
+    return result
+
+
+def run(directory, fmus, step, algorithm, wired=False, derivatives=True, stop=STOP):
+    return simulate(
+        system(directory, fmus, wired, step),
+        step=step,
+        stop=stop,
+        algorithm=algorithm,
+        derivatives=derivatives,
+    )
+
+
+def pitch_error(results, truth, step) -> float:
+    every = round(step / FINE)
+    assert np.allclose(truth["time"][::every], results.time)
+    pitch = twist(results.vector("SatelliteDynamics.q_BO"))
+    return float(np.abs(pitch - twist(truth["q_BO"])[::every]).max())
+
+
+SCHEMES = {  # label: (algorithm, ḣ wired, derivatives)
+    "jacobi, ḣ wired (as shipped)": ("jacobi", True, True),
+    "jacobi, no ḣ wires, derivatives": ("jacobi", False, True),
+    "jacobi, no ḣ wires, no derivatives": ("jacobi", False, False),
+    "gauss-seidel, ḣ wired": ("gauss-seidel", True, True),
+    "gauss-seidel, no ḣ wires, derivatives (interpolation)": ("gauss-seidel", False, True),
+}
+
+
+# -- the tests -------------------------------------------------------------------------
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return reference.simulate(FINE, STOP, control_period=P)
+
+
+@pytest.fixture(scope="module")
+def errors(fmus, truth, tmp_path_factory):
+    """Coupling error in pitch [rad] of each scheme at each plant step."""
+    directory = tmp_path_factory.mktemp("systems")
+    return {
+        (label, step): pitch_error(
+            run(directory, fmus, step, algorithm, wired, derivatives), truth, step
+        )
+        for label, (algorithm, wired, derivatives) in SCHEMES.items()
+        for step in STEPS
+    }
+
+
+def order(errors, label) -> float:
+    return math.log(errors[label, STEPS[0]] / errors[label, STEPS[1]]) / math.log(
+        STEPS[0] / STEPS[1]
+    )
+
+
+def test_without_the_wires_jacobi_with_derivatives_is_the_wired_run_bit_for_bit(fmus, tmp_path):
+    """Tolerance zero, by construction: fmi2GetRealOutputDerivatives of the cluster's h is
+    its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg stores it in
+    the hub's input hdot_cmg: the same number the wire passes, at the same time."""
+    wired = run(tmp_path, fmus, P, "jacobi", wired=True, stop=20.0)
+    derived = run(tmp_path, fmus, P, "jacobi", stop=20.0)
+    assert wired.names == derived.names
+    assert wired.data.tobytes() == derived.data.tobytes()
+    assert "derivatives" not in wired.meta  # the wire wins: no derivative calls at all
+    assert derived.meta["derivatives"] == [
+        f"CmgCluster.h[{i}] -> SatelliteDynamics.h_cmg[{i}] (extrapolated)" for i in (1, 2, 3)
+    ]
+
+
+def test_without_derivatives_the_coupling_is_first_order_and_larger(errors):
+    off, on = "jacobi, no ḣ wires, no derivatives", "jacobi, no ḣ wires, derivatives"
+    for step in STEPS:
+        assert errors[off, step] > 10 * errors[on, step], (step, errors)
+    assert order(errors, off) < 1.3, errors
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["jacobi, no ḣ wires, derivatives", "gauss-seidel, no ḣ wires, derivatives (interpolation)"],
+)
+def test_with_derivatives_the_coupling_is_second_order(errors, label):
+    assert order(errors, label) >= 1.9, errors
+    assert errors[label, P] <= 0.01 * DEG, errors
+
+
+def test_wired_gauss_seidel_stays_the_first_order_scheme(errors):
+    """The explicit ḣ wire wins over the derivatives (nothing to interpolate): Gauss-Seidel
+    with the wires is the first-order scheme it was."""
+    label = "gauss-seidel, ḣ wired"
+    assert errors[label, P] > 0.1 * DEG and order(errors, label) < 1.3, errors
+
+
+# -- the table ---------------------------------------------------------------------------
+def main() -> None:
+    import tempfile
+
+    from agilesat.fmus.build import build_all
+
+    fmus = {path.stem: path for path in build_all()}
+    truth = reference.simulate(FINE, STOP, control_period=P)
+    print(f"coupling error in pitch against the sampled reference (P = {P} s), {STOP:g} s run")
+    print("| scheme | plant step H [s] | coupling error [deg] | observed order |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as directory:
+        for label, (algorithm, wired, derivatives) in SCHEMES.items():
+            found = {}
+            for step in STEPS:
+                results = run(Path(directory), fmus, step, algorithm, wired, derivatives)
+                found[label, step] = pitch_error(results, truth, step)
+                rate = f"{order(found, label):.2f}" if step == STEPS[-1] else "—"
+                print(f"| {label} | {step} | {found[label, step] / DEG:.2g} | {rate} |")
+
+
+if __name__ == "__main__":
+    main()
