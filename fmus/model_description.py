@@ -70,7 +70,7 @@ def model_description(
 
 
 def _flag(layout, causality: str) -> str:
-    """"true" if a variable of that causality is declared the derivative of another."""
+    """``"true"`` if a variable of that causality is declared the derivative of another."""
     return "true" if any(v.derivative_of for v in layout.group(causality)) else "false"
 
 
