@@ -14,6 +14,7 @@ P = 0.05 s, the plant FMUs at H (multi-rate), so a smaller H changes the couplin
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import sys
 from pathlib import Path
@@ -26,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from agilesat.orchestration.master import simulate  # noqa: E402
 from agilesat.orchestration.scenarios import get  # noqa: E402
 from agilesat.orchestration.ssp import read_system  # noqa: E402
+from helpers import run_python  # noqa: E402
 from reference import scan_pitch as reference  # noqa: E402
 
 DEG = math.pi / 180
@@ -145,6 +147,63 @@ def test_wired_gauss_seidel_stays_the_first_order_scheme(errors):
     with the wires is the first-order scheme it was."""
     label = "gauss-seidel, ḣ wired"
     assert errors[label, P] > 0.1 * DEG and order(errors, label) < 1.3, errors
+
+
+FMPY_HOST = """
+import json, sys
+import numpy as np
+from fmpy import simulate_fmu
+path = sys.argv[1]
+# FMPy's Input keeps 9 input derivatives whatever the number of inputs (fmpy 0.3
+# simulation.py, Input.__init__; no upstream issue found): the table has exactly the hub's
+# 9 momentum inputs (h_cmg[3] = 0.1 t, slope 0.1 exactly; the rest zero)
+ramp = [(-20.0, -2.0), (40.0, 4.0)]  # FMPy: derivative 0 at the table's first time
+momenta = [f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)]
+def table(*extra):
+    names = ["time", *momenta, *extra]
+    rows = [(t, 0, 0, h, 0, 0, 0, 0, 0, 0) + (0, 0, 0.1)[: len(extra)] for t, h in ramp]
+    return np.array(rows, dtype=[(n, np.double) for n in names])
+def run(signals, derivatives):
+    return simulate_fmu(path, stop_time=20.0, step_size=0.5, output_interval=0.5,
+                        input=signals, set_input_derivatives=derivatives,
+                        start_values={"gravity_gradient": False},
+                        output=["w_BI_B[3]", "q_BI[1]", "q_BI[4]"])
+wired = run(table("hdot_cmg[1]", "hdot_cmg[2]", "hdot_cmg[3]"), False)
+derived, held = run(table(), True), run(table(), False)
+diff = lambda a, b: max(float(np.abs(a[n] - b[n]).max()) for n in a.dtype.names[1:])
+print(json.dumps({"derived": diff(wired, derived), "held": diff(wired, held)}))
+"""
+
+
+def test_fmpy_as_host_sets_input_derivatives_in_a_clean_process(fmus):
+    """FMPy's own simulate_fmu(set_input_derivatives=True) on the hub with a momentum ramp
+    and no ḣ input: the same run, bit for bit, as with ḣ given as an input; without the
+    derivatives the hub holds h over each step (a different run)."""
+    from fmpy.validation import validate_fmu
+
+    for name in ("CmgCluster", "Flywheel", "PayloadGimbals", "SatelliteDynamics"):
+        assert validate_fmu(str(fmus[name])) == [], name
+    run = run_python(FMPY_HOST, fmus["SatelliteDynamics"])
+    assert run.returncode == 0, run.stderr
+    found = json.loads(run.stdout.strip().splitlines()[-1])
+    assert found["derived"] == 0.0 and found["held"] > 1e-6, found
+
+
+def test_model_descriptions_declare_the_derivatives(fmus):
+    from fmpy import read_model_description
+
+    declared = {}
+    for name in ("CmgCluster", "Flywheel", "PayloadGimbals", "SatelliteDynamics", "CmgSteering"):
+        md = read_model_description(str(fmus[name]))
+        pairs = {v.name: v.derivative.name for v in md.modelVariables if v.derivative}
+        cs = md.coSimulation
+        declared[name] = (cs.canInterpolateInputs, cs.maxOutputDerivativeOrder, pairs)
+    device = {f"hdot[{i}]": f"h[{i}]" for i in (1, 2, 3)}
+    for name in ("CmgCluster", "Flywheel", "PayloadGimbals"):
+        assert declared[name] == (False, 1, device), name
+    hub = {f"hdot_{d}[{i}]": f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)}
+    assert declared["SatelliteDynamics"] == (True, 0, hub)
+    assert declared["CmgSteering"] == (False, 0, {})
 
 
 # -- the table ---------------------------------------------------------------------------

@@ -702,8 +702,9 @@ EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
  * slave implements them (fmus/slave.py: which variables have a declared derivative, the
  * order, the mode, finite values), and the shim passes each (vr, order) on to it as the
  * value reference DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr of an fmi2SetReal or
- * fmi2GetReal.  Refused here: NULL arrays with n > 0, an order outside 1..MAX_ORDER (0 and
- * negative orders are no derivatives), a value reference too large for any variable. */
+ * fmi2GetReal.  Refused here: NULL arrays with n > 0, an order outside 0..MAX_ORDER, a
+ * value reference too large for any variable (the slave refuses every order but 1, naming
+ * the variable). */
 static fmi2Status derivative_call(Shim *s, const char *call, const fmi2ValueReference vr[],
                                   size_t n, const fmi2Integer order[], void *value,
                                   int setting) {
@@ -716,10 +717,9 @@ static fmi2Status derivative_call(Shim *s, const char *call, const fmi2ValueRefe
     if (!codes) return refuse(s, call, "out of memory");
     for (size_t i = 0; i < n; i++) {
         char why[200];
-        if (order[i] < 1 || order[i] > MAX_ORDER)
+        if (order[i] < 0 || order[i] > MAX_ORDER)
             snprintf(why, sizeof why, "order[%zu] = %d for value reference %u: 1 is the first "
-                     "derivative, the only one this FMU has (0 is not allowed)", i, order[i],
-                     vr[i]);
+                     "derivative, the only one this FMU has", i, order[i], vr[i]);
         else if (vr[i] >= (1u << ORDER_SHIFT))
             snprintf(why, sizeof why, "unknown value reference %u", vr[i]);
         else {
