@@ -85,7 +85,47 @@ SCHEMES = {  # label: (algorithm, ḣ wired, derivatives)
 
 
 # -- the tests -------------------------------------------------------------------------
-pytestmark = [pytest.mark.slow, pytest.mark.integration]
+def _var(name, causality, unit, shape=(3,), **kw):
+    from agilesat.components.variables import input_, output, parameter
+
+    make = {"input": input_, "output": output}.get(causality)
+    if make is None:
+        return parameter(name, 0.0, unit, name, shape=shape, **kw)
+    return make(name, unit, name, shape=shape, **kw)
+
+
+@pytest.mark.parametrize(
+    "base",
+    [
+        _var("h", "output", "N.m.s", shape=(2,)),  # another shape
+        _var("h", "input", "N.m.s"),  # another causality
+        _var("h", "output", "rad"),  # N.m is not rad per second
+        _var("g", "output", "N.m.s"),  # not the one named
+    ],
+)
+def test_a_derivative_must_match_what_it_is_the_derivative_of(base):
+    from agilesat.components.variables import Layout
+
+    derivative = _var("hdot", "output", "N.m", derivative_of="h")
+    with pytest.raises(ValueError, match="hdot: derivative_of='h' must name a Real output"):
+        Layout((base, derivative))
+    with pytest.raises(ValueError, match="only Real inputs and outputs can be derivatives"):
+        _var("p", "parameter", "N.m", derivative_of="h")
+
+
+def test_a_declared_derivative_reaches_the_model_description():
+    import xml.etree.ElementTree as ET
+
+    from agilesat.components.satellite_dynamics import SatelliteDynamics
+    from agilesat.fmus.model_description import model_description
+
+    root = ET.fromstring(model_description("S", SatelliteDynamics, "g", "d", "t"))
+    variables = root.findall("ModelVariables/ScalarVariable")
+    derivative = {v.get("name"): v[0].get("derivative") for v in variables}
+    assert variables[int(derivative["hdot_wheel[2]"]) - 1].get("name") == "h_wheel[2]"
+    assert derivative["h_wheel[2]"] is None and derivative["tau_ext[1]"] is None
+    assert root.find("CoSimulation").get("canInterpolateInputs") == "true"
+    assert root.find("CoSimulation").get("maxOutputDerivativeOrder") == "0"
 
 
 @pytest.fixture(scope="module")
@@ -112,6 +152,8 @@ def order(errors, label) -> float:
     )
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_without_the_wires_jacobi_with_derivatives_is_the_wired_run_bit_for_bit(fmus, tmp_path):
     """Tolerance zero, by construction: fmi2GetRealOutputDerivatives of the cluster's h is
     its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg stores it in
@@ -126,6 +168,8 @@ def test_without_the_wires_jacobi_with_derivatives_is_the_wired_run_bit_for_bit(
     ]
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_without_derivatives_the_coupling_is_first_order_and_larger(errors):
     off, on = "jacobi, no ḣ wires, no derivatives", "jacobi, no ḣ wires, derivatives"
     for step in STEPS:
@@ -133,6 +177,8 @@ def test_without_derivatives_the_coupling_is_first_order_and_larger(errors):
     assert order(errors, off) < 1.3, errors
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 @pytest.mark.parametrize(
     "label",
     ["jacobi, no ḣ wires, derivatives", "gauss-seidel, no ḣ wires, derivatives (interpolation)"],
@@ -142,6 +188,8 @@ def test_with_derivatives_the_coupling_is_second_order(errors, label):
     assert errors[label, P] <= 0.01 * DEG, errors
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_wired_gauss_seidel_stays_the_first_order_scheme(errors):
     """The explicit ḣ wire wins over the derivatives (nothing to interpolate): Gauss-Seidel
     with the wires is the first-order scheme it was."""
@@ -175,6 +223,8 @@ print(json.dumps({"derived": diff(wired, derived), "held": diff(wired, held)}))
 """
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_fmpy_as_host_sets_input_derivatives_in_a_clean_process(fmus):
     """FMPy's own simulate_fmu(set_input_derivatives=True) on the hub with a momentum ramp
     and no ḣ input: the same run, bit for bit, as with ḣ given as an input; without the
@@ -189,6 +239,8 @@ def test_fmpy_as_host_sets_input_derivatives_in_a_clean_process(fmus):
     assert found["derived"] == 0.0 and found["held"] > 1e-6, found
 
 
+@pytest.mark.slow
+@pytest.mark.integration
 def test_model_descriptions_declare_the_derivatives(fmus):
     from fmpy import read_model_description
 
