@@ -442,6 +442,7 @@ def _run(
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
+    jacobi_reads = _fed_reads(sequence, plan.sources)
     links = _Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
     if links is not None and not links.consumers:
         links = None
@@ -497,7 +498,7 @@ def _run(
                         if couple is not None:
                             couple(node, values, step)
                         _do_step(node.instance, t, step * node.every)
-                _evaluate(sequence, values, n + 1)
+                _read_after_steps(jacobi_reads, values, n + 1)
             if links is not None:
                 links.read()
             row[0], row[1:] = start + (n + 1) * step, values
@@ -550,6 +551,39 @@ def _sequence(schedule, nodes) -> list:
         )
         for name, block, first in evaluation_sequence(schedule)
     ]
+
+
+def _fed_reads(sequence, sources) -> list:
+    """(node, output ports, do its outputs depend directly on a connected input?) for each
+    block of a sequence."""
+    result = []
+    for node, reads, _ in sequence:
+        instance = node.instance
+        connected = {u for (b, u) in sources if b == instance.name}
+        outputs = [y for port in reads for y in _port_names(port, node)]
+        feeds = any(
+            instance.feedthrough.get(y) is None or instance.feedthrough[y] & connected
+            for y in outputs
+        )
+        result.append((node, reads, feeds))
+    return result
+
+
+def _port_names(port: _Port, node: _Node) -> list[str]:
+    by_place = {place: y for y, place in node.position.items()}
+    return [by_place[int(i)] for i in port.index]
+
+
+def _read_after_steps(reads, values, k: int) -> None:
+    """Jacobi: bring every output to communication point k once all FMUs stepped, block
+    by block, setting a block's inputs only if its outputs depend on them directly (the
+    next step sets every input anyway).  As :func:`_evaluate` without a step."""
+    for node, ports, feeds in reads:
+        if k % node.every == 0:
+            if feeds:
+                node.set_inputs(values)
+            for port in ports:
+                port.read(values)
 
 
 def _evaluate(
