@@ -234,10 +234,10 @@ class _Derivatives:
             for u, a, y, after in entries
         ]
         self.consumers = {b: _InputSlopes(nodes[b].instance, e, layout) for b, e in links.items()}
-        outputs: dict[str, list] = {}
+        outputs: dict[str, list] = {}  # read for the extrapolated links only
         for entries in links.values():
-            for _, a, y, _ in entries:
-                if y not in outputs.setdefault(a, []):
+            for _, a, y, after in entries:
+                if not after and y not in outputs.setdefault(a, []):
                     outputs[a].append(y)
         self.sources = [_OutputSlopes(nodes[a].instance, ys, layout) for a, ys in outputs.items()]
         self.interpolating = any(c.interpolated.any() for c in self.consumers.values())
@@ -249,12 +249,14 @@ class _Derivatives:
         for source in self.sources:
             source.read(self.slopes)
 
-    def couple(self, node: _Node, values: np.ndarray, step: float) -> bool:
+    def couple(self, node: _Node, values: np.ndarray, step: float):
         """Before ``node`` steps: the derivatives of its linked inputs and, where
-        interpolated, their values at t_n (then True: they need setting back after the
-        step)."""
+        interpolated, their values at t_n; then the links to set back to t_{n+1} after the
+        step (:meth:`_InputSlopes.restore`), or None."""
         consumer = self.consumers.get(node.instance.name)
-        return consumer is not None and consumer.write(values, self.previous, self.slopes, step)
+        if consumer is not None and consumer.write(values, self.previous, self.slopes, step):
+            return consumer
+        return None
 
 
 class _OutputSlopes:
@@ -305,6 +307,11 @@ class _InputSlopes:
             self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
         self.instance.call("fmi2SetRealInputDerivatives", self.vrs, self.n, self.orders, self.ptr)
         return moved
+
+    def restore(self, values) -> None:
+        """The interpolated inputs back at their newest values (after the step)."""
+        self.start_buffer[:] = values[self.index[self.interpolated]]
+        self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
 
 
 def simulate(
@@ -600,10 +607,10 @@ def _evaluate(
         if stepping or reading:
             node.set_inputs(values)
         if stepping:
-            moved = couple is not None and couple(node, values, step)
+            moved = couple(node, values, step) if couple is not None else None
             _do_step(node.instance, t, step * node.every)
-            if moved and reading:  # inputs set to their t_{k-1} values: back to t_k
-                node.set_inputs(values)
+            if moved is not None and reading:  # inputs set to their t_{k-1} values
+                moved.restore(values)
         if reading:
             for port in reads:
                 port.read(values)

@@ -261,6 +261,7 @@ def test_model_descriptions_declare_the_derivatives(fmus):
 # -- the table ---------------------------------------------------------------------------
 def main() -> None:
     import tempfile
+    import time
 
     from agilesat.fmus.build import build_all
 
@@ -277,6 +278,17 @@ def main() -> None:
                 found[label, step] = pitch_error(results, truth, step)
                 rate = f"{order(found, label):.2f}" if step == STEPS[-1] else "—"
                 print(f"| {label} | {step} | {found[label, step] / DEG:.2g} | {rate} |")
+        timed = [label for label in SCHEMES if "no derivatives" not in label]
+        best = dict.fromkeys(timed, math.inf)
+        for _ in range(5):  # interleaved, best of 5, in one process
+            for label in timed:
+                algorithm, wired, derivatives = SCHEMES[label]
+                start = time.perf_counter()
+                run(Path(directory), fmus, P, algorithm, wired, derivatives)
+                best[label] = min(best[label], time.perf_counter() - start)
+        print(f"wall per simulated second at H = {P} s (best of 5, interleaved):")
+        for label in timed:
+            print(f"  {label}: {1e3 * best[label] / STOP:.1f} ms")
 
 
 if __name__ == "__main__":
