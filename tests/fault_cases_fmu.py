@@ -182,13 +182,14 @@ def _late_case(mode: str, fault: str):
 CASES += [
     _case(
         "fmi2GetRealOutputDerivatives before initialisation, of order 2, of an output without "
-        "a declared derivative, with a NULL order array; fmi2SetRealInputDerivatives of orders "
+        "a declared derivative, with a NULL order array; fmi2GetReal of a value reference "
+        "the shim reserves for them; fmi2SetRealInputDerivatives of orders "
         "0, -1 and 2, of an input without a declared derivative, of NaN, with NULL value-reference "
         "and value arrays, after fmi2Terminate",
         "fmi2Error with a message for each, naming the FMU and the variable where there is "
         "one; both instances still step",
         "derivative_faults",
-        {"statuses": [ERROR] * 12, "messages": 12, "named": True, "steps_after": [0, 0]},
+        {"statuses": [ERROR] * 13, "messages": 13, "named": True, "steps_after": [0, 0]},
     ),
     _case(
         "fmi2GetFMUstate and fmi2SerializeFMUstate after fmi2SetRealInputDerivatives, another "
@@ -550,6 +551,13 @@ def derivative_faults():
         _derivative_call(cmg, get, ["h[1]", "h[2]"], [1, 2]),
         _derivative_call(cmg, get, ["delta[1]"], [1]),
         _derivative_call(cmg, get, ["h[1]"], [1], order=False),
+        # the value references that carry the derivative calls to the slave, in a plain call
+        cmg.dll.fmi2GetReal(
+            cmg.c,
+            (ctypes.c_uint * 1)((1 << 30) + (1 << 24) + cmg.vr["h[1]"]),
+            1,
+            (ctypes.c_double * 1)(),
+        ),
     ]
     sat = _ready(SATELLITE, "sat")
     put = "fmi2SetRealInputDerivatives"
