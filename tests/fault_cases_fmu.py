@@ -79,10 +79,10 @@ CASES = [
         {"statuses": [ERROR] * 5},
     ),
     _case(
-        "calls on NULL and on a made-up instance handle",
+        "calls on NULL and on a made-up instance handle (the derivative calls too)",
         "fmi2Error for each, no crash",
         "garbage_handle",
-        {"statuses": [ERROR] * 4},
+        {"statuses": [ERROR] * 6},
     ),
     _case(
         "NULL value-reference, value and string arrays with n > 0; a NULL string; NULL categories",
@@ -383,12 +383,15 @@ def garbage_handle():
     junk = ctypes.create_string_buffer(b"\xff" * 256)
     made_up = ctypes.cast(junk, ctypes.c_void_p)
     vr, value = (ctypes.c_uint * 1)(0), (ctypes.c_double * 1)()
+    order = (ctypes.c_int * 1)(1)
     return {
         "statuses": [
             fmu.dll.fmi2DoStep(None, 0.0, 0.05, 1),
             fmu.dll.fmi2DoStep(made_up, 0.0, 0.05, 1),
             fmu.dll.fmi2GetReal(made_up, vr, 1, value),
             fmu.dll.fmi2SetupExperiment(made_up, 0, 0.0, 0.0, 0, 0.0),
+            fmu.dll.fmi2SetRealInputDerivatives(None, vr, 1, order, value),
+            fmu.dll.fmi2GetRealOutputDerivatives(made_up, vr, 1, order, value),
         ]
     }
 
