@@ -221,7 +221,7 @@ class CmgCluster(Model):
         output("delta", "rad", "gimbal angles", shape=(6,), display_unit="deg"),
         output("delta_dot", "rad/s", "gimbal rates", shape=(6,), display_unit="deg/s"),
         output("h", "N.m.s", "cluster angular momentum relative to the body, in B", shape=(3,)),
-        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,)),
+        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,), derivative_of="h"),
         output("singularity", "1", "singularity measure Q = det(A A^T)"),
     )
 

@@ -157,7 +157,14 @@ class Flywheel(Model):
             display_unit="deg/s",
         ),
         output("h", "N.m.s", "wheel angular momentum relative to the body, in B", shape=(3,)),
-        output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,), depends=_INPUTS),
+        output(
+            "hdot",
+            "N.m",
+            "time derivative of h as seen in B",
+            shape=(3,),
+            depends=_INPUTS,
+            derivative_of="h",
+        ),
         output(
             "speed",
             "rad/s",

@@ -255,6 +255,7 @@ class PayloadGimbals(Model):
             "time derivative of h as seen in B",
             shape=(3,),
             depends=_COMMANDS + _ACCELERATIONS,
+            derivative_of="h",
         ),
         output(
             "los_B",

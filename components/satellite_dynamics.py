@@ -71,6 +71,7 @@ def _device_inputs():
             f"time derivative of h_{device} as seen in B",
             shape=(3,),
             optional=f"zero: constant {device} momentum",
+            derivative_of=f"h_{device}",
         )
 
 

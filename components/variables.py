@@ -57,7 +57,11 @@ class Var:
     ``start`` is a scalar (broadcast) or a nested sequence of ``shape``.  ``choices``
     (scalar Integer parameters only, made by :func:`choice`): the (NAME, meaning) of the
     values 0, 1, …: a named choice instead of a bare number; :meth:`choice_value` reads a
-    name or a number.
+    name or a number.  ``derivative_of`` (Real inputs and outputs): this variable is the
+    time derivative of that one of the same causality and shape (its unit per second):
+    ``hdot`` of ``h``.  The model description says so (FMI 2.0 ``derivative``
+    attribute), and the FMU answers ``fmi2GetRealOutputDerivatives`` of the output with
+    the derivative's value and stores ``fmi2SetRealInputDerivatives`` of the input in it.
     """
 
     name: str
@@ -71,6 +75,7 @@ class Var:
     depends: tuple[str, ...] = ()
     optional: str = ""
     choices: tuple[tuple[str, str], ...] = ()
+    derivative_of: str = ""
 
     def __post_init__(self):
         if self.causality not in CAUSALITIES:
@@ -95,6 +100,8 @@ class Var:
             raise ValueError(f"{self.name}: String variables must be scalar parameters")
         if self.choices:
             self._check_choices()
+        if self.derivative_of and (self.type != "Real" or self.causality == "parameter"):
+            raise ValueError(f"{self.name}: only Real inputs and outputs can be derivatives")
 
     def _check_choices(self) -> None:
         names = [name for name, _ in self.choices]
@@ -148,6 +155,26 @@ class Var:
         return np.array(value, dtype=float).reshape(-1)
 
 
+def _check_derivative(derivative: Var, base: Var | None) -> None:
+    """``derivative`` is d/dt of ``base``: same causality and shape, unit per second."""
+    per_second = {}
+    if base is not None:
+        per_second = dict(UNITS[base.unit][0])
+        per_second["s"] = per_second.get("s", 0) - 1
+    if (
+        base is None
+        or base.derivative_of
+        or (base.causality, base.shape, base.type)
+        != (derivative.causality, derivative.shape, "Real")
+        or UNITS[derivative.unit][0] != {k: e for k, e in per_second.items() if e}
+    ):
+        raise ValueError(
+            f"{derivative.name}: derivative_of={derivative.derivative_of!r} must name a Real "
+            f"{derivative.causality} of shape {derivative.shape}, no derivative itself, whose "
+            "unit per second is this one's"
+        )
+
+
 def parameter(name, start, unit, description, **kw) -> Var:
     return Var(name, "parameter", unit, description, start, **kw)
 
@@ -193,6 +220,10 @@ class Layout:
             unknown = set(v.depends) - inputs
             if unknown:
                 raise ValueError(f"{v.name}: depends on unknown inputs {sorted(unknown)}")
+        by_name = {v.name: v for v in variables}
+        for v in variables:
+            if v.derivative_of:
+                _check_derivative(v, by_name.get(v.derivative_of))
         numeric = [
             v for c in CAUSALITIES for v in variables if v.causality == c and v.type != "String"
         ]

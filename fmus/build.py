@@ -290,6 +290,8 @@ def interface_rows(model):
             notes.append("required" if v.required else f"optional, {v.optional}")
         if v.depends:
             notes.append("feedthrough from " + ", ".join(v.depends))
+        if v.derivative_of:
+            notes.append(f"the derivative of {v.derivative_of} (FMI input/output derivatives)")
         description = v.description + (f" ({'; '.join(notes)})" if notes else "")
         yield f"{v.name}{shape}", v.causality, v.type, unit, start, description
 

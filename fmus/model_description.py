@@ -5,6 +5,13 @@ depend on every input; this one writes UnitDefinitions (SI base-unit exponents, 
 display units), a description and start value for every variable, and the true
 dependencies: an output depends on the inputs its table row lists in ``depends``; at
 initialisation also on the inputs the initial state reads and on the parameters.
+
+Derivatives (a table row's ``derivative_of``): the derivative variable's ``<Real>`` carries
+FMI 2.0's ``derivative`` attribute (the index of the variable it is the derivative of:
+"if an input or an output is the derivative of another input or output", FMI 2.0.4
+section 2.2.7; such variables need not be states, so ``<Derivatives>`` stays empty);
+an FMU with such inputs declares ``canInterpolateInputs`` and one with such outputs
+``maxOutputDerivativeOrder="1"`` (first derivatives only).
 """
 
 from __future__ import annotations
@@ -43,7 +50,8 @@ def model_description(
             "modelIdentifier": name,
             "needsExecutionTool": "true",  # a Python 3 interpreter with numpy
             "canHandleVariableCommunicationStepSize": "true",
-            "canInterpolateInputs": "false",
+            "canInterpolateInputs": _flag(layout, "input"),
+            "maxOutputDerivativeOrder": "1" if _flag(layout, "output") == "true" else "0",
             "canBeInstantiatedOnlyOncePerProcess": "false",
             "canNotUseMemoryManagementFunctions": "true",
             "canGetAndSetFMUstate": "true",
@@ -59,6 +67,11 @@ def model_description(
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
     return tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _flag(layout, causality: str) -> str:
+    """``"true"`` if a variable of that causality is declared the derivative of another."""
+    return "true" if any(v.derivative_of for v in layout.group(causality)) else "false"
 
 
 def _unit_definitions(root, layout):
@@ -92,6 +105,7 @@ def _input_annotation(root, layout):
 
 def _model_variables(root, layout):
     variables = SubElement(root, "ModelVariables")
+    index = {name: i for i, (_, name) in enumerate(layout.scalars, start=1)}
     for vr, (var, scalar_name) in enumerate(layout.scalars):
         attributes = {
             "name": scalar_name,
@@ -113,6 +127,9 @@ def _model_variables(root, layout):
             type_attributes["unit"] = var.unit
             if var.display_unit:
                 type_attributes["displayUnit"] = var.display_unit
+            if var.derivative_of:
+                base = scalar_name.replace(var.name, var.derivative_of, 1)
+                type_attributes["derivative"] = str(index[base])
         if var.causality != "output":
             type_attributes["start"] = _start_text(var, vr - layout.offset[var.name])
         SubElement(element, var.type, type_attributes)

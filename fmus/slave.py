@@ -13,6 +13,19 @@ non-positive or non-finite step size, a time discontinuity between steps, calls 
 wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
 instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
 from the model.  FMU states are data (``fmu_state``), never pickles.
+
+Input and output derivatives (FMI 2.0 section 4.2.1).  pythonfmu 0.7 answers
+``fmi2SetRealInputDerivatives`` and ``fmi2GetRealOutputDerivatives`` "not supported"; the
+shim passes them on as ``fmi2SetReal``/``fmi2GetReal`` of the value references
+``DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr`` (a range no variable has).  A table row
+with ``derivative_of`` makes the pair: the first derivative of input ``h_cmg`` *is* the
+input ``hdot_cmg`` (setting one sets the other; the last call before ``fmi2DoStep`` wins,
+and it stays until set again, like any input: FMI 2.0 puts the same restrictions on it as
+on ``fmi2SetReal``); never set, it is the start value, zero: the input held over the
+step.  The output derivative of ``h`` is the output ``hdot``, at the current time.  Refused
+with fmi2Error: a variable without a declared derivative, an order other than 1, a
+non-finite derivative, setting after ``fmi2Terminate``, getting before
+``fmi2ExitInitializationMode`` (FMI 2.0 section 4.2.4's state table).
 """
 
 from __future__ import annotations
@@ -34,6 +47,8 @@ _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
 _PLAN_CACHE_SIZE = 64
 _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
+#: value references of the derivative calls the shim forwards (shim/agilesat_fmi2.c)
+DERIVATIVE_BASE, ORDER_SHIFT = 1 << 30, 24
 
 
 def _guarded(default):
@@ -94,6 +109,13 @@ class ModelSlave(Fmi2Slave):
         self._type = np.array([_TYPE_CODE[v.type] for v, _ in layout.scalars])
         self._string_names = [v.name for v in layout.variables if v.type == "String"]
         self._outputs = slice(layout.range["output"].start, layout.range["output"].stop)
+        #: vr of a scalar with a declared derivative -> vr of its derivative
+        self._derivative = {
+            layout.offset[v.derivative_of] + k: layout.offset[v.name] + k
+            for v in layout.variables
+            if v.derivative_of
+            for k in range(v.size)
+        }
         self._plans: dict = {}
         self._mode = "instantiated"
         self._start_time = 0.0
@@ -143,6 +165,8 @@ class ModelSlave(Fmi2Slave):
     # -- getters and setters -------------------------------------------------------
     @_guarded(_zeros)
     def get_real(self, vrs):
+        if vrs and vrs[0] >= DERIVATIVE_BASE:
+            return self.get_real_output_derivatives(vrs)
         return self._read(vrs, "Real").tolist()
 
     @_guarded(_zeros)
@@ -160,7 +184,69 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(None)
     def set_real(self, vrs, values):
+        if vrs and vrs[0] >= DERIVATIVE_BASE:
+            return self.set_real_input_derivatives(vrs, values)
         self._write(vrs, values, "Real")
+
+    # -- input and output derivatives (see the module docstring) ---------------------
+    @_guarded(_zeros)
+    def get_real_output_derivatives(self, vrs):
+        if self._mode not in ("step", "terminated"):
+            raise _CallRejected(
+                f"not allowed in mode '{self._mode}' (only after "
+                "fmi2ExitInitializationMode: FMI 2.0 section 4.2.4)"
+            )
+        return self._read(self._derivative_vrs(vrs, OUTPUT), "Real").tolist()
+
+    @_guarded(None)
+    def set_real_input_derivatives(self, vrs, values):
+        targets = self._derivative_vrs(vrs, INPUT)
+        if not all(map(math.isfinite, values)):
+            bad = [
+                f"{self._scalar_names[vr]}={x!r}"
+                for vr, x in zip(self._decoded(vrs), values)
+                if not math.isfinite(x)
+            ]
+            raise _CallRejected(f"non-finite derivatives rejected: {bad}")
+        self._write(targets, values, "Real")
+
+    @staticmethod
+    def _decoded(vrs):
+        return [(vr - DERIVATIVE_BASE) & ((1 << ORDER_SHIFT) - 1) for vr in vrs]
+
+    def _derivative_vrs(self, vrs, causality: int) -> list:
+        """The value references of the derivatives the (order, vr) codes ask for."""
+        key = ("derivative", causality, tuple(vrs))
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._make_derivative_plan(vrs, causality)
+            if len(self._plans) < _PLAN_CACHE_SIZE:
+                self._plans[key] = plan
+        if isinstance(plan, str):
+            raise _CallRejected(plan)
+        return plan
+
+    def _make_derivative_plan(self, vrs, causality: int):
+        n, kind = len(self._scalar_names), ("input", "output")[causality - INPUT]
+        declared = [
+            self._scalar_names[vr] for vr in self._derivative if self._causality[vr] == causality
+        ]
+        targets = []
+        for code, vr in zip(vrs, self._decoded(vrs)):
+            order = (code - DERIVATIVE_BASE) >> ORDER_SHIFT
+            if not 0 <= vr < n:
+                return f"unknown value reference {vr} (this FMU has 0..{n - 1})"
+            name = self._scalar_names[vr]
+            if vr not in self._derivative or self._causality[vr] != causality:
+                return (
+                    f"{name} is not a Real continuous {kind} with a declared derivative "
+                    f"(those of this FMU: {declared or 'none'})"
+                )
+            if order != 1:
+                why = "maxOutputDerivativeOrder is 1" if kind == "output" else "linear inputs"
+                return f"order {order} of {name}: only order 1, the first derivative ({why})"
+            targets.append(self._derivative[vr])
+        return targets
 
     @_guarded(None)
     def set_integer(self, vrs, values):

@@ -13,10 +13,20 @@ Run (:func:`simulate`):
    first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
    has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
    input was last set at its FMU's block, before the FMUs of later blocks had their t_n
-   outputs: setting them again before the step keeps it from lagging a step).  Either way
+   outputs: setting them again before the step keeps it from lagging a step; after the
+   steps only blocks whose outputs depend on inputs directly have them set).  Either way
    the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
    the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
    over m H at every m-th communication point and holds its outputs in between.
+   Input and output derivatives (FMI 2.0 section 4.2.1; :class:`_Derivatives`): an input
+   whose FMU declares its derivative (``canInterpolateInputs`` and the ``derivative``
+   attribute), fed by an output whose FMU declares its derivative
+   (``maxOutputDerivativeOrder`` ≥ 1 and the attribute), with no connection to the
+   derivative input itself, both at the base step, gets its first derivative by
+   ``fmi2SetRealInputDerivatives`` before each step: Jacobi extrapolates with the source's
+   ``fmi2GetRealOutputDerivatives`` at t_n; Gauss-Seidel, for a source that already
+   stepped, interpolates, value y_n and slope (y_{n+1} − y_n)/H (else it extrapolates as
+   Jacobi).  ``derivatives=False`` turns this off.
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
@@ -195,6 +205,116 @@ class _Node:
             port.read(values)
 
 
+class _Derivatives:
+    """The input-derivative links of a run (see the module docstring, step 3): per source
+    FMU the outputs whose derivatives are read, per consumer FMU the inputs whose
+    derivatives are set.  ``slopes`` (the value vector's layout) holds the output
+    derivatives of the last communication point."""
+
+    def __init__(self, nodes: dict, sources: dict, layout: dict, algorithm: str):
+        order = list(nodes)  # the step order: in Gauss-Seidel, who steps first
+        links: dict[str, list] = {}
+        for (b, u), (a, y) in sorted(sources.items()):
+            consumer, source = nodes[b].instance, nodes[a].instance
+            du, dy = consumer.derivatives.get(u), source.derivatives.get(y)
+            if (
+                consumer.can_interpolate_inputs
+                and source.max_output_derivative_order >= 1
+                and du is not None
+                and consumer.variables[du].causality == "input"
+                and dy is not None
+                and source.variables[dy].causality == "output"
+                and (b, du) not in sources  # an explicit derivative wire wins
+                and nodes[a].every == nodes[b].every == 1
+            ):
+                after = algorithm == "gauss-seidel" and order.index(a) < order.index(b)
+                links.setdefault(b, []).append((u, a, y, after))
+        self.described = [
+            f"{a}.{y} -> {b}.{u} ({'interpolated' if after else 'extrapolated'})"
+            for b, entries in links.items()
+            for u, a, y, after in entries
+        ]
+        self.consumers = {b: _InputSlopes(nodes[b].instance, e, layout) for b, e in links.items()}
+        outputs: dict[str, list] = {}  # read for the extrapolated links only
+        for entries in links.values():
+            for _, a, y, after in entries:
+                if not after and y not in outputs.setdefault(a, []):
+                    outputs[a].append(y)
+        self.sources = [_OutputSlopes(nodes[a].instance, ys, layout) for a, ys in outputs.items()]
+        self.interpolating = any(c.interpolated.any() for c in self.consumers.values())
+        self.slopes = np.zeros(len(layout))
+        self.previous = np.zeros(len(layout))  # the values at t_n (Gauss-Seidel)
+
+    def read(self) -> None:
+        """The output derivatives at the current communication point."""
+        for source in self.sources:
+            source.read(self.slopes)
+
+    def couple(self, node: _Node, values: np.ndarray, step: float):
+        """Before ``node`` steps: the derivatives of its linked inputs and, where
+        interpolated, their values at t_n; then the links to set back to t_{n+1} after the
+        step (:meth:`_InputSlopes.restore`), or None."""
+        consumer = self.consumers.get(node.instance.name)
+        if consumer is not None and consumer.write(values, self.previous, self.slopes, step):
+            return consumer
+        return None
+
+
+class _OutputSlopes:
+    """fmi2GetRealOutputDerivatives (order 1) of some outputs of one FMU."""
+
+    def __init__(self, instance: Instance, names: list[str], layout: dict):
+        self.instance, self.n = instance, len(names)
+        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[y].valueReference for y in names))
+        self.orders = (ctypes.c_int * self.n)(*[1] * self.n)
+        self.buffer = np.zeros(self.n)
+        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+        self.index = np.array([layout[(instance.name, y)] for y in names], dtype=np.intp)
+
+    def read(self, slopes: np.ndarray) -> None:
+        self.instance.call("fmi2GetRealOutputDerivatives", self.vrs, self.n, self.orders, self.ptr)
+        slopes[self.index] = self.buffer
+
+
+class _InputSlopes:
+    """fmi2SetRealInputDerivatives (order 1) of some inputs of one FMU, from the outputs
+    feeding them; the interpolated ones also get their values at t_n."""
+
+    def __init__(self, instance: Instance, entries: list, layout: dict):
+        self.instance, self.n = instance, len(entries)
+        self.vrs = (ctypes.c_uint * self.n)(
+            *(instance.variables[u].valueReference for u, *_ in entries)
+        )
+        self.orders = (ctypes.c_int * self.n)(*[1] * self.n)
+        self.index = np.array([layout[(a, y)] for _, a, y, _ in entries], dtype=np.intp)
+        self.interpolated = np.array([after for *_, after in entries], dtype=bool)
+        self.buffer = np.zeros(self.n)
+        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+        chosen = [u for u, *_, after in entries if after]
+        self.at_start = (ctypes.c_uint * len(chosen))(
+            *(instance.variables[u].valueReference for u in chosen)
+        )
+        self.start_buffer = np.zeros(len(chosen))
+        self.start_ptr = self.start_buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+    def write(self, values, previous, slopes, step: float) -> bool:
+        index, inner = self.index, self.interpolated
+        self.buffer[:] = slopes[index]
+        moved = bool(inner.any())
+        if moved:
+            start, end = previous[index[inner]], values[index[inner]]
+            self.buffer[inner] = (end - start) / step
+            self.start_buffer[:] = start
+            self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
+        self.instance.call("fmi2SetRealInputDerivatives", self.vrs, self.n, self.orders, self.ptr)
+        return moved
+
+    def restore(self, values) -> None:
+        """The interpolated inputs back at their newest values (after the step)."""
+        self.start_buffer[:] = values[self.index[self.interpolated]]
+        self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
+
+
 def simulate(
     system,
     *,
@@ -206,6 +326,7 @@ def simulate(
     logging_on: bool = False,
     echo=None,
     progress=None,
+    derivatives: bool = True,
 ) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
@@ -214,7 +335,8 @@ def simulate(
     ``results.csv`` is written there row by row and ``results.npz`` at the end, and the
     Results returned map their rows from disk (memory independent of the run length);
     without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
-    hundred times over the run.  Returns :class:`Results` (``meta`` holds the settings, the
+    hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
+    plain scheme, for comparison).  Returns :class:`Results` (``meta`` holds the settings, the
     units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
     (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
     """
@@ -262,6 +384,7 @@ def simulate(
                 logging_on,
                 signals,
                 progress,
+                derivatives,
             )
         finally:
             for instance in instances.values():
@@ -317,6 +440,7 @@ def _run(
     logging_on,
     signals,
     progress=None,
+    derivatives=True,
 ) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
     nodes = {
@@ -326,6 +450,11 @@ def _run(
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
+    jacobi_reads = _fed_reads(sequence, plan.sources)
+    links = _Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
+    if links is not None and not links.consumers:
+        links = None
+    couple = None if links is None else links.couple
 
     values = np.zeros(len(layout))
     row = np.zeros(len(layout) + 1)
@@ -341,6 +470,8 @@ def _run(
         "unconnected_optional_inputs": plan.open_inputs,
         "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
     }
+    if links is not None:
+        meta["derivatives"] = links.described
     recorder = Recorder(columns, out_dir)
     failure, report_every = None, max(1, n_steps // 100)
     try:
@@ -355,6 +486,8 @@ def _run(
             log,
             logging_on,
         )
+        if links is not None:
+            links.read()
         row[0], row[1:] = start, values
         recorder.append(row)
         for n in range(n_steps):
@@ -363,13 +496,19 @@ def _run(
             t = start + n * step
             log.time = t
             if algorithm == "gauss-seidel":
-                _evaluate(sequence, values, n + 1, t, step)
+                if links is not None and links.interpolating:
+                    links.previous[:] = values
+                _evaluate(sequence, values, n + 1, t, step, couple)
             else:
                 for node in nodes.values():
                     if n % node.every == 0:
                         node.set_inputs(values)
+                        if couple is not None:
+                            couple(node, values, step)
                         _do_step(node.instance, t, step * node.every)
-                _evaluate(sequence, values, n + 1)
+                _read_after_steps(jacobi_reads, values, n + 1)
+            if links is not None:
+                links.read()
             row[0], row[1:] = start + (n + 1) * step, values
             recorder.append(row)
             if progress and (n + 1) % report_every == 0:
@@ -422,9 +561,45 @@ def _sequence(schedule, nodes) -> list:
     ]
 
 
-def _evaluate(sequence, values, k: int, t: float = 0.0, step: float | None = None) -> None:
+def _fed_reads(sequence, sources) -> list:
+    """(node, output ports, do its outputs depend directly on a connected input?) for each
+    block of a sequence."""
+    result = []
+    for node, reads, _ in sequence:
+        instance = node.instance
+        connected = {u for (b, u) in sources if b == instance.name}
+        outputs = [y for port in reads for y in _port_names(port, node)]
+        feeds = any(
+            instance.feedthrough.get(y) is None or instance.feedthrough[y] & connected
+            for y in outputs
+        )
+        result.append((node, reads, feeds))
+    return result
+
+
+def _port_names(port: _Port, node: _Node) -> list[str]:
+    by_place = {place: y for y, place in node.position.items()}
+    return [by_place[int(i)] for i in port.index]
+
+
+def _read_after_steps(reads, values, k: int) -> None:
+    """Jacobi: bring every output to communication point k once all FMUs stepped, block
+    by block, setting a block's inputs only if its outputs depend on them directly (the
+    next step sets every input anyway).  As :func:`_evaluate` without a step."""
+    for node, ports, feeds in reads:
+        if k % node.every == 0:
+            if feeds:
+                node.set_inputs(values)
+            for port in ports:
+                port.read(values)
+
+
+def _evaluate(
+    sequence, values, k: int, t: float = 0.0, step: float | None = None, couple=None
+) -> None:
     """Bring every output to communication point k, block by block; with a step, each FMU
-    first steps from t = t_{k-1} at its first block (Gauss-Seidel).  An FMU with its own
+    first steps from t = t_{k-1} at its first block (Gauss-Seidel; ``couple(node, values,
+    step)`` passes the input derivatives just before).  An FMU with its own
     step m·H (:mod:`.multirate`) steps only from t_{k-1} with k − 1 a multiple of m, and
     has its inputs set and outputs read only at k a multiple of m (else they hold)."""
     for node, reads, first in sequence:
@@ -433,7 +608,10 @@ def _evaluate(sequence, values, k: int, t: float = 0.0, step: float | None = Non
         if stepping or reading:
             node.set_inputs(values)
         if stepping:
+            moved = couple(node, values, step) if couple is not None else None
             _do_step(node.instance, t, step * node.every)
+            if moved is not None and reading:  # inputs set to their t_{k-1} values
+                moved.restore(values)
         if reading:
             for port in reads:
                 port.read(values)

@@ -79,10 +79,10 @@ CASES = [
         {"statuses": [ERROR] * 5},
     ),
     _case(
-        "calls on NULL and on a made-up instance handle",
+        "calls on NULL and on a made-up instance handle (the derivative calls too)",
         "fmi2Error for each, no crash",
         "garbage_handle",
-        {"statuses": [ERROR] * 4},
+        {"statuses": [ERROR] * 6},
     ),
     _case(
         "NULL value-reference, value and string arrays with n > 0; a NULL string; NULL categories",
@@ -178,6 +178,28 @@ def _late_case(mode: str, fault: str):
     run.__name__ = f"late_calls_{mode}"
     return run
 
+
+CASES += [
+    _case(
+        "fmi2GetRealOutputDerivatives before initialisation, of order 2, of an output without "
+        "a declared derivative, with a NULL order array; fmi2GetReal of a value reference "
+        "the shim reserves for them; fmi2SetRealInputDerivatives of orders "
+        "0, -1 and 2, of an input without a declared derivative, of NaN, with NULL value-reference "
+        "and value arrays, after fmi2Terminate",
+        "fmi2Error with a message for each, naming the FMU and the variable where there is "
+        "one; both instances still step",
+        "derivative_faults",
+        {"statuses": [ERROR] * 13, "messages": 13, "named": True, "steps_after": [0, 0]},
+    ),
+    _case(
+        "fmi2GetFMUstate and fmi2SerializeFMUstate after fmi2SetRealInputDerivatives, another "
+        "derivative set, then the state restored (and deserialized into a fresh instance)",
+        "the derivative comes back with the state: the steps after both restores are "
+        "bit-identical to a run that never set the other derivative",
+        "derivative_state",
+        {"restored": [True, True], "derivative": [True, True]},
+    ),
+]
 
 CASES += [
     _late_case(
@@ -361,12 +383,15 @@ def garbage_handle():
     junk = ctypes.create_string_buffer(b"\xff" * 256)
     made_up = ctypes.cast(junk, ctypes.c_void_p)
     vr, value = (ctypes.c_uint * 1)(0), (ctypes.c_double * 1)()
+    order = (ctypes.c_int * 1)(1)
     return {
         "statuses": [
             fmu.dll.fmi2DoStep(None, 0.0, 0.05, 1),
             fmu.dll.fmi2DoStep(made_up, 0.0, 0.05, 1),
             fmu.dll.fmi2GetReal(made_up, vr, 1, value),
             fmu.dll.fmi2SetupExperiment(made_up, 0, 0.0, 0.0, 0, 0.0),
+            fmu.dll.fmi2SetRealInputDerivatives(None, vr, 1, order, value),
+            fmu.dll.fmi2GetRealOutputDerivatives(made_up, vr, 1, order, value),
         ]
     }
 
@@ -506,6 +531,95 @@ def mode_rules():
         "messages": len(_errors(a, 0)) + len(_errors(fresh, 0)),
         "texts": _errors(a, 0),
     }
+
+
+SATELLITE = "SatelliteDynamics"  # inputs with declared derivatives (h_cmg, ...)
+
+
+def _derivative_call(fmu, call, names, orders, values=None, vr=True, order=True):
+    n = len(names)
+    vrs = (ctypes.c_uint * n)(*(fmu.vr[name] for name in names)) if vr else None
+    order_array = (ctypes.c_int * n)(*orders) if order else None
+    array = (ctypes.c_double * n)(*(values or [0.0] * n)) if values is not False else None
+    return getattr(fmu.dll, call)(fmu.c, vrs, n, order_array, array)
+
+
+def derivative_faults():
+    fmi_host = _host()
+    cmg = fmi_host.Fmu(_path(OTHER), "cmg")
+    get = "fmi2GetRealOutputDerivatives"
+    statuses = [_derivative_call(cmg, get, ["h[1]"], [1])]  # before initialisation
+    cmg.initialize(fmi_host.plausible_inputs(cmg))
+    statuses += [
+        _derivative_call(cmg, get, ["h[1]", "h[2]"], [1, 2]),
+        _derivative_call(cmg, get, ["delta[1]"], [1]),
+        _derivative_call(cmg, get, ["h[1]"], [1], order=False),
+        # the value references that carry the derivative calls to the slave, in a plain call
+        cmg.dll.fmi2GetReal(
+            cmg.c,
+            (ctypes.c_uint * 1)((1 << 30) + (1 << 24) + cmg.vr["h[1]"]),
+            1,
+            (ctypes.c_double * 1)(),
+        ),
+    ]
+    sat = _ready(SATELLITE, "sat")
+    put = "fmi2SetRealInputDerivatives"
+    statuses += [
+        _derivative_call(sat, put, ["h_cmg[1]"], [0]),
+        _derivative_call(sat, put, ["h_cmg[1]"], [-1]),
+        _derivative_call(sat, put, ["h_cmg[1]"], [2]),
+        _derivative_call(sat, put, ["tau_ext[1]"], [1]),
+        _derivative_call(sat, put, ["h_cmg[1]", "h_cmg[2]"], [1, 1], [0.1, float("nan")]),
+        _derivative_call(sat, put, ["h_cmg[1]"], [1], vr=False),
+        _derivative_call(sat, put, ["h_cmg[1]"], [1], values=False),
+    ]
+    steps = [cmg.step(0.0, 0.05), sat.step(0.0, 0.05)]
+    ended = fmi_host.Fmu(_path(SATELLITE), "ended")
+    ended.initialize(fmi_host.plausible_inputs(ended))
+    assert ended.dll.fmi2Terminate(ended.c) == 0
+    statuses.append(_derivative_call(ended, put, ["h_cmg[1]"], [1], [0.1]))
+    texts = _errors(cmg, 0) + _errors(sat, 0) + _errors(ended, 0)
+    variables = ["h[2]", "delta[1]", "h_cmg[1]", "tau_ext[1]", "h_cmg[2]"]
+    return {
+        "statuses": statuses,
+        "messages": len(texts),
+        "named": all(any(v in t for t in texts) for v in variables)
+        and all(any(f in t for t in texts) for f in ("CmgCluster", SATELLITE)),
+        "steps_after": steps,
+        "texts": texts,
+    }
+
+
+def derivative_state():
+    put = "fmi2SetRealInputDerivatives"
+    names = ["h_cmg[1]", "h_cmg[2]", "h_cmg[3]"]
+    outputs = [f"w_BI_B[{i}]" for i in (1, 2, 3)] + [f"q_BI[{i}]" for i in (1, 2, 3, 4)]
+    kept, other = [0.02, -0.01, 0.03], [5.0, 5.0, 5.0]
+
+    def steps(fmu):
+        result = []
+        for k in range(3):
+            assert fmu.step(0.05 * k, 0.05) == 0
+            result.append(fmu.get_real(outputs)[1])
+        return result
+
+    twin = _ready(SATELLITE, "twin")
+    assert _derivative_call(twin, put, names, [1, 1, 1], kept) == 0
+    expected = steps(twin)
+    a = _ready(SATELLITE, "a")
+    assert _derivative_call(a, put, names, [1, 1, 1], kept) == 0
+    state = _state(a)
+    data = _serialize(a, state)
+    assert _derivative_call(a, put, names, [1, 1, 1], other) == 0
+    restored = [a.dll.fmi2SetFMUstate(a.c, state) == 0]
+    derivative = [a.get_real([f"hdot_cmg[{i}]" for i in (1, 2, 3)])[1] == kept]
+    restored[0] = restored[0] and steps(a) == expected
+    fresh = _ready(SATELLITE, "fresh")
+    status, copy = _deserialize(fresh, data)
+    restored.append(status == 0 and fresh.dll.fmi2SetFMUstate(fresh.c, copy) == 0)
+    derivative.append(fresh.get_real([f"hdot_cmg[{i}]" for i in (1, 2, 3)])[1] == kept)
+    restored[1] = restored[1] and steps(fresh) == expected
+    return {"restored": restored, "derivative": derivative}
 
 
 def after_fatal():

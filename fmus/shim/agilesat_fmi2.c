@@ -28,6 +28,9 @@
  *    every handle and pointer before forwarding: a freed, NULL, foreign or made-up
  *    instance or state, a NULL array with n > 0, a too-small serialization buffer all get
  *    fmi2Error (with a message when the instance is known) and never reach pythonfmu.
+ *  - Derivatives.  fmi2SetRealInputDerivatives and fmi2GetRealOutputDerivatives, which
+ *    pythonfmu 0.7.0 does not implement, reach the slave as calls on reserved value
+ *    references (see derivative_call).
  *  - Fatal.  After an fmi2Fatal (pythonfmu's answer to an exception it caught, after which
  *    its instance is broken) every call but fmi2FreeInstance is refused with fmi2Error.
  *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
@@ -497,7 +500,13 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
     return 0;
 }
 
-#define FORWARD_ARRAY(fn, type, check_strings)                                            \
+/* Value references from DERIVATIVE_BASE up carry the derivative calls to the slave (see
+ * "input and output derivatives" below); a plain fmi2GetReal/fmi2SetReal may not use them. */
+#define DERIVATIVE_BASE (1u << 30)
+#define ORDER_SHIFT 24
+#define MAX_ORDER 63
+
+#define FORWARD_ARRAY(fn, type, check_strings, check_codes)                               \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
@@ -506,16 +515,18 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
         if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
         for (size_t i = 0; check_strings && i < n; i++)                                   \
             if (!((const void *const *)value)[i]) return refuse(s, #fn, "a string is NULL"); \
+        for (size_t i = 0; check_codes && i < n; i++)                                     \
+            if (vr[i] >= DERIVATIVE_BASE) return refuse(s, #fn, "unknown value reference"); \
         return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
-FORWARD_ARRAY(fmi2GetReal, fmi2Real, 0)
-FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0)
-FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0)
-FORWARD_ARRAY(fmi2GetString, fmi2String, 0)
-FORWARD_ARRAY(fmi2SetReal, const fmi2Real, 0)
-FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0)
-FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0)
-FORWARD_ARRAY(fmi2SetString, const fmi2String, 1)
+FORWARD_ARRAY(fmi2GetReal, fmi2Real, 0, 1)
+FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0, 0)
+FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0, 0)
+FORWARD_ARRAY(fmi2GetString, fmi2String, 0, 0)
+FORWARD_ARRAY(fmi2SetReal, const fmi2Real, 0, 1)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0, 0)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0, 0)
+FORWARD_ARRAY(fmi2SetString, const fmi2String, 1, 0)
 
 /* ---- FMU states --------------------------------------------------------------------- */
 static State **find_state(Shim *s, fmi2FMUstate state) {
@@ -686,24 +697,59 @@ EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                                            dv_known, dv_unknown));
 }
 
+/* ---- input and output derivatives ----------------------------------------------------
+ * pythonfmu 0.7.0's binary answers both calls "not supported" without reaching Python.  The
+ * slave implements them (fmus/slave.py: which variables have a declared derivative, the
+ * order, the mode, finite values), and the shim passes each (vr, order) on to it as the
+ * value reference DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr of an fmi2SetReal or
+ * fmi2GetReal.  Refused here: NULL arrays with n > 0, an order outside 0..MAX_ORDER, a
+ * value reference too large for any variable (the slave refuses every order but 1, naming
+ * the variable). */
+static fmi2Status derivative_call(Shim *s, const char *call, const fmi2ValueReference vr[],
+                                  size_t n, const fmi2Integer order[], void *value,
+                                  int setting) {
+    typedef fmi2Status (*Set)(fmi2Component, const fmi2ValueReference *, size_t,
+                              const fmi2Real *);
+    typedef fmi2Status (*Get)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Real *);
+    if (bad_arrays(s, call, n, vr, value)) return fmi2Error;
+    if (n > 0 && !order) return refuse(s, call, "the order array is NULL");
+    fmi2ValueReference *codes = malloc((n ? n : 1) * sizeof *codes);
+    if (!codes) return refuse(s, call, "out of memory");
+    for (size_t i = 0; i < n; i++) {
+        char why[200];
+        if (order[i] < 0 || order[i] > MAX_ORDER)
+            snprintf(why, sizeof why, "order[%zu] = %d for value reference %u: 1 is the first "
+                     "derivative, the only one this FMU has", i, order[i], vr[i]);
+        else if (vr[i] >= (1u << ORDER_SHIFT))
+            snprintf(why, sizeof why, "unknown value reference %u", vr[i]);
+        else {
+            codes[i] = DERIVATIVE_BASE + ((fmi2ValueReference)order[i] << ORDER_SHIFT) + vr[i];
+            continue;
+        }
+        free(codes);
+        return refuse(s, call, why);
+    }
+    fmi2Status status = setting
+        ? INNER(Set, fmi2SetReal)(s->inner, codes, n, (const fmi2Real *)value)
+        : INNER(Get, fmi2GetReal)(s->inner, codes, n, (fmi2Real *)value);
+    free(codes);
+    return leave(s, status);
+}
+
 EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                               size_t n, const fmi2Integer order[],
                                               const fmi2Real value[]) {
-    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
-                            const fmi2Integer *, const fmi2Real *);
     Shim *s = enter(c, "fmi2SetRealInputDerivatives");
     if (!s) return fmi2Error;
-    return leave(s, INNER(F, fmi2SetRealInputDerivatives)(s->inner, vr, n, order, value));
+    return derivative_call(s, "fmi2SetRealInputDerivatives", vr, n, order, (void *)value, 1);
 }
 
 EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                                size_t n, const fmi2Integer order[],
                                                fmi2Real value[]) {
-    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t,
-                            const fmi2Integer *, fmi2Real *);
     Shim *s = enter(c, "fmi2GetRealOutputDerivatives");
     if (!s) return fmi2Error;
-    return leave(s, INNER(F, fmi2GetRealOutputDerivatives)(s->inner, vr, n, order, value));
+    return derivative_call(s, "fmi2GetRealOutputDerivatives", vr, n, order, value, 0);
 }
 
 EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_set_prior) {
