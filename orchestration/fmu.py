@@ -101,7 +101,7 @@ class Description:
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
-        # FMI 2.0 input/output derivatives (the master's _Derivatives): the capability
+        # FMI 2.0 input/output derivatives (orchestration.derivatives): the capability
         # flags, and {variable: the variable declared its derivative} (``derivative``)
         self.can_interpolate_inputs = bool(self.md.coSimulation.canInterpolateInputs)
         self.max_output_derivative_order = int(self.md.coSimulation.maxOutputDerivativeOrder or 0)

@@ -18,7 +18,7 @@ Run (:func:`simulate`):
    the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
    the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
    over m H at every m-th communication point and holds its outputs in between.
-   Input and output derivatives (FMI 2.0 section 4.2.1; :class:`_Derivatives`): an input
+   Input and output derivatives (FMI 2.0 section 4.2.1; :mod:`.derivatives`): an input
    whose FMU declares its derivative (``canInterpolateInputs`` and the ``derivative``
    attribute), fed by an output whose FMU declares its derivative
    (``maxOutputDerivativeOrder`` ≥ 1 and the attribute), with no connection to the
@@ -52,6 +52,7 @@ import threading
 import numpy as np
 
 from . import multirate
+from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance, Log
 from .parameters import scalar_parameters
 from .recorder import Recorder
@@ -205,116 +206,6 @@ class _Node:
             port.read(values)
 
 
-class _Derivatives:
-    """The input-derivative links of a run (see the module docstring, step 3): per source
-    FMU the outputs whose derivatives are read, per consumer FMU the inputs whose
-    derivatives are set.  ``slopes`` (the value vector's layout) holds the output
-    derivatives of the last communication point."""
-
-    def __init__(self, nodes: dict, sources: dict, layout: dict, algorithm: str):
-        order = list(nodes)  # the step order: in Gauss-Seidel, who steps first
-        links: dict[str, list] = {}
-        for (b, u), (a, y) in sorted(sources.items()):
-            consumer, source = nodes[b].instance, nodes[a].instance
-            du, dy = consumer.derivatives.get(u), source.derivatives.get(y)
-            if (
-                consumer.can_interpolate_inputs
-                and source.max_output_derivative_order >= 1
-                and du is not None
-                and consumer.variables[du].causality == "input"
-                and dy is not None
-                and source.variables[dy].causality == "output"
-                and (b, du) not in sources  # an explicit derivative wire wins
-                and nodes[a].every == nodes[b].every == 1
-            ):
-                after = algorithm == "gauss-seidel" and order.index(a) < order.index(b)
-                links.setdefault(b, []).append((u, a, y, after))
-        self.described = [
-            f"{a}.{y} -> {b}.{u} ({'interpolated' if after else 'extrapolated'})"
-            for b, entries in links.items()
-            for u, a, y, after in entries
-        ]
-        self.consumers = {b: _InputSlopes(nodes[b].instance, e, layout) for b, e in links.items()}
-        outputs: dict[str, list] = {}  # read for the extrapolated links only
-        for entries in links.values():
-            for _, a, y, after in entries:
-                if not after and y not in outputs.setdefault(a, []):
-                    outputs[a].append(y)
-        self.sources = [_OutputSlopes(nodes[a].instance, ys, layout) for a, ys in outputs.items()]
-        self.interpolating = any(c.interpolated.any() for c in self.consumers.values())
-        self.slopes = np.zeros(len(layout))
-        self.previous = np.zeros(len(layout))  # the values at t_n (Gauss-Seidel)
-
-    def read(self) -> None:
-        """The output derivatives at the current communication point."""
-        for source in self.sources:
-            source.read(self.slopes)
-
-    def couple(self, node: _Node, values: np.ndarray, step: float):
-        """Before ``node`` steps: the derivatives of its linked inputs and, where
-        interpolated, their values at t_n; then the links to set back to t_{n+1} after the
-        step (:meth:`_InputSlopes.restore`), or None."""
-        consumer = self.consumers.get(node.instance.name)
-        if consumer is not None and consumer.write(values, self.previous, self.slopes, step):
-            return consumer
-        return None
-
-
-class _OutputSlopes:
-    """fmi2GetRealOutputDerivatives (order 1) of some outputs of one FMU."""
-
-    def __init__(self, instance: Instance, names: list[str], layout: dict):
-        self.instance, self.n = instance, len(names)
-        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[y].valueReference for y in names))
-        self.orders = (ctypes.c_int * self.n)(*[1] * self.n)
-        self.buffer = np.zeros(self.n)
-        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-        self.index = np.array([layout[(instance.name, y)] for y in names], dtype=np.intp)
-
-    def read(self, slopes: np.ndarray) -> None:
-        self.instance.call("fmi2GetRealOutputDerivatives", self.vrs, self.n, self.orders, self.ptr)
-        slopes[self.index] = self.buffer
-
-
-class _InputSlopes:
-    """fmi2SetRealInputDerivatives (order 1) of some inputs of one FMU, from the outputs
-    feeding them; the interpolated ones also get their values at t_n."""
-
-    def __init__(self, instance: Instance, entries: list, layout: dict):
-        self.instance, self.n = instance, len(entries)
-        self.vrs = (ctypes.c_uint * self.n)(
-            *(instance.variables[u].valueReference for u, *_ in entries)
-        )
-        self.orders = (ctypes.c_int * self.n)(*[1] * self.n)
-        self.index = np.array([layout[(a, y)] for _, a, y, _ in entries], dtype=np.intp)
-        self.interpolated = np.array([after for *_, after in entries], dtype=bool)
-        self.buffer = np.zeros(self.n)
-        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-        chosen = [u for u, *_, after in entries if after]
-        self.at_start = (ctypes.c_uint * len(chosen))(
-            *(instance.variables[u].valueReference for u in chosen)
-        )
-        self.start_buffer = np.zeros(len(chosen))
-        self.start_ptr = self.start_buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-
-    def write(self, values, previous, slopes, step: float) -> bool:
-        index, inner = self.index, self.interpolated
-        self.buffer[:] = slopes[index]
-        moved = bool(inner.any())
-        if moved:
-            start, end = previous[index[inner]], values[index[inner]]
-            self.buffer[inner] = (end - start) / step
-            self.start_buffer[:] = start
-            self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
-        self.instance.call("fmi2SetRealInputDerivatives", self.vrs, self.n, self.orders, self.ptr)
-        return moved
-
-    def restore(self, values) -> None:
-        """The interpolated inputs back at their newest values (after the step)."""
-        self.start_buffer[:] = values[self.index[self.interpolated]]
-        self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
-
-
 def simulate(
     system,
     *,
@@ -451,7 +342,7 @@ def _run(
     sequence = _sequence(plan.steps, nodes)
     init_sequence = _sequence(plan.init, nodes)
     jacobi_reads = _fed_reads(sequence, plan.sources)
-    links = _Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
+    links = Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
     if links is not None and not links.consumers:
         links = None
     couple = None if links is None else links.couple
