@@ -53,16 +53,18 @@ import numpy as np
 
 from .scan_pitch import (
     H_ROTOR,
+    S_AX,
+    T_AX,
     J_HUB,
     _qdot,
     cluster_momentum,
     dcm,
     euler123_to_q,
-    jacobian,
     qconj,
     qmul,
     rot,
     servo,
+    singularity_measure,
     steering,
 )
 
@@ -140,6 +142,7 @@ def simulate(
     h = cluster_momentum(delta)
     H = tuple(dcm(q).T @ (J_HUB * w + h))
 
+    stages = np.array([[half], [dt]])  # the gimbals at h/2 and h of each step
     rec, rec_d, rec_r, rec_c = [], [], [], []
     for k in range(n_steps + 1):
         w = (np.array(rot(q, H)) - h) / J_HUB
@@ -147,16 +150,15 @@ def simulate(
             j = k // every
             tau, e, r = control(q, w, *(np.asarray(guidance[n][j]) for n in GUIDANCE))
             cmd = steering(tau, w, h, delta)
-        A = jacobian(delta)
-        rec.append((*q, *w, *h, *tau, *e, *r, np.linalg.det(A @ A.T)))
+        rec.append((*q, *w, *h, *tau, *e, *r))
         rec_d.append(delta)
         rec_r.append(rate)
         rec_c.append(cmd)
         if k == n_steps:
             break
-        mid = cluster_momentum(servo(delta, rate, cmd, half)[0])
-        delta, rate = servo(delta, rate, cmd, dt)
-        end = cluster_momentum(delta)
+        angles, rates = servo(delta, rate, cmd, stages)
+        mid, end = H_ROTOR * (np.cos(angles) @ S_AX.T + np.sin(angles) @ T_AX.T)
+        delta, rate = angles[1], rates[1]
         k1 = _qdot(q, H, h)
         k2 = _qdot(tuple(x + half * y for x, y in zip(q, k1)), H, mid)
         k3 = _qdot(tuple(x + half * y for x, y in zip(q, k2)), H, mid)
@@ -178,7 +180,7 @@ def simulate(
         "tau_cmd": st[:, 10:13],
         "att_error": st[:, 13:16],
         "rate_error": st[:, 16:19],
-        "Q": st[:, 19],
+        "Q": singularity_measure(np.array(rec_d)),
         "delta": np.array(rec_d),
         "delta_dot": np.array(rec_r),
         "delta_dot_cmd": np.array(rec_c),
