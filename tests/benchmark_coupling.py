@@ -20,7 +20,8 @@ control period P with zero-order hold, the plant integrated together):
   single rate (P = H) as well, the scenario's own way of running at another step;
 - payload_sweep and video_sar (unless --quick): the reference's own checks, its step halved
   and its total-momentum drift; payload_sweep also the effect of sampling the wheel drive at
-  H (the Flywheel's communication step) instead of continuously.
+  H (the Flywheel's communication step) instead of continuously, and that of the
+  SweepPlanner's acceleration at the start of an arriving ramp (tests/reference/payload_sweep.py).
 """
 
 from __future__ import annotations
@@ -35,10 +36,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from coupling_cases import FINE, attitude_difference, errors, reference, system_file, twist
+
 from agilesat.fmus.build import build_all
 from agilesat.orchestration import simulate
 from agilesat.orchestration.scenarios import get
-from coupling_cases import FINE, attitude_difference, errors, reference, system_file, twist
 from reference import payload_sweep, scan_pitch, video_sar
 
 SCENARIOS = ("scan_pitch", "payload_sweep", "video_sar")
@@ -77,8 +79,9 @@ def table(title: str, rows: list[tuple], schemes, error: str) -> None:
 
 
 def measure(scenario, path, control, steps, schemes, repeat, stop, single=False):
-    """Rows of :func:`table` for the plant steps ``steps`` (``single``: P = H)."""
-    rows, truths = [], {}
+    """Rows of :func:`table` for the plant steps ``steps`` (``single``: P = H), the references
+    and the run each was given, by (P, H) (H None when the reference does not depend on it)."""
+    rows, truths, recordings = [], {}, {}
     for H in steps:
         P = H if single else control
         walls = {}
@@ -87,16 +90,19 @@ def measure(scenario, path, control, steps, schemes, repeat, stop, single=False)
             key = (P, H if scenario == "payload_sweep" else None)
             if key not in truths:
                 truths[key] = reference(scenario, P, H, stop, results)
+                recordings[key] = results
             if scheme in schemes:
                 error = errors(scenario, results, truths[key], H)
                 rows.append((scheme, H, P, *error, walls[scheme], walls["gauss-seidel"]))
-    return rows, truths
+    return rows, truths, recordings
 
 
 def scan_pitch_report(fmus, args, schemes, tmp):
     stop = get("scan_pitch").stop
     path = system_file("scan_pitch", args.control, fmus, tmp)
-    rows, truths = measure("scan_pitch", path, args.control, args.plant, schemes, args.repeat, stop)
+    rows, truths, _ = measure(
+        "scan_pitch", path, args.control, args.plant, schemes, args.repeat, stop
+    )
     continuous = scan_pitch.simulate(FINE["scan_pitch"], stop)
 
     def effect(P, truth):
@@ -117,7 +123,9 @@ def scan_pitch_report(fmus, args, schemes, tmp):
     if args.quick:
         return
     ssd = get("scan_pitch").ssd
-    rows, truths = measure("scan_pitch", ssd, None, args.single, schemes, args.repeat, stop, True)
+    rows, truths, _ = measure(
+        "scan_pitch", ssd, None, args.single, schemes, args.repeat, stop, True
+    )
     for (P, _), truth in sorted(truths.items()):
         effect(P, truth)
     table(
@@ -128,18 +136,21 @@ def scan_pitch_report(fmus, args, schemes, tmp):
     )
 
 
-def reference_checks(scenario: str, truths: dict, control: float, stop: float, recorded) -> None:
-    """The reference's step halved, its momentum drift and (payload_sweep) the drive's
-    sampling effect, printed."""
+def reference_checks(scenario: str, truths: dict, recordings: dict, stop: float) -> None:
+    """The reference's step halved, its momentum drift and (payload_sweep) the effects of
+    sampling the wheel drive at H and of the SweepPlanner's boundary samples, printed."""
     fine = FINE[scenario]
-    (P, H), truth = min(truths.items(), key=lambda item: item[0][1] or 0.0)
+    key = min(truths, key=lambda k: k[1] or 0.0)  # the finest plant step
+    (P, H), truth, recorded = key, truths[key], recordings[key]
     if scenario == "payload_sweep":
-        half = payload_sweep.simulate(fine / 2, stop, control_period=P, drive_period=H)
+        ff = payload_sweep.feedforward_from(recorded, P)
+        half = payload_sweep.simulate(
+            fine / 2, stop, control_period=P, drive_period=H, feedforward=ff
+        )
         label = f"drive at H = {H:g} s"
     else:
-        half = video_sar.simulate(
-            fine / 2, stop, video_sar.guidance_from(recorded, P), control_period=P
-        )
+        guidance = video_sar.guidance_from(recorded, P)
+        half = video_sar.simulate(fine / 2, stop, guidance, control_period=P)
         label = "guidance of the run"
     halved = attitude_difference(truth["q_BI"], half["q_BI"][::2]).max()
     H_I = truth["H_I"]
@@ -149,20 +160,27 @@ def reference_checks(scenario: str, truths: dict, control: float, stop: float, r
         f"max attitude difference {math.degrees(halved):.2g} deg; total momentum drift "
         f"{drift:.1g} relative"
     )
-    if scenario == "payload_sweep":
-        continuous = payload_sweep.simulate(fine, stop, control_period=P)
-        for (P, H), truth in sorted(truths.items()):
-            effect = attitude_difference(truth["q_BI"], continuous["q_BI"]).max()
-            print(
-                f"wheel-drive sampling effect, drive at H = {H:g} s vs at {fine:g} s "
-                f"(P = {P:g} s): max attitude difference {math.degrees(effect):.3g} deg"
-            )
+    if scenario != "payload_sweep":
+        return
+    for (P, H), truth in sorted(truths.items()):
+        ff = payload_sweep.feedforward_from(recordings[P, H], P)
+        continuous = payload_sweep.simulate(fine, stop, control_period=P, feedforward=ff)
+        closed = payload_sweep.simulate(fine, stop, control_period=P, drive_period=H)
+        drive = attitude_difference(truth["q_BI"], continuous["q_BI"]).max()
+        planner = attitude_difference(truth["q_BI"], closed["q_BI"]).max()
+        print(
+            f"H = {H:g} s (P = {P:g} s): wheel drive at H vs at {fine:g} s: max attitude "
+            f"difference {math.degrees(drive):.3g} deg; the planner's feedforward vs the "
+            f"closed form: {math.degrees(planner):.3g} deg"
+        )
 
 
 def scenario_report(scenario, fmus, args, schemes, tmp):
     stop = get(scenario).stop
     path = system_file(scenario, args.control, fmus, tmp)
-    rows, truths = measure(scenario, path, args.control, args.plant, schemes, args.repeat, stop)
+    rows, truths, recordings = measure(
+        scenario, path, args.control, args.plant, schemes, args.repeat, stop
+    )
     digital = "controller" if scenario == "payload_sweep" else "controller and steering"
     table(
         f"{scenario}, multi-rate: {digital} at P = {args.control:g} s, plant FMUs at H; "
@@ -172,8 +190,7 @@ def scenario_report(scenario, fmus, args, schemes, tmp):
         "coupling error attitude [deg]",
     )
     if not args.quick:
-        recorded = simulate(path, step=args.control) if scenario == "video_sar" else None
-        reference_checks(scenario, truths, args.control, stop, recorded)
+        reference_checks(scenario, truths, recordings, stop)
 
 
 def main() -> None:

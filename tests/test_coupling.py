@@ -23,13 +23,12 @@ import math
 
 import numpy as np
 import pytest
-
-from agilesat.orchestration.results import Results
-from agilesat.orchestration.scenarios import get
-from agilesat.orchestration.scenarios import payload_sweep as payload_sweep_scenario
-from agilesat.orchestration.scenarios import video_sar as video_sar_scenario
 from coupling_cases import attitude_difference, errors, system_file, twist
 from coupling_cases import reference as sampled_reference
+
+from agilesat.orchestration.results import Results
+from agilesat.orchestration.scenarios import payload_sweep as payload_sweep_scenario
+from agilesat.orchestration.scenarios import video_sar as video_sar_scenario
 from helpers import agilesat
 from reference import payload_sweep, video_sar
 from reference import scan_pitch as reference
@@ -111,7 +110,11 @@ def test_gauss_seidel_hands_the_hub_the_torque_a_step_early(fmus, sampled, tmp_p
 # --- payload_sweep and video_sar --------------------------------------------------------------
 CONTROL = 0.05  # the scenarios' step: the controller's period
 PLANT = (0.05, 0.025)
-STOP = 60.0  # five roll strokes of payload_sweep (wheel saturated at every reversal)
+#: five roll strokes of payload_sweep (wheel saturated at every reversal), before the first
+#: pitch reversal, whose start the SweepPlanner samples as its left limit (see
+#: tests/reference/payload_sweep.py: a planner matter, not coupling; the reference then takes
+#: the planner's feedforward, but the hub's extrapolation over that step still sees it)
+STOP = 60.0
 REQUIREMENT = {"payload_sweep": 0.032 * DEG, "video_sar": 0.05 * DEG}
 BUDGET = 0.01  # of the requirement, at the scenario's step
 SCENARIOS = ("payload_sweep", "video_sar")
@@ -126,12 +129,17 @@ def test_payload_sweep_reference_is_the_scenario():
     assert payload_sweep.INCLINATION == pytest.approx(p["OrbitEnvironment.inclination"], rel=1e-15)
     assert np.array_equal(p["SatelliteDynamics.inertia"], payload_sweep.J_HUB * np.eye(3))
     assert tuple(p["PayloadGimbals.J_payload"]) == payload_sweep.J_PAYLOAD
-    sweep = [p[f"SweepPlanner.{axis}_{k}"] for axis in ("roll", "pitch") for k in ("amplitude", "rate")]
+    sweep = [
+        p[f"SweepPlanner.{axis}_{k}"] for axis in ("roll", "pitch") for k in ("amplitude", "rate")
+    ]
     assert sweep == [*payload_sweep.ROLL, *payload_sweep.PITCH]
     assert p["SweepPlanner.turnaround_time"] == payload_sweep.TURNAROUND
     assert p["Flywheel.torque_limit"] == payload_sweep.TORQUE_LIMIT
     assert payload_sweep.J_WHEEL == pytest.approx(flywheel.HR12_INERTIA, rel=1e-15)
-    assert (payload_sweep.VISCOUS, payload_sweep.COULOMB) == (flywheel.VISCOUS, flywheel.HR12_COULOMB)
+    assert (payload_sweep.VISCOUS, payload_sweep.COULOMB) == (
+        flywheel.VISCOUS,
+        flywheel.HR12_COULOMB,
+    )
     assert payload_sweep.KP == pytest.approx(attitude_controller.KP, rel=1e-15)
     assert payload_sweep.KD == pytest.approx(attitude_controller.KD, rel=1e-15)
 
@@ -151,9 +159,8 @@ def test_payload_sweep_orbit_frame_is_its_definition():
         C = reference.c_oi_from_rv(*payload_sweep.orbit_rv(t))
         np.testing.assert_allclose(reference.dcm(payload_sweep.q_oi(t)), C, atol=1e-14)
     # its rate: C_OI(t + s) ≈ (1 − s [w_OI_O×]) C_OI(t)
-    s = 1e-3
-    dC = (reference.dcm(payload_sweep.q_oi(10 + s)) - reference.dcm(payload_sweep.q_oi(10 - s))) / (2 * s)
-    W = -dC @ reference.dcm(payload_sweep.q_oi(10)).T  # = [w×]
+    s, C = 1e-3, lambda t: reference.dcm(payload_sweep.q_oi(t))
+    W = -(C(10 + s) - C(10 - s)) / (2 * s) @ C(10).T  # = [w×]
     np.testing.assert_allclose((W[2, 1], W[0, 2], W[1, 0]), payload_sweep.W_OI_O, atol=1e-12)
 
 
@@ -224,9 +231,13 @@ def coupled(fmus, tmp_path_factory):
                 for scheme in ("gauss-seidel", "jacobi")
                 for H in PLANT
             }
-            recorded = runs["gauss-seidel", CONTROL]
-            truths = {H: sampled_reference(scenario, CONTROL, H, STOP, recorded) for H in PLANT}
-            found = {key: errors(scenario, run, truths[key[1]], key[1]) for key, run in runs.items()}
+            truths = {
+                H: sampled_reference(scenario, CONTROL, H, STOP, runs["gauss-seidel", H])
+                for H in PLANT
+            }
+            found = {
+                key: errors(scenario, run, truths[key[1]], key[1]) for key, run in runs.items()
+            }
             cache[scenario] = runs, found, truths
         return cache[scenario]
 
@@ -283,9 +294,10 @@ def test_jacobi_coupling_error_is_second_order_and_within_budget(scenario, fmus,
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_gauss_seidel_coupling_error_is_first_order(scenario, fmus, coupled):
     """The scenarios' default scheme: the devices' momentum reaches the hub a step early.
-    First order (not less), and so large that it spends more than the whole budget."""
+    First order, not less; at the scenario's step below the requirement itself (a run whose
+    method error exceeds what it verifies verifies nothing), and far above Jacobi."""
     found = coupled(scenario)[1]
     (coarse, _), (fine, _) = found["gauss-seidel", 0.05], found["gauss-seidel", 0.025]
     assert 0.9 <= math.log2(coarse / fine) <= 1.1
-    assert coarse * DEG > BUDGET * REQUIREMENT[scenario]
+    assert coarse * DEG <= REQUIREMENT[scenario]
     assert coarse > 100 * found["jacobi", 0.05][0]

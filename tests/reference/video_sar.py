@@ -53,9 +53,9 @@ import numpy as np
 
 from .scan_pitch import (
     H_ROTOR,
+    J_HUB,
     S_AX,
     T_AX,
-    J_HUB,
     _qdot,
     cluster_momentum,
     dcm,
@@ -163,7 +163,9 @@ def simulate(
         k2 = _qdot(tuple(x + half * y for x, y in zip(q, k1)), H, mid)
         k3 = _qdot(tuple(x + half * y for x, y in zip(q, k2)), H, mid)
         k4 = _qdot(tuple(x + dt * y for x, y in zip(q, k3)), H, end)
-        q = tuple(x + dt / 6.0 * (a + 2.0 * (b + c) + d) for x, a, b, c, d in zip(q, k1, k2, k3, k4))
+        q = tuple(
+            x + dt / 6.0 * (a + 2.0 * (b + c) + d) for x, a, b, c, d in zip(q, k1, k2, k3, k4)
+        )
         nrm = 1.0 / math.sqrt(sum(x * x for x in q))
         q = tuple(x * nrm for x in q)
         h = end
