@@ -214,7 +214,7 @@ def wheel_speed(omega: float, m: float, tau: float) -> float:
             sgn = 1.0 if omega > 0.0 else -1.0
         drive = m - COULOMB * sgn - VISCOUS * omega  # J_w Ω̇ at the start of the regime
         phi = -math.expm1(-_K * remaining) / _K
-        if omega != 0.0 and drive * sgn < 0.0 and (m - COULOMB * sgn) * sgn < 0.0:
+        if omega != 0.0 and (m - COULOMB * sgn) * sgn < 0.0:  # its asymptote beyond rest
             phi_zero = -J_WHEEL * omega / drive
             if phi_zero <= phi:  # reaches rest within the remaining time
                 remaining += math.log1p(-_K * phi_zero) / _K
