@@ -135,17 +135,33 @@ def test_payload_sweep_reference_is_the_scenario():
     assert sweep == [*payload_sweep.ROLL, *payload_sweep.PITCH]
     assert p["SweepPlanner.turnaround_time"] == payload_sweep.TURNAROUND
     assert p["Flywheel.torque_limit"] == payload_sweep.TORQUE_LIMIT
+    assert flywheel.HR12_MOMENTUM == payload_sweep.MOMENTUM_LIMIT
     assert payload_sweep.J_WHEEL == pytest.approx(flywheel.HR12_INERTIA, rel=1e-15)
     assert (payload_sweep.VISCOUS, payload_sweep.COULOMB) == (
         flywheel.VISCOUS,
         flywheel.HR12_COULOMB,
     )
+    assert np.array_equal(flywheel.DEFAULT_AXES, [*np.eye(3), [0, 0, 0]])  # x, y, z; no 4th
     assert payload_sweep.KP == pytest.approx(attitude_controller.KP, rel=1e-15)
     assert payload_sweep.KD == pytest.approx(attitude_controller.KD, rel=1e-15)
 
 
 def test_video_sar_reference_is_the_scenario():
+    from agilesat.components.cmg_cluster import CmgCluster
+    from agilesat.components.cmg_steering import PSEUDO_INVERSE, CmgSteering
+
+    def default(model, name):
+        return next(v.start for v in model.VARIABLES if v.name == name)
+
     p = video_sar_scenario.PARAMETERS
+    # isotropic hub: the gravity-gradient torque the FMU has switched on vanishes identically
+    assert np.array_equal(p["SatelliteDynamics.inertia"], video_sar.J_HUB * np.eye(3))
+    assert p["CmgCluster.h_rotor"] == p["CmgSteering.h_rotor"] == video_sar.H_ROTOR
+    assert p["CmgCluster.rate_limit"] == reference.RATE_MAX
+    assert "CmgCluster.accel_limit" not in p
+    assert default(CmgCluster, "accel_limit") == reference.ACCEL_MAX
+    assert p["CmgSteering.law"] == PSEUDO_INVERSE and "CmgSteering.null_gain" not in p
+    assert default(CmgSteering, "null_gain") == 0.0
     assert tuple(p["SatelliteDynamics.attitude0"]) == video_sar.ATTITUDE0
     assert tuple(p["SatelliteDynamics.rate0"]) == video_sar.RATE0
     assert tuple(p["CmgCluster.delta0"]) == video_sar.DELTA0
