@@ -42,7 +42,11 @@ Initial state (the scenario's frozen values: the body on the reference, the clus
 
 Integration: one loop, step h, t_k = k h (integer counter); the gimbals exact at h/2 and h,
 ``q_BI`` by RK4 with h from the exact gimbal angles at the stage times, normalised after each
-step; ``H_I`` constant.  The only discretisation is RK4's O(h⁴).
+step; ``H_I`` constant.  The only discretisation is RK4: O(h⁴) on smooth stretches, but after
+each new command a gimbal reaches its new rate within the first step (at 0.5 rad/s²), a jump
+of δ̈ inside that step that leaves a lower-order term with a small constant.  Measured
+(P = 0.05 s, 200 s): the step 2.5 ms against 1.25 ms moves the attitude by 2e-11°, 5 ms
+against 2.5 ms by 5e-10° (tests/benchmark_coupling.py and tests/test_coupling.py).
 """
 
 from __future__ import annotations
