@@ -18,7 +18,11 @@ s = t mod P, the first half period (0 ≤ s < P/2, descending from +A) is::
                              (w = P/2 − s)
 
 and the second half mirrors it: f(s) = −f(s − P/2).  Angle, rate and acceleration are
-exact functions of t.  During a reversal the angle moves by rτ/4 beyond the constant-rate
+exact functions of t; at a switch between a ramp and the constant rate the acceleration
+is the one of the piece that begins there (the right limit: the value a sample at that
+instant holds over the step after it).  A time within ``SNAP`` = 1 ns of a switch counts as
+on it, so that a time grid n·H landing on a switch up to rounding (t mod P is inexact)
+samples the piece ahead, not a 0 acceleration for a whole step.  During a reversal the angle moves by rτ/4 beyond the constant-rate
 stretch, so the constant-rate (imaging) part of a stroke is 2A − rτ/2 and τ ≤ 4A/r; at
 τ = 4A/r the whole motion is uniformly accelerated (rate a triangle wave of period 8A/r).
 
@@ -48,6 +52,7 @@ from .variables import output, parameter
 
 DEG = math.pi / 180.0
 DEFAULT_TURNAROUND = 1.0  # s; see the module docstring
+SNAP = 1e-9  # s; a time this close to a switch of pieces is on it (module docstring)
 
 
 @dataclass(frozen=True)
@@ -94,14 +99,14 @@ class SweepAxis:
             s -= half
             sign = -1.0
         ramp = 0.5 * tau
-        if s < ramp:  # leaving the upper turning point
+        if s < ramp - SNAP:  # leaving the upper turning point
             return (
                 sign * (A - r * s * s / tau),
                 sign * (-2.0 * r * s / tau),
                 sign * (-2.0 * r / tau),
             )
         w = half - s
-        if w < ramp:  # arriving at the lower turning point
+        if tau > 0 and w <= ramp + SNAP:  # arriving at the lower turning point
             return (
                 sign * (-A + r * w * w / tau),
                 sign * (-2.0 * r * w / tau),

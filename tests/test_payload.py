@@ -421,8 +421,10 @@ def test_reversal_at_constant_acceleration_keeps_the_amplitude(tau):
     for t0, sign in ((period, 1.0), (period / 2, -1.0)):
         for f in (-0.5, -0.25, 0.25, 0.5):
             assert axis(t0 + f * tau)[1] == pytest.approx(-sign * 2 * f * ROLL_R, abs=1e-12)
-            if abs(f) < 0.5:  # the ends of the ramp belong to the constant-rate pieces
+            if f < 0.5:  # a ramp begins at -τ/2 and ends before +τ/2 (right limits)
                 assert axis(t0 + f * tau)[2] == pytest.approx(-sign * 2 * ROLL_R / tau)
+            elif tau < 4 * ROLL_A / ROLL_R:  # (no constant rate at τ = 4A/r: the next ramp)
+                assert axis(t0 + f * tau)[2] == 0.0
     t = np.linspace(0, 3 * period, 20001)
     angles = np.array([axis(x)[0] for x in t])
     assert angles.max() <= ROLL_A + 1e-15 and angles.min() >= -ROLL_A - 1e-15
@@ -442,6 +444,23 @@ def test_rate_and_acceleration_are_the_derivatives_of_the_angle(tau):
         angle, rate, accel = axis(t)
         assert (axis(t + h)[0] - axis(t - h)[0]) / (2 * h) == pytest.approx(rate, abs=1e-8)
         assert (axis(t + h)[1] - axis(t - h)[1]) / (2 * h) == pytest.approx(accel, abs=1e-7)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e-12, -1e-12, 3e-11])
+@pytest.mark.parametrize("amplitude, rate", [(ROLL_A, ROLL_R), (PITCH_A, PITCH_R)])
+def test_a_sample_on_a_switch_holds_the_piece_ahead(amplitude, rate, offset):
+    """At (or within rounding of) the start of an arriving ramp the acceleration is the
+    ramp's, and at the end of a leaving ramp the constant rate's: what a zero-order hold
+    over the next step must carry.  The pitch axis' switch at 150 s is hit by the scenario's
+    0.05 s grid; before the fix its sample there gave 0."""
+    axis = SweepAxis(amplitude, rate, 1.0)
+    half = axis.period / 2
+    for k in range(4):
+        arriving, leaving = k * half + half - 0.5, k * half + 0.5
+        sign = 1.0 if k % 2 == 0 else -1.0
+        assert axis(arriving + offset)[2] == pytest.approx(sign * 2 * rate / 1.0, rel=1e-12)
+        assert axis(leaving + offset)[2] == 0.0
+    assert SweepAxis(PITCH_A, PITCH_R, 1.0)(150.0)[2] == pytest.approx(2 * PITCH_R)
 
 
 def test_rate_is_continuous_with_a_turnaround():
