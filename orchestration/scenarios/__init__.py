@@ -34,7 +34,9 @@ class Scenario:
     metrics: Callable  # Results -> {"metrics", "diagnostics"}
     figures: Callable  # (Results, out_dir) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
-    algorithm: str = "gauss-seidel"
+    # Jacobi: the hub extrapolates the devices' momentum over the step with their hdot, a
+    # coupling error of second order (tests/test_coupling.py, README "Coupling accuracy")
+    algorithm: str = "jacobi"
     steps: dict = field(default_factory=dict)  # instance -> its own step (multirate.py)
     system: Path | None = None  # the .ssd, if not the shipped systems/<name>
 

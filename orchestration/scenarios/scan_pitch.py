@@ -427,9 +427,6 @@ SCENARIO = Scenario(
     parameters=PARAMETERS,
     stop=150.0,
     step=0.05,
-    # Jacobi: the hub extrapolates the cluster momentum over the step with its hdot, a
-    # coupling error of second order (tests/test_coupling.py, README "Coupling accuracy")
-    algorithm="jacobi",
     metrics=metrics,
     figures=figures,
     variants=VARIANTS,
