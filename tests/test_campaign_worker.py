@@ -1,6 +1,7 @@
 """What a campaign worker keeps between runs, and that keeping it changes no result: the
 system file read once per content (an edited ``.ssd`` or ``.ssv`` is read again), each
-FMU bound once, and the worker's memory bounded over many runs.  Each runs in a fresh process, as a worker would.
+FMU bound once, and the worker's memory bounded over many runs.  Each runs in a fresh
+process, as a worker would.
 """
 
 import json
