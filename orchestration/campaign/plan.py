@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
+from ..fmu import Description
 from ..runner import parse_target
 from ..ssp import read_system
 from . import dispersion as dispersions
@@ -185,16 +186,42 @@ class Plan:
         return nominal
 
     def _signal(self, key: str) -> list[str]:
+        """The recorded columns of a ``--keep`` name (a whole variable: all its elements);
+        a ValueError naming what there is if the run does not record it (only outputs
+        are recorded)."""
+        instance, _, name = key.partition(".")
+        if instance not in self.fmus:
+            self._variable(key, "--keep")  # raises, naming the components there are
+        component = next(c for c in self.system.components if c.name == instance)
+        described = Description(instance, component.source)
+        base = name.partition("[")[0]
+        columns = [o for o in described.outputs if o.partition("[")[0] == base]
+        if not columns:
+            causality = next(
+                (
+                    v.causality
+                    for n, v in described.variables.items()
+                    if n.partition("[")[0] == base
+                ),
+                None,
+            )
+            listing = ", ".join(dict.fromkeys(o.partition("[")[0] for o in described.outputs))
+            raise ValueError(
+                f"--keep {key}: {self.fmus[instance]} has "
+                + (f"{base!r} as a {causality}" if causality else f"no variable {base!r}")
+                + f"; a run records the outputs, {instance}'s are: {listing}"
+            )
+        if name != base:
+            if name not in columns:
+                raise ValueError(
+                    f"--keep {key}: the elements of {instance}.{base} are "
+                    f"{columns[0]} .. {columns[-1]}"
+                )
+            columns = [name]
         var = self._variable(key, "--keep")
-        if var is None:
-            return [key]
-        instance = key.partition(".")[0]
-        self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
-        return (
-            [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()]
-            if "[" not in key
-            else [key]
-        )
+        if var is not None:
+            self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
+        return [f"{instance}.{n}" for n in columns]
 
 
 def _scalar_names(key: str, shape) -> list[str]:
