@@ -436,3 +436,41 @@ def test_runs_in_one_batch_are_each_their_own_outcome(tmp_path, fmus):
     assert result.returncode == 0, result.stderr
     assert {r["batch"] for r in journal(one_by_one)} == set(range(16))
     assert rows(one_by_one) == rows(out)
+
+
+def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
+    out = tmp_path / "laws"
+    result = agilesat(
+        "campaign",
+        "scan_pitch",
+        "--stop",
+        STOP,
+        "--workers",
+        "1",
+        "--vary",
+        "CmgSteering.law=values(PSEUDO_INVERSE, SR_INVERSE)",
+        "--out",
+        out,
+        "--no-progress",
+    )
+    assert result.returncode in (0, 3), result.stderr
+    assert "CmgSteering.law=SR_INVERSE: " in result.stdout
+    table = rows(out)
+    assert [r["CmgSteering.law"] for r in table] == ["PSEUDO_INVERSE", "SR_INVERSE"]
+    assert table[0]["max_abs_output_torque"] != table[1]["max_abs_output_torque"]
+    result = agilesat(
+        "run",
+        "scan_pitch",
+        "--stop",
+        STOP,
+        "--set",
+        "CmgSteering.law=SR_INVERSE",
+        "--out",
+        tmp_path / "replay",
+        "--no-figures",
+    )
+    assert result.returncode in (0, 3), result.stderr
+    summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
+    for name, metric in summary["metrics"].items():
+        value = metric["value"]
+        assert (table[1][name] == "nan") if value is None else float(table[1][name]) == value

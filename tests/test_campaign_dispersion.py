@@ -153,6 +153,12 @@ def test_plan_whole_variables_start_from_the_system_values():
         ("CmgCluster.delta0=values(0, 1)", "grids take scalar names"),
         ("CmgCluster.h_rotor=rotate(1deg)", "rotate\\(\\) turns a 3-vector"),
         ("CmgCluster.gimbal_axis=inertia(0.1, 0)", "disperses a 3×3 inertia"),
+        (
+            "CmgSteering.law=choice(PSEUDO_INVERSE, NOPE)",
+            "law must be one of 0 \\(PSEUDO_INVERSE\\), 1 \\(SR_INVERSE\\), got 'NOPE'",
+        ),
+        ("CmgCluster.h_rotor=choice(A, B)", "CmgCluster.h_rotor has none: give numbers"),
+        ("CmgSteering.law=+choice(0, 1)", "a named choice cannot be added or multiplied"),
     ],
 )
 def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
@@ -293,3 +299,23 @@ def test_keep_of_what_is_not_recorded_is_refused_before_the_campaign(tmp_path, k
     assert plan.signals == [f"CmgCluster.h[{i}]" for i in (1, 2, 3)] + [
         "SatelliteDynamics.w_BI_B[2]"
     ]
+
+
+def test_choice_takes_the_names_of_a_named_choice_and_records_them():
+    """The table and the replay command get the name, as ``--set`` takes it; the draws
+    are those of the numbers 0, 1 (the names' values)."""
+    from agilesat.orchestration.campaign import replay_arguments
+
+    named = Plan(Spec("scan_pitch", 20, 3, ["CmgSteering.law=choice(PSEUDO_INVERSE, sr_inverse)"]))
+    numbers = Plan(Spec("scan_pitch", 20, 3, ["CmgSteering.law=choice(0, 1)"]))
+    drawn = [named.run_values(i)["CmgSteering.law"] for i in range(20)]
+    assert set(drawn) == {"PSEUDO_INVERSE", "SR_INVERSE"}
+    assert drawn == [numbers.run_values(i)["CmgSteering.law"] for i in range(20)]
+    assert named.kinds == {"CmgSteering.law": "s"}
+    sweep = Plan(Spec("scan_pitch", 1, 0, ["CmgSteering.law=values(SR_INVERSE, PSEUDO_INVERSE)"]))
+    assert [sweep.run_values(i) for i in (0, 1)] == [
+        {"CmgSteering.law": "SR_INVERSE"},
+        {"CmgSteering.law": "PSEUDO_INVERSE"},
+    ]
+    index = drawn.index("SR_INVERSE")
+    assert replay_arguments(named, index)[-2:] == ["--set", "CmgSteering.law=SR_INVERSE"]

@@ -9,6 +9,7 @@ the grid point's values and the draws of :meth:`Dispersion.draw` for index i on 
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -76,12 +77,22 @@ class Plan:
         twice = sorted({k for k in keys if keys.count(k) > 1})
         if twice:
             raise ValueError(f"dispersed twice: {', '.join(twice)}")
-        self.nominal = {d.key: self._check(d) for d in self.dispersions}
+        self.choices = {}  # key -> the names of a named-choice parameter's values 0, 1, ...
+        self.integers = set()  # keys of Integer parameters
+        self.nominal = {}
+        for k, d in enumerate(self.dispersions):
+            self.dispersions[k], self.nominal[d.key] = self._check(d)
         self.columns = [
             name
             for d in self.dispersions
             for name in _scalar_names(d.key, self.nominal[d.key].shape)
         ]
+        #: the table's type of each dispersed column: i (Integer), s (a choice's name), f
+        self.kinds = {
+            name: "s" if d.key in self.choices else "i" if d.key in self.integers else "f"
+            for d in self.dispersions
+            for name in _scalar_names(d.key, self.nominal[d.key].shape)
+        }
         overlap = set(self.columns) & set(spec.set)
         if overlap:
             raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
@@ -107,7 +118,10 @@ class Plan:
                 else d.draw(self.spec.seed, index, nominal)
             )
             for name, x in zip(_scalar_names(d.key, nominal.shape), np.ravel(value)):
-                result[name] = x.item()
+                if d.key in self.choices:  # by name, as --set takes it
+                    result[name] = self.choices[d.key][int(x)]
+                else:
+                    result[name] = int(x) if d.key in self.integers else x.item()
         return result
 
     def parameters(self, index: int) -> dict:
@@ -135,18 +149,24 @@ class Plan:
                 return var
         raise ValueError(f"{what} {key}: {self.fmus[instance]} has no variable {name!r}")
 
-    def _check(self, d) -> np.ndarray:
-        """The nominal value of a dispersed variable, after checking that the dispersion
-        fits it."""
+    def _check(self, d) -> tuple:
+        """(the dispersion, named choices resolved to their values; the nominal value of
+        the dispersed variable), after checking that the dispersion fits it."""
         var = self._variable(d.key, "--vary")
         whole = "[" not in d.key
+        named = any(isinstance(a, str) for a in d.args)
+        if named and (var is None or not var.choices):
+            raise ValueError(
+                f"--vary {d.text}: names are for a named-choice parameter, "
+                f"{d.instance}.{d.variable} has none: give numbers"
+            )
         if var is None:
             if d.kind in ("rotate", "inertia") or whole and d.mode:
                 raise ValueError(
                     f"--vary {d.text}: whole-variable dispersions need one of "
                     f"our FMUs, {self.fmus[d.instance]} is not"
                 )
-            return np.asarray(float(self.values.get(d.key, 0.0)))
+            return d, np.asarray(float(self.values.get(d.key, 0.0)))
         if var.causality != "parameter" or var.type == "String":
             raise ValueError(
                 f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
@@ -154,13 +174,23 @@ class Plan:
             )
         if var.type != "Real" and d.kind not in ("choice", "values"):
             raise ValueError(f"--vary {d.text}: {var.type} parameter: use choice() or values()")
+        if var.choices:
+            d = self._named(d, var)
+        elif var.type == "Integer":
+            self.integers.add(d.key)
         names = var.scalar_names()
         start = var.start_array()
         flat = np.array(
-            [float(self.values.get(f"{d.instance}.{n}", s)) for n, s in zip(names, start)]
+            [
+                var.choice_value(self.values.get(f"{d.instance}.{n}", s))
+                if var.choices
+                else float(self.values.get(f"{d.instance}.{n}", s))
+                for n, s in zip(names, start)
+            ],
+            dtype=float,
         )
         if not whole:
-            return np.asarray(flat[names.index(d.key.partition(".")[2])])
+            return d, np.asarray(flat[names.index(d.key.partition(".")[2])])
         shape = var.shape
         if d.is_grid and shape:
             raise ValueError(
@@ -183,7 +213,22 @@ class Plan:
             raise ValueError(
                 f"--vary {d.text}: nominal {nominal.tolist()} is not symmetric positive definite"
             )
-        return nominal
+        return d, nominal
+
+    def _named(self, d, var):
+        """choice()/values() of a named-choice parameter, its names (any case) or numbers
+        resolved to the values 0, 1, ... (the draws then are those of the numbers)."""
+        if d.mode:
+            raise ValueError(f"--vary {d.text}: a named choice cannot be added or multiplied")
+        try:
+            args = tuple(
+                float(var.choice_value(int(a) if isinstance(a, float) and a.is_integer() else a))
+                for a in d.args
+            )
+        except ValueError as exc:
+            raise ValueError(f"--vary {d.text}: {exc}") from None
+        self.choices[d.key] = [name for name, _ in var.choices]
+        return dataclasses.replace(d, args=args)
 
     def _signal(self, key: str) -> list[str]:
         """The recorded columns of a ``--keep`` name (a whole variable: all its elements);
