@@ -44,12 +44,18 @@ MAX_BATCH = 50
 #: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
 #: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
 #: pause, terminate) every 0.1 s (idle Dask processes using CPU: dask/distributed#5000,
-#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).
+#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).  And the nanny spawns its
+#: worker with MALLOC_TRIM_THRESHOLD_=65536 (for workers holding large data): setting it
+#: turns off glibc's dynamic mmap threshold, so every NumPy array over 128 KiB a run makes
+#: is mapped and unmapped again, ~500 page faults per scan_pitch run instead of ~30; our
+#: workers hold no data (their memory is flat without it, see the benchmark), and None
+#: unsets it (the nanny would also set it in this process's environment for good).
 LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }
 
 
