@@ -269,6 +269,10 @@ def test_batch_size_aims_at_a_few_seconds_and_an_even_share():
     # the end of a campaign: at most an even share of what is left per batch in flight
     assert engine.batch_size(0.1, 9, 2) == 3
     assert engine.batch_size(0.1, 1, 2) == 1
+    # a large cluster: longer batches, at most MAX_TASKS_PER_SECOND tasks for the client
+    assert engine.MAX_TASKS_PER_SECOND == 20
+    assert engine.batch_size(1.0, 10**6, 40) == 2
+    assert engine.batch_size(1.0, 10**6, 200) == 10
 
 
 @pytest.mark.parametrize(

@@ -36,6 +36,7 @@ from .worker import run_batch
 
 IN_FLIGHT_PER_WORKER = 2  # batches queued per worker: the next is there when one ends
 BATCH_SECONDS = 2.0
+MAX_TASKS_PER_SECOND = 20  # the client + scheduler's ~15 ms per task: ~1/3 of a core
 MAX_BATCH = 50
 #: Settings of the LocalCluster we start (a cluster given by its address keeps its own).
 #: Dask's periodic work, at its defaults, costs about 50 ms of CPU per second in each of
@@ -154,14 +155,17 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
 
 def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:
     """Runs per Dask task: enough that a task lasts about ``BATCH_SECONDS`` (Dask's round
-    trip, some 10-20 ms of CPU in the client, scheduler and worker, then costs under 1 %),
-    at most ``MAX_BATCH`` (what a dead worker loses and the progress bar waits for), and no
-    more than an even share of what is left (the workers finish together).  One run per
-    task until a run's duration is known."""
+    trip, some 10-30 ms of CPU in the client, scheduler, worker and nanny, then costs
+    about 1 %), longer on a large cluster so that the client and scheduler get at most
+    ``MAX_TASKS_PER_SECOND``; at most ``MAX_BATCH`` runs (what a dead worker loses and the
+    progress bar waits for), and no more than an even share of what is left (the workers
+    finish together).  One run per task until a run's duration is known."""
     if not run_seconds:
         return 1
-    share = -(-remaining // (IN_FLIGHT_PER_WORKER * max(1, workers)))
-    return max(1, min(round(BATCH_SECONDS / run_seconds), MAX_BATCH, share))
+    workers = max(1, workers)
+    seconds = max(BATCH_SECONDS, workers / MAX_TASKS_PER_SECOND)
+    share = -(-remaining // (IN_FLIGHT_PER_WORKER * workers))
+    return max(1, min(round(seconds / run_seconds), MAX_BATCH, share))
 
 
 def execute(
