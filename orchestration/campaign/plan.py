@@ -9,9 +9,8 @@ the grid point's values and the draws of :meth:`Dispersion.draw` for index i on 
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -228,7 +227,7 @@ class Plan:
         except ValueError as exc:
             raise ValueError(f"--vary {d.text}: {exc}") from None
         self.choices[d.key] = [name for name, _ in var.choices]
-        return dataclasses.replace(d, args=args)
+        return replace(d, args=args)
 
     def _signal(self, key: str) -> list[str]:
         """The recorded columns of a ``--keep`` name (a whole variable: all its elements);
