@@ -363,10 +363,11 @@ def main() -> int:
     }
     print("per round (each ratio from one round; the least disturbed round is the best one):")
     for label, (values, unit, best_of) in per_round.items():
-        listing = ", ".join(f"{v:.2f}{unit}" for v in values)
+        form = "{:+.1f}" if unit == " %" else "{:.2f}"
+        listing = ", ".join(form.format(v) + unit for v in values)
         print(
-            f"  {label:42s} {listing}; median {np.median(values):.2f}{unit}, "
-            f"best {best_of(values):.2f}{unit}"
+            f"  {label:42s} {listing}; median {form.format(np.median(values))}{unit}, "
+            f"best {form.format(best_of(values))}{unit}"
         )
     print("overhead of the machinery, 1 worker, best rounds of each (target ≤ 10 %):")
     print(
