@@ -155,8 +155,8 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
 
 def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:
     """Runs per Dask task: enough that a task lasts about ``BATCH_SECONDS`` (Dask's round
-    trip, some 10-30 ms of CPU in the client, scheduler, worker and nanny, then costs
-    about 1 %), longer on a large cluster so that the client and scheduler get at most
+    trip, some 30 ms of CPU in the client, scheduler, worker and nanny, then costs
+    about 1.5 %), longer on a large cluster so that the client and scheduler get at most
     ``MAX_TASKS_PER_SECOND``; at most ``MAX_BATCH`` runs (what a dead worker loses and the
     progress bar waits for), and no more than an even share of what is left (the workers
     finish together).  One run per task until a run's duration is known."""
