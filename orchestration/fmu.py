@@ -12,7 +12,8 @@ every run instantiates its instances on it.  Unpacking it again for each run wou
 another copy of the binary each time that is never unmapped: pythonfmu's binary cannot be
 unloaded (its GNU-unique C++ symbols make it NODELETE), so a campaign of thousands of runs
 in one process would run out of memory mappings.  A run's components are reset and kept
-for the next run with the same FMU and instance name (see :meth:`Instance.free`).
+for the next run with the same FMU and instance name, with fmpy's ``FMU2Slave`` and its
+bound FMI functions (see :meth:`Instance.free`).
 """
 
 from __future__ import annotations
@@ -124,12 +125,7 @@ class Instance(Description):
         self.log = log
         self._key = _content_key(self.path)
         self.unzip_dir = _unpacked(self._key, str(path), self.md.coSimulation.modelIdentifier)
-        self.slave = FMU2Slave(
-            guid=self.md.guid,
-            unzipDirectory=self.unzip_dir,
-            modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName=name,
-        )
+        self.slave = _take_slave(self._key, name, self.md, self.unzip_dir)
         dll = self.slave.dll
         self.fmi2DoStep = dll.fmi2DoStep
         self.fmi2GetReal, self.fmi2SetReal = dll.fmi2GetReal, dll.fmi2SetReal
@@ -208,7 +204,7 @@ class Instance(Description):
                 ):
                     self.slave.fmi2FreeInstance(component)
             if not self.fatal:
-                self.slave.freeLibrary()
+                _keep_slave(self._key, self.name, self.slave)
         except Exception:  # noqa: BLE001 - cleanup after an FMU failure
             pass
         resources = str(Path(self.unzip_dir) / "resources")
@@ -259,6 +255,35 @@ def _keep_idle(key: str, name: str, record: _Component, reset) -> bool:
     with _lock:
         _idle.setdefault((key, name), []).append(record)
     return True
+
+
+# fmpy binds each of the ~70 FMI functions of a new FMU2Slave through inspect.signature
+# (~1.5 ms per FMU); a slave holds nothing of a run but its component pointer, so it is kept
+# for the next Instance of the same FMU and name (its reference to the library with it).
+_slaves: dict[tuple[str, str], list[FMU2Slave]] = {}
+
+
+def _take_slave(key: str, name: str, md, unzip_dir: str) -> FMU2Slave:
+    with _lock:
+        kept = _slaves.get((key, name))
+        if kept:
+            return kept.pop()
+    return FMU2Slave(
+        guid=md.guid,
+        unzipDirectory=unzip_dir,
+        modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName=name,
+    )
+
+
+def _keep_slave(key: str, name: str, slave: FMU2Slave) -> None:
+    slave.component = slave.callbacks = None
+    with _lock:
+        kept = _slaves.setdefault((key, name), [])
+        if len(kept) < _IDLE_PER_NAME:
+            kept.append(slave)
+            return
+    slave.freeLibrary()
 
 
 # -- one load per FMU file content, per process -----------------------------------------

@@ -383,3 +383,94 @@ def test_a_reused_worker_is_bit_identical_to_a_fresh_process(tmp_path, fmus):
     assert not np.array_equal(runs[1], alone)  # the other parameters do differ
     for k in (0, 2, 3):
         assert np.array_equal(runs[k], alone)
+
+
+BATCHED = [
+    "CmgCluster.rate_limit=values(0.6, -1)",
+    "SatelliteDynamics.rate0[2]=+normal(0, 0.01deg)",
+]
+ONE_PER_TASK = """
+import json, sys
+from agilesat.orchestration.campaign import engine, run_campaign, Spec
+engine.MAX_BATCH = 1
+spec = Spec("scan_pitch", 8, 0, json.loads(sys.argv[2]), stop=0.5)
+run_campaign(spec, sys.argv[1], workers=1, progress=False)
+"""
+
+
+def test_runs_in_one_batch_are_each_their_own_outcome(tmp_path, fmus):
+    """Short runs go several to a Dask task; a run that stops inside a batch is its own
+    row with its message and the others of its batch are made; the table is the one of
+    runs made one per task (run i depends on i alone)."""
+    out = tmp_path / "batched"
+    result = agilesat(
+        "campaign",
+        "scan_pitch",
+        "--stop",
+        "0.5",
+        "--runs",
+        "8",
+        "--workers",
+        "1",
+        *[arg for vary in BATCHED for arg in ("--vary", vary)],
+        "--out",
+        out,
+        "--no-progress",
+    )
+    assert result.returncode == 3, result.stderr
+    made = {r["index"]: r for r in journal(out)}
+    assert sorted(made) == list(range(16))
+    batches = {}
+    for r in made.values():
+        batches.setdefault(r["batch"], []).append(r["index"])
+    # several runs shared a task, one that stopped with one that did not
+    assert any({i % 2 for i in b} == {0, 1} for b in batches.values()), batches
+    for index, r in made.items():
+        if index % 2:  # rate_limit -1
+            assert r["status"] == "error"
+            assert "rate_limit (-1.0) and accel_limit (0.5) must be positive" in r["message"]
+        else:
+            assert r["status"] == "ok", r["message"]
+    one_by_one = tmp_path / "one_by_one"
+    result = run_python(ONE_PER_TASK, one_by_one, json.dumps(BATCHED))
+    assert result.returncode == 0, result.stderr
+    assert {r["batch"] for r in journal(one_by_one)} == set(range(16))
+    assert rows(one_by_one) == rows(out)
+
+
+def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
+    out = tmp_path / "laws"
+    result = agilesat(
+        "campaign",
+        "scan_pitch",
+        "--stop",
+        STOP,
+        "--workers",
+        "1",
+        "--vary",
+        "CmgSteering.law=values(PSEUDO_INVERSE, SR_INVERSE)",
+        "--out",
+        out,
+        "--no-progress",
+    )
+    assert result.returncode in (0, 3), result.stderr
+    assert "CmgSteering.law=SR_INVERSE: " in result.stdout
+    table = rows(out)
+    assert [r["CmgSteering.law"] for r in table] == ["PSEUDO_INVERSE", "SR_INVERSE"]
+    assert table[0]["max_abs_output_torque"] != table[1]["max_abs_output_torque"]
+    result = agilesat(
+        "run",
+        "scan_pitch",
+        "--stop",
+        STOP,
+        "--set",
+        "CmgSteering.law=SR_INVERSE",
+        "--out",
+        tmp_path / "replay",
+        "--no-figures",
+    )
+    assert result.returncode in (0, 3), result.stderr
+    summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
+    for name, metric in summary["metrics"].items():
+        value = metric["value"]
+        assert (table[1][name] == "nan") if value is None else float(table[1][name]) == value

@@ -3,6 +3,7 @@ pass-rate intervals, the table and requirements in scenario summaries."""
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -152,6 +153,12 @@ def test_plan_whole_variables_start_from_the_system_values():
         ("CmgCluster.delta0=values(0, 1)", "grids take scalar names"),
         ("CmgCluster.h_rotor=rotate(1deg)", "rotate\\(\\) turns a 3-vector"),
         ("CmgCluster.gimbal_axis=inertia(0.1, 0)", "disperses a 3×3 inertia"),
+        (
+            "CmgSteering.law=choice(PSEUDO_INVERSE, NOPE)",
+            "law must be one of 0 \\(PSEUDO_INVERSE\\), 1 \\(SR_INVERSE\\), got 'NOPE'",
+        ),
+        ("CmgCluster.h_rotor=choice(A, B)", "CmgCluster.h_rotor has none: give numbers"),
+        ("CmgSteering.law=+choice(0, 1)", "a named choice cannot be added or multiplied"),
     ],
 )
 def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
@@ -249,3 +256,70 @@ def test_progress_is_a_bar_on_a_terminal():
     progress.close()
     text = stream.getvalue()
     assert "4/5" in text and "1 error" in text and "run/s" in text
+
+
+def test_batch_size_aims_at_a_few_seconds_and_an_even_share():
+    from agilesat.orchestration.campaign import engine
+
+    assert engine.BATCH_SECONDS == 2.0 and engine.IN_FLIGHT_PER_WORKER == 2
+    assert engine.batch_size(None, 1000, 2) == 1  # a run's duration not known yet
+    assert engine.batch_size(0.4, 1000, 2) == 5  # 2 s of runs
+    assert engine.batch_size(1e-4, 10**6, 2) == engine.MAX_BATCH
+    assert engine.batch_size(10.0, 1000, 2) == 1  # long runs: one per task
+    # the end of a campaign: at most an even share of what is left per batch in flight
+    assert engine.batch_size(0.1, 9, 2) == 3
+    assert engine.batch_size(0.1, 1, 2) == 1
+    # a large cluster: longer batches, at most MAX_TASKS_PER_SECOND tasks for the client
+    assert engine.MAX_TASKS_PER_SECOND == 20
+    assert engine.batch_size(1.0, 10**6, 40) == 2
+    assert engine.batch_size(1.0, 10**6, 200) == 10
+
+
+@pytest.mark.parametrize(
+    "keep, match",
+    [
+        (
+            "CmgCluster.h_rotor",
+            "CmgCluster has 'h_rotor' as a parameter; a run records the "
+            "outputs, CmgCluster's are: delta, delta_dot, h, hdot, singularity",
+        ),
+        ("SatelliteDynamics.nope", "SatelliteDynamics has no variable 'nope'; .* w_BI_B"),
+        (
+            "SatelliteDynamics.w_BI_B[4]",
+            "the elements of SatelliteDynamics.w_BI_B are w_BI_B\\[1\\] \\.\\. w_BI_B\\[3\\]",
+        ),
+        ("Nobody.x", "no component 'Nobody'"),
+    ],
+)
+def test_keep_of_what_is_not_recorded_is_refused_before_the_campaign(tmp_path, keep, match):
+    """Not one run: the error names the signal and the outputs there are (it used to be
+    a ColumnError inside every run)."""
+    from agilesat.orchestration.campaign import run_campaign
+
+    with pytest.raises(ValueError, match=f"--keep {re.escape(keep)}: {match}"):
+        run_campaign(Spec("scan_pitch", keep=[keep], stop=1.0), tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    plan = Plan(Spec("scan_pitch", keep=["CmgCluster.h", "SatelliteDynamics.w_BI_B[2]"]))
+    assert plan.signals == [f"CmgCluster.h[{i}]" for i in (1, 2, 3)] + [
+        "SatelliteDynamics.w_BI_B[2]"
+    ]
+
+
+def test_choice_takes_the_names_of_a_named_choice_and_records_them():
+    """The table and the replay command get the name, as ``--set`` takes it; the draws
+    are those of the numbers 0, 1 (the names' values)."""
+    from agilesat.orchestration.campaign import replay_arguments
+
+    named = Plan(Spec("scan_pitch", 20, 3, ["CmgSteering.law=choice(PSEUDO_INVERSE, sr_inverse)"]))
+    numbers = Plan(Spec("scan_pitch", 20, 3, ["CmgSteering.law=choice(0, 1)"]))
+    drawn = [named.run_values(i)["CmgSteering.law"] for i in range(20)]
+    assert set(drawn) == {"PSEUDO_INVERSE", "SR_INVERSE"}
+    assert drawn == [numbers.run_values(i)["CmgSteering.law"] for i in range(20)]
+    assert named.kinds == {"CmgSteering.law": "s"}
+    sweep = Plan(Spec("scan_pitch", 1, 0, ["CmgSteering.law=values(SR_INVERSE, PSEUDO_INVERSE)"]))
+    assert [sweep.run_values(i) for i in (0, 1)] == [
+        {"CmgSteering.law": "SR_INVERSE"},
+        {"CmgSteering.law": "PSEUDO_INVERSE"},
+    ]
+    index = drawn.index("SR_INVERSE")
+    assert replay_arguments(named, index)[-2:] == ["--set", "CmgSteering.law=SR_INVERSE"]

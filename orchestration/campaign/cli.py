@@ -157,7 +157,10 @@ def format_campaign(summary: dict) -> str:
         rates = point["pass_rates"]
         met = rates.get("all") or next(iter(rates.values()), None)
         if met:
-            values = ", ".join(f"{k}={v:.6g}" for k, v in point["values"].items())
+            values = ", ".join(
+                f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+                for k, v in point["values"].items()
+            )
             lines.append(f"  {values}: {met['met']}/{met['runs']} met")
     for failure in summary["failures"][:5]:
         lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")

@@ -5,7 +5,9 @@ A dispersion is ``Instance.variable=DIST`` (``--vary``, or one entry of a TOML/J
 
 Random (Monte Carlo) — drawn anew for every run:
   ``normal(mean, sd)``, ``uniform(lo, hi)``, ``choice(a, b, ...)``; on a whole array each
-  element is drawn independently from the same distribution.
+  element is drawn independently from the same distribution.  ``choice`` and ``values``
+  take the names of a named-choice parameter too (``CmgSteering.law=choice(PSEUDO_INVERSE,
+  SR_INVERSE)``); the table records the name, as ``--set`` takes it.
   ``rotate(sd)``: each unit vector (a 3-vector, or each row of an n×3 matrix such as
   ``CmgCluster.gimbal_axis``) is turned by a small rotation φ = sd (n₁ e₁ + n₂ e₂),
   n ~ N(0, 1), e₁, e₂ ⊥ the vector (Rodrigues), so it stays a unit vector and the tilt has
@@ -42,6 +44,7 @@ RANDOM = {"normal": 2, "uniform": 2, "choice": None, "rotate": 1, "inertia": 2}
 GRIDS = {"linspace": 3, "values": None}
 _EXPR = re.compile(r"^\s*([+*]?)\s*([a-z_]+)\s*\((.*)\)\s*$", re.S)
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(deg)?\s*$")
+_NAME = re.compile(r"^\s*([A-Za-z_]\w*)\s*$")  # a named choice (CmgSteering.law)
 _KEY = re.compile(r"^[A-Za-z_]\w*\.[A-Za-z_]\w*(\[\d+(,\d+)*\])?$")
 
 
@@ -49,7 +52,7 @@ _KEY = re.compile(r"^[A-Za-z_]\w*\.[A-Za-z_]\w*(\[\d+(,\d+)*\])?$")
 class Dispersion:
     key: str  # "Instance.variable" or "Instance.variable[i,j]"
     kind: str  # one of RANDOM or GRIDS
-    args: tuple[float, ...]
+    args: tuple  # floats; for choice and values also names, until the plan resolves them
     mode: str = ""  # "" replace, "+" add to nominal, "*" multiply nominal
     text: str = ""  # as written
 
@@ -125,6 +128,9 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
     args = []
     for item in body.split(","):
         number = _NUMBER.match(item)
+        if not number and kind in ("choice", "values") and _NAME.match(item):
+            args.append(item.strip())
+            continue
         if not number:
             raise ValueError(
                 f"{origin} {key}={expression}: {item.strip()!r} is not a number "

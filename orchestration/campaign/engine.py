@@ -1,17 +1,18 @@
 """Running a campaign on Dask, and what it leaves in its directory.
 
 Runs go to a ``distributed`` cluster: a ``LocalCluster`` of single-threaded worker
-processes on this machine, or any running cluster by its scheduler address.  At most a
-few runs per worker are in flight (``as_completed`` refilled as runs finish), so the
-client's memory stays bounded whatever N is.  A worker that dies is noticed by the
-scheduler, which runs what it held on the others (up to ``distributed.scheduler.
-allowed-failures`` times, then that run's outcome is ``lost``); the campaign reports the
-workers it lost.
+processes on this machine, or any running cluster by its scheduler address.  Runs go in
+batches of a few seconds of work (one Dask task each, :func:`batch_size`), each run still
+its own record; at most two batches per worker are in flight (``as_completed`` refilled
+as they finish), so the client's memory stays bounded whatever N is.  A worker that dies
+is noticed by the scheduler, which runs the batches it held on the others (up to
+``distributed.scheduler.allowed-failures`` times, then those runs' outcome is ``lost``);
+the campaign reports the workers it lost and the runs they held.
 
 Files in the output directory, written as runs finish:
 
 - ``runs.jsonl`` — the journal: one line per finished run (index, values, outcome,
-  metrics), flushed at once; ``--resume`` and extensions skip the runs it holds.
+  metrics), flushed as each batch is back; ``--resume`` and extensions skip the runs it holds.
 - ``metrics.json`` — each metric's unit, description and requirement (first run).
 - ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
   run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
@@ -31,9 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from .plan import Plan, Spec
-from .worker import run_one
+from .worker import run_batch
 
-IN_FLIGHT_PER_WORKER = 2
+IN_FLIGHT_PER_WORKER = 2  # batches queued per worker: the next is there when one ends
+BATCH_SECONDS = 2.0
+MAX_TASKS_PER_SECOND = 20  # the client + scheduler's ~15 ms per task: ~1/3 of a core
+MAX_BATCH = 50
 #: Settings of the LocalCluster we start (a cluster given by its address keeps its own).
 #: Dask's periodic work, at its defaults, costs about 50 ms of CPU per second in each of
 #: the worker, nanny and client processes, taken from the runs: the worker's statistical
@@ -41,12 +45,18 @@ IN_FLIGHT_PER_WORKER = 2
 #: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
 #: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
 #: pause, terminate) every 0.1 s (idle Dask processes using CPU: dask/distributed#5000,
-#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).
+#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).  And the nanny spawns its
+#: worker with MALLOC_TRIM_THRESHOLD_=65536 (for workers holding large data): setting it
+#: turns off glibc's dynamic mmap threshold, so every NumPy array over 128 KiB a run makes
+#: is mapped and unmapped again, ~500 page faults per scan_pitch run instead of ~30; our
+#: workers hold no data (their memory is flat without it, see the benchmark), and None
+#: unsets it (the nanny would also set it in this process's environment for good).
 LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }
 
 
@@ -143,90 +153,118 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
         yield client
 
 
+def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:
+    """Runs per Dask task: enough that a task lasts about ``BATCH_SECONDS`` (Dask's round
+    trip, some 30 ms of CPU in the client, scheduler, worker and nanny, then costs
+    about 1.5 %), longer on a large cluster so that the client and scheduler get at most
+    ``MAX_TASKS_PER_SECOND``; at most ``MAX_BATCH`` runs (what a dead worker loses and the
+    progress bar waits for), and no more than an even share of what is left (the workers
+    finish together).  One run per task until a run's duration is known."""
+    if not run_seconds:
+        return 1
+    workers = max(1, workers)
+    seconds = max(BATCH_SECONDS, workers / MAX_TASKS_PER_SECOND)
+    share = -(-remaining // (IN_FLIGHT_PER_WORKER * workers))
+    return max(1, min(round(seconds / run_seconds), MAX_BATCH, share))
+
+
 def execute(
     plan: Plan, out: Path, client, done: dict, progress, metrics: dict
 ) -> tuple[dict, list, str]:
     """Run what is not in ``done`` on ``client``; returns (records by index, lost workers,
-    "complete" or "interrupted").  Every finished run is in the journal at once;
-    ``metrics`` collects each metric's unit, description and requirement."""
+    "complete" or "interrupted").  Runs go in batches (:func:`batch_size`), each run its
+    own record; every run is in the journal as soon as its batch is back; ``metrics`` collects each
+    metric's unit, description and requirement."""
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
     records = dict(done)
     signals = signals_file(plan, out)
-    todo = iter([i for i in range(plan.total) if i not in records])
+    todo = [i for i in range(plan.total) if i not in records][::-1]  # popped from the end
     watcher = WorkerWatch(client)
-    futures = {}
+    futures = {}  # future -> the indices of its runs
     values = {}  # of the runs in flight (drawn once)
+    timed = [0.0, 0]  # seconds and number of the runs made here, for the batch size
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
 
     def submit():
-        for index in todo:
+        workers = len(watcher.workers)
+        size = batch_size(timed[0] / timed[1] if timed[1] else None, len(todo), workers)
+        batch = [todo.pop() for _ in range(min(size, len(todo)))]
+        if not batch:
+            return None
+        for index in batch:
             values[index] = plan.run_values(index)
-            future = client.submit(
-                run_one,
-                index,
-                plan.spec.target,
-                {**plan.spec.set, **values[index]},
-                plan.step,
-                plan.stop,
-                plan.spec.algorithm,
-                plan.signals,
-                plan.points,
-                key=f"agilesat-run-{index}-{token}",
-                pure=False,
-            )
-            futures[future] = index
-            return future
-        return None
+        future = client.submit(
+            run_batch,
+            [(index, {**plan.spec.set, **values[index]}) for index in batch],
+            plan.spec.target,
+            plan.step,
+            plan.stop,
+            plan.spec.algorithm,
+            plan.signals,
+            plan.points,
+            key=f"agilesat-runs-{batch[0]}-{len(batch)}-{token}",
+            pure=False,
+        )
+        futures[future] = batch
+        return future
 
-    window = max(1, IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers)))
-    pending = as_completed([f for f in (submit() for _ in range(window)) if f is not None])
+    def in_flight():
+        return IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers))
+
+    pending = as_completed([f for f in (submit() for _ in range(in_flight())) if f is not None])
     status = "complete"
     try:
         with (out / "runs.jsonl").open("a") as journal:
             for future in pending:
-                index = futures.pop(future)
+                batch = futures.pop(future)
                 try:
-                    record = future.result()
+                    made = future.result()
                 except KilledWorker as exc:
-                    record = {
-                        "index": index,
-                        "status": "lost",
-                        "metrics": {},
-                        "message": f"every worker that ran it died (Dask gives up after "
-                        f"distributed.scheduler.allowed-failures): {exc}",
-                    }
-                except Exception as exc:  # the task itself could not run there
-                    record = {
-                        "index": index,
-                        "status": "error",
-                        "metrics": {},
-                        "message": f"{type(exc).__name__}: {exc}",
-                    }
-                signal = record.pop("signals", None)
-                if signals is not None and signal is not None:
-                    signals[index] = signal
-                record.update(
-                    seed=plan.spec.seed, values=values.pop(index), grid=index % len(plan.grid)
-                )
-                if set(record["metrics"]) - set(metrics):
-                    for name, m in record["metrics"].items():
-                        metrics.setdefault(
-                            name, {k: v for k, v in m.items() if k not in ("value", "met", "paper")}
+                    made = [
+                        _failed(
+                            index,
+                            "lost",
+                            "every worker that ran it died (Dask gives up "
+                            f"after distributed.scheduler.allowed-failures): {exc}",
                         )
-                    (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
-                record["metrics"] = {
-                    k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
-                    for k, m in record["metrics"].items()
-                }
-                journal.write(json.dumps(record) + "\n")
+                        for index in batch
+                    ]
+                except Exception as exc:  # the task itself could not run there
+                    made = [_failed(i, "error", f"{type(exc).__name__}: {exc}") for i in batch]
+                for record in made:
+                    index = record["index"]
+                    signal = record.pop("signals", None)
+                    if signals is not None and signal is not None:
+                        signals[index] = signal
+                    if "seconds" in record:
+                        timed[0] += record["seconds"]
+                        timed[1] += 1
+                    record.update(
+                        seed=plan.spec.seed,
+                        values=values.pop(index),
+                        grid=index % len(plan.grid),
+                        batch=batch[0],  # the first run of its Dask task
+                    )
+                    if set(record["metrics"]) - set(metrics):
+                        for name, m in record["metrics"].items():
+                            metrics.setdefault(
+                                name,
+                                {k: v for k, v in m.items() if k not in ("value", "met", "paper")},
+                            )
+                        (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
+                    record["metrics"] = {
+                        k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
+                        for k, m in record["metrics"].items()
+                    }
+                    journal.write(json.dumps(record) + "\n")
+                    records[index] = record
+                    progress.update(record["status"])
                 journal.flush()
-                records[index] = record
                 watcher.check(futures)
-                progress.update(record["status"])
-                # keep IN_FLIGHT_PER_WORKER runs per worker there is now
-                while len(futures) < IN_FLIGHT_PER_WORKER * max(1, len(watcher.workers)):
+                # keep IN_FLIGHT_PER_WORKER batches per worker there is now
+                while len(futures) < in_flight():
                     nxt = submit()
                     if nxt is None:
                         break
@@ -239,6 +277,10 @@ def execute(
             signals.flush()
         progress.close()
     return records, watcher.lost, status
+
+
+def _failed(index: int, status: str, message: str) -> dict:
+    return {"index": index, "status": status, "metrics": {}, "message": message}
 
 
 class WorkerWatch:
@@ -257,9 +299,9 @@ class WorkerWatch:
             return
         self.last = now
         workers = set(self.client.scheduler_info()["workers"])
-        keys = {f.key: i for f, i in futures.items()}
+        keys = {f.key: batch for f, batch in futures.items()}
         for address in sorted(self.workers - workers):
-            held = sorted(keys[k] for k in self.processing.get(address, ()) if k in keys)
+            held = sorted(i for k in self.processing.get(address, ()) for i in keys.get(k, ()))
             self.lost.append({"worker": address, "runs_in_flight": held})
             print(
                 f"campaign: worker {address} left; Dask re-runs the runs it held "

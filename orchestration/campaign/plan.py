@@ -10,12 +10,13 @@ the grid point's values and the draws of :meth:`Dispersion.draw` for index i on 
 from __future__ import annotations
 
 import itertools
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from ...fmus import FMUS, model_class
+from ..fmu import Description
 from ..runner import parse_target
 from ..ssp import read_system
 from . import dispersion as dispersions
@@ -75,12 +76,22 @@ class Plan:
         twice = sorted({k for k in keys if keys.count(k) > 1})
         if twice:
             raise ValueError(f"dispersed twice: {', '.join(twice)}")
-        self.nominal = {d.key: self._check(d) for d in self.dispersions}
+        self.choices = {}  # key -> the names of a named-choice parameter's values 0, 1, ...
+        self.integers = set()  # keys of Integer parameters
+        self.nominal = {}
+        for k, d in enumerate(self.dispersions):
+            self.dispersions[k], self.nominal[d.key] = self._check(d)
         self.columns = [
             name
             for d in self.dispersions
             for name in _scalar_names(d.key, self.nominal[d.key].shape)
         ]
+        #: the table's type of each dispersed column: i (Integer), s (a choice's name), f
+        self.kinds = {
+            name: "s" if d.key in self.choices else "i" if d.key in self.integers else "f"
+            for d in self.dispersions
+            for name in _scalar_names(d.key, self.nominal[d.key].shape)
+        }
         overlap = set(self.columns) & set(spec.set)
         if overlap:
             raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
@@ -106,7 +117,10 @@ class Plan:
                 else d.draw(self.spec.seed, index, nominal)
             )
             for name, x in zip(_scalar_names(d.key, nominal.shape), np.ravel(value)):
-                result[name] = x.item()
+                if d.key in self.choices:  # by name, as --set takes it
+                    result[name] = self.choices[d.key][int(x)]
+                else:
+                    result[name] = int(x) if d.key in self.integers else x.item()
         return result
 
     def parameters(self, index: int) -> dict:
@@ -134,18 +148,24 @@ class Plan:
                 return var
         raise ValueError(f"{what} {key}: {self.fmus[instance]} has no variable {name!r}")
 
-    def _check(self, d) -> np.ndarray:
-        """The nominal value of a dispersed variable, after checking that the dispersion
-        fits it."""
+    def _check(self, d) -> tuple:
+        """(the dispersion, named choices resolved to their values; the nominal value of
+        the dispersed variable), after checking that the dispersion fits it."""
         var = self._variable(d.key, "--vary")
         whole = "[" not in d.key
+        named = any(isinstance(a, str) for a in d.args)
+        if named and (var is None or not var.choices):
+            raise ValueError(
+                f"--vary {d.text}: names are for a named-choice parameter, "
+                f"{d.instance}.{d.variable} has none: give numbers"
+            )
         if var is None:
             if d.kind in ("rotate", "inertia") or whole and d.mode:
                 raise ValueError(
                     f"--vary {d.text}: whole-variable dispersions need one of "
                     f"our FMUs, {self.fmus[d.instance]} is not"
                 )
-            return np.asarray(float(self.values.get(d.key, 0.0)))
+            return d, np.asarray(float(self.values.get(d.key, 0.0)))
         if var.causality != "parameter" or var.type == "String":
             raise ValueError(
                 f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
@@ -153,13 +173,23 @@ class Plan:
             )
         if var.type != "Real" and d.kind not in ("choice", "values"):
             raise ValueError(f"--vary {d.text}: {var.type} parameter: use choice() or values()")
+        if var.choices:
+            d = self._named(d, var)
+        elif var.type == "Integer":
+            self.integers.add(d.key)
         names = var.scalar_names()
         start = var.start_array()
         flat = np.array(
-            [float(self.values.get(f"{d.instance}.{n}", s)) for n, s in zip(names, start)]
+            [
+                var.choice_value(self.values.get(f"{d.instance}.{n}", s))
+                if var.choices
+                else float(self.values.get(f"{d.instance}.{n}", s))
+                for n, s in zip(names, start)
+            ],
+            dtype=float,
         )
         if not whole:
-            return np.asarray(flat[names.index(d.key.partition(".")[2])])
+            return d, np.asarray(flat[names.index(d.key.partition(".")[2])])
         shape = var.shape
         if d.is_grid and shape:
             raise ValueError(
@@ -182,19 +212,60 @@ class Plan:
             raise ValueError(
                 f"--vary {d.text}: nominal {nominal.tolist()} is not symmetric positive definite"
             )
-        return nominal
+        return d, nominal
+
+    def _named(self, d, var):
+        """choice()/values() of a named-choice parameter, its names (any case) or numbers
+        resolved to the values 0, 1, ... (the draws then are those of the numbers)."""
+        if d.mode:
+            raise ValueError(f"--vary {d.text}: a named choice cannot be added or multiplied")
+        try:
+            args = tuple(
+                float(var.choice_value(int(a) if isinstance(a, float) and a.is_integer() else a))
+                for a in d.args
+            )
+        except ValueError as exc:
+            raise ValueError(f"--vary {d.text}: {exc}") from None
+        self.choices[d.key] = [name for name, _ in var.choices]
+        return replace(d, args=args)
 
     def _signal(self, key: str) -> list[str]:
+        """The recorded columns of a ``--keep`` name (a whole variable: all its elements);
+        a ValueError naming what there is if the run does not record it (only outputs
+        are recorded)."""
+        instance, _, name = key.partition(".")
+        if instance not in self.fmus:
+            self._variable(key, "--keep")  # raises, naming the components there are
+        component = next(c for c in self.system.components if c.name == instance)
+        described = Description(instance, component.source)
+        base = name.partition("[")[0]
+        columns = [o for o in described.outputs if o.partition("[")[0] == base]
+        if not columns:
+            causality = next(
+                (
+                    v.causality
+                    for n, v in described.variables.items()
+                    if n.partition("[")[0] == base
+                ),
+                None,
+            )
+            listing = ", ".join(dict.fromkeys(o.partition("[")[0] for o in described.outputs))
+            raise ValueError(
+                f"--keep {key}: {self.fmus[instance]} has "
+                + (f"{base!r} as a {causality}" if causality else f"no variable {base!r}")
+                + f"; a run records the outputs, {instance}'s are: {listing}"
+            )
+        if name != base:
+            if name not in columns:
+                raise ValueError(
+                    f"--keep {key}: the elements of {instance}.{base} are "
+                    f"{columns[0]} .. {columns[-1]}"
+                )
+            columns = [name]
         var = self._variable(key, "--keep")
-        if var is None:
-            return [key]
-        instance = key.partition(".")[0]
-        self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
-        return (
-            [f"{key.partition('.')[0]}.{n}" for n in var.scalar_names()]
-            if "[" not in key
-            else [key]
-        )
+        if var is not None:
+            self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
+        return [f"{instance}.{n}" for n in columns]
 
 
 def _scalar_names(key: str, shape) -> list[str]:

@@ -39,7 +39,7 @@ def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
 def columns(plan, metrics: dict) -> list[tuple[str, str]]:
     """(name, kind) of the table's columns; kind: i (int), f (float), b (bool), s (str)."""
     cols = [("index", "i"), ("seed", "i"), ("grid", "i")]
-    cols += [(name, "f") for name in plan.columns]
+    cols += [(name, plan.kinds[name]) for name in plan.columns]
     cols += [("status", "s"), ("message", "s")]
     cols += [(name, "f") for name in metrics]
     cols += [(f"met_{name}", "b") for name, m in metrics.items() if "requirement" in m]
@@ -140,7 +140,10 @@ def grid_pass_rates(plan, array: np.ndarray, metrics: dict) -> list[dict]:
         return []
     return [
         {
-            "values": dict(zip(plan.grid_keys, point)),
+            "values": {
+                k: plan.choices[k][int(v)] if k in plan.choices else v
+                for k, v in zip(plan.grid_keys, point)
+            },
             "pass_rates": pass_rates(array, metrics, array["grid"] == g),
         }
         for g, point in enumerate(plan.grid)

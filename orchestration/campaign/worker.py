@@ -61,6 +61,17 @@ def run_one(
     return record
 
 
+def run_batch(
+    runs: list[tuple[int, dict]], target: str, step, stop, algorithm, signals, points
+) -> list[dict]:
+    """Several runs in one Dask task (one round trip through the scheduler for all), each
+    with its own record: ``runs`` is [(index, parameters), ...]."""
+    return [
+        run_one(index, target, parameters, step, stop, algorithm, signals, points)
+        for index, parameters in runs
+    ]
+
+
 def _signals(results, names, points) -> np.ndarray | None:
     """(len(names), points) float64; NaN where the run did not get to."""
     if not names:
