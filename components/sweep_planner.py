@@ -22,9 +22,11 @@ exact functions of t; at a switch between a ramp and the constant rate the accel
 is the one of the piece that begins there (the right limit: the value a sample at that
 instant holds over the step after it).  A time within ``SNAP`` = 1 ns of a switch counts as
 on it, so that a time grid n·H landing on a switch up to rounding (t mod P is inexact)
-samples the piece ahead, not a 0 acceleration for a whole step.  During a reversal the angle moves by rτ/4 beyond the constant-rate
-stretch, so the constant-rate (imaging) part of a stroke is 2A − rτ/2 and τ ≤ 4A/r; at
-τ = 4A/r the whole motion is uniformly accelerated (rate a triangle wave of period 8A/r).
+samples the piece ahead, not a 0 acceleration for a whole step.
+
+During a reversal the angle moves by rτ/4 beyond the constant-rate stretch, so the
+constant-rate (imaging) part of a stroke is 2A − rτ/2 and τ ≤ 4A/r; at τ = 4A/r the whole
+motion is uniformly accelerated (rate a triangle wave of period 8A/r).
 
 Paper's values (body text and stated periods; the English abstract swaps the two rates):
 roll ±15° at 6 °/s (period 10 s), pitch ±45° at 0.6 °/s (period 300 s).
