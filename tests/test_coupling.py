@@ -112,8 +112,8 @@ CONTROL = 0.05  # the scenarios' step: the controller's period
 PLANT = (0.05, 0.025)
 #: payload_sweep: fourteen roll strokes (wheel saturated at every reversal) and the first pitch
 #: reversal (150-151 s), where the largest errors arise: the SweepPlanner must give the ramp's
-#: acceleration from its first sample at 150 s (it gave 0 there until the fix, and this test's
-#: Jacobi order was then < 1.9); video_sar: the first 60 s of the stare
+#: acceleration from its first sample at 150 s (before its fix it gave 0 there at H = 0.025 s,
+#: and Jacobi's error at 0.025 s was 0.027°, its order -9.6); video_sar: the first 60 s
 STOP = {"payload_sweep": 160.0, "video_sar": 60.0}
 REQUIREMENT = {"payload_sweep": 0.032 * DEG, "video_sar": 0.05 * DEG}
 BUDGET = 0.01  # of the requirement, at the scenario's step
@@ -314,9 +314,9 @@ def test_jacobi_coupling_error_is_second_order_and_within_budget(scenario, fmus,
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_gauss_seidel_coupling_error_is_first_order(scenario, fmus, coupled):
     """The plain scheme (the scenarios run Jacobi by default): the devices' momentum reaches
-    the hub a step early.
-    First order, not less; at the scenario's step below the requirement itself (a run whose
-    method error exceeds what it verifies verifies nothing), and far above Jacobi."""
+    the hub a step early.  First order, not less; at the scenario's step below the requirement
+    itself (a run whose method error exceeds what it verifies verifies nothing), and far above
+    Jacobi."""
     found = coupled(scenario)[1]
     (coarse, _), (fine, _) = found["gauss-seidel", 0.05], found["gauss-seidel", 0.025]
     assert 0.9 <= math.log2(coarse / fine) <= 1.1
