@@ -3,6 +3,7 @@
     python tests/benchmark_coupling.py [--scenario scan_pitch|payload_sweep|video_sar|all]
                                        [--coupling gauss-seidel|jacobi|all] [--control 0.05]
                                        [--plant 0.05 0.025 0.01] [--quick] [--repeat N]
+                                       [--stop T]
 
 For each scenario, against the monolithic run of the SAME sampled-data system
 (tests/reference/, harness tests/coupling_cases.py: digital components sampled at the
@@ -53,7 +54,7 @@ def run(path: Path, step: float, scheme: str, repeat: int, stop: float):
     walls = []
     for _ in range(repeat):
         start = time.perf_counter()
-        results = simulate(path, step=step, algorithm=scheme)
+        results = simulate(path, step=step, stop=stop, algorithm=scheme)
         walls.append((time.perf_counter() - start) / stop)
     return results, min(walls)
 
@@ -169,7 +170,7 @@ def reference_checks(scenario: str, truths: dict, recordings: dict, stop: float)
 
 
 def scenario_report(scenario, fmus, args, schemes, tmp):
-    stop = get(scenario).stop
+    stop = args.stop or get(scenario).stop
     path = system_file(scenario, args.control, fmus, tmp)
     rows, truths, recordings = measure(
         scenario, path, args.control, args.plant, schemes, args.repeat, stop
@@ -200,6 +201,9 @@ def main() -> None:
         help="single-rate steps (scan_pitch)",
     )
     parser.add_argument("--quick", action="store_true", help="only the multi-rate tables")
+    parser.add_argument(
+        "--stop", type=float, help="payload_sweep, video_sar: run length [s] (default: theirs)"
+    )
     parser.add_argument("--repeat", type=int, default=1, help="best of N wall times")
     args = parser.parse_args()
     schemes = SCHEMES if args.coupling == "all" else (args.coupling,)
