@@ -9,8 +9,7 @@ and the coupling error of a co-simulation against it at its plant step H:
 - ``payload_sweep``: max attitude difference (the rotation angle between the two q_BI),
   controller at P; the Flywheel computes its motor torques at its own communication
   points, so the reference's wheel drive runs at H (``drive_period``); the controller's
-  payload feedforward at P is taken from the co-simulation it is compared with (the
-  prescribed motion is open loop; see tests/reference/payload_sweep.py); reference at 2.5 ms.
+  payload feedforward at P is the reference's own closed-form sweep; reference at 2.5 ms.
 - ``video_sar``: max attitude difference, controller and CMG steering at P; the reference
   takes the guidance at P from the co-simulation it is compared with (open loop, see
   tests/reference/video_sar.py); reference at 2.5 ms.
@@ -64,18 +63,12 @@ def system_file(scenario: str, control: float, fmus: dict, where: Path) -> Path:
 def reference(scenario: str, control: float, plant: float, stop: float, recorded=None) -> dict:
     """The monolithic sampled-data reference at its FINE step for a co-simulation with its
     digital components at ``control`` and its plant at ``plant`` (``recorded``: a run of the
-    scenario, for video_sar's guidance and payload_sweep's feedforward, both open loop)."""
+    scenario, for video_sar's guidance, open loop)."""
     fine = FINE[scenario]
     if scenario == "scan_pitch":
         return scan_pitch.simulate(fine, stop, control_period=control)
     if scenario == "payload_sweep":
-        return payload_sweep.simulate(
-            fine,
-            stop,
-            control_period=control,
-            drive_period=plant,
-            feedforward=payload_sweep.feedforward_from(recorded, control),
-        )
+        return payload_sweep.simulate(fine, stop, control_period=control, drive_period=plant)
     guidance = video_sar.guidance_from(recorded, control)
     return video_sar.simulate(fine, stop, guidance, control_period=control)
 

@@ -63,17 +63,11 @@ the orbit frame R = O; kp = J ω_n² = 6, kd = 2 ζ ω_n J = 42.43, ω_n = 0.2 r
 ``q_BR = q_OI* ⊗ q_BI`` (sign with q0 ≥ 0), ``e = 2 atan2(|q_v|, q0) q_v/|q_v|``,
 ``r = w_BI_B − C(q_BR) w_OI_O``, ``τ_cmd = −kp e − kd r + ḣ_p + w_BI_B × h_p``.
 
-The feedforward (h_p, ḣ_p at the samples) is the closed form above by default.  At a sample
-exactly on a kink of the sweep ḣ_p jumps, and the value held over the next period is its
-right limit (the later segment, as the SweepPlanner's own docstring defines the segments).
-The SweepPlanner FMU takes the left limit at a sample on the start of an arriving ramp
-whenever its floating-point time (n H + H) lands exactly there: the pitch sweep at
-t = 150 s, 300.5 s and 451 s, depending on H (the roll's period rounds to 10.999999999999998 s
-and escapes).  Its controller then sees no reversal for one period, and the hub extrapolates
-the payloads' momentum with the wrong derivative for one step.  To compare a co-simulation's
-coupling alone, ``feedforward`` takes the controller's h_p and ḣ_p at the samples from the run
-being compared (:func:`feedforward_from`; the prescribed motion is open loop, so both schemes
-give the same values at the same plant step); the hub's h_p stays the closed form.
+The feedforward (h_p, ḣ_p at the samples) is the closed form above.  At a sample exactly on
+a kink of the sweep ḣ_p jumps, and the value held over the next period is its right limit (the
+later segment, as the SweepPlanner's docstring defines the segments); a sample within ``EDGE``
+of a kink counts as on it, since a floating-point grid n H lands on t = 150 s, 300.5 s, 451 s
+(the pitch reversals) only up to rounding.
 
 Initial state: at rest relative to O (attitude0 = rate0 = 0): q_BI(0) = q_OI(0),
 w_BI_B(0) = (0, −n, 0); h_w = 0; h_p(0) = 0; ``H_I = C_BIᵀ (J w + h_w + h_p)``.
@@ -261,17 +255,6 @@ def control(q_bi, w, t: float, h_p, hdot_p) -> tuple:
     return tau, e, r
 
 
-def feedforward_from(results, control_period: float) -> dict[str, np.ndarray]:
-    """The payload feedforward (PayloadGimbals.h, .hdot) at t = j·control_period of a run."""
-    t = results.time
-    every = int(round(control_period / (t[1] - t[0])))
-    return {
-        "time": t[::every],
-        "h": results.vector("PayloadGimbals.h")[::every],
-        "hdot": results.vector("PayloadGimbals.hdot")[::every],
-    }
-
-
 # --- the monolithic simulation --------------------------------------------------------------------
 def _every(period, step: float, name: str) -> int:
     m = 1 if period is None else int(round(period / step))
@@ -285,15 +268,14 @@ def simulate(
     stop: float = 600.0,
     control_period: float | None = None,
     drive_period: float | None = None,
-    feedforward: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Run the monolithic reference with step ``step`` up to ``stop``; samples at t = k·step.
 
     ``control_period`` and ``drive_period`` (integer multiples of ``step``; default ``step``):
     the controller and the wheel drive are sampled only at their multiples and their commands
     (τ_cmd; the motor torques) held in between, while the plant (hub RK4, exact wheels, the
-    payloads' closed form) advances at ``step``.  ``feedforward``: :func:`feedforward_from`
-    of a run, the controller's h_p and ḣ_p at its samples (default: the closed form).
+    payloads' closed form) advances at ``step``; the controller's feedforward is the closed
+    form at its samples.
 
     Returns arrays over the N+1 samples: ``time``, ``q_BI``, ``q_BO``, ``w_BI_B``, ``w_BO_B``,
     ``h_wheel``, ``speed`` (wheel speeds), ``h_payload``, ``hdot_payload``, ``H_I`` (recomputed
@@ -312,16 +294,7 @@ def simulate(
     hp_all, hdp_all = payload_pair(0.5 * dt * np.arange(2 * n_steps + 1))
     hp = hp_all.tolist()
     hdp = hdp_all.tolist()
-    samples = n_steps // every_c + 1
-    if feedforward is None:
-        ff = list(zip(hp[:: 2 * every_c], hdp[:: 2 * every_c]))
-    else:
-        times = np.asarray(feedforward["time"])[:samples]
-        if len(times) < samples or not np.allclose(times, step * every_c * np.arange(samples)):
-            raise ValueError(
-                f"feedforward must be sampled at t = j·{step * every_c} s up to {stop} s"
-            )
-        ff = list(zip(feedforward["h"].tolist(), feedforward["hdot"].tolist()))
+    ff = list(zip(hp[:: 2 * every_c], hdp[:: 2 * every_c]))
 
     q = q_oi(0.0)
     omega = [0.0, 0.0, 0.0]
