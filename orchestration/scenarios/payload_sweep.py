@@ -185,11 +185,17 @@ def metrics(results) -> dict:
             "fraction of the run with a wheel limit active",
         ),
         "momentum_drift": (
-            relative_drift(inertial_momentum(results, INERTIA, "Flywheel.h", "PayloadGimbals.h")),
+            relative_drift(
+                inertial_momentum(results, INERTIA, "Flywheel.h", "PayloadGimbals.h"),
+                scale=max(
+                    np.linalg.norm(results.vector(part), axis=1).max()
+                    for part in ("Flywheel.h", "PayloadGimbals.h")
+                ),
+            ),
             "1",
             "1",
-            "max relative change of C_BIᵀ(J w + h_wheel + h_payload), "
-            "recomputed from the recorded outputs",
+            "max change of C_BIᵀ(J w + h_wheel + h_payload), recomputed from the recorded "
+            "outputs, relative to |H(0)| or the largest device momentum if larger",
         ),
     }
     summary = summarize(m, PAPER, REQUIREMENTS)
