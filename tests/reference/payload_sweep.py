@@ -92,7 +92,7 @@ import math
 
 import numpy as np
 
-from .scan_pitch import MU, Q_M0, dcm, qconj, qmul, rot
+from .scan_pitch import MU, Q_M0, dcm, hub_qdot, qconj, qmul, rot
 
 # --- constants (the scenario's parameters and the FMUs' defaults it keeps) ------------------------
 DEG = math.pi / 180.0
@@ -301,21 +301,7 @@ def simulate(
     w0 = W_OI_O
     Hx, Hy, Hz = rot(qconj(q), tuple(J_HUB * w0[i] + hp[0][i] for i in range(3)))
 
-    def qdot(a0, a1, a2, a3, bx, by, bz):
-        # ½ q ⊗ (0, w),  w = (C(q/|q|) H − h)/J
-        inv = 1.0 / (a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
-        kk = a0 * a0 - a1 * a1 - a2 * a2 - a3 * a3
-        dd = 2.0 * (a1 * Hx + a2 * Hy + a3 * Hz)
-        c0 = 2.0 * a0
-        wx = ((kk * Hx + dd * a1 - c0 * (a2 * Hz - a3 * Hy)) * inv - bx) * jinv
-        wy = ((kk * Hy + dd * a2 - c0 * (a3 * Hx - a1 * Hz)) * inv - by) * jinv
-        wz = ((kk * Hz + dd * a3 - c0 * (a1 * Hy - a2 * Hx)) * inv - bz) * jinv
-        return (
-            -0.5 * (a1 * wx + a2 * wy + a3 * wz),
-            0.5 * (a0 * wx + a2 * wz - a3 * wy),
-            0.5 * (a0 * wy + a3 * wx - a1 * wz),
-            0.5 * (a0 * wz + a1 * wy - a2 * wx),
-        )
+    qdot = hub_qdot((Hx, Hy, Hz), jinv)
 
     rec = []
     for k in range(n_steps + 1):

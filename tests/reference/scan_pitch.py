@@ -380,6 +380,30 @@ def _qdot(q, H, h):
     )
 
 
+def hub_qdot(H_I, jinv: float):
+    """q̇_BI(q, h) = ½ q ⊗ (0, w), w = (C(q/|q|) H_I − h)/J for a hub of inertia J·1 with the
+    (constant) total momentum H_I: the hub kinematics every reference integrates."""
+    Hx, Hy, Hz = H_I
+
+    def qdot(a0, a1, a2, a3, bx, by, bz):
+        # ½ q ⊗ (0, w),  w = (C(q/|q|) H − h)/J
+        inv = 1.0 / (a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
+        kk = a0 * a0 - a1 * a1 - a2 * a2 - a3 * a3
+        dd = 2.0 * (a1 * Hx + a2 * Hy + a3 * Hz)
+        c0 = 2.0 * a0
+        wx = ((kk * Hx + dd * a1 - c0 * (a2 * Hz - a3 * Hy)) * inv - bx) * jinv
+        wy = ((kk * Hy + dd * a2 - c0 * (a3 * Hx - a1 * Hz)) * inv - by) * jinv
+        wz = ((kk * Hz + dd * a3 - c0 * (a1 * Hy - a2 * Hx)) * inv - bz) * jinv
+        return (
+            -0.5 * (a1 * wx + a2 * wy + a3 * wz),
+            0.5 * (a0 * wx + a2 * wz - a3 * wy),
+            0.5 * (a0 * wy + a3 * wx - a1 * wz),
+            0.5 * (a0 * wz + a1 * wy - a2 * wx),
+        )
+
+    return qdot
+
+
 def simulate(
     step: float, stop: float = 150.0, control_period: float | None = None
 ) -> dict[str, np.ndarray]:
@@ -433,21 +457,7 @@ def simulate(
         (q0, -q1, -q2, -q3), (J_HUB * w0[0] + hx, J_HUB * w0[1] + hy, J_HUB * w0[2] + hz)
     )  # C_BIᵀ (J w + h)
 
-    def qdot(a0, a1, a2, a3, bx, by, bz):
-        # ½ q ⊗ (0, w),  w = (C(q/|q|) H − h)/J
-        inv = 1.0 / (a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
-        kk = a0 * a0 - a1 * a1 - a2 * a2 - a3 * a3
-        dd = 2.0 * (a1 * Hx + a2 * Hy + a3 * Hz)
-        c0 = 2.0 * a0
-        wx = ((kk * Hx + dd * a1 - c0 * (a2 * Hz - a3 * Hy)) * inv - bx) * jinv
-        wy = ((kk * Hy + dd * a2 - c0 * (a3 * Hx - a1 * Hz)) * inv - by) * jinv
-        wz = ((kk * Hz + dd * a3 - c0 * (a1 * Hy - a2 * Hx)) * inv - bz) * jinv
-        return (
-            -0.5 * (a1 * wx + a2 * wy + a3 * wz),
-            0.5 * (a0 * wx + a2 * wz - a3 * wy),
-            0.5 * (a0 * wy + a3 * wx - a1 * wz),
-            0.5 * (a0 * wz + a1 * wy - a2 * wx),
-        )
+    qdot = hub_qdot((Hx, Hy, Hz), jinv)
 
     rec_state = []  # (q_BI, q_BO, w_BI, w_BO, pitch, h, tau, phase, Q)
     rec_d = []
