@@ -107,6 +107,12 @@ def _system_commands(commands, quiet) -> None:
     run.add_argument("--stop", type=float, help="stop time [s]")
     run.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
     run.add_argument(
+        "--no-derivatives",
+        action="store_true",
+        help="do not couple through FMI input/output derivatives where no wire passes "
+        "them (first-order coupling of those inputs)",
+    )
+    run.add_argument(
         "--set",
         action="append",
         default=[],
@@ -313,6 +319,7 @@ def _run(args) -> int:
             figures=not args.no_figures,
             echo=_echo(out),
             progress=progress,
+            derivatives=not args.no_derivatives,
         )
     if args.mat:
         results.to_mat(out / "results.mat")

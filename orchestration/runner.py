@@ -67,10 +67,11 @@ def run(
     echo=None,
     build: bool = True,
     progress=None,
+    derivatives: bool = True,
 ) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
     (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
-    elements (:mod:`.parameters`); ``progress``: see :func:`simulate`.
+    elements (:mod:`.parameters`); ``progress`` and ``derivatives``: see :func:`simulate`.
 
     With ``out_dir``: results.csv (row by row), results.npz, log.txt and summary.json, also
     when the run fails (``status: "error"``) or is interrupted by SIGINT/SIGTERM
@@ -112,6 +113,7 @@ def run(
                 out_dir=out_dir,
                 echo=echo,
                 progress=progress,
+                derivatives=derivatives,
             )
         except SimulationError as failure:
             if out_dir is not None and failure.results is not None:

@@ -294,3 +294,22 @@ def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
     assert Results.load(tmp_path / "run")["SatelliteDynamics.w_BO_B[1]"][0] == pytest.approx(
         0.001, rel=1e-12
     )
+
+
+@pytest.mark.slow
+def test_no_derivatives_reaches_the_master(fmus, tmp_path, monkeypatch):
+    """`agilesat run --no-derivatives` passes derivatives=False to simulate (what it does
+    there is in tests/test_derivatives.py); without the flag, True."""
+    from agilesat.orchestration import cli, runner
+
+    seen = []
+
+    def simulate(system, **kwargs):
+        seen.append(kwargs["derivatives"])
+        raise ValueError("stopped before anything runs")
+
+    monkeypatch.setattr(runner, "simulate", simulate)
+    ssd = get("scan_pitch").ssd
+    for flag in (["--no-derivatives"], []):
+        assert cli.main(["run", str(ssd), "--out", str(tmp_path), "--quiet", *flag]) != 0
+    assert seen == [False, True]
