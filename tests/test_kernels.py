@@ -1,0 +1,139 @@
+"""Compiled kernels (components/jit.py): the same results as the readable Python, a
+switch back to it, and a compile cache that survives fresh FMU extractions."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from helpers import run_python
+
+from agilesat.components import jit, satellite_dynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+
+needs_numba = pytest.mark.skipif(not jit.ENABLED, reason="numba not installed or AGILESAT_JIT=0")
+
+
+def _integrate_inputs(seed: int, n: int, gravity_gradient: bool):
+    rng = np.random.default_rng(seed)
+    J = np.diag([900.0, 950.0, 1000.0]) + rng.normal(scale=5.0, size=(3, 3))
+    J = (J + J.T) / 2
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    vector = lambda scale: tuple((scale * rng.normal(size=3)).tolist())  # noqa: E731
+    return (
+        (*q.tolist(), *vector(50.0)),
+        n,
+        0.1 / n,
+        vector(20.0),
+        vector(1.0),
+        vector(0.1),
+        tuple((7e6 * rng.normal(size=3)).tolist()),
+        tuple(map(tuple, J.tolist())),
+        tuple(map(tuple, np.linalg.inv(J).tolist())),
+        3.986004418e14,
+        gravity_gradient,
+    )
+
+
+@needs_numba
+@pytest.mark.parametrize("gravity_gradient", [False, True])
+@pytest.mark.parametrize("seed, n", [(1, 1), (2, 3), (3, 17)])
+def test_integration_kernel_is_bit_identical_to_the_python(seed, n, gravity_gradient):
+    inputs = _integrate_inputs(seed, n, gravity_gradient)
+    compiled = satellite_dynamics._integrate(*inputs)
+    readable = satellite_dynamics._integrate.py_func(*inputs)
+    assert type(compiled) is tuple and len(compiled) == 7
+    assert compiled == readable
+    assert compiled != inputs[0]  # it integrated something
+
+
+def _spin_up(model: SatelliteDynamics, steps: int) -> np.ndarray:
+    """A tumbling body (several sub-steps per step) with moving device momentum."""
+    model.set("inertia", [[900.0, 12.0, -4.0], [12.0, 950.0, 7.0], [-4.0, 7.0, 1010.0]])
+    model.set("rate0", [0.05, -0.4, 0.2])
+    model.set("h_cmg", [3.0, -2.0, 1.0])
+    model.start(0.0)
+    rows = []
+    for k in range(steps):
+        model.set("hdot_cmg", [0.3 * math.sin(0.1 * k), 0.2, -0.1 * math.cos(0.05 * k)])
+        model.set("tau_ext", [1e-3 * k, 0.0, -2e-3])
+        model.advance(k * 0.05, 0.05)
+        rows.append(model.values.copy())
+    return np.array(rows)
+
+
+@needs_numba
+def test_satellite_dynamics_compiled_and_readable_runs_are_identical(monkeypatch):
+    compiled = _spin_up(SatelliteDynamics(), 300)
+    for name, dispatcher in jit.kernels(satellite_dynamics).items():
+        monkeypatch.setattr(satellite_dynamics, name, dispatcher.py_func)
+    readable = _spin_up(SatelliteDynamics(), 300)
+    assert np.array_equal(compiled, readable)
+    assert np.ptp(compiled[:, SatelliteDynamics().layout.slice("q_BI")]) > 1.0  # it tumbled
+
+
+_RUN_AS_TEXT = """
+import sys
+{prelude}
+sys.path.insert(0, "tests")
+from agilesat.components import jit, satellite_dynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+from test_kernels import _spin_up
+print(jit.ENABLED, type(satellite_dynamics._integrate).__name__)
+print(_spin_up(SatelliteDynamics(), 300).tobytes().hex())
+"""
+_NO_NUMBA = """
+import importlib.abc
+class _NoNumba(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.split(".")[0] in ("numba", "llvmlite"):
+            raise ImportError("no numba here")
+sys.meta_path.insert(0, _NoNumba())
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "prelude",
+    ["import os; os.environ['AGILESAT_JIT'] = '0'", _NO_NUMBA],
+    ids=["AGILESAT_JIT=0", "numba not installed"],
+)
+def test_without_the_compiler_the_readable_path_gives_the_same_results(prelude):
+    result = run_python(_RUN_AS_TEXT.format(prelude=prelude))
+    assert result.returncode == 0, result.stderr
+    switch, values = result.stdout.split()[:2], result.stdout.split()[2]
+    assert switch == ["False", "function"]
+    assert values == _spin_up(SatelliteDynamics(), 300).tobytes().hex()
+
+
+_LOAD_EXTRACTED = """
+import json, os, sys, tempfile
+os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]
+import fmpy
+folder = tempfile.mkdtemp(prefix="fmu_")
+fmpy.extract(sys.argv[1], unzipdir=folder)
+fmpy.simulate_fmu(folder, stop_time=1.0, output_interval=0.1)
+module = next(m for n, m in sys.modules.items() if n.endswith(".components.satellite_dynamics"))
+stats = module._integrate.stats
+print(json.dumps({"folder": folder, "hits": len(stats.cache_hits),
+                  "misses": len(stats.cache_misses), "path": stats.cache_path}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@needs_numba
+def test_an_fmu_extracted_twice_compiles_its_kernels_once(fmus, tmp_path):
+    """Two hosts unpack the FMU to two new folders: the first compiles, the second loads."""
+    cache = tmp_path / "cache"
+    loads = []
+    for _ in range(2):
+        result = run_python(_LOAD_EXTRACTED, fmus["SatelliteDynamics"], cache)
+        assert result.returncode == 0, result.stderr
+        loads.append(json.loads(result.stdout.splitlines()[-1]))
+    first, second = loads
+    assert first["folder"] != second["folder"]
+    assert (first["misses"], first["hits"]) == (1, 0)  # compiled and saved
+    assert (second["misses"], second["hits"]) == (0, 1)  # loaded, not compiled
+    assert first["path"] == second["path"] and first["path"].startswith(str(cache))
