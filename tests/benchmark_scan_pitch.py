@@ -14,6 +14,7 @@ steps, on one core, best of N runs each:
   by their readable Python (what AGILESAT_JIT=0 runs), and the ratio of the two;
 - the monolithic NumPy reference of scan_pitch at the same step
   (tests/reference/scan_pitch.py), and the ratio of the two wall times.
+Basilisk (tests/benchmark_basilisk.py) as an anchor where bsk is installed.
 Targets (issue 10): >= 1,000x real time at 0.05 s, and <= 1.5x the monolithic reference.
 """
 
@@ -123,6 +124,23 @@ def measure(ssd, step, stop, repeat):
     return cosim, previous, per_step
 
 
+def basilisk(cosim: float, monolithic: float, repeat: int) -> None:
+    """The Basilisk anchor (tests/benchmark_basilisk.py) where bsk is installed."""
+    try:
+        from benchmark_basilisk import KINDS, hub_time
+    except ImportError as exc:
+        print(f"\nBasilisk: not installed ({exc}); pip install bsk for the anchor")
+        return
+    print("\nBasilisk at 0.05 s, 150 s, RK4 (dynamics only):")
+    for kind in KINDS:
+        elapsed = best(lambda: hub_time(kind, 0.05, STOP), repeat)
+        print(
+            f"  {kind:>5}: {elapsed:.3f}s, {STOP / elapsed:.0f}x real time, "
+            f"{elapsed / monolithic:.2f}x the reference, co-simulation / Basilisk "
+            f"{cosim / elapsed:.2f}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
@@ -160,6 +178,7 @@ def main() -> None:
         )
     cosim, monolithic = rows[0.05]
     rtf = STOP / cosim
+    basilisk(cosim, monolithic, args.repeat)
     print(
         "\nus/step: wall time per macro step = model + FMI + master; previous: the same with "
         "the kernels' readable Python (AGILESAT_JIT=0), its model compute, and previous / now"

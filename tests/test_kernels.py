@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 import pytest
-from helpers import run_python
 
 from agilesat.components import cmg_cluster, jit, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
 from agilesat.components.model import Model
 from agilesat.components.satellite_dynamics import SatelliteDynamics
+from helpers import run_python
 
 needs_numba = pytest.mark.skipif(not jit.ENABLED, reason="numba not installed or AGILESAT_JIT=0")
 
