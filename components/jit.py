@@ -41,7 +41,7 @@ try:
     from numba.extending import overload as _overload
     from numba.extending import register_jitable as _register_jitable
 except ImportError:
-    numba = None
+    numba = None  # type: ignore[assignment]
     ENABLED = False
 
 
@@ -75,7 +75,7 @@ def kernel(function):
     dispatcher = numba.njit(function)
     try:
         dispatcher._cache = _ContentCache(function)  # what enable_caching() does
-    except (OSError, RuntimeError) as exc:
+    except (OSError, RuntimeError, NameError) as exc:  # NameError: numba's API moved
         warnings.warn(
             f"agilesat: no compile cache for {function.__qualname__} ({exc}): "
             "compiling it in every process",
@@ -95,7 +95,7 @@ def kernels(module) -> dict:
     }
 
 
-if ENABLED:
+if ENABLED and hasattr(_caching, "_CacheLocator") and hasattr(_caching, "FunctionCache"):
 
     class _ContentLocator(_caching._CacheLocator):
         """numba cache locator keyed on content, not on path and mtime."""
@@ -125,6 +125,9 @@ if ENABLED:
 
     class _ContentCache(_caching.FunctionCache):
         _impl_class = _ContentCacheImpl
+
+
+if ENABLED:
 
     def _identity_for_sequences(x):
         """``rotations._floats`` (ndarray -> list) is the identity on tuples in a kernel."""

@@ -168,3 +168,25 @@ def test_an_fmu_extracted_twice_compiles_its_kernels_once(fmus, tmp_path):
     assert (first["misses"], first["hits"]) == (1, 0)  # compiled and saved
     assert (second["misses"], second["hits"]) == (0, 1)  # loaded, not compiled
     assert first["path"] == second["path"] and first["path"].startswith(str(cache))
+
+
+_UNWRITABLE = """
+import os, sys, warnings
+os.environ["AGILESAT_CACHE_DIR"] = os.path.join(sys.argv[1], "cache")
+from agilesat.components import satellite_dynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+model = SatelliteDynamics().start(0.0).advance(0.0, 0.1)
+print(len(satellite_dynamics._integrate.stats.cache_misses), model.get("q_BI").tolist())
+"""
+
+
+@pytest.mark.slow
+@needs_numba
+def test_an_unwritable_cache_costs_a_compile_and_says_so(tmp_path):
+    (tmp_path / "a_file").write_text("not a directory")
+    result = run_python(_UNWRITABLE, tmp_path / "a_file")
+    assert result.returncode == 0, result.stderr
+    assert "no compile cache for _integrate" in result.stderr
+    misses, q = result.stdout.split(" ", 1)
+    assert misses == "1"  # compiled in this process
+    assert q.strip() == str(SatelliteDynamics().start(0.0).advance(0.0, 0.1).get("q_BI").tolist())
