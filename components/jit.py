@@ -1,13 +1,17 @@
-"""Compiled kernels: the models' own hot functions, compiled by numba where it is installed.
+"""Compiled kernels: the models' own hot functions, compiled by numba once a run is long.
 
 A hot loop of a model is written once, as a plain Python function on floats and tuples, in
 the model's module, with its equations; ``@kernel`` marks it and ``@jitable`` the plain
-functions it calls.  With numba importable (and ``AGILESAT_JIT`` not ``0``) a kernel is
-that same function compiled by numba in nopython mode without fastmath: IEEE double
-arithmetic in the order written, the same libm, so its results are those of the Python
-(bit for bit, tested in tests/test_kernels.py); otherwise it is the function itself.
-``kernel.py_func`` is always the readable Python.  ``@jitable`` leaves the function as it
-is for Python callers (``numba.extending.register_jitable``).
+functions it calls.  A kernel runs that Python for its first ``AGILESAT_JIT_AFTER`` calls
+(default :data:`DEFAULT_AFTER`), then the same function compiled by numba in nopython
+mode without fastmath: IEEE double arithmetic in the order written, the same libm, so the
+results are those of the Python bit for bit (tests/test_kernels.py) and switching midway
+changes nothing.  The threshold is measured, not guessed: importing numba and loading the
+compiled kernels costs about a second per process, which the kernels win back only after
+tens of thousands of calls (README, "Benchmark"); short runs never import numba, long runs
+and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the Python;
+``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
+``kernel.compiled`` the compiled function (the Python without numba).
 
 Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's path and
 modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,
@@ -31,18 +35,12 @@ import os
 import warnings
 from pathlib import Path
 
+#: calls of a kernel before it is compiled (see the module docstring)
+DEFAULT_AFTER = 50_000
 ENABLED = os.environ.get("AGILESAT_JIT", "1") != "0"
-
-try:
-    if not ENABLED:
-        raise ImportError("AGILESAT_JIT=0")
-    import numba
-    from numba.core import caching as _caching
-    from numba.extending import overload as _overload
-    from numba.extending import register_jitable as _register_jitable
-except ImportError:
-    numba = None  # type: ignore[assignment]
-    ENABLED = False
+AFTER = int(os.environ.get("AGILESAT_JIT_AFTER", DEFAULT_AFTER))
+_JITABLE: list = []  # functions kernels may call
+_FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
 
 
 def cache_root() -> Path:
@@ -65,41 +63,94 @@ def content_key(module: str, source: str) -> str:
 
 def jitable(function):
     """A plain function that kernels may call (unchanged for Python callers)."""
-    return _register_jitable(function) if ENABLED else function
+    _JITABLE.append(function)
+    return function
 
 
-def kernel(function):
-    """``function`` compiled (nopython, no fastmath, content-keyed cache) or itself."""
+def register_floats(function) -> None:
+    """Let kernels call ``function`` (a to-floats converter) on tuples, as the identity."""
+    _FLOATS.append(function)
+
+
+class Kernel:
+    """A hot function: its Python for the first ``after`` calls, then compiled."""
+
+    def __init__(self, function, after: int):
+        functools.update_wrapper(self, function)
+        self.py_func = function
+        self._left = after
+        self._run = self._count if ENABLED else function
+
+    def __call__(self, *args):
+        return self._run(*args)
+
+    def _count(self, *args):
+        self._left -= 1
+        if self._left < 0:
+            self._run = self.compiled
+            return self._run(*args)
+        return self.py_func(*args)
+
+    @functools.cached_property
+    def compiled(self):
+        """numba's compiled function (with our cache), or the Python without numba."""
+        numba = _numba()
+        if numba is None:
+            return self.py_func
+        dispatcher = numba.njit(self.py_func)
+        try:
+            dispatcher._cache = _content_cache(self.py_func)  # what enable_caching() does
+        except (OSError, RuntimeError, AttributeError) as exc:  # AttributeError: API moved
+            warnings.warn(
+                f"agilesat: no compile cache for {self.py_func.__qualname__} ({exc}): "
+                "compiling it in every process",
+                stacklevel=2,
+            )
+        return dispatcher
+
+
+def kernel(function) -> Kernel:
+    return Kernel(function, AFTER)
+
+
+def kernels(module) -> dict[str, Kernel]:
+    """{name: kernel} of a module."""
+    return {name: obj for name, obj in vars(module).items() if isinstance(obj, Kernel)}
+
+
+@functools.cache
+def _numba():
+    """numba, imported and told about our jitable functions at the first compile."""
     if not ENABLED:
-        return function
-    dispatcher = numba.njit(function)
+        return None
     try:
-        dispatcher._cache = _ContentCache(function)  # what enable_caching() does
-    except (OSError, RuntimeError, NameError) as exc:  # NameError: numba's API moved
-        warnings.warn(
-            f"agilesat: no compile cache for {function.__qualname__} ({exc}): "
-            "compiling it in every process",
-            stacklevel=2,
-        )
-    return dispatcher
+        import numba
+        from numba.extending import overload, register_jitable
+    except ImportError:
+        return None
+
+    def identity_on_tuples(x):
+        if isinstance(x, numba.types.BaseTuple):
+            return lambda x: x
+        return None
+
+    for function in _FLOATS:
+        overload(function)(identity_on_tuples)
+    for function in _JITABLE:
+        register_jitable(function)
+    return numba
 
 
-def kernels(module) -> dict:
-    """{name: compiled kernel} of a module (empty without numba)."""
-    if not ENABLED:
-        return {}
-    return {
-        name: obj
-        for name, obj in vars(module).items()
-        if isinstance(obj, numba.core.registry.CPUDispatcher)
-    }
+def _content_cache(py_func):
+    return _content_cache_class()(py_func)
 
 
-if ENABLED and hasattr(_caching, "_CacheLocator") and hasattr(_caching, "FunctionCache"):
+@functools.cache
+def _content_cache_class():
+    """numba's FunctionCache with a locator keyed on content (numba.core.caching)."""
+    from numba.core import caching
 
-    class _ContentLocator(_caching._CacheLocator):
-        """numba cache locator keyed on content, not on path and mtime."""
-
+    class ContentLocator(caching._CacheLocator):
         def __init__(self, py_func, py_file):
             self._py_file = py_file
             self._lineno = py_func.__code__.co_firstlineno
@@ -120,26 +171,10 @@ if ENABLED and hasattr(_caching, "_CacheLocator") and hasattr(_caching, "Functio
             locator.ensure_cache_path()  # OSError: not writable
             return locator
 
-    class _ContentCacheImpl(_caching.CompileResultCacheImpl):
-        _locator_classes = [_ContentLocator]
+    class ContentCacheImpl(caching.CompileResultCacheImpl):
+        _locator_classes = [ContentLocator]
 
-    class _ContentCache(_caching.FunctionCache):
-        _impl_class = _ContentCacheImpl
+    class ContentCache(caching.FunctionCache):
+        _impl_class = ContentCacheImpl
 
-
-if ENABLED:
-
-    def _identity_for_sequences(x):
-        """``rotations._floats`` (ndarray -> list) is the identity on tuples in a kernel."""
-        if isinstance(x, numba.types.BaseTuple):
-            return lambda x: x
-        return None
-
-    def register_floats(function) -> None:
-        """Let kernels call ``function`` (a to-floats converter) on tuples."""
-        _overload(function)(_identity_for_sequences)
-
-else:
-
-    def register_floats(function) -> None:
-        del function
+    return ContentCache

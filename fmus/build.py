@@ -93,7 +93,8 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
 
 
 _COMPILE_KERNELS = """
-import importlib, sys, tempfile, zipfile
+import importlib, os, sys, tempfile, zipfile
+os.environ["AGILESAT_JIT_AFTER"] = "0"
 fmu, name, package, module = sys.argv[1:]
 with tempfile.TemporaryDirectory() as folder:
     zipfile.ZipFile(fmu).extractall(folder)

@@ -14,7 +14,9 @@ from agilesat.components.model import Model
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 from helpers import run_python
 
-needs_numba = pytest.mark.skipif(not jit.ENABLED, reason="numba not installed or AGILESAT_JIT=0")
+needs_numba = pytest.mark.skipif(
+    jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
+)
 
 
 def _integrate_inputs(seed: int, n: int, gravity_gradient: bool):
@@ -44,8 +46,11 @@ def _integrate_inputs(seed: int, n: int, gravity_gradient: bool):
 @pytest.mark.parametrize("seed, n", [(1, 1), (2, 3), (3, 17)])
 def test_integration_kernel_is_bit_identical_to_the_python(seed, n, gravity_gradient):
     inputs = _integrate_inputs(seed, n, gravity_gradient)
-    compiled = satellite_dynamics._integrate(*inputs)
+    compiled = satellite_dynamics._integrate.compiled(*inputs)
     readable = satellite_dynamics._integrate.py_func(*inputs)
+    assert compiled is not readable and type(satellite_dynamics._integrate.compiled) is not type(
+        satellite_dynamics._integrate.py_func
+    )
     assert type(compiled) is tuple and len(compiled) == 7
     assert compiled == readable
     assert compiled != inputs[0]  # it integrated something
@@ -94,25 +99,29 @@ def _runs() -> str:
 @pytest.mark.parametrize("model", list(_RUNS), ids=lambda m: m.__name__)
 def test_compiled_and_readable_model_runs_are_identical(model, monkeypatch):
     module, run = _RUNS[model]
+    kernels = jit.kernels(module).values()
+    assert kernels
+    for kernel in kernels:
+        monkeypatch.setattr(kernel, "_run", kernel.compiled)
     compiled = run(model(), 300)
-    patched = jit.kernels(module)
-    assert patched
-    for name, dispatcher in patched.items():
-        monkeypatch.setattr(module, name, dispatcher.py_func)
+    for kernel in kernels:
+        monkeypatch.setattr(kernel, "_run", kernel.py_func)
     readable = run(model(), 300)
     assert np.array_equal(compiled, readable)
     assert np.all(np.ptp(compiled, axis=0)[model().layout.range["output"].start :] > 0)
 
 
 _RUN_AS_TEXT = """
-import sys
+import os, sys
+os.environ["AGILESAT_JIT_AFTER"] = "0"
 {prelude}
 sys.path.insert(0, "tests")
-from agilesat.components import jit, satellite_dynamics
-from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.components import satellite_dynamics
 from test_kernels import _runs
-print(jit.ENABLED, type(satellite_dynamics._integrate).__name__)
-print(_runs())
+runs = _runs()
+kernel = satellite_dynamics._integrate
+print(kernel.compiled is kernel.py_func, kernel._run is kernel.py_func, "numba" in sys.modules)
+print(runs)
 """
 _NO_NUMBA = """
 import importlib.abc
@@ -133,20 +142,21 @@ sys.meta_path.insert(0, _NoNumba())
 def test_without_the_compiler_the_readable_path_gives_the_same_results(prelude):
     result = run_python(_RUN_AS_TEXT.format(prelude=prelude))
     assert result.returncode == 0, result.stderr
-    switch, values = result.stdout.split()[:2], result.stdout.split()[2]
-    assert switch == ["False", "function"]
+    *switch, values = result.stdout.split()
+    assert switch == ["True", "True", "False"]  # the Python ran; numba was not imported
     assert values == _runs()
 
 
 _LOAD_EXTRACTED = """
 import json, os, sys, tempfile
 os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]
+os.environ["AGILESAT_JIT_AFTER"] = "0"
 import fmpy
 folder = tempfile.mkdtemp(prefix="fmu_")
 fmpy.extract(sys.argv[1], unzipdir=folder)
 fmpy.simulate_fmu(folder, stop_time=1.0, output_interval=0.1)
 module = next(m for n, m in sys.modules.items() if n.endswith(".components.satellite_dynamics"))
-stats = module._integrate.stats
+stats = module._integrate.compiled.stats
 print(json.dumps({"folder": folder, "hits": len(stats.cache_hits),
                   "misses": len(stats.cache_misses), "path": stats.cache_path}))
 """
@@ -171,12 +181,13 @@ def test_an_fmu_extracted_twice_compiles_its_kernels_once(fmus, tmp_path):
 
 
 _UNWRITABLE = """
-import os, sys, warnings
+import os, sys
 os.environ["AGILESAT_CACHE_DIR"] = os.path.join(sys.argv[1], "cache")
+os.environ["AGILESAT_JIT_AFTER"] = "0"
 from agilesat.components import satellite_dynamics
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 model = SatelliteDynamics().start(0.0).advance(0.0, 0.1)
-print(len(satellite_dynamics._integrate.stats.cache_misses), model.get("q_BI").tolist())
+print(len(satellite_dynamics._integrate.compiled.stats.cache_misses), model.get("q_BI").tolist())
 """
 
 
@@ -190,3 +201,32 @@ def test_an_unwritable_cache_costs_a_compile_and_says_so(tmp_path):
     misses, q = result.stdout.split(" ", 1)
     assert misses == "1"  # compiled in this process
     assert q.strip() == str(SatelliteDynamics().start(0.0).advance(0.0, 0.1).get("q_BI").tolist())
+
+
+@needs_numba
+def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function():
+    tiered = jit.Kernel(satellite_dynamics._integrate.py_func, 3)
+    inputs = [_integrate_inputs(seed, 2, True) for seed in range(6)]
+    results = []
+    for k, args in enumerate(inputs):
+        results.append(tiered(*args))
+        assert (tiered._run is tiered.compiled) == (k >= 3)
+    assert results == [tiered.py_func(*args) for args in inputs]
+
+
+_SHORT_RUN = """
+import sys
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+simulate(get("scan_pitch").ssd, step=0.05, stop=5.0)
+print("numba" in sys.modules)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_a_short_run_does_not_import_numba(fmus):
+    """Below the threshold the kernels' Python runs: no numba import, no compile load."""
+    result = run_python(_SHORT_RUN)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["False"]
