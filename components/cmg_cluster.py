@@ -192,7 +192,7 @@ def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
     return angles, rates
 
 
-# compiled by numba where installed (components/jit.py), else these very functions
+# kernels: these very functions, compiled by numba in long runs (components/jit.py)
 _compiled_axes = kernel(axes)
 _compiled_servo_step = kernel(servo_step)
 

@@ -41,6 +41,8 @@ ENABLED = os.environ.get("AGILESAT_JIT", "1") != "0"
 AFTER = int(os.environ.get("AGILESAT_JIT_AFTER", DEFAULT_AFTER))
 _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
+_REGISTERED: set = set()  # those of them numba was told about
+_SET_UP = False  # numba imported (then a function declared later is registered at once)
 
 
 def cache_root() -> Path:
@@ -64,12 +66,16 @@ def content_key(module: str, source: str) -> str:
 def jitable(function):
     """A plain function that kernels may call (unchanged for Python callers)."""
     _JITABLE.append(function)
+    if _SET_UP:  # a module imported after the first compile
+        _set_up()
     return function
 
 
 def register_floats(function) -> None:
     """Let kernels call ``function`` (a to-floats converter) on tuples, as the identity."""
     _FLOATS.append(function)
+    if _SET_UP:
+        _set_up()
 
 
 class Kernel:
@@ -121,13 +127,22 @@ def kernels(module) -> dict[str, Kernel]:
 @functools.cache
 def _numba():
     """numba, imported and told about our jitable functions at the first compile."""
+    global _SET_UP
     if not ENABLED:
         return None
     try:
         import numba
-        from numba.extending import overload, register_jitable
     except ImportError:
         return None
+    _SET_UP = True
+    _set_up()
+    return numba
+
+
+def _set_up() -> None:
+    """Register every jitable function and converter with numba (each once)."""
+    import numba
+    from numba.extending import overload, register_jitable
 
     def identity_on_tuples(x):
         if isinstance(x, numba.types.BaseTuple):
@@ -135,10 +150,13 @@ def _numba():
         return None
 
     for function in _FLOATS:
-        overload(function)(identity_on_tuples)
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            overload(function)(identity_on_tuples)
     for function in _JITABLE:
-        register_jitable(function)
-    return numba
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            register_jitable(function)
 
 
 def _content_cache(py_func):

@@ -291,7 +291,7 @@ class SatelliteDynamics(Model):
         return rotate(self.J_inv, (H_B[0] - h[0], H_B[1] - h[1], H_B[2] - h[2]))
 
 
-# -- the integration (kernels: compiled by numba where installed, components/jit.py) -------
+# -- the integration (a kernel: compiled by numba in long runs, components/jit.py) --------
 @kernel
 def _integrate(x, n, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
     """x = (q_BI, H_I) after n RK4 sub-steps of ``sub``."""

@@ -128,6 +128,46 @@ def measure(ssd, step, stop, repeat):
     return cosim, previous, per_step
 
 
+def models_report(repeat: int) -> None:
+    """Each scan_pitch model alone (in-process, at its defaults, 500 steps of 0.05 s with
+    step + output): us per step with its kernels compiled and with their Python,
+    alternated, best of ``repeat`` (less noisy than the co-simulation's split)."""
+    from agilesat.components import jit
+    from agilesat.fmus import FMUS, model_class
+
+    print("\nmodels alone, us per step + output (compiled kernels / their Python):")
+    for name in get("scan_pitch").components:
+        model = model_class(name)
+        module = sys.modules[model.__module__]
+        kernels = [
+            k
+            for m in list(sys.modules.values())
+            if m is not None
+            and getattr(m, "__name__", "").startswith(module.__name__.rsplit(".", 1)[0] + ".")
+            for k in jit.kernels(m).values()
+        ]
+
+        def run():
+            instance = model().start(0.0)
+            for k in range(500):
+                instance.advance(k * 0.05, 0.05)
+
+        times = {}
+        for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+            changes = [(k, "_run", getattr(k, attribute)) for k in kernels]
+            with patched(changes):
+                run()  # compile or load outside the timing
+        for _ in range(repeat):
+            for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+                with patched([(k, "_run", getattr(k, attribute)) for k in kernels]):
+                    elapsed = best(run, 1) / 500 * 1e6
+                times[label] = min(times.get(label, elapsed), elapsed)
+        print(
+            f"  {name:>24} ({FMUS[name]}): {times['compiled']:6.1f} / {times['python']:6.1f}"
+            f"{'' if kernels else '  (no kernels)'}"
+        )
+
+
 def basilisk(cosim: float, monolithic: float, repeat: int) -> None:
     """The Basilisk anchor (tests/benchmark_basilisk.py) where bsk is installed."""
     try:
@@ -182,6 +222,7 @@ def main() -> None:
         )
     cosim, monolithic = rows[0.05]
     rtf = STOP / cosim
+    models_report(max(args.repeat, 5))
     basilisk(cosim, monolithic, args.repeat)
     print(
         "\nus/step: wall time per macro step = model + FMI + master; previous: the same with "

@@ -230,3 +230,22 @@ def test_a_short_run_does_not_import_numba(fmus):
     result = run_python(_SHORT_RUN)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["False"]
+
+
+_IMPORTED_LATER = """
+import os
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+from agilesat.components.cmg_cluster import CmgCluster
+CmgCluster().start(0.0).advance(0.0, 0.1)  # the first compile sets numba up
+from agilesat.components import satellite_dynamics
+satellite_dynamics.SatelliteDynamics().start(0.0).advance(0.0, 0.1)
+print(satellite_dynamics._integrate._run is satellite_dynamics._integrate.compiled)
+"""
+
+
+@pytest.mark.slow
+@needs_numba
+def test_a_module_imported_after_the_first_compile_compiles_too():
+    result = run_python(_IMPORTED_LATER)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["True"]
