@@ -6,12 +6,14 @@ import math
 
 import numpy as np
 import pytest
+from test_c_host import host as c_host  # noqa: F401  (the C host fixture, compiled once)
 
 from agilesat.components import cmg_cluster, jit, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
 from agilesat.components.model import Model
 from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.orchestration.scenarios import get as get_scenario
 from helpers import run_python
 
 needs_numba = pytest.mark.skipif(
@@ -249,3 +251,21 @@ def test_a_module_imported_after_the_first_compile_compiles_too():
     result = run_python(_IMPORTED_LATER)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["True"]
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@needs_numba
+def test_the_c_host_with_compiled_kernels_matches_the_master(fmus, c_host, tmp_path):  # noqa: F811
+    """Kernels compiled from the first call in a host without Python (the FMUs' own
+    interpreter) give the master's results (the kernels' Python) bit for bit."""
+    import test_c_host as c
+
+    ssd = get_scenario("scan_pitch").ssd
+    c.write_script(ssd, tmp_path / "script.txt", tmp_path / "fmus", c.STOP)
+    env = {**c.CLEAN_ENV, "AGILESAT_JIT_AFTER": "0"}
+    run = c.run_host(c_host, tmp_path / "script.txt", tmp_path / "c.csv", env=env)
+    assert run.returncode == 0, run.stderr
+    names, data = c.read_csv(tmp_path / "c.csv")
+    m_names, m_data = c.master_results(ssd, c.STOP, tmp_path / "master.npz")
+    assert np.array_equal(data, m_data[:, [m_names.index(n) for n in names]])
