@@ -28,6 +28,8 @@ import math
 
 import numpy as np
 
+from .jit import jitable, register_floats
+
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 #: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined
 GIMBAL_LOCK_COS = 1e-9
@@ -39,7 +41,11 @@ def _floats(x):
     return x.tolist() if isinstance(x, np.ndarray) else x
 
 
+register_floats(_floats)  # kernels (components/jit.py) call the tuple primitives on tuples
+
+
 # -- tuple primitives ------------------------------------------------------------------
+@jitable
 def dcm(q) -> tuple:
     """C(q) as a tuple of rows."""
     q0, q1, q2, q3 = _floats(q)
@@ -50,6 +56,7 @@ def dcm(q) -> tuple:
     )
 
 
+@jitable
 def rotate(M, v) -> tuple:
     """M v for a 3×3 M given as rows (e.g. ``dcm(q)``)."""
     v0, v1, v2 = _floats(v)
@@ -60,6 +67,7 @@ def rotate(M, v) -> tuple:
     )
 
 
+@jitable
 def rotate_back(M, v) -> tuple:
     """Mᵀ v for a 3×3 M given as rows."""
     v0, v1, v2 = _floats(v)
@@ -70,6 +78,7 @@ def rotate_back(M, v) -> tuple:
     )
 
 
+@jitable
 def qmul(p, q) -> tuple:
     """Hamilton product p ⊗ q."""
     p0, p1, p2, p3 = _floats(p)

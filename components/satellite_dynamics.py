@@ -28,6 +28,7 @@ import math
 
 import numpy as np
 
+from .jit import jitable, kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
@@ -212,9 +213,9 @@ class SatelliteDynamics(Model):
         self.check_initial_inputs(dt)
         u = self.u
         h0 = self._h_total()
-        hdot = (u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist()
-        tau = u.tau_ext.tolist()
-        r_I = u.r_I.tolist()
+        hdot = tuple((u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist())
+        tau = tuple(u.tau_ext.tolist())
+        r_I = tuple(u.r_I.tolist())
         if self.needs_position and not any(r_I):
             raise ModelError(
                 "gravity_gradient is on but r_I is zero: connect r_I or set "
@@ -227,10 +228,10 @@ class SatelliteDynamics(Model):
                 f"t={t:.6g} s: body rate {max(map(abs, w)):.3g} rad/s would need "
                 f"{n} sub-steps of {dt:g} s: the state is unphysical"
             )
-        x = (*self.q_BI, *self.H_I)
-        sub = dt / n
-        for k in range(n):
-            x = self._rk4(x, k * sub, sub, h0, hdot, tau, r_I)
+        x = _integrate(
+            (*self.q_BI, *self.H_I), n, dt / n, h0, hdot, tau, r_I,
+            self.J, self.J_inv, self.mu, self.gravity_gradient,
+        )  # fmt: skip
         if not all(map(math.isfinite, x)):
             raise ModelError(f"non-finite state at t={t + dt:.6g} s")
         norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
@@ -281,58 +282,92 @@ class SatelliteDynamics(Model):
         return jumps
 
     # -- internals -----------------------------------------------------------------
-    def _h_total(self) -> list:
+    def _h_total(self) -> tuple:
         u = self.u
-        return (u.h_cmg + u.h_wheel + u.h_payload).tolist()
+        return tuple((u.h_cmg + u.h_wheel + u.h_payload).tolist())
 
     def _rate(self, q, H_I, h) -> tuple:
         """w_BI_B = J⁻¹ (C_BI H_I − h)."""
         H_B = rotate(dcm(q), H_I)
         return rotate(self.J_inv, (H_B[0] - h[0], H_B[1] - h[1], H_B[2] - h[2]))
 
-    def _rk4(self, x, s, ds, h0, hdot, tau, r_I):
-        f, half = self._derivative, ds / 2
-        k1 = f(x, s, h0, hdot, tau, r_I)
-        k2 = f([a + half * b for a, b in zip(x, k1)], s + half, h0, hdot, tau, r_I)
-        k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
-        k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
-        sixth = ds / 6
-        return tuple(
-            xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)
-        )
 
-    def _derivative(self, x, s, h0, hdot, tau, r_I):
-        """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
-        q0, q1, q2, q3 = q = x[:4]
-        k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
-        C = tuple((k * a, k * b, k * c) for a, b, c in dcm(q))
-        H_B = rotate(C, x[4:])
-        wx, wy, wz = rotate(
-            self.J_inv,
-            (
-                H_B[0] - h0[0] - hdot[0] * s,
-                H_B[1] - h0[1] - hdot[1] * s,
-                H_B[2] - h0[2] - hdot[2] * s,
-            ),
-        )
-        q_dot = (
-            0.5 * (-q1 * wx - q2 * wy - q3 * wz),
-            0.5 * (q0 * wx + q2 * wz - q3 * wy),
-            0.5 * (q0 * wy - q1 * wz + q3 * wx),
-            0.5 * (q0 * wz + q1 * wy - q2 * wx),
-        )
-        if not self.gravity_gradient:
-            return (*q_dot, *rotate_back(C, tau))
-        rx, ry, rz = r_B = rotate(C, r_I)
-        r2 = rx * rx + ry * ry + rz * rz
-        g = 3.0 * self.mu / (r2 * r2 * math.sqrt(r2))
-        jx, jy, jz = rotate(self.J, r_B)
-        torque = (
-            tau[0] + g * (ry * jz - rz * jy),
-            tau[1] + g * (rz * jx - rx * jz),
-            tau[2] + g * (rx * jy - ry * jx),
-        )
-        return (*q_dot, *rotate_back(C, torque))
+# -- the integration (a kernel: compiled by numba in long runs, components/jit.py) --------
+@kernel
+def _integrate(x, n, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """x = (q_BI, H_I) after n RK4 sub-steps of ``sub``."""
+    for k in range(n):
+        x = _rk4(x, k * sub, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient)
+    return x
+
+
+@jitable
+def _rk4(x, s, ds, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """One classical Runge-Kutta step of ``ds`` from ``s`` into the macro step."""
+    f, half = _derivative, ds / 2
+    inputs = h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient
+    k1 = f(x, s, *inputs)
+    k2 = f(_shift(x, half, k1), s + half, *inputs)
+    k3 = f(_shift(x, half, k2), s + half, *inputs)
+    k4 = f(_shift(x, ds, k3), s + ds, *inputs)
+    return _shift(x, ds / 6, _weighted(k1, k2, k3, k4))
+
+
+@jitable
+def _shift(x, a, k):
+    """x + a k (7-tuples)."""
+    return (
+        x[0] + a * k[0], x[1] + a * k[1], x[2] + a * k[2], x[3] + a * k[3],
+        x[4] + a * k[4], x[5] + a * k[5], x[6] + a * k[6],
+    )  # fmt: skip
+
+
+@jitable
+def _weighted(k1, k2, k3, k4):
+    """RK4's k1 + 2 (k2 + k3) + k4 (7-tuples)."""
+    a, b, c, d = k1, k2, k3, k4
+    return (
+        a[0] + 2 * (b[0] + c[0]) + d[0], a[1] + 2 * (b[1] + c[1]) + d[1],
+        a[2] + 2 * (b[2] + c[2]) + d[2], a[3] + 2 * (b[3] + c[3]) + d[3],
+        a[4] + 2 * (b[4] + c[4]) + d[4], a[5] + 2 * (b[5] + c[5]) + d[5],
+        a[6] + 2 * (b[6] + c[6]) + d[6],
+    )  # fmt: skip
+
+
+@jitable
+def _derivative(x, s, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
+    q0, q1, q2, q3 = q = x[:4]
+    k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = dcm(q)
+    C = (k * c00, k * c01, k * c02), (k * c10, k * c11, k * c12), (k * c20, k * c21, k * c22)
+    H_B = rotate(C, x[4:])
+    wx, wy, wz = rotate(
+        J_inv,
+        (
+            H_B[0] - h0[0] - hdot[0] * s,
+            H_B[1] - h0[1] - hdot[1] * s,
+            H_B[2] - h0[2] - hdot[2] * s,
+        ),
+    )
+    q_dot = (
+        0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+        0.5 * (q0 * wx + q2 * wz - q3 * wy),
+        0.5 * (q0 * wy - q1 * wz + q3 * wx),
+        0.5 * (q0 * wz + q1 * wy - q2 * wx),
+    )
+    if not gravity_gradient:
+        return q_dot + rotate_back(C, tau)
+    rx, ry, rz = r_B = rotate(C, r_I)
+    r2 = rx * rx + ry * ry + rz * rz
+    g = 3.0 * mu / (r2 * r2 * math.sqrt(r2))
+    jx, jy, jz = rotate(J, r_B)
+    torque = (
+        tau[0] + g * (ry * jz - rz * jy),
+        tau[1] + g * (rz * jx - rx * jz),
+        tau[2] + g * (rx * jy - ry * jx),
+    )
+    return q_dot + rotate_back(C, torque)
 
 
 def _unit(q, name) -> tuple:
