@@ -3,6 +3,7 @@ switch back to it, and a compile cache that survives fresh FMU extractions."""
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -11,8 +12,9 @@ from test_c_host import host as c_host  # noqa: F401  (the C host fixture, compi
 from agilesat.components import cmg_cluster, jit, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
-from agilesat.components.model import Model
+from agilesat.components.model import Model, ModelError
 from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.fmus import fmu_state
 from agilesat.orchestration.scenarios import get as get_scenario
 from helpers import run_python
 
@@ -21,41 +23,123 @@ needs_numba = pytest.mark.skipif(
 )
 
 
-def _integrate_inputs(seed: int, n: int, gravity_gradient: bool):
+def _random_dynamics(seed: int, gravity_gradient: bool, spin: float) -> SatelliteDynamics:
+    """A SatelliteDynamics at a random state, parameters and inputs (|w| ~ ``spin``)."""
     rng = np.random.default_rng(seed)
     J = np.diag([900.0, 950.0, 1000.0]) + rng.normal(scale=5.0, size=(3, 3))
-    J = (J + J.T) / 2
+    model = SatelliteDynamics(inertia=(J + J.T) / 2, gravity_gradient=gravity_gradient)
+    model.set("attitude0", rng.uniform(-3.0, 3.0, size=3))
+    model.set("rate0", rng.normal(scale=spin, size=3))
+    model.start(0.0)
+    for v in model.layout.group("input"):
+        model.set(v.name, rng.normal(scale=20.0, size=v.size))
     q = rng.normal(size=4)
-    q /= np.linalg.norm(q)
-    vector = lambda scale: tuple((scale * rng.normal(size=3)).tolist())  # noqa: E731
-    return (
-        (*q.tolist(), *vector(50.0)),
-        n,
-        0.1 / n,
-        vector(20.0),
-        vector(1.0),
-        vector(0.1),
-        tuple((7e6 * rng.normal(size=3)).tolist()),
-        tuple(map(tuple, J.tolist())),
-        tuple(map(tuple, np.linalg.inv(J).tolist())),
-        3.986004418e14,
-        gravity_gradient,
-    )
+    model.set("q_OI", q / np.linalg.norm(q))
+    model.set("r_I", 7e6 * rng.normal(size=3))
+    model.set("w_OI_O", 1e-3 * rng.normal(size=3))
+    return model
+
+
+def _both(function, *arrays_and_args):
+    """function's compiled and Python results on copies of the arrays: (returns, arrays)."""
+    runs = []
+    for f in (function.compiled, function.py_func):
+        arrays = [a.copy() for a in arrays_and_args if isinstance(a, np.ndarray)]
+        others = [a for a in arrays_and_args if not isinstance(a, np.ndarray)]
+        runs.append((f(*arrays, *others), arrays))
+    return runs
 
 
 @needs_numba
 @pytest.mark.parametrize("gravity_gradient", [False, True])
-@pytest.mark.parametrize("seed, n", [(1, 1), (2, 3), (3, 17)])
-def test_integration_kernel_is_bit_identical_to_the_python(seed, n, gravity_gradient):
-    inputs = _integrate_inputs(seed, n, gravity_gradient)
-    compiled = satellite_dynamics._integrate.compiled(*inputs)
-    readable = satellite_dynamics._integrate.py_func(*inputs)
-    assert compiled is not readable and type(satellite_dynamics._integrate.compiled) is not type(
-        satellite_dynamics._integrate.py_func
+@pytest.mark.parametrize("seed, spin, dt", [(1, 0.01, 0.05), (2, 0.3, 0.1), (3, 2.0, 0.5)])
+def test_step_and_output_kernels_are_bit_identical_to_the_python(seed, spin, dt, gravity_gradient):
+    model = _random_dynamics(seed, gravity_gradient, spin)
+    (compiled, arrays), (readable, py_arrays) = _both(
+        satellite_dynamics._step, model.values, model.state, dt
     )
-    assert type(compiled) is tuple and len(compiled) == 7
+    assert compiled == readable and compiled[0] == satellite_dynamics.OK
+    assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
+    assert not np.array_equal(arrays[1], model.state)  # it integrated something
+    substeps = math.ceil(compiled[2])
+    assert (substeps > 1) == (spin > 0.1)  # sub-stepping covered
+    (compiled, arrays), (readable, py_arrays) = _both(satellite_dynamics._output, *arrays)
     assert compiled == readable
-    assert compiled != inputs[0]  # it integrated something
+    assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
+    outputs = model.layout.range["output"]
+    assert np.all(arrays[0][outputs.start : outputs.stop] != 0.0)  # every output written
+
+
+@pytest.fixture(params=["compiled", "python"])
+def dynamics_kernels(request, monkeypatch):
+    """SatelliteDynamics' kernels run compiled (numba) or as their Python."""
+    if request.param == "compiled" and jit._numba() is None:
+        pytest.skip("numba not installed or AGILESAT_JIT=0")
+    for kernel in jit.kernels(satellite_dynamics).values():
+        attribute = "compiled" if request.param == "compiled" else "py_func"
+        monkeypatch.setattr(kernel, "_run", getattr(kernel, attribute))
+    return request.param
+
+
+@pytest.mark.parametrize(
+    "inputs, message",
+    [
+        (
+            {"r_I": [0.0, 0.0, 0.0]},
+            "^gravity_gradient is on but r_I is zero: connect r_I or set gravity_gradient = false$",
+        ),
+        (
+            {"h_cmg": [0.0, 0.0, -4e5]},
+            r"^t=2 s: body rate 418 rad/s would need 1046\d sub-steps "
+            r"of 0.5 s: the state is unphysical$",
+        ),
+        ({"h_cmg": [math.nan, 0.0, 0.0]}, r"^t=2 s: body rate nan rad/s would need nan sub-steps"),
+        ({"tau_ext": [math.inf, 0.0, 0.0]}, r"^non-finite state at t=2.5 s$"),
+        (
+            {"q_OI": [0.0, 0.0, 0.0, 0.0]},
+            r"^q_OI must be a unit quaternion, got \[0.0, 0.0, 0.0, "
+            r"0.0\] \(norm 0.0\)$",
+        ),
+    ],
+    ids=["no r_I", "too many sub-steps", "nan rate", "non-finite state", "q_OI"],
+)
+def test_each_error_of_the_kernels_is_raised_with_its_message(inputs, message, dynamics_kernels):
+    model = SatelliteDynamics(rate0=[0.01, 0.02, 0.0]).start(0.0).advance(0.0, 2.0)
+    for name, value in inputs.items():
+        model.set(name, value)
+    values, state = model.values.copy(), model.state.copy()
+    with pytest.raises(ModelError) as error:
+        model.output() if "q_OI" in inputs else model.step(2.0, 0.5)  # q_OI: output's check
+    assert re.search(message, str(error.value)), error.value
+    assert np.array_equal(model.values, values, equal_nan=True)  # nothing changed
+    assert np.array_equal(model.state, state)
+
+
+def test_inputs_set_after_initialisation_are_still_caught(dynamics_kernels):
+    model = SatelliteDynamics()
+    model.initialize(0.0)  # as an FMU does: the first step checks the inputs it used
+    model.set("q_OI", [0.6, 0.8, 0.0, 0.0])
+    with pytest.raises(ModelError, match=r"^at the first step the inputs \['q_OI'\] are not"):
+        model.step(0.0, 0.05)
+
+
+def test_a_saved_state_restores_the_run_bit_for_bit(dynamics_kernels):
+    """get_state / set_state through the FMU state's bytes (fmus/fmu_state.py)."""
+    model = _random_dynamics(4, True, 0.3)
+
+    def run(steps):
+        rows = []
+        for k in range(steps):
+            model.set("tau_ext", [1e-3 * k, -2e-3, 0.0])
+            model.advance(k * 0.1, 0.1)
+            rows.append(model.values.copy())
+        return np.array(rows)
+
+    run(20)
+    saved = fmu_state.encode("test", model.get_state(), "agilesat")
+    first = run(30)
+    model.set_state(fmu_state.decode("test", saved, "agilesat"))
+    assert np.array_equal(run(30), first)
 
 
 def _spin_up(model: SatelliteDynamics, steps: int) -> np.ndarray:
@@ -121,7 +205,7 @@ sys.path.insert(0, "tests")
 from agilesat.components import satellite_dynamics
 from test_kernels import _runs
 runs = _runs()
-kernel = satellite_dynamics._integrate
+kernel = satellite_dynamics._step
 print(kernel.compiled is kernel.py_func, kernel._run is kernel.py_func, "numba" in sys.modules)
 print(runs)
 """
@@ -158,7 +242,7 @@ folder = tempfile.mkdtemp(prefix="fmu_")
 fmpy.extract(sys.argv[1], unzipdir=folder)
 fmpy.simulate_fmu(folder, stop_time=1.0, output_interval=0.1)
 module = next(m for n, m in sys.modules.items() if n.endswith(".components.satellite_dynamics"))
-stats = module._integrate.compiled.stats
+stats = module._step.compiled.stats
 print(json.dumps({"folder": folder, "hits": len(stats.cache_hits),
                   "misses": len(stats.cache_misses), "path": stats.cache_path}))
 """
@@ -188,8 +272,9 @@ os.environ["AGILESAT_CACHE_DIR"] = os.path.join(sys.argv[1], "cache")
 os.environ["AGILESAT_JIT_AFTER"] = "0"
 from agilesat.components import satellite_dynamics
 from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.fmus import fmu_state
 model = SatelliteDynamics().start(0.0).advance(0.0, 0.1)
-print(len(satellite_dynamics._integrate.compiled.stats.cache_misses), model.get("q_BI").tolist())
+print(len(satellite_dynamics._step.compiled.stats.cache_misses), model.get("q_BI").tolist())
 """
 
 
@@ -199,7 +284,7 @@ def test_an_unwritable_cache_costs_a_compile_and_says_so(tmp_path):
     (tmp_path / "a_file").write_text("not a directory")
     result = run_python(_UNWRITABLE, tmp_path / "a_file")
     assert result.returncode == 0, result.stderr
-    assert "no compile cache for _integrate" in result.stderr
+    assert "no compile cache for _step" in result.stderr
     misses, q = result.stdout.split(" ", 1)
     assert misses == "1"  # compiled in this process
     assert q.strip() == str(SatelliteDynamics().start(0.0).advance(0.0, 0.1).get("q_BI").tolist())
@@ -207,13 +292,16 @@ def test_an_unwritable_cache_costs_a_compile_and_says_so(tmp_path):
 
 @needs_numba
 def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function():
-    tiered = jit.Kernel(satellite_dynamics._integrate.py_func, 3)
-    inputs = [_integrate_inputs(seed, 2, True) for seed in range(6)]
+    tiered = jit.Kernel(satellite_dynamics._step.py_func, 3)
+    models = [_random_dynamics(seed, True, 0.3) for seed in range(6)]
+    states = [m.state.copy() for m in models]
     results = []
-    for k, args in enumerate(inputs):
-        results.append(tiered(*args))
+    for k, model in enumerate(models):
+        results.append(tiered(model.values, model.state, 0.1))
         assert (tiered._run is tiered.compiled) == (k >= 3)
-    assert results == [tiered.py_func(*args) for args in inputs]
+    expected = [tiered.py_func(m.values, state, 0.1) for m, state in zip(models, states)]
+    assert results == expected
+    assert all(np.array_equal(m.state, state) for m, state in zip(models, states))
 
 
 _SHORT_RUN = """
@@ -241,7 +329,7 @@ from agilesat.components.cmg_cluster import CmgCluster
 CmgCluster().start(0.0).advance(0.0, 0.1)  # the first compile sets numba up
 from agilesat.components import satellite_dynamics
 satellite_dynamics.SatelliteDynamics().start(0.0).advance(0.0, 0.1)
-print(satellite_dynamics._integrate._run is satellite_dynamics._integrate.compiled)
+print(satellite_dynamics._step._run is satellite_dynamics._step.compiled)
 """
 
 
