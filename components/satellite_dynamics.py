@@ -18,8 +18,14 @@ vanishes identically.
 
 Outputs relative to the orbit frame O (inputs q_OI, w_OI_O): q_BO = q_OI* ⊗ q_BI,
 w_BO_B = w_BI_B − C_BO w_OI_O and the 1-2-3 Euler angles of B relative to O on a branch
-continuous in time (pitch may pass through ±90°; see rotations.euler123_from_quat), with
-their rates (video-SAR eq. 13).
+continuous in time (pitch may pass through ±90°; see rotations.euler123), with their
+rates (video-SAR eq. 13).
+
+``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
+runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
+read and written at the offsets of the variable table, and on ``self.state``: q_BI, H_I,
+the last q_BO and euler_BO, and the constants ``initialize`` derives (offsets ``S_*``).
+A kernel returns a status code; the methods raise its ModelError.
 """
 
 from __future__ import annotations
@@ -195,7 +201,7 @@ class SatelliteDynamics(Model):
         q_BO = quat_from_dcm(C_BO)
         q_BI = qmul(q_OI, q_BO)
         w_BI_B = p.rate0 + C_BO @ u.w_OI_O
-        H_B = rotate(tuple(map(tuple, J.tolist())), w_BI_B)
+        H_B = rotate(J.tolist(), w_BI_B)
         h = (u.h_cmg + u.h_wheel + u.h_payload).tolist()
         #: the state and the constants of the step and output kernels (offsets S_*)
         self.state = state = np.zeros(STATE_SIZE)
