@@ -305,7 +305,8 @@ def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function
 
 
 _SHORT_RUN = """
-import sys
+import os, sys
+os.environ.pop("AGILESAT_JIT_AFTER", None)  # the default threshold
 from agilesat.orchestration import simulate
 from agilesat.orchestration.scenarios import get
 simulate(get("scan_pitch").ssd, step=0.05, stop=5.0)
