@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_c_host import host as c_host  # noqa: F401  (the C host fixture, compiled once)
 
-from agilesat.components import cmg_cluster, jit, satellite_dynamics
+from agilesat.components import cmg_cluster, jit, rotations, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
 from agilesat.components.model import Model, ModelError
@@ -68,6 +68,34 @@ def test_step_and_output_kernels_are_bit_identical_to_the_python(seed, spin, dt,
     assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
     outputs = model.layout.range["output"]
     assert np.all(arrays[0][outputs.start : outputs.stop] != 0.0)  # every output written
+
+
+@pytest.mark.slow
+@needs_numba
+def test_euler_angles_compiled_are_those_of_the_python_through_the_gimbal_lock():
+    """euler123 / euler123_dot (rotations) compiled as in a kernel, on pitches across ±90°
+    (the lock zone, and exact lock) from random previous angles."""
+    numba = jit._numba()
+    angles = numba.njit(lambda q, C, previous: rotations.euler123(q, C, previous, True))
+    rates = numba.njit(rotations.euler123_dot)
+    rng = np.random.default_rng(5)
+    pitches = np.concatenate([np.linspace(-1.7, 1.7, 101), [math.pi / 2, -math.pi / 2]])
+    zone = exact = 0
+    half = math.sqrt(0.5)
+    for pitch in pitches:
+        euler = (rng.uniform(-3, 3), pitch, rng.uniform(-3, 3))
+        q = tuple(rotations.quat_from_euler123(euler).tolist())
+        if pitch == pitches[-1]:
+            q = (half, 0.0, -half, 0.0)  # pitch -90° exactly
+        C = rotations.dcm(q)
+        previous = tuple((np.array(euler) + rng.normal(scale=0.3, size=3)).tolist())
+        readable = rotations.euler123(q, C, previous, True)
+        assert angles(q, C, previous) == readable
+        w = tuple(rng.normal(size=3).tolist())
+        assert rates(readable, w) == rotations.euler123_dot(readable, w)
+        zone += abs(math.cos(readable[1])) < rotations.LOCK_ZONE_COS
+        exact += abs(math.cos(readable[1])) <= rotations.GIMBAL_LOCK_COS
+    assert zone >= 3 and exact >= 1  # the lock zone was crossed, exact lock reached
 
 
 @pytest.fixture(params=["compiled", "python"])
