@@ -28,6 +28,7 @@ import math
 
 import numpy as np
 
+from .jit import kernel
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
@@ -76,16 +77,11 @@ class ClusterGeometry:
         self.G = G
         self.S = S / spin_norms[:, None]
         self.T = np.cross(self.G, self.S)
-        self._st = [(tuple(s), tuple(t)) for s, t in zip(self.S.tolist(), self.T.tolist())]
+        self._st = tuple((tuple(s), tuple(t)) for s, t in zip(self.S.tolist(), self.T.tolist()))
 
     def axes(self, delta) -> tuple[list, list]:
         """(spins σ_i = s_i cos δ_i + t_i sin δ_i, Jacobian columns a_i = ∂σ_i/∂δ_i)."""
-        spins, columns = [], []
-        for d, (s, t) in zip(delta, self._st):
-            c, n = math.cos(d), math.sin(d)
-            spins.append((s[0] * c + t[0] * n, s[1] * c + t[1] * n, s[2] * c + t[2] * n))
-            columns.append((t[0] * c - s[0] * n, t[1] * c - s[1] * n, t[2] * c - s[2] * n))
-        return spins, columns
+        return _compiled_axes(tuple(delta), self._st)
 
     def momentum(self, delta) -> np.ndarray:
         """h = h_rotor Σ σ_i."""
@@ -103,6 +99,17 @@ class ClusterGeometry:
     def singularity(A) -> float:
         """Q = det(A Aᵀ): zero at a singular gimbal configuration."""
         return det3(gram(np.asarray(A).T.tolist()))
+
+
+def axes(delta, st) -> tuple[list, list]:
+    """Spins σ_i = s_i cos δ_i + t_i sin δ_i and Jacobian columns a_i = ∂σ_i/∂δ_i of the
+    gyros with reference spins and transverse axes ``st`` = ((s_i, t_i), ...)."""
+    spins, columns = [], []
+    for d, (s, t) in zip(delta, st):
+        c, n = math.cos(d), math.sin(d)
+        spins.append((s[0] * c + t[0] * n, s[1] * c + t[1] * n, s[2] * c + t[2] * n))
+        columns.append((t[0] * c - s[0] * n, t[1] * c - s[1] * n, t[2] * c - s[2] * n))
+    return spins, columns
 
 
 def zero_momentum_angles(
@@ -185,6 +192,11 @@ def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
     return angles, rates
 
 
+# kernels: these very functions, compiled by numba in long runs (components/jit.py)
+_compiled_axes = kernel(axes)
+_compiled_servo_step = kernel(servo_step)
+
+
 class CmgCluster(Model):
     """Six single-gimbal CMGs with rate- and acceleration-limited gimbals."""
 
@@ -249,9 +261,10 @@ class CmgCluster(Model):
                 "the commanded torque)"
             )
         self.saturated = saturated
-        self.delta, self.delta_dot = servo_step(
-            self.delta, self.delta_dot, command, dt, self.rate_limit, self.accel_limit
-        )
+        self.delta, self.delta_dot = _compiled_servo_step(
+            tuple(self.delta), tuple(self.delta_dot), tuple(command), dt, self.rate_limit,
+            self.accel_limit,
+        )  # fmt: skip
         self.t = t + dt
 
     def output(self):

@@ -28,6 +28,9 @@ import math
 
 import numpy as np
 
+from .jit import floats as _floats
+from .jit import jitable
+
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 #: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined
 GIMBAL_LOCK_COS = 1e-9
@@ -35,11 +38,8 @@ GIMBAL_LOCK_COS = 1e-9
 LOCK_ZONE_COS = 0.05
 
 
-def _floats(x):
-    return x.tolist() if isinstance(x, np.ndarray) else x
-
-
 # -- tuple primitives ------------------------------------------------------------------
+@jitable
 def dcm(q) -> tuple:
     """C(q) as a tuple of rows."""
     q0, q1, q2, q3 = _floats(q)
@@ -50,6 +50,7 @@ def dcm(q) -> tuple:
     )
 
 
+@jitable
 def rotate(M, v) -> tuple:
     """M v for a 3×3 M given as rows (e.g. ``dcm(q)``)."""
     v0, v1, v2 = _floats(v)
@@ -60,6 +61,7 @@ def rotate(M, v) -> tuple:
     )
 
 
+@jitable
 def rotate_back(M, v) -> tuple:
     """Mᵀ v for a 3×3 M given as rows."""
     v0, v1, v2 = _floats(v)
@@ -70,6 +72,7 @@ def rotate_back(M, v) -> tuple:
     )
 
 
+@jitable
 def qmul(p, q) -> tuple:
     """Hamilton product p ⊗ q."""
     p0, p1, p2, p3 = _floats(p)
@@ -173,12 +176,22 @@ def quat_from_euler123(euler) -> np.ndarray:
 
 
 def euler123_from_quat(q, previous=None) -> np.ndarray:
-    """(φ, θ, ψ) with C(q) = R3(ψ) R2(θ) R1(φ), on a branch continuous in time.
+    """(φ, θ, ψ) with C(q) = R3(ψ) R2(θ) R1(φ), on a branch continuous in time
+    (:func:`euler123`; without ``previous`` the principal one)."""
+    q = tuple(_floats(q))
+    if previous is None:
+        return np.array(euler123(q, dcm(q), (0.0, 0.0, 0.0), False))
+    return np.array(euler123(q, dcm(q), tuple(_floats(previous)), True))
+
+
+@jitable
+def euler123(q, C, previous, continuous) -> tuple:
+    """(φ, θ, ψ) with C = C(q) = R3(ψ) R2(θ) R1(φ), on a branch continuous in time.
 
     Every rotation has two 1-2-3 representations, (φ, θ, ψ) with |θ| ≤ π/2 and
-    (φ+π, π−θ, ψ+π).  Without ``previous`` the first (principal) one is returned.  With
-    ``previous`` (the last output) the one nearer it is returned, each angle shifted by
-    multiples of 2π to stay continuous.  Near the gimbal lock at θ = ±90°
+    (φ+π, π−θ, ψ+π).  Without ``continuous`` the first (principal) one is returned.  With
+    it, ``previous`` is the last output and the one nearer it is returned, each angle
+    shifted by multiples of 2π to stay continuous.  Near the gimbal lock at θ = ±90°
     (|cos θ| < ``LOCK_ZONE_COS``) φ and ψ alone swing with tiny attitude changes and cannot
     choose: there the representation whose pitch is nearer the twist of q about y,
     2 atan2(q2, q0), wins — that angle is well conditioned through the lock, so a pitch
@@ -186,52 +199,74 @@ def euler123_from_quat(q, previous=None) -> np.ndarray:
     In exact lock only φ + ψ (θ = +90°) or φ − ψ (θ = −90°) is defined; the change of that
     combination is split equally between φ and ψ.
     """
-    q0, _, q2, _ = q = _floats(q)
-    (c00, c01, _), (c10, c11, _), (c20, c21, c22) = dcm(q)
+    q0, _, q2, _ = q
+    (c00, c01, _), (c10, c11, _), (c20, c21, c22) = C
     sin_theta = min(1.0, max(-1.0, c20))
     theta = math.asin(sin_theta)
     cos_theta = math.cos(theta)
     if cos_theta > GIMBAL_LOCK_COS:
         principal = (math.atan2(-c21, c22), theta, math.atan2(-c10, c00))
-        if previous is None:
-            return np.array(principal)
+        if not continuous:
+            return principal
         other = (principal[0] + math.pi, math.pi - theta, principal[2] + math.pi)
         if cos_theta < LOCK_ZONE_COS:
             twist = 2.0 * math.atan2(q2, q0) if q0 >= 0 else 2.0 * math.atan2(-q2, -q0)
             use_other = abs(wrap_pi(other[1] - twist)) < abs(wrap_pi(theta - twist))
         else:
             use_other = _distance(other, previous) < _distance(principal, previous)
-        return np.array(unwrap_near(other if use_other else principal, previous))
+        return _unwrap3(other if use_other else principal, previous)
     # gimbal lock: C[0,1] = ±sin(φ ± ψ), C[1,1] = cos(φ ± ψ) (upper signs for θ = +90°)
     sign = 1.0 if sin_theta > 0 else -1.0
     combination = math.atan2(sign * c01, c11)
-    if previous is None:
-        return np.array([combination, theta, 0.0])
-    phi0, _, psi0 = _floats(previous)
+    if not continuous:
+        return (combination, theta, 0.0)
+    phi0, _, psi0 = previous
     change = wrap_pi(combination - (phi0 + sign * psi0))
-    return np.array(unwrap_near((phi0 + change / 2, theta, psi0 + sign * change / 2), previous))
+    return _unwrap3((phi0 + change / 2, theta, psi0 + sign * change / 2), previous)
 
 
 def euler123_rates(euler, w) -> np.ndarray:
+    """(φ̇, θ̇, ψ̇) from the body rates ``w`` of B relative to O (:func:`euler123_dot`)."""
+    return np.array(euler123_dot(tuple(_floats(euler)), tuple(_floats(w))))
+
+
+@jitable
+def euler123_dot(euler, w) -> tuple:
     """(φ̇, θ̇, ψ̇) from the body rates ``w`` of B relative to O (eq. 13 inverted).
 
     Singular at cos θ = 0; there φ̇ is set to 0 and ψ̇ takes the whole z rate.
     """
-    _, theta, psi = _floats(euler)
+    _, theta, psi = euler
     cp, sp = math.cos(psi), math.sin(psi)
     ct, st = math.cos(theta), math.sin(theta)
-    wx, wy, wz = _floats(w)
+    wx, wy, wz = w
     phi_dot = (wx * cp - wy * sp) / ct if abs(ct) > GIMBAL_LOCK_COS else 0.0
-    return np.array([phi_dot, wx * sp + wy * cp, wz - phi_dot * st])
+    return (phi_dot, wx * sp + wy * cp, wz - phi_dot * st)
 
 
+@jitable
 def wrap_pi(angle: float) -> float:
     """Angle wrapped to [−π, π)."""
     return angle - 2 * math.pi * math.floor((angle + math.pi) / (2 * math.pi))
 
 
+@jitable
 def _distance(angles, reference) -> float:
-    return sum(wrap_pi(a - r) ** 2 for a, r in zip(angles, _floats(reference)))
+    """Σ wrap_pi(a − r)² over three angles."""
+    d0 = wrap_pi(angles[0] - reference[0])
+    d1 = wrap_pi(angles[1] - reference[1])
+    d2 = wrap_pi(angles[2] - reference[2])
+    return d0 * d0 + d1 * d1 + d2 * d2
+
+
+@jitable
+def _unwrap3(angles, reference) -> tuple:
+    """:func:`unwrap_near` of three angles."""
+    return (
+        reference[0] + wrap_pi(angles[0] - reference[0]),
+        reference[1] + wrap_pi(angles[1] - reference[1]),
+        reference[2] + wrap_pi(angles[2] - reference[2]),
+    )
 
 
 def unwrap_near(angles, reference) -> tuple:

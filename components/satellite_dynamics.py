@@ -18,8 +18,14 @@ vanishes identically.
 
 Outputs relative to the orbit frame O (inputs q_OI, w_OI_O): q_BO = q_OI* ⊗ q_BI,
 w_BO_B = w_BI_B − C_BO w_OI_O and the 1-2-3 Euler angles of B relative to O on a branch
-continuous in time (pitch may pass through ±90°; see rotations.euler123_from_quat), with
-their rates (video-SAR eq. 13).
+continuous in time (pitch may pass through ±90°; see rotations.euler123), with their
+rates (video-SAR eq. 13).
+
+``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
+runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
+read and written at the offsets of the variable table, and on ``self.state``: q_BI, H_I,
+the last q_BO and euler_BO, and the constants ``initialize`` derives (offsets ``S_*``).
+A kernel returns a status code; the methods raise its ModelError.
 """
 
 from __future__ import annotations
@@ -28,20 +34,21 @@ import math
 
 import numpy as np
 
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
     IDENTITY_Q,
     dcm,
     dcm_from_euler123,
-    euler123_from_quat,
-    euler123_rates,
+    euler123,
+    euler123_dot,
     qmul,
     quat_from_dcm,
     rotate,
     rotate_back,
 )
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
@@ -187,75 +194,52 @@ class SatelliteDynamics(Model):
             raise ModelError(f"inertia must be symmetric, got {J.tolist()}")
         if np.any(np.linalg.eigvalsh(J) <= 0):
             raise ModelError(f"inertia must be positive definite, got {J.tolist()}")
-        self.J = tuple(map(tuple, J.tolist()))
-        self.J_inv = tuple(map(tuple, np.linalg.inv(J).tolist()))
         # the gravity-gradient torque r × J r vanishes identically for J ∝ 1
         isotropic = np.allclose(J, J[0, 0] * np.eye(3), rtol=1e-15, atol=0.0)
-        self.gravity_gradient = p.gravity_gradient and not isotropic
-        self.needs_position = p.gravity_gradient
-        self.mu = p.mu
         q_OI = _unit(u.q_OI, "q_OI")
         C_BO = dcm_from_euler123(p.attitude0)
         q_BO = quat_from_dcm(C_BO)
         q_BI = qmul(q_OI, q_BO)
         w_BI_B = p.rate0 + C_BO @ u.w_OI_O
-        H_B = rotate(self.J, w_BI_B)
-        h = self._h_total()
-        self.q_BI = q_BI
-        self.H_I = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
-        self.euler = tuple(p.attitude0.tolist())
-        self.q_BO = tuple(q_BO.tolist())
+        H_B = rotate(J.tolist(), w_BI_B)
+        h = (u.h_cmg + u.h_wheel + u.h_payload).tolist()
+        #: the state and the constants of the step and output kernels (offsets S_*)
+        self.state = state = np.zeros(STATE_SIZE)
+        state[S_Q_BI : S_Q_BI + 4] = q_BI
+        state[S_H_I : S_H_I + 3] = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
+        state[S_Q_BO : S_Q_BO + 4] = q_BO
+        state[S_EULER : S_EULER + 3] = p.attitude0
+        state[S_J : S_J + 9] = J.reshape(-1)
+        state[S_J_INV : S_J_INV + 9] = np.linalg.inv(J).reshape(-1)
+        state[S_MU] = p.mu
+        state[S_GRAVITY_GRADIENT] = p.gravity_gradient and not isotropic
+        state[S_NEEDS_POSITION] = p.gravity_gradient
         self.t = t0
         self.remember_initial_inputs()
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        u = self.u
-        h0 = self._h_total()
-        hdot = (u.hdot_cmg + u.hdot_wheel + u.hdot_payload).tolist()
-        tau = u.tau_ext.tolist()
-        r_I = u.r_I.tolist()
-        if self.needs_position and not any(r_I):
+        status, rate, needed = _step(self.values, self.state, dt)
+        if status == NO_POSITION:
             raise ModelError(
                 "gravity_gradient is on but r_I is zero: connect r_I or set "
                 "gravity_gradient = false"
             )
-        w = self._rate(self.q_BI, self.H_I, h0)
-        n = max(1, math.ceil(max(map(abs, w)) * dt / MAX_ROTATION_PER_SUBSTEP))
-        if n > MAX_SUBSTEPS:
+        if status == TOO_MANY_SUBSTEPS:
+            n = math.ceil(needed) if math.isfinite(needed) else needed
             raise ModelError(
-                f"t={t:.6g} s: body rate {max(map(abs, w)):.3g} rad/s would need "
+                f"t={t:.6g} s: body rate {rate:.3g} rad/s would need "
                 f"{n} sub-steps of {dt:g} s: the state is unphysical"
             )
-        x = (*self.q_BI, *self.H_I)
-        sub = dt / n
-        for k in range(n):
-            x = self._rk4(x, k * sub, sub, h0, hdot, tau, r_I)
-        if not all(map(math.isfinite, x)):
+        if status == NON_FINITE:
             raise ModelError(f"non-finite state at t={t + dt:.6g} s")
-        norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
-        self.q_BI = (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm)
-        self.H_I = x[4:]
         self.t = t + dt
 
     def output(self):
-        u, y = self.u, self.y
-        q_OI = _unit(u.q_OI, "q_OI")
-        w_BI_B = self._rate(self.q_BI, self.H_I, self._h_total())
-        q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), self.q_BI)
-        if sum(a * b for a, b in zip(q_BO, self.q_BO)) < 0:  # keep the sign continuous
-            q_BO = tuple(-x for x in q_BO)
-        self.q_BO = q_BO
-        self.euler = euler123_from_quat(q_BO, previous=self.euler)
-        w_OI_B = rotate(dcm(q_BO), u.w_OI_O)
-        w_BO_B = (w_BI_B[0] - w_OI_B[0], w_BI_B[1] - w_OI_B[1], w_BI_B[2] - w_OI_B[2])
-        y.q_BI[:] = self.q_BI
-        y.w_BI_B[:] = w_BI_B
-        y.q_BO[:] = q_BO
-        y.euler_BO[:] = self.euler
-        y.euler_rate_BO[:] = euler123_rates(self.euler, w_BO_B)
-        y.w_BO_B[:] = w_BO_B
-        y.H_I[:] = self.H_I
+        status, norm = _output(self.values, self.state)
+        if status == NOT_UNIT:
+            q_OI = self.u.q_OI.tolist()
+            raise ModelError(f"q_OI must be a unit quaternion, got {q_OI} (norm {norm})")
 
     def initial_input_jumps(self, used, dt):
         """Bounds of one step of dt (margin 4): the orbit frame turns by at most
@@ -280,64 +264,224 @@ class SatelliteDynamics(Model):
                 jumps[h] = f"changed by {change:.4g} N.m.s"
         return jumps
 
-    # -- internals -----------------------------------------------------------------
-    def _h_total(self) -> list:
-        u = self.u
-        return (u.h_cmg + u.h_wheel + u.h_payload).tolist()
 
-    def _rate(self, q, H_I, h) -> tuple:
-        """w_BI_B = J⁻¹ (C_BI H_I − h)."""
-        H_B = rotate(dcm(q), H_I)
-        return rotate(self.J_inv, (H_B[0] - h[0], H_B[1] - h[1], H_B[2] - h[2]))
+# -- step and output: kernels on the value array (compiled in long runs, components/jit.py) --
+_OFFSET = Layout(SatelliteDynamics.VARIABLES).offset  # offsets in SatelliteDynamics.values
+H_CMG, H_WHEEL, H_PAYLOAD = (_OFFSET[f"h_{d}"] for d in DEVICES)
+HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD = (_OFFSET[f"hdot_{d}"] for d in DEVICES)
+TAU_EXT, R_I, Q_OI, W_OI_O = (_OFFSET[n] for n in ("tau_ext", "r_I", "q_OI", "w_OI_O"))
+Y_Q_BI, Y_W_BI_B, Y_Q_BO, Y_EULER_BO, Y_EULER_RATE_BO, Y_W_BO_B, Y_H_I = (
+    _OFFSET[n] for n in ("q_BI", "w_BI_B", "q_BO", "euler_BO", "euler_rate_BO", "w_BO_B", "H_I")
+)
+#: offsets in SatelliteDynamics.state: the state (q_BI, H_I), the last output's q_BO and
+#: euler_BO (their sign and branch are kept continuous), and constants set by initialize
+S_Q_BI, S_H_I, S_Q_BO, S_EULER = 0, 4, 7, 11
+S_J, S_J_INV = 14, 23  # hub inertia and its inverse, row-major
+S_MU = 32
+S_GRAVITY_GRADIENT = 33  # 1: apply the torque (gravity_gradient on and J not ∝ 1)
+S_NEEDS_POSITION = 34  # 1: gravity_gradient on, so r_I must not be zero
+STATE_SIZE = 35
+#: the kernels' status codes (the Python wrapper raises the message)
+OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT = range(5)
 
-    def _rk4(self, x, s, ds, h0, hdot, tau, r_I):
-        f, half = self._derivative, ds / 2
-        k1 = f(x, s, h0, hdot, tau, r_I)
-        k2 = f([a + half * b for a, b in zip(x, k1)], s + half, h0, hdot, tau, r_I)
-        k3 = f([a + half * b for a, b in zip(x, k2)], s + half, h0, hdot, tau, r_I)
-        k4 = f([a + ds * b for a, b in zip(x, k3)], s + ds, h0, hdot, tau, r_I)
-        sixth = ds / 6
-        return tuple(
-            xi + sixth * (a + 2 * (b + c) + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)
-        )
 
-    def _derivative(self, x, s, h0, hdot, tau, r_I):
-        """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
-        q0, q1, q2, q3 = q = x[:4]
-        k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
-        C = tuple((k * a, k * b, k * c) for a, b, c in dcm(q))
-        H_B = rotate(C, x[4:])
-        wx, wy, wz = rotate(
-            self.J_inv,
-            (
-                H_B[0] - h0[0] - hdot[0] * s,
-                H_B[1] - h0[1] - hdot[1] * s,
-                H_B[2] - h0[2] - hdot[2] * s,
-            ),
-        )
-        q_dot = (
-            0.5 * (-q1 * wx - q2 * wy - q3 * wz),
-            0.5 * (q0 * wx + q2 * wz - q3 * wy),
-            0.5 * (q0 * wy - q1 * wz + q3 * wx),
-            0.5 * (q0 * wz + q1 * wy - q2 * wx),
-        )
-        if not self.gravity_gradient:
-            return (*q_dot, *rotate_back(C, tau))
-        rx, ry, rz = r_B = rotate(C, r_I)
-        r2 = rx * rx + ry * ry + rz * rz
-        g = 3.0 * self.mu / (r2 * r2 * math.sqrt(r2))
-        jx, jy, jz = rotate(self.J, r_B)
-        torque = (
-            tau[0] + g * (ry * jz - rz * jy),
-            tau[1] + g * (rz * jx - rx * jz),
-            tau[2] + g * (rx * jy - ry * jx),
-        )
-        return (*q_dot, *rotate_back(C, torque))
+@kernel
+def _step(values, state, dt):
+    """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values`` (held at
+    the step's start, the devices' momentum extrapolated with its derivative): RK4 in
+    n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉ sub-steps, q_BI normalised after.
+    Returns (status, max|w_BI_B|, the sub-steps needed); on an error nothing changes."""
+    v, s = floats(values), floats(state)
+    h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
+    hdot = _device_sum(v, HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD)
+    tau, r_I = _vector(v, TAU_EXT), _vector(v, R_I)
+    if s[S_NEEDS_POSITION] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
+        return NO_POSITION, 0.0, 0.0
+    q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
+    J, J_inv = _matrix(s, S_J), _matrix(s, S_J_INV)
+    w = _rate(q_BI, H_I, h0, J_inv)
+    rate = abs(w[0])
+    if abs(w[1]) > rate:
+        rate = abs(w[1])
+    if abs(w[2]) > rate:
+        rate = abs(w[2])
+    needed = rate * dt / MAX_ROTATION_PER_SUBSTEP
+    if not needed <= MAX_SUBSTEPS:
+        return TOO_MANY_SUBSTEPS, rate, needed
+    n = max(1, int(math.ceil(needed)))
+    x = _integrate(
+        q_BI + H_I, n, dt / n, h0, hdot, tau, r_I, J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0
+    )
+    for xi in x:
+        if not math.isfinite(xi):
+            return NON_FINITE, rate, needed
+    norm = _norm(x)
+    _put(state, S_Q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
+    _put(state, S_H_I, x[4:])
+    return OK, rate, needed
+
+
+@kernel
+def _output(values, state):
+    """Write the outputs into ``values`` from ``state`` and the inputs; keep q_BO's sign
+    and euler_BO's branch in ``state``.  Returns (status, |q_OI|); NOT_UNIT (nothing
+    written) if q_OI is not a unit quaternion."""
+    v, s = floats(values), floats(state)
+    q0, q1, q2, q3 = q = _quaternion(v, Q_OI)
+    norm = _norm(q)
+    if not _is_unit(norm):
+        return NOT_UNIT, norm
+    q_OI = (q0 / norm, q1 / norm, q2 / norm, q3 / norm)
+    q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
+    w_BI_B = _rate(q_BI, H_I, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), _matrix(s, S_J_INV))
+    q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), q_BI)
+    last = _quaternion(s, S_Q_BO)
+    if q_BO[0] * last[0] + q_BO[1] * last[1] + q_BO[2] * last[2] + q_BO[3] * last[3] < 0:
+        q_BO = (-q_BO[0], -q_BO[1], -q_BO[2], -q_BO[3])  # keep the sign continuous
+    C_BO = dcm(q_BO)
+    euler = euler123(q_BO, C_BO, _vector(s, S_EULER), True)
+    w_OI_B = rotate(C_BO, _vector(v, W_OI_O))
+    w_BO_B = (w_BI_B[0] - w_OI_B[0], w_BI_B[1] - w_OI_B[1], w_BI_B[2] - w_OI_B[2])
+    _put(state, S_Q_BO, q_BO)
+    _put(state, S_EULER, euler)
+    _put(values, Y_Q_BI, q_BI)
+    _put(values, Y_W_BI_B, w_BI_B)
+    _put(values, Y_Q_BO, q_BO)
+    _put(values, Y_EULER_BO, euler)
+    _put(values, Y_EULER_RATE_BO, euler123_dot(euler, w_BO_B))
+    _put(values, Y_W_BO_B, w_BO_B)
+    _put(values, Y_H_I, H_I)
+    return OK, norm
+
+
+@jitable
+def _rate(q, H_I, h, J_inv):
+    """w_BI_B = J⁻¹ (C_BI H_I − h)."""
+    H_B = rotate(dcm(q), H_I)
+    return rotate(J_inv, (H_B[0] - h[0], H_B[1] - h[1], H_B[2] - h[2]))
+
+
+@jitable
+def _integrate(x, n, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """x = (q_BI, H_I) after n RK4 sub-steps of ``sub``."""
+    for k in range(n):
+        x = _rk4(x, k * sub, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient)
+    return x
+
+
+@jitable
+def _rk4(x, s, ds, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """One classical Runge-Kutta step of ``ds`` from ``s`` into the macro step."""
+    f, half = _derivative, ds / 2
+    inputs = h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient
+    k1 = f(x, s, *inputs)
+    k2 = f(_shift(x, half, k1), s + half, *inputs)
+    k3 = f(_shift(x, half, k2), s + half, *inputs)
+    k4 = f(_shift(x, ds, k3), s + ds, *inputs)
+    return _shift(x, ds / 6, _weighted(k1, k2, k3, k4))
+
+
+@jitable
+def _shift(x, a, k):
+    """x + a k (7-tuples)."""
+    return (
+        x[0] + a * k[0], x[1] + a * k[1], x[2] + a * k[2], x[3] + a * k[3],
+        x[4] + a * k[4], x[5] + a * k[5], x[6] + a * k[6],
+    )  # fmt: skip
+
+
+@jitable
+def _weighted(k1, k2, k3, k4):
+    """RK4's k1 + 2 (k2 + k3) + k4 (7-tuples)."""
+    a, b, c, d = k1, k2, k3, k4
+    return (
+        a[0] + 2 * (b[0] + c[0]) + d[0], a[1] + 2 * (b[1] + c[1]) + d[1],
+        a[2] + 2 * (b[2] + c[2]) + d[2], a[3] + 2 * (b[3] + c[3]) + d[3],
+        a[4] + 2 * (b[4] + c[4]) + d[4], a[5] + 2 * (b[5] + c[5]) + d[5],
+        a[6] + 2 * (b[6] + c[6]) + d[6],
+    )  # fmt: skip
+
+
+@jitable
+def _derivative(x, s, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+    """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
+    q0, q1, q2, q3 = q = x[:4]
+    k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = dcm(q)
+    C = (k * c00, k * c01, k * c02), (k * c10, k * c11, k * c12), (k * c20, k * c21, k * c22)
+    H_B = rotate(C, x[4:])
+    wx, wy, wz = rotate(
+        J_inv,
+        (
+            H_B[0] - h0[0] - hdot[0] * s,
+            H_B[1] - h0[1] - hdot[1] * s,
+            H_B[2] - h0[2] - hdot[2] * s,
+        ),
+    )
+    q_dot = (
+        0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+        0.5 * (q0 * wx + q2 * wz - q3 * wy),
+        0.5 * (q0 * wy - q1 * wz + q3 * wx),
+        0.5 * (q0 * wz + q1 * wy - q2 * wx),
+    )
+    if not gravity_gradient:
+        return q_dot + rotate_back(C, tau)
+    rx, ry, rz = r_B = rotate(C, r_I)
+    r2 = rx * rx + ry * ry + rz * rz
+    g = 3.0 * mu / (r2 * r2 * math.sqrt(r2))
+    jx, jy, jz = rotate(J, r_B)
+    torque = (
+        tau[0] + g * (ry * jz - rz * jy),
+        tau[1] + g * (rz * jx - rx * jz),
+        tau[2] + g * (rx * jy - ry * jx),
+    )
+    return q_dot + rotate_back(C, torque)
+
+
+@jitable
+def _vector(a, at):
+    return a[at], a[at + 1], a[at + 2]
+
+
+@jitable
+def _quaternion(a, at):
+    return a[at], a[at + 1], a[at + 2], a[at + 3]
+
+
+@jitable
+def _matrix(a, at):
+    """A row-major 3×3 as a tuple of rows."""
+    return _vector(a, at), _vector(a, at + 3), _vector(a, at + 6)
+
+
+@jitable
+def _device_sum(a, cmg, wheel, payload):
+    """(cmg + wheel) + payload of three 3-vectors at these offsets."""
+    c, w, p = _vector(a, cmg), _vector(a, wheel), _vector(a, payload)
+    return (c[0] + w[0]) + p[0], (c[1] + w[1]) + p[1], (c[2] + w[2]) + p[2]
+
+
+@jitable
+def _put(array, at, x):
+    """array[at : at + len(x)] = x."""
+    for i in range(len(x)):
+        array[at + i] = x[i]
+
+
+@jitable
+def _norm(q):
+    return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+
+
+@jitable
+def _is_unit(norm):
+    """|q| near enough to 1 for a quaternion meant to be a unit one."""
+    return 0.5 < norm < 2.0
 
 
 def _unit(q, name) -> tuple:
-    q0, q1, q2, q3 = q.tolist()
-    norm = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    if not 0.5 < norm < 2.0:
-        raise ModelError(f"{name} must be a unit quaternion, got {[q0, q1, q2, q3]} (norm {norm})")
+    q0, q1, q2, q3 = q = q.tolist()
+    norm = _norm(q)
+    if not _is_unit(norm):
+        raise ModelError(f"{name} must be a unit quaternion, got {q} (norm {norm})")
     return q0 / norm, q1 / norm, q2 / norm, q3 / norm

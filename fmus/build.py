@@ -86,7 +86,36 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
     for path in sorted(_pythonfmu_dir().glob("*.py")):
         entries[f"resources/pythonfmu/{path.name}"] = path.read_bytes()
-    return write_archive(target, entries)
+    write_archive(target, entries)
+    if any(b"@kernel\n" in path.read_bytes() for path in sources.values()):
+        compile_kernels(target, name, package)
+    return target
+
+
+_COMPILE_KERNELS = """
+import importlib, os, sys, tempfile, zipfile
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+fmu, name, package, module = sys.argv[1:]
+with tempfile.TemporaryDirectory() as folder:
+    zipfile.ZipFile(fmu).extractall(folder)
+    sys.path.insert(0, folder + "/resources")
+    model = getattr(importlib.import_module(package + ".components." + module), name)
+    model().start(0.0).advance(0.0, 0.1)
+"""
+
+
+def compile_kernels(fmu: Path, name: str, package: str) -> None:
+    """Fill the compile cache of the FMU's kernels (components/jit.py): load its code from
+    an extraction, as a host does, in a fresh process of this Python, and run its model at
+    the defaults for one step.  The cache is keyed on content, so any later extraction of
+    this FMU loads the compiled kernels instead of compiling them."""
+    result = subprocess.run(
+        [sys.executable, "-c", _COMPILE_KERNELS, str(fmu), name, package, FMUS[name]],
+        capture_output=True,
+        text=True,
+    )
+    if result.returncode != 0:
+        raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
 
 
 def write_archive(target: Path, entries: dict[str, bytes]) -> Path:

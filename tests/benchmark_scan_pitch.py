@@ -1,20 +1,28 @@
-"""Benchmark of scan_pitch: prints a report (not a test; timings on shared machines vary).
+"""Benchmark of scan_pitch (and payload_sweep, video_sar): prints a report (not a test;
+timings on shared machines vary: compare the ratios, measured in one run).
 
     python tests/benchmark_scan_pitch.py [--repeat N]
 
-For macro steps 0.01, 0.05 and 0.1 s, on one core, best of N runs each:
-- the co-simulation (our master, the five FMUs) and its real-time factor;
-- the monolithic NumPy reference at the same step (tests/reference/scan_pitch.py), and the
-  ratio of the two wall times, measured in the same run;
-- the co-simulation's time per macro step split into FMI-call overhead (the same run with
-  every model's initialize/step/output replaced by a no-op inside the loaded FMUs: the
-  master, ctypes, pythonfmu and our slave and shim) and model compute (the rest).
-Targets (issue 2): ≥ 300× real time at 0.05 s, and ≤ 3× the monolithic reference.
+scan_pitch at macro steps 0.01, 0.05 and 0.1 s, payload_sweep and video_sar at their own
+steps, on one core, best of N runs each (CPU time of this process, see best()):
+- the co-simulation (our master, the FMUs) and its real-time factor;
+- its time per macro step split into model compute (the rest of the below), FMI layer (the
+  same run with every model's initialize/step/output replaced by a no-op inside the loaded
+  FMUs, minus the master: ctypes, pythonfmu, our shim and slave) and master (the same run
+  with every FMI call of the master's loop replaced by a Python no-op: its own loop);
+- the previous design: the same run with the compiled kernels (components/jit.py) replaced
+  by their readable Python (what AGILESAT_JIT=0 runs), and the ratio of the two;
+- the monolithic NumPy reference of scan_pitch at the same step
+  (tests/reference/scan_pitch.py), and the ratio of the two wall times.
+Basilisk (tests/benchmark_basilisk.py) as an anchor where bsk is installed.
+Targets (issue 10): >= 1,000x real time at 0.05 s, and <= 1.5x the monolithic reference.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import platform
 import resource
 import sys
@@ -23,44 +31,158 @@ from pathlib import Path
 
 import numpy as np
 
+os.environ.setdefault("AGILESAT_JIT_AFTER", "0")  # compiled from the first call (jit.py)
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from agilesat.fmus.build import build_all
-from agilesat.orchestration import simulate
+from agilesat.orchestration import master, simulate
 from agilesat.orchestration.scenarios import get
 from reference import scan_pitch as reference
 
 STEPS = (0.01, 0.05, 0.1)
 STOP = 150.0
+OTHERS = ("payload_sweep", "video_sar")
 
 
 def best(function, repeat: int) -> float:
+    """Least CPU time of this process over ``repeat`` calls (single-threaded: on a quiet
+    machine the wall time; on a shared one not inflated by other processes' load)."""
     times = []
     for _ in range(repeat):
-        start = time.perf_counter()
+        start = time.process_time()
         function()
-        times.append(time.perf_counter() - start)
+        times.append(time.process_time() - start)
     return min(times)
 
 
+def _fmu_modules():
+    return [(n, m) for n, m in list(sys.modules.items()) if n.startswith("agilesat_")]
+
+
+@contextlib.contextmanager
+def patched(changes):
+    """Set (object, attribute, value) for the block, then restore."""
+    saved = [(obj, name, vars(obj)[name]) for obj, name, _ in changes]
+    try:
+        for obj, name, value in changes:
+            setattr(obj, name, value)
+        yield
+    finally:
+        for obj, name, value in saved:
+            setattr(obj, name, value)
+
+
 def stub_models():
-    """Replace every loaded FMU model's work by a no-op; returns a function undoing it."""
-    saved = []
-    for name, module in list(sys.modules.items()):
-        if not name.startswith("agilesat_"):
-            continue
+    """Every loaded FMU model's work replaced by a no-op."""
+    changes = []
+    for name, module in _fmu_modules():
         for obj in vars(module).values():
             if isinstance(obj, type) and "VARIABLES" in vars(obj) and obj.__module__ == name:
-                for method in ("initialize", "step", "output"):
-                    saved.append((obj, method, vars(obj)[method]))
-                obj.initialize = lambda self, t0: None
-                obj.step = lambda self, t, dt: None
-                obj.output = lambda self: None
+                changes += [
+                    (obj, "initialize", lambda self, t0: None),
+                    (obj, "step", lambda self, t, dt: None),
+                    (obj, "output", lambda self: None),
+                ]
+    return patched(changes)
 
-    def restore():
-        for obj, method, function in saved:
-            setattr(obj, method, function)
 
-    return restore
+def readable_kernels():
+    """Every compiled kernel of the loaded FMUs running its readable Python."""
+    changes = []
+    for _, module in _fmu_modules():
+        if module.__name__.endswith(".components.jit"):
+            for other_name, other in _fmu_modules():
+                if other_name.startswith(module.__name__.split(".")[0] + ".components."):
+                    for kernel in module.kernels(other).values():
+                        changes.append((kernel, "_run", kernel.py_func))
+    return patched(changes)
+
+
+def stub_fmi():
+    """The master's FMI calls in the loop (get/set/doStep) replaced by Python no-ops."""
+    return patched(
+        [
+            (master._Port, "transfer", lambda self: None),
+            (master, "_do_step", lambda instance, t, step: None),
+        ]
+    )
+
+
+def measure(ssd, step, stop, repeat):
+    run = lambda: simulate(ssd, step=step, stop=stop)  # noqa: E731
+    cosim = best(run, repeat)
+    with readable_kernels():
+        previous = best(run, repeat)
+    with stub_models():
+        stubbed = best(run, repeat)
+        with stub_fmi():
+            loop = best(run, repeat)
+    n = round(stop / step)
+    per_step = {
+        "total": cosim / n * 1e6,
+        "model": (cosim - stubbed) / n * 1e6,
+        "fmi": (stubbed - loop) / n * 1e6,
+        "master": loop / n * 1e6,
+        "previous model": (previous - stubbed) / n * 1e6,
+        "previous": previous / n * 1e6,
+    }
+    return cosim, previous, per_step
+
+
+def models_report(repeat: int) -> None:
+    """Each scan_pitch model alone (in-process, at its defaults, 500 steps of 0.05 s with
+    step + output): us per step with its kernels compiled and with their Python,
+    alternated, best of ``repeat`` (less noisy than the co-simulation's split)."""
+    from agilesat.components import jit
+    from agilesat.fmus import FMUS, model_class
+
+    print("\nmodels alone, us per step + output (compiled kernels / their Python):")
+    for name in get("scan_pitch").components:
+        model = model_class(name)
+        module = sys.modules[model.__module__]
+        kernels = [
+            k
+            for m in list(sys.modules.values())
+            if m is not None
+            and getattr(m, "__name__", "").startswith(module.__name__.rsplit(".", 1)[0] + ".")
+            for k in jit.kernels(m).values()
+        ]
+
+        def run():
+            instance = model().start(0.0)
+            for k in range(500):
+                instance.advance(k * 0.05, 0.05)
+
+        times = {}
+        for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+            changes = [(k, "_run", getattr(k, attribute)) for k in kernels]
+            with patched(changes):
+                run()  # compile or load outside the timing
+        for _ in range(repeat):
+            for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+                with patched([(k, "_run", getattr(k, attribute)) for k in kernels]):
+                    elapsed = best(run, 1) / 500 * 1e6
+                times[label] = min(times.get(label, elapsed), elapsed)
+        print(
+            f"  {name:>24} ({FMUS[name]}): {times['compiled']:6.1f} / {times['python']:6.1f}"
+            f"{'' if kernels else '  (no kernels)'}"
+        )
+
+
+def basilisk(cosim: float, monolithic: float, repeat: int) -> None:
+    """The Basilisk anchor (tests/benchmark_basilisk.py) where bsk is installed."""
+    try:
+        from benchmark_basilisk import KINDS, hub_time
+    except ImportError as exc:
+        print(f"\nBasilisk: not installed ({exc}); pip install bsk for the anchor")
+        return
+    print("\nBasilisk at 0.05 s, 150 s, RK4 (dynamics only):")
+    for kind in KINDS:
+        elapsed = best(lambda: hub_time(kind, 0.05, STOP), repeat)
+        print(
+            f"  {kind:>5}: {elapsed:.3f}s, {STOP / elapsed:.0f}x real time, "
+            f"{elapsed / monolithic:.2f}x the reference, co-simulation / Basilisk "
+            f"{cosim / elapsed:.2f}"
+        )
 
 
 def main() -> None:
@@ -70,39 +192,47 @@ def main() -> None:
     build_all()
     ssd = get("scan_pitch").ssd
     simulate(ssd, step=0.1, stop=1.0)  # load every FMU module once
-    print(f"scan_pitch benchmark: {STOP:g} s simulated, best of {args.repeat} runs per entry")
+    for name in OTHERS:
+        simulate(get(name).ssd, step=get(name).step, stop=1.0)
+    print(f"benchmark: best of {args.repeat} runs per entry")
     print(
         f"  {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
         f"numpy {np.__version__}, one core\n"
     )
-    header = (
-        f"{'step':>6} {'co-sim':>9} {'RTF':>7} {'us/step':>8} {'reference':>10} "
-        f"{'ratio':>6} {'FMI us/step':>12} {'model us/step':>14}"
+    print(
+        f"{'scenario':>13} {'step':>5} {'co-sim':>8} {'RTF':>6} {'us/step':>8} "
+        f"{'model':>6} {'FMI':>5} {'master':>6} | {'previous':>8} {'model':>6} {'speed-up':>8} "
+        f"| {'reference':>9} {'ratio':>6}"
     )
-    print(header)
     rows = {}
-    for step in STEPS:
-        n = round(STOP / step)
-        cosim = best(lambda: simulate(ssd, step=step, stop=STOP), args.repeat)
-        monolithic = best(lambda: reference.simulate(step, STOP), args.repeat)
-        restore = stub_models()
-        try:
-            overhead = best(lambda: simulate(ssd, step=step, stop=STOP), args.repeat)
-        finally:
-            restore()
-        rows[step] = (cosim, monolithic)
+    cases = [("scan_pitch", step, STOP) for step in STEPS]
+    cases += [(name, get(name).step, get(name).stop) for name in OTHERS]
+    for name, step, stop in cases:
+        cosim, previous, us = measure(get(name).ssd, step, stop, args.repeat)
+        if name == "scan_pitch":
+            monolithic = best(lambda: reference.simulate(step, stop), args.repeat)
+            ref = f"{monolithic:>8.3f}s {cosim / monolithic:>6.2f}"
+            rows[step] = (cosim, monolithic)
+        else:
+            ref = f"{'':>9} {'':>6}"
         print(
-            f"{step:>6} {cosim:>8.3f}s {STOP / cosim:>7.0f} {cosim / n * 1e6:>8.0f} "
-            f"{monolithic:>9.3f}s {cosim / monolithic:>6.2f} {overhead / n * 1e6:>12.0f} "
-            f"{(cosim - overhead) / n * 1e6:>14.0f}"
+            f"{name:>13} {step:>5} {cosim:>7.3f}s {stop / cosim:>6.0f} {us['total']:>8.0f} "
+            f"{us['model']:>6.0f} {us['fmi']:>5.0f} {us['master']:>6.0f} | "
+            f"{us['previous']:>8.0f} {us['previous model']:>6.0f} {previous / cosim:>7.2f}x | {ref}"
         )
     cosim, monolithic = rows[0.05]
     rtf = STOP / cosim
+    models_report(max(args.repeat, 5))
+    basilisk(cosim, monolithic, args.repeat)
     print(
-        f"\ntargets at 0.05 s: real-time factor {rtf:.0f} (target >= 300: "
-        f"{'met' if rtf >= 300 else 'NOT met'}); co-simulation / reference "
+        "\nus/step: wall time per macro step = model + FMI + master; previous: the same with "
+        "the kernels' readable Python (AGILESAT_JIT=0), its model compute, and previous / now"
+    )
+    print(
+        f"targets at 0.05 s: real-time factor {rtf:.0f} (target >= 1000: "
+        f"{'met' if rtf >= 1000 else 'NOT met'}); co-simulation / reference "
         f"{cosim / monolithic:.2f} "
-        f"(target <= 3: {'met' if cosim / monolithic <= 3 else 'NOT met'})"
+        f"(target <= 1.5: {'met' if cosim / monolithic <= 1.5 else 'NOT met'})"
     )
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory {peak:.0f} MiB")

@@ -1,0 +1,215 @@
+"""Compiled kernels: the models' own hot functions, compiled by numba once a run is long.
+
+A hot loop of a model is written once, as a plain Python function on floats and tuples, in
+the model's module, with its equations; ``@kernel`` marks it and ``@jitable`` the plain
+functions it calls.  A kernel runs that Python for its first ``AGILESAT_JIT_AFTER`` calls
+(default :data:`DEFAULT_AFTER`), then the same function compiled by numba in nopython
+mode without fastmath: IEEE double arithmetic in the order written, the same libm, so the
+results are those of the Python bit for bit (tests/test_kernels.py) and switching midway
+changes nothing.  The threshold is measured, not guessed: importing numba and loading the
+compiled kernels costs about a second per process, which the kernels win back only after
+tens of thousands of calls (README, "Benchmark"); short runs never import numba, long runs
+and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the Python;
+``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
+``kernel.compiled`` the compiled function (the Python without numba).
+
+A kernel may work on a model's whole value array (SatelliteDynamics): it reads through
+:func:`floats` (in its Python a list of Python floats, which index and compute several
+times faster than NumPy scalars; compiled, the array itself) at offsets named after the
+variable table, and writes into the array.
+
+Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's path and
+modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,
+``get_suitable_cache_subpath``), and FMI hosts unpack an FMU into a new temporary folder
+each time: every load would compile again (seconds per FMU).  Our locator keys it on
+content instead: ``<root>/<key>/``, key = SHA-256 of the module's name and of every
+``.py`` file beside its source (the kernel and everything it calls from its package),
+root = ``AGILESAT_CACHE_DIR`` or ``$XDG_CACHE_HOME/agilesat/numba`` (``~/.cache``).  Inside
+an FMU the module is ``agilesat_<content hash>.components.<name>``, so a rebuilt FMU gets
+new entries and two extractions of one FMU share them; ``agilesat build`` fills the cache
+by loading each built FMU once (``fmus/build.py``).  numba's index key adds the
+signature, the CPU and the bytecode.  An unwritable cache directory costs a compile per
+process, nothing else (a warning says so).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+#: calls of a kernel before it is compiled (see the module docstring)
+DEFAULT_AFTER = 50_000
+ENABLED = os.environ.get("AGILESAT_JIT", "1") != "0"
+AFTER = int(os.environ.get("AGILESAT_JIT_AFTER", DEFAULT_AFTER))
+_JITABLE: list = []  # functions kernels may call
+_FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
+_REGISTERED: set = set()  # those of them numba was told about
+_SET_UP = False  # numba imported (then a function declared later is registered at once)
+
+
+def cache_root() -> Path:
+    """Where compiled kernels are kept (see the module docstring)."""
+    root = os.environ.get("AGILESAT_CACHE_DIR")
+    if root:
+        return Path(root)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base, "agilesat", "numba")
+
+
+@functools.cache
+def content_key(module: str, source: str) -> str:
+    """SHA-256 of the module name and of the ``.py`` files in the source's directory."""
+    digest = hashlib.sha256(module.encode() + b"\0")
+    for path in sorted(Path(source).resolve().parent.glob("*.py")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:24]
+
+
+def jitable(function):
+    """A plain function that kernels may call (unchanged for Python callers)."""
+    _JITABLE.append(function)
+    if _SET_UP:  # a module imported after the first compile
+        _set_up()
+    return function
+
+
+def register_floats(function) -> None:
+    """Let kernels call ``function`` (a to-floats converter) on tuples and arrays, as the
+    identity."""
+    _FLOATS.append(function)
+    if _SET_UP:
+        _set_up()
+
+
+def floats(x):
+    """``x.tolist()`` for an ndarray, else ``x``; in a compiled kernel the identity (on
+    tuples and arrays)."""
+    return x.tolist() if isinstance(x, np.ndarray) else x
+
+
+register_floats(floats)
+
+
+class Kernel:
+    """A hot function: its Python for the first ``after`` calls, then compiled."""
+
+    def __init__(self, function, after: int):
+        functools.update_wrapper(self, function)
+        self.py_func = function
+        self._left = after
+        self._run = self._count if ENABLED else function
+
+    def __call__(self, *args):
+        return self._run(*args)
+
+    def _count(self, *args):
+        self._left -= 1
+        if self._left < 0:
+            self._run = self.compiled
+            return self._run(*args)
+        return self.py_func(*args)
+
+    @functools.cached_property
+    def compiled(self):
+        """numba's compiled function (with our cache), or the Python without numba."""
+        numba = _numba()
+        if numba is None:
+            return self.py_func
+        dispatcher = numba.njit(self.py_func)
+        try:
+            dispatcher._cache = _content_cache(self.py_func)  # what enable_caching() does
+        except (OSError, RuntimeError, AttributeError) as exc:  # AttributeError: API moved
+            warnings.warn(
+                f"agilesat: no compile cache for {self.py_func.__qualname__} ({exc}): "
+                "compiling it in every process",
+                stacklevel=2,
+            )
+        return dispatcher
+
+
+def kernel(function) -> Kernel:
+    return Kernel(function, AFTER)
+
+
+def kernels(module) -> dict[str, Kernel]:
+    """{name: kernel} of a module."""
+    return {name: obj for name, obj in vars(module).items() if isinstance(obj, Kernel)}
+
+
+@functools.cache
+def _numba():
+    """numba, imported and told about our jitable functions at the first compile."""
+    global _SET_UP
+    if not ENABLED:
+        return None
+    try:
+        import numba
+    except ImportError:
+        return None
+    _SET_UP = True
+    _set_up()
+    return numba
+
+
+def _set_up() -> None:
+    """Register every jitable function and converter with numba (each once)."""
+    import numba
+    from numba.extending import overload, register_jitable
+
+    def identity(x):
+        if isinstance(x, (numba.types.BaseTuple, numba.types.Array)):
+            return lambda x: x
+        return None
+
+    for function in _FLOATS:
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            overload(function)(identity)
+    for function in _JITABLE:
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            register_jitable(function)
+
+
+def _content_cache(py_func):
+    return _content_cache_class()(py_func)
+
+
+@functools.cache
+def _content_cache_class():
+    """numba's FunctionCache with a locator keyed on content (numba.core.caching)."""
+    from numba.core import caching
+
+    class ContentLocator(caching._CacheLocator):
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            self._key = content_key(py_func.__module__, py_file)
+
+        def get_cache_path(self):
+            return str(cache_root() / self._key)
+
+        def get_source_stamp(self):
+            return self._key
+
+        def get_disambiguator(self):
+            return str(self._lineno)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            locator = cls(py_func, py_file)
+            locator.ensure_cache_path()  # OSError: not writable
+            return locator
+
+    class ContentCacheImpl(caching.CompileResultCacheImpl):
+        _locator_classes = [ContentLocator]
+
+    class ContentCache(caching.FunctionCache):
+        _impl_class = ContentCacheImpl
+
+    return ContentCache
