@@ -144,8 +144,8 @@ def _set_up() -> None:
     import numba
     from numba.extending import overload, register_jitable
 
-    def identity_on_tuples(x):
-        if isinstance(x, numba.types.BaseTuple):
+    def identity_on_tuples(x):  # and on arrays (components/flat.py)
+        if isinstance(x, (numba.types.BaseTuple, numba.types.Array)):
             return lambda x: x
         return None
 

@@ -1,0 +1,58 @@
+"""What the models' step/output kernels share: their view of the flat value array.
+
+A model's kernel (components/jit.py) is one function on the model's value array
+(:mod:`.variables`: parameters, inputs, outputs at the fixed offsets of its table, named
+by module constants from :func:`offsets`) and a small float64 state array of its own.
+It reads both through :func:`floats` and writes outputs and state by index; it returns a
+status code, from which the model's Python wrapper raises its ModelError or issues its
+warning, so that the messages are those of the readable code.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .jit import jitable, register_floats
+from .variables import Layout
+
+
+def floats(array):
+    """The numbers of a float64 array to read from: Python floats in the kernels' Python
+    (indexing a list of floats is several times faster than a NumPy array's scalars, and
+    reading it copies: write into the array itself); the array itself in a compiled kernel."""
+    return array.tolist()
+
+
+register_floats(floats)
+
+
+def offsets(model_class) -> dict[str, int]:
+    """{variable: offset in the value array} of a model class (its FMI value references)."""
+    return Layout(model_class.VARIABLES).offset
+
+
+@jitable
+def quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22):
+    """q (scalar first, q0 ≥ 0) of the rotation matrix with rows (c00, c01, c02), ...:
+    Shepperd's method, the largest of 1 + trace, 1 + 2 c_kk − trace chosen (the first on a
+    tie), as :func:`.rotations.quat_from_dcm`, bit for bit (tests/test_kernels_models.py)."""
+    trace = c00 + c11 + c22
+    k, largest = 0, trace
+    for j, c in ((1, c00), (2, c11), (3, c22)):
+        if c > largest:
+            k, largest = j, c
+    if k == 0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = (0.25 * s, (c12 - c21) / s, (c20 - c02) / s, (c01 - c10) / s)
+    elif k == 1:
+        s = 2.0 * math.sqrt(1.0 + 2 * c00 - trace)
+        q = ((c12 - c21) / s, 0.25 * s, (c01 + c10) / s, (c02 + c20) / s)
+    elif k == 2:
+        s = 2.0 * math.sqrt(1.0 + 2 * c11 - trace)
+        q = ((c20 - c02) / s, (c01 + c10) / s, 0.25 * s, (c12 + c21) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + 2 * c22 - trace)
+        q = ((c01 - c10) / s, (c02 + c20) / s, (c12 + c21) / s, 0.25 * s)
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    sign = -1.0 if q[0] < 0.0 else 1.0
+    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
