@@ -56,3 +56,30 @@ def quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22):
     norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     sign = -1.0 if q[0] < 0.0 else 1.0
     return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
+
+
+@jitable
+def remainder(x: float, y: float) -> float:
+    """IEEE 754 remainder x − n y, n the integer nearest x / y (even on a tie): CPython's
+    ``math.remainder`` (Modules/mathmodule.c, m_remainder) step for step, which numba does
+    not provide.  Every step is exact (``%`` of non-negative numbers is fmod)."""
+    if math.isfinite(x) and math.isfinite(y):
+        if y == 0.0:
+            return math.nan
+        absx, absy = abs(x), abs(y)
+        m = absx % absy
+        c = absy - m
+        if m < c:
+            r = m
+        elif m > c:
+            r = -c
+        else:  # half-way: n is even
+            r = m - 2.0 * ((0.5 * (absx - m)) % absy)
+        return math.copysign(1.0, x) * r
+    if math.isnan(x):
+        return x
+    if math.isnan(y):
+        return y
+    if math.isinf(x):
+        return math.nan
+    return x
