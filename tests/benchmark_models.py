@@ -25,7 +25,9 @@ MODELS = ("OrbitEnvironment", "CmgCluster", "CmgSteering", "PitchManeuverControl
 
 def parameters(name: str) -> dict:
     prefix = name + "."
-    return {k[len(prefix) :]: v for k, v in get("scan_pitch").parameters.items() if k.startswith(prefix)}
+    return {
+        k[len(prefix) :]: v for k, v in get("scan_pitch").parameters.items() if k.startswith(prefix)
+    }
 
 
 def all_kernels():
