@@ -83,7 +83,7 @@ class ClusterGeometry:
 
     def axes(self, delta) -> tuple[list, list]:
         """(spins σ_i = s_i cos δ_i + t_i sin δ_i, Jacobian columns a_i = ∂σ_i/∂δ_i)."""
-        return axes(list(delta), self.st.tolist())
+        return axes(np.asarray(delta, dtype=float).tolist(), self.st.tolist())
 
     def momentum(self, delta) -> np.ndarray:
         """h = h_rotor Σ σ_i."""
@@ -128,7 +128,7 @@ def zero_momentum_angles(
     ModelError if |h| does not reach 1e-12 h_rotor."""
     d = np.array(delta, dtype=float)
     for k in range(iterations + 10):  # the last ten: Newton alone, to convergence
-        spins, columns = (np.array(x) for x in geometry.axes(d.tolist()))
+        spins, columns = (np.array(x) for x in geometry.axes(d))
         A = columns.T
         pinv = np.linalg.pinv(A)
         d = d - pinv @ spins.sum(axis=0)
@@ -136,7 +136,7 @@ def zero_momentum_angles(
             grad = -2.0 * np.einsum("ij,jk,ik->i", columns, np.linalg.inv(A @ A.T), spins)
             d = d + gain * (np.eye(N_GYROS) - pinv @ A) @ grad
     d = np.remainder(d + math.pi, 2.0 * math.pi) - math.pi
-    if not np.linalg.norm(geometry.momentum(d.tolist())) < 1e-12 * geometry.h_rotor:
+    if not np.linalg.norm(geometry.momentum(d)) < 1e-12 * geometry.h_rotor:
         raise ModelError(f"no zero-momentum gimbal set found near {list(delta)}")
     return d
 
@@ -286,19 +286,18 @@ N_STATE = RATE + N_GYROS
 
 @kernel
 def cluster_step(values, state, dt):
-    """Each gimbal's :func:`servo` over ``dt`` with its command held.  Returns the gimbal
+    """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  Returns the gimbal
     with the largest |command| (the first of equals) if that exceeds the rate limit (the
     cluster cannot deliver the commanded torque), else −1."""
-    command = floats(values[Y_CMD : Y_CMD + N_GYROS])
-    delta, rates = floats(state[DELTA : DELTA + N_GYROS]), floats(state[RATE : RATE + N_GYROS])
-    rate_limit, accel_limit = floats(state[RATE_LIMIT : ACCEL_LIMIT + 1])
-    angles, rates = servo_step(delta, rates, command, dt, rate_limit, accel_limit)
+    command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state)
+    delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
+    angles, rates = servo_step(delta, rate, command, dt, s[RATE_LIMIT], s[ACCEL_LIMIT])
     worst, largest = 0, abs(command[0])
     for i in range(N_GYROS):
         state[DELTA + i], state[RATE + i] = angles[i], rates[i]
         if abs(command[i]) > largest:
             worst, largest = i, abs(command[i])
-    return worst if largest > rate_limit else -1
+    return worst if largest > s[RATE_LIMIT] else -1
 
 
 @kernel

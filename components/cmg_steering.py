@@ -207,6 +207,7 @@ def wanted_hdot(v) -> tuple:
 
 @jitable
 def _dot(a, b) -> float:
+    """a · b, summed from 0.0 in order (the zero's sign as Python's ``sum`` gives it)."""
     return 0.0 + a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
