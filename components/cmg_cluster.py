@@ -28,10 +28,9 @@ import math
 
 import numpy as np
 
-from .flat import floats, offsets
-from .jit import jitable, kernel
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
@@ -271,8 +270,8 @@ class CmgCluster(Model):
         cluster_output(self.values, self.state)
 
 
-# -- kernels (components/jit.py, components/flat.py) ------------------------------------
-_AT = offsets(CmgCluster)
+# -- kernels (components/jit.py) ------------------------------------------------------
+_AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
 Y_CMD = _AT["delta_dot_cmd"]  # input
 Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
 Y_Q = _AT["singularity"]

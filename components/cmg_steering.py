@@ -42,11 +42,10 @@ from .cmg_cluster import (
     gram,
     inv3,
 )
-from .flat import floats, offsets
-from .jit import jitable, kernel
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
 from .rotations import rotate
-from .variables import choice, input_, output, parameter
+from .variables import Layout, choice, input_, output, parameter
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
 PSEUDO_INVERSE, SR_INVERSE = 0, 1
@@ -152,8 +151,8 @@ class CmgSteering(Model):
         self.singular = singular
 
 
-# -- kernel (components/jit.py, components/flat.py) -------------------------------------
-_AT = offsets(CmgSteering)
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(CmgSteering.VARIABLES).offset  # offsets in CmgSteering.values
 U_TAU, U_DELTA, U_W, U_H = _AT["tau_cmd"], _AT["delta"], _AT["w_BI_B"], _AT["h"]
 Y_RATES, Y_Q = _AT["delta_dot_cmd"], _AT["singularity"]
 #: the state array: s_i, t_i of each gyro (ClusterGeometry.st), then the law's constants

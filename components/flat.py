@@ -1,34 +1,19 @@
-"""What the models' step/output kernels share: their view of the flat value array.
+"""Compilable equivalents of CPython functions numba lacks or computes otherwise, bit for
+bit (tests/test_kernels_models.py), for the models' step/output kernels.
 
-A model's kernel (components/jit.py) is one function on the model's value array
-(:mod:`.variables`: parameters, inputs, outputs at the fixed offsets of its table, named
-by module constants from :func:`offsets`) and a small float64 state array of its own.
-It reads both through :func:`floats` and writes outputs and state by index; it returns a
-status code, from which the model's Python wrapper raises its ModelError or issues its
-warning, so that the messages are those of the readable code.
+Those kernels (components/jit.py) are one function each on the model's value array
+(:mod:`.variables`: parameters, inputs, outputs at the offsets of its table, named by
+module constants) and a small float64 state array of the model; they read both through
+:func:`.jit.floats`, write outputs and state by index and return a status code, from
+which the model's Python wrapper raises its ModelError or issues its warning, so that the
+messages are those of the readable code.
 """
 
 from __future__ import annotations
 
 import math
 
-from .jit import jitable, register_floats
-from .variables import Layout
-
-
-def floats(array):
-    """The numbers of a float64 array to read from: Python floats in the kernels' Python
-    (indexing a list of floats is several times faster than a NumPy array's scalars, and
-    reading it copies: write into the array itself); the array itself in a compiled kernel."""
-    return array.tolist()
-
-
-register_floats(floats)
-
-
-def offsets(model_class) -> dict[str, int]:
-    """{variable: offset in the value array} of a model class (its FMI value references)."""
-    return Layout(model_class.VARIABLES).offset
+from .jit import jitable
 
 
 @jitable

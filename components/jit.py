@@ -13,6 +13,11 @@ and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the 
 ``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
 ``kernel.compiled`` the compiled function (the Python without numba).
 
+A kernel may work on a model's whole value array (SatelliteDynamics): it reads through
+:func:`floats` (in its Python a list of Python floats, which index and compute several
+times faster than NumPy scalars; compiled, the array itself) at offsets named after the
+variable table, and writes into the array.
+
 Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's path and
 modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,
 ``get_suitable_cache_subpath``), and FMI hosts unpack an FMU into a new temporary folder
@@ -34,6 +39,8 @@ import hashlib
 import os
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 #: calls of a kernel before it is compiled (see the module docstring)
 DEFAULT_AFTER = 50_000
@@ -72,10 +79,20 @@ def jitable(function):
 
 
 def register_floats(function) -> None:
-    """Let kernels call ``function`` (a to-floats converter) on tuples, as the identity."""
+    """Let kernels call ``function`` (a to-floats converter) on tuples and arrays, as the
+    identity."""
     _FLOATS.append(function)
     if _SET_UP:
         _set_up()
+
+
+def floats(x):
+    """``x.tolist()`` for an ndarray, else ``x``; in a compiled kernel the identity (on
+    tuples and arrays)."""
+    return x.tolist() if isinstance(x, np.ndarray) else x
+
+
+register_floats(floats)
 
 
 class Kernel:
@@ -144,7 +161,7 @@ def _set_up() -> None:
     import numba
     from numba.extending import overload, register_jitable
 
-    def identity_on_tuples(x):  # and on arrays (components/flat.py)
+    def identity(x):
         if isinstance(x, (numba.types.BaseTuple, numba.types.Array)):
             return lambda x: x
         return None
@@ -152,7 +169,7 @@ def _set_up() -> None:
     for function in _FLOATS:
         if function not in _REGISTERED:
             _REGISTERED.add(function)
-            overload(function)(identity_on_tuples)
+            overload(function)(identity)
     for function in _JITABLE:
         if function not in _REGISTERED:
             _REGISTERED.add(function)

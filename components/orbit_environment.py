@@ -108,10 +108,10 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
-from .flat import floats, offsets, quat_of_rows, remainder
-from .jit import jitable, kernel
+from .flat import quat_of_rows, remainder
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .variables import output, parameter
+from .variables import Layout, output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
 WGS84_A = 6378137.0  # m, semi-major axis
@@ -449,8 +449,8 @@ class OrbitEnvironment(Model):
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
 
-# -- kernel (components/jit.py, components/flat.py) -------------------------------------
-_AT = offsets(OrbitEnvironment)
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.values
 Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
 Y_R_T, Y_V_T, Y_EARTH = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"]
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,

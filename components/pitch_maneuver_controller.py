@@ -30,10 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .flat import floats, offsets
-from .jit import jitable, kernel
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 DEG = math.pi / 180.0
 PHASE_TIME_TOLERANCE = 1e-9  # s
@@ -170,8 +169,8 @@ class PitchManeuverController(Model):
         pitch_output(self.values, self.state, self.t, n)
 
 
-# -- kernel (components/jit.py, components/flat.py) -------------------------------------
-_AT = offsets(PitchManeuverController)
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(PitchManeuverController.VARIABLES).offset  # offsets in PitchManeuverController.values
 U_Q, U_W = _AT["q_BO"], _AT["w_BO_B"]
 Y_TAU, Y_PHASE, Y_PITCH, Y_PITCH_RATE = (
     _AT["tau_cmd"], _AT["phase"], _AT["pitch_ref"], _AT["pitch_rate_ref"]
