@@ -275,12 +275,11 @@ _AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
 Y_CMD = _AT["delta_dot_cmd"]  # input
 Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
 Y_Q = _AT["singularity"]
-#: the state array: s_i, t_i of each gyro (ClusterGeometry.st), the constants, δ and δ̇
-ST = 0
-H_ROTOR, RATE_LIMIT, ACCEL_LIMIT = 6 * N_GYROS, 6 * N_GYROS + 1, 6 * N_GYROS + 2
-DELTA = 6 * N_GYROS + 3
-RATE = DELTA + N_GYROS
-N_STATE = RATE + N_GYROS
+#: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st)
+DELTA, RATE = 0, N_GYROS
+RATE_LIMIT, ACCEL_LIMIT, H_ROTOR = 2 * N_GYROS, 2 * N_GYROS + 1, 2 * N_GYROS + 2
+ST = H_ROTOR + 1
+N_STATE = ST + 6 * N_GYROS
 
 
 @kernel
@@ -288,12 +287,13 @@ def cluster_step(values, state, dt):
     """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  Returns the gimbal
     with the largest |command| (the first of equals) if that exceeds the rate limit (the
     cluster cannot deliver the commanded torque), else −1."""
-    command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state)
+    command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state[:ST])
     delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
     angles, rates = servo_step(delta, rate, command, dt, s[RATE_LIMIT], s[ACCEL_LIMIT])
+    state[DELTA : DELTA + N_GYROS] = angles
+    state[RATE : RATE + N_GYROS] = rates
     worst, largest = 0, abs(command[0])
     for i in range(N_GYROS):
-        state[DELTA + i], state[RATE + i] = angles[i], rates[i]
         if abs(command[i]) > largest:
             worst, largest = i, abs(command[i])
     return worst if largest > s[RATE_LIMIT] else -1
@@ -308,8 +308,8 @@ def cluster_output(values, state):
     h = _sum(spins)
     hdot = _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
     h_rotor = s[H_ROTOR]
-    for i in range(N_GYROS):
-        values[Y_DELTA + i], values[Y_RATE + i] = delta[i], rates[i]
+    values[Y_DELTA : Y_DELTA + N_GYROS] = delta
+    values[Y_RATE : Y_RATE + N_GYROS] = rates
     for k in range(3):
         values[Y_H + k], values[Y_HDOT + k] = h_rotor * h[k], h_rotor * hdot[k]
     values[Y_Q] = det3(gram(columns))

@@ -135,7 +135,7 @@ class CmgSteering(Model):
     def output(self):
         if steering_output(self.values, self.state) == PSEUDO_INVERSE_SINGULAR:
             _, columns = self.geometry.axes(self.u.delta.tolist())
-            h_dot = wanted_hdot(self.values.tolist())
+            h_dot = wanted_hdot(self.values[U_0:U_1].tolist())
             rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
             self.y.delta_dot_cmd[:] = rates
         self._note_singularity(self.y.singularity)
@@ -153,8 +153,10 @@ class CmgSteering(Model):
 
 # -- kernel (components/jit.py) -------------------------------------------------------
 _AT = Layout(CmgSteering.VARIABLES).offset  # offsets in CmgSteering.values
-U_TAU, U_DELTA, U_W, U_H = _AT["tau_cmd"], _AT["delta"], _AT["w_BI_B"], _AT["h"]
 Y_RATES, Y_Q = _AT["delta_dot_cmd"], _AT["singularity"]
+#: the inputs, values[U_0:U_1], and the offsets of each in them
+U_0, U_1 = _AT["tau_cmd"], _AT["h"] + 3
+TAU, DELTA, W, H = (_AT[name] - U_0 for name in ("tau_cmd", "delta", "w_BI_B", "h"))
 #: the state array: s_i, t_i of each gyro (ClusterGeometry.st), then the law's constants
 ST = 0
 H_ROTOR, LAW, NULL_GAIN, SR_LAMBDA0, SR_MU = range(6 * N_GYROS, 6 * N_GYROS + 5)
@@ -168,8 +170,8 @@ def steering_output(values, state):
     """Gimbal-rate commands δ̇ and Q for the wanted torque (module docstring): writes both
     and returns 0, or writes Q and returns PSEUDO_INVERSE_SINGULAR where the law is the
     pseudo-inverse and Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's)."""
-    v, s = floats(values), floats(state)
-    spins, columns = axes(v[U_DELTA : U_DELTA + N_GYROS], s[ST:H_ROTOR])
+    u, s = floats(values[U_0:U_1]), floats(state)
+    spins, columns = axes(u[DELTA : DELTA + N_GYROS], s[ST:H_ROTOR])
     M = gram(columns)
     Q = det3(M)
     values[Y_Q] = Q
@@ -184,23 +186,22 @@ def steering_output(values, state):
     elif not Q > SINGULAR_Q:
         return PSEUDO_INVERSE_SINGULAR
     M_inv = inv3(M)
-    x = rotate(M_inv, wanted_hdot(v))
+    x = rotate(M_inv, wanted_hdot(u))
     rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / s[H_ROTOR] for a in columns]
     null_gain = s[NULL_GAIN]
     if law == PSEUDO_INVERSE and null_gain != 0.0:
         moves = _null_motion(columns, M_inv, Q, spins)
         rates = [r + null_gain * n for r, n in zip(rates, moves)]
-    for i in range(N_GYROS):
-        values[Y_RATES + i] = rates[i]
+    values[Y_RATES : Y_RATES + N_GYROS] = rates
     return 0
 
 
 @jitable
-def wanted_hdot(v) -> tuple:
-    """ḣ = −τ_cmd − w × h from the inputs in the values ``v``."""
-    wx, wy, wz = v[U_W], v[U_W + 1], v[U_W + 2]
-    hx, hy, hz = v[U_H], v[U_H + 1], v[U_H + 2]
-    tx, ty, tz = v[U_TAU], v[U_TAU + 1], v[U_TAU + 2]
+def wanted_hdot(u) -> tuple:
+    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U_0:U_1])."""
+    wx, wy, wz = u[W], u[W + 1], u[W + 2]
+    hx, hy, hz = u[H], u[H + 1], u[H + 2]
+    tx, ty, tz = u[TAU], u[TAU + 1], u[TAU + 2]
     return (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
 
 
