@@ -151,7 +151,7 @@ class PitchManeuverController(Model):
 
     def initialize(self, t0):
         p = self.p
-        self.profile = profile = PitchProfile(
+        profile = PitchProfile(
             p.pitch0, p.pitch_final, p.duration, p.scan_rate, p.cruise_fraction, p.imaging_fraction
         )
         self.state = np.array(
