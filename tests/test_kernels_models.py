@@ -146,6 +146,7 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @needs_numba
 @pytest.mark.parametrize("case", list(CASES))
 @pytest.mark.parametrize("seed, scale", [(1, 0.8), (2, 3.0)])
