@@ -28,9 +28,9 @@ import math
 
 import numpy as np
 
-from .jit import kernel
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
@@ -57,7 +57,8 @@ DEFAULT_SPINS = -_PRINTED_SPINS  # the printed rotor spin reversed (DESIGN.md §
 class ClusterGeometry:
     """h, Jacobian and singularity measure of a cluster, shared by cluster and steering.
 
-    Computed on Python floats: it runs at every communication point on six 3-vectors.
+    ``st`` holds, per gyro i, its reference spin s_i and transverse axis t_i at
+    ``st[6i : 6i + 3]`` and ``st[6i + 3 : 6i + 6]``: what the kernels read.
     """
 
     def __init__(self, h_rotor: float, gimbal_axes, spins):
@@ -77,11 +78,11 @@ class ClusterGeometry:
         self.G = G
         self.S = S / spin_norms[:, None]
         self.T = np.cross(self.G, self.S)
-        self._st = tuple((tuple(s), tuple(t)) for s, t in zip(self.S.tolist(), self.T.tolist()))
+        self.st = np.hstack([self.S, self.T]).reshape(-1)
 
     def axes(self, delta) -> tuple[list, list]:
         """(spins σ_i = s_i cos δ_i + t_i sin δ_i, Jacobian columns a_i = ∂σ_i/∂δ_i)."""
-        return _compiled_axes(tuple(delta), self._st)
+        return axes(np.asarray(delta, dtype=float).tolist(), self.st.tolist())
 
     def momentum(self, delta) -> np.ndarray:
         """h = h_rotor Σ σ_i."""
@@ -101,14 +102,16 @@ class ClusterGeometry:
         return det3(gram(np.asarray(A).T.tolist()))
 
 
+@jitable
 def axes(delta, st) -> tuple[list, list]:
     """Spins σ_i = s_i cos δ_i + t_i sin δ_i and Jacobian columns a_i = ∂σ_i/∂δ_i of the
-    gyros with reference spins and transverse axes ``st`` = ((s_i, t_i), ...)."""
+    gyros with reference spins and transverse axes ``st`` (s_i, t_i at 6i, 6i + 3)."""
     spins, columns = [], []
-    for d, (s, t) in zip(delta, st):
-        c, n = math.cos(d), math.sin(d)
-        spins.append((s[0] * c + t[0] * n, s[1] * c + t[1] * n, s[2] * c + t[2] * n))
-        columns.append((t[0] * c - s[0] * n, t[1] * c - s[1] * n, t[2] * c - s[2] * n))
+    for i in range(len(delta)):
+        c, n = math.cos(delta[i]), math.sin(delta[i])
+        s0, s1, s2, t0, t1, t2 = st[6 * i : 6 * i + 6]
+        spins.append((s0 * c + t0 * n, s1 * c + t1 * n, s2 * c + t2 * n))
+        columns.append((t0 * c - s0 * n, t1 * c - s1 * n, t2 * c - s2 * n))
     return spins, columns
 
 
@@ -137,6 +140,7 @@ def zero_momentum_angles(
     return d
 
 
+@jitable
 def gram(columns) -> tuple:
     """Σ a aᵀ over the columns (3×3 rows)."""
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0
@@ -150,11 +154,13 @@ def gram(columns) -> tuple:
     return (m00, m01, m02), (m01, m11, m12), (m02, m12, m22)
 
 
+@jitable
 def det3(M) -> float:
     (a, b, c), (d, e, f), (g, h, i) = M
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
+@jitable
 def inv3(M) -> tuple:
     """Inverse of a 3×3 matrix (rows) by its adjugate."""
     (a, b, c), (d, e, f), (g, h, i) = M
@@ -166,6 +172,7 @@ def inv3(M) -> tuple:
     )
 
 
+@jitable
 def _sum(vectors) -> tuple:
     x = y = z = 0.0
     for v in vectors:
@@ -175,7 +182,8 @@ def _sum(vectors) -> tuple:
     return x, y, z
 
 
-def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
+@jitable
+def servo_step(delta, rate, command, dt, rate_limit, accel_limit) -> tuple[list, list]:
     """Gimbal angles and rates after ``dt`` with the rate command held.
 
     The rate moves toward clip(command, ±rate_limit) at ±accel_limit and then holds it:
@@ -190,11 +198,6 @@ def servo_step(delta, rate, command, dt, rate_limit, accel_limit):
         angles.append(d + r * dt + a * tau * (dt - tau / 2))
         rates.append(r + a * tau)
     return angles, rates
-
-
-# kernels: these very functions, compiled by numba in long runs (components/jit.py)
-_compiled_axes = kernel(axes)
-_compiled_servo_step = kernel(servo_step)
 
 
 class CmgCluster(Model):
@@ -244,38 +247,69 @@ class CmgCluster(Model):
                 f"rate_limit ({p.rate_limit}) and accel_limit ({p.accel_limit}) must be positive"
             )
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.rate_limit, self.accel_limit = p.rate_limit, p.accel_limit
-        self.delta = p.delta0.tolist()
-        self.delta_dot = [0.0] * N_GYROS
+        self.state = np.zeros(N_STATE)
+        self.state[ST : ST + 6 * N_GYROS] = self.geometry.st
+        self.state[[H_ROTOR, RATE_LIMIT, ACCEL_LIMIT]] = p.h_rotor, p.rate_limit, p.accel_limit
+        self.state[DELTA : DELTA + N_GYROS] = p.delta0
         self.saturated = False
         self.t = t0
 
     def step(self, t, dt):
-        command = self.u.delta_dot_cmd.tolist()
-        saturated = max(map(abs, command)) > self.rate_limit
-        if saturated and not self.saturated:
-            worst = max(range(N_GYROS), key=lambda i: abs(command[i]))
+        worst = cluster_step(self.values, self.state, dt)
+        if worst >= 0 and not self.saturated:
+            command = float(self.values[Y_CMD + worst])
             self.warnings.append(
-                f"t={t:.3f} s: gimbal {worst + 1} rate command {command[worst]:.3f} rad/s "
-                f"exceeds the rate limit {self.rate_limit} rad/s (the cluster cannot deliver "
-                "the commanded torque)"
+                f"t={t:.3f} s: gimbal {worst + 1} rate command {command:.3f} rad/s "
+                f"exceeds the rate limit {float(self.state[RATE_LIMIT])} rad/s (the cluster cannot "
+                "deliver the commanded torque)"
             )
-        self.saturated = saturated
-        self.delta, self.delta_dot = _compiled_servo_step(
-            tuple(self.delta), tuple(self.delta_dot), tuple(command), dt, self.rate_limit,
-            self.accel_limit,
-        )  # fmt: skip
+        self.saturated = worst >= 0
         self.t = t + dt
 
     def output(self):
-        g, y = self.geometry, self.y
-        spins, columns = g.axes(self.delta)
-        h_rotor = g.h_rotor
-        y.delta[:] = self.delta
-        y.delta_dot[:] = self.delta_dot
-        y.h[:] = [h_rotor * x for x in _sum(spins)]
-        y.hdot[:] = [
-            h_rotor * x
-            for x in _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, self.delta_dot)])
-        ]
-        y.singularity = det3(gram(columns))
+        cluster_output(self.values, self.state)
+
+
+# -- kernels (components/jit.py) ------------------------------------------------------
+_AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
+Y_CMD = _AT["delta_dot_cmd"]  # input
+Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
+Y_Q = _AT["singularity"]
+#: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st)
+DELTA, RATE = 0, N_GYROS
+RATE_LIMIT, ACCEL_LIMIT, H_ROTOR = 2 * N_GYROS, 2 * N_GYROS + 1, 2 * N_GYROS + 2
+ST = H_ROTOR + 1
+N_STATE = ST + 6 * N_GYROS
+
+
+@kernel
+def cluster_step(values, state, dt):
+    """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  Returns the gimbal
+    with the largest |command| (the first of equals) if that exceeds the rate limit (the
+    cluster cannot deliver the commanded torque), else −1."""
+    command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state[:ST])
+    delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
+    angles, rates = servo_step(delta, rate, command, dt, s[RATE_LIMIT], s[ACCEL_LIMIT])
+    state[DELTA : DELTA + N_GYROS] = angles
+    state[RATE : RATE + N_GYROS] = rates
+    worst, largest = 0, abs(command[0])
+    for i in range(N_GYROS):
+        if abs(command[i]) > largest:
+            worst, largest = i, abs(command[i])
+    return worst if largest > s[RATE_LIMIT] else -1
+
+
+@kernel
+def cluster_output(values, state):
+    """δ, δ̇, h = h_rotor Σ σ_i, hdot = h_rotor Σ a_i δ̇_i and Q = det(A Aᵀ) (module doc)."""
+    s = floats(state)
+    delta, rates = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
+    spins, columns = axes(delta, s[ST : ST + 6 * N_GYROS])
+    h = _sum(spins)
+    hdot = _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
+    h_rotor = s[H_ROTOR]
+    values[Y_DELTA : Y_DELTA + N_GYROS] = delta
+    values[Y_RATE : Y_RATE + N_GYROS] = rates
+    for k in range(3):
+        values[Y_H + k], values[Y_HDOT + k] = h_rotor * h[k], h_rotor * hdot[k]
+    values[Y_Q] = det3(gram(columns))

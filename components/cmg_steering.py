@@ -31,10 +31,21 @@ import math
 
 import numpy as np
 
-from .cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster, det3, gram, inv3
+from .cmg_cluster import (
+    DEFAULT_SPINS,
+    GIMBAL_AXES,
+    N_GYROS,
+    ClusterGeometry,
+    CmgCluster,
+    axes,
+    det3,
+    gram,
+    inv3,
+)
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
 from .rotations import rotate
-from .variables import choice, input_, output, parameter
+from .variables import Layout, choice, input_, output, parameter
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
 PSEUDO_INVERSE, SR_INVERSE = 0, 1
@@ -112,8 +123,9 @@ class CmgSteering(Model):
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.law, self.null_gain = p.law, p.null_gain
-        self.sr_lambda0, self.sr_mu = p.sr_lambda0, p.sr_mu
+        self.state = np.zeros(N_STATE)
+        self.state[ST:H_ROTOR] = self.geometry.st
+        self.state[H_ROTOR:] = p.h_rotor, p.law, p.null_gain, p.sr_lambda0, p.sr_mu
         self.singular = False
         self.t = t0
 
@@ -121,34 +133,12 @@ class CmgSteering(Model):
         self.t = t + dt  # stateless between communication points
 
     def output(self):
-        u, y, g = self.u, self.y, self.geometry
-        spins, columns = g.axes(u.delta.tolist())
-        M = gram(columns)
-        Q = det3(M)
-        wx, wy, wz = u.w_BI_B.tolist()
-        hx, hy, hz = u.h.tolist()
-        tx, ty, tz = u.tau_cmd.tolist()
-        h_dot = (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
-        if self.law == SR_INVERSE:
-            lam = self.sr_lambda0 * math.exp(-self.sr_mu * Q)
-            M = tuple(
-                tuple(m + (lam if i == j else 0.0) for j, m in enumerate(row))
-                for i, row in enumerate(M)
-            )
-        if self.law == SR_INVERSE or Q > SINGULAR_Q:
-            M_inv = inv3(M)
-            v = rotate(M_inv, h_dot)
-            rates = [(a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) / g.h_rotor for a in columns]
-            if self.law == PSEUDO_INVERSE and self.null_gain:
-                rates = [
-                    r + self.null_gain * n
-                    for r, n in zip(rates, _null_motion(columns, M_inv, Q, spins))
-                ]
-        else:
-            rates = (np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / g.h_rotor).tolist()
-        self._note_singularity(Q)
-        y.delta_dot_cmd[:] = rates
-        y.singularity = Q
+        if steering_output(self.values, self.state) == PSEUDO_INVERSE_SINGULAR:
+            _, columns = self.geometry.axes(self.u.delta.tolist())
+            h_dot = wanted_hdot(self.values[U_0:U_1].tolist())
+            rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
+            self.y.delta_dot_cmd[:] = rates
+        self._note_singularity(self.y.singularity)
 
     def _note_singularity(self, Q):
         singular = Q <= SINGULAR_Q
@@ -161,15 +151,80 @@ class CmgSteering(Model):
         self.singular = singular
 
 
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(CmgSteering.VARIABLES).offset  # offsets in CmgSteering.values
+Y_RATES, Y_Q = _AT["delta_dot_cmd"], _AT["singularity"]
+#: the inputs, values[U_0:U_1], and the offsets of each in them
+U_0, U_1 = _AT["tau_cmd"], _AT["h"] + 3
+TAU, DELTA, W, H = (_AT[name] - U_0 for name in ("tau_cmd", "delta", "w_BI_B", "h"))
+#: the state array: s_i, t_i of each gyro (ClusterGeometry.st), then the law's constants
+ST = 0
+H_ROTOR, LAW, NULL_GAIN, SR_LAMBDA0, SR_MU = range(6 * N_GYROS, 6 * N_GYROS + 5)
+N_STATE = SR_MU + 1
+#: steering_output's status: the pseudo-inverse at a singularity, left to the SVD
+PSEUDO_INVERSE_SINGULAR = 1
+
+
+@kernel
+def steering_output(values, state):
+    """Gimbal-rate commands δ̇ and Q for the wanted torque (module docstring): writes both
+    and returns 0, or writes Q and returns PSEUDO_INVERSE_SINGULAR where the law is the
+    pseudo-inverse and Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's)."""
+    u, s = floats(values[U_0:U_1]), floats(state)
+    spins, columns = axes(u[DELTA : DELTA + N_GYROS], s[ST:H_ROTOR])
+    M = gram(columns)
+    Q = det3(M)
+    values[Y_Q] = Q
+    law = s[LAW]
+    if law == SR_INVERSE:
+        lam = s[SR_LAMBDA0] * math.exp(-s[SR_MU] * Q)
+        M = (
+            (M[0][0] + lam, M[0][1], M[0][2]),
+            (M[1][0], M[1][1] + lam, M[1][2]),
+            (M[2][0], M[2][1], M[2][2] + lam),
+        )
+    elif not Q > SINGULAR_Q:
+        return PSEUDO_INVERSE_SINGULAR
+    M_inv = inv3(M)
+    x = rotate(M_inv, wanted_hdot(u))
+    rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / s[H_ROTOR] for a in columns]
+    null_gain = s[NULL_GAIN]
+    if law == PSEUDO_INVERSE and null_gain != 0.0:
+        moves = _null_motion(columns, M_inv, Q, spins)
+        rates = [r + null_gain * n for r, n in zip(rates, moves)]
+    values[Y_RATES : Y_RATES + N_GYROS] = rates
+    return 0
+
+
+@jitable
+def wanted_hdot(u) -> tuple:
+    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U_0:U_1])."""
+    wx, wy, wz = u[W], u[W + 1], u[W + 2]
+    hx, hy, hz = u[H], u[H + 1], u[H + 2]
+    tx, ty, tz = u[TAU], u[TAU + 1], u[TAU + 2]
+    return (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
+
+
+@jitable
+def _dot(a, b) -> float:
+    """a · b, summed from 0.0 in order (the zero's sign as Python's ``sum`` gives it)."""
+    return 0.0 + a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@jitable
 def _null_motion(columns, M_inv, Q, spins) -> list:
     """(1 − Aᵀ M⁻¹ A) ∂Q/∂δ with ∂Q/∂δ_i = −2 Q a_iᵀ M⁻¹ σ_i."""
-    gradient = [
-        -2.0 * Q * sum(x * y for x, y in zip(a, rotate(M_inv, s))) for a, s in zip(columns, spins)
-    ]
+    gradient = [-2.0 * Q * _dot(a, rotate(M_inv, s)) for a, s in zip(columns, spins)]
     v = rotate(M_inv, _sum_weighted(columns, gradient))
     return [d - (a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) for a, d in zip(columns, gradient)]
 
 
+@jitable
 def _sum_weighted(columns, weights) -> tuple:
     """A w = Σ a_i w_i."""
-    return tuple(sum(a[k] * w for a, w in zip(columns, weights)) for k in range(3))
+    x = y = z = 0.0
+    for a, w in zip(columns, weights):
+        x += a[0] * w
+        y += a[1] * w
+        z += a[2] * w
+    return x, y, z

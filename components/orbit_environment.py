@@ -96,6 +96,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .ephemeris import (
     DAY,
     TWO_PI,
@@ -106,9 +108,10 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
+from .flat import quat_of_rows, remainder
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .rotations import quat_from_dcm
-from .variables import output, parameter
+from .variables import Layout, output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
 WGS84_A = 6378137.0  # m, semi-major axis
@@ -134,14 +137,24 @@ TLE_AGE_WARNING = 30.0
 
 def solve_kepler(mean_anomaly: float, e: float) -> float:
     """Eccentric anomaly E in [−π, π] with E − e sin E = M mod 2π (Newton iteration)."""
-    M = math.remainder(mean_anomaly, TWO_PI)
+    E, converged = eccentric_anomaly(mean_anomaly, e)
+    if not converged:
+        M = remainder(mean_anomaly, TWO_PI)
+        raise ModelError(f"Kepler's equation did not converge (M = {M}, e = {e})")
+    return E
+
+
+@jitable
+def eccentric_anomaly(mean_anomaly: float, e: float) -> tuple[float, bool]:
+    """(E, converged) of :func:`solve_kepler`."""
+    M = remainder(mean_anomaly, TWO_PI)
     E = M if e < 0.8 else math.copysign(math.pi, M)
     for _ in range(_KEPLER_MAX_ITER):
         step = (E - e * math.sin(E) - M) / (1.0 - e * math.cos(E))
         E -= step
         if abs(step) <= 1e-14:
-            return E
-    raise ModelError(f"Kepler's equation did not converge (M = {M}, e = {e})")
+            return E, True
+    return E, False
 
 
 def _day_parts(seconds: float) -> tuple[int, float]:
@@ -339,6 +352,15 @@ class OrbitEnvironment(Model):
             )
         self.earth_angle0 = p.earth_angle0
         self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
+        self.state = np.zeros(N_STATE)
+        if self._satrec is None:
+            self.state[A:N_KEPLER] = (
+                self.a, self.e, self.b, self.M0, self.mean_motion, self.raan_rate,
+                self.argp_rate, self.raan0, self.argp0, self.cos_i, self.sin_i, self.mu_kepler,
+            )  # fmt: skip
+        self.state[EARTH_ANGLE0] = self.earth_angle0
+        self.state[R_T_E : R_T_E + 3] = self.r_T_E
+        self.state[[GIVEN_ORBIT, GIVEN_EARTH]] = self._satrec is not None, self._gmst0 is not None
         self.t = t0
         if self._satrec is not None:
             self._sgp4(t0)  # SGP4 errors at the start: fail here
@@ -376,14 +398,6 @@ class OrbitEnvironment(Model):
     def step(self, t, dt):
         self.t = t + dt
 
-    def elements(self, t: float) -> tuple[float, float, float]:
-        """(Ω, ω, M) at time t: the secular model's drifting angles (classical elements)."""
-        return (
-            self.raan0 + self.raan_rate * t,
-            self.argp0 + self.argp_rate * t,
-            self.M0 + self.mean_motion * t,
-        )
-
     def _sgp4(self, t: float):
         """SGP4 position (km) and velocity (km/s) in TEME at time t; ModelError on error."""
         error, r, v = self._satrec.sgp4_tsince(self._tsince0 + t / 60.0)
@@ -394,52 +408,6 @@ class OrbitEnvironment(Model):
                 f"SGP4 error {error} at t = {t} s: {SGP4_ERRORS.get(error, 'unknown error')}"
             )
         return r, v
-
-    def _kepler_state(self, t):
-        """r_I, v_I and the frame rate (w_y, w_z) of O of the Kepler/J2 model at t."""
-        a, e, b = self.a, self.e, self.b
-        raan, argp, M = self.elements(t)
-        Wr, wr = self.raan_rate, self.argp_rate
-
-        # perifocal position, velocity
-        E = solve_kepler(M, e) if e > 0.0 else M
-        cE, sE = math.cos(E), math.sin(E)
-        one_e = 1.0 - e * cE
-        r = a * one_e
-        Edot = self.mean_motion / one_e
-        xp, yp = a * (cE - e), b * sE
-        vxp, vyp = -a * sE * Edot, b * cE * Edot
-
-        # perifocal axes P, Q, W in I: R = R3(−Ω) R1(−i) R3(−ω)
-        cO, sO, cw, sw, ci, si = (
-            math.cos(raan),
-            math.sin(raan),
-            math.cos(argp),
-            math.sin(argp),
-            self.cos_i,
-            self.sin_i,
-        )
-        Px, Py, Pz = cO * cw - sO * sw * ci, sO * cw + cO * sw * ci, sw * si
-        Qx, Qy, Qz = -cO * sw - sO * cw * ci, -sO * sw + cO * cw * ci, cw * si
-        Wx, Wy, Wz = sO * si, -cO * si, ci
-        rx, ry, rz = xp * Px + yp * Qx, xp * Py + yp * Qy, xp * Pz + yp * Qz
-        kx, ky, kz = vxp * Px + vyp * Qx, vxp * Py + vyp * Qy, vxp * Pz + vyp * Qz  # R ṙ_P
-
-        g = -self.mu_kepler / (r * r * r)
-        if Wr or wr:  # frame rate Ω_R = Ω̇ ẑ + ω̇ Ŵ
-            ox, oy, oz = wr * Wx, wr * Wy, Wr + wr * Wz
-            vx, vy, vz = (kx + oy * rz - oz * ry, ky + oz * rx - ox * rz, kz + ox * ry - oy * rx)
-            c = wr * Wr  # ω̇ Ω̇ (ẑ × Ŵ) × r, ẑ × Ŵ = (−Wy, Wx, 0)
-            ax = g * rx + (oy * kz - oz * ky) + (oy * vz - oz * vy) + c * (Wx * rz)
-            ay = g * ry + (oz * kx - ox * kz) + (oz * vx - ox * vz) + c * (Wy * rz)
-            az = g * rz + (ox * ky - oy * kx) + (ox * vy - oy * vx) - c * (Wx * rx + Wy * ry)
-        else:
-            vx, vy, vz = kx, ky, kz
-            ax, ay, az = g * rx, g * ry, g * rz
-        hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
-        h = math.sqrt(hx * hx + hy * hy + hz * hz)
-        a_h = (ax * hx + ay * hy + az * hz) / h
-        return (rx, ry, rz), (vx, vy, vz), (0.0, -h / (r * r), -r * a_h / h)
 
     def _sgp4_state(self, t):
         """r_I, v_I (SGP4, m and m/s) and w_OI_O of the frame built from them at t."""
@@ -471,32 +439,131 @@ class OrbitEnvironment(Model):
         return ((1e3 * rx, 1e3 * ry, 1e3 * rz), (1e3 * vx, 1e3 * vy, 1e3 * vz), w)
 
     def output(self):
-        t, y = self.t, self.y
-        if self._satrec is None:
-            (rx, ry, rz), (vx, vy, vz), w = self._kepler_state(t)
-        else:
-            (rx, ry, rz), (vx, vy, vz), w = self._sgp4_state(t)
+        t = self.t
+        if self._satrec is not None:
+            r, v, w = self._sgp4_state(t)
+            self.state[R_I : R_I + 9] = (*r, *v, *w)
+        if self._gmst0 is not None:
+            self.state[THETA : THETA + 2] = sidereal_time(*self._gmst0, t)
+        if orbit_output(self.values, self.state, t) == KEPLER_DIVERGED:
+            solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
-        # orbit frame: z = −r̂, y = −ĥ, x = ĥ × r̂
-        hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
-        h = math.sqrt(hx * hx + hy * hy + hz * hz)
-        r = math.sqrt(rx * rx + ry * ry + rz * rz)
-        ux, uy, uz = rx / r, ry / r, rz / r
-        nx, ny, nz = hx / h, hy / h, hz / h
-        x_O = (ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux)
 
-        y.r_I[:] = (rx, ry, rz)
-        y.v_I[:] = (vx, vy, vz)
-        y.q_OI[:] = quat_from_dcm((x_O, (-nx, -ny, -nz), (-ux, -uy, -uz)))
-        y.w_OI_O[:] = w
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.values
+Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
+Y_R_T, Y_V_T, Y_EARTH = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"]
+#: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
+#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, and those given values
+A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0, COS_I, SIN_I, MU_KEPLER = range(12)
+N_KEPLER = MU_KEPLER + 1
+EARTH_ANGLE0, R_T_E = N_KEPLER, N_KEPLER + 1
+GIVEN_ORBIT, GIVEN_EARTH = R_T_E + 3, R_T_E + 4
+R_I, THETA = GIVEN_EARTH + 1, GIVEN_EARTH + 10  # r_I, v_I, w_OI_O; θ_E, θ̇_E
+N_STATE = THETA + 2
+#: orbit_output's status: Kepler's equation did not converge (nothing written)
+KEPLER_DIVERGED = 1
 
-        if self._gmst0 is None:
-            theta, rate = self.earth_angle0 + EARTH_RATE * t, EARTH_RATE
-        else:
-            theta, rate = sidereal_time(*self._gmst0, t)
-        cT, sT = math.cos(theta), math.sin(theta)
-        xE, yE, zE = self.r_T_E
-        xT, yT = cT * xE - sT * yE, sT * xE + cT * yE
-        y.r_T_I[:] = (xT, yT, zE)
-        y.v_T_I[:] = (-rate * yT, rate * xT, 0.0)
-        y.earth_angle = wrap_2pi(theta)
+jitable(wrap_2pi)  # kernels may call it (components/ephemeris.py)
+
+
+@kernel
+def orbit_output(values, state, t):
+    """The outputs at time t (module docstring): the orbit (Kepler/J2 at t, or the given
+    SGP4 r_I, v_I, w_OI_O), the orbit frame O, the Earth angle (earth_angle0 + ω_E t, or
+    the given GMST) and the target.  Returns KEPLER_DIVERGED (nothing written) or 0."""
+    s = floats(state)
+    if s[GIVEN_ORBIT]:
+        r = s[R_I], s[R_I + 1], s[R_I + 2]
+        v = s[R_I + 3], s[R_I + 4], s[R_I + 5]
+        w = s[R_I + 6], s[R_I + 7], s[R_I + 8]
+    else:
+        r, v, w, converged = kepler_state(s, t)
+        if not converged:
+            return KEPLER_DIVERGED
+    (rx, ry, rz), (vx, vy, vz) = r, v
+
+    # orbit frame: z = −r̂, y = −ĥ, x = ĥ × r̂
+    hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
+    h = math.sqrt(hx * hx + hy * hy + hz * hz)
+    r_norm = math.sqrt(rx * rx + ry * ry + rz * rz)
+    ux, uy, uz = rx / r_norm, ry / r_norm, rz / r_norm
+    nx, ny, nz = hx / h, hy / h, hz / h
+    q = quat_of_rows(
+        ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux, -nx, -ny, -nz, -ux, -uy, -uz
+    )
+    for k in range(3):
+        values[Y_R + k], values[Y_V + k], values[Y_W + k] = r[k], v[k], w[k]
+    for k in range(4):
+        values[Y_Q + k] = q[k]
+
+    if s[GIVEN_EARTH]:
+        theta, rate = s[THETA], s[THETA + 1]
+    else:
+        theta, rate = s[EARTH_ANGLE0] + EARTH_RATE * t, EARTH_RATE
+    cT, sT = math.cos(theta), math.sin(theta)
+    xE, yE, zE = s[R_T_E], s[R_T_E + 1], s[R_T_E + 2]
+    xT, yT = cT * xE - sT * yE, sT * xE + cT * yE
+    values[Y_R_T], values[Y_R_T + 1], values[Y_R_T + 2] = xT, yT, zE
+    values[Y_V_T], values[Y_V_T + 1], values[Y_V_T + 2] = -rate * yT, rate * xT, 0.0
+    values[Y_EARTH] = wrap_2pi(theta)
+    return 0
+
+
+@jitable
+def elements(s, t: float) -> tuple[float, float, float]:
+    """(Ω, ω, M) at time t: the secular model's drifting angles (classical elements)."""
+    return (
+        s[RAAN0] + s[RAAN_RATE] * t,
+        s[ARGP0] + s[ARGP_RATE] * t,
+        s[M0] + s[MEAN_MOTION] * t,
+    )
+
+
+@jitable
+def kepler_state(s, t):
+    """r_I, v_I and w_OI_O = (0, w_y, w_z) of the Kepler/J2 model at t (module docstring)
+    from the constants in the state ``s``, and whether Kepler's equation converged."""
+    a, e, b = s[A], s[ECC], s[B]
+    raan, argp, M = elements(s, t)
+    Wr, wr = s[RAAN_RATE], s[ARGP_RATE]
+
+    # perifocal position, velocity
+    E, converged = eccentric_anomaly(M, e) if e > 0.0 else (M, True)
+    cE, sE = math.cos(E), math.sin(E)
+    one_e = 1.0 - e * cE
+    r = a * one_e
+    Edot = s[MEAN_MOTION] / one_e
+    xp, yp = a * (cE - e), b * sE
+    vxp, vyp = -a * sE * Edot, b * cE * Edot
+
+    # perifocal axes P, Q, W in I: R = R3(−Ω) R1(−i) R3(−ω)
+    cO, sO, cw, sw, ci, si = (
+        math.cos(raan),
+        math.sin(raan),
+        math.cos(argp),
+        math.sin(argp),
+        s[COS_I],
+        s[SIN_I],
+    )
+    Px, Py, Pz = cO * cw - sO * sw * ci, sO * cw + cO * sw * ci, sw * si
+    Qx, Qy, Qz = -cO * sw - sO * cw * ci, -sO * sw + cO * cw * ci, cw * si
+    Wx, Wy, Wz = sO * si, -cO * si, ci
+    rx, ry, rz = xp * Px + yp * Qx, xp * Py + yp * Qy, xp * Pz + yp * Qz
+    kx, ky, kz = vxp * Px + vyp * Qx, vxp * Py + vyp * Qy, vxp * Pz + vyp * Qz  # R ṙ_P
+
+    g = -s[MU_KEPLER] / (r * r * r)
+    if Wr != 0.0 or wr != 0.0:  # frame rate Ω_R = Ω̇ ẑ + ω̇ Ŵ
+        ox, oy, oz = wr * Wx, wr * Wy, Wr + wr * Wz
+        vx, vy, vz = (kx + oy * rz - oz * ry, ky + oz * rx - ox * rz, kz + ox * ry - oy * rx)
+        c = wr * Wr  # ω̇ Ω̇ (ẑ × Ŵ) × r, ẑ × Ŵ = (−Wy, Wx, 0)
+        ax = g * rx + (oy * kz - oz * ky) + (oy * vz - oz * vy) + c * (Wx * rz)
+        ay = g * ry + (oz * kx - ox * kz) + (oz * vx - ox * vz) + c * (Wy * rz)
+        az = g * rz + (ox * ky - oy * kx) + (ox * vy - oy * vx) - c * (Wx * rx + Wy * ry)
+    else:
+        vx, vy, vz = kx, ky, kz
+        ax, ay, az = g * rx, g * ry, g * rz
+    hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
+    h = math.sqrt(hx * hx + hy * hy + hz * hz)
+    a_h = (ax * hx + ay * hy + az * hz) / h
+    return (rx, ry, rz), (vx, vy, vz), (0.0, -h / (r * r), -r * a_h / h), converged

@@ -28,8 +28,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 DEG = math.pi / 180.0
 PHASE_TIME_TOLERANCE = 1e-9  # s
@@ -73,35 +76,49 @@ class PitchProfile:
         object.__setattr__(self, "rate_max", rate_max)  # θ̇m
 
     def phase(self, t: float) -> int:
-        """Phase 1..5 at time t (half-open on the left; 5 from t4 on).
-
-        A time within 1e-9 s of a phase time counts as at it: t1 = T (1 − f2 − f4)/2 is
-        10.000000000000004 s in floating point, and the communication point at 10 s must
-        already switch to phase 2.
-        """
-        for k, tk in enumerate(self.times[:4], start=1):
-            if t < tk - PHASE_TIME_TOLERANCE:
-                return k
-        return 5
+        """Phase 1..5 at time t (:func:`phase_at`)."""
+        return phase_at(self.times, t)
 
     def reference(self, t: float) -> tuple[float, float]:
-        """Planned (θ, θ̇) at time t: piecewise parabolic, θf after t5."""
-        t1, t2, t3, t4, t5 = self.times
-        a, r, r0 = self.accel, self.rate_max, self.scan_rate
-        theta = self.theta0
-        pieces = (
-            (0.0, t1, 0.0, a),
-            (t1, t2, r, 0.0),
-            (t2, t3, r, -a),
-            (t3, t4, r0, 0.0),
-            (t4, t5, r0, -a),
+        """Planned (θ, θ̇) at time t (:func:`reference_at`)."""
+        return reference_at(
+            self.theta0, self.theta_f, self.times, self.accel, self.rate_max, self.scan_rate, t
         )
-        for start, end, rate, acc in pieces:
-            s = min(max(t - start, 0.0), end - start)
-            theta += rate * s + 0.5 * acc * s * s
-            if t < end:
-                return theta, rate + acc * s
-        return self.theta_f, 0.0
+
+
+@jitable
+def phase_at(times, t: float) -> int:
+    """Phase 1..5 at time t of the phase times t1..t5 (half-open on the left; 5 from t4 on).
+
+    A time within 1e-9 s of a phase time counts as at it: t1 = T (1 − f2 − f4)/2 is
+    10.000000000000004 s in floating point, and the communication point at 10 s must
+    already switch to phase 2.
+    """
+    for k in range(4):
+        if t < times[k] - PHASE_TIME_TOLERANCE:
+            return k + 1
+    return 5
+
+
+@jitable
+def reference_at(theta0, theta_f, times, accel, rate_max, scan_rate, t) -> tuple[float, float]:
+    """Planned (θ, θ̇) at time t: piecewise parabolic, θf after t5."""
+    t1, t2, t3, t4, t5 = times
+    a, r, r0 = accel, rate_max, scan_rate
+    theta = theta0
+    pieces = (
+        (0.0, t1, 0.0, a),
+        (t1, t2, r, 0.0),
+        (t2, t3, r, -a),
+        (t3, t4, r0, 0.0),
+        (t4, t5, r0, -a),
+    )
+    for start, end, rate, acc in pieces:
+        s = min(max(t - start, 0.0), end - start)
+        theta += rate * s + 0.5 * acc * s * s
+        if t < end:
+            return theta, rate + acc * s
+    return theta_f, 0.0
 
 
 class PitchManeuverController(Model):
@@ -134,34 +151,58 @@ class PitchManeuverController(Model):
 
     def initialize(self, t0):
         p = self.p
-        self.profile = PitchProfile(
+        profile = PitchProfile(
             p.pitch0, p.pitch_final, p.duration, p.scan_rate, p.cruise_fraction, p.imaging_fraction
         )
-        self.inertia = p.inertia
-        self.gains = (p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw)
+        self.state = np.array(
+            [*profile.times, profile.accel, profile.rate_max, profile.scan_rate, profile.theta0]
+            + [profile.theta_f, p.inertia, p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw]
+        )
         self.t = t0
 
     def step(self, t, dt):
         self.t = t + dt
 
     def output(self):
-        y, profile = self.y, self.profile
-        q0, q1, q2, q3 = self.u.q_BO if self.u.q_BO[0] >= 0 else -self.u.q_BO
-        wx, wy, wz = self.u.w_BO_B
-        kp, kd, kp_roll, kd_roll, kp_yaw, kd_yaw = self.gains
-        n = math.hypot(q0, q2)
-        c, s = q0 / n, q2 / n
-        pitch = 2.0 * math.atan2(q2, q0)
-        roll_error, yaw_error = 2.0 * (c * q1 - s * q3), 2.0 * (c * q3 + s * q1)
-        phase = profile.phase(self.t)
-        if phase == 5:
-            torque_y = kp * (profile.theta_f - pitch) + kd * (0.0 - wy)
-        else:
-            torque_y = {1: 1.0, 3: -1.0}.get(phase, 0.0) * self.inertia * profile.accel
-        y.tau_cmd[:] = (
-            -kp_roll * roll_error - kd_roll * wx,
-            torque_y,
-            -kp_yaw * yaw_error - kd_yaw * wz,
-        )
-        y.phase = phase
-        y.pitch_ref, y.pitch_rate_ref = profile.reference(self.t)
+        # CPython's math.hypot is its own algorithm, numba's libm's (1 ulp apart at times)
+        n = math.hypot(self.values[U_Q], self.values[U_Q + 2])
+        pitch_output(self.values, self.state, self.t, n)
+
+
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(PitchManeuverController.VARIABLES).offset  # offsets in PitchManeuverController.values
+U_Q, U_W = _AT["q_BO"], _AT["w_BO_B"]
+Y_TAU, Y_PHASE, Y_PITCH, Y_PITCH_RATE = (
+    _AT["tau_cmd"], _AT["phase"], _AT["pitch_ref"], _AT["pitch_rate_ref"]
+)  # fmt: skip
+#: the state array: the profile (t1..t5, θ̈m, θ̇m, θ̇0, θ0, θf), the inertia and the gains
+TIMES, ACCEL, RATE_MAX, SCAN_RATE, THETA0, THETA_F = 0, 5, 6, 7, 8, 9
+INERTIA, KP, KD, KP_ROLL, KD_ROLL, KP_YAW, KD_YAW = range(10, 17)
+
+
+@kernel
+def pitch_output(values, state, t, n):
+    """τ_cmd (eq. 11 corrected, roll/yaw hold), phase and the planned pitch and rate at
+    time t, with n = hypot(q0, q2) of q_BO (module docstring)."""
+    s = floats(state)
+    q0, q1, q2, q3 = floats(values[U_Q : U_Q + 4])
+    if not q0 >= 0:
+        q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+    wx, wy, wz = floats(values[U_W : U_W + 3])
+    c, sn = q0 / n, q2 / n
+    pitch = 2.0 * math.atan2(q2, q0)
+    roll_error, yaw_error = 2.0 * (c * q1 - sn * q3), 2.0 * (c * q3 + sn * q1)
+    times = s[TIMES : TIMES + 5]
+    phase = phase_at(times, t)
+    if phase == 5:
+        torque_y = s[KP] * (s[THETA_F] - pitch) + s[KD] * (0.0 - wy)
+    else:
+        sign = 1.0 if phase == 1 else -1.0 if phase == 3 else 0.0
+        torque_y = sign * s[INERTIA] * s[ACCEL]
+    values[Y_TAU] = -s[KP_ROLL] * roll_error - s[KD_ROLL] * wx
+    values[Y_TAU + 1] = torque_y
+    values[Y_TAU + 2] = -s[KP_YAW] * yaw_error - s[KD_YAW] * wz
+    values[Y_PHASE] = phase
+    values[Y_PITCH], values[Y_PITCH_RATE] = reference_at(
+        s[THETA0], s[THETA_F], times, s[ACCEL], s[RATE_MAX], s[SCAN_RATE], t
+    )

@@ -1,0 +1,338 @@
+"""The models' whole step/output kernels (components/jit.py, components/flat.py): compiled
+and Python give the same values, warnings, errors and saved states bit for bit, each step
+and output is one kernel call, and the helpers numba lacks match CPython's."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from agilesat.components import (
+    cmg_cluster,
+    cmg_steering,
+    flat,
+    jit,
+    orbit_environment,
+    pitch_maneuver_controller,
+)
+from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
+from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
+from agilesat.components.model import ModelError
+from agilesat.components.orbit_environment import OrbitEnvironment
+from agilesat.components.pitch_maneuver_controller import PitchManeuverController
+from agilesat.components.rotations import dcm, quat_from_dcm
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.orchestration.scenarios import scan_pitch
+from helpers import ISS_TLE
+
+needs_numba = pytest.mark.skipif(
+    jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
+)
+MODULES = (cmg_cluster, cmg_steering, orbit_environment, pitch_maneuver_controller)
+ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
+STEP = 0.05
+
+
+@pytest.fixture(params=["compiled", "py_func"])
+def path(request, monkeypatch):
+    """Every kernel of the four models running its compiled function or its Python."""
+    for kernel in ALL_KERNELS:
+        monkeypatch.setattr(kernel, "_run", getattr(kernel, request.param))
+    return request.param
+
+
+def both(run):
+    """run() with every kernel compiled, then with its Python: the two results."""
+    results = []
+    for attribute in ("compiled", "py_func"):
+        saved = [(k, k._run) for k in ALL_KERNELS]
+        try:
+            for kernel in ALL_KERNELS:
+                kernel._run = getattr(kernel, attribute)
+            results.append(run())
+        finally:
+            for kernel, run_ in saved:
+                kernel._run = run_
+    return results
+
+
+def snapshot(model):
+    return model.values.tobytes(), model.state.tobytes(), list(model.warnings)
+
+
+# -- scan_pitch in-process: the five models, Jacobi coupling --------------------------------
+def scan_pitch_run(steps: int):
+    """scan_pitch's models with its parameters and connections; every model's values and
+    state after each step."""
+    models = {
+        name: cls()
+        for name, cls in (
+            ("OrbitEnvironment", OrbitEnvironment),
+            ("SatelliteDynamics", SatelliteDynamics),
+            ("CmgCluster", CmgCluster),
+            ("CmgSteering", CmgSteering),
+            ("PitchManeuverController", PitchManeuverController),
+        )
+    }
+    for key, value in scan_pitch.PARAMETERS.items():
+        name, variable = key.split(".")
+        models[name].set(variable, value)
+    connections = [
+        (models[a.split(".")[0]], a.split(".")[1], models[b.split(".")[0]], b.split(".")[1])
+        for a, b in scan_pitch.CONNECTIONS
+    ]
+    for model in models.values():
+        model.start(0.0)
+    record = []
+    for k in range(steps):
+        for source, output, target, input_ in connections:
+            target.set(input_, source.get(output))
+        for model in models.values():
+            model.advance(k * STEP, STEP)
+        record.append([snapshot(models[name]) for name in models if name != "SatelliteDynamics"])
+    return record
+
+
+@pytest.mark.slow
+@needs_numba
+def test_a_scan_pitch_run_is_the_same_compiled_and_in_python():
+    steps = round(150.0 / STEP)  # the whole maneuver: every phase, the terminal PD
+    compiled, readable = both(lambda: scan_pitch_run(steps))
+    assert compiled == readable
+    phases = {np.frombuffer(row[3][0])[pitch_maneuver_controller.Y_PHASE] for row in compiled}
+    assert phases == {1.0, 2.0, 3.0, 4.0, 5.0}
+
+
+# -- each model alone on random inputs ---------------------------------------------------
+def random_run(model, steps: int, seed: int, scale: float, inputs=None):
+    """The model started, then random inputs (or ``inputs(k)``) before each step."""
+    rng = np.random.default_rng(seed)
+    model.start(0.0)
+    record = [snapshot(model)]
+    for k in range(steps):
+        for v in model.layout.group("input"):
+            value = inputs(k, v) if inputs else rng.uniform(-scale, scale, size=v.size)
+            model.set(v.name, value)
+        model.advance(k * STEP, STEP)
+        record.append(snapshot(model))
+    return record
+
+
+CASES = {
+    "cluster": (CmgCluster, {}),
+    "cluster_slow_gimbals": (CmgCluster, {"rate_limit": 0.05, "accel_limit": 0.02}),
+    "steering": (CmgSteering, {}),
+    "steering_null_motion": (CmgSteering, {"null_gain": 0.5}),
+    "steering_sr_inverse": (CmgSteering, {"law": SR_INVERSE, "sr_lambda0": 0.2}),
+    "pitch": (PitchManeuverController, {}),
+    "orbit_circular": (OrbitEnvironment, {}),
+    "orbit_j2_eccentric_epoch": (
+        OrbitEnvironment,
+        {
+            "eccentricity": 0.3,
+            "j2": True,
+            "raan": 1.0,
+            "arg_perigee": 2.0,
+            "true_anomaly0": 0.5,
+            "epoch": "2024-03-01T10:00:00",
+            "target_lat": 0.5,
+            "target_lon": -1.0,
+            "target_alt": 100.0,
+        },
+    ),
+    "orbit_very_eccentric": (OrbitEnvironment, {"eccentricity": 0.9, "earth_angle0": 1.0}),
+    "orbit_tle": (OrbitEnvironment, {"tle_line1": ISS_TLE[0], "tle_line2": ISS_TLE[1]}),
+}
+
+
+@pytest.mark.slow
+@needs_numba
+@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize("seed, scale", [(1, 0.8), (2, 3.0)])
+def test_each_model_on_random_inputs_is_the_same_compiled_and_in_python(case, seed, scale):
+    cls, parameters = CASES[case]
+    steps = 2400 if cls is PitchManeuverController else 300  # 120 s: every phase
+    compiled, readable = both(lambda: random_run(cls(**parameters), steps, seed, scale))
+    assert compiled == readable
+    outputs = np.array([np.frombuffer(values) for values, _, _ in compiled])
+    varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
+    assert np.count_nonzero(varying) >= varying.size - 3  # orbit: w_OI_O x, target z, v_z
+
+
+@needs_numba
+def test_the_saturation_warning_comes_from_the_compiled_path_with_its_text(path):
+    model = CmgCluster().start(0.0)
+    model.set("delta_dot_cmd", [0.1, 0.0, -1.5, 0.2, 0.0, 0.0])
+    model.advance(0.0, STEP)
+    # the rate moves toward the limit at the acceleration limit
+    assert model.get("delta_dot")[2] == -0.5 * STEP
+    model.advance(STEP, STEP)  # still saturated: no second warning
+    model.set("delta_dot_cmd", [0.0] * 6)
+    model.advance(2 * STEP, STEP)
+    model.set("delta_dot_cmd", [0.7, 0.0, 0.0, 0.0, 0.0, -0.7])  # equal: the first named
+    model.advance(3 * STEP, STEP)
+    assert model.warnings == [
+        "t=0.000 s: gimbal 3 rate command -1.500 rad/s exceeds the rate limit 0.6 rad/s "
+        "(the cluster cannot deliver the commanded torque)",
+        "t=0.150 s: gimbal 1 rate command 0.700 rad/s exceeds the rate limit 0.6 rad/s "
+        "(the cluster cannot deliver the commanded torque)",
+    ]
+
+
+def singular_angles():
+    """Gimbal angles at the cluster's saturation singularity along y (all spins on y)."""
+    geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
+    y = np.array([0.0, 1.0, 0.0])
+    return np.arctan2(geometry.T @ y, geometry.S @ y)
+
+
+@needs_numba
+@pytest.mark.parametrize("law", [0, SR_INVERSE])
+def test_a_singular_configuration_is_the_same_compiled_and_in_python(law):
+    delta = singular_angles()
+
+    def run():
+        model = CmgSteering(law=law)
+        model.set("delta", delta)
+        model.set("h", ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS).momentum(delta))
+        model.set("tau_cmd", [0.3, -0.2, 0.1])
+        model.start(0.0)
+        return snapshot(model)
+
+    compiled, readable = both(run)
+    assert compiled == readable
+    values = np.frombuffer(compiled[0])
+    assert values[cmg_steering.Y_Q] < cmg_steering.SINGULAR_Q
+    rates = values[cmg_steering.Y_RATES : cmg_steering.Y_RATES + 6]
+    assert np.all(np.isfinite(rates)) and np.any(rates != 0)
+    assert len(compiled[2]) == 1
+    assert re.fullmatch(
+        r"t=0\.000 s: singular gimbal configuration \(Q = \d\.\d\de-\d\d\); torque along "
+        r"the singular direction is not delivered",
+        compiled[2][0],
+    )
+
+
+@needs_numba
+def test_the_pseudo_inverse_at_a_singularity_leaves_the_singular_direction_undelivered(path):
+    delta = singular_angles()
+    geometry = ClusterGeometry(16.65, GIMBAL_AXES, DEFAULT_SPINS)
+    model = CmgSteering()
+    model.set("delta", delta)
+    model.set("h", [0.0, 0.0, 0.0])
+    model.set("tau_cmd", [0.3, -0.2, 0.1])
+    model.start(0.0)
+    hdot = geometry.h_rotor * geometry.jacobian(delta) @ model.get("delta_dot_cmd")
+    assert hdot[1] == pytest.approx(0.0, abs=1e-9)  # y: the singular direction
+    assert hdot[[0, 2]] == pytest.approx([-0.3, -0.1], rel=1e-9)
+
+
+@needs_numba
+def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(path):
+    model = OrbitEnvironment(eccentricity=0.3).start(0.0)
+    model.state[orbit_environment.M0] = math.nan  # no finite input makes Newton fail
+    before = model.values.copy()
+    with pytest.raises(
+        ModelError, match=re.escape("Kepler's equation did not converge (M = nan, e = 0.3)")
+    ):
+        model.advance(0.0, STEP)
+    assert np.array_equal(model.values, before)  # nothing written
+
+
+@needs_numba
+@pytest.mark.parametrize("case", ["cluster", "steering", "pitch", "orbit_j2_eccentric_epoch"])
+def test_a_saved_state_restored_continues_bit_for_bit(case, path):
+    cls, parameters = CASES[case]
+    rng = np.random.default_rng(5)
+    inputs = {k: rng.uniform(-0.8, 0.8, size=32) for k in range(60)}
+
+    def feed(k, v):
+        return inputs[k][: v.size]
+
+    model = cls(**parameters)
+    random_run(model, 30, 0, 0.0, inputs=feed)
+    saved = model.get_state()
+
+    def continue_(model):
+        """(values and state after each step, warnings issued) of steps 30..59."""
+        record, issued = [], len(model.warnings)
+        for k in range(30, 60):
+            for v in model.layout.group("input"):
+                model.set(v.name, feed(k, v))
+            model.advance(k * STEP, STEP)
+            record.append(snapshot(model)[:2])
+        return record, model.warnings[issued:]
+
+    first = continue_(model)
+    model.set_state(saved)
+    again = continue_(model)
+    other = cls(**parameters).start(0.0)
+    other.set_state(saved)
+    assert first == again == continue_(other)
+
+
+@needs_numba
+@pytest.mark.parametrize("case", list(CASES))
+def test_step_and_output_are_at_most_one_kernel_call_each(case, path, monkeypatch):
+    cls, parameters = CASES[case]
+    model = cls(**parameters).start(0.0)
+    calls = []
+    for kernel in ALL_KERNELS:
+        run = kernel._run
+        monkeypatch.setattr(kernel, "_run", lambda *a, run=run: calls.append(run) or run(*a))
+    model.step(0.0, STEP)
+    stepped = len(calls)
+    model.output()
+    assert stepped <= 1 and len(calls) - stepped == 1
+
+
+# -- helpers numba lacks, against CPython's ------------------------------------------------
+def remainder_cases():
+    rng = np.random.default_rng(3)
+    cases = [(x, y) for y in (2 * math.pi, 1.0, 0.5) for x in np.arange(-20, 21) * y / 2]
+    cases += list(zip(rng.uniform(-1e4, 1e4, 2000), rng.uniform(0.01, 100, 2000)))
+    cases += [(1e-300, 2 * math.pi), (-1e-300, 2 * math.pi), (0.0, 1.0), (-0.0, 1.0)]
+    cases += [(math.nan, 1.0), (1.0, math.nan), (3.0, math.inf), (-3.0, -math.inf)]
+    return [(float(x), float(y)) for x, y in cases]
+
+
+def same_float(a, b):
+    return (math.isnan(a) and math.isnan(b)) or (
+        a == b and math.copysign(1, a) == math.copysign(1, b)
+    )
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_remainder_is_math_remainder_bit_for_bit(function):
+    remainder = jit._numba().njit(flat.remainder) if function == "compiled" else flat.remainder
+    for x, y in remainder_cases():
+        assert same_float(remainder(x, y), math.remainder(x, y)), (x, y)
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_quat_of_rows_is_quat_from_dcm_bit_for_bit(function):
+    quat = jit._numba().njit(flat.quat_of_rows) if function == "compiled" else flat.quat_of_rows
+    rng = np.random.default_rng(4)
+    qs = list(rng.normal(size=(400, 4)))
+    qs += [np.eye(4)[k] for k in range(4)] + [-np.eye(4)[k] for k in range(4)]
+    branches = set()
+    for q in qs:
+        C = np.array(dcm(q / np.linalg.norm(q)))
+        assert quat(*C.reshape(-1).tolist()) == tuple(quat_from_dcm(C).tolist())
+        trace = np.trace(C)
+        branches.add(int(np.argmax([trace, *np.diag(C)])))
+    assert branches == {0, 1, 2, 3}
+
+
+@needs_numba
+def test_every_model_kernel_compiles():
+    names = sorted(k.__name__ for k in ALL_KERNELS)
+    assert names == [
+        "cluster_output", "cluster_step", "orbit_output", "pitch_output", "steering_output"
+    ]  # fmt: skip
+    for kernel in ALL_KERNELS:
+        assert kernel.compiled is not kernel.py_func
+        assert type(kernel.compiled).__module__.startswith("numba")
