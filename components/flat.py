@@ -17,33 +17,6 @@ from .jit import jitable
 
 
 @jitable
-def quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22):
-    """q (scalar first, q0 ≥ 0) of the rotation matrix with rows (c00, c01, c02), ...:
-    Shepperd's method, the largest of 1 + trace, 1 + 2 c_kk − trace chosen (the first on a
-    tie), as :func:`.rotations.quat_from_dcm`, bit for bit (tests/test_kernels_models.py)."""
-    trace = c00 + c11 + c22
-    k, largest = 0, trace
-    for j, c in ((1, c00), (2, c11), (3, c22)):
-        if c > largest:
-            k, largest = j, c
-    if k == 0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = (0.25 * s, (c12 - c21) / s, (c20 - c02) / s, (c01 - c10) / s)
-    elif k == 1:
-        s = 2.0 * math.sqrt(1.0 + 2 * c00 - trace)
-        q = ((c12 - c21) / s, 0.25 * s, (c01 + c10) / s, (c02 + c20) / s)
-    elif k == 2:
-        s = 2.0 * math.sqrt(1.0 + 2 * c11 - trace)
-        q = ((c20 - c02) / s, (c01 + c10) / s, 0.25 * s, (c12 + c21) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + 2 * c22 - trace)
-        q = ((c01 - c10) / s, (c02 + c20) / s, (c12 + c21) / s, 0.25 * s)
-    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    sign = -1.0 if q[0] < 0.0 else 1.0
-    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
-
-
-@jitable
 def remainder(x: float, y: float) -> float:
     """IEEE 754 remainder x − n y, n the integer nearest x / y (even on a tie): CPython's
     ``math.remainder`` (Modules/mathmodule.c, m_remainder) step for step, which numba does

@@ -108,9 +108,10 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
-from .flat import quat_of_rows, remainder
+from .flat import remainder
 from .jit import floats, jitable, kernel
 from .model import Model, ModelError
+from .rotations import quat_of_rows
 from .variables import Layout, output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1

@@ -128,11 +128,16 @@ def dcm_from_quat(q) -> np.ndarray:
     return np.array(dcm(q))
 
 
-def quat_from_dcm(C) -> np.ndarray:
-    """Inverse of :func:`dcm_from_quat` (Shepperd's method), scalar part ≥ 0."""
-    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _floats(C)
+@jitable
+def quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22):
+    """q (scalar first, q0 ≥ 0) of the rotation matrix with rows (c00, c01, c02), ...:
+    Shepperd's method, the largest of 1 + trace, 1 + 2 c_kk − trace chosen (the first on a
+    tie), what :func:`quat_from_dcm` returns, compilable."""
     trace = c00 + c11 + c22
-    k = max(range(4), key=(trace, c00, c11, c22).__getitem__)
+    k, largest = 0, trace
+    for j, c in ((1, c00), (2, c11), (3, c22)):
+        if c > largest:
+            k, largest = j, c
     if k == 0:
         s = 2.0 * math.sqrt(1.0 + trace)
         q = (0.25 * s, (c12 - c21) / s, (c20 - c02) / s, (c01 - c10) / s)
@@ -147,7 +152,13 @@ def quat_from_dcm(C) -> np.ndarray:
         q = ((c01 - c10) / s, (c02 + c20) / s, (c12 + c21) / s, 0.25 * s)
     norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     sign = -1.0 if q[0] < 0.0 else 1.0
-    return np.array([sign * x / norm for x in q])
+    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
+
+
+def quat_from_dcm(C) -> np.ndarray:
+    """Inverse of :func:`dcm_from_quat` (Shepperd's method), scalar part ≥ 0."""
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _floats(C)
+    return np.array(quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22))
 
 
 def rot1(a: float) -> np.ndarray:

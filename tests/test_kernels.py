@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_c_host import host as c_host  # noqa: F401  (the C host fixture, compiled once)
 
-from agilesat.components import cmg_cluster, jit, rotations, satellite_dynamics
+from agilesat.components import cmg_cluster, cmg_steering, jit, rotations, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
 from agilesat.components.model import Model, ModelError
@@ -201,7 +201,7 @@ def _gimbals(model: Model, steps: int) -> np.ndarray:
 _RUNS = {
     SatelliteDynamics: (satellite_dynamics, _spin_up),
     CmgCluster: (cmg_cluster, _gimbals),
-    CmgSteering: (cmg_cluster, _gimbals),
+    CmgSteering: (cmg_steering, _gimbals),
 }
 
 
