@@ -209,7 +209,8 @@ class ModelSlave(Fmi2Slave):
         put back and leaves them invalid: the next get evaluates them again and reports
         it (``_read``)."""
         model = self.model
-        self._prediction = (dict(vars(model)), self._values[self._outputs].copy(), len(model.warnings))
+        before = self._values[self._outputs].copy()
+        self._prediction = (dict(vars(model)), before, len(model.warnings))
         try:
             model.output()
         except Exception:  # noqa: BLE001 - reported by the get that needs them
