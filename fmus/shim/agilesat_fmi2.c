@@ -236,7 +236,6 @@ typedef struct Shim {
     int fatal;                   /* a call returned fmi2Fatal: only fmi2FreeInstance now */
     State *states;
     /* the fast path (see "fast get/set"): NULL values when off */
-    int fast_off;                /* AGILESAT_SHIM_FAST=0 at instantiation */
     double *values;              /* the slave's model.values */
     size_t n_values;
     const unsigned char *kind;   /* per value reference: KIND_* */
@@ -402,8 +401,9 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
  *    parameter set, a non-finite value, outputs not evaluated yet or invalid) is forwarded
  *    to pythonfmu exactly as before: the slave gives its status and message.  The answer
  *    is the same either way; so are results, bit for bit.
- *  - AGILESAT_SHIM_FAST=0 in the environment at fmi2Instantiate turns it off for that
- *    instance (every call forwarded).  agilesat_shim_counters() gives an instance's counts
+ *  - AGILESAT_SHIM_FAST=0 in the environment at fmi2Instantiate (or fmi2Reset, after which
+ *    the instance is as if just instantiated) turns it off for that instance (every call
+ *    forwarded).  agilesat_shim_counters() gives an instance's counts
  *    of get/set calls served and forwarded (for tests and benchmarks).
  * Only the instance's own fields are used: one instance per thread is safe, as FMI 2.0
  * allows. */
@@ -424,7 +424,8 @@ static void handshake(Shim *s) {
     s->kind = NULL;
     s->control = NULL;
     s->n_values = 0;
-    if (s->fast_off) return;
+    const char *fast = getenv("AGILESAT_SHIM_FAST");
+    if (fast && strcmp(fast, "0") == 0) return;
     fmi2ValueReference vr[FAST_PATH_N];
     fmi2Real got[FAST_PATH_N] = {0};
     for (int i = 0; i < FAST_PATH_N; i++) vr[i] = FAST_PATH_VR;
@@ -520,8 +521,6 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     s->ours.logger = shim_logger;
     s->ours.componentEnvironment = s;
     s->logging_on = logging_on;
-    const char *fast = getenv("AGILESAT_SHIM_FAST");
-    s->fast_off = fast && strcmp(fast, "0") == 0;
     typedef fmi2Component (*F)(fmi2String, fmi2Type, fmi2String, fmi2String,
                                const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
     s->inner = INNER(F, fmi2Instantiate)(name, type, guid, resources, &s->ours, visible,
