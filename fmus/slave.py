@@ -33,14 +33,14 @@ value reference ``FAST_PATH_VR`` and gets the addresses of three arrays this sla
 for its whole life: the model's value array ``model.values`` (never replaced: state
 restore, reset and initialisation copy into it), ``_kind`` (per scalar: ``KIND_*``) and
 ``_control`` (``STEP_MODE``: the mode is "step"; ``OUTPUTS_VALID``: ``model.output()``
-has been evaluated for the current state and inputs; ``PREDICTED``: see below).  With
+has been evaluated for the current state and inputs; ``PREDICTED``, ``FED``: see below).  With
 ``STEP_MODE`` and ``OUTPUTS_VALID`` set the shim answers a ``fmi2GetReal`` of Real scalars
 itself (and clears ``PREDICTED``); in step mode it writes a ``fmi2SetReal`` of finite
-values to Real inputs itself, clearing ``OUTPUTS_VALID`` when one of them feeds an output
-through (``KIND_FEEDTHROUGH``: an input some output's ``depends`` lists, the dependencies
-of modelDescription.xml), unless ``PREDICTED`` is set.  Every other call comes here as
-before.  A set of inputs no output depends on keeps the outputs valid (they would not
-change).
+values to Real inputs itself, clearing ``OUTPUTS_VALID`` and setting ``FED`` when one of
+them feeds an output through (``KIND_FEEDTHROUGH``: an input some output's ``depends``
+lists, the dependencies of modelDescription.xml), unless ``PREDICTED`` is set.  Every
+other call comes here as before.  A set of inputs no output depends on keeps the outputs
+valid (they would not change).
 
 Predicted outputs, so that a macro step enters Python once (``fmi2DoStep``).  Without the
 shim, ``model.output()`` runs at the first get after a step or a feedthrough set.
@@ -54,7 +54,9 @@ prediction, so ``output()`` runs later exactly as without the shim, and the resu
 the same bit for bit even for models whose ``output()`` remembers its last result (the
 sign of a quaternion, an Euler angle branch).  The undo restores the attribute
 references, so ``output()`` must assign its memories, not modify them in place
-(tests/test_shim_fast.py checks every model).
+(tests/test_shim_fast.py checks every model).  An instance predicts only while that pays:
+after an undone prediction it stops, until a get comes first after a step again (``FED``
+cleared by ``do_step``, set by a feedthrough set).
 """
 
 from __future__ import annotations
@@ -86,7 +88,7 @@ FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 5, 1.0
 #: per scalar, for the shim: not Real, Real parameter, output, input, feedthrough input
 KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = 0, 1, 2, 3, 4
 #: indices in the control block shared with the shim
-STEP_MODE, OUTPUTS_VALID, PREDICTED = 0, 1, 2
+STEP_MODE, OUTPUTS_VALID, PREDICTED, FED = 0, 1, 2, 3
 
 
 def _guarded(default):
@@ -168,8 +170,9 @@ class ModelSlave(Fmi2Slave):
             np.where(self._causality == OUTPUT, KIND_OUTPUT, KIND_PARAMETER),
         )
         self._kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER).astype(np.uint8)
-        self._control = np.zeros(3, dtype=np.int32)  # shared with the shim: never replaced
+        self._control = np.zeros(4, dtype=np.int32)  # shared with the shim: never replaced
         self._prediction = None
+        self._predicting = True  # see _predict_outputs
         self._values = self.model.values  # the array the shim reads and writes
         self._plans: dict = {}
         self._mode = "instantiated"
@@ -207,7 +210,13 @@ class ModelSlave(Fmi2Slave):
         """End of a step: evaluate the outputs, so that the shim answers the gets (see
         the module docstring).  A model that raises or produces non-finite outputs is
         put back and leaves them invalid: the next get evaluates them again and reports
-        it (``_read``)."""
+        it (``_read``).  Only while predictions pay: one undone (a feedthrough set came
+        first, as in a Jacobi master's feedthrough pass, or no get at all) stops them
+        until a get comes first after a step again (``FED``: no feedthrough set since the
+        step); either way the results are the same."""
+        self._control[FED] = 0
+        if not self._predicting:
+            return
         model = self.model
         before = self._values[self._outputs].copy()
         self._prediction = (dict(vars(model)), before, len(model.warnings))
@@ -232,10 +241,12 @@ class ModelSlave(Fmi2Slave):
         del model.warnings[n_warnings:]
         self._control[OUTPUTS_VALID] = self._control[PREDICTED] = 0
 
-    def _consume_prediction(self) -> None:
-        """A call that changes what a get would compute: a prediction no get used is undone."""
+    def _consume_prediction(self, wrong: bool = True) -> None:
+        """A call that changes what a get would compute: a prediction no get used is undone
+        (and, ``wrong``, no longer made: see ``_predict_outputs``)."""
         if self._control[PREDICTED]:
             self._unpredict()
+            self._predicting = self._predicting and not wrong
 
     # -- FMI life cycle ------------------------------------------------------------
     @_guarded(None)
@@ -392,7 +403,7 @@ class ModelSlave(Fmi2Slave):
     # reason; the shim refuses such a state with fmi2Error and that reason.
     @_guarded(None)
     def _get_fmu_state(self):
-        self._consume_prediction()  # the state as without the shim
+        self._consume_prediction(wrong=False)  # the state as without the shim
         wrapper = (
             self._mode,
             self._start_time,
@@ -549,6 +560,8 @@ class ModelSlave(Fmi2Slave):
                     f"the model produced non-finite outputs {bad} at t={self.model.t!r}"
                 )
             self._outputs_valid = True
+            if self._mode == "step" and not self._control[FED]:
+                self._predicting = True  # a get came first after the step
         self._control[PREDICTED] = 0  # a get came first: the prediction was right
         return values[index]
 
@@ -568,6 +581,7 @@ class ModelSlave(Fmi2Slave):
         elif self._feeds[index].any():  # else the outputs stay what they are
             self._consume_prediction()
             self._outputs_valid = False
+            self._control[FED] = 1
 
     def _ensure_state(self):
         if not self._state_valid:

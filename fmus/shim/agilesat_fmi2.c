@@ -239,7 +239,7 @@ typedef struct Shim {
     double *values;              /* the slave's model.values */
     size_t n_values;
     const unsigned char *kind;   /* per value reference: KIND_* */
-    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, PREDICTED: the slave's */
+    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, PREDICTED, FED: the slave's */
     unsigned long long fast_calls, forwarded_calls;  /* get/set calls served / forwarded */
     struct Shim *next;
 } Shim;
@@ -385,7 +385,7 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
  *    reserved value reference FAST_PATH_VR (no host can: plain calls on value references
  *    from DERIVATIVE_BASE up are refused).  The answer: FAST_PATH_VERSION, the address and
  *    length of model.values (value reference = offset), the address of kind[] (KIND_* per
- *    value reference) and of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED).  The slave
+ *    value reference) and of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED, FED).  The slave
  *    owns the three for its whole life and never replaces them; it keeps the flags up to
  *    date, and evaluates the outputs at the end of fmi2DoStep (PREDICTED: until a get
  *    confirms it, the slave can undo that evaluation, see fmus/slave.py).
@@ -395,8 +395,8 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
  *  - fmi2SetReal is served when STEP_MODE is set, every value reference is a Real input
  *    and every value is finite, unless one of the inputs feeds an output through
  *    (KIND_FEEDTHROUGH, the model description's dependencies) while PREDICTED is set (the
- *    slave undoes the prediction): the values are copied in, and OUTPUTS_VALID is cleared
- *    if one of the inputs feeds an output through, as the slave does.
+ *    slave undoes the prediction): the values are copied in, and if one of the inputs
+ *    feeds an output through, OUTPUTS_VALID is cleared and FED set, as the slave does.
  *  - Anything else (another mode, an unknown value reference, a wrong type, an output or
  *    parameter set, a non-finite value, outputs not evaluated yet or invalid) is forwarded
  *    to pythonfmu exactly as before: the slave gives its status and message.  The answer
@@ -411,7 +411,7 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
 #define FAST_PATH_N 5
 #define FAST_PATH_VERSION 1.0
 enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH };
-enum { STEP_MODE, OUTPUTS_VALID, PREDICTED };
+enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED };
 
 static void *address(double x) {
     uintptr_t a = (uintptr_t)x;
@@ -464,7 +464,7 @@ static int fast_set(Shim *s, const fmi2ValueReference vr[], size_t n, const fmi2
     }
     if (feeds && s->control[PREDICTED]) return 0;
     for (size_t i = 0; i < n; i++) s->values[vr[i]] = value[i];
-    if (feeds) s->control[OUTPUTS_VALID] = 0;
+    if (feeds) s->control[OUTPUTS_VALID] = 0, s->control[FED] = 1;
     s->fast_calls++;
     return 1;
 }
