@@ -14,6 +14,7 @@ import pickle
 
 import numpy as np
 import pytest
+from count_python_entries import count
 
 from agilesat.fmus import FMUS, model_class
 from agilesat.fmus.slave import FAST_PATH_N, FAST_PATH_VR, OUTPUTS_VALID, PREDICTED, STEP_MODE
@@ -298,7 +299,7 @@ def test_fmu_states_and_reset_leave_no_stale_pointer_or_flag(fmus, fast):
     assert off[0] == -1
 
 
-CAMPAIGN = r"""
+SCAN_PITCH = r"""
 import json, os, sys
 if sys.argv[1] == "0":
     os.environ["AGILESAT_SHIM_FAST"] = "0"
@@ -315,11 +316,17 @@ print(json.dumps({"names": list(results.names), "data": results.data.tolist()}))
 def test_scan_pitch_is_bit_identical_with_and_without_the_fast_path(fmus):
     runs = []
     for fast in ("1", "0"):
-        result = run_python(CAMPAIGN, fast)
+        result = run_python(SCAN_PITCH, fast)
         assert result.returncode == 0, result.stderr
         runs.append(json.loads(result.stdout.strip().splitlines()[-1]))
     assert runs[0]["names"] == runs[1]["names"]
     assert runs[0]["data"] == runs[1]["data"]
+    # and the fast path was taken: entries into the slaves per macro step (20 more steps)
+    on, off = (
+        sum(count(fast, 0.05, 2.0).values()) - sum(count(fast, 0.05, 1.0).values())
+        for fast in ("1", "0")
+    )
+    assert on < 0.6 * off
 
 
 SIMULATE = r"""
