@@ -26,6 +26,37 @@ step.  The output derivative of ``h`` is the output ``hdot``, at the current tim
 with fmi2Error: a variable without a declared derivative, an order other than 1, a
 non-finite derivative, setting after ``fmi2Terminate``, getting before
 ``fmi2ExitInitializationMode`` (FMI 2.0 section 4.2.4's state table).
+
+The shim's fast path (``shim/agilesat_fmi2.c``, "fast get/set").  After instantiation
+(and after ``fmi2Reset``, which makes pythonfmu create a new slave) the shim asks for the
+value reference ``FAST_PATH_VR`` and gets the addresses of three arrays this slave owns
+for its whole life: the model's value array ``model.values`` (never replaced: state
+restore, reset and initialisation copy into it), ``_kind`` (per scalar: ``KIND_*``) and
+``_control`` (``STEP_MODE``: the mode is "step"; ``OUTPUTS_VALID``: ``model.output()``
+has been evaluated for the current state and inputs; ``PREDICTED``, ``FED``: see below).  With
+``STEP_MODE`` and ``OUTPUTS_VALID`` set the shim answers a ``fmi2GetReal`` of Real scalars
+itself (and clears ``PREDICTED``); in step mode it writes a ``fmi2SetReal`` of finite
+values to Real inputs itself, clearing ``OUTPUTS_VALID`` and setting ``FED`` when one of
+them feeds an output through (``KIND_FEEDTHROUGH``: an input some output's ``depends``
+lists, the dependencies of modelDescription.xml), unless ``PREDICTED`` is set.  Every
+other call comes here as before.  A set of inputs no output depends on keeps the outputs
+valid (they would not change).
+
+Predicted outputs, so that a macro step enters Python once (``fmi2DoStep``).  Without the
+shim, ``model.output()`` runs at the first get after a step or a feedthrough set.
+``do_step`` runs it at its end instead, *predicting* that the next call is a get; a model
+that raises or gives non-finite outputs leaves them invalid (the next get comes here and
+reports it as it always did).  The prediction is right when a get comes first
+(``PREDICTED`` cleared: the outputs are those a get computes).  Otherwise (a feedthrough
+set, the next ``do_step``, an FMU state taken) it is undone first (``_unpredict``): the
+model's attributes, its outputs and warnings are put back as they were before the
+prediction, so ``output()`` runs later exactly as without the shim, and the results stay
+the same bit for bit even for models whose ``output()`` remembers its last result (the
+sign of a quaternion, an Euler angle branch).  The undo restores the attribute
+references, so ``output()`` must assign its memories, not modify them in place
+(tests/test_shim_fast.py checks every model).  An instance predicts only while that pays:
+after an undone prediction it stops, until a get comes first after a step again (``FED``
+cleared by ``do_step``, set by a feedthrough set).
 """
 
 from __future__ import annotations
@@ -49,6 +80,15 @@ _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 #: value references of the derivative calls the shim forwards (shim/agilesat_fmi2.c)
 DERIVATIVE_BASE, ORDER_SHIFT = 1 << 30, 24
+#: the shim's fast-path handshake: a get_real of FAST_PATH_N copies of the value reference
+#: 0xFFFFFFFF (pythonfmu 0.7.0 passes value references as C ints: -1) gives
+#: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address);
+#: the shim checks the version (shim/agilesat_fmi2.c)
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 5, 1.0
+#: per scalar, for the shim: not Real, Real parameter, output, input, feedthrough input
+KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = 0, 1, 2, 3, 4
+#: indices in the control block shared with the shim
+STEP_MODE, OUTPUTS_VALID, PREDICTED, FED = 0, 1, 2, 3
 
 
 def _guarded(default):
@@ -116,12 +156,97 @@ class ModelSlave(Fmi2Slave):
             if v.derivative_of
             for k in range(v.size)
         }
+        #: inputs some output depends on directly (its table row's ``depends``)
+        feeds = {
+            vr
+            for v in layout.variables
+            for name in v.depends
+            for vr in range(layout.offset[name], layout.offset[name] + layout.by_name[name].size)
+        }
+        self._feeds = np.array([vr in feeds for vr in range(len(layout.scalars))], dtype=bool)
+        kind = np.where(
+            self._causality == INPUT,
+            np.where(self._feeds, KIND_FEEDTHROUGH, KIND_INPUT),
+            np.where(self._causality == OUTPUT, KIND_OUTPUT, KIND_PARAMETER),
+        )
+        self._kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER).astype(np.uint8)
+        self._control = np.zeros(4, dtype=np.int32)  # shared with the shim: never replaced
+        self._prediction = None
+        self._predicting = True  # see _predict_outputs
+        self._values = self.model.values  # the array the shim reads and writes
         self._plans: dict = {}
         self._mode = "instantiated"
         self._start_time = 0.0
         self._next_time: float | None = None
         self._state_valid = False
         self._outputs_valid = False
+
+    # -- the flags the shim reads (see the module docstring) ------------------------
+    @property
+    def _mode(self) -> str:
+        return self._mode_name
+
+    @_mode.setter
+    def _mode(self, mode: str) -> None:
+        self._mode_name = mode
+        self._control[STEP_MODE] = mode == "step" and self.model.values is self._values
+
+    @property
+    def _outputs_valid(self) -> bool:
+        return bool(self._control[OUTPUTS_VALID])
+
+    @_outputs_valid.setter
+    def _outputs_valid(self, valid: bool) -> None:
+        self._control[OUTPUTS_VALID] = valid
+
+    def _fast_path_addresses(self, n: int) -> list:
+        if n != FAST_PATH_N:
+            raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
+        address = [a.__array_interface__["data"][0] for a in (self._values, self._kind)]
+        control = self._control.__array_interface__["data"][0]
+        return [FAST_PATH_VERSION, address[0], self._values.size, address[1], control]
+
+    def _predict_outputs(self) -> None:
+        """End of a step: evaluate the outputs, so that the shim answers the gets (see
+        the module docstring).  A model that raises or produces non-finite outputs is
+        put back and leaves them invalid: the next get evaluates them again and reports
+        it (``_read``).  Only while predictions pay: one undone (a feedthrough set came
+        first, as in a Jacobi master's feedthrough pass, or no get at all) stops them
+        until a get comes first after a step again (``FED``: no feedthrough set since the
+        step); either way the results are the same."""
+        self._control[FED] = 0
+        if not self._predicting:
+            return
+        model = self.model
+        before = self._values[self._outputs].copy()
+        self._prediction = (dict(vars(model)), before, len(model.warnings))
+        try:
+            model.output()
+        except Exception:  # noqa: BLE001 - reported by the get that needs them
+            self._unpredict()
+            return
+        if not math.isfinite(self._values[self._outputs].sum()):
+            self._unpredict()
+            return
+        self._control[OUTPUTS_VALID] = self._control[PREDICTED] = 1
+
+    def _unpredict(self) -> None:
+        """Undo the prediction of ``_predict_outputs`` (no get came first)."""
+        attributes, outputs, n_warnings = self._prediction
+        self._prediction = None
+        model = self.model
+        vars(model).clear()
+        vars(model).update(attributes)
+        self._values[self._outputs] = outputs
+        del model.warnings[n_warnings:]
+        self._control[OUTPUTS_VALID] = self._control[PREDICTED] = 0
+
+    def _consume_prediction(self, wrong: bool = True) -> None:
+        """A call that changes what a get would compute: a prediction no get used is undone
+        (and, ``wrong``, no longer made: see ``_predict_outputs``)."""
+        if self._control[PREDICTED]:
+            self._unpredict()
+            self._predicting = self._predicting and not wrong
 
     # -- FMI life cycle ------------------------------------------------------------
     @_guarded(None)
@@ -144,6 +269,7 @@ class ModelSlave(Fmi2Slave):
     @_guarded(False)
     def do_step(self, current_time, step_size):
         self._require_mode("step")
+        self._consume_prediction()
         if not (math.isfinite(step_size) and step_size > 0.0):
             raise _CallRejected(f"step size must be positive and finite, got {step_size!r}")
         if not math.isclose(current_time, self._next_time, rel_tol=1e-9, abs_tol=1e-12):
@@ -155,6 +281,9 @@ class ModelSlave(Fmi2Slave):
         self._flush_warnings()
         self._next_time = current_time + step_size
         self._outputs_valid = False
+        if self.model.values is not self._values:  # the shim would see another array
+            self._control[STEP_MODE] = 0
+        self._predict_outputs()
         return True
 
     @_guarded(None)
@@ -165,6 +294,8 @@ class ModelSlave(Fmi2Slave):
     # -- getters and setters -------------------------------------------------------
     @_guarded(_zeros)
     def get_real(self, vrs):
+        if vrs and vrs[0] in FAST_PATH_VR:
+            return self._fast_path_addresses(len(vrs))
         if vrs and vrs[0] >= DERIVATIVE_BASE:
             return self.get_real_output_derivatives(vrs)
         return self._read(vrs, "Real").tolist()
@@ -259,6 +390,7 @@ class ModelSlave(Fmi2Slave):
     @_guarded(None)
     def set_string(self, vrs, values):
         self._plan(vrs, "String", setting=True)
+        self._consume_prediction()
         for vr, value in zip(vrs, values):
             self.model.strings[self._scalar_names[vr]] = value
         self._state_valid = self._outputs_valid = False
@@ -271,6 +403,7 @@ class ModelSlave(Fmi2Slave):
     # reason; the shim refuses such a state with fmi2Error and that reason.
     @_guarded(None)
     def _get_fmu_state(self):
+        self._consume_prediction(wrong=False)  # the state as without the shim
         wrapper = (
             self._mode,
             self._start_time,
@@ -288,6 +421,8 @@ class ModelSlave(Fmi2Slave):
             fmu_state.decode(self._identity(), state, _PACKAGE)
         )
         self.model.set_state(model_state)
+        self._prediction = None
+        self._control[PREDICTED] = 0
         (self._mode, self._start_time, self._next_time, self._state_valid, self._outputs_valid) = (
             wrapper
         )
@@ -425,6 +560,9 @@ class ModelSlave(Fmi2Slave):
                     f"the model produced non-finite outputs {bad} at t={self.model.t!r}"
                 )
             self._outputs_valid = True
+            if self._mode == "step" and not self._control[FED]:
+                self._predicting = True  # a get came first after the step
+        self._control[PREDICTED] = 0  # a get came first: the prediction was right
         return values[index]
 
     def _write(self, vrs, values, type_name):
@@ -439,7 +577,11 @@ class ModelSlave(Fmi2Slave):
         self.model.values[index] = values
         if self._mode in ("instantiated", "initialization"):
             self._state_valid = False
-        self._outputs_valid = False
+            self._outputs_valid = False
+        elif self._feeds[index].any():  # else the outputs stay what they are
+            self._consume_prediction()
+            self._outputs_valid = False
+            self._control[FED] = 1
 
     def _ensure_state(self):
         if not self._state_valid:

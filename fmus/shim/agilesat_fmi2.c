@@ -36,13 +36,18 @@
  *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
  *    once (fmi2Error; fmi2FreeInstance does nothing): a host calling from a static
  *    destructor would otherwise take the GIL of a dead interpreter inside pythonfmu.
+ *  - Speed.  A valid fmi2GetReal/fmi2SetReal in step mode is served here, in C, straight
+ *    from/to the model's value array, without entering Python (see "fast get/set"); every
+ *    other call is forwarded as before, so the slave keeps every check and message.
  *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <locale.h>
+#include <math.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -230,6 +235,12 @@ typedef struct Shim {
     fmi2Status worst;            /* worst status logged during the current call */
     int fatal;                   /* a call returned fmi2Fatal: only fmi2FreeInstance now */
     State *states;
+    /* the fast path (see "fast get/set"): NULL values when off */
+    double *values;              /* the slave's model.values */
+    size_t n_values;
+    const unsigned char *kind;   /* per value reference: KIND_* */
+    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, PREDICTED, FED: the slave's */
+    unsigned long long fast_calls, forwarded_calls;  /* get/set calls served / forwarded */
     struct Shim *next;
 } Shim;
 
@@ -365,6 +376,109 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
 
 #define INNER(type, fn) ((type)inner.fn)
 
+/* ---- fast get/set ----------------------------------------------------------------------
+ * Most of a co-simulation step's calls are valid gets and sets of Reals, and through
+ * pythonfmu each one costs a Python call, the GIL and a list or two.  The shim serves them
+ * itself from the slave's own arrays (fmus/slave.py, "The shim's fast path"):
+ *  - Handshake.  After fmi2Instantiate and after fmi2Reset (pythonfmu then creates a new
+ *    slave: the old arrays are gone) the shim asks the slave for FAST_PATH_N values of the
+ *    reserved value reference FAST_PATH_VR (no host can: plain calls on value references
+ *    from DERIVATIVE_BASE up are refused).  The answer: FAST_PATH_VERSION, the address and
+ *    length of model.values (value reference = offset), the address of kind[] (KIND_* per
+ *    value reference) and of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED, FED).  The slave
+ *    owns the three for its whole life and never replaces them; it keeps the flags up to
+ *    date, and evaluates the outputs at the end of fmi2DoStep (PREDICTED: until a get
+ *    confirms it, the slave can undo that evaluation, see fmus/slave.py).
+ *  - fmi2GetReal is served when STEP_MODE and OUTPUTS_VALID are set and every value
+ *    reference is a Real scalar (parameter, input or output): the values are copied out,
+ *    and PREDICTED is cleared (a get came first: the prediction was right).
+ *  - fmi2SetReal is served when STEP_MODE is set, every value reference is a Real input
+ *    and every value is finite, unless one of the inputs feeds an output through
+ *    (KIND_FEEDTHROUGH, the model description's dependencies) while PREDICTED is set (the
+ *    slave undoes the prediction): the values are copied in, and if one of the inputs
+ *    feeds an output through, OUTPUTS_VALID is cleared and FED set, as the slave does.
+ *  - Anything else (another mode, an unknown value reference, a wrong type, an output or
+ *    parameter set, a non-finite value, outputs not evaluated yet or invalid) is forwarded
+ *    to pythonfmu exactly as before: the slave gives its status and message.  The answer
+ *    is the same either way; so are results, bit for bit.
+ *  - AGILESAT_SHIM_FAST=0 in the environment at fmi2Instantiate (or fmi2Reset, after which
+ *    the instance is as if just instantiated) turns it off for that instance (every call
+ *    forwarded).  agilesat_shim_counters() gives an instance's counts
+ *    of get/set calls served and forwarded (for tests and benchmarks).
+ * Only the instance's own fields are used: one instance per thread is safe, as FMI 2.0
+ * allows. */
+#define FAST_PATH_VR 0xFFFFFFFFu
+#define FAST_PATH_N 5
+#define FAST_PATH_VERSION 1.0
+enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH };
+enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED };
+
+static void *address(double x) {
+    uintptr_t a = (uintptr_t)x;
+    return x > 0 && x < 9007199254740992.0 && (double)a == x ? (void *)a : NULL;
+}
+
+static void handshake(Shim *s) {
+    typedef fmi2Status (*Get)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Real *);
+    s->values = NULL;
+    s->kind = NULL;
+    s->control = NULL;
+    s->n_values = 0;
+    const char *fast = getenv("AGILESAT_SHIM_FAST");
+    if (fast && strcmp(fast, "0") == 0) return;
+    fmi2ValueReference vr[FAST_PATH_N];
+    fmi2Real got[FAST_PATH_N] = {0};
+    for (int i = 0; i < FAST_PATH_N; i++) vr[i] = FAST_PATH_VR;
+    fmi2Status status = INNER(Get, fmi2GetReal)(s->inner, vr, FAST_PATH_N, got);
+    fmi2Status worst = s->worst;
+    s->worst = fmi2OK;
+    if (status != fmi2OK || worst != fmi2OK || got[0] != FAST_PATH_VERSION) return;
+    double *values = address(got[1]);
+    unsigned char *kind = address(got[3]);
+    int32_t *control = address(got[4]);
+    if (!values || !kind || !control || !(got[2] >= 0 && got[2] < (double)MAX_VALUES)) return;
+    s->n_values = (size_t)got[2];
+    s->kind = kind;
+    s->control = control;
+    s->values = values;
+}
+
+static int fast_get(Shim *s, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
+    if (!s->values || !s->control[STEP_MODE] || !s->control[OUTPUTS_VALID]) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (vr[i] >= s->n_values || s->kind[vr[i]] == KIND_OTHER) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]];
+    s->control[PREDICTED] = 0;
+    s->fast_calls++;
+    return 1;
+}
+
+static int fast_set(Shim *s, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
+    if (!s->values || !s->control[STEP_MODE]) return 0;
+    int feeds = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= s->n_values || !isfinite(value[i])) return 0;
+        unsigned char kind = s->kind[vr[i]];
+        if (kind != KIND_INPUT && kind != KIND_FEEDTHROUGH) return 0;
+        feeds |= kind == KIND_FEEDTHROUGH;
+    }
+    if (feeds && s->control[PREDICTED]) return 0;
+    for (size_t i = 0; i < n; i++) s->values[vr[i]] = value[i];
+    if (feeds) s->control[OUTPUTS_VALID] = 0, s->control[FED] = 1;
+    s->fast_calls++;
+    return 1;
+}
+
+/* The counts of fmi2GetReal/fmi2SetReal calls of instance c served here and forwarded to
+ * the slave; 0 when c is not a live instance, -1 when the fast path is off. */
+EXPORT int agilesat_shim_counters(fmi2Component c, unsigned long long counts[2]) {
+    Shim *s = find_instance(c, 0);
+    if (!s || !counts) return 0;
+    counts[0] = s->fast_calls;
+    counts[1] = s->forwarded_calls;
+    return s->values ? 1 : -1;
+}
+
 /* ---- FMI 2.0 API -------------------------------------------------------------------- */
 EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
 EXPORT const char *fmi2GetVersion(void) { return "2.0"; }
@@ -416,6 +530,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         free(s);
         return NULL;
     }
+    handshake(s);
     pthread_mutex_lock(&registry_lock);
     s->next = instances;
     instances = s;
@@ -484,8 +599,22 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tol_defined, 
 FORWARD_NOARGS(fmi2EnterInitializationMode)
 FORWARD_NOARGS(fmi2ExitInitializationMode)
 FORWARD_NOARGS(fmi2Terminate)
-FORWARD_NOARGS(fmi2Reset)
 FORWARD_NOARGS(fmi2CancelStep)
+
+/* pythonfmu 0.7.0 resets by creating a new slave (PySlaveInstance::initialize): the fast
+ * path is off during the call and learns the new slave's arrays after it. */
+EXPORT fmi2Status fmi2Reset(fmi2Component c) {
+    Shim *s = enter(c, "fmi2Reset");
+    if (!s) return fmi2Error;
+    s->values = NULL;
+    fmi2Status status = leave(s, INNER(fmi2Status (*)(fmi2Component), fmi2Reset)(s->inner));
+    if (status <= fmi2Warning) {
+        fmi2Status worst = s->worst;
+        handshake(s);
+        s->worst = worst;
+    }
+    return status;
+}
 
 static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const void *value) {
     if (n == 0) return 0;
@@ -506,7 +635,7 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
 #define ORDER_SHIFT 24
 #define MAX_ORDER 63
 
-#define FORWARD_ARRAY(fn, type, check_strings, check_codes)                               \
+#define FORWARD_ARRAY(fn, type, check_strings)                                            \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
@@ -515,18 +644,29 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
         if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
         for (size_t i = 0; check_strings && i < n; i++)                                   \
             if (!((const void *const *)value)[i]) return refuse(s, #fn, "a string is NULL"); \
-        for (size_t i = 0; check_codes && i < n; i++)                                     \
-            if (vr[i] >= DERIVATIVE_BASE) return refuse(s, #fn, "unknown value reference"); \
         return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
-FORWARD_ARRAY(fmi2GetReal, fmi2Real, 0, 1)
-FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0, 0)
-FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0, 0)
-FORWARD_ARRAY(fmi2GetString, fmi2String, 0, 0)
-FORWARD_ARRAY(fmi2SetReal, const fmi2Real, 0, 1)
-FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0, 0)
-FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0, 0)
-FORWARD_ARRAY(fmi2SetString, const fmi2String, 1, 0)
+#define FORWARD_REAL(fn, type, fast)                                                      \
+    EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
+                         type value[]) {                                                  \
+        typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
+        Shim *s = enter(c, #fn);                                                          \
+        if (!s) return fmi2Error;                                                         \
+        if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
+        if (fast(s, vr, n, value)) return fmi2OK;                                         \
+        for (size_t i = 0; i < n; i++)                                                    \
+            if (vr[i] >= DERIVATIVE_BASE) return refuse(s, #fn, "unknown value reference"); \
+        s->forwarded_calls++;                                                             \
+        return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
+    }
+FORWARD_REAL(fmi2GetReal, fmi2Real, fast_get)
+FORWARD_REAL(fmi2SetReal, const fmi2Real, fast_set)
+FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0)
+FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0)
+FORWARD_ARRAY(fmi2GetString, fmi2String, 0)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0)
+FORWARD_ARRAY(fmi2SetString, const fmi2String, 1)
 
 /* ---- FMU states --------------------------------------------------------------------- */
 static State **find_state(Shim *s, fmi2FMUstate state) {
