@@ -53,7 +53,8 @@ model's attributes, its outputs and warnings are put back as they were before th
 prediction, so ``output()`` runs later exactly as without the shim, and the results stay
 the same bit for bit even for models whose ``output()`` remembers its last result (the
 sign of a quaternion, an Euler angle branch).  The undo restores the attribute
-references, so ``output()`` must assign its memories, not modify them in place
+references and the contents of the model's arrays (a kernel's state array), so
+``output()`` must assign any other memory, not modify it in place
 (tests/test_shim_fast.py checks every model).  An instance predicts only while that pays:
 after an undone prediction it stops, until a get comes first after a step again (``FED``
 cleared by ``do_step``, set by a feedthrough set).
@@ -219,7 +220,12 @@ class ModelSlave(Fmi2Slave):
             return
         model = self.model
         before = self._values[self._outputs].copy()
-        self._prediction = (dict(vars(model)), before, len(model.warnings))
+        arrays = {  # kernels' state arrays, which output() updates in place
+            k: v.copy()
+            for k, v in vars(model).items()
+            if type(v) is np.ndarray and v is not self._values
+        }
+        self._prediction = (dict(vars(model)), arrays, before, len(model.warnings))
         try:
             model.output()
         except Exception:  # noqa: BLE001 - reported by the get that needs them
@@ -232,11 +238,13 @@ class ModelSlave(Fmi2Slave):
 
     def _unpredict(self) -> None:
         """Undo the prediction of ``_predict_outputs`` (no get came first)."""
-        attributes, outputs, n_warnings = self._prediction
+        attributes, arrays, outputs, n_warnings = self._prediction
         self._prediction = None
         model = self.model
         vars(model).clear()
         vars(model).update(attributes)
+        for name, saved in arrays.items():
+            attributes[name][...] = saved
         self._values[self._outputs] = outputs
         del model.warnings[n_warnings:]
         self._control[OUTPUTS_VALID] = self._control[PREDICTED] = 0
