@@ -97,11 +97,12 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "agilesat"
 
 
-_loaded: dict[Path, ctypes.PyDLL] = {}
+_DLL = ctypes.PyDLL  # holding the GIL: measured faster than CDLL (tests/benchmark_master_loop.py)
+_loaded: dict[Path, ctypes.CDLL] = {}
 _lock = threading.Lock()
 
 
-def library(source: Path = SOURCE) -> ctypes.PyDLL:
+def library(source: Path = SOURCE) -> ctypes.CDLL:
     """The compiled loop (compiled into the cache at first use), or LoopUnavailable."""
     compiler = c_compiler()
     if not compiler:
@@ -119,7 +120,7 @@ def library(source: Path = SOURCE) -> ctypes.PyDLL:
             if not path.exists():
                 _compile(compiler, source, path)
             try:
-                dll = ctypes.PyDLL(str(path))
+                dll = _DLL(str(path))
             except OSError as exc:
                 raise LoopUnavailable(f"{path} does not load: {exc}") from None
             function = dll.agilesat_loop

@@ -4,8 +4,9 @@ With an output directory every row goes to disk at once, as one ``os.write`` of 
 text to ``results.csv`` and raw float64 to a scratch file ``.results.f64`` beside it (the
 compiled loop hands over its rows a chunk of a few milliseconds at a time,
 :meth:`Recorder.append_block`, written the same way).  A process that is killed (even
-``kill -9``) loses at most the rows being written, and the CSV never ends in a torn row: a short write (disk full) is cut back to the last whole row, in
-both files, and the error names the file.  :meth:`Recorder.close` (also after a failure or
+``kill -9``) loses at most the rows being written, and the CSV never ends in a torn row:
+a short write (disk full) is cut back to the last whole row, in both files, and the error
+names the file.  :meth:`Recorder.close` (also after a failure or
 an interrupt) writes ``results.npz`` from the raw rows in chunks, under a temporary name
 renamed when complete, and hands back :class:`Results` that map the raw rows from disk
 (copy-on-write: the caller may modify them) instead of holding them in memory.
