@@ -33,7 +33,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fmus.build import _partial, c_compiler
 from .fmu import Log
 
 LOOPS = ("auto", "compiled", "python")
@@ -104,6 +103,8 @@ _lock = threading.Lock()
 
 def library(source: Path = SOURCE) -> ctypes.CDLL:
     """The compiled loop (compiled into the cache at first use), or LoopUnavailable."""
+    from ..fmus.build import c_compiler  # the FMU build's: $CC, cc or gcc
+
     compiler = c_compiler()
     if not compiler:
         raise LoopUnavailable("no C compiler (cc or gcc on the PATH, or set CC)")
@@ -134,6 +135,8 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
 
 
 def _compile(compiler: str, source: Path, path: Path) -> None:
+    from ..fmus.build import _partial  # a temporary name unique to this process and call
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         partial = _partial(path)
@@ -215,7 +218,7 @@ def run(
     dll, program: Program, values, recorder, signals, progress, log: ClockLog, start, step, n_steps
 ) -> None:
     """Steps 0 .. n_steps - 1 in chunks, as the Python loop of :mod:`.master` runs them."""
-    report_every = max(1, n_steps // 100)
+    report_every = max(1, n_steps // 100) if progress else n_steps  # a chunk ends there
     width = len(values) + 1
     rows = np.empty((max(1, min(report_every, 4096, (1 << 22) // (8 * width))), width))
     failure = (ctypes.c_int64 * 2)()
