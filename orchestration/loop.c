@@ -24,7 +24,14 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include <time.h>
+
+/* CPython's own float formatting (what repr(float) calls; resolved in the Python process
+   that loads this library through ctypes.PyDLL, holding the GIL). */
+extern char *PyOS_double_to_string(double value, char format, int precision, int flags, int *type);
+extern void PyMem_Free(void *pointer);
+#define PY_DTSF_ADD_DOT_0 0x02
 
 enum { SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP };
 enum { AT_STEP = 1, AT_READ = 2 };
@@ -112,4 +119,30 @@ int64_t agilesat_loop(const struct operation *ops, int64_t n_ops, double *values
         if (seconds() - began >= budget) return n + 1 - first;
     }
     return last - first;
+}
+
+/* The CSV lines of n_rows rows of width values: each value as Python's repr(float), comma
+   separated, each line ended by a newline (orchestration/recorder.py writes the same in
+   Python).  Returns the bytes written to out, or -1 if size is too small or memory ran
+   out.  Needs the GIL (PyOS_double_to_string allocates with PyMem). */
+int64_t agilesat_csv(const double *rows, int64_t n_rows, int64_t width, char *out,
+                     int64_t size) {
+    int64_t used = 0, i, j;
+    for (i = 0; i < n_rows; i++) {
+        for (j = 0; j < width; j++) {
+            char *text = PyOS_double_to_string(rows[i * width + j], 'r', 0, PY_DTSF_ADD_DOT_0,
+                                               NULL);
+            if (text == NULL) return -1;
+            size_t length = strlen(text);
+            if (used + (int64_t)length + 1 > size) {
+                PyMem_Free(text);
+                return -1;
+            }
+            memcpy(out + used, text, length);
+            PyMem_Free(text);
+            used += (int64_t)length;
+            out[used++] = j + 1 < width ? ',' : '\n';
+        }
+    }
+    return used;
 }

@@ -12,9 +12,11 @@ Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
 (:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its flags
 and the machine (:func:`cache_dir`; written under a temporary name and renamed, so that
-processes may compile at once), and loaded with ctypes.  The loop is called through
-``ctypes.PyDLL``, holding the GIL (measured faster than ``CDLL``: pythonfmu takes the GIL
-back at every call into the slave).  Derivative links (:mod:`.derivatives`) run in the
+processes may compile at once), and loaded with ``ctypes.PyDLL``, holding the GIL: the
+loop measured the same as through ``CDLL`` (tests/benchmark_master_loop.py; pythonfmu takes
+the GIL at every call into a slave either way), and :func:`csv_text` needs it (it formats
+the CSV lines with CPython's own ``repr`` of a float, a third faster than in Python).
+Derivative links (:mod:`.derivatives`) run in the
 Python loop.  ``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the
 Python loop with a note in the run's log when the compiled one is not available;
 ``"compiled"`` raises :class:`LoopUnavailable` naming why; ``"python"`` never compiles.
@@ -96,7 +98,7 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "agilesat"
 
 
-_DLL = ctypes.PyDLL  # holding the GIL: measured faster than CDLL (tests/benchmark_master_loop.py)
+_DLL = ctypes.PyDLL  # holding the GIL, which csv_text needs
 _loaded: dict[Path, ctypes.CDLL] = {}
 _lock = threading.Lock()
 
@@ -112,7 +114,7 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
     key = hashlib.sha256(
         b"\0".join(
             [code, compiler.encode(), " ".join(FLAGS).encode()]
-            + [s.encode() for s in (sys.platform, platform.machine())]
+            + [s.encode() for s in (sys.platform, platform.machine(), sys.implementation.cache_tag)]
         )
     ).hexdigest()[:16]
     path = cache_dir() / "loop" / f"agilesat_loop_{key}.so"
@@ -130,6 +132,9 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
             function.argtypes += [ctypes.c_int64, ctypes.c_double, ctypes.c_double]
             function.argtypes += [ctypes.c_int64, ctypes.c_int64, ctypes.c_double]
             function.argtypes += [ctypes.c_void_p] * 3
+            dll.agilesat_csv.restype = ctypes.c_int64
+            dll.agilesat_csv.argtypes = [ctypes.c_void_p, ctypes.c_int64, ctypes.c_int64]
+            dll.agilesat_csv.argtypes += [ctypes.c_void_p, ctypes.c_int64]
             _loaded[path] = dll
         return _loaded[path]
 
@@ -222,6 +227,7 @@ def run(
     width = len(values) + 1
     rows = np.empty((max(1, min(report_every, 4096, (1 << 22) // (8 * width))), width))
     failure = (ctypes.c_int64 * 2)()
+    text = ctypes.create_string_buffer(rows.size * 25) if recorder.out_dir is not None else None
     pointers = [ctypes.addressof(program.ops), values.ctypes.data, rows.ctypes.data]
     clock = ctypes.addressof(log.clock)
     n = 0
@@ -235,7 +241,8 @@ def run(
             BUDGET, pointers[2], clock, failure,
         )  # fmt: skip
         if done:
-            recorder.append_block(rows[:done])
+            lines = None if text is None else csv_text(dll, rows[:done], text)
+            recorder.append_block(rows[:done], lines)
         n += done
         if failure[0] >= 0:
             instance, call = program.calls[failure[0]]
@@ -243,3 +250,11 @@ def run(
         if progress and n % report_every == 0:
             progress(n, n_steps)
     log.time = start + n_steps * step
+
+
+def csv_text(dll, rows: np.ndarray, out) -> bytes | None:
+    """The CSV lines of rows (C-contiguous float64) as the recorder writes them, formatted
+    in C by CPython's repr of a float, into ``out`` (25 bytes per value); None if it
+    does not fit."""
+    used = dll.agilesat_csv(rows.ctypes.data, len(rows), rows.shape[1], out, len(out))
+    return None if used < 0 else ctypes.string_at(out, used)

@@ -59,20 +59,22 @@ class Recorder:
             self.csv.commit()
         self.rows += 1
 
-    def append_block(self, rows: np.ndarray) -> None:
+    def append_block(self, rows: np.ndarray, text: bytes | None = None) -> None:
         """Record several rows at once, as :meth:`append` would one by one (a failed write
-        is retried row by row: every whole row that fits is kept)."""
+        is retried row by row: every whole row that fits is kept).  ``text``: their CSV
+        lines as :meth:`append` writes them, if the caller has them already."""
         if not self._files:
             while self.rows + len(rows) > len(self._memory):
                 self._memory = np.concatenate([self._memory, np.empty_like(self._memory)])
             self._memory[self.rows : self.rows + len(rows)] = rows
             self.rows += len(rows)
             return
-        text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist())
+        if text is None:
+            text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist()).encode()
         try:
             self.raw.write(np.ascontiguousarray(rows, dtype="<f8").tobytes(), self.rows)
             try:
-                self.csv.write(text.encode(), self.rows)
+                self.csv.write(text, self.rows)
             except OSError:
                 self.raw.truncate()
                 raise

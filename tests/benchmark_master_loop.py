@@ -33,7 +33,7 @@ VARIANTS = ("python", "PyDLL", "CDLL")
 
 
 def run(ssd, step: float, stop: float, variant: str) -> float:
-    if variant != "python":
+    if variant != "python":  # no output directory: csv_text (needs the GIL) is not called
         loop._DLL = getattr(ctypes, variant)
         loop._loaded.clear()
     began = time.perf_counter()

@@ -266,3 +266,15 @@ def test_processes_compiling_at_once_share_one_entry(tmp_path):
     assert all(p.returncode == 0 for p in processes)
     assert len(names) == 1
     assert [p.name for p in (tmp_path / "loop").iterdir()] == [os.path.basename(names.pop())]
+
+
+def test_the_csv_lines_formatted_in_c_are_what_the_recorder_writes_in_python():
+    special = [0.0, -0.0, 1.0, -1.5, 1e-5, 1e-4, 1e15, 1e16, 5e-324, 2.2250738585072014e-308]
+    special += [1.7976931348623157e308, float("inf"), -float("inf"), float("nan"), 0.1, 1 / 3]
+    rng = np.random.default_rng(7)
+    rows = rng.normal(size=(50, len(special))) * 10.0 ** rng.integers(-30, 30, (50, len(special)))
+    rows = np.ascontiguousarray(np.vstack([special, rows]))
+    expected = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist()).encode()
+    dll = loop.library()
+    assert loop.csv_text(dll, rows, ctypes.create_string_buffer(rows.size * 25)) == expected
+    assert loop.csv_text(dll, rows, ctypes.create_string_buffer(100)) is None  # too small
