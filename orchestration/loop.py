@@ -1,6 +1,6 @@
 """The master's macro-step loop compiled (``loop.c``), with the Python loop as fall-back.
 
-:func:`program` turns a run's schedule into the FMI calls of one macro step, in the order
+:class:`Program` turns a run's schedule into the FMI calls of one macro step, in the order
 the Python loop of :mod:`.master` makes them (fmpy's bound functions, the component
 pointers, value references, buffers and places in the value vector); :func:`run` has the
 C loop run them chunk by chunk (at most :data:`BUDGET` seconds or up to the next progress
@@ -10,16 +10,17 @@ between chunks, and raises the same :class:`FmiCallError` as the Python loop (th
 Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
 
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
-(:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its flags
-and the machine (:func:`cache_dir`; written under a temporary name and renamed, so that
-processes may compile at once), and loaded with ``ctypes.PyDLL``, holding the GIL: the
-loop measured the same as through ``CDLL`` (tests/benchmark_master_loop.py; pythonfmu takes
-the GIL at every call into a slave either way), and :func:`csv_text` needs it (it formats
-the CSV lines with CPython's own ``repr`` of a float, a third faster than in Python).
-Derivative links (:mod:`.derivatives`) run in the
-Python loop.  ``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the
-Python loop with a note in the run's log when the compiled one is not available;
-``"compiled"`` raises :class:`LoopUnavailable` naming why; ``"python"`` never compiles.
+(:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its
+flags, the machine and the Python version (:func:`cache_dir`; written under a temporary
+name and renamed, so that processes may compile at once), and loaded with
+``ctypes.PyDLL``, holding the GIL: the loop measured the same as through ``CDLL``
+(tests/benchmark_master_loop.py; pythonfmu takes the GIL at every call into a slave
+either way), and :func:`csv_text` needs it (it formats the CSV lines with CPython's own
+``repr`` of a float, a third faster than in Python).  Derivative links
+(:mod:`.derivatives`) run in the Python loop.  ``loop="auto"`` (the default, or
+``$AGILESAT_LOOP``) falls back to the Python loop with a note in the run's log when the
+compiled one is not available; ``"compiled"`` raises :class:`LoopUnavailable` naming why;
+``"python"`` never compiles.
 """
 
 from __future__ import annotations
@@ -225,7 +226,7 @@ def run(
     """Steps 0 .. n_steps - 1 in chunks, as the Python loop of :mod:`.master` runs them."""
     report_every = max(1, n_steps // 100) if progress else n_steps  # a chunk ends there
     width = len(values) + 1
-    rows = np.empty((max(1, min(report_every, 4096, (1 << 22) // (8 * width))), width))
+    rows = np.empty((max(1, min(report_every, 1024, (1 << 22) // (8 * width))), width))
     failure = (ctypes.c_int64 * 2)()
     text = ctypes.create_string_buffer(rows.size * 25) if recorder.out_dir is not None else None
     pointers = [ctypes.addressof(program.ops), values.ctypes.data, rows.ctypes.data]
