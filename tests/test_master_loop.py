@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from agilesat.orchestration import loop, master
+from agilesat.orchestration import loop, master, recorder
 from agilesat.orchestration.master import Interrupted, SimulationError, simulate
 from agilesat.orchestration.scenarios import NAMES, get
 from agilesat.orchestration.ssp import read_system
@@ -278,3 +278,46 @@ def test_the_csv_lines_formatted_in_c_are_what_the_recorder_writes_in_python():
     dll = loop.library()
     assert loop.csv_text(dll, rows, ctypes.create_string_buffer(rows.size * 25)) == expected
     assert loop.csv_text(dll, rows, ctypes.create_string_buffer(100)) is None  # too small
+
+
+# -- recording a chunk --------------------------------------------------------------------
+def test_a_block_is_recorded_as_its_rows_one_by_one(tmp_path):
+    rows = np.arange(400.0).reshape(100, 4) / 7
+    for name in ("one", "block"):
+        (tmp_path / name).mkdir()
+    one = recorder.Recorder(list("tabc"), tmp_path / "one")
+    for row in rows:
+        one.append(row)
+    for out in (tmp_path / "block", None):
+        block = recorder.Recorder(list("tabc"), out)
+        for k in range(0, 100, 30):
+            block.append_block(rows[k : k + 30])
+        assert block.rows == 100
+        results, problems = block.close({})
+        assert problems == [] and results.data.tobytes() == rows.tobytes()
+    one.close({})
+    assert (tmp_path / "one" / "results.csv").read_bytes() == (
+        tmp_path / "block" / "results.csv"
+    ).read_bytes()
+
+
+def test_a_short_write_in_a_block_keeps_every_whole_row_that_fits(tmp_path, monkeypatch):
+    rec = recorder.Recorder(["time", "a"], tmp_path)
+    rows = np.array([[0.0, 1.0], [0.05, 2.0], [0.1, 3.0], [0.15, 4.0]])
+    limit = len("time,a\n0.0,1.0\n0.05,2.0\n") + 3  # the disk fills inside the third row
+    real_write = os.write
+
+    def full(fd, data):
+        room = limit - os.lseek(fd, 0, os.SEEK_CUR)
+        if fd != rec.csv.fd or len(data) <= room:
+            return real_write(fd, data)
+        real_write(fd, bytes(data[:room]))
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(recorder.os, "write", full)
+    with pytest.raises(OSError, match=r"results.csv: No space left on device; kept the 2 "):
+        rec.append_block(rows)
+    monkeypatch.undo()
+    results, _ = rec.close({})
+    assert (tmp_path / "results.csv").read_text() == "time,a\n0.0,1.0\n0.05,2.0\n"
+    assert results.data.tobytes() == rows[:2].tobytes()
