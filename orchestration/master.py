@@ -33,17 +33,18 @@ Run (:func:`simulate`):
    called on that FMU.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
    the run stops between two macro steps (the compiled loop: between two chunks of a few
-   milliseconds), terminates and frees the FMUs, keeps its rows and
-   raises :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
+   milliseconds), terminates and frees the FMUs, keeps its rows and raises
+   :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
 
 The system is checked against the model descriptions before any FMU is instantiated; open
 inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
 in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
 the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
 
-The macro steps run in C (:mod:`.loop`, the same calls in the same order, results bit for
-bit) or, for runs with derivative links, with ``loop="python"`` and where no C compiler
-is available, in the Python loop here; ``Results.meta["loop"]`` says which.
+The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
+for bit), or in the Python loop here: for runs with derivative links, with
+``loop="python"``, or where the C loop cannot be compiled; ``Results.meta["loop"]`` says
+which.
 """
 
 from __future__ import annotations
