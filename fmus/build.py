@@ -262,7 +262,7 @@ def _shim_library(out_dir: Path) -> Path:
     if library.exists():
         return library
     library.parent.mkdir(parents=True, exist_ok=True)
-    compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    compiler = c_compiler()
     if not compiler:
         raise BuildError(
             "building FMUs needs a C compiler (cc or gcc, or set CC) for the "
@@ -296,6 +296,11 @@ def _shim_library(out_dir: Path) -> Path:
     finally:
         partial.unlink(missing_ok=True)
     return library
+
+
+def c_compiler() -> str | None:
+    """The C compiler: $CC, else cc or gcc on the PATH (None: none found)."""
+    return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
 def _partial(target: Path) -> Path:

@@ -32,13 +32,19 @@ Run (:func:`simulate`):
    when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
    called on that FMU.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
-   the run stops between two macro steps, terminates and frees the FMUs, keeps its rows and
-   raises :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
+   the run stops between two macro steps (the compiled loop: between two chunks of a few
+   milliseconds), terminates and frees the FMUs, keeps its rows and raises
+   :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
 
 The system is checked against the model descriptions before any FMU is instantiated; open
 inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
 in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
 the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
+
+The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
+for bit), or in the Python loop here: for runs with derivative links, with
+``loop="python"``, or where the C loop cannot be compiled; ``Results.meta["loop"]`` says
+which.
 """
 
 from __future__ import annotations
@@ -51,9 +57,10 @@ import threading
 
 import numpy as np
 
+from . import loop as compiled
 from . import multirate
 from .derivatives import Derivatives
-from .fmu import FmiCallError, Instance, Log
+from .fmu import FmiCallError, Instance
 from .parameters import scalar_parameters
 from .recorder import Recorder
 from .results import Results
@@ -218,6 +225,7 @@ def simulate(
     echo=None,
     progress=None,
     derivatives: bool = True,
+    loop: str | None = None,
 ) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
@@ -227,7 +235,8 @@ def simulate(
     Results returned map their rows from disk (memory independent of the run length);
     without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
     hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
-    plain scheme, for comparison).  Returns :class:`Results` (``meta`` holds the settings, the
+    plain scheme, for comparison).  ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled"
+    or "python" (:mod:`.loop`).  Returns :class:`Results` (``meta`` holds the settings, the
     units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
     (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
     """
@@ -240,9 +249,10 @@ def simulate(
     every = multirate.multiples(system, step, n_steps)
     if algorithm not in ALGORITHMS:
         raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
+    loop = compiled.choose(loop)
 
     with stop_on_signals() as signals:
-        log = Log(echo=echo)
+        log = compiled.ClockLog(echo=echo)
         log.time = start
         instances = {}
         try:
@@ -276,6 +286,7 @@ def simulate(
                 signals,
                 progress,
                 derivatives,
+                loop,
             )
         finally:
             for instance in instances.values():
@@ -332,6 +343,7 @@ def _run(
     signals,
     progress=None,
     derivatives=True,
+    loop="python",
 ) -> Results:
     layout = value_layout(instances, plan.steps.step_order)
     nodes = {
@@ -363,6 +375,8 @@ def _run(
     }
     if links is not None:
         meta["derivatives"] = links.described
+    dll = compiled.select(loop, links is not None, log)
+    meta["loop"] = "python" if dll is None else "compiled"
     recorder = Recorder(columns, out_dir)
     failure, report_every = None, max(1, n_steps // 100)
     try:
@@ -381,31 +395,37 @@ def _run(
             links.read()
         row[0], row[1:] = start, values
         recorder.append(row)
-        for n in range(n_steps):
-            if signals.signal is not None:
-                break
-            t = start + n * step
-            log.time = t
-            if algorithm == "gauss-seidel":
-                if links is not None and links.interpolating:
-                    links.previous[:] = values
-                _evaluate(sequence, values, n + 1, t, step, couple)
-            else:
-                for node in nodes.values():
-                    if n % node.every == 0:
-                        node.set_inputs(values)
-                        if couple is not None:
-                            couple(node, values, step)
-                        _do_step(node.instance, t, step * node.every)
-                _read_after_steps(jacobi_reads, values, n + 1)
-            if links is not None:
-                links.read()
-            row[0], row[1:] = start + (n + 1) * step, values
-            recorder.append(row)
-            if progress and (n + 1) % report_every == 0:
-                progress(n + 1, n_steps)
+        if dll is not None:
+            program = compiled.Program(algorithm, nodes, sequence, jacobi_reads, step)
+            compiled.run(
+                dll, program, values, recorder, signals, progress, log, start, step, n_steps
+            )
         else:
-            log.time = start + n_steps * step
+            for n in range(n_steps):
+                if signals.signal is not None:
+                    break
+                t = start + n * step
+                log.time = t
+                if algorithm == "gauss-seidel":
+                    if links is not None and links.interpolating:
+                        links.previous[:] = values
+                    _evaluate(sequence, values, n + 1, t, step, couple)
+                else:
+                    for node in nodes.values():
+                        if n % node.every == 0:
+                            node.set_inputs(values)
+                            if couple is not None:
+                                couple(node, values, step)
+                            _do_step(node.instance, t, step * node.every)
+                    _read_after_steps(jacobi_reads, values, n + 1)
+                if links is not None:
+                    links.read()
+                row[0], row[1:] = start + (n + 1) * step, values
+                recorder.append(row)
+                if progress and (n + 1) % report_every == 0:
+                    progress(n + 1, n_steps)
+            else:
+                log.time = start + n_steps * step
         for inst in instances.values():
             inst.call("fmi2Terminate")
     except (FmiCallError, OSError) as exc:

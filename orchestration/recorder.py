@@ -1,10 +1,12 @@
 """Recording a run's rows as they come: memory independent of the run length.
 
 With an output directory every row goes to disk at once, as one ``os.write`` of whole lines:
-text to ``results.csv`` and raw float64 to a scratch file ``.results.f64`` beside it.  A
-process that is killed (even ``kill -9``) loses at most the row being written, and the CSV
-never ends in a torn row: a short write (disk full) is cut back to the last whole row, in
-both files, and the error names the file.  :meth:`Recorder.close` (also after a failure or
+text to ``results.csv`` and raw float64 to a scratch file ``.results.f64`` beside it (the
+compiled loop hands over its rows a chunk of a few milliseconds at a time,
+:meth:`Recorder.append_block`, written the same way).  A process that is killed (even
+``kill -9``) loses at most the rows being written, and the CSV never ends in a torn row:
+a short write (disk full) is cut back to the last whole row, in both files, and the error
+names the file.  :meth:`Recorder.close` (also after a failure or
 an interrupt) writes ``results.npz`` from the raw rows in chunks, under a temporary name
 renamed when complete, and hands back :class:`Results` that map the raw rows from disk
 (copy-on-write: the caller may modify them) instead of holding them in memory.
@@ -56,6 +58,33 @@ class Recorder:
             self.raw.commit()
             self.csv.commit()
         self.rows += 1
+
+    def append_block(self, rows: np.ndarray, text: bytes | None = None) -> None:
+        """Record several rows at once, as :meth:`append` would one by one (a failed write
+        is retried row by row: every whole row that fits is kept).  ``text``: their CSV
+        lines as :meth:`append` writes them, if the caller has them already."""
+        if not self._files:
+            while self.rows + len(rows) > len(self._memory):
+                self._memory = np.concatenate([self._memory, np.empty_like(self._memory)])
+            self._memory[self.rows : self.rows + len(rows)] = rows
+            self.rows += len(rows)
+            return
+        if text is None:
+            text = "".join(",".join(map(repr, row)) + "\n" for row in rows.tolist()).encode()
+        try:
+            self.raw.write(np.ascontiguousarray(rows, dtype="<f8").tobytes(), self.rows)
+            try:
+                self.csv.write(text, self.rows)
+            except OSError:
+                self.raw.truncate()
+                raise
+        except OSError:
+            for row in rows:
+                self.append(row)
+            return
+        self.raw.commit()
+        self.csv.commit()
+        self.rows += len(rows)
 
     def close(self, meta: dict) -> tuple[Results, list[str]]:
         """(the rows recorded, problems writing the files); writes results.npz."""
