@@ -6,12 +6,15 @@ timings on shared machines vary: compare the ratios, measured in one run).
 scan_pitch at macro steps 0.01, 0.05 and 0.1 s, payload_sweep and video_sar at their own
 steps, on one core, best of N runs each (CPU time of this process, see best()):
 - the co-simulation (our master, the FMUs) and its real-time factor;
-- its time per macro step split into model compute (the rest of the below), FMI layer (the
-  same run with every model's initialize/step/output replaced by a no-op inside the loaded
-  FMUs, minus the master: ctypes, pythonfmu, our shim and slave) and master (the same run
-  with every FMI call of the master's loop replaced by a Python no-op: its own loop);
-- the previous design: the same run with the compiled kernels (components/jit.py) replaced
-  by their readable Python (what AGILESAT_JIT=0 runs), and the ratio of the two;
+- its time per macro step split into model compute (the rest of the below) and FMI layer
+  + master (the same run with every model's initialize/step/output replaced by a no-op
+  inside the loaded FMUs: the compiled master loop, ctypes, our shim, and pythonfmu and our
+  slave for each doStep);
+- the previous design in the same run: the kernels (components/jit.py) running their
+  readable Python (AGILESAT_JIT=0), the shim's get/set through pythonfmu and the slave
+  (AGILESAT_SHIM_FAST=0) and the Python master loop (loop="python"), split into model
+  compute, FMI layer and master (the Python loop with every FMI call a Python no-op), and
+  the ratio previous / now;
 - the monolithic NumPy reference of scan_pitch at the same step
   (tests/reference/scan_pitch.py), and the ratio of the two wall times.
 Basilisk (tests/benchmark_basilisk.py) as an anchor where bsk is installed.
@@ -107,23 +110,41 @@ def stub_fmi():
     )
 
 
+@contextlib.contextmanager
+def previous_design(ssd, step):
+    """The previous design's paths (see the module docstring).  The shim reads
+    AGILESAT_SHIM_FAST at fmi2Reset, which the master calls on the FMUs it keeps at the end
+    of each run: a one-step run after each change of the variable."""
+    os.environ["AGILESAT_SHIM_FAST"] = "0"
+    try:
+        simulate(ssd, step=step, stop=step)
+        with readable_kernels():
+            yield
+    finally:
+        del os.environ["AGILESAT_SHIM_FAST"]
+        simulate(ssd, step=step, stop=step)
+
+
 def measure(ssd, step, stop, repeat):
-    run = lambda: simulate(ssd, step=step, stop=stop)  # noqa: E731
+    run = lambda loop=None: simulate(ssd, step=step, stop=stop, loop=loop)  # noqa: E731
     cosim = best(run, repeat)
-    with readable_kernels():
-        previous = best(run, repeat)
     with stub_models():
         stubbed = best(run, repeat)
-        with stub_fmi():
-            loop = best(run, repeat)
+    with previous_design(ssd, step):
+        previous = best(lambda: run("python"), repeat)
+        with stub_models():
+            previous_stubbed = best(lambda: run("python"), repeat)
+            with stub_fmi():
+                previous_loop = best(lambda: run("python"), repeat)
     n = round(stop / step)
     per_step = {
         "total": cosim / n * 1e6,
         "model": (cosim - stubbed) / n * 1e6,
-        "fmi": (stubbed - loop) / n * 1e6,
-        "master": loop / n * 1e6,
-        "previous model": (previous - stubbed) / n * 1e6,
+        "fmi+master": stubbed / n * 1e6,
         "previous": previous / n * 1e6,
+        "previous model": (previous - previous_stubbed) / n * 1e6,
+        "previous fmi": (previous_stubbed - previous_loop) / n * 1e6,
+        "previous master": previous_loop / n * 1e6,
     }
     return cosim, previous, per_step
 
@@ -200,9 +221,10 @@ def main() -> None:
         f"numpy {np.__version__}, one core\n"
     )
     print(
-        f"{'scenario':>13} {'step':>5} {'co-sim':>8} {'RTF':>6} {'us/step':>8} "
-        f"{'model':>6} {'FMI':>5} {'master':>6} | {'previous':>8} {'model':>6} {'speed-up':>8} "
-        f"| {'reference':>9} {'ratio':>6}"
+        f"{'':>19} {'now':>35} | {'previous design':>33} |"
+        f"\n{'scenario':>13} {'step':>5} {'co-sim':>8} {'RTF':>6} {'us/step':>8} "
+        f"{'model':>6} {'FMI+master':>10} | {'us/step':>8} {'model':>6} {'FMI':>5} {'master':>6} "
+        f"{'ratio':>6} | {'reference':>9} {'ratio':>6}"
     )
     rows = {}
     cases = [("scan_pitch", step, STOP) for step in STEPS]
@@ -217,16 +239,17 @@ def main() -> None:
             ref = f"{'':>9} {'':>6}"
         print(
             f"{name:>13} {step:>5} {cosim:>7.3f}s {stop / cosim:>6.0f} {us['total']:>8.0f} "
-            f"{us['model']:>6.0f} {us['fmi']:>5.0f} {us['master']:>6.0f} | "
-            f"{us['previous']:>8.0f} {us['previous model']:>6.0f} {previous / cosim:>7.2f}x | {ref}"
+            f"{us['model']:>6.0f} {us['fmi+master']:>10.0f} | {us['previous']:>8.0f} "
+            f"{us['previous model']:>6.0f} {us['previous fmi']:>5.0f} "
+            f"{us['previous master']:>6.0f} {previous / cosim:>5.2f}x | {ref}"
         )
     cosim, monolithic = rows[0.05]
     rtf = STOP / cosim
     models_report(max(args.repeat, 5))
     basilisk(cosim, monolithic, args.repeat)
     print(
-        "\nus/step: wall time per macro step = model + FMI + master; previous: the same with "
-        "the kernels' readable Python (AGILESAT_JIT=0), its model compute, and previous / now"
+        "\nus/step: CPU time per macro step = model + FMI layer + master; previous design: "
+        "kernels' Python, get/set through pythonfmu, Python loop; ratio = previous / now"
     )
     print(
         f"targets at 0.05 s: real-time factor {rtf:.0f} (target >= 1000: "
