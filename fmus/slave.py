@@ -601,6 +601,8 @@ class ModelSlave(Fmi2Slave):
         """The model's warnings, at category logStatusWarning; with the parameter
         warnings_return_ok at status fmi2OK, which the shim forwards to the host (even
         with debug logging off) without raising the call's status."""
+        if not self.model.warnings:
+            return
         status = Fmi2Status.ok if self.model.p.warnings_return_ok else Fmi2Status.warning
         for message in self.model.warnings:
             self.log(
