@@ -22,9 +22,9 @@ Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's
 modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,
 ``get_suitable_cache_subpath``), and FMI hosts unpack an FMU into a new temporary folder
 each time: every load would compile again (seconds per FMU).  Our locator keys it on
-content instead: ``<root>/<key>/``, key = SHA-256 of the module's name and of every
+content instead: ``<root>/numba/<key>/``, key = SHA-256 of the module's name and of every
 ``.py`` file beside its source (the kernel and everything it calls from its package),
-root = ``AGILESAT_CACHE_DIR`` or ``$XDG_CACHE_HOME/agilesat/numba`` (``~/.cache``).  Inside
+root = :func:`cache_root` (the master's compiled loop is kept there too).  Inside
 an FMU the module is ``agilesat_<content hash>.components.<name>``, so a rebuilt FMU gets
 new entries and two extractions of one FMU share them; ``agilesat build`` fills the cache
 by loading each built FMU once (``fmus/build.py``).  numba's index key adds the
@@ -53,12 +53,13 @@ _SET_UP = False  # numba imported (then a function declared later is registered 
 
 
 def cache_root() -> Path:
-    """Where compiled kernels are kept (see the module docstring)."""
+    """agilesat's compile cache: $AGILESAT_CACHE_DIR, else $XDG_CACHE_HOME/agilesat, else
+    ~/.cache/agilesat (kernels in ``numba/``, the master's loop in ``loop/``)."""
     root = os.environ.get("AGILESAT_CACHE_DIR")
     if root:
         return Path(root)
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base, "agilesat", "numba")
+    return Path(base, "agilesat")
 
 
 @functools.cache
@@ -192,7 +193,7 @@ def _content_cache_class():
             self._key = content_key(py_func.__module__, py_file)
 
         def get_cache_path(self):
-            return str(cache_root() / self._key)
+            return str(cache_root() / "numba" / self._key)
 
         def get_source_stamp(self):
             return self._key

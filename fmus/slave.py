@@ -205,7 +205,8 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
         address = [a.__array_interface__["data"][0] for a in (self._values, self._kind)]
         control = self._control.__array_interface__["data"][0]
-        return [FAST_PATH_VERSION, address[0], self._values.size, address[1], control]
+        n_values = min(self._values.size, self._kind.size)  # the shim reads both up to it
+        return [FAST_PATH_VERSION, address[0], n_values, address[1], control]
 
     def _predict_outputs(self) -> None:
         """End of a step: evaluate the outputs, so that the shim answers the gets (see

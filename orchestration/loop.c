@@ -78,7 +78,7 @@ static int run(const struct operation *op, double *values, double t) {
             for (i = 0; i < op->n; i++) values[op->index[i]] = buffer[i];
         return status;
     }
-    case SET_INTEGER: { /* as numpy's float64 -> int32 cast: truncation */
+    case SET_INTEGER: { /* truncation as numpy's cast; the values are Integer outputs, integral */
         int *buffer = op->buffer;
         for (i = 0; i < op->n; i++) buffer[i] = (int)values[op->index[i]];
         return ((integer_call)op->function)(op->component, op->vrs, (size_t)op->n, buffer);

@@ -11,16 +11,16 @@ Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
 
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
 (:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its
-flags, the machine and the Python version (:func:`cache_dir`; written under a temporary
-name and renamed, so that processes may compile at once), and loaded with
-``ctypes.PyDLL``, holding the GIL: the loop measured the same as through ``CDLL``
-(tests/benchmark_master_loop.py; pythonfmu takes the GIL at every call into a slave
-either way), and :func:`csv_text` needs it (it formats the CSV lines with CPython's own
-``repr`` of a float, a third faster than in Python).  Derivative links
-(:mod:`.derivatives`) run in the Python loop.  ``loop="auto"`` (the default, or
-``$AGILESAT_LOOP``) falls back to the Python loop with a note in the run's log when the
-compiled one is not available; ``"compiled"`` raises :class:`LoopUnavailable` naming why;
-``"python"`` never compiles.
+flags, the machine and the Python version (in ``loop/`` of
+:func:`components.jit.cache_root`; written under a temporary name and renamed, so that
+processes may compile at once), and loaded with ``ctypes.PyDLL``, holding the GIL: the
+loop measured the same as through ``CDLL`` (tests/benchmark_master_loop.py; pythonfmu
+takes the GIL at every call into a slave either way), and :func:`csv_text` needs it (it
+formats the CSV lines with CPython's own ``repr`` of a float, a third faster than in
+Python).  Derivative links (:mod:`.derivatives`) run in the Python loop.
+``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the Python loop with
+a note in the run's log when the compiled one is not available; ``"compiled"`` raises
+:class:`LoopUnavailable` naming why; ``"python"`` never compiles.
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..components.jit import cache_root
 from .fmu import Log
 
 LOOPS = ("auto", "compiled", "python")
@@ -91,14 +92,6 @@ def choose(loop: str | None) -> str:
     return chosen
 
 
-def cache_dir() -> Path:
-    """$AGILESAT_CACHE_DIR, else $XDG_CACHE_HOME/agilesat, else ~/.cache/agilesat."""
-    explicit = os.environ.get("AGILESAT_CACHE_DIR")
-    if explicit:
-        return Path(explicit)
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "agilesat"
-
-
 _DLL = ctypes.PyDLL  # holding the GIL, which csv_text needs
 _loaded: dict[Path, ctypes.CDLL] = {}
 _lock = threading.Lock()
@@ -118,7 +111,7 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
             + [s.encode() for s in (sys.platform, platform.machine(), sys.implementation.cache_tag)]
         )
     ).hexdigest()[:16]
-    path = cache_dir() / "loop" / f"agilesat_loop_{key}.so"
+    path = cache_root() / "loop" / f"agilesat_loop_{key}.so"
     with _lock:
         if path not in _loaded:
             if not path.exists():
