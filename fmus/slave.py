@@ -174,6 +174,7 @@ class ModelSlave(Fmi2Slave):
         self._control = np.zeros(4, dtype=np.int32)  # shared with the shim: never replaced
         self._prediction = None
         self._predicting = True  # see _predict_outputs
+        self._arrays: list | None = None  # the model's array attributes but values, found once
         self._values = self.model.values  # the array the shim reads and writes
         self._plans: dict = {}
         self._mode = "instantiated"
@@ -221,12 +222,13 @@ class ModelSlave(Fmi2Slave):
             return
         model = self.model
         before = self._values[self._outputs].copy()
-        arrays = {  # kernels' state arrays, which output() updates in place
-            k: v.copy()
-            for k, v in vars(model).items()
-            if type(v) is np.ndarray and v is not self._values
-        }
-        self._prediction = (dict(vars(model)), arrays, before, len(model.warnings))
+        attributes = vars(model)
+        if self._arrays is None:  # the kernels' state arrays, which output() updates in place
+            self._arrays = [
+                k for k, v in attributes.items() if type(v) is np.ndarray and v is not self._values
+            ]
+        arrays = {k: attributes[k].copy() for k in self._arrays if k in attributes}
+        self._prediction = (dict(attributes), arrays, before, len(model.warnings))
         try:
             model.output()
         except Exception:  # noqa: BLE001 - reported by the get that needs them

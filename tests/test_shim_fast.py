@@ -205,16 +205,21 @@ real = {v.name: v.valueReference for v in md.modelVariables if v.type == "Real"}
 outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
 q_OI = [real[f"q_OI[{i}]"] for i in (1, 2, 3, 4)]
 h_cmg = [real[f"h_cmg[{i}]"] for i in (1, 2, 3)]
+
+
+def started():
+    fmu = instance("a")
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal(h_cmg, [1.0, -2.0, 0.5])
+    fmu.exitInitializationMode()
+    return fmu
 """
 
 SCRIPT = {
     "steps": HOST
     + r"""
-fmu = instance("a")
-fmu.setupExperiment(startTime=0.0)
-fmu.enterInitializationMode()
-fmu.setReal(h_cmg, [1.0, -2.0, 0.5])
-fmu.exitInitializationMode()
+fmu = started()
 counts, answers = [fmu.count()], []
 for k in range(20):
     fmu.setReal(h_cmg, [1.0 + 0.01 * k, -2.0, 0.5])
@@ -232,11 +237,7 @@ print(json.dumps({"counts": counts, "answers": answers}))
 """,
     "states": HOST
     + r"""
-fmu = instance("a")
-fmu.setupExperiment(startTime=0.0)
-fmu.enterInitializationMode()
-fmu.setReal(h_cmg, [1.0, -2.0, 0.5])
-fmu.exitInitializationMode()
+fmu = started()
 fmu.doStep(0.0, 0.05)
 after_step = fmu.getFMUstate()          # outputs evaluated, no get yet
 first = fmu.getReal(outputs)
