@@ -8,6 +8,17 @@
      GET_*    fmi2Get*(component, vrs, n, buffer), then scatter values[index[i]] = buffer[i]
      DO_STEP  fmi2DoStep(component, t_n, h, fmi2True)   (h = step * every, from Python)
 
+   and, for input/output derivative links (orchestration/derivatives.py; components at
+   the base step only):
+
+     GET_DERIVATIVES  fmi2GetRealOutputDerivatives(component, vrs, n, orders, buffer), then
+                      slopes[index[i]] = buffer[i]
+     SET_DERIVATIVES  buffer[i] = (values[index[i]] - previous[index[i]]) / h where
+                      interpolated[i], else slopes[index[i]]; then
+                      fmi2SetRealInputDerivatives(component, vrs, n, orders, buffer)
+     SET_PREVIOUS     SET_REAL gathering from previous (the values at t_n)
+     KEEP_PREVIOUS    previous = values (n of them), at the start of a step
+
    An operation of a component with its own step (every > 1 base steps) runs only at the
    steps its ``when`` says: AT_STEP when n is a multiple of every (it steps from t_n),
    AT_READ when n + 1 is (its outputs are due at t_{n+1}), or either.  After each step the
@@ -33,12 +44,14 @@ extern char *PyOS_double_to_string(double value, char format, int precision, int
 extern void PyMem_Free(void *pointer);
 #define PY_DTSF_ADD_DOT_0 0x02
 
-enum { SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP };
+enum { SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP,
+       GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS };
 enum { AT_STEP = 1, AT_READ = 2 };
 
 typedef int (*real_call)(void *, const unsigned int *, size_t, double *);
 typedef int (*integer_call)(void *, const unsigned int *, size_t, int *);
 typedef int (*step_call)(void *, double, double, int);
+typedef int (*derivative_call)(void *, const unsigned int *, size_t, const int *, double *);
 
 struct operation {
     int32_t kind, when;
@@ -49,6 +62,9 @@ struct operation {
     const int64_t *index;
     void *buffer;
     double h;
+    const int *orders;              /* derivative operations: the orders (all 1) */
+    double *slopes, *previous;      /* the output derivatives, the values at t_n */
+    const unsigned char *interpolated;
 };
 
 static double seconds(void) {
@@ -92,6 +108,32 @@ static int run(const struct operation *op, double *values, double t) {
     }
     case DO_STEP:
         return ((step_call)op->function)(op->component, t, op->h, 1);
+    case GET_DERIVATIVES: {
+        double *buffer = op->buffer;
+        int status = ((derivative_call)op->function)(op->component, op->vrs, (size_t)op->n,
+                                                     op->orders, buffer);
+        if (status <= 1)
+            for (i = 0; i < op->n; i++) op->slopes[op->index[i]] = buffer[i];
+        return status;
+    }
+    case SET_DERIVATIVES: {
+        double *buffer = op->buffer;
+        for (i = 0; i < op->n; i++) {
+            int64_t j = op->index[i];
+            buffer[i] = op->interpolated[i] ? (values[j] - op->previous[j]) / op->h
+                                            : op->slopes[j];
+        }
+        return ((derivative_call)op->function)(op->component, op->vrs, (size_t)op->n,
+                                               op->orders, buffer);
+    }
+    case SET_PREVIOUS: {
+        double *buffer = op->buffer;
+        for (i = 0; i < op->n; i++) buffer[i] = op->previous[op->index[i]];
+        return ((real_call)op->function)(op->component, op->vrs, (size_t)op->n, buffer);
+    }
+    case KEEP_PREVIOUS:
+        memcpy(op->previous, values, (size_t)op->n * sizeof *values);
+        return 0;
     }
     return 3; /* unknown operation: fmi2Error (loop.py never builds one) */
 }

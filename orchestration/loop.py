@@ -17,7 +17,7 @@ processes may compile at once), and loaded with ``ctypes.PyDLL``, holding the GI
 loop measured the same as through ``CDLL`` (tests/benchmark_master_loop.py; pythonfmu
 takes the GIL at every call into a slave either way), and :func:`csv_text` needs it (it
 formats the CSV lines with CPython's own ``repr`` of a float, a third faster than in
-Python).  Derivative links (:mod:`.derivatives`) run in the Python loop.
+Python).  Derivative links (:mod:`.derivatives`) are operations of the loop too.
 ``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the Python loop with
 a note in the run's log when the compiled one is not available; ``"compiled"`` raises
 :class:`LoopUnavailable` naming why; ``"python"`` never compiles.
@@ -45,7 +45,8 @@ FLAGS = ("-shared", "-fPIC", "-O2", "-ffp-contract=off")
 BUDGET = 0.005  # seconds of one chunk: Ctrl-C, progress and the CSV stay this close
 _KINDS = {"SetReal": 0, "GetReal": 1, "SetInteger": 2, "GetInteger": 3}
 _KINDS.update(SetBoolean=2, GetBoolean=3)  # fmi2Boolean is an int, as fmi2Integer
-DO_STEP, AT_STEP, AT_READ = 4, 1, 2
+SET_REAL, DO_STEP, AT_STEP, AT_READ = 0, 4, 1, 2
+GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS = 5, 6, 7, 8
 
 
 class LoopUnavailable(RuntimeError):
@@ -64,6 +65,10 @@ class Operation(ctypes.Structure):
         ("index", ctypes.c_void_p),
         ("buffer", ctypes.c_void_p),
         ("h", ctypes.c_double),
+        ("orders", ctypes.c_void_p),
+        ("slopes", ctypes.c_void_p),
+        ("previous", ctypes.c_void_p),
+        ("interpolated", ctypes.c_void_p),
     ]
 
 
@@ -152,14 +157,12 @@ def _compile(compiler: str, source: Path, path: Path) -> None:
         raise LoopUnavailable(f"cannot compile {source} into {path.parent}: {exc}") from None
 
 
-def select(loop: str, derivative_links: bool, log: Log):
+def select(loop: str, log: Log):
     """The compiled loop for a run, or None: the Python loop (with a note in the log when
     the compiled one was asked for by "auto" and is not available)."""
     if loop == "python":
         return None
     try:
-        if derivative_links:
-            raise LoopUnavailable("derivative links run in the Python loop only")
         return library()
     except LoopUnavailable as exc:
         if loop == "compiled":
@@ -170,47 +173,146 @@ def select(loop: str, derivative_links: bool, log: Log):
 
 class Program:
     """The FMI calls of one macro step (:mod:`.master`'s loop, step 3), for ``loop.c``;
-    ``calls[k]`` is (instance, FMI call) of operation k, to raise its error."""
+    ``calls[k]`` is (instance, FMI call) of operation k, to raise its error.  ``links``:
+    the run's :class:`.derivatives.Derivatives`, or None."""
 
-    def __init__(self, algorithm: str, nodes: dict, sequence: list, reads: list, step: float):
-        entries = []  # (kind, when, every, port or None, instance, call, h)
+    def __init__(
+        self, algorithm: str, nodes: dict, sequence: list, reads: list, step: float, links=None
+    ):
+        entries: list[dict] = []  # the fields of each Operation, with instance and call
 
         def ports(node, chosen, when):
             for port in chosen:
-                kind = _KINDS[port.call[4:]]
-                entries.append((kind, when, node.every, port, port.instance, port.call, 0.0))
+                entries.append(
+                    dict(_port(port), kind=_KINDS[port.call[4:]], when=when, every=node.every)
+                )
 
         def do_step(node):
-            h = step * node.every
-            entries.append((DO_STEP, AT_STEP, node.every, None, node.instance, "fmi2DoStep", h))
+            entries.append(
+                dict(
+                    kind=DO_STEP,
+                    when=AT_STEP,
+                    every=node.every,
+                    instance=node.instance,
+                    call="fmi2DoStep",
+                    h=step * node.every,
+                )
+            )
 
+        def step_linked(node, when):
+            """couple(), the step, restore() (:mod:`.derivatives`; every == 1)."""
+            consumer = None if links is None else links.consumers.get(node.instance.name)
+            if consumer is not None and consumer.interpolated.any():
+                entries.append(_previous(consumer, SET_PREVIOUS, links))
+            if consumer is not None:
+                entries.append(_derivatives(consumer, SET_DERIVATIVES, links, step))
+            do_step(node)
+            if consumer is not None and consumer.interpolated.any() and when & AT_READ:
+                entries.append(_previous(consumer, SET_REAL, links))
+
+        if links is not None and links.interpolating:
+            entries.append(
+                dict(
+                    kind=KEEP_PREVIOUS,
+                    every=1,
+                    n=len(links.previous),
+                    previous=links.previous.ctypes.data,
+                )
+            )
         if algorithm == "jacobi":
             for node in nodes.values():
                 ports(node, node.inputs, AT_STEP)
-                do_step(node)
+                step_linked(node, AT_STEP)
             for node, chosen, feeds in reads:
                 if feeds:
                     ports(node, node.inputs, AT_READ)
                 ports(node, chosen, AT_READ)
         else:  # gauss-seidel: a node steps at its first block
             for node, chosen, first in sequence:
-                ports(node, node.inputs, (AT_STEP | AT_READ) if first else AT_READ)
+                when = (AT_STEP | AT_READ) if first else AT_READ
+                ports(node, node.inputs, when)
                 if first:
-                    do_step(node)
+                    step_linked(node, when)
                 ports(node, chosen, AT_READ)
+        for source in [] if links is None else links.sources:
+            entries.append(_derivatives(source, GET_DERIVATIVES, links))
         self.ops = (Operation * len(entries))()
-        self.calls = [(instance, call) for *_, instance, call, _ in entries]
-        self._keep = []  # the index arrays the operations point into
-        for op, (kind, when, every, port, instance, call, h) in zip(self.ops, entries):
-            op.kind, op.when, op.every, op.h = kind, when, every, h
-            op.component = instance.component
-            function = getattr(instance, call) if port is None else port.function
-            op.function = ctypes.cast(function, ctypes.c_void_p).value
-            if port is not None:
-                index = np.ascontiguousarray(port.index, dtype=np.int64)
-                self._keep.append(index)
-                op.vrs = ctypes.addressof(port.vrs)
-                op.n, op.index, op.buffer = port.n, index.ctypes.data, port.buffer.ctypes.data
+        self.calls = [(entry.get("instance"), entry.get("call")) for entry in entries]
+        self._keep = [entry.pop("keep", None) for entry in entries]  # arrays pointed into
+        for op, entry in zip(self.ops, entries):
+            instance = entry.pop("instance", None)
+            if instance is not None:
+                op.component = instance.component
+                op.function = _address(
+                    entry.pop("function", None) or getattr(instance, entry["call"])
+                )
+            entry.pop("call", None)
+            for field, value in entry.items():
+                setattr(op, field, value)
+
+
+def _address(function) -> int:
+    return ctypes.cast(function, ctypes.c_void_p).value
+
+
+def _port(port) -> dict:
+    index = np.ascontiguousarray(port.index, dtype=np.int64)
+    return dict(
+        instance=port.instance,
+        call=port.call,
+        function=port.function,
+        vrs=ctypes.addressof(port.vrs),
+        n=port.n,
+        index=index.ctypes.data,
+        buffer=port.buffer.ctypes.data,
+        keep=index,
+    )
+
+
+def _derivatives(slopes, kind: int, links, step: float = 0.0) -> dict:
+    """Get (an :class:`.derivatives._OutputSlopes`) or set (an ``_InputSlopes``) of
+    output/input derivatives."""
+    index = np.ascontiguousarray(slopes.index, dtype=np.int64)
+    interpolated = np.ascontiguousarray(getattr(slopes, "interpolated", []), dtype=np.uint8)
+    call = (
+        "fmi2GetRealOutputDerivatives" if kind == GET_DERIVATIVES else "fmi2SetRealInputDerivatives"
+    )
+    return dict(
+        kind=kind,
+        every=1,
+        instance=slopes.instance,
+        call=call,
+        function=getattr(slopes.instance.slave.dll, call),
+        vrs=ctypes.addressof(slopes.vrs),
+        n=slopes.n,
+        index=index.ctypes.data,
+        buffer=slopes.buffer.ctypes.data,
+        h=step,
+        orders=ctypes.addressof(slopes.orders),
+        slopes=links.slopes.ctypes.data,
+        previous=links.previous.ctypes.data,
+        interpolated=interpolated.ctypes.data,
+        keep=(index, interpolated),
+    )
+
+
+def _previous(consumer, kind: int, links) -> dict:
+    """fmi2SetReal of a consumer's interpolated inputs: their values at t_n (SET_PREVIOUS,
+    before the step) or their newest (SET_REAL, after it)."""
+    index = np.ascontiguousarray(consumer.index[consumer.interpolated], dtype=np.int64)
+    return dict(
+        kind=kind,
+        every=1,
+        instance=consumer.instance,
+        call="fmi2SetReal",
+        function=consumer.instance.slave.dll.fmi2SetReal,
+        vrs=ctypes.addressof(consumer.at_start),
+        n=len(index),
+        index=index.ctypes.data,
+        buffer=consumer.start_buffer.ctypes.data,
+        previous=links.previous.ctypes.data,
+        keep=index,
+    )
 
 
 def run(
@@ -231,9 +333,19 @@ def run(
         last = min(n_steps, n + len(rows), (n // report_every + 1) * report_every)
         failure[0] = -1
         done = dll.agilesat_loop(
-            pointers[0], len(program.ops), pointers[1], len(values), start, step, n, last,
-            BUDGET, pointers[2], clock, failure,
-        )  # fmt: skip
+            pointers[0],
+            len(program.ops),
+            pointers[1],
+            len(values),
+            start,
+            step,
+            n,
+            last,
+            BUDGET,
+            pointers[2],
+            clock,
+            failure,
+        )
         if done:
             lines = None if text is None else csv_text(dll, rows[:done], text)
             recorder.append_block(rows[:done], lines)

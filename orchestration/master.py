@@ -42,9 +42,8 @@ in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive 
 the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
 
 The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
-for bit), or in the Python loop here: for runs with derivative links, with
-``loop="python"``, or where the C loop cannot be compiled; ``Results.meta["loop"]`` says
-which.
+for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
+be compiled; ``Results.meta["loop"]`` says which.
 """
 
 from __future__ import annotations
@@ -375,7 +374,7 @@ def _run(
     }
     if links is not None:
         meta["derivatives"] = links.described
-    dll = compiled.select(loop, links is not None, log)
+    dll = compiled.select(loop, log)
     meta["loop"] = "python" if dll is None else "compiled"
     recorder = Recorder(columns, out_dir)
     failure, report_every = None, max(1, n_steps // 100)
@@ -396,7 +395,7 @@ def _run(
         row[0], row[1:] = start, values
         recorder.append(row)
         if dll is not None:
-            program = compiled.Program(algorithm, nodes, sequence, jacobi_reads, step)
+            program = compiled.Program(algorithm, nodes, sequence, jacobi_reads, step, links)
             compiled.run(
                 dll, program, values, recorder, signals, progress, log, start, step, n_steps
             )

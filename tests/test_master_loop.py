@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from agilesat.orchestration import loop, master, recorder
+from agilesat.orchestration import derivatives, loop, master, recorder
 from agilesat.orchestration.master import Interrupted, SimulationError, simulate
 from agilesat.orchestration.scenarios import NAMES, get
 from agilesat.orchestration.ssp import read_system
@@ -68,16 +68,70 @@ def test_both_algorithms_single_and_multi_rate_are_the_python_loop_bit_for_bit(
         }
 
 
-@pytest.mark.slow
-def test_with_derivative_links_the_python_loop_runs_and_says_so(fmus):
+def _unwired(**kwargs):
+    """scan_pitch without the ḣ wires: CmgCluster's h feeds the hub with its derivative."""
     system = read_system(get("scan_pitch").ssd)
     system.connections = [c for c in system.connections if not c.end_connector.startswith("hdot_")]
-    results = simulate(system, stop=1.0)
-    assert results.meta["loop"] == "python" and results.meta["derivatives"]
-    notes = [e.message for e in results.meta["log"] if e.instance == "master"]
-    assert notes == ["the Python loop runs this: derivative links run in the Python loop only"]
-    with pytest.raises(loop.LoopUnavailable, match="derivative links run in the Python loop"):
-        simulate(system, stop=1.0, loop="compiled")
+    return system
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "algorithm, how", [("jacobi", "extrapolated"), ("gauss-seidel", "interpolated")]
+)
+def test_derivative_links_run_in_the_compiled_loop_bit_for_bit(fmus, algorithm, how):
+    python, compiled = both(_unwired(), algorithm=algorithm, stop=20.0)
+    assert compiled.meta["derivatives"] == [
+        f"CmgCluster.h[{i}] -> SatelliteDynamics.h_cmg[{i}] ({how})" for i in (1, 2, 3)
+    ]
+    same_run(python, compiled)  # the Python loop passes the derivatives:
+    if algorithm == "jacobi":  # without them, another run (Gauss-Seidel: none, it fails)
+        plain = simulate(_unwired(), algorithm=algorithm, stop=20.0, derivatives=False)
+        assert plain.data.tobytes() != compiled.data.tobytes()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("call", ["fmi2GetRealOutputDerivatives", "fmi2SetRealInputDerivatives"])
+def test_a_failing_derivative_call_gives_the_same_error_and_rows_with_both_loops(
+    fmus, monkeypatch, call
+):
+    """The 30th call of CmgCluster's fmi2GetRealOutputDerivatives (or of the hub's
+    fmi2SetRealInputDerivatives) returns fmi2Error, put in the FMU's library in place of
+    the real one (both loops call the library's)."""
+    prototype = ctypes.CFUNCTYPE(
+        ctypes.c_int,
+        ctypes.c_void_p,
+        ctypes.POINTER(ctypes.c_uint),
+        ctypes.c_size_t,
+        ctypes.POINTER(ctypes.c_int),
+        ctypes.POINTER(ctypes.c_double),
+    )
+    owner = "CmgCluster" if call.startswith("fmi2Get") else "SatelliteDynamics"
+    real_init = derivatives.Derivatives.__init__
+
+    def init(self, nodes, *args):
+        real_init(self, nodes, *args)
+        dll = nodes[owner].instance.slave.dll
+        real, calls = getattr(dll, call), [0]
+
+        def failing(component, vrs, n, orders, values):
+            calls[0] += 1
+            return 3 if calls[0] == 30 else real(component, vrs, n, orders, values)
+
+        patch.setattr(dll, call, prototype(failing))
+
+    outcome = []
+    for which in ("python", "compiled"):
+        with monkeypatch.context() as patch:
+            patch.setattr(derivatives.Derivatives, "__init__", init)
+            with pytest.raises(SimulationError) as error:
+                simulate(_unwired(), algorithm="jacobi", stop=20.0, loop=which)
+        outcome.append((str(error.value), error.value.results))
+    (message, python), (message_c, compiled) = outcome
+    assert f"{owner}: {call} at t=" in message
+    assert message_c == message
+    assert 2 < len(python) < 401
+    same_run(python, compiled)
 
 
 # -- failures ---------------------------------------------------------------------------
