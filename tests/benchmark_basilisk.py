@@ -2,8 +2,8 @@
 tests/benchmark_scan_pitch.py: a rigid hub (our SatelliteDynamics' inertia and mass) with
 six VSCMGs (balanced model, 16.65 N.m.s rotors) or three reaction wheels (Honeywell HR16),
 RK4, at a given step and duration, no flight software (constant zero commands): the time of
-Basilisk's own dynamics loop alone.  Optional: ``pip install bsk`` (it pins older sgp4,
-tqdm, pandas, matplotlib; a separate environment keeps ours intact).
+Basilisk's own dynamics loop alone.  Optional: ``pip install -e '.[basilisk]'`` (bsk pins
+older sgp4, tqdm, pandas, matplotlib; a separate environment keeps ours intact).
 
     python tests/benchmark_basilisk.py      # 150 s at 0.05 s, both hubs
 """

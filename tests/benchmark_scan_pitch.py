@@ -194,7 +194,7 @@ def basilisk(cosim: float, monolithic: float, repeat: int) -> None:
     try:
         from benchmark_basilisk import KINDS, hub_time
     except ImportError as exc:
-        print(f"\nBasilisk: not installed ({exc}); pip install bsk for the anchor")
+        print(f"\nBasilisk: not installed ({exc}); pip install -e '.[basilisk]' for the anchor")
         return
     print("\nBasilisk at 0.05 s, 150 s, RK4 (dynamics only):")
     for kind in KINDS:
