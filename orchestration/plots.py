@@ -14,14 +14,11 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
-import matplotlib
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-
-from .units import label as unit_label  # noqa: E402
-from .units import to_degrees  # noqa: E402
+from .units import label as unit_label
+from .units import to_degrees
 
 DPI = 200
 FORMATS = (".png", ".svg")
@@ -42,13 +39,7 @@ def lines(
 
 def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
-    fig, axes = plt.subplots(
-        len(rows),
-        1,
-        figsize=(8, 1.2 + 2.6 * len(rows)),
-        squeeze=False,
-        sharex=len({id(r[0]) for r in rows}) == 1,
-    )
+    fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
     for ax, row in zip(axes[:, 0], rows):
         t, series, ylabel = row[:3]
         for k, (name, values) in enumerate(series.items()):
@@ -96,7 +87,7 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     """Metrics against a design variable (log x), each with its requirement line; points
     that meet every requirement filled green, the others open red (legend says so)."""
-    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 1.2 + 2.6 * len(rows)), squeeze=False)
+    fig, axes = _subplots(len(rows))
     for ax, (label, values, limit) in zip(axes[:, 0], rows):
         ax.plot(x, values, color="0.6", linewidth=1)
         for xi, v, ok in zip(x, values, met):
@@ -131,9 +122,7 @@ def signals(
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
     the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
     one), it is the title and the axes name the variables alone."""
-    fig, axes = plt.subplots(
-        len(variables), 1, figsize=(8, 1.2 + 2.6 * len(variables)), squeeze=False, sharex=True
-    )
+    fig, axes = _subplots(len(variables), sharex=True)
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
@@ -179,12 +168,31 @@ def overview(results, out_dir) -> list[Path]:
     return paths
 
 
+def _subplots(n: int, sharex: bool = False):
+    """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide."""
+    fig = Figure(figsize=(8, 1.2 + 2.6 * n))
+    return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
+
+
 def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
-    """Label the stacked axes, write the figure in every format, free it."""
+    """Label the stacked axes, lay them out once (tight), write the figure in every
+    format.  The layout is fixed before saving: with a layout engine left on the figure,
+    every ``savefig`` would first draw it once more just to lay it out."""
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     fig.tight_layout()
+    fig.set_layout_engine(None)
     for target in formats(path):
         fig.savefig(target, dpi=DPI)
-    plt.close(fig)
     return Path(path)
+
+
+def __getattr__(name):
+    if name == "plt":  # pyplot for callers that use it (campaign reports), on first use
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot
+
+        return matplotlib.pyplot
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
