@@ -319,6 +319,7 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
+    from .figure_pool import processes_for_figures
     from .parameters import parse_set
     from .progress import Progress
     from .runner import run
@@ -337,6 +338,7 @@ def _run(args) -> int:
             echo=_echo(out),
             progress=progress,
             derivatives=not args.no_derivatives,
+            figure_processes=processes_for_figures(),
         )
     if args.mat:
         results.to_mat(out / "results.mat")

@@ -7,15 +7,16 @@ the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(val
 (a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
+
+matplotlib is imported by the first figure drawn, not with this module (a run without
+figures, or whose figures a :mod:`.figure_pool` draws, never loads it).
 """
 
 from __future__ import annotations
 
+import functools
 import textwrap
 from pathlib import Path
-
-from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 
 from .units import label as unit_label
 from .units import to_degrees
@@ -23,6 +24,22 @@ from .units import to_degrees
 DPI = 200
 FORMATS = (".png", ".svg")
 _STYLES = ("-", "--", "-.", ":")
+#: None: every figure is drawn; else called once per figure, which is drawn only if it
+#: returns True (the processes of a :class:`.figure_pool.FigurePool` share them out)
+claim = None
+
+
+def _shared(draw):
+    """A figure function that draws only the figures :data:`claim` gives this process
+    (it returns the path either way)."""
+
+    @functools.wraps(draw)
+    def shared(path, *args, **kwargs):
+        if claim is not None and not claim():
+            return Path(path)
+        return draw(path, *args, **kwargs)
+
+    return shared
 
 
 def formats(path) -> list[Path]:
@@ -37,6 +54,7 @@ def lines(
     return panels(path, title, [(t, series, ylabel, marks)], xlabel)
 
 
+@_shared
 def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
     fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
@@ -84,9 +102,12 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
         ax.set_ylim(bottom=bottom)
 
 
+@_shared
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     """Metrics against a design variable (log x), each with its requirement line; points
     that meet every requirement filled green, the others open red (legend says so)."""
+    from matplotlib.lines import Line2D
+
     fig, axes = _subplots(len(rows))
     for ax, (label, values, limit) in zip(axes[:, 0], rows):
         ax.plot(x, values, color="0.6", linewidth=1)
@@ -115,6 +136,7 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     return _save(fig, axes, path, title, xlabel)
 
 
+@_shared
 def signals(
     path: Path, runs: dict, variables, deg: bool = False, instance: str | None = None
 ) -> Path:
@@ -170,6 +192,8 @@ def overview(results, out_dir) -> list[Path]:
 
 def _subplots(n: int, sharex: bool = False):
     """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide."""
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(8, 1.2 + 2.6 * n))
     return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
 

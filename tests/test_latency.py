@@ -3,6 +3,7 @@ tests/benchmark_latency.py): nothing heavy imported before a command needs it, f
 drawn once per format, the same figures as before."""
 
 import json
+import warnings
 
 import pytest
 
@@ -84,3 +85,98 @@ def test_each_format_is_drawn_once(tmp_path, monkeypatch):
     path = plots.lines(tmp_path / "f.png", "title", t, {"a": np.sin(t), "b": np.cos(t)}, "y")
     assert [p.exists() for p in plots.formats(path)] == [True, True]
     assert len(draws) == len(plots.FORMATS)
+
+
+def _figures(results, out_dir):
+    """Four figures through plots (a module-level function: it pickles by name)."""
+    import numpy as np
+
+    from agilesat.orchestration import plots
+
+    t = np.linspace(0.0, 1.0, 50)
+    return [
+        plots.lines(out_dir / f"f{k}.png", f"figure {k}", t, {"y": t**k}, "y") for k in range(4)
+    ]
+
+
+def _failing(results, out_dir):
+    from agilesat.orchestration import plots
+
+    plots.lines(out_dir / "ok.png", "fine", [0.0, 1.0], {"y": [0.0, 1.0]}, "y")
+    raise ValueError("figure code failed here")
+
+
+def test_claims_give_each_figure_to_one_process_as_they_go():
+    import os
+
+    from agilesat.orchestration.figure_pool import Claims
+
+    claims = Claims()
+    other = Claims.__new__(Claims)  # a second process: the same pipe, its own walk
+    other.__dict__.update(claims.__dict__)
+    taken = []
+    for k in range(6):  # both walk every figure; one takes it, the other skips it
+        first, second = (claims, other) if k % 2 else (other, claims)
+        taken.append((first(), second()))
+    assert taken == [(True, False)] * 6
+    os.close(claims._read), os.close(claims._write)
+
+
+@pytest.fixture
+def importable(monkeypatch):
+    """This module importable in a worker (it pickles its figure functions by name), and
+    any fall-back to drawing in the calling process an error."""
+    from helpers import ROOT
+
+    monkeypatch.setenv("PYTHONPATH", str(ROOT / "tests"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yield
+
+
+@pytest.mark.slow
+def test_a_pool_writes_the_figures_one_process_writes(tmp_path, importable):
+    import numpy as np
+    from PIL import Image
+
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    (tmp_path / "here").mkdir(), (tmp_path / "pool").mkdir()
+    here = _figures(None, tmp_path / "here")
+    pool = FigurePool(3, (__name__,))
+    try:
+        drawn = pool.draw(_figures, None, tmp_path / "pool")
+    finally:
+        pool.close()
+    assert [p.name for p in drawn] == [p.name for p in here]
+    for path in here:
+        for twin in (path, path.with_suffix(".svg")):
+            assert (tmp_path / "pool" / twin.name).exists()
+        pixels = [
+            np.asarray(Image.open(d / path.name)) for d in (tmp_path / "here", tmp_path / "pool")
+        ]
+        assert np.array_equal(*pixels)
+
+
+@pytest.mark.slow
+def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path, importable):
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    pool = FigurePool(2, (__name__,))
+    try:
+        with pytest.raises(ValueError, match="figure code failed here"):
+            pool.draw(_failing, None, tmp_path)
+    finally:
+        pool.close()
+    pool = FigurePool(2)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            drawn = pool.draw(lambda r, out: _figures(r, out), None, tmp_path)
+    finally:
+        assert pool.close() == 0  # the worker ended on its closed input
+    assert len(caught) == 1 and str(caught[0].message).startswith(
+        "figures drawn in this process: the figure worker failed: the figure call cannot be "
+        "sent to it"
+    )
+    assert all(p.exists() for p in drawn)

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from ...components.orbit_environment import WGS84_A
+from .. import plots
 from . import Scenario, inertial_momentum, relative_drift, summarize
 from .constants import PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY
 
@@ -258,8 +259,6 @@ def yaw_periods(results) -> tuple[float, float]:
 def figures(results, out_dir) -> list:
     """The paper's Figs 4–8 from a run, body-frame (B) quantities named as such, the pointing
     requirement and the paper's yaw-torque bound drawn."""
-    from .. import plots
-
     t = results.time
     deg = 180 / math.pi
     roll, pitch = (

@@ -17,6 +17,7 @@ from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.orbit_environment import WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
+from .. import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
 
@@ -289,8 +290,6 @@ def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
 def figures(results, out_dir) -> list:
     """The paper's Figs 4–11 from a run, with the gimbal limits, the scan-rate requirement
     and the paper's values drawn."""
-    from .. import plots
-
     t = results.time
     deg = 180 / math.pi
     pitch = results["SatelliteDynamics.euler_BO[2]"] * deg

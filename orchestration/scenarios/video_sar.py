@@ -45,6 +45,7 @@ from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, 
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
+from .. import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
 from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
@@ -386,8 +387,6 @@ def metrics(results) -> dict:
 def figures(results, out_dir) -> list:
     """The paper's Fig. 7 (Euler angles and rates, achieved and reference), pointing error,
     footprint rotation, look geometry, gimbal rates."""
-    from .. import plots
-
     t = results.time
     deg = 180 / math.pi
     euler = results.vector("SatelliteDynamics.euler_BO") * deg
