@@ -16,6 +16,7 @@ import json
 import os
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -166,7 +167,12 @@ def _figure_pool(processes: int, scenario):
         return
     from .figure_pool import FigurePool
 
-    pool = FigurePool(processes, (scenario.figures.__module__,) if scenario is not None else ())
+    try:
+        pool = FigurePool(processes, (scenario.figures.__module__,) if scenario is not None else ())
+    except OSError as exc:  # no process to be had: draw here
+        warnings.warn(f"figures drawn in this process: no figure worker ({exc})", stacklevel=3)
+        yield None
+        return
     try:
         yield pool
     finally:

@@ -9,13 +9,18 @@ own output directory:
   ($AGILESAT_CACHE_DIR: the master's compiled loop, the kernels' compile cache, the
   unpacked FMUs), as in a fresh clone;
 - warm rerun: the same command again, everything cached;
-each with the figures and with ``--no-figures``, every case ``--n`` times, the cases
-interleaved; the report gives medians.  A run's time is split by timestamps the wrapper
-takes around the master's own functions: start-up and imports (interpreter start to the
-command's modules imported), set-up (arguments, the FMUs' staleness check, reading the
-system, loading and initialising the FMUs), simulation (the macro steps, results.csv row
-by row), writing (results.npz, the metrics, summary.json and log.txt), figures (to the
-end of the command) and exit (interpreter shutdown, worker processes joined).
+each with the figures and with ``--no-figures``, and with the figures drawn in the
+command's own process (``AGILESAT_FIGURE_PROCESSES=0``, as before the figure worker),
+every case ``--n`` times, the cases interleaved; the report gives medians, and the CPU
+time of all the processes of a run (robust to other load on the machine).  A run's time
+is split by timestamps the wrapper takes around the master's own functions: start-up and
+imports (interpreter start to the command's modules imported), set-up (arguments, the
+FMUs' staleness check, reading the system, loading and initialising the FMUs),
+simulation (the macro steps, results.csv row by row), writing (results.npz, the metrics,
+summary.json and log.txt), figures (to the end of the command) and exit (interpreter
+shutdown, worker processes joined).  Nothing
+else may rebuild the FMUs while it runs (the FMUs are built for an interpreter path:
+``.venv/bin/python`` and ``.venv/bin/python3`` rebuild each other's).
 
 ``--baseline REV``: the same cases, interleaved, with the code of a git revision
 (``git archive`` into a temporary directory, imported through PYTHONPATH with this
@@ -27,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -82,9 +88,11 @@ def run_once(env: dict, target: str, out: Path, figures: bool, work: Path) -> di
     marks_file = work / "marks.json"
     command = [sys.executable, "-c", WRAPPER, str(marks_file), "run", target, "-q"]
     command += ["--out", str(out)] + ([] if figures else ["--no-figures"])
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     launch = time.time()
     result = subprocess.run(command, env=env, capture_output=True, text=True, cwd=work)
     end = time.time()
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if result.returncode != 0:
         raise RuntimeError(f"{' '.join(command[3:])} failed:\n{result.stderr[-3000:]}")
     m = json.loads(marks_file.read_text())
@@ -96,6 +104,9 @@ def run_once(env: dict, target: str, out: Path, figures: bool, work: Path) -> di
         "figures": m["main_end"] - m["written"],
         "exit": end - m["main_end"],
         "total": end - launch,
+        "CPU, all processes": sum(
+            getattr(after, f) - getattr(before, f) for f in ("ru_utime", "ru_stime")
+        ),
         "wall time in summary": json.loads((out / "summary.json").read_text())["wall_time"],
     }
 
@@ -121,7 +132,10 @@ def main() -> None:
     args = parser.parse_args()
     work = Path(tempfile.mkdtemp(prefix="agilesat_latency_"))
     try:
-        variants = {"this tree": dict(os.environ)}
+        variants = {
+            "this tree": dict(os.environ),
+            "figures in 1 process": {**os.environ, "AGILESAT_FIGURE_PROCESSES": "0"},
+        }
         if args.baseline:
             path = baseline_tree(args.baseline, work)
             variants[f"{args.baseline}"] = {
@@ -136,7 +150,13 @@ def main() -> None:
                 capture_output=True,
                 cwd=work,
             )
-        cases = [(v, f, w) for v in variants for f in (True, False) for w in ("first", "warm")]
+        cases = [
+            (v, f, w)
+            for v in variants
+            for f in (True, False)
+            for w in ("first", "warm")
+            if f or v != "figures in 1 process"
+        ]
         times: dict[tuple, list[dict]] = {case: [] for case in cases}
         for k in range(args.n):
             for variant, figures, when in cases:
@@ -167,7 +187,7 @@ def report(args, cases, times) -> None:
     ]
     width = max(18, *(len(label) for label in labels)) + 1
     print(f"{'':22s}" + "".join(f"{label:>{width}s}" for label in labels))
-    for phase in (*PHASES, "total", "wall time in summary"):
+    for phase in (*PHASES, "total", "CPU, all processes", "wall time in summary"):
         row = [statistics.median(t[phase] for t in times[case]) for case in cases]
         print(f"{phase:22s}" + "".join(f"{x:>{width}.2f}" for x in row))
     print(

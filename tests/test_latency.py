@@ -174,9 +174,53 @@ def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path,
             warnings.simplefilter("always")
             drawn = pool.draw(lambda r, out: _figures(r, out), None, tmp_path)
     finally:
-        assert pool.close() == 0  # the worker ended on its closed input
+        pool.close()
+    assert pool.worker.returncode is not None  # sent nothing: stopped, not left waiting
     assert len(caught) == 1 and str(caught[0].message).startswith(
         "figures drawn in this process: the figure worker failed: the figure call cannot be "
         "sent to it"
     )
     assert all(p.exists() for p in drawn)
+
+
+_LOAD = """
+import json, os, sys
+os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]
+from agilesat.orchestration.fmu import Instance, Log
+instance = Instance("SatelliteDynamics", sys.argv[1], Log())
+instance.instantiate()
+modules = [m.__cached__ for n, m in sys.modules.items() if n.startswith("agilesat_")]
+instance.free()
+print(json.dumps({"folder": instance.unzip_dir, "compiled": modules}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_an_fmu_is_unpacked_and_compiled_once_per_content(fmus, tmp_path):
+    from pathlib import Path
+
+    cache = tmp_path / "cache"
+    loads = []
+    for _ in range(2):
+        result = run_python(_LOAD, fmus["SatelliteDynamics"], cache)
+        assert result.returncode == 0, result.stderr
+        loads.append(json.loads(result.stdout.splitlines()[-1]))
+    first, second = loads
+    assert first["folder"] == second["folder"] and Path(first["folder"]).parent == cache / "fmus"
+    assert Path(first["folder"], "modelDescription.xml").is_file()  # kept after exit
+    assert [p.name for p in (cache / "fmus").iterdir()] == [Path(first["folder"]).name]
+    # the FMU's code (its packed agilesat_<hash> package) loaded from compiled files
+    assert first["compiled"] and all(Path(p).is_file() for p in first["compiled"])
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_an_unwritable_cache_unpacks_to_a_temporary_folder(fmus, tmp_path):
+    from pathlib import Path
+
+    (tmp_path / "a_file").write_text("not a directory")
+    result = run_python(_LOAD, fmus["SatelliteDynamics"], tmp_path / "a_file")
+    assert result.returncode == 0, result.stderr
+    folder = json.loads(result.stdout.splitlines()[-1])["folder"]
+    assert not folder.startswith(str(tmp_path)) and not Path(folder).exists()  # removed at exit
