@@ -224,3 +224,39 @@ def test_an_unwritable_cache_unpacks_to_a_temporary_folder(fmus, tmp_path):
     assert result.returncode == 0, result.stderr
     folder = json.loads(result.stdout.splitlines()[-1])["folder"]
     assert not folder.startswith(str(tmp_path)) and not Path(folder).exists()  # removed at exit
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_an_interrupted_run_stops_its_figure_worker_at_once(fmus, tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    process = subprocess.Popen(
+        [sys.executable, "-m", "agilesat.orchestration", "run", "scan_pitch", "-q"]
+        + ["--out", str(tmp_path)],
+        env={**os.environ, "AGILESAT_FIGURE_PROCESSES": "2"},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    children = Path(f"/proc/{process.pid}/task/{process.pid}/children")
+    deadline = time.monotonic() + 120
+    while (
+        not (tmp_path / "results.csv").exists()
+        or len((tmp_path / "results.csv").read_text().splitlines()) < 50
+    ):
+        assert time.monotonic() < deadline and process.poll() is None
+        time.sleep(0.05)
+    workers = children.read_text().split()
+    assert len(workers) == 1  # the figure worker, started with the run
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130 and "Traceback" not in stderr, stderr
+    assert not Path(f"/proc/{workers[0]}").exists()  # stopped and reaped
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "interrupted"
+    assert not list(tmp_path.glob("*.png"))
