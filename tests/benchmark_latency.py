@@ -134,7 +134,7 @@ def main() -> None:
     try:
         variants = {
             "this tree": dict(os.environ),
-            "figures in 1 process": {**os.environ, "AGILESAT_FIGURE_PROCESSES": "0"},
+            "this tree, 1 drawing process": {**os.environ, "AGILESAT_FIGURE_PROCESSES": "0"},
         }
         if args.baseline:
             path = baseline_tree(args.baseline, work)
@@ -155,7 +155,7 @@ def main() -> None:
             for v in variants
             for f in (True, False)
             for w in ("first", "warm")
-            if f or v != "figures in 1 process"
+            if f or v != "this tree, 1 drawing process"
         ]
         times: dict[tuple, list[dict]] = {case: [] for case in cases}
         for k in range(args.n):
@@ -179,25 +179,24 @@ def main() -> None:
 def report(args, cases, times) -> None:
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     print(
-        f"`agilesat run {args.target}`: median of {args.n} runs per column [s], "
-        f"{cpus} cores, load average {os.getloadavg()[0]:.2f} at the end"
+        f"`agilesat run {args.target}`: median of {args.n} runs per case [s], {cpus} cores, "
+        f"load average {os.getloadavg()[0]:.2f} at the end"
     )
-    labels = [
-        f"{v} {'figures' if f else 'no-figures'} {w}".replace("this tree ", "") for v, f, w in cases
+    columns = (*PHASES, "total", "CPU, all processes", "wall time in summary")
+    heads = [
+        c.replace(", all processes", " (all)").replace(" in summary", " (summary)") for c in columns
     ]
-    width = max(18, *(len(label) for label in labels)) + 1
-    print(f"{'':22s}" + "".join(f"{label:>{width}s}" for label in labels))
-    for phase in (*PHASES, "total", "CPU, all processes", "wall time in summary"):
-        row = [statistics.median(t[phase] for t in times[case]) for case in cases]
-        print(f"{phase:22s}" + "".join(f"{x:>{width}.2f}" for x in row))
-    print(
-        f"{'total, min-max':22s}"
-        + "".join(
-            f"{min(t['total'] for t in times[c]):>{width - 6}.2f}-"
-            f"{max(t['total'] for t in times[c]):<5.2f}"
-            for c in cases
+    print(f"{'':38s}" + "".join(f"{h:>{max(9, len(h)) + 1}s}" for h in heads) + "  total min-max")
+    for case in cases:
+        variant, figures, when = case
+        label = f"{variant}, {'figures' if figures else '--no-figures'}, {when}"
+        row = [statistics.median(t[c] for t in times[case]) for c in columns]
+        totals = [t["total"] for t in times[case]]
+        print(
+            f"{label:38s}"
+            + "".join(f"{x:>{max(9, len(h)) + 1}.2f}" for x, h in zip(row, heads))
+            + f"  {min(totals):.2f}-{max(totals):.2f}"
         )
-    )
     if args.baseline:
         print(f"\ntotal of this tree / total of {args.baseline} (medians):")
         for figures in (True, False):
@@ -205,7 +204,7 @@ def report(args, cases, times) -> None:
                 now = statistics.median(t["total"] for t in times[("this tree", figures, when)])
                 then = statistics.median(t["total"] for t in times[(args.baseline, figures, when)])
                 print(
-                    f"  {'figures' if figures else 'no-figures'} {when}: "
+                    f"  {'figures' if figures else '--no-figures'}, {when}: "
                     f"{now:.2f} / {then:.2f} s = {now / then:.2f}"
                 )
     print("target (issue 10): warm rerun <= 3 s, first run no slower than before (~10 s)")
