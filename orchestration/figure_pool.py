@@ -202,7 +202,7 @@ if __name__ == "__main__":
 
     from matplotlib.figure import Figure
 
-    from . import plots
+    from . import fmu, plots, results  # noqa: F401 - what a pickled run's Results refers to
 
     # matplotlib, its fonts and every format's backend, while the run simulates
     axes = Figure().subplots()
