@@ -24,6 +24,7 @@ def _imported_by(code: str) -> set[str]:
     return set(json.loads(result.stdout.splitlines()[-1]))
 
 
+@pytest.mark.slow  # fresh interpreters: over 1 s
 def test_help_imports_nothing_heavy():
     code = (
         "from agilesat.orchestration.cli import main\n"
@@ -38,11 +39,13 @@ def test_help_imports_nothing_heavy():
     assert "matplotlib" not in _imported_by(code)
 
 
+@pytest.mark.slow  # fresh interpreters: over 1 s
 def test_the_package_names_are_imported_on_first_use():
     assert _imported_by("import agilesat.orchestration") == set()
     assert "fmpy" in _imported_by("from agilesat.orchestration import simulate")
 
 
+@pytest.mark.slow  # fresh interpreters: over 1 s
 def test_campaign_is_named_in_help_as_the_campaign_package_says():
     code = (
         "import argparse\n"
@@ -68,6 +71,7 @@ def test_a_run_without_figures_loads_no_matplotlib(fmus, tmp_path):
     assert "matplotlib" not in _imported_by(code)
 
 
+@pytest.mark.slow  # imports matplotlib
 def test_each_format_is_drawn_once(tmp_path, monkeypatch):
     """A figure is laid out once, then drawn once per file (savefig with a layout engine
     left on the figure would draw it once more per file just to lay it out)."""
