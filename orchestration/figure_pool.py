@@ -36,17 +36,27 @@ _ENV = {
 }
 
 
+#: free cores (cores less the 1-minute load average) a worker needs to pay
+FREE_CORES = 0.5
+
+
 def processes_for_figures() -> int:
     """Drawing processes worth starting here: $AGILESAT_FIGURE_PROCESSES if set (0: draw
-    in the calling process), else the cores this process may use, at most 8; 0 with a
-    single core, where a worker only adds its start-up (~0.5 s of CPU)."""
+    in the calling process), else the cores this process may use, at most 8, if at least
+    :data:`FREE_CORES` of them are idle (as ``make -l`` reads the load average); else 0.
+    A worker costs ~0.5 s of CPU more than drawing here (its own interpreter) and only
+    pays with a core to draw on: on a saturated machine it slows the run."""
     if os.environ.get("AGILESAT_FIGURE_PROCESSES"):
         return max(0, int(os.environ["AGILESAT_FIGURE_PROCESSES"]))
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         cores = os.cpu_count() or 1
-    return 0 if cores < 2 else min(cores, 8)
+    try:
+        free = cores - os.getloadavg()[0]
+    except (AttributeError, OSError):  # no load average: assume idle
+        free = cores
+    return min(cores, 8) if cores >= 2 and free >= FREE_CORES else 0
 
 
 class FigurePool:

@@ -264,3 +264,29 @@ def test_an_interrupted_run_stops_its_figure_worker_at_once(fmus, tmp_path):
     assert not Path(f"/proc/{workers[0]}").exists()  # stopped and reaped
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "interrupted"
     assert not list(tmp_path.glob("*.png"))
+
+
+@pytest.mark.parametrize(
+    ("cores", "load", "env", "expected"),
+    [
+        (2, 0.2, None, 2),  # a free core: a worker
+        (2, 1.5, None, 2),
+        (2, 1.6, None, 0),  # saturated: drawn in the command
+        (1, 0.0, None, 0),  # one core
+        (16, 0.0, None, 8),  # at most 8
+        (2, 3.0, "3", 3),  # $AGILESAT_FIGURE_PROCESSES decides
+        (8, 0.0, "0", 0),
+    ],
+)
+def test_a_figure_worker_only_where_a_core_is_free(monkeypatch, cores, load, env, expected):
+    import os
+
+    from agilesat.orchestration import figure_pool
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(cores)))
+    monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
+    if env is None:
+        monkeypatch.delenv("AGILESAT_FIGURE_PROCESSES", raising=False)
+    else:
+        monkeypatch.setenv("AGILESAT_FIGURE_PROCESSES", env)
+    assert figure_pool.processes_for_figures() == expected
