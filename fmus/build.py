@@ -205,20 +205,31 @@ def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -
     (relative to ``root``; a package's modules with its ``__init__.py``)."""
     package = "/".join(relative.split("/")[:-1])
     found = []
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.ImportFrom) and node.level:
-            base = package.split("/")[: len(package.split("/")) - node.level + 1]
-            module = "/".join(base + (node.module.split(".") if node.module else []))
-            if (root / module).is_dir():  # from ..components.analysis import x
-                found.append(f"{module}/__init__.py")
-                for alias in node.names:  # from . import slave, analysis
-                    if (root / module / f"{alias.name}.py").is_file():
-                        found.append(f"{module}/{alias.name}.py")
-                    elif (root / module / alias.name).is_dir():
-                        found.append(f"{module}/{alias.name}/__init__.py")
-            else:  # from .cmg_cluster import x
-                found.append(f"{module}.py")
+    for level, name, names in _relative_import_froms(path.read_text(), str(path)):
+        base = package.split("/")[: len(package.split("/")) - level + 1]
+        module = "/".join(base + (name.split(".") if name else []))
+        if (root / module).is_dir():  # from ..components.analysis import x
+            found.append(f"{module}/__init__.py")
+            for alias in names:  # from . import slave, analysis
+                if (root / module / f"{alias}.py").is_file():
+                    found.append(f"{module}/{alias}.py")
+                elif (root / module / alias).is_dir():
+                    found.append(f"{module}/{alias}/__init__.py")
+        else:  # from .cmg_cluster import x
+            found.append(f"{module}.py")
     return found
+
+
+@functools.lru_cache(maxsize=256)
+def _relative_import_froms(source: str, filename: str) -> tuple:
+    """(level, module, imported names) of each relative ``from … import`` in a module's
+    source, parsed once per content (every FMU's staleness check follows the same
+    modules: the slave, the registry, the shared components)."""
+    return tuple(
+        (node.level, node.module, tuple(alias.name for alias in node.names))
+        for node in ast.walk(ast.parse(source, filename))
+        if isinstance(node, ast.ImportFrom) and node.level
+    )
 
 
 @functools.cache

@@ -14,20 +14,22 @@ import sys
 from importlib import metadata
 from pathlib import Path
 
-import numpy as np
-
-from ..components.analysis import mission
-from . import scenarios
-from .master import Interrupted
-from .scenarios import constants, payload_sweep
+from .scenarios import NAMES, constants
 
 DEG = math.pi / 180
+#: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
+#: master are imported only to run a campaign; a test checks it is the campaign's own)
+CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
 
 
 def main(argv=None) -> int:
-    from .campaign import cli as campaign_cli
-
-    args = _parser().parse_args(argv)
+    """The command line.  Nothing heavy is imported here: each command imports what it
+    uses (``agilesat --help`` and ``agilesat run --no-figures`` load no matplotlib)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    campaign = bool(argv) and argv[0] == "campaign"
+    if campaign:
+        from .campaign import cli as campaign_cli
+    args = _parser(campaign).parse_args(argv)
     try:
         return {
             "list": _list,
@@ -41,19 +43,31 @@ def main(argv=None) -> int:
             "mission": _mission,
             "size-flywheel": _size_flywheel,
             "generate": _generate,
-            "campaign": campaign_cli.main,
+            "campaign": campaign_cli.main if campaign else None,
         }[args.command](args)
-    except (Interrupted, KeyboardInterrupt) as exc:
+    except KeyboardInterrupt as exc:
         print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
         return 130
     except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
+        if _interrupted(exc):
+            print(f"agilesat {args.command}: {exc}", file=sys.stderr)
+            return 130
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
         return 1
 
 
-def _parser() -> argparse.ArgumentParser:
-    """The command line: the options of every subcommand (each one's --help)."""
+def _interrupted(exc: BaseException) -> bool:
+    """A run stopped by SIGINT/SIGTERM (master.Interrupted; only a command that imported
+    the master can raise one)."""
+    master = sys.modules.get(f"{__package__}.master")
+    return master is not None and isinstance(exc, master.Interrupted)
+
+
+def _parser(campaign: bool = True) -> argparse.ArgumentParser:
+    """The command line: the options of every subcommand (each one's --help); without
+    ``campaign``, `agilesat campaign` is only named (its options need the campaign
+    package)."""
     doc = __doc__.split("\n\n")
     parser = argparse.ArgumentParser(
         prog="agilesat",
@@ -71,9 +85,12 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     _system_commands(commands, quiet)
     _analysis_commands(commands, quiet)
-    from .campaign import cli as campaign_cli
+    if campaign:
+        from .campaign import cli as campaign_cli
 
-    campaign_cli.add_parser(commands)
+        campaign_cli.add_parser(commands)
+    else:
+        commands.add_parser("campaign", help=CAMPAIGN_HELP)
     return parser
 
 
@@ -101,7 +118,7 @@ def _system_commands(commands, quiet) -> None:
         "run", parents=[quiet], help="run a scenario[:variant] or an .ssd/.ssp file"
     )
     run.add_argument(
-        "target", help=f"one of {', '.join(scenarios.NAMES)} (optionally :variant) or a system file"
+        "target", help=f"one of {', '.join(NAMES)} (optionally :variant) or a system file"
     )
     run.add_argument("--step", type=float, help="macro step [s]")
     run.add_argument("--stop", type=float, help="stop time [s]")
@@ -143,7 +160,7 @@ def _system_commands(commands, quiet) -> None:
     export = commands.add_parser(
         "export", help="write a scenario[:variant] as a self-contained SSP package (.ssd + FMUs)"
     )
-    export.add_argument("target", help=f"one of {', '.join(scenarios.NAMES)} (optionally :variant)")
+    export.add_argument("target", help=f"one of {', '.join(NAMES)} (optionally :variant)")
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
     generate = commands.add_parser(
@@ -229,13 +246,13 @@ def _analysis_commands(commands, quiet) -> None:
     size.add_argument(
         "--accuracy",
         type=float,
-        default=payload_sweep.ACCURACY / DEG,
+        default=constants.PAYLOAD_SWEEP_ACCURACY / DEG,
         help="pointing accuracy [deg]",
     )
     size.add_argument(
         "--stability",
         type=float,
-        default=payload_sweep.STABILITY / DEG,
+        default=constants.PAYLOAD_SWEEP_STABILITY / DEG,
         help="pointing stability [deg/s]",
     )
     size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
@@ -302,6 +319,7 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
+    from .figure_pool import processes_for_figures
     from .parameters import parse_set
     from .progress import Progress
     from .runner import run
@@ -320,6 +338,7 @@ def _run(args) -> int:
             echo=_echo(out),
             progress=progress,
             derivatives=not args.no_derivatives,
+            figure_processes=processes_for_figures(),
         )
     if args.mat:
         results.to_mat(out / "results.mat")
@@ -416,6 +435,9 @@ def _mission(args) -> int:
 
 def _overlap(args, altitude: float) -> None:
     """Frame overlap (eqs 1-5) at the asked frame rates, and its figure over 1-30 Hz."""
+    import numpy as np
+
+    from ..components.analysis import mission
     from . import plots
 
     look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
@@ -453,6 +475,8 @@ def _overlap(args, altitude: float) -> None:
 
 def _walker(args, altitude: float) -> None:
     """Walker sizing (eqs 14-20) under both readings of the paper's β."""
+    from ..components.analysis import mission
+
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
     for kind, reading in (
@@ -513,8 +537,9 @@ def _echo(out: Path, limit: int = 5):
 
 def _generate(args) -> int:
     from ..fmus.build import FMUS_DIR, interfaces_markdown
+    from . import scenarios
 
-    files = {scenarios.get(name).ssd: scenarios.get(name).render_ssd for name in scenarios.NAMES}
+    files = {scenarios.get(name).ssd: scenarios.get(name).render_ssd for name in NAMES}
     files[FMUS_DIR / "INTERFACES.md"] = lambda: interfaces_markdown().encode()
     stale = []
     for path, render in files.items():

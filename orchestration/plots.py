@@ -7,25 +7,39 @@ the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(val
 (a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
+
+matplotlib is imported by the first figure drawn, not with this module (a run without
+figures, or whose figures a :mod:`.figure_pool` draws, never loads it).
 """
 
 from __future__ import annotations
 
+import functools
 import textwrap
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-
-from .units import label as unit_label  # noqa: E402
-from .units import to_degrees  # noqa: E402
+from .units import label as unit_label
+from .units import to_degrees
 
 DPI = 200
 FORMATS = (".png", ".svg")
 _STYLES = ("-", "--", "-.", ":")
+#: None: every figure is drawn; else called once per figure, which is drawn only if it
+#: returns True (the processes of a :class:`.figure_pool.FigurePool` share them out)
+claim = None
+
+
+def _shared(draw):
+    """A figure function that draws only the figures :data:`claim` gives this process
+    (it returns the path either way)."""
+
+    @functools.wraps(draw)
+    def shared(path, *args, **kwargs):
+        if claim is not None and not claim():
+            return Path(path)
+        return draw(path, *args, **kwargs)
+
+    return shared
 
 
 def formats(path) -> list[Path]:
@@ -40,15 +54,10 @@ def lines(
     return panels(path, title, [(t, series, ylabel, marks)], xlabel)
 
 
+@_shared
 def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
-    fig, axes = plt.subplots(
-        len(rows),
-        1,
-        figsize=(8, 1.2 + 2.6 * len(rows)),
-        squeeze=False,
-        sharex=len({id(r[0]) for r in rows}) == 1,
-    )
+    fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
     for ax, row in zip(axes[:, 0], rows):
         t, series, ylabel = row[:3]
         for k, (name, values) in enumerate(series.items()):
@@ -93,10 +102,13 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
         ax.set_ylim(bottom=bottom)
 
 
+@_shared
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     """Metrics against a design variable (log x), each with its requirement line; points
     that meet every requirement filled green, the others open red (legend says so)."""
-    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 1.2 + 2.6 * len(rows)), squeeze=False)
+    from matplotlib.lines import Line2D
+
+    fig, axes = _subplots(len(rows))
     for ax, (label, values, limit) in zip(axes[:, 0], rows):
         ax.plot(x, values, color="0.6", linewidth=1)
         for xi, v, ok in zip(x, values, met):
@@ -124,6 +136,7 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     return _save(fig, axes, path, title, xlabel)
 
 
+@_shared
 def signals(
     path: Path, runs: dict, variables, deg: bool = False, instance: str | None = None
 ) -> Path:
@@ -131,9 +144,7 @@ def signals(
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
     the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
     one), it is the title and the axes name the variables alone."""
-    fig, axes = plt.subplots(
-        len(variables), 1, figsize=(8, 1.2 + 2.6 * len(variables)), squeeze=False, sharex=True
-    )
+    fig, axes = _subplots(len(variables), sharex=True)
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
@@ -179,12 +190,33 @@ def overview(results, out_dir) -> list[Path]:
     return paths
 
 
+def _subplots(n: int, sharex: bool = False):
+    """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 1.2 + 2.6 * n))
+    return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
+
+
 def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
-    """Label the stacked axes, write the figure in every format, free it."""
+    """Label the stacked axes, lay them out once (tight), write the figure in every
+    format.  The layout is fixed before saving: with a layout engine left on the figure,
+    every ``savefig`` would first draw it once more just to lay it out."""
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     fig.tight_layout()
+    fig.set_layout_engine(None)
     for target in formats(path):
         fig.savefig(target, dpi=DPI)
-    plt.close(fig)
     return Path(path)
+
+
+def __getattr__(name):
+    if name == "plt":  # pyplot for callers that use it (campaign reports), on first use
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot
+
+        return matplotlib.pyplot
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

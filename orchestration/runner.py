@@ -10,11 +10,13 @@ output and the momentum drift where ``H_I`` is recorded; the figures written.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +70,7 @@ def run(
     build: bool = True,
     progress=None,
     derivatives: bool = True,
+    figure_processes: int = 0,
 ) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
     (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
@@ -78,6 +81,10 @@ def run(
     (``status: "interrupted"``); the exception is raised after they are written.  The
     summary lists every input left open with what its default means
     (``unconnected_optional_inputs``).
+
+    ``figure_processes``: 0 draws the figures in this process; n > 0 in n processes of a
+    worker started with the run, which imports matplotlib while the run simulates
+    (:mod:`.figure_pool`; the CLI's choice, :func:`.figure_pool.processes_for_figures`).
     """
     scenario, variant = parse_target(target)
     overrides = dict(parameters or {})
@@ -102,7 +109,10 @@ def run(
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in typed.items()},
     }
     wall = time.perf_counter()
-    with stop_on_signals() as signals:
+    with (
+        stop_on_signals() as signals,
+        _figure_pool(figure_processes if figures and out_dir is not None else 0, scenario) as pool,
+    ):
         try:
             results = simulate(
                 system,
@@ -138,14 +148,35 @@ def run(
             if figures and signals.signal is None:
                 from . import plots
 
-                paths = (
-                    scenario.figures(results, out_dir)
-                    if scenario is not None
-                    else plots.overview(results, out_dir)
+                draw = (lambda f, *a: f(*a)) if pool is None else pool.draw
+                paths = draw(
+                    scenario.figures if scenario is not None else plots.overview,
+                    results,
+                    out_dir,
                 )
                 summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
                 _write_file(out_dir / "summary.json", _summary_text(summary))
     return results, summary
+
+
+@contextlib.contextmanager
+def _figure_pool(processes: int, scenario):
+    """A :class:`.figure_pool.FigurePool` of ``processes`` (None for 0), stopped at the end."""
+    if processes <= 0:
+        yield None
+        return
+    from .figure_pool import FigurePool
+
+    try:
+        pool = FigurePool(processes, (scenario.figures.__module__,) if scenario is not None else ())
+    except OSError as exc:  # no process to be had: draw here
+        warnings.warn(f"figures drawn in this process: no figure worker ({exc})", stacklevel=3)
+        yield None
+        return
+    try:
+        yield pool
+    finally:
+        pool.close()
 
 
 def _facts(results: Results, wall: float) -> dict:

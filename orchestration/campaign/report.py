@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus.model_description import UNITS
-from ..plots import plt
 
 PERCENTILES = (1, 5, 50, 95, 99)
 STATUSES = ("ok", "failed", "error", "lost")
@@ -156,6 +155,8 @@ def display(meta: dict) -> tuple[float, str]:
 
 
 def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
+    from ..plots import plt
+
     paths = []
     for name, meta in metrics.items():
         values = array[name][np.isfinite(array[name])]
@@ -190,6 +191,8 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
 
 def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
     """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal."""
+    from ..plots import plt
+
     paths = []
     for j, name in enumerate(names):
         data = np.asarray(signals[:, j, :])

@@ -15,8 +15,10 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # NumPy is imported where it is used: the CLI's --help needs none
+    import numpy as np
 
 SYSTEMS_DIR = Path(__file__).resolve().parent.parent / "systems"
 NAMES = ("scan_pitch", "payload_sweep", "video_sar")
@@ -127,6 +129,8 @@ def summarize(metrics: dict, paper: dict | None = None, requirements: dict | Non
 def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:
     """C_BIᵀ (J w + Σ h) per row (N, 3), from the recorded SatelliteDynamics attitude and
     rate and the named devices' momentum columns."""
+    import numpy as np
+
     from ...components.rotations import dcm, rotate_back
 
     w = results.vector("SatelliteDynamics.w_BI_B")
@@ -139,6 +143,8 @@ def relative_drift(H: np.ndarray, scale: float = 0.0) -> float:
     """max |H(t) − H(0)| / max(|H(0)|, scale) over the rows of H (N, 3).  ``scale``: the
     largest momentum a part of the system carries, for a system whose total starts at
     zero (at rest in inertial space), where |H(0)| alone would divide rounding by zero."""
+    import numpy as np
+
     change = float(np.abs(H - H[0]).max())
     norm = max(float(np.linalg.norm(H[0])), scale)
     return change / norm if norm > 0 else (0.0 if change == 0 else math.inf)
@@ -146,6 +152,8 @@ def relative_drift(H: np.ndarray, scale: float = 0.0) -> float:
 
 def scalar_values(values: dict) -> dict:
     """{"A.x": array} -> {"A.x[1,1]": ..., ...} in FMI structured names (1-based)."""
+    import numpy as np
+
     result = {}
     for key, value in values.items():
         array = np.asarray(value)

@@ -10,6 +10,9 @@ import math
 
 DEG = math.pi / 180.0
 
+#: payload_sweep's pointing requirements: the paper's claims with the wheel
+PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY = 0.032 * DEG, 0.006 * DEG
+
 VIDEO_SAR_ALTITUDE = 567e3  # m
 VIDEO_SAR_CARRIER = 9.6e9  # Hz
 VIDEO_SAR_LOOK_ANGLE = 30.0 * DEG  # 下视角
