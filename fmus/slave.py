@@ -70,6 +70,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
+from ..components import jit
 from ..components.model import ModelError
 from . import fmu_state
 
@@ -83,13 +84,21 @@ _MODES = ("instantiated", "initialization", "step", "terminated")
 DERIVATIVE_BASE, ORDER_SHIFT = 1 << 30, 24
 #: the shim's fast-path handshake: a get_real of FAST_PATH_N copies of the value reference
 #: 0xFFFFFFFF (pythonfmu 0.7.0 passes value references as C ints: -1) gives
-#: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address);
-#: the shim checks the version (shim/agilesat_fmi2.c)
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 5, 1.0
+#: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address,
+#: _block address); the shim checks the version (shim/agilesat_fmi2.c)
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 6, 2.0
 #: per scalar, for the shim: not Real, Real parameter, output, input, feedthrough input
 KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = 0, 1, 2, 3, 4
-#: indices in the control block shared with the shim
-STEP_MODE, OUTPUTS_VALID, PREDICTED, FED = 0, 1, 2, 3
+#: indices in the control block shared with the shim (int32)
+STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING = 0, 1, 2, 3, 4
+C_STEP, C_OUTPUT, C_PREDICTED, C_DIRTY = 5, 6, 7, 8
+N_CONTROL = 9
+#: C_STEP: the next step is the Python's, the step entry's, or changes nothing but t
+PYTHON_STEP, ENTRY_STEP, TIME_STEP = 0, 1, 2
+#: indices in the C step block shared with the shim (float64; addresses as exact doubles)
+B_TIME, B_NEXT_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED = range(8)
+B_OUTPUTS_START, B_OUTPUTS_STOP = 8, 9
+N_BLOCK = 10
 
 
 def _guarded(default):
@@ -98,6 +107,8 @@ def _guarded(default):
     def decorate(method):
         @functools.wraps(method)
         def wrapper(self, *args):
+            if self._control[C_DIRTY]:  # the shim served calls in C since the last entry
+                self._sync()
             try:
                 return method(self, *args)
             except (_CallRejected, ModelError) as rejected:
@@ -107,11 +118,18 @@ def _guarded(default):
                     f"{method.__name__}: {type(exc).__name__}: {exc}\n"
                     f"{traceback.format_exc(limit=4)}"
                 )
+            finally:
+                if self._c_path:
+                    self._arm()
             return default(*args) if callable(default) else default
 
         return wrapper
 
     return decorate
+
+
+def _address(array: np.ndarray) -> int:
+    return array.__array_interface__["data"][0]
 
 
 def _zeros(vrs):
@@ -171,7 +189,10 @@ class ModelSlave(Fmi2Slave):
             np.where(self._causality == OUTPUT, KIND_OUTPUT, KIND_PARAMETER),
         )
         self._kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER).astype(np.uint8)
-        self._control = np.zeros(4, dtype=np.int32)  # shared with the shim: never replaced
+        self._control = np.zeros(N_CONTROL, dtype=np.int32)  # shared with the shim: never replaced
+        self._block = np.zeros(N_BLOCK)  # the C step path's, shared with the shim: never replaced
+        self._saved = np.zeros(0)  # the C path's snapshot (its address is in _block)
+        self._c_path = False  # the shim asked for the addresses (see _arm)
         self._prediction = None
         self._predicting = True  # see _predict_outputs
         self._arrays: list | None = None  # the model's array attributes but values, found once
@@ -194,6 +215,14 @@ class ModelSlave(Fmi2Slave):
         self._control[STEP_MODE] = mode == "step" and self.model.values is self._values
 
     @property
+    def _predicting(self) -> bool:
+        return bool(self._control[PREDICTING])
+
+    @_predicting.setter
+    def _predicting(self, predicting: bool) -> None:
+        self._control[PREDICTING] = predicting
+
+    @property
     def _outputs_valid(self) -> bool:
         return bool(self._control[OUTPUTS_VALID])
 
@@ -204,10 +233,58 @@ class ModelSlave(Fmi2Slave):
     def _fast_path_addresses(self, n: int) -> list:
         if n != FAST_PATH_N:
             raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
-        address = [a.__array_interface__["data"][0] for a in (self._values, self._kind)]
-        control = self._control.__array_interface__["data"][0]
+        address = [_address(a) for a in (self._values, self._kind, self._control, self._block)]
         n_values = min(self._values.size, self._kind.size)  # the shim reads both up to it
-        return [FAST_PATH_VERSION, address[0], n_values, address[1], control]
+        self._c_path = True
+        return [FAST_PATH_VERSION, address[0], n_values, *address[1:]]
+
+    def _arm(self) -> None:
+        """End of every call the slave answers: tell the shim what its C step path may do
+        until the next one (module docstring, "The C step path"): the model's C entries
+        usable now (``c_entries``: compiled kernels, nothing for the Python to do), the
+        addresses of the model's state array and of the snapshot buffer (both may have been
+        replaced: initialisation, FMU state restore), the times."""
+        control, block, model = self._control, self._block, self.model
+        step = output = None
+        if control[STEP_MODE] and self._state_valid and hasattr(model, "c_entries"):
+            step, output = model.c_entries()
+        state = getattr(model, "state", None)
+        if not (
+            type(state) is np.ndarray and state.dtype == np.float64 and state.flags.c_contiguous
+        ):
+            step = output = None
+        kind = PYTHON_STEP
+        if isinstance(step, jit.TimeStep):
+            kind = TIME_STEP if step.ready else PYTHON_STEP
+        elif step is not None and (address := step.address):
+            kind, block[B_STEP] = ENTRY_STEP, address
+        address = output.address if output is not None else None
+        control[C_OUTPUT], block[B_OUTPUT] = (1, address) if address else (0, 0.0)
+        control[C_STEP] = kind
+        if kind == PYTHON_STEP and not address:
+            return
+        need = self._values.size + state.size
+        if self._saved.size < need:
+            self._saved = np.zeros(need)
+        block[B_TIME], block[B_NEXT_TIME] = model.t, self._next_time
+        block[B_STATE], block[B_N_STATE] = _address(state), state.size
+        block[B_SAVED], block[B_N_SAVED] = _address(self._saved), self._saved.size
+        block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = self._outputs.start, self._outputs.stop
+
+    def _sync(self) -> None:
+        """Start of a call after calls the shim served in C: take over what they did (the
+        model's time, the step's end; a prediction the shim made becomes the slave's, with
+        the shim's snapshot), so that everything goes on as if they had come here."""
+        control, block, model = self._control, self._block, self.model
+        control[C_DIRTY] = 0
+        model.t = float(block[B_TIME])
+        self._next_time = float(block[B_NEXT_TIME])
+        if control[C_PREDICTED]:
+            control[C_PREDICTED] = 0
+            n, saved = self._values.size, self._saved
+            arrays = {"state": saved[n : n + model.state.size].copy()}
+            outputs = saved[self._outputs].copy()
+            self._prediction = (dict(vars(model)), arrays, outputs, len(model.warnings))
 
     def _predict_outputs(self) -> None:
         """End of a step: evaluate the outputs, so that the shim answers the gets (see

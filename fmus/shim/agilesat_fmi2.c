@@ -239,8 +239,11 @@ typedef struct Shim {
     double *values;              /* the slave's model.values */
     size_t n_values;
     const unsigned char *kind;   /* per value reference: KIND_* */
-    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, PREDICTED, FED: the slave's */
+    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, ... (KIND_*, C_*): the slave's */
+    double *block;               /* the C step path's times and addresses (B_*): the slave's */
+    int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
     unsigned long long fast_calls, forwarded_calls;  /* get/set calls served / forwarded */
+    unsigned long long c_steps, c_outputs, c_fallbacks; /* the C step path's counts */
     struct Shim *next;
 } Shim;
 
@@ -408,10 +411,14 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
  * Only the instance's own fields are used: one instance per thread is safe, as FMI 2.0
  * allows. */
 #define FAST_PATH_VR 0xFFFFFFFFu
-#define FAST_PATH_N 5
-#define FAST_PATH_VERSION 1.0
+#define FAST_PATH_N 6
+#define FAST_PATH_VERSION 2.0
 enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH };
-enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED };
+enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING, C_STEP, C_OUTPUT, C_PREDICTED,
+       C_DIRTY };
+enum { PYTHON_STEP, ENTRY_STEP, TIME_STEP };
+enum { B_TIME, B_NEXT_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED,
+       B_OUTPUTS_START, B_OUTPUTS_STOP };
 
 static void *address(double x) {
     uintptr_t a = (uintptr_t)x;
@@ -423,9 +430,12 @@ static void handshake(Shim *s) {
     s->values = NULL;
     s->kind = NULL;
     s->control = NULL;
+    s->block = NULL;
     s->n_values = 0;
     const char *fast = getenv("AGILESAT_SHIM_FAST");
     if (fast && strcmp(fast, "0") == 0) return;
+    const char *step = getenv("AGILESAT_SHIM_STEP");
+    s->step_path = !(step && strcmp(step, "0") == 0);
     fmi2ValueReference vr[FAST_PATH_N];
     fmi2Real got[FAST_PATH_N] = {0};
     for (int i = 0; i < FAST_PATH_N; i++) vr[i] = FAST_PATH_VR;
@@ -436,19 +446,158 @@ static void handshake(Shim *s) {
     double *values = address(got[1]);
     unsigned char *kind = address(got[3]);
     int32_t *control = address(got[4]);
-    if (!values || !kind || !control || !(got[2] >= 0 && got[2] < (double)MAX_VALUES)) return;
+    double *block = address(got[5]);
+    if (!values || !kind || !control || !block || !(got[2] >= 0 && got[2] < (double)MAX_VALUES))
+        return;
     s->n_values = (size_t)got[2];
     s->kind = kind;
     s->control = control;
+    s->block = block;
     s->values = values;
 }
 
+/* ---- the C step path -----------------------------------------------------------------
+ * fmi2DoStep, and the evaluation of the outputs, in C: the model's compiled step and output
+ * kernels as C functions (components/jit.py, "C entries"), which the slave hands over in
+ * the block (B_*) at the end of every call it answers, with what they may do until the
+ * next one (fmus/slave.py, "The C step path"): C_STEP (PYTHON_STEP: the step is the
+ * slave's; ENTRY_STEP: the step entry does all of it; TIME_STEP: the step changes nothing
+ * but the time) and C_OUTPUT (the output entry does all of model.output()).  A step is
+ * served here only when the slave would accept it: step mode, a step size positive and
+ * finite, the time continuous (math.isclose with rel_tol 1e-9, abs_tol 1e-12, as CPython
+ * computes it) and no prediction of the slave's own to undo; else it is forwarded, and the
+ * slave gives its status and message.  A served step does what do_step does: undo an
+ * unused prediction (and stop predicting), step, set the times (B_TIME: the model's t,
+ * B_NEXT_TIME: the step's end), invalidate the outputs and, while predicting, predict
+ * them with the output entry (C_PREDICTED: the snapshot before it is in the slave's
+ * buffer, B_SAVED, which the slave uses if it must undo it).  A fmi2GetReal with the
+ * outputs invalid evaluates them with the output entry; a feedthrough fmi2SetReal undoes a
+ * prediction made here.  An entry returning anything but 0 (a warning, an error, a case
+ * the Python handles), or non-finite outputs: the value and state arrays are put back from
+ * the snapshot taken before the call, and the call is forwarded: the slave does it in
+ * Python, with its message, bit for bit as if it had come there first.  C_DIRTY tells the
+ * slave, at its next call, to take over the times and a prediction made here.
+ * AGILESAT_SHIM_STEP=0 (at fmi2Instantiate or fmi2Reset) turns this part off (the fast
+ * get/set stay on); agilesat_shim_step_counters() gives the counts. */
+typedef int32_t (*Entry)(double *values, int64_t n_values, double *state, int64_t n_state,
+                         double x);
+
+typedef struct {
+    Entry step, output;
+    double *state, *saved;
+    size_t n_state, start, stop;   /* outputs: values[start:stop] */
+} Armed;
+
+/* The block's addresses and sizes, checked; 0 when they do not fit together. */
+static int armed(Shim *s, Armed *a) {
+    const double *b = s->block;
+    a->step = (Entry)address(b[B_STEP]);
+    a->output = (Entry)address(b[B_OUTPUT]);
+    a->state = address(b[B_STATE]);
+    a->saved = address(b[B_SAVED]);
+    if (!a->state || !a->saved || !(b[B_N_STATE] >= 0 && b[B_N_STATE] < (double)MAX_VALUES) ||
+        !(b[B_OUTPUTS_START] >= 0 && b[B_OUTPUTS_START] <= b[B_OUTPUTS_STOP] &&
+          b[B_OUTPUTS_STOP] <= (double)s->n_values))
+        return 0;
+    a->n_state = (size_t)b[B_N_STATE];
+    a->start = (size_t)b[B_OUTPUTS_START];
+    a->stop = (size_t)b[B_OUTPUTS_STOP];
+    return b[B_N_SAVED] >= (double)(s->n_values + a->n_state);
+}
+
+static void snapshot(Shim *s, const Armed *a) {
+    memcpy(a->saved, s->values, s->n_values * sizeof(double));
+    memcpy(a->saved + s->n_values, a->state, a->n_state * sizeof(double));
+}
+
+static void restore(Shim *s, const Armed *a) {
+    memcpy(s->values, a->saved, s->n_values * sizeof(double));
+    memcpy(a->state, a->saved + s->n_values, a->n_state * sizeof(double));
+}
+
+/* The slave's _unpredict and _consume_prediction of a prediction made here: the outputs
+ * and the state as before it, and no more predictions until a get comes first. */
+static void unpredict(Shim *s, const Armed *a) {
+    memcpy(s->values + a->start, a->saved + a->start, (a->stop - a->start) * sizeof(double));
+    memcpy(a->state, a->saved + s->n_values, a->n_state * sizeof(double));
+    s->control[OUTPUTS_VALID] = s->control[PREDICTED] = s->control[C_PREDICTED] = 0;
+    s->control[PREDICTING] = 0;
+}
+
+/* model.output() by the output entry; 0 (everything put back) if it leaves it to the Python
+ * or the outputs are not finite.  The snapshot stays in the slave's buffer. */
+static int output_in_c(Shim *s, const Armed *a) {
+    if (!a->output) return 0;
+    snapshot(s, a);
+    int ok = a->output(s->values, (int64_t)s->n_values, a->state, (int64_t)a->n_state,
+                       s->block[B_TIME]) == 0;
+    for (size_t i = a->start; ok && i < a->stop; i++) ok = isfinite(s->values[i]);
+    if (!ok) restore(s, a);
+    else s->c_outputs++;
+    return ok;
+}
+
+/* CPython's math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12) (Modules/mathmodule.c). */
+static int is_close(double a, double b) {
+    if (a == b) return 1;
+    if (isinf(a) || isinf(b)) return 0;
+    double diff = fabs(b - a);
+    return diff <= fabs(1e-9 * b) || diff <= fabs(1e-9 * a) || diff <= 1e-12;
+}
+
+static int fast_step(Shim *s, double t, double h) {
+    int32_t *control = s->control;
+    Armed a;
+    if (!s->values || !s->step_path || !control[STEP_MODE] || control[C_STEP] == PYTHON_STEP)
+        return 0;
+    if (!(isfinite(h) && h > 0.0) || !is_close(t, s->block[B_NEXT_TIME])) return 0;
+    if ((control[PREDICTED] && !control[C_PREDICTED]) || !armed(s, &a)) return 0;
+    if (control[C_STEP] == ENTRY_STEP && !a.step) return 0;
+    if (control[PREDICTED]) unpredict(s, &a);  /* do_step's _consume_prediction() */
+    if (control[C_STEP] == ENTRY_STEP) {
+        snapshot(s, &a);
+        if (a.step(s->values, (int64_t)s->n_values, a.state, (int64_t)a.n_state, h) != 0) {
+            restore(s, &a);
+            s->c_fallbacks++;
+            return 0;
+        }
+    }
+    s->block[B_TIME] = s->block[B_NEXT_TIME] = t + h;
+    control[OUTPUTS_VALID] = 0;
+    control[C_DIRTY] = 1;
+    control[FED] = 0;  /* _predict_outputs */
+    if (control[PREDICTING] && control[C_OUTPUT] && output_in_c(s, &a))
+        control[OUTPUTS_VALID] = control[PREDICTED] = control[C_PREDICTED] = 1;
+    s->c_steps++;
+    return 1;
+}
+
+/* The counts of instance c's fmi2DoStep calls served here, outputs evaluated here and
+ * steps whose entry left them to the slave; 0 when c is not a live instance, -1 when the
+ * C step path is off. */
+EXPORT int agilesat_shim_step_counters(fmi2Component c, unsigned long long counts[3]) {
+    Shim *s = find_instance(c, 0);
+    if (!s || !counts) return 0;
+    counts[0] = s->c_steps;
+    counts[1] = s->c_outputs;
+    counts[2] = s->c_fallbacks;
+    return s->values && s->step_path ? 1 : -1;
+}
+
 static int fast_get(Shim *s, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-    if (!s->values || !s->control[STEP_MODE] || !s->control[OUTPUTS_VALID]) return 0;
+    int32_t *control = s->control;
+    if (!s->values || !control[STEP_MODE]) return 0;
     for (size_t i = 0; i < n; i++)
         if (vr[i] >= s->n_values || s->kind[vr[i]] == KIND_OTHER) return 0;
+    if (!control[OUTPUTS_VALID]) {  /* the slave's _read, with the output entry */
+        Armed a;
+        if (!s->step_path || !control[C_OUTPUT] || !armed(s, &a) || !output_in_c(s, &a))
+            return 0;
+        control[OUTPUTS_VALID] = 1;
+        if (!control[FED]) control[PREDICTING] = 1;  /* a get came first after the step */
+    }
     for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]];
-    s->control[PREDICTED] = 0;
+    control[PREDICTED] = control[C_PREDICTED] = 0;
     s->fast_calls++;
     return 1;
 }
@@ -462,7 +611,11 @@ static int fast_set(Shim *s, const fmi2ValueReference vr[], size_t n, const fmi2
         if (kind != KIND_INPUT && kind != KIND_FEEDTHROUGH) return 0;
         feeds |= kind == KIND_FEEDTHROUGH;
     }
-    if (feeds && s->control[PREDICTED]) return 0;
+    if (feeds && s->control[PREDICTED]) {  /* the slave's _consume_prediction() */
+        Armed a;
+        if (!s->control[C_PREDICTED] || !armed(s, &a)) return 0;
+        unpredict(s, &a);
+    }
     for (size_t i = 0; i < n; i++) s->values[vr[i]] = value[i];
     if (feeds) s->control[OUTPUTS_VALID] = 0, s->control[FED] = 1;
     s->fast_calls++;
@@ -896,6 +1049,7 @@ EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolea
     typedef fmi2Status (*F)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
     Shim *s = enter(c, "fmi2DoStep");
     if (!s) return fmi2Error;
+    if (fast_step(s, t, h)) return fmi2OK;
     return leave(s, INNER(F, fmi2DoStep)(s->inner, t, h, no_set_prior));
 }
 
