@@ -87,8 +87,10 @@ DERIVATIVE_BASE, ORDER_SHIFT = 1 << 30, 24
 #: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address,
 #: _block address); the shim checks the version (shim/agilesat_fmi2.c)
 FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 6, 2.0
-#: per scalar, for the shim: not Real, Real parameter, output, input, feedthrough input
+#: per scalar, for the shim: a String, Real parameter, output, input, feedthrough input,
+#: an Integer, a Boolean
 KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = 0, 1, 2, 3, 4
+KIND_INTEGER, KIND_BOOLEAN = 5, 6
 #: indices in the control block shared with the shim (int32)
 STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING = 0, 1, 2, 3, 4
 C_STEP, C_OUTPUT, C_PREDICTED, C_DIRTY = 5, 6, 7, 8
@@ -188,7 +190,10 @@ class ModelSlave(Fmi2Slave):
             np.where(self._feeds, KIND_FEEDTHROUGH, KIND_INPUT),
             np.where(self._causality == OUTPUT, KIND_OUTPUT, KIND_PARAMETER),
         )
-        self._kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER).astype(np.uint8)
+        kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER)
+        kind[self._type == _TYPE_CODE["Integer"]] = KIND_INTEGER
+        kind[self._type == _TYPE_CODE["Boolean"]] = KIND_BOOLEAN
+        self._kind = kind.astype(np.uint8)
         self._control = np.zeros(N_CONTROL, dtype=np.int32)  # shared with the shim: never replaced
         self._block = np.zeros(N_BLOCK)  # the C step path's, shared with the shim: never replaced
         self._saved = np.zeros(0)  # the C path's snapshot (its address is in _block)

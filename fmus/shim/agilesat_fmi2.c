@@ -413,7 +413,8 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
 #define FAST_PATH_VR 0xFFFFFFFFu
 #define FAST_PATH_N 6
 #define FAST_PATH_VERSION 2.0
-enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH };
+enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH, KIND_INTEGER,
+       KIND_BOOLEAN };
 enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING, C_STEP, C_OUTPUT, C_PREDICTED,
        C_DIRTY };
 enum { PYTHON_STEP, ENTRY_STEP, TIME_STEP };
@@ -584,21 +585,60 @@ EXPORT int agilesat_shim_step_counters(fmi2Component c, unsigned long long count
     return s->values && s->step_path ? 1 : -1;
 }
 
-static int fast_get(Shim *s, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-    int32_t *control = s->control;
-    if (!s->values || !control[STEP_MODE]) return 0;
-    for (size_t i = 0; i < n; i++)
-        if (vr[i] >= s->n_values || s->kind[vr[i]] == KIND_OTHER) return 0;
-    if (!control[OUTPUTS_VALID]) {  /* the slave's _read, with the output entry */
-        Armed a;
-        if (!s->step_path || !control[C_OUTPUT] || !armed(s, &a) || !output_in_c(s, &a))
+/* A get may be served: step mode and every value reference of the kind(s) asked for. */
+static int gettable(Shim *s, const fmi2ValueReference vr[], size_t n, int integer, int boolean) {
+    if (!s->values || !s->control[STEP_MODE]) return 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= s->n_values) return 0;
+        unsigned char kind = s->kind[vr[i]];
+        if (integer || boolean ? kind != (integer ? KIND_INTEGER : KIND_BOOLEAN)
+                               : kind == KIND_OTHER || kind >= KIND_INTEGER)
             return 0;
-        control[OUTPUTS_VALID] = 1;
-        if (!control[FED]) control[PREDICTING] = 1;  /* a get came first after the step */
     }
-    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]];
-    control[PREDICTED] = control[C_PREDICTED] = 0;
+    return 1;
+}
+
+/* The outputs are valid, or evaluated here now (the slave's _read, with the output entry). */
+static int outputs_ready(Shim *s) {
+    int32_t *control = s->control;
+    Armed a;
+    if (control[OUTPUTS_VALID]) return 1;
+    if (!s->step_path || !control[C_OUTPUT] || !armed(s, &a) || !output_in_c(s, &a)) return 0;
+    control[OUTPUTS_VALID] = 1;
+    if (!control[FED]) control[PREDICTING] = 1;  /* a get came first after the step */
+    return 1;
+}
+
+/* A get came first: a prediction was right (the slave's _read). */
+static void got(Shim *s) {
+    s->control[PREDICTED] = s->control[C_PREDICTED] = 0;
     s->fast_calls++;
+}
+
+/* fmi2GetInteger and fmi2GetBoolean of Integer and Boolean variables, as the slave's
+ * int(x) (truncation; values a C int cannot hold are forwarded) and bool(x) (x != 0). */
+static int fast_get_integer(Shim *s, const fmi2ValueReference vr[], size_t n,
+                            fmi2Integer value[]) {
+    if (!gettable(s, vr, n, 1, 0) || !outputs_ready(s)) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!(s->values[vr[i]] > -2147483649.0 && s->values[vr[i]] < 2147483648.0)) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = (fmi2Integer)s->values[vr[i]];
+    got(s);
+    return 1;
+}
+
+static int fast_get_boolean(Shim *s, const fmi2ValueReference vr[], size_t n,
+                            fmi2Boolean value[]) {
+    if (!gettable(s, vr, n, 0, 1) || !outputs_ready(s)) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]] != 0.0;
+    got(s);
+    return 1;
+}
+
+static int fast_get(Shim *s, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
+    if (!gettable(s, vr, n, 0, 0) || !outputs_ready(s)) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]];
+    got(s);
     return 1;
 }
 
@@ -788,7 +828,12 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
 #define ORDER_SHIFT 24
 #define MAX_ORDER 63
 
-#define FORWARD_ARRAY(fn, type, check_strings)                                            \
+static int not_served(Shim *s, const fmi2ValueReference vr[], size_t n, const void *value) {
+    (void)s, (void)vr, (void)n, (void)value;
+    return 0;
+}
+
+#define FORWARD_ARRAY(fn, type, check_strings, fast)                                      \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
@@ -797,6 +842,7 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
         if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
         for (size_t i = 0; check_strings && i < n; i++)                                   \
             if (!((const void *const *)value)[i]) return refuse(s, #fn, "a string is NULL"); \
+        if (fast(s, vr, n, value)) return fmi2OK;                                         \
         return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
 #define FORWARD_REAL(fn, type, fast)                                                      \
@@ -814,12 +860,12 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
     }
 FORWARD_REAL(fmi2GetReal, fmi2Real, fast_get)
 FORWARD_REAL(fmi2SetReal, const fmi2Real, fast_set)
-FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0)
-FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0)
-FORWARD_ARRAY(fmi2GetString, fmi2String, 0)
-FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0)
-FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0)
-FORWARD_ARRAY(fmi2SetString, const fmi2String, 1)
+FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0, fast_get_integer)
+FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0, fast_get_boolean)
+FORWARD_ARRAY(fmi2GetString, fmi2String, 0, not_served)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0, not_served)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0, not_served)
+FORWARD_ARRAY(fmi2SetString, const fmi2String, 1, not_served)
 
 /* ---- FMU states --------------------------------------------------------------------- */
 static State **find_state(Shim *s, fmi2FMUstate state) {
