@@ -58,6 +58,26 @@ references and the contents of the model's arrays (a kernel's state array), so
 (tests/test_shim_fast.py checks every model).  An instance predicts only while that pays:
 after an undone prediction it stops, until a get comes first after a step again (``FED``
 cleared by ``do_step``, set by a feedthrough set).
+
+The C step path (``shim/agilesat_fmi2.c``, "the C step path").  Once a model's kernels run
+compiled (components/jit.py), the shim also takes ``fmi2DoStep`` and the evaluation of the
+outputs (the prediction at the step's end, a get with the outputs invalid, the undo on a
+feedthrough set), calling the model's C entries (``model.c_entries()``: the compiled
+step and output as C functions, or None where the next call needs the Python: the first
+step of SatelliteDynamics, a saturated cluster, a singular steering, SGP4, CPython's
+``math.hypot``).  The slave hands them over in ``_block`` (B_*: addresses of the entries,
+of the model's state array and of the snapshot buffer ``_saved``; the model's ``t`` and
+the step's end) with ``_control`` (C_STEP, C_OUTPUT) at the end of every call it answers
+(``_arm``, in ``_guarded``): the state array and the buffer may be replaced by a call here
+(initialisation, state restore), never between two.  The shim serves a step only when
+``do_step`` would accept it, with nothing to report; it does what ``do_step`` and
+``_predict_outputs`` do, flags ``C_DIRTY``, and forwards anything else (after putting the
+arrays back) so that this class gives its status and message.  At the start of the next
+call here (``_guarded`` is the one door) ``_sync`` takes over what the shim did: ``model.t``,
+``_next_time`` and a prediction the shim made (``C_PREDICTED``; its snapshot in ``_saved``
+becomes ``_prediction``), so that every call here sees the slave exactly as if every call
+had come here: FMU states, errors, terminate, reset.  ``_predicting`` lives in
+``_control`` (PREDICTING) for the same reason.
 """
 
 from __future__ import annotations
@@ -122,7 +142,7 @@ def _guarded(default):
                 )
             finally:
                 if self._c_path:
-                    self._arm()
+                    self._arm_or_disarm()
             return default(*args) if callable(default) else default
 
         return wrapper
@@ -197,7 +217,8 @@ class ModelSlave(Fmi2Slave):
         self._control = np.zeros(N_CONTROL, dtype=np.int32)  # shared with the shim: never replaced
         self._block = np.zeros(N_BLOCK)  # the C step path's, shared with the shim: never replaced
         self._saved = np.zeros(0)  # the C path's snapshot (its address is in _block)
-        self._c_path = False  # the shim asked for the addresses (see _arm)
+        self._c_path = False  # the shim asked for the addresses, the model has C entries
+        self._armed, self._armed_state = 0, None  # C_STEP or C_OUTPUT set; the state checked
         self._prediction = None
         self._predicting = True  # see _predict_outputs
         self._arrays: list | None = None  # the model's array attributes but values, found once
@@ -240,7 +261,7 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
         address = [_address(a) for a in (self._values, self._kind, self._control, self._block)]
         n_values = min(self._values.size, self._kind.size)  # the shim reads both up to it
-        self._c_path = True
+        self._c_path = hasattr(self.model, "c_entries")
         return [FAST_PATH_VERSION, address[0], n_values, *address[1:]]
 
     def _arm(self) -> None:
@@ -251,23 +272,26 @@ class ModelSlave(Fmi2Slave):
         replaced: initialisation, FMU state restore), the times."""
         control, block, model = self._control, self._block, self.model
         step = output = None
-        if control[STEP_MODE] and self._state_valid and hasattr(model, "c_entries"):
+        if self._mode_name == "step" and self._state_valid:
             step, output = model.c_entries()
-        state = getattr(model, "state", None)
-        if not (
-            type(state) is np.ndarray and state.dtype == np.float64 and state.flags.c_contiguous
-        ):
-            step = output = None
         kind = PYTHON_STEP
-        if isinstance(step, jit.TimeStep):
+        if type(step) is jit.TimeStep:
             kind = TIME_STEP if step.ready else PYTHON_STEP
         elif step is not None and (address := step.address):
             kind, block[B_STEP] = ENTRY_STEP, address
         address = output.address if output is not None else None
-        control[C_OUTPUT], block[B_OUTPUT] = (1, address) if address else (0, 0.0)
-        control[C_STEP] = kind
-        if kind == PYTHON_STEP and not address:
+        state = getattr(model, "state", None)
+        if state is not self._armed_state:  # checked once per array
+            plain = type(state) is np.ndarray and state.dtype == np.float64
+            self._armed_state = state if plain and state.flags.c_contiguous else None
+        if self._armed_state is None:
+            kind = address = None
+        if not (kind or address):
+            if self._armed:
+                control[C_STEP] = control[C_OUTPUT] = self._armed = 0
             return
+        control[C_OUTPUT], block[B_OUTPUT] = (1, address) if address else (0, 0.0)
+        control[C_STEP], self._armed = kind, 1
         need = self._values.size + state.size
         if self._saved.size < need:
             self._saved = np.zeros(need)
@@ -275,6 +299,13 @@ class ModelSlave(Fmi2Slave):
         block[B_STATE], block[B_N_STATE] = _address(state), state.size
         block[B_SAVED], block[B_N_SAVED] = _address(self._saved), self._saved.size
         block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = self._outputs.start, self._outputs.stop
+
+    def _arm_or_disarm(self) -> None:
+        try:
+            self._arm()
+        except Exception as exc:  # noqa: BLE001 - never into pythonfmu (fmi2Fatal)
+            self._control[C_STEP] = self._control[C_OUTPUT] = self._armed = 0
+            self._error(f"the C step path is off: {type(exc).__name__}: {exc}")
 
     def _sync(self) -> None:
         """Start of a call after calls the shim served in C: take over what they did (the

@@ -36,9 +36,13 @@
  *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
  *    once (fmi2Error; fmi2FreeInstance does nothing): a host calling from a static
  *    destructor would otherwise take the GIL of a dead interpreter inside pythonfmu.
- *  - Speed.  A valid fmi2GetReal/fmi2SetReal in step mode is served here, in C, straight
- *    from/to the model's value array, without entering Python (see "fast get/set"); every
- *    other call is forwarded as before, so the slave keeps every check and message.
+ *  - Speed.  A valid fmi2GetReal/fmi2SetReal (and fmi2GetInteger/fmi2GetBoolean) in step
+ *    mode is served here, in C, straight from/to the model's value array, without entering
+ *    Python (see "fast get/set"); once the model's kernels run compiled, so is a valid
+ *    fmi2DoStep and the evaluation of the outputs, calling the compiled kernels (see "the
+ *    C step path"; AGILESAT_SHIM_STEP=0 turns that part off).  Every other call, and any
+ *    the model leaves to its Python, is forwarded as before, so the slave keeps every check
+ *    and message.
  *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
@@ -239,7 +243,7 @@ typedef struct Shim {
     double *values;              /* the slave's model.values */
     size_t n_values;
     const unsigned char *kind;   /* per value reference: KIND_* */
-    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, ... (KIND_*, C_*): the slave's */
+    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, ..., C_*: the slave's */
     double *block;               /* the C step path's times and addresses (B_*): the slave's */
     int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
     unsigned long long fast_calls, forwarded_calls;  /* get/set calls served / forwarded */
@@ -388,13 +392,16 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
  *    reserved value reference FAST_PATH_VR (no host can: plain calls on value references
  *    from DERIVATIVE_BASE up are refused).  The answer: FAST_PATH_VERSION, the address and
  *    length of model.values (value reference = offset), the address of kind[] (KIND_* per
- *    value reference) and of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED, FED).  The slave
- *    owns the three for its whole life and never replaces them; it keeps the flags up to
+ *    value reference), of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, and the C
+ *    step path's flags) and of block[] (the C step path's, below).  The slave
+ *    owns the four for its whole life and never replaces them; it keeps the flags up to
  *    date, and evaluates the outputs at the end of fmi2DoStep (PREDICTED: until a get
  *    confirms it, the slave can undo that evaluation, see fmus/slave.py).
  *  - fmi2GetReal is served when STEP_MODE and OUTPUTS_VALID are set and every value
  *    reference is a Real scalar (parameter, input or output): the values are copied out,
- *    and PREDICTED is cleared (a get came first: the prediction was right).
+ *    and PREDICTED is cleared (a get came first: the prediction was right).  The same for
+ *    fmi2GetInteger (KIND_INTEGER: int(x)) and fmi2GetBoolean (KIND_BOOLEAN: x != 0).
+ *    With OUTPUTS_VALID clear, the C step path may evaluate the outputs first (below).
  *  - fmi2SetReal is served when STEP_MODE is set, every value reference is a Real input
  *    and every value is finite, unless one of the inputs feeds an output through
  *    (KIND_FEEDTHROUGH, the model description's dependencies) while PREDICTED is set (the
