@@ -271,8 +271,12 @@ class ModelSlave(Fmi2Slave):
         addresses of the model's state array and of the snapshot buffer (both may have been
         replaced: initialisation, FMU state restore), the times."""
         control, block, model = self._control, self._block, self.model
+        state = getattr(model, "state", None)
+        if state is not self._armed_state:  # checked once per array
+            plain = type(state) is np.ndarray and state.dtype == np.float64
+            self._armed_state = state if plain and state.flags.c_contiguous else None
         step = output = None
-        if self._mode_name == "step" and self._state_valid:
+        if self._mode_name == "step" and self._state_valid and self._armed_state is not None:
             step, output = model.c_entries()
         kind = PYTHON_STEP
         if type(step) is jit.TimeStep:
@@ -280,12 +284,6 @@ class ModelSlave(Fmi2Slave):
         elif step is not None and (address := step.address):
             kind, block[B_STEP] = ENTRY_STEP, address
         address = output.address if output is not None else None
-        state = getattr(model, "state", None)
-        if state is not self._armed_state:  # checked once per array
-            plain = type(state) is np.ndarray and state.dtype == np.float64
-            self._armed_state = state if plain and state.flags.c_contiguous else None
-        if self._armed_state is None:
-            kind = address = None
         if not (kind or address):
             if self._armed:
                 control[C_STEP] = control[C_OUTPUT] = self._armed = 0
