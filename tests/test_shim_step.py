@@ -147,3 +147,32 @@ def test_scan_pitch_enters_python_once_per_macro_step(monkeypatch):
     short, long = count("1", 0.05, 1.0), count("1", 0.05, 2.0)
     per_step = {name: (long[name] - short.get(name, 0)) / 20 for name in long}
     assert {name: n for name, n in per_step.items() if n} == {"get_real": 1.0}
+
+
+SCAN_PITCH = r"""
+import json, os, sys
+os.environ["AGILESAT_JIT_AFTER"], os.environ["AGILESAT_SHIM_STEP"] = sys.argv[1:3]
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+steps = []  # the slaves' do_step entries (Python)
+sys.setprofile(lambda frame, event, arg: event == "call" and frame.f_code.co_name == "do_step"
+               and frame.f_code.co_filename.endswith("fmus/slave.py") and steps.append(1))
+results = simulate(get("scan_pitch").ssd, stop=20.0)
+sys.setprofile(None)
+print(json.dumps({"names": list(results.names), "data": results.data.tolist(),
+                  "python steps": len(steps)}))
+"""
+
+
+def test_kernels_switching_mid_run_hand_the_steps_to_c_bit_for_bit():
+    """The tier switch after 150 calls (400 macro steps): the C step path takes over mid-run
+    and the results are those of the run without it, bit for bit."""
+    runs = []
+    for step_path in ("1", "0"):
+        result = run_python(SCAN_PITCH, "150", step_path)
+        assert result.returncode == 0, result.stderr
+        runs.append(json.loads(result.stdout.strip().splitlines()[-1]))
+    assert runs[0]["names"] == runs[1]["names"] and len(runs[0]["data"]) == 401
+    assert runs[0]["data"] == runs[1]["data"]
+    # 5 FMUs x 400 steps in Python without the path; with it only until the switch
+    assert runs[1]["python steps"] == 2000 and runs[0]["python steps"] < 1000
