@@ -47,8 +47,12 @@ class Fmu:
         self._callbacks = callbacks
         self.slave.instantiate(callbacks=callbacks)
         self.c, self.dll = self.slave.component, self.slave.dll
-        self.dll.fmi2DoStep.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
-                                        ctypes.c_int]
+        self.dll.fmi2DoStep.argtypes = [
+            ctypes.c_void_p,
+            ctypes.c_double,
+            ctypes.c_double,
+            ctypes.c_int,
+        ]
         counters = self.dll.agilesat_shim_step_counters
         counters.argtypes, counters.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
         self._counters = counters
@@ -131,8 +135,13 @@ def states(fmu):
     restored = fmu.steps(11 * H, 5)
     assert fmu.dll.fmi2SetFMUstate(fmu.c, fmu.deserialize(data)) == 0
     deserialized = fmu.steps(11 * H, 5)
-    return {"state": data.hex(), "after": after, "restored": restored,
-            "deserialized": deserialized, "counts": fmu.counts()}
+    return {
+        "state": data.hex(),
+        "after": after,
+        "restored": restored,
+        "deserialized": deserialized,
+        "counts": fmu.counts(),
+    }
 
 
 def faults(fmu):
@@ -160,8 +169,7 @@ def reset(fmu):
     before = fmu.counts()
     assert fmu.dll.fmi2Reset(fmu.c) == 0
     fmu.initialize()
-    return {"first": first, "again": fmu.steps(0.0, 6), "before": before,
-            "after": fmu.counts()}
+    return {"first": first, "again": fmu.steps(0.0, 6), "before": before, "after": fmu.counts()}
 
 
 def saturation(fmu):
@@ -189,7 +197,10 @@ def unphysical(fmu):
 
 
 PROGRAMS = {"run": run, "states": states, "faults": faults, "reset": reset}
-SPECIAL = {"CmgCluster": {"saturation": saturation}, "SatelliteDynamics": {"unphysical": unphysical}}
+SPECIAL = {
+    "CmgCluster": {"saturation": saturation},
+    "SatelliteDynamics": {"unphysical": unphysical},
+}
 
 results = {}
 for argument in sys.argv[2:]:

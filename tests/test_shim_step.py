@@ -21,8 +21,13 @@ from helpers import run_python
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 HOST = (Path(__file__).parent / "shim_step_host.py").read_text()
 #: the FMUs with C entries (scan_pitch's five)
-NAMES = ("SatelliteDynamics", "CmgCluster", "CmgSteering", "PitchManeuverController",
-         "OrbitEnvironment")
+NAMES = (
+    "SatelliteDynamics",
+    "CmgCluster",
+    "CmgSteering",
+    "PitchManeuverController",
+    "OrbitEnvironment",
+)
 OK, WARNING, ERROR = 0, 1, 3
 
 
@@ -128,8 +133,14 @@ def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
     values, state = np.array([3.0]), np.zeros(1)
     inner(values, state, 2.0)  # the tier switch
     assert entry.address is not None
-    call = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_int64, ctypes.c_void_p,
-                            ctypes.c_int64, ctypes.c_double)(entry.address)
+    call = ctypes.CFUNCTYPE(
+        ctypes.c_int32,
+        ctypes.c_void_p,
+        ctypes.c_int64,
+        ctypes.c_void_p,
+        ctypes.c_int64,
+        ctypes.c_double,
+    )(entry.address)
     assert call(values.ctypes.data, 1, state.ctypes.data, 1, 4.0) == 0 and state[0] == 0.75
     assert call(values.ctypes.data, 1, state.ctypes.data, 1, 0.0) == -1 and state[0] == 0.75
     with pytest.raises(ZeroDivisionError):
