@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .jit import floats, jitable, kernel
+from .jit import c_entry, floats, jitable, kernel
 from .model import Model, ModelError
 from .variables import Layout, input_, output, parameter
 
@@ -269,6 +269,11 @@ class CmgCluster(Model):
     def output(self):
         cluster_output(self.values, self.state)
 
+    def c_entries(self):
+        """(step, output) for the FMU's C path (components/jit.py, "C entries"): a step
+        while saturated is the Python's (it may end the saturation)."""
+        return (None if self.saturated else c_step), c_output
+
 
 # -- kernels (components/jit.py) ------------------------------------------------------
 _AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
@@ -313,3 +318,15 @@ def cluster_output(values, state):
     for k in range(3):
         values[Y_H + k], values[Y_HDOT + k] = h_rotor * h[k], h_rotor * hdot[k]
     values[Y_Q] = det3(gram(columns))
+
+
+@c_entry(cluster_step)
+def c_step(values, state, dt):
+    """0, or 1 when a gimbal exceeds the rate limit (step() warns)."""
+    return 0 if cluster_step(values, state, dt) < 0 else 1
+
+
+@c_entry(cluster_output)
+def c_output(values, state, t):
+    cluster_output(values, state)
+    return 0

@@ -42,7 +42,7 @@ from .cmg_cluster import (
     gram,
     inv3,
 )
-from .jit import floats, jitable, kernel
+from .jit import TimeStep, c_entry, floats, jitable, kernel
 from .model import Model, ModelError
 from .rotations import rotate
 from .variables import Layout, choice, input_, output, parameter
@@ -140,6 +140,11 @@ class CmgSteering(Model):
             self.y.delta_dot_cmd[:] = rates
         self._note_singularity(self.y.singularity)
 
+    def c_entries(self):
+        """(step, output) for the FMU's C path (components/jit.py, "C entries"): outputs
+        while singular are the Python's (it may end the singularity)."""
+        return TimeStep(steering_output), (None if self.singular else c_output)
+
     def _note_singularity(self, Q):
         singular = Q <= SINGULAR_Q
         if singular and not self.singular:
@@ -194,6 +199,14 @@ def steering_output(values, state):
         rates = [r + null_gain * n for r, n in zip(rates, moves)]
     values[Y_RATES : Y_RATES + N_GYROS] = rates
     return 0
+
+
+@c_entry(steering_output)
+def c_output(values, state, t):
+    """0, or 1 at a singularity (the SVD pseudo-inverse, the warning: output())."""
+    if steering_output(values, state) != 0:
+        return 1
+    return 0 if values[Y_Q] > SINGULAR_Q else 1
 
 
 @jitable

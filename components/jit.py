@@ -30,6 +30,21 @@ new entries and two extractions of one FMU share them; ``agilesat build`` fills 
 by loading each built FMU once (``fmus/build.py``).  numba's index key adds the
 signature, the CPU and the bytecode.  An unwritable cache directory costs a compile per
 process, nothing else (a warning says so).
+
+C entries (the FMU's step in C, fmus/slave.py and fmus/shim/agilesat_fmi2.c).  A model whose
+``step`` or ``output`` is one kernel may say so with ``@c_entry(kernel)`` on a small
+adapter ``(values, state, x) -> status`` in its module (x: the step size, or the time):
+0 when the kernel did everything the method would do, with nothing left for the Python
+but ``t``; anything else leaves the call to the method (a warning, an error, a case the
+Python handles).  :attr:`CEntry.address` is a C function
+``int32 (double *values, int64 n_values, double *state, int64 n_state, double x)``, a
+numba ``cfunc`` calling the adapter, which calls the compiled kernel: the same machine
+code as the compiled ``step``/``output``, no second copy of the physics.  It exists only
+once the kernel has switched to its compiled tier (None before, and without numba).  An
+exception inside (a ``ZeroDivisionError`` under numba's Python error model) is caught and
+returns -1, so the caller falls back to the Python, which raises it with its message
+(numba's cfunc wrapper would only print it and return an undefined value).  The cfuncs
+are cached beside the kernels, under the adapter's module and name.
 """
 
 from __future__ import annotations
@@ -133,6 +148,89 @@ class Kernel:
         return dispatcher
 
 
+class CEntry:
+    """A model's step or output as a C function (module docstring, "C entries")."""
+
+    def __init__(self, adapter, kernel: Kernel):
+        functools.update_wrapper(self, adapter)
+        self.py_func = adapter
+        self.kernel = kernel
+
+    def __call__(self, values, state, x):
+        return self.py_func(values, state, x)
+
+    @property
+    def address(self) -> int | None:
+        """The C function's address once the kernel runs compiled, else None."""
+        return self._cfunc.address if runs_compiled(self.kernel) else None
+
+    @functools.cached_property
+    def _cfunc(self):
+        numba = _numba()
+        from numba.core.ccallback import CFunc
+
+        adapter = numba.njit(self.py_func)
+        code = _c_template.__code__.replace(
+            co_filename=self.py_func.__code__.co_filename,
+            co_firstlineno=self.py_func.__code__.co_firstlineno,
+            co_name=self.__name__ + "_c",
+            co_qualname=self.__qualname__ + "_c",
+        )
+        namespace = {"__name__": self.py_func.__module__, "adapter": adapter}
+        namespace["carray"] = numba.carray
+        entry = type(_c_template)(code, namespace, self.__name__ + "_c")
+        entry.__module__ = self.py_func.__module__
+        cfunc = CFunc(entry, _C_SIGNATURE(numba), locals={}, options={})
+        try:
+            adapter._cache = _content_cache(self.py_func)
+            cfunc._cache = _content_cache(entry)
+        except (OSError, RuntimeError, AttributeError) as exc:
+            warnings.warn(
+                f"agilesat: no compile cache for {self.__qualname__} ({exc}): "
+                "compiling it in every process",
+                stacklevel=2,
+            )
+        cfunc.compile()
+        return cfunc
+
+
+def _c_template(values, n_values, state, n_state, x):
+    """The body of every C entry (``adapter`` and ``carray`` are its globals)."""
+    try:
+        return adapter(carray(values, n_values), carray(state, n_state), x)  # noqa: F821
+    except Exception:  # noqa: BLE001 - the caller runs the Python, which raises it
+        return -1
+
+
+def _C_SIGNATURE(numba):
+    double_p = numba.types.CPointer(numba.types.float64)
+    i64 = numba.types.int64
+    return (double_p, i64, double_p, i64, numba.types.float64), numba.types.int32
+
+
+class TimeStep:
+    """A model's step that changes nothing but ``t`` (a stateless model): the C path may
+    take it once ``kernel`` (its output's) runs compiled."""
+
+    def __init__(self, kernel: Kernel):
+        self.kernel = kernel
+
+    @property
+    def ready(self) -> bool:
+        return runs_compiled(self.kernel)
+
+
+def runs_compiled(kernel: Kernel) -> bool:
+    """Has ``kernel`` switched to its compiled tier (with numba)?"""
+    compiled = kernel.__dict__.get("compiled")
+    return compiled is not None and kernel._run is compiled is not kernel.py_func
+
+
+def c_entry(kernel: Kernel):
+    """Decorator: the adapter of ``kernel`` for the FMU's C path (module docstring)."""
+    return lambda adapter: CEntry(adapter, kernel)
+
+
 def kernel(function) -> Kernel:
     return Kernel(function, AFTER)
 
@@ -167,6 +265,11 @@ def _set_up() -> None:
             return lambda x: x
         return None
 
+    if Kernel not in _REGISTERED:  # an adapter calls a kernel: its compiled function
+        from numba.extending import typeof_impl
+
+        _REGISTERED.add(Kernel)
+        typeof_impl.register(Kernel)(lambda kernel, c: numba.typeof(kernel.compiled))
     for function in _FLOATS:
         if function not in _REGISTERED:
             _REGISTERED.add(function)

@@ -109,7 +109,7 @@ from .ephemeris import (
     wrap_2pi,
 )
 from .flat import remainder
-from .jit import floats, jitable, kernel
+from .jit import TimeStep, c_entry, floats, jitable, kernel
 from .model import Model, ModelError
 from .rotations import quat_of_rows
 from .variables import Layout, output, parameter
@@ -449,6 +449,12 @@ class OrbitEnvironment(Model):
         if orbit_output(self.values, self.state, t) == KEPLER_DIVERGED:
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
+    def c_entries(self):
+        """(step, output) for the FMU's C path (components/jit.py, "C entries"): SGP4 and
+        the GMST of an epoch are the Python's."""
+        given = self._satrec is not None or self._gmst0 is not None
+        return TimeStep(orbit_output), (None if given else c_output)
+
 
 # -- kernel (components/jit.py) -------------------------------------------------------
 _AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.values
@@ -568,3 +574,9 @@ def kepler_state(s, t):
     h = math.sqrt(hx * hx + hy * hy + hz * hz)
     a_h = (ax * hx + ay * hy + az * hz) / h
     return (rx, ry, rz), (vx, vy, vz), (0.0, -h / (r * r), -r * a_h / h), converged
+
+
+@c_entry(orbit_output)
+def c_output(values, state, t):
+    """0, or KEPLER_DIVERGED (output() raises)."""
+    return orbit_output(values, state, t)

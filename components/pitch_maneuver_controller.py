@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .jit import floats, jitable, kernel
+from .jit import TimeStep, floats, jitable, kernel
 from .model import Model, ModelError
 from .variables import Layout, input_, output, parameter
 
@@ -162,6 +162,11 @@ class PitchManeuverController(Model):
 
     def step(self, t, dt):
         self.t = t + dt
+
+    def c_entries(self):
+        """(step, output) for the FMU's C path (components/jit.py, "C entries"): the
+        output needs CPython's math.hypot."""
+        return TimeStep(pitch_output), None
 
     def output(self):
         # CPython's math.hypot is its own algorithm, numba's libm's (1 ulp apart at times)

@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from .jit import floats, jitable, kernel
+from .jit import c_entry, floats, jitable, kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
@@ -241,6 +241,11 @@ class SatelliteDynamics(Model):
             q_OI = self.u.q_OI.tolist()
             raise ModelError(f"q_OI must be a unit quaternion, got {q_OI} (norm {norm})")
 
+    def c_entries(self):
+        """(step, output) for the FMU's C path (components/jit.py, "C entries"); the first
+        step checks the inputs in Python."""
+        return (c_step if self._initial_inputs is None else None), c_output
+
     def initial_input_jumps(self, used, dt):
         """Bounds of one step of dt (margin 4): the orbit frame turns by at most
         |w_OI_O| dt, its rate changes by a small fraction, each device's momentum by
@@ -352,6 +357,16 @@ def _output(values, state):
     _put(values, Y_W_BO_B, w_BO_B)
     _put(values, Y_H_I, H_I)
     return OK, norm
+
+
+@c_entry(_step)
+def c_step(values, state, dt):
+    return _step(values, state, dt)[0]
+
+
+@c_entry(_output)
+def c_output(values, state, t):
+    return _output(values, state)[0]
 
 
 @jitable

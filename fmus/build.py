@@ -99,8 +99,12 @@ fmu, name, package, module = sys.argv[1:]
 with tempfile.TemporaryDirectory() as folder:
     zipfile.ZipFile(fmu).extractall(folder)
     sys.path.insert(0, folder + "/resources")
-    model = getattr(importlib.import_module(package + ".components." + module), name)
-    model().start(0.0).advance(0.0, 0.1)
+    source = importlib.import_module(package + ".components." + module)
+    getattr(source, name)().start(0.0).advance(0.0, 0.1)
+    jit = importlib.import_module(package + ".components.jit")
+    for entry in vars(source).values():  # the C entries of the FMU's C step path
+        if isinstance(entry, jit.CEntry):
+            entry.address
 """
 
 

@@ -58,6 +58,26 @@ references and the contents of the model's arrays (a kernel's state array), so
 (tests/test_shim_fast.py checks every model).  An instance predicts only while that pays:
 after an undone prediction it stops, until a get comes first after a step again (``FED``
 cleared by ``do_step``, set by a feedthrough set).
+
+The C step path (``shim/agilesat_fmi2.c``, "the C step path").  Once a model's kernels run
+compiled (components/jit.py), the shim also takes ``fmi2DoStep`` and the evaluation of the
+outputs (the prediction at the step's end, a get with the outputs invalid, the undo on a
+feedthrough set), calling the model's C entries (``model.c_entries()``: the compiled
+step and output as C functions, or None where the next call needs the Python: the first
+step of SatelliteDynamics, a saturated cluster, a singular steering, SGP4, CPython's
+``math.hypot``).  The slave hands them over in ``_block`` (B_*: addresses of the entries,
+of the model's state array and of the snapshot buffer ``_saved``; the model's ``t`` and
+the step's end) with ``_control`` (C_STEP, C_OUTPUT) at the end of every call it answers
+(``_arm``, in ``_guarded``): the state array and the buffer may be replaced by a call here
+(initialisation, state restore), never between two.  The shim serves a step only when
+``do_step`` would accept it, with nothing to report; it does what ``do_step`` and
+``_predict_outputs`` do, flags ``C_DIRTY``, and forwards anything else (after putting the
+arrays back) so that this class gives its status and message.  At the start of the next
+call here (``_guarded`` is the one door) ``_sync`` takes over what the shim did: ``model.t``,
+``_next_time`` and a prediction the shim made (``C_PREDICTED``; its snapshot in ``_saved``
+becomes ``_prediction``), so that every call here sees the slave exactly as if every call
+had come here: FMU states, errors, terminate, reset.  ``_predicting`` lives in
+``_control`` (PREDICTING) for the same reason.
 """
 
 from __future__ import annotations
@@ -70,6 +90,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
+from ..components import jit
 from ..components.model import ModelError
 from . import fmu_state
 
@@ -83,13 +104,23 @@ _MODES = ("instantiated", "initialization", "step", "terminated")
 DERIVATIVE_BASE, ORDER_SHIFT = 1 << 30, 24
 #: the shim's fast-path handshake: a get_real of FAST_PATH_N copies of the value reference
 #: 0xFFFFFFFF (pythonfmu 0.7.0 passes value references as C ints: -1) gives
-#: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address);
-#: the shim checks the version (shim/agilesat_fmi2.c)
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 5, 1.0
-#: per scalar, for the shim: not Real, Real parameter, output, input, feedthrough input
+#: (FAST_PATH_VERSION, values address, number of values, _kind address, _control address,
+#: _block address); the shim checks the version (shim/agilesat_fmi2.c)
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = (-1, 0xFFFFFFFF), 6, 2.0
+#: per scalar, for the shim: a String, Real parameter, output, input, feedthrough input,
+#: an Integer, a Boolean
 KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = 0, 1, 2, 3, 4
-#: indices in the control block shared with the shim
-STEP_MODE, OUTPUTS_VALID, PREDICTED, FED = 0, 1, 2, 3
+KIND_INTEGER, KIND_BOOLEAN = 5, 6
+#: indices in the control block shared with the shim (int32)
+STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING = 0, 1, 2, 3, 4
+C_STEP, C_OUTPUT, C_PREDICTED, C_DIRTY = 5, 6, 7, 8
+N_CONTROL = 9
+#: C_STEP: the next step is the Python's, the step entry's, or changes nothing but t
+PYTHON_STEP, ENTRY_STEP, TIME_STEP = 0, 1, 2
+#: indices in the C step block shared with the shim (float64; addresses as exact doubles)
+B_TIME, B_NEXT_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED = range(8)
+B_OUTPUTS_START, B_OUTPUTS_STOP = 8, 9
+N_BLOCK = 10
 
 
 def _guarded(default):
@@ -98,6 +129,8 @@ def _guarded(default):
     def decorate(method):
         @functools.wraps(method)
         def wrapper(self, *args):
+            if self._control[C_DIRTY]:  # the shim served calls in C since the last entry
+                self._sync()
             try:
                 return method(self, *args)
             except (_CallRejected, ModelError) as rejected:
@@ -107,11 +140,18 @@ def _guarded(default):
                     f"{method.__name__}: {type(exc).__name__}: {exc}\n"
                     f"{traceback.format_exc(limit=4)}"
                 )
+            finally:
+                if self._c_path:
+                    self._arm_or_disarm()
             return default(*args) if callable(default) else default
 
         return wrapper
 
     return decorate
+
+
+def _address(array: np.ndarray) -> int:
+    return array.__array_interface__["data"][0]
 
 
 def _zeros(vrs):
@@ -170,8 +210,15 @@ class ModelSlave(Fmi2Slave):
             np.where(self._feeds, KIND_FEEDTHROUGH, KIND_INPUT),
             np.where(self._causality == OUTPUT, KIND_OUTPUT, KIND_PARAMETER),
         )
-        self._kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER).astype(np.uint8)
-        self._control = np.zeros(4, dtype=np.int32)  # shared with the shim: never replaced
+        kind = np.where(self._type == _TYPE_CODE["Real"], kind, KIND_OTHER)
+        kind[self._type == _TYPE_CODE["Integer"]] = KIND_INTEGER
+        kind[self._type == _TYPE_CODE["Boolean"]] = KIND_BOOLEAN
+        self._kind = kind.astype(np.uint8)
+        self._control = np.zeros(N_CONTROL, dtype=np.int32)  # shared with the shim: never replaced
+        self._block = np.zeros(N_BLOCK)  # the C step path's, shared with the shim: never replaced
+        self._saved = np.zeros(0)  # the C path's snapshot (its address is in _block)
+        self._c_path = False  # the shim asked for the addresses, the model has C entries
+        self._armed, self._armed_state = 0, None  # C_STEP or C_OUTPUT set; the state checked
         self._prediction = None
         self._predicting = True  # see _predict_outputs
         self._arrays: list | None = None  # the model's array attributes but values, found once
@@ -194,6 +241,14 @@ class ModelSlave(Fmi2Slave):
         self._control[STEP_MODE] = mode == "step" and self.model.values is self._values
 
     @property
+    def _predicting(self) -> bool:
+        return bool(self._control[PREDICTING])
+
+    @_predicting.setter
+    def _predicting(self, predicting: bool) -> None:
+        self._control[PREDICTING] = predicting
+
+    @property
     def _outputs_valid(self) -> bool:
         return bool(self._control[OUTPUTS_VALID])
 
@@ -204,10 +259,66 @@ class ModelSlave(Fmi2Slave):
     def _fast_path_addresses(self, n: int) -> list:
         if n != FAST_PATH_N:
             raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
-        address = [a.__array_interface__["data"][0] for a in (self._values, self._kind)]
-        control = self._control.__array_interface__["data"][0]
+        address = [_address(a) for a in (self._values, self._kind, self._control, self._block)]
         n_values = min(self._values.size, self._kind.size)  # the shim reads both up to it
-        return [FAST_PATH_VERSION, address[0], n_values, address[1], control]
+        self._c_path = hasattr(self.model, "c_entries")
+        return [FAST_PATH_VERSION, address[0], n_values, *address[1:]]
+
+    def _arm(self) -> None:
+        """End of every call the slave answers: tell the shim what its C step path may do
+        until the next one (module docstring, "The C step path"): the model's C entries
+        usable now (``c_entries``: compiled kernels, nothing for the Python to do), the
+        addresses of the model's state array and of the snapshot buffer (both may have been
+        replaced: initialisation, FMU state restore), the times."""
+        control, block, model = self._control, self._block, self.model
+        state = getattr(model, "state", None)
+        if state is not self._armed_state:  # checked once per array
+            plain = type(state) is np.ndarray and state.dtype == np.float64
+            self._armed_state = state if plain and state.flags.c_contiguous else None
+        step = output = None
+        if self._mode_name == "step" and self._state_valid and self._armed_state is not None:
+            step, output = model.c_entries()
+        kind = PYTHON_STEP
+        if type(step) is jit.TimeStep:
+            kind = TIME_STEP if step.ready else PYTHON_STEP
+        elif step is not None and (address := step.address):
+            kind, block[B_STEP] = ENTRY_STEP, address
+        address = output.address if output is not None else None
+        if not (kind or address):
+            if self._armed:
+                control[C_STEP] = control[C_OUTPUT] = self._armed = 0
+            return
+        control[C_OUTPUT], block[B_OUTPUT] = (1, address) if address else (0, 0.0)
+        control[C_STEP], self._armed = kind, 1
+        need = self._values.size + state.size
+        if self._saved.size < need:
+            self._saved = np.zeros(need)
+        block[B_TIME], block[B_NEXT_TIME] = model.t, self._next_time
+        block[B_STATE], block[B_N_STATE] = _address(state), state.size
+        block[B_SAVED], block[B_N_SAVED] = _address(self._saved), self._saved.size
+        block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = self._outputs.start, self._outputs.stop
+
+    def _arm_or_disarm(self) -> None:
+        try:
+            self._arm()
+        except Exception as exc:  # noqa: BLE001 - never into pythonfmu (fmi2Fatal)
+            self._control[C_STEP] = self._control[C_OUTPUT] = self._armed = 0
+            self._error(f"the C step path is off: {type(exc).__name__}: {exc}")
+
+    def _sync(self) -> None:
+        """Start of a call after calls the shim served in C: take over what they did (the
+        model's time, the step's end; a prediction the shim made becomes the slave's, with
+        the shim's snapshot), so that everything goes on as if they had come here."""
+        control, block, model = self._control, self._block, self.model
+        control[C_DIRTY] = 0
+        model.t = float(block[B_TIME])
+        self._next_time = float(block[B_NEXT_TIME])
+        if control[C_PREDICTED]:
+            control[C_PREDICTED] = 0
+            n, saved = self._values.size, self._saved
+            arrays = {"state": saved[n : n + model.state.size].copy()}
+            outputs = saved[self._outputs].copy()
+            self._prediction = (dict(vars(model)), arrays, outputs, len(model.warnings))
 
     def _predict_outputs(self) -> None:
         """End of a step: evaluate the outputs, so that the shim answers the gets (see

@@ -43,13 +43,14 @@ def test_the_shared_arrays_are_never_replaced(name):
     """The shim keeps the addresses of the handshake: state restore, steps and terminate
     copy into the same arrays (fmi2Reset makes a new slave, and the shim asks again)."""
     fmu = started(name)
-    values, kind, control = fmu.model.values, fmu._kind, fmu._control
+    values, kind, control, block = fmu.model.values, fmu._kind, fmu._control, fmu._block
     answer = fmu.get_real([FAST_PATH_VR[0]] * FAST_PATH_N)
     assert answer[1:] == [
         values.__array_interface__["data"][0],
         values.size,
         kind.__array_interface__["data"][0],
         control.__array_interface__["data"][0],
+        block.__array_interface__["data"][0],
     ]
     state = fmu._get_fmu_state()
     for k in range(3):
@@ -59,6 +60,7 @@ def test_the_shared_arrays_are_never_replaced(name):
     assert fmu.do_step(0.0, STEP)
     fmu.terminate()
     assert fmu.model.values is values and fmu._kind is kind and fmu._control is control
+    assert fmu._block is block
     assert logged(fmu) == []
 
 
