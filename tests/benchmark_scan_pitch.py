@@ -74,18 +74,46 @@ def patched(changes):
             setattr(obj, name, value)
 
 
-def stub_models():
-    """Every loaded FMU model's work replaced by a no-op."""
+def stub_models(c_path: bool = False):
+    """Every loaded FMU model's work replaced by a no-op.  ``c_path``: the shim's C step
+    path kept (components/jit.py, "C entries"): the models initialise and evaluate their
+    outputs until their first step as they do (the C path needs their state and valid
+    values), then do nothing, and every C entry is a compiled no-op of its signature."""
     changes = []
+    noop = _noop_c_entry() if c_path else None
     for name, module in _fmu_modules():
         for obj in vars(module).values():
             if isinstance(obj, type) and "VARIABLES" in vars(obj) and obj.__module__ == name:
-                changes += [
-                    (obj, "initialize", lambda self, t0: None),
-                    (obj, "step", lambda self, t, dt: None),
-                    (obj, "output", lambda self: None),
-                ]
+                if c_path:
+                    changes += [(obj, "step", _stepped), (obj, "output", _until_stepped(obj))]
+                else:
+                    changes += [
+                        (obj, "initialize", lambda self, t0: None),
+                        (obj, "step", lambda self, t, dt: None),
+                        (obj, "output", lambda self: None),
+                    ]
+            if c_path and type(obj).__name__ == "CEntry" and "_cfunc" in vars(obj):
+                changes.append((obj, "_cfunc", noop))
     return patched(changes)
+
+
+def _stepped(self, t, dt):
+    self._initial_inputs = None  # as the first step's check leaves it (the C path's cue)
+    self._stub_stepped = True
+
+
+def _until_stepped(model_class):
+    real = vars(model_class)["output"]
+    return lambda self: None if getattr(self, "_stub_stepped", False) else real(self)
+
+
+def _noop_c_entry():
+    import numba
+
+    double_p = numba.types.CPointer(numba.types.float64)
+    signature = numba.types.int32(double_p, numba.types.int64, double_p, numba.types.int64,
+                                  numba.types.float64)  # fmt: skip
+    return numba.cfunc(signature)(lambda values, n_values, state, n_state, x: 0)
 
 
 def readable_kernels():
@@ -128,7 +156,8 @@ def previous_design(ssd, step):
 def measure(ssd, step, stop, repeat):
     run = lambda loop=None: simulate(ssd, step=step, stop=stop, loop=loop)  # noqa: E731
     cosim = best(run, repeat)
-    with stub_models():
+    with stub_models(c_path=True):
+        run()  # the FMUs reset with the no-op entries armed
         stubbed = best(run, repeat)
     with previous_design(ssd, step):
         previous = best(lambda: run("python"), repeat)

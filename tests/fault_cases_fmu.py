@@ -131,6 +131,14 @@ CASES = [
         {"statuses": [ERROR] * 6, "messages": 6},
     ),
     _case(
+        "the FMU unpacked under a path with a comma, a space and a percent sign (fmpy "
+        "percent-encodes them in fmuResourceLocation); fmi2Instantiate with a location that "
+        "does not exist and with an http:// one",
+        "the first instantiates and steps; the others get NULL and a message each, no crash",
+        "resource_locations",
+        {"step": 0, "refused": [True, True], "messages": 2},
+    ),
+    _case(
         "a KeyboardInterrupt inside the FMU (fmi2Fatal), then more calls, then fmi2FreeInstance",
         "the later calls refused with fmi2Error (only "
         "fmi2FreeInstance is allowed); no crash, clean exit",
@@ -353,6 +361,22 @@ def _deserialize(fmu, data: bytes) -> tuple[int, ctypes.c_void_p]:
     state = ctypes.c_void_p()
     buffer = (ctypes.c_char * max(len(data), 1)).from_buffer_copy(data or b"\0")
     return fmu.dll.fmi2DeSerializeFMUstate(fmu.c, buffer, len(data), ctypes.byref(state)), state
+
+
+def resource_locations():
+    directory = Path(tempfile.mkdtemp(), "a,b c%")
+    directory.mkdir()
+    tempfile.tempdir = str(directory)  # where fmpy unpacks
+    fmu = _ready()
+    step = fmu.step(0.0, 0.05)
+    refused = []
+    for uri in (b"file:///nonexistent/resources", b"http://example.com/resources"):
+        c = fmu.dll.fmi2Instantiate(
+            b"x", 1, fmu.md.guid.encode(), uri, ctypes.byref(fmu._callbacks), 0, 0
+        )
+        refused.append(c is None)
+    said = [m for _, m in fmu.messages if "is not this FMU's resources directory" in m]
+    return {"step": step, "refused": refused, "messages": len(said)}
 
 
 def double_free():

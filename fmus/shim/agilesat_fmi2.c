@@ -44,10 +44,18 @@
  *    the model leaves to its Python, is forwarded as before, so the slave keeps every check
  *    and message.
  *
+ *  - Resources.  fmuResourceLocation is decoded here (a percent-encoded file URI, as FMI
+ *    2.0 asks hosts to pass it) and handed to pythonfmu as a plain file URI, after checking
+ *    that it is this FMU's resources directory: pythonfmu 0.7.0 does not decode it and
+ *    segfaults on a location without its resources (a path with a comma, which fmpy
+ *    encodes, or a wrong location); such a location gets fmi2Error and a message instead.
+ *
  * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
  */
 #define _GNU_SOURCE
+#include <ctype.h>
 #include <dlfcn.h>
+#include <errno.h>
 #include <locale.h>
 #include <math.h>
 #include <pthread.h>
@@ -320,16 +328,30 @@ static void free_categories(Shim *s) {
     s->n_categories = 0;
 }
 
-/* The GUID in <resources>/../modelDescription.xml must be the one the host passes. */
-static int guid_matches(const char *resource_uri, const char *guid, char *why, size_t n) {
-    if (!resource_uri || !guid) return 1;
-    const char *p = resource_uri;
-    if (strncmp(p, "file://", 7) == 0) p += 7;
-    else if (strncmp(p, "file:", 5) == 0) p += 5;
-    char path[4096];
+/* The resources directory that fmuResourceLocation names, as a path: a file URI
+ * ("file:///p", "file://localhost/p", "file:/p") percent-decoded (RFC 3986; FMI 2.0
+ * section 2.1.5: hosts encode, fmpy for instance turns ',' into %2C), anything else taken
+ * as a plain path.  0 if it does not fit or is not a local file URI.  pythonfmu 0.7.0
+ * takes the location as a path without decoding it, and dereferences NULL when its
+ * resources are not there (it segfaults the host): the shim hands it the decoded path,
+ * and only once it has checked that the resources are there (resources_ok). */
+static int resource_path(const char *uri, char *path, size_t n) {
+    const char *p = uri;
+    int encoded = strncmp(p, "file:", 5) == 0;
+    if (strncmp(p, "file://", 7) == 0) {
+        p += 7;
+        if (*p != '/') {  /* an authority: only this machine's */
+            if (strncmp(p, "localhost/", 10) != 0) return 0;
+            p += 9;
+        }
+    } else if (encoded) {
+        p += 5;
+    }
     size_t k = 0;
-    for (; *p && k + 1 < sizeof path; p++) {  /* percent-decode */
-        if (p[0] == '%' && p[1] && p[2]) {
+    for (; *p; p++) {
+        if (k + 1 >= n) return 0;
+        if (encoded && p[0] == '%' && isxdigit((unsigned char)p[1]) &&
+            isxdigit((unsigned char)p[2])) {
             char hex[3] = {p[1], p[2], 0};
             path[k++] = (char)strtol(hex, NULL, 16);
             p += 2;
@@ -337,10 +359,27 @@ static int guid_matches(const char *resource_uri, const char *guid, char *why, s
             path[k++] = *p;
         }
     }
+    while (k > 1 && path[k - 1] == '/') k--;
     path[k] = '\0';
-    while (k > 0 && path[k - 1] == '/') path[--k] = '\0';
-    snprintf(path + k, sizeof path - k, "/../modelDescription.xml");
-    FILE *f = fopen(path, "rb");
+    return k > 0;
+}
+
+/* The location is this FMU's resources directory (pythonfmu's slavemodule.txt is in it)
+ * and the GUID in its ../modelDescription.xml is the one the host passes; else 0 and why. */
+static int resources_ok(const char *uri, const char *path, const char *guid, char *why,
+                        size_t n) {
+    char file[4200];
+    snprintf(file, sizeof file, "%s/slavemodule.txt", path);
+    FILE *f = fopen(file, "rb");
+    if (!f) {
+        snprintf(why, n, "fmuResourceLocation %.1024s is not this FMU's resources directory "
+                 "(%.1024s: %s)", uri, file, strerror(errno));
+        return 0;
+    }
+    fclose(f);
+    if (!guid) return 1;
+    snprintf(file, sizeof file, "%s/../modelDescription.xml", path);
+    f = fopen(file, "rb");
     if (!f) return 1; /* cannot check; not an error */
     char head[8192];
     size_t got = fread(head, 1, sizeof head - 1, f);
@@ -699,11 +738,18 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
                  "this FMU supports co-simulation only (fmi2CoSimulation)");
         return NULL;
     }
-    char why[1024];
-    if (!guid_matches(resources, guid, why, sizeof why)) {
+    char why[2400], path[4096], location[4104];
+    if (!resource_path(resources, path, sizeof path)) {
+        snprintf(why, sizeof why, "fmuResourceLocation %.1024s is not a local file URI or path",
+                 resources);
         host_log(&probe, fmi2Error, "logStatusError", why);
         return NULL;
     }
+    if (!resources_ok(resources, path, guid, why, sizeof why)) {
+        host_log(&probe, fmi2Error, "logStatusError", why);
+        return NULL;
+    }
+    snprintf(location, sizeof location, "file://%s", path);
     pthread_once(&load_once, load_inner);
     if (load_error[0]) {
         host_log(&probe, fmi2Fatal, "logStatusFatal", load_error);
@@ -723,7 +769,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
     s->logging_on = logging_on;
     typedef fmi2Component (*F)(fmi2String, fmi2Type, fmi2String, fmi2String,
                                const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
-    s->inner = INNER(F, fmi2Instantiate)(name, type, guid, resources, &s->ours, visible,
+    s->inner = INNER(F, fmi2Instantiate)(name, type, guid, location, &s->ours, visible,
                                          fmi2True);
     if (!s->inner) {
         free(s->name);
