@@ -11,7 +11,8 @@ compiled kernels costs about a second per process, which the kernels win back on
 tens of thousands of calls (README, "Benchmark"); short runs never import numba, long runs
 and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the Python;
 ``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
-``kernel.compiled`` the compiled function (the Python without numba).
+``kernel.compiled`` the compiled function (the Python without numba, or where numba cannot
+compile the kernel: it then says so in a warning at the switch).
 
 A kernel may work on a model's whole value array (SatelliteDynamics): it reads through
 :func:`floats` (in its Python a list of Python floats, which index and compute several
@@ -126,9 +127,31 @@ class Kernel:
     def _count(self, *args):
         self._left -= 1
         if self._left < 0:
-            self._run = self.compiled
-            return self._run(*args)
+            return self._switch(*args)
         return self.py_func(*args)
+
+    def _switch(self, *args):
+        """The first compiled call.  A kernel numba cannot compile here (another numba
+        version, say: ``agilesat build`` compiles every kernel, so ours do with the
+        numba they were built with) keeps running its Python, with a warning."""
+        if self.compiled is self.py_func:  # without numba
+            self._run = self.py_func
+            return self.py_func(*args)
+        from numba.core.errors import NumbaError
+
+        try:
+            result = self.compiled(*args)
+        except NumbaError as exc:
+            said = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+            warnings.warn(
+                f"agilesat: {self.py_func.__qualname__} could not be compiled "
+                f"({type(exc).__name__}: {said}); its Python runs",
+                stacklevel=3,
+            )
+            self.__dict__["compiled"] = self._run = self.py_func
+            return self.py_func(*args)
+        self._run = self.compiled
+        return result
 
     @functools.cached_property
     def compiled(self):

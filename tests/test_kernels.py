@@ -332,6 +332,25 @@ def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function
     assert all(np.array_equal(m.state, state) for m, state in zip(models, states))
 
 
+def _not_jitable(x):  # a plain function kernels may not call (no @jitable)
+    return x + 1.0
+
+
+def _calls_a_plain_function(x):
+    return 2.0 * _not_jitable(x)
+
+
+@needs_numba
+def test_a_kernel_numba_cannot_compile_keeps_its_python_and_says_so():
+    tiered = jit.Kernel(_calls_a_plain_function, 1)
+    assert tiered(1.0) == 4.0  # the Python
+    with pytest.warns(UserWarning, match=r"_calls_a_plain_function could not be compiled \(Typing"):
+        assert tiered(2.0) == 6.0
+    assert tiered._run is tiered.compiled is tiered.py_func
+    assert not jit.runs_compiled(tiered)  # no C entry: the FMU's C path stays off
+    assert tiered(3.0) == 8.0
+
+
 _SHORT_RUN = """
 import os, sys
 os.environ.pop("AGILESAT_JIT_AFTER", None)  # the default threshold
