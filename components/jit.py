@@ -193,11 +193,13 @@ class CEntry:
         from numba.core.ccallback import CFunc
 
         adapter = numba.njit(self.py_func)
+        names = {"co_name": self.__name__ + "_c"}
+        if hasattr(_c_template.__code__, "co_qualname"):  # Python 3.11 on
+            names["co_qualname"] = self.__qualname__ + "_c"
         code = _c_template.__code__.replace(
             co_filename=self.py_func.__code__.co_filename,
             co_firstlineno=self.py_func.__code__.co_firstlineno,
-            co_name=self.__name__ + "_c",
-            co_qualname=self.__qualname__ + "_c",
+            **names,
         )
         namespace = {"__name__": self.py_func.__module__, "adapter": adapter}
         namespace["carray"] = numba.carray

@@ -84,6 +84,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import traceback
 
 import numpy as np
@@ -152,6 +153,19 @@ def _guarded(default):
 
 def _address(array: np.ndarray) -> int:
     return array.__array_interface__["data"][0]
+
+
+def _same_arrays(model, attributes: dict) -> None:
+    """A state's arrays must have the shape and dtype of the model's own (the compiled
+    kernels index them without bounds checks): else _CallRejected."""
+    for name, value in attributes.items():
+        mine = vars(model).get(name)
+        if type(mine) is np.ndarray and not (
+            type(value) is np.ndarray and value.dtype == mine.dtype and value.shape == mine.shape
+        ):
+            raise _CallRejected(
+                f"the state's {name} is not a {mine.dtype} array of shape {mine.shape}"
+            )
 
 
 def _zeros(vrs):
@@ -261,7 +275,10 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(f"the fast-path handshake takes {FAST_PATH_N} values, not {n}")
         address = [_address(a) for a in (self._values, self._kind, self._control, self._block)]
         n_values = min(self._values.size, self._kind.size)  # the shim reads both up to it
-        self._c_path = hasattr(self.model, "c_entries")
+        # the shim reads the same switch at the same moment (handshake)
+        self._c_path = (
+            hasattr(self.model, "c_entries") and os.environ.get("AGILESAT_SHIM_STEP") != "0"
+        )
         return [FAST_PATH_VERSION, address[0], n_values, *address[1:]]
 
     def _arm(self) -> None:
@@ -276,7 +293,8 @@ class ModelSlave(Fmi2Slave):
             plain = type(state) is np.ndarray and state.dtype == np.float64
             self._armed_state = state if plain and state.flags.c_contiguous else None
         step = output = None
-        if self._mode_name == "step" and self._state_valid and self._armed_state is not None:
+        ready = self._mode_name == "step" and self._state_valid and self._armed_state is not None
+        if ready and not model.warnings:  # warnings waiting: the next doStep reports them
             step, output = model.c_entries()
         kind = PYTHON_STEP
         if type(step) is jit.TimeStep:
@@ -302,8 +320,10 @@ class ModelSlave(Fmi2Slave):
         try:
             self._arm()
         except Exception as exc:  # noqa: BLE001 - never into pythonfmu (fmi2Fatal)
+            # the call itself succeeded: the Python steps from now on, and says so once
             self._control[C_STEP] = self._control[C_OUTPUT] = self._armed = 0
-            self._error(f"the C step path is off: {type(exc).__name__}: {exc}")
+            self._c_path = False
+            self._warn([f"the C step path is off ({type(exc).__name__}: {exc}); the Python steps"])
 
     def _sync(self) -> None:
         """Start of a call after calls the shim served in C: take over what they did (the
@@ -542,6 +562,7 @@ class ModelSlave(Fmi2Slave):
         model_state, wrapper = self._check_state(
             fmu_state.decode(self._identity(), state, _PACKAGE)
         )
+        _same_arrays(self.model, model_state[2])
         self.model.set_state(model_state)
         self._prediction = None
         self._control[PREDICTED] = 0
@@ -715,13 +736,15 @@ class ModelSlave(Fmi2Slave):
         """The model's warnings, at category logStatusWarning; with the parameter
         warnings_return_ok at status fmi2OK, which the shim forwards to the host (even
         with debug logging off) without raising the call's status."""
-        if not self.model.warnings:
-            return
+        if self.model.warnings:
+            self._warn(self.model.warnings)
+            self.model.warnings.clear()
+
+    def _warn(self, messages) -> None:
         status = Fmi2Status.ok if self.model.p.warnings_return_ok else Fmi2Status.warning
-        for message in self.model.warnings:
+        for message in messages:
             self.log(
                 f"{self.model_class.__name__} '{self.instance_name}': {message}",
                 status,
                 "logStatusWarning",
             )
-        self.model.warnings.clear()

@@ -192,7 +192,13 @@ def test_every_model_has_the_warnings_return_ok_parameter():
 
 @pytest.mark.slow
 @pytest.mark.integration
-def test_a_warning_returns_fmi2Warning_by_default(fmus):
+@pytest.mark.parametrize("jit_after", ["default", "0"])
+def test_a_warning_returns_fmi2Warning_by_default(fmus, monkeypatch, jit_after):
+    """Also with the kernels compiled from the first call, where the steps after it may run
+    in the shim's C step path: the warning of an output evaluated in Python is reported by
+    the next doStep all the same."""
+    if jit_after != "default":
+        monkeypatch.setenv("AGILESAT_JIT_AFTER", jit_after)
     answer = host("warning", fmus["CmgSteering"], 0)
     assert answer["status"] == 1  # fmi2Warning
     assert [m[:2] for m in answer["messages"]] == [[1, "logStatusWarning"]]

@@ -117,6 +117,46 @@ def test_an_error_from_the_step_falls_back_to_the_slave(hosts):
     assert on["counts"][3] == 1 and on["counts"][1] == 8  # the first step is the Python's
 
 
+_BROKEN_BUILD = """
+import json, os, sys
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+sys.path.insert(0, sys.argv[2])
+import fmi_host
+fmu = fmi_host.Fmu(sys.argv[1], "a")
+jit = next(m for n, m in sys.modules.items() if n.startswith("agilesat_") and n.endswith(".jit"))
+def broken(self):
+    raise TypeError("numba moved")
+jit.CEntry._cfunc = property(broken)  # every C entry fails to build
+fmu.initialize(fmi_host.plausible_inputs(fmu))
+statuses = [fmu.step(k * 0.05, 0.05) for k in range(5)]
+said = [m for s, m in fmu.messages if "C step path is off" in m]
+print(json.dumps({"statuses": statuses, "said": said}))
+"""
+
+
+def test_a_c_entry_that_cannot_be_built_leaves_the_steps_to_the_python_with_a_warning(fmus):
+    """(Another numba version, say.)  The calls still succeed; the first step reports it
+    once, as a warning; the Python steps from then on."""
+    result = run_python(_BROKEN_BUILD, fmus["CmgCluster"], Path(__file__).parent)
+    assert result.returncode == 0, result.stderr
+    answer = json.loads(result.stdout.strip().splitlines()[-1])
+    assert answer["statuses"] == [WARNING, OK, OK, OK, OK]
+    assert len(answer["said"]) == 1 and "TypeError: numba moved" in answer["said"][0]
+
+
+def test_a_restored_state_must_have_the_models_array_shapes():
+    """The compiled kernels index the state array without bounds checks: a crafted FMU
+    state with another array is refused before the model takes it."""
+    from agilesat.components.cmg_cluster import CmgCluster
+    from agilesat.fmus.slave import _CallRejected, _same_arrays
+
+    model = CmgCluster().start(0.0)
+    _same_arrays(model, {"state": model.state.copy(), "t": 1.0})  # a state of its own: taken
+    for wrong in (np.zeros(1), model.state.astype(np.float32), model.state.tolist()):
+        with pytest.raises(_CallRejected, match="the state's state is not a float64 array"):
+            _same_arrays(model, {"state": wrong})
+
+
 def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
     """numba's cfunc wrapper would print an exception and return an undefined value: the C
     entry catches it (here a ZeroDivisionError, numba's Python error model) and returns -1,
