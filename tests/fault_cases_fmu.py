@@ -711,8 +711,11 @@ def warning_as_ok(library):
         ctypes.c_int,
     ]
     dll.fmi2DoStep.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
+    resources = Path(tempfile.mkdtemp(), "resources")  # what the shim checks is there
+    resources.mkdir()
+    (resources / "slavemodule.txt").write_text("fake")
     c = dll.fmi2Instantiate(
-        b"fake", 1, b"{0}", b"file:///nonexistent", ctypes.addressof(callbacks), 0, 0
+        b"fake", 1, b"{0}", resources.as_uri().encode(), ctypes.addressof(callbacks), 0, 0
     )
     return {"step": dll.fmi2DoStep(c, 0.0, 0.05, 1), "messages": messages}
 
