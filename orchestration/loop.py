@@ -251,7 +251,7 @@ class Program:
                 setattr(op, field, value)
 
 
-def _address(function) -> int:
+def _address(function) -> int | None:
     return ctypes.cast(function, ctypes.c_void_p).value
 
 
@@ -352,6 +352,7 @@ def run(
         n += done
         if failure[0] >= 0:
             instance, call = program.calls[failure[0]]
+            assert instance is not None  # only KEEP_PREVIOUS has none, and it cannot fail
             instance.check(int(failure[1]), call)
         if progress and n % report_every == 0:
             progress(n, n_steps)
