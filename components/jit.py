@@ -179,6 +179,9 @@ class CEntry:
         self.py_func = adapter
         self.kernel = kernel
 
+    def __call__(self, values, state, x):
+        return self.py_func(values, state, x)
+
     @property
     def address(self) -> int | None:
         """The C function's address once the kernel runs compiled, else None."""
