@@ -11,43 +11,58 @@ README's table).  Nothing here imports pythonfmu at import time.
 
 from __future__ import annotations
 
-import ast
 import functools
 import importlib
+import re
 from pathlib import Path
 
 _COMPONENTS = Path(__file__).resolve().parent.parent / "components"
+FMUS: dict[str, str]  # see __getattr__
 
 
 def _camel(snake: str) -> str:
     return "".join(part.capitalize() for part in snake.split("_"))
 
 
+def _snake(camel: str) -> str:
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", camel).lower()
+
+
 def _find_fmus(directory: Path) -> dict[str, str]:
-    """{FMU name: component module} for every module defining ``class <Camel>(Model)``."""
+    """{FMU name: component module} for every module defining ``class <Camel>(Model)``
+    (the sources read, nothing imported: :mod:`.source_facts`)."""
+    from .source_facts import facts
+
     found = {}
     for path in sorted(directory.glob("*.py")):
         name = _camel(path.stem)
-        for node in ast.parse(path.read_text(encoding="utf-8"), str(path)).body:
-            if (
-                isinstance(node, ast.ClassDef)
-                and node.name == name
-                and any(isinstance(base, ast.Name) and base.id == "Model" for base in node.bases)
-            ):
-                found[name] = path.stem
+        classes = facts(path.read_text(encoding="utf-8"), str(path))["classes"]
+        if any(cls == name and "Model" in bases for cls, bases in classes):
+            found[name] = path.stem
     return found
 
 
-#: FMU name (= modelIdentifier = class name) -> module in ``components`` of its model
-FMUS: dict[str, str] = _find_fmus(_COMPONENTS)
+def __getattr__(name: str):
+    """``FMUS``: FMU name (= modelIdentifier = class name) -> module in ``components`` of
+    its model, read on first use (an FMU's own import of this package never needs it)."""
+    if name == "FMUS":
+        globals()["FMUS"] = _find_fmus(_COMPONENTS)
+        return globals()["FMUS"]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def model_class(name: str):
-    """The component model class (``components``) of the FMU ``name``."""
-    if name not in FMUS:
-        raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(FMUS)}")
-    package = __name__.rsplit(".", 1)[0]
-    return getattr(importlib.import_module(f"{package}.components.{FMUS[name]}"), name)
+    """The component model class of the FMU ``name``: class ``<Name>`` of
+    ``components/<snake_name>.py``, a direct subclass of ``Model`` (as ``FMUS`` reads it;
+    no other module is read)."""
+    module = _snake(name)
+    found = None
+    if _camel(module) == name and (_COMPONENTS / f"{module}.py").is_file():
+        package = __name__.rsplit(".", 1)[0]
+        found = getattr(importlib.import_module(f"{package}.components.{module}"), name, None)
+    if not (isinstance(found, type) and "Model" in [base.__name__ for base in found.__bases__]):
+        raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(_find_fmus(_COMPONENTS))}")
+    return found
 
 
 @functools.cache

@@ -20,7 +20,6 @@ archive is deterministic (sorted entries, fixed timestamps): same sources, same 
 
 from __future__ import annotations
 
-import ast
 import functools
 import hashlib
 import os
@@ -36,6 +35,7 @@ from pathlib import Path
 
 from . import FMUS, model_class
 from .model_description import model_description
+from .source_facts import facts
 
 FMUS_DIR = Path(__file__).resolve().parent
 BUILD_DIR = FMUS_DIR / "build"
@@ -209,7 +209,7 @@ def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -
     (relative to ``root``; a package's modules with its ``__init__.py``)."""
     package = "/".join(relative.split("/")[:-1])
     found = []
-    for level, name, names in _relative_import_froms(path.read_text(), str(path)):
+    for level, name, names in facts(path.read_text(), str(path))["imports"]:
         base = package.split("/")[: len(package.split("/")) - level + 1]
         module = "/".join(base + (name.split(".") if name else []))
         if (root / module).is_dir():  # from ..components.analysis import x
@@ -222,18 +222,6 @@ def _relative_imports(relative: str, path: Path, root: Path = FMUS_DIR.parent) -
         else:  # from .cmg_cluster import x
             found.append(f"{module}.py")
     return found
-
-
-@functools.lru_cache(maxsize=256)
-def _relative_import_froms(source: str, filename: str) -> tuple:
-    """(level, module, imported names) of each relative ``from … import`` in a module's
-    source, parsed once per content (every FMU's staleness check follows the same
-    modules: the slave, the registry, the shared components)."""
-    return tuple(
-        (node.level, node.module, tuple(alias.name for alias in node.names))
-        for node in ast.walk(ast.parse(source, filename))
-        if isinstance(node, ast.ImportFrom) and node.level
-    )
 
 
 @functools.cache

@@ -1,0 +1,107 @@
+"""The sources' facts (classes, relative imports) are parsed once per content: a warm
+run's staleness check and an FMU's start parse nothing (issue 10, latency)."""
+
+import ast
+import json
+
+import pytest
+
+from agilesat.fmus import FMUS, build, source_facts
+from helpers import run_python
+
+SOURCE = "from .model import Model\n\n\nclass Wheel(Model):\n    pass\n"
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """An empty cache directory, read afresh (as by a new process)."""
+    monkeypatch.setenv("AGILESAT_CACHE_DIR", str(tmp_path / "cache"))
+    source_facts._memo.cache_clear()
+    yield tmp_path / "cache"
+    source_facts._memo.cache_clear()
+
+
+def _no_parsing(monkeypatch):
+    def parse(*args, **kwargs):
+        raise AssertionError("parsed")
+
+    monkeypatch.setattr(ast, "parse", parse)
+
+
+def test_a_source_is_parsed_once_per_content_and_remembered(cache, monkeypatch):
+    found = source_facts.facts(SOURCE, "wheel.py")
+    assert found == {"classes": [["Wheel", ["Model"]]], "imports": [[1, "model", ["Model"]]]}
+    assert (cache / "source_facts.json").is_file()
+    source_facts._memo.cache_clear()  # a new process
+    with monkeypatch.context() as patch:
+        _no_parsing(patch)
+        assert source_facts.facts(SOURCE, "wheel.py") == found
+        with pytest.raises(AssertionError, match="parsed"):  # changed content: parsed again
+            source_facts.facts(SOURCE.replace("Wheel", "Gyro"), "wheel.py")
+    assert source_facts.facts(SOURCE.replace("Wheel", "Gyro"), "wheel.py")["classes"] == [
+        ["Gyro", ["Model"]]
+    ]
+
+
+@pytest.mark.parametrize("content", ["not json", json.dumps({"version": -1, "facts": {}})])
+def test_a_cache_that_is_not_ours_is_parsed_over(cache, content):
+    cache.mkdir()
+    (cache / "source_facts.json").write_text(content)
+    assert source_facts.facts(SOURCE, "wheel.py")["classes"] == [["Wheel", ["Model"]]]
+    assert json.loads((cache / "source_facts.json").read_text())["version"] == 1
+
+
+def test_an_unwritable_cache_parses_as_before(tmp_path, monkeypatch):
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv("AGILESAT_CACHE_DIR", str(tmp_path / "file" / "cache"))
+    source_facts._memo.cache_clear()
+    try:
+        assert source_facts.facts(SOURCE, "wheel.py")["imports"] == [[1, "model", ["Model"]]]
+    finally:
+        source_facts._memo.cache_clear()
+
+
+def test_the_cache_keeps_the_newest_entries(cache, monkeypatch):
+    monkeypatch.setattr(source_facts, "MAX_ENTRIES", 2)
+    for k in range(3):
+        source_facts.facts(f"x = {k}\n", "x.py")
+    kept = json.loads((cache / "source_facts.json").read_text())["facts"]
+    assert len(kept) == 2 and source_facts._memo() == kept
+
+
+def test_a_warm_staleness_check_parses_nothing(cache):
+    """In a new process with the cache filled: the same digests, no source parsed."""
+    digests = {name: build._sources(name)[1] for name in FMUS}
+    code = (
+        "import ast, json, os, sys\n"
+        "os.environ['AGILESAT_CACHE_DIR'] = sys.argv[1]\n"
+        "from agilesat.fmus import FMUS, build\n"
+        "def parse(*args, **kwargs):\n"
+        "    raise AssertionError('parsed')\n"
+        "ast.parse = parse\n"
+        "print(json.dumps({name: build._sources(name)[1] for name in FMUS}))\n"
+    )
+    result = run_python(code, cache)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout) == digests
+
+
+@pytest.mark.slow  # a fresh interpreter loading an FMU: over 1 s
+def test_an_fmu_starts_without_reading_the_registry(fmus):
+    """The FMU's slave class comes from its module by the naming rule: the FMU's copy of
+    ``fmus`` never reads ``FMUS`` (every component module parsed, at each start)."""
+    code = (
+        "import sys\n"
+        "from fmpy import extract, read_model_description\n"
+        "from fmpy.fmi2 import FMU2Slave\n"
+        "md = read_model_description(sys.argv[1])\n"
+        "instance = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1]),\n"
+        "                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName='a')\n"
+        "instance.instantiate()\n"
+        "registries = [m for name, m in sys.modules.items()\n"
+        "              if name.startswith('agilesat_') and name.endswith('.fmus')]\n"
+        "assert registries and not [m for m in registries if 'FMUS' in vars(m)], registries\n"
+        "instance.freeInstance()\n"
+    )
+    result = run_python(code, fmus["CmgCluster"])
+    assert result.returncode == 0, result.stderr
