@@ -1,18 +1,27 @@
 """A run's figures drawn in worker processes while the run is still simulating.
 
 ``agilesat run`` spends most of its time on figures when there is a spare core: importing
-matplotlib (~0.7 s) and drawing each figure (0.2–1 s, Python-bound: one core each).  A
+matplotlib (~0.7 s) and drawing each figure (0.2–0.5 s, Python-bound: one core each).  A
 :class:`FigurePool` starts one fresh interpreter when the run starts; it imports
 matplotlib, the plots and the scenario's module while the run simulates on the other core,
-then waits.  :meth:`FigurePool.draw` sends it the figure function and its arguments
-(pickled: the scenario's ``figures(results, out_dir)``); the worker forks into
-``processes`` (it is single-threaded: BLAS threads are off in it, so forking is safe) and
-they share the figures out as they go (:class:`Claims`), each writing whole figures.  The
-files are the ones the same call writes in one process.
+then waits.  :meth:`FigurePool.send` sends it the figure function and its arguments as
+soon as the results exist (pickled: the scenario's ``figures(results, out_dir)``);
+:meth:`FigurePool.result` (after the run's records are written) lets it draw and waits.
 
-An exception in the figure code is raised in the caller as it would be in one process; if
-the worker cannot be used (it died, or the call cannot be pickled), the figures are drawn
-in the calling process instead, with a warning saying why.
+The worker first runs the figure function once with :data:`.plots.recording` on: each
+figure it makes is recorded (a :class:`.plots.Drawing`), not drawn, and anything it draws
+itself is drawn then, once.  It then forks into ``processes`` (it is single-threaded: BLAS
+threads are off in it, so forking is safe), and they share the recorded figures out,
+heaviest first (:attr:`.plots.Drawing.cost`), each taking the next one nobody has taken
+(:class:`Claims`): the longest figures do not come last, when the other processes would
+wait for them.  The files are the ones the same call writes in one process.
+
+An exception in the figure code is raised in the caller as in one process (a figure's
+that failed to draw first, in the order the figure function made them; then the figure
+function's own); if the worker cannot be used (it died, or the call cannot be pickled),
+the figures are drawn in the calling process instead, with a warning saying why.  Nothing
+is drawn before :meth:`FigurePool.result`: a run that fails or is interrupted after
+sending writes no figure, as in one process.
 """
 
 from __future__ import annotations
@@ -23,6 +32,7 @@ import signal
 import struct
 import subprocess
 import sys
+import threading
 import traceback
 import warnings
 
@@ -64,7 +74,11 @@ class FigurePool:
     ``preload``: modules it imports while waiting (the scenario's)."""
 
     def __init__(self, processes: int, preload: tuple[str, ...] = ()):
-        self.processes, self.sent = processes, False
+        self.processes = processes
+        self.job: tuple | None = None  # (function, args) sent
+        self.unsent: str | None = None  # why the job could not be sent
+        self.drawing = False  # told to draw: close() waits for it
+        self._sending: threading.Thread | None = None
         self.worker = subprocess.Popen(
             [sys.executable, "-m", __name__, str(processes), *preload],
             stdin=subprocess.PIPE,
@@ -75,33 +89,62 @@ class FigurePool:
     def draw(self, function, *args):
         """``function(*args)`` (it draws figures with :mod:`.plots` and returns their
         paths), its figures drawn by the worker's processes."""
+        self.send(function, *args)
+        return self.result()
+
+    def send(self, function, *args) -> None:
+        """Send the worker ``function(*args)``, to draw when :meth:`result` says so; in a
+        thread (the worker may still be importing matplotlib: this returns at once).  If
+        it cannot be sent, :meth:`result` draws it here."""
+        self.job = (function, args)
         try:
-            job = pickle.dumps((function, args), protocol=pickle.HIGHEST_PROTOCOL)
+            data = pickle.dumps(self.job, protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - a closure, an open file: draw here
-            return self._here(f"the figure call cannot be sent to it ({exc})", function, args)
-        self.sent = True
+            self.unsent = f"the figure call cannot be sent to it ({exc})"
+            return
+        self._sending = threading.Thread(target=self._write, args=(data,), daemon=True)
+        self._sending.start()
+
+    def _write(self, data: bytes) -> None:
         try:
-            self.worker.stdin.write(job)
+            self.worker.stdin.write(struct.pack("q", len(data)) + data)
+            self.worker.stdin.flush()
+        except OSError as exc:
+            self.unsent = f"it stopped ({exc!r})"
+
+    def result(self):
+        """Draw the job :meth:`send` sent; its value (the paths), or its exception."""
+        assert self.job is not None, "send() first"
+        if self._sending is not None:
+            self._sending.join()
+        if self.unsent is not None:
+            return self._here(self.unsent)
+        self.drawing = True
+        try:
+            self.worker.stdin.write(_DRAW)
             self.worker.stdin.close()
             status, value = pickle.load(self.worker.stdout)
         except (OSError, EOFError, pickle.UnpicklingError) as exc:
-            return self._here(f"it stopped ({exc!r}, exit status {self.close()})", function, args)
+            return self._here(f"it stopped ({exc!r}, exit status {self.close()})")
         if status == "error":
             raise value
         return value
 
-    def _here(self, why: str, function, args):
+    def _here(self, why: str):
         warnings.warn(
             f"figures drawn in this process: the figure worker failed: {why}", stacklevel=3
         )
         self.close()
+        function, args = self.job
         return function(*args)
 
     def close(self) -> int | None:
-        """Stop the worker (at once if it was sent nothing: the run failed or was
+        """Stop the worker (at once if it was not told to draw: the run failed or was
         interrupted); its exit status."""
-        if not self.sent:
+        if not self.drawing:
             self.worker.kill()
+        if self._sending is not None:  # a write to a stopped worker fails at once
+            self._sending.join()
         if self.worker.stdin and not self.worker.stdin.closed:
             try:
                 self.worker.stdin.close()
@@ -114,6 +157,10 @@ class FigurePool:
             return self.worker.wait()
         finally:
             self.worker.stdout.close()
+
+
+#: what :meth:`FigurePool.result` writes to let the worker draw the job it was sent
+_DRAW = b"d"
 
 
 class Claims:
@@ -135,11 +182,37 @@ class Claims:
         return take
 
 
-def _draw_share(function, args, claims):
+def _record(function, args) -> tuple[tuple, list]:
+    """Run ``function(*args)`` once with :data:`.plots.recording` on: (("ok", its value)
+    or ("error", its exception), the figures it made, not drawn)."""
     from . import plots
 
-    plots.claim = claims
-    return function(*args)
+    plots.recording = drawings = []
+    try:
+        return ("ok", function(*args)), drawings
+    except Exception as exc:  # noqa: BLE001 - reported to the caller
+        return ("error", _error_of(exc)), drawings
+    finally:
+        plots.recording = None
+
+
+def heaviest_first(drawings) -> list[int]:
+    """The indices of the drawings by falling :attr:`.plots.Drawing.cost` (ties in the
+    order they were made)."""
+    return sorted(range(len(drawings)), key=lambda k: drawings[k].cost, reverse=True)
+
+
+def _draw_taken(drawings, order, claims) -> list[tuple[int, BaseException]]:
+    """Draw, in ``order``, each drawing no other process has taken; (index, exception)
+    of those that failed (the others are drawn still)."""
+    failures = []
+    for k in order:
+        if claims():
+            try:
+                drawings[k]()
+            except Exception as exc:  # noqa: BLE001 - reported to the caller
+                failures.append((k, _error_of(exc)))
+    return failures
 
 
 def _error_of(exc: BaseException):
@@ -152,48 +225,54 @@ def _error_of(exc: BaseException):
 
 
 def _serve(processes: int) -> None:
-    """The worker: read one job from stdin, draw it in ``processes`` processes, reply on
-    stdout (anything else printed goes to stderr)."""
+    """The worker: read one job from stdin; when told to, draw it in ``processes``
+    processes and reply on stdout (anything else printed goes to stderr).  Stdin closed
+    before either: the run ended without figures."""
     reply = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)
-    data = sys.stdin.buffer.read()
-    if not data:  # the run ended without figures
+    size = sys.stdin.buffer.read(8)
+    if len(size) < 8:
         return
-    function, args = pickle.loads(data)
-    claims = Claims()
+    job = sys.stdin.buffer.read(struct.unpack("q", size)[0])
+    function, args = pickle.loads(job)
+    if sys.stdin.buffer.read(1) != _DRAW:
+        return
+    result, drawings = _record(function, args)
+    order, claims = heaviest_first(drawings), Claims()
     children = []
     sys.stdout.flush()
     sys.stderr.flush()
-    for _ in range(processes - 1):
+    for _ in range(min(processes, len(drawings)) - 1):
         read, write = os.pipe()
         pid = os.fork()
         if pid == 0:
             os.close(read)
             code = 0
             try:
-                _draw_share(function, args, claims)
+                failures = _draw_taken(drawings, order, claims)
             except BaseException as exc:  # noqa: BLE001 - reported to the caller
-                os.write(write, pickle.dumps(_error_of(exc)))
-                code = 1
+                failures, code = [(len(drawings), _error_of(exc))], 1
+            try:
+                with os.fdopen(write, "wb") as stream:
+                    pickle.dump(failures, stream)
             finally:
                 os._exit(code)
         os.close(write)
         children.append((pid, read))
-    try:
-        result = ("ok", _draw_share(function, args, claims))
-    except Exception as exc:  # noqa: BLE001 - reported to the caller
-        result = ("error", _error_of(exc))
+    failures = _draw_taken(drawings, order, claims)
+    died = None
     for pid, read in children:
         with os.fdopen(read, "rb") as stream:
             said = stream.read()
         _, status = os.waitpid(pid, 0)
-        if result[0] == "ok" and status != 0:
-            result = (
-                "error",
-                pickle.loads(said)
-                if said
-                else RuntimeError(f"a figure process died ({_status(status)})"),
-            )
+        if said:
+            failures += pickle.loads(said)
+        elif status != 0:
+            died = RuntimeError(f"a figure process died ({_status(status)})")
+    if failures:  # the first in the figure function's order, as in one process
+        result = ("error", min(failures, key=lambda failure: failure[0])[1])
+    elif died is not None:
+        result = ("error", died)
     pickle.dump(result, reply, protocol=pickle.HIGHEST_PROTOCOL)
     reply.close()
 

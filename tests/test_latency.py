@@ -3,10 +3,14 @@ tests/benchmark_latency.py): nothing heavy imported before a command needs it, f
 drawn once per format, the same figures as before."""
 
 import json
+import os
+import time
 import warnings
+from pathlib import Path
 
 import pytest
 
+from agilesat.orchestration import plots
 from helpers import run_python
 
 HEAVY = ("matplotlib", "fmpy", "numpy", "lxml", "dask", "scipy")
@@ -110,6 +114,63 @@ def _failing(results, out_dir):
     raise ValueError("figure code failed here")
 
 
+def _note(path, panels: int, log: Path, fail: bool = False) -> Path:
+    """A stand-in figure of ``panels`` panels: notes (process, figure) in ``log``."""
+    with open(log, "a") as f:
+        f.write(f"{os.getpid()} {Path(path).name}\n")
+    time.sleep(0.1)
+    if fail:
+        raise ValueError(f"could not draw {Path(path).name}")
+    return Path(path)
+
+
+_noted = plots._shared(lambda a: (a["panels"], 0))(_note)
+PANELS = (1, 3, 2, 3, 1)
+HEAVIEST_FIRST = ["f1.png", "f3.png", "f2.png", "f0.png", "f4.png"]
+
+
+def _noting(results, out_dir, fail=()):
+    """Figures of PANELS panels, noted in out_dir/log (those in ``fail`` fail), and one
+    line it writes itself in out_dir/itself."""
+    with open(out_dir / "itself", "a") as f:
+        f.write(f"{os.getpid()}\n")
+    return [
+        _noted(out_dir / f"f{k}.png", n, out_dir / "log", fail=k in fail)
+        for k, n in enumerate(PANELS)
+    ]
+
+
+def _failing_figures(results, out_dir):
+    return _noting(results, out_dir, fail=(0, 1))
+
+
+def _noted_lines(out_dir: Path) -> list[list[str]]:
+    return [line.split() for line in (out_dir / "log").read_text().splitlines()]
+
+
+def test_figures_are_recorded_with_their_cost_and_drawn_heaviest_first(monkeypatch):
+    from agilesat.orchestration.figure_pool import heaviest_first
+
+    monkeypatch.setattr(plots, "recording", [])
+    t = [0.0, 1.0]
+    returned = [
+        plots.lines("a.png", "a", t, {"y": t, "z": t}, "y"),
+        plots.panels("b.png", "b", [(t, {"y": t}, "y"), (t, {"y": t, "z": t}, "z", {})]),
+        plots.lines("c.png", "c", t, {"y": t, "z": t, "w": t}, "y"),
+        plots.panels("d.png", "d", [(t, {"y": t, "z": t}, "y")], xlabel="x"),
+    ]
+    assert returned == [Path(p) for p in ("a.png", "b.png", "c.png", "d.png")]
+    drawings = plots.recording
+    assert [d.cost for d in drawings] == [(1, 2), (2, 3), (1, 3), (1, 2)]
+    assert [drawings[k].path.name for k in heaviest_first(drawings)] == [
+        "b.png",
+        "c.png",
+        "a.png",  # ties in the order made
+        "d.png",
+    ]
+    assert drawings[3].kwargs == {"xlabel": "x"}
+
+
 def test_claims_give_each_figure_to_one_process_as_they_go():
     import os
 
@@ -172,6 +233,7 @@ def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path,
             pool.draw(_failing, None, tmp_path)
     finally:
         pool.close()
+    assert (tmp_path / "ok.png").exists()  # made before the error: drawn, as in one process
     pool = FigurePool(2)
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -185,6 +247,55 @@ def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path,
         "sent to it"
     )
     assert all(p.exists() for p in drawn)
+
+
+@pytest.mark.slow
+def test_a_pool_draws_each_recorded_figure_once_heaviest_first(tmp_path, importable):
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    for processes in (1, 3):
+        out = tmp_path / str(processes)
+        out.mkdir()
+        pool = FigurePool(processes, (__name__,))
+        try:
+            drawn = pool.draw(_noting, None, out)
+        finally:
+            pool.close()
+        assert drawn == [out / f"f{k}.png" for k in range(len(PANELS))]
+        noted = _noted_lines(out)
+        # the figure function ran once (what it writes itself is written once)
+        assert len((out / "itself").read_text().splitlines()) == 1
+        if processes == 1:
+            assert [name for _, name in noted] == HEAVIEST_FIRST
+        else:  # each figure once, shared out among the processes
+            assert sorted(name for _, name in noted) == sorted(HEAVIEST_FIRST)
+            assert len({pid for pid, _ in noted}) > 1
+
+
+@pytest.mark.slow
+def test_a_pool_raises_the_error_of_the_first_figure_that_failed(tmp_path, importable):
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    pool = FigurePool(2, (__name__,))
+    try:
+        with pytest.raises(ValueError, match="could not draw f0.png"):  # f1 failed first
+            pool.draw(_failing_figures, None, tmp_path)
+    finally:
+        pool.close()
+    assert sorted(name for _, name in _noted_lines(tmp_path)) == sorted(HEAVIEST_FIRST)
+
+
+@pytest.mark.slow
+def test_a_pool_sent_a_job_draws_nothing_until_told(tmp_path, importable):
+    """A run that fails or is interrupted after sending its figures writes none."""
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    pool = FigurePool(2, (__name__,))
+    pool.send(_noting, None, tmp_path)
+    time.sleep(3.0)  # ready (matplotlib imported) and read the job
+    pool.close()
+    assert pool.worker.returncode is not None
+    assert list(tmp_path.iterdir()) == []
 
 
 _LOAD = """
