@@ -302,3 +302,8 @@ if __name__ == "__main__":
     for module in sys.argv[2:]:
         importlib.import_module(module)
     _serve(int(sys.argv[1]))
+    # done (every file written and closed): no interpreter teardown, which takes ~0.2 s
+    # with matplotlib loaded and which the run waits for (FigurePool.close)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
