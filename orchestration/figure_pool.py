@@ -4,9 +4,8 @@
 matplotlib (~0.7 s) and drawing each figure (0.2–0.5 s, Python-bound: one core each).  A
 :class:`FigurePool` starts one fresh interpreter when the run starts; it imports
 matplotlib, the plots and the scenario's module while the run simulates on the other core,
-then waits.  :meth:`FigurePool.send` sends it the figure function and its arguments as
-soon as the results exist (pickled: the scenario's ``figures(results, out_dir)``);
-:meth:`FigurePool.result` (after the run's records are written) lets it draw and waits.
+then waits.  :meth:`FigurePool.draw` sends it the figure function and its arguments
+(pickled: the scenario's ``figures(results, out_dir)``).
 
 The worker first runs the figure function once with :data:`.plots.recording` on: each
 figure it makes is recorded (a :class:`.plots.Drawing`), not drawn, and anything it draws
@@ -19,9 +18,7 @@ wait for them.  The files are the ones the same call writes in one process.
 An exception in the figure code is raised in the caller as in one process (a figure's
 that failed to draw first, in the order the figure function made them; then the figure
 function's own); if the worker cannot be used (it died, or the call cannot be pickled),
-the figures are drawn in the calling process instead, with a warning saying why.  Nothing
-is drawn before :meth:`FigurePool.result`: a run that fails or is interrupted after
-sending writes no figure, as in one process.
+the figures are drawn in the calling process instead, with a warning saying why.
 """
 
 from __future__ import annotations
@@ -32,7 +29,6 @@ import signal
 import struct
 import subprocess
 import sys
-import threading
 import traceback
 import warnings
 
@@ -74,11 +70,7 @@ class FigurePool:
     ``preload``: modules it imports while waiting (the scenario's)."""
 
     def __init__(self, processes: int, preload: tuple[str, ...] = ()):
-        self.processes = processes
-        self.job: tuple | None = None  # (function, args) sent
-        self.unsent: str | None = None  # why the job could not be sent
-        self.drawing = False  # told to draw: close() waits for it
-        self._sending: threading.Thread | None = None
+        self.processes, self.sent = processes, False
         self.worker = subprocess.Popen(
             [sys.executable, "-m", __name__, str(processes), *preload],
             stdin=subprocess.PIPE,
@@ -89,62 +81,33 @@ class FigurePool:
     def draw(self, function, *args):
         """``function(*args)`` (it draws figures with :mod:`.plots` and returns their
         paths), its figures drawn by the worker's processes."""
-        self.send(function, *args)
-        return self.result()
-
-    def send(self, function, *args) -> None:
-        """Send the worker ``function(*args)``, to draw when :meth:`result` says so; in a
-        thread (the worker may still be importing matplotlib: this returns at once).  If
-        it cannot be sent, :meth:`result` draws it here."""
-        self.job = (function, args)
         try:
-            data = pickle.dumps(self.job, protocol=pickle.HIGHEST_PROTOCOL)
+            job = pickle.dumps((function, args), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - a closure, an open file: draw here
-            self.unsent = f"the figure call cannot be sent to it ({exc})"
-            return
-        self._sending = threading.Thread(target=self._write, args=(data,), daemon=True)
-        self._sending.start()
-
-    def _write(self, data: bytes) -> None:
+            return self._here(f"the figure call cannot be sent to it ({exc})", function, args)
+        self.sent = True
         try:
-            self.worker.stdin.write(struct.pack("q", len(data)) + data)
-            self.worker.stdin.flush()
-        except OSError as exc:
-            self.unsent = f"it stopped ({exc!r})"
-
-    def result(self):
-        """Draw the job :meth:`send` sent; its value (the paths), or its exception."""
-        assert self.job is not None, "send() first"
-        if self._sending is not None:
-            self._sending.join()
-        if self.unsent is not None:
-            return self._here(self.unsent)
-        self.drawing = True
-        try:
-            self.worker.stdin.write(_DRAW)
+            self.worker.stdin.write(job)
             self.worker.stdin.close()
             status, value = pickle.load(self.worker.stdout)
         except (OSError, EOFError, pickle.UnpicklingError) as exc:
-            return self._here(f"it stopped ({exc!r}, exit status {self.close()})")
+            return self._here(f"it stopped ({exc!r}, exit status {self.close()})", function, args)
         if status == "error":
             raise value
         return value
 
-    def _here(self, why: str):
+    def _here(self, why: str, function, args):
         warnings.warn(
             f"figures drawn in this process: the figure worker failed: {why}", stacklevel=3
         )
         self.close()
-        function, args = self.job
         return function(*args)
 
     def close(self) -> int | None:
-        """Stop the worker (at once if it was not told to draw: the run failed or was
+        """Stop the worker (at once if it was sent nothing: the run failed or was
         interrupted); its exit status."""
-        if not self.drawing:
+        if not self.sent:
             self.worker.kill()
-        if self._sending is not None:  # a write to a stopped worker fails at once
-            self._sending.join()
         if self.worker.stdin and not self.worker.stdin.closed:
             try:
                 self.worker.stdin.close()
@@ -157,10 +120,6 @@ class FigurePool:
             return self.worker.wait()
         finally:
             self.worker.stdout.close()
-
-
-#: what :meth:`FigurePool.result` writes to let the worker draw the job it was sent
-_DRAW = b"d"
 
 
 class Claims:
@@ -225,18 +184,14 @@ def _error_of(exc: BaseException):
 
 
 def _serve(processes: int) -> None:
-    """The worker: read one job from stdin; when told to, draw it in ``processes``
-    processes and reply on stdout (anything else printed goes to stderr).  Stdin closed
-    before either: the run ended without figures."""
+    """The worker: read one job from stdin, draw it in ``processes`` processes, reply on
+    stdout (anything else printed goes to stderr)."""
     reply = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)
-    size = sys.stdin.buffer.read(8)
-    if len(size) < 8:
+    data = sys.stdin.buffer.read()
+    if not data:  # the run ended without figures
         return
-    job = sys.stdin.buffer.read(struct.unpack("q", size)[0])
-    function, args = pickle.loads(job)
-    if sys.stdin.buffer.read(1) != _DRAW:
-        return
+    function, args = pickle.loads(data)
     result, drawings = _record(function, args)
     order, claims = heaviest_first(drawings), Claims()
     children = []

@@ -138,12 +138,6 @@ def run(
                     failure.args = (f"{failure}\n{exc}",)
             raise
         summary.update(_facts(results, time.perf_counter() - wall))
-        if figures and out_dir is not None:
-            from . import plots
-
-            figure_function = scenario.figures if scenario is not None else plots.overview
-            if pool is not None:  # on its way while the records are written (drawn after)
-                pool.send(figure_function, results, out_dir)
         if scenario is not None:
             summary.update(scenario.metrics(results))
             summary["status"] = "failed" if summary["diagnostics"] else "ok"
@@ -152,7 +146,14 @@ def run(
         if out_dir is not None:
             _write_records(results, summary, out_dir)
             if figures and signals.signal is None:
-                paths = figure_function(results, out_dir) if pool is None else pool.result()
+                from . import plots
+
+                draw = (lambda f, *a: f(*a)) if pool is None else pool.draw
+                paths = draw(
+                    scenario.figures if scenario is not None else plots.overview,
+                    results,
+                    out_dir,
+                )
                 summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
                 _write_file(out_dir / "summary.json", _summary_text(summary))
     return results, summary

@@ -285,19 +285,6 @@ def test_a_pool_raises_the_error_of_the_first_figure_that_failed(tmp_path, impor
     assert sorted(name for _, name in _noted_lines(tmp_path)) == sorted(HEAVIEST_FIRST)
 
 
-@pytest.mark.slow
-def test_a_pool_sent_a_job_draws_nothing_until_told(tmp_path, importable):
-    """A run that fails or is interrupted after sending its figures writes none."""
-    from agilesat.orchestration.figure_pool import FigurePool
-
-    pool = FigurePool(2, (__name__,))
-    pool.send(_noting, None, tmp_path)
-    time.sleep(3.0)  # ready (matplotlib imported) and read the job
-    pool.close()
-    assert pool.worker.returncode is not None
-    assert list(tmp_path.iterdir()) == []
-
-
 _LOAD = """
 import json, os, sys
 os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]
