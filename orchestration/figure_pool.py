@@ -81,8 +81,10 @@ class FigurePool:
     def draw(self, function, *args):
         """``function(*args)`` (it draws figures with :mod:`.plots` and returns their
         paths), its figures drawn by the worker's processes."""
-        try:
-            job = pickle.dumps((function, args), protocol=pickle.HIGHEST_PROTOCOL)
+        from . import plots
+
+        try:  # with the formats this process writes
+            job = pickle.dumps((plots.FORMATS, function, args), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - a closure, an open file: draw here
             return self._here(f"the figure call cannot be sent to it ({exc})", function, args)
         self.sent = True
@@ -191,7 +193,10 @@ def _serve(processes: int) -> None:
     data = sys.stdin.buffer.read()
     if not data:  # the run ended without figures
         return
-    function, args = pickle.loads(data)
+    formats, function, args = pickle.loads(data)
+    from . import plots
+
+    plots.FORMATS = formats
     result, drawings = _record(function, args)
     order, claims = heaviest_first(drawings), Claims()
     children = []

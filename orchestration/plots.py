@@ -1,5 +1,6 @@
 """Figures with matplotlib (non-interactive backend), fit for a report: every figure as a
-200-dpi PNG and an SVG beside it, limits and requirements drawn where they exist.
+200-dpi PNG and, where asked (:func:`written_as`), an SVG beside it; limits and
+requirements drawn where they exist.
 
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
@@ -14,6 +15,7 @@ figures, or whose figures a :mod:`.figure_pool` draws, never loads it).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import textwrap
@@ -21,11 +23,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
+from . import figure_layout
 from .units import label as unit_label
 from .units import to_degrees
 
 DPI = 200
-FORMATS = (".png", ".svg")
+#: the formats a figure is written in, the path given first (its suffix the first's):
+#: the PNG and its vector twin (``agilesat plot``), or as :func:`written_as` sets them
+FORMATS: tuple[str, ...] = (".png", ".svg")
 _STYLES = ("-", "--", "-.", ":")
 #: None: every figure function draws its figure; a list: each records its call there (a
 #: :class:`Drawing`) and returns the path without drawing (a :mod:`.figure_pool` draws them)
@@ -68,6 +73,17 @@ def _shared(cost):
         return shared
 
     return decorate
+
+
+@contextlib.contextmanager
+def written_as(formats):
+    """Figures made inside are written in ``formats`` (suffixes, the PNG's first)."""
+    global FORMATS
+    saved, FORMATS = FORMATS, tuple(formats)
+    try:
+        yield
+    finally:
+        FORMATS = saved
 
 
 def formats(path) -> list[Path]:
@@ -224,22 +240,28 @@ def overview(results, out_dir) -> list[Path]:
 
 
 def _subplots(n: int, sharex: bool = False):
-    """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide."""
+    """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide, at the
+    PNG's resolution."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(8, 1.2 + 2.6 * n))
+    fig = Figure(figsize=(8, 1.2 + 2.6 * n), dpi=DPI)
     return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
 
 
 def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
-    """Label the stacked axes, lay them out once (tight), write the figure in every
-    format.  The layout is fixed before saving: with a layout engine left on the figure,
-    every ``savefig`` would first draw it once more just to lay it out."""
+    """Label the stacked axes, lay them out once (:mod:`.figure_layout`), write the PNG
+    from that one Agg drawing and each other format with its own renderer."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.image import imsave
+
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
-    fig.tight_layout()
-    fig.set_layout_engine(None)
-    for target in formats(path):
+    figure_layout.fixed(fig, axes, title)
+    canvas = FigureCanvasAgg(fig)
+    figure_layout.draw(fig, axes, canvas)
+    png, *others = formats(path)
+    imsave(png, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)  # as savefig
+    for target in others:
         fig.savefig(target, dpi=DPI)
     return Path(path)
 

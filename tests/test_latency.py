@@ -224,6 +224,19 @@ def test_a_pool_writes_the_figures_one_process_writes(tmp_path, importable):
 
 
 @pytest.mark.slow
+def test_a_pool_writes_the_formats_of_its_caller(tmp_path, importable):
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    pool = FigurePool(2, (__name__,))
+    try:
+        with plots.written_as((".png",)):
+            drawn = pool.draw(_figures, None, tmp_path)
+    finally:
+        pool.close()
+    assert sorted(p.name for p in tmp_path.glob("*.*")) == sorted(p.name for p in drawn)
+
+
+@pytest.mark.slow
 def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path, importable):
     from agilesat.orchestration.figure_pool import FigurePool
 

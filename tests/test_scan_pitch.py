@@ -76,6 +76,8 @@ def test_summary_reports_paper_values_and_status(nominal):
     assert format_summary(summary) in result.stdout  # the CLI prints what it wrote
     assert "paper -0.8075 °/s" in result.stdout
     assert len(list(out.glob("fig*.png"))) == 8
+    assert not list(out.glob("*.svg"))  # SVG twins only with --svg
+    assert sorted(summary["figures"]) == sorted(map(str, out.glob("fig*.png")))
 
 
 def recorded_momentum(results, inertia):
