@@ -1,6 +1,6 @@
 """Figures with matplotlib (non-interactive backend), fit for a report: every figure as a
-200-dpi PNG and, where asked (:func:`written_as`), an SVG beside it; limits and
-requirements drawn where they exist.
+200-dpi PNG and an SVG beside it (:data:`FORMATS`; :func:`written_as` chooses: ``agilesat
+run`` writes the SVG only with ``--svg``), limits and requirements drawn where they exist.
 
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
