@@ -53,11 +53,14 @@ def __getattr__(name: str):
 
 def model_class(name: str):
     """The component model class of the FMU ``name``: class ``<Name>`` of
-    ``components/<snake_name>.py``, a direct subclass of ``Model`` (as ``FMUS`` reads it;
-    no other module is read)."""
+    ``components/<snake_name>.py``, a direct subclass of ``Model``, found by that naming
+    rule without reading other modules (an FMU's start), else by ``FMUS`` (a module named
+    otherwise, ``sensor_3d.py`` for ``Sensor3d``)."""
     module = _snake(name)
+    if _camel(module) != name or not (_COMPONENTS / f"{module}.py").is_file():
+        module = _find_fmus(_COMPONENTS).get(name, module)
     found = None
-    if _camel(module) == name and (_COMPONENTS / f"{module}.py").is_file():
+    if (_COMPONENTS / f"{module}.py").is_file():
         package = __name__.rsplit(".", 1)[0]
         found = getattr(importlib.import_module(f"{package}.components.{module}"), name, None)
     if not (isinstance(found, type) and "Model" in [base.__name__ for base in found.__bases__]):

@@ -21,8 +21,9 @@ import os
 import uuid
 from pathlib import Path
 
-#: bump when what :func:`_parse` returns changes (older entries are ignored)
-VERSION = 1
+#: this module's own content: a changed parser ignores what an older one kept (every
+#: checkout and installed version shares the cache)
+VERSION = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
 #: entries kept (the oldest are dropped): our ~60 modules, each in a few versions
 MAX_ENTRIES = 1000
 
@@ -32,7 +33,7 @@ def facts(source: str, filename: str) -> dict:
     module, [names]], ...] (relative ``from … import``)} of a module's source."""
     key = hashlib.sha256(source.encode()).hexdigest()
     known = _memo()
-    if key not in known:
+    if not _well_formed(known.get(key)):
         known[key] = _parse(source, filename)
         while len(known) > MAX_ENTRIES:
             del known[next(iter(known))]
@@ -56,6 +57,14 @@ def _parse(source: str, filename: str) -> dict:
     }
 
 
+def _well_formed(entry) -> bool:
+    return (
+        isinstance(entry, dict)
+        and isinstance(entry.get("classes"), list)
+        and isinstance(entry.get("imports"), list)
+    )
+
+
 def _path() -> Path:
     from ..components.jit import cache_root
 
@@ -72,7 +81,8 @@ def _memo() -> dict:
         return {}
     if not isinstance(data, dict) or data.get("version") != VERSION:
         return {}
-    return dict(data.get("facts", {}))
+    known = data.get("facts")
+    return dict(known) if isinstance(known, dict) else {}
 
 
 def _save(known: dict) -> None:

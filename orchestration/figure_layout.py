@@ -1,14 +1,15 @@
 """Stacked axes laid out with fixed margins where they fit, else with the tight layout.
 
 matplotlib's tight layout measures every axes' ticks and labels before a figure is drawn:
-a pass over the artists that takes ~30 % of drawing one of our figures as a PNG.  Our
-figures are stacked axes 8 in wide under one title, and fixed margins (:data:`MARGINS`,
-the tight layout's own for most of them) fit nearly all of them.  So a figure is laid out
-with those (:func:`fixed`), drawn (:func:`draw`), and checked: every text lies inside the
-figure and clear of the other axes and of their texts.  Only where one does not is the
-figure laid out tight and drawn again, as before: no text clipped or overlapping either way.
-The check costs a few percent of a drawing (the texts' sizes are those the drawing
-measured; only the tick locations are asked for again).
+a pass over the artists that takes ~18 % of drawing our figures as PNGs (measured: README,
+"First-run latency").  Our figures are stacked axes 8 in wide under one title, and fixed
+margins (:data:`MARGINS`, the tight layout's own for most of them) fit nearly all of them.
+So a figure is laid out with those (:func:`fixed`), drawn (:func:`draw`), and checked:
+every text, and each legend, lies inside the figure and clear of the other axes and of
+their texts.  Only where one does not is the figure laid out tight and drawn again, as
+before: no text clipped or overlapping either way.  The check costs a few percent of a
+drawing (the texts' sizes are those the drawing measured; only the tick locations are
+asked for again).
 """
 
 from __future__ import annotations
@@ -60,22 +61,27 @@ def draw(fig, axes, canvas) -> bool:
 def _texts(ax) -> list:
     """The texts drawn around ``ax``: title, axis labels and offsets, the tick labels
     inside its view (as the drawing placed them; ticks a locator gives beyond the view
-    are not drawn)."""
+    are not drawn) and its legend (checked whole: a legend may not reach other axes)."""
     texts = [ax.title, *ax.texts]
     for axis in (ax.xaxis, ax.yaxis):
         texts += [axis.label, axis.offsetText]
         low, high = sorted(axis.get_view_interval())
+        slack = 1e-10 * (high - low)  # matplotlib's own, drawing a tick at the view's edge
         for locs, ticks in (
             (axis.get_majorticklocs(), axis.get_major_ticks),
             (axis.get_minorticklocs(), axis.get_minor_ticks),
         ):
             for loc, tick in zip(locs, ticks(len(locs))):
-                if low <= loc <= high:
+                if low - slack <= loc <= high + slack:
                     texts += [tick.label1, tick.label2]
-    return [t for t in texts if t.get_visible() and t.get_text()]
+    texts = [t for t in texts if t.get_visible() and t.get_text()]
+    legend = ax.get_legend()
+    return texts if legend is None or not legend.get_visible() else [*texts, legend]
 
 
 def _fits(fig, axes, renderer) -> bool:
+    if fig.legends or fig.texts:  # figure-level artists: left to the tight layout
+        return False
     placed = [(ax, t.get_window_extent(renderer)) for ax in axes[:, 0] for t in _texts(ax)]
     edge = fig.bbox.padded(1.0)  # a pixel of rounding is no clipping
     for ax, box in placed:

@@ -84,7 +84,7 @@ class FigurePool:
         from . import plots
 
         try:  # with the formats this process writes
-            job = pickle.dumps((plots.FORMATS, function, args), protocol=pickle.HIGHEST_PROTOCOL)
+            job = pickle.dumps((plots.written(), function, args), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - a closure, an open file: draw here
             return self._here(f"the figure call cannot be sent to it ({exc})", function, args)
         self.sent = True
@@ -196,7 +196,15 @@ def _serve(processes: int) -> None:
     formats, function, args = pickle.loads(data)
     from . import plots
 
-    plots.FORMATS = formats
+    with plots.written_as(formats):
+        result = _draw(processes, function, args)
+    pickle.dump(result, reply, protocol=pickle.HIGHEST_PROTOCOL)
+    reply.close()
+
+
+def _draw(processes: int, function, args) -> tuple:
+    """Record ``function(*args)``, draw its figures in ``processes`` processes (this one
+    and forks); ("ok", its value) or ("error", the exception to raise)."""
     result, drawings = _record(function, args)
     order, claims = heaviest_first(drawings), Claims()
     children = []
@@ -233,8 +241,7 @@ def _serve(processes: int) -> None:
         result = ("error", min(failures, key=lambda failure: failure[0])[1])
     elif died is not None:
         result = ("error", died)
-    pickle.dump(result, reply, protocol=pickle.HIGHEST_PROTOCOL)
-    reply.close()
+    return result
 
 
 def _status(status: int) -> str:

@@ -10,7 +10,10 @@ Later series are drawn thinner, so that lines lying on top of each other stay vi
 "planned …" and "reference …" series are dashed.
 
 matplotlib is imported by the first figure drawn, not with this module (a run without
-figures, or whose figures a :mod:`.figure_pool` draws, never loads it).
+figures, or whose figures a :mod:`.figure_pool` draws, never loads it).  A figure pool
+records the figure calls first and draws them after the figure function returns: a figure
+function must not change an array after handing it to a figure (each call is drawn with
+the arrays as they are at the end).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import functools
 import inspect
 import textwrap
 from collections.abc import Callable
+from contextvars import ContextVar
 from pathlib import Path
 from typing import NamedTuple
 
@@ -28,9 +32,10 @@ from .units import label as unit_label
 from .units import to_degrees
 
 DPI = 200
-#: the formats a figure is written in, the path given first (its suffix the first's):
-#: the PNG and its vector twin (``agilesat plot``), or as :func:`written_as` sets them
-FORMATS: tuple[str, ...] = (".png", ".svg")
+#: the formats a figure can be written in: the PNG (the path given) and its vector twin
+FORMATS = (".png", ".svg")
+#: those figures are written in now: all, or as :func:`written_as` sets them (per thread)
+_written: ContextVar[tuple[str, ...]] = ContextVar("agilesat_figure_formats", default=FORMATS)
 _STYLES = ("-", "--", "-.", ":")
 #: None: every figure function draws its figure; a list: each records its call there (a
 #: :class:`Drawing`) and returns the path without drawing (a :mod:`.figure_pool` draws them)
@@ -77,18 +82,26 @@ def _shared(cost):
 
 @contextlib.contextmanager
 def written_as(formats):
-    """Figures made inside are written in ``formats`` (suffixes, the PNG's first)."""
-    global FORMATS
-    saved, FORMATS = FORMATS, tuple(formats)
+    """Figures made inside (in this thread) are written in ``formats``: ".png" first, then
+    any of the others of :data:`FORMATS`."""
+    formats = tuple(formats)
+    if formats[:1] != (".png",) or not set(formats) <= set(FORMATS):
+        raise ValueError(f"figure formats {formats}: expected '.png' first, then of {FORMATS}")
+    token = _written.set(formats)
     try:
         yield
     finally:
-        FORMATS = saved
+        _written.reset(token)
+
+
+def written() -> tuple[str, ...]:
+    """The formats figures are written in now."""
+    return _written.get()
 
 
 def formats(path) -> list[Path]:
     """Every file a figure is written as (the PNG path given, then its vector twin)."""
-    return [Path(path).with_suffix(suffix) for suffix in FORMATS]
+    return [Path(path).with_suffix(suffix) for suffix in written()]
 
 
 def lines(
@@ -244,7 +257,7 @@ def _subplots(n: int, sharex: bool = False):
     PNG's resolution."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(8, 1.2 + 2.6 * n), dpi=DPI)
+    fig = Figure(figsize=(8, 1.2 + 2.6 * n), dpi=DPI, layout="none")  # whatever rcParams say
     return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
 
 

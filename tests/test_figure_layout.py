@@ -72,3 +72,35 @@ def test_the_png_is_the_one_savefig_writes(tmp_path):
     ours, saved = (np.asarray(Image.open(tmp_path / f)) for f in ("ours.png", "saved.png"))
     assert ours.shape == (round((1.2 + 2.6) * plots.DPI), 8 * plots.DPI, 4)
     assert np.array_equal(ours, saved)
+
+
+def test_a_legend_reaching_other_axes_is_laid_out_tight():
+    fig, axes, canvas = _figure(2, sharex=False)
+    for k in range(20):
+        axes[0, 0].plot([0.0, 150.0], [k, k], label=f"series {k}")
+    axes[0, 0].legend()
+    canvas.draw()
+    legend = axes[0, 0].get_legend().get_window_extent(canvas.get_renderer())
+    assert legend.overlaps(axes[1, 0].bbox)  # with the fixed margins
+    assert not figure_layout.draw(fig, axes, canvas)
+
+
+def test_the_formats_are_set_per_thread_and_checked():
+    import threading
+
+    inside, leave = threading.Event(), threading.Event()
+
+    def png_only():
+        with plots.written_as((".png",)):
+            inside.set()
+            leave.wait(10)
+
+    thread = threading.Thread(target=png_only)
+    thread.start()
+    inside.wait(10)
+    assert plots.written() == plots.FORMATS == (".png", ".svg")  # not this thread's
+    leave.set()
+    thread.join()
+    with pytest.raises(ValueError, match=r"expected '.png' first"):
+        with plots.written_as((".svg",)):
+            pass

@@ -2,7 +2,9 @@
 run's staleness check and an FMU's start parse nothing (issue 10, latency)."""
 
 import ast
+import hashlib
 import json
+import types
 
 import pytest
 
@@ -43,12 +45,27 @@ def test_a_source_is_parsed_once_per_content_and_remembered(cache, monkeypatch):
     ]
 
 
-@pytest.mark.parametrize("content", ["not json", json.dumps({"version": -1, "facts": {}})])
+KEY = hashlib.sha256(SOURCE.encode()).hexdigest()
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        "not json",
+        json.dumps([1]),
+        json.dumps({"version": "another parser's", "facts": {}}),
+        json.dumps({"version": source_facts.VERSION, "facts": "abc"}),
+        json.dumps({"version": source_facts.VERSION, "facts": None}),
+        json.dumps({"version": source_facts.VERSION, "facts": {KEY: {"imports": []}}}),
+        json.dumps({"version": source_facts.VERSION, "facts": {KEY: [1]}}),
+    ],
+)
 def test_a_cache_that_is_not_ours_is_parsed_over(cache, content):
     cache.mkdir()
     (cache / "source_facts.json").write_text(content)
     assert source_facts.facts(SOURCE, "wheel.py")["classes"] == [["Wheel", ["Model"]]]
-    assert json.loads((cache / "source_facts.json").read_text())["version"] == 1
+    kept = json.loads((cache / "source_facts.json").read_text())
+    assert kept["version"] == source_facts.VERSION and KEY in kept["facts"]
 
 
 def test_an_unwritable_cache_parses_as_before(tmp_path, monkeypatch):
@@ -84,6 +101,31 @@ def test_a_warm_staleness_check_parses_nothing(cache):
     result = run_python(code, cache)
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout) == digests
+
+
+def test_a_model_module_named_otherwise_is_found_through_the_registry(cache, tmp_path, monkeypatch):
+    """``sensor_3d.py`` defines ``Sensor3d``, whose snake case is ``sensor3d``."""
+    import agilesat.fmus as fmus
+
+    class Model:
+        pass
+
+    class Sensor3d(Model):
+        pass
+
+    (tmp_path / "sensor_3d.py").write_text("class Sensor3d(Model):\n    pass\n")
+    monkeypatch.setattr(fmus, "_COMPONENTS", tmp_path)
+    imported = []
+
+    def import_module(name):
+        imported.append(name)
+        return types.SimpleNamespace(Sensor3d=Sensor3d)
+
+    monkeypatch.setattr(fmus.importlib, "import_module", import_module)
+    assert fmus.model_class("Sensor3d") is Sensor3d
+    assert imported == ["agilesat.components.sensor_3d"]
+    with pytest.raises(KeyError, match="unknown FMU 'Sensor3D'; FMUs: Sensor3d"):
+        fmus.model_class("Sensor3D")
 
 
 @pytest.mark.slow  # a fresh interpreter loading an FMU: over 1 s
