@@ -42,12 +42,18 @@ def _find_fmus(directory: Path) -> dict[str, str]:
     return found
 
 
+def _registry() -> dict[str, str]:
+    """``FMUS``, read once per process."""
+    if "FMUS" not in globals():
+        globals()["FMUS"] = _find_fmus(_COMPONENTS)
+    return globals()["FMUS"]
+
+
 def __getattr__(name: str):
     """``FMUS``: FMU name (= modelIdentifier = class name) -> module in ``components`` of
     its model, read on first use (an FMU's own import of this package never needs it)."""
     if name == "FMUS":
-        globals()["FMUS"] = _find_fmus(_COMPONENTS)
-        return globals()["FMUS"]
+        return _registry()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -58,13 +64,13 @@ def model_class(name: str):
     otherwise, ``sensor_3d.py`` for ``Sensor3d``)."""
     module = _snake(name)
     if _camel(module) != name or not (_COMPONENTS / f"{module}.py").is_file():
-        module = _find_fmus(_COMPONENTS).get(name, module)
+        module = _registry().get(name, module)
     found = None
     if (_COMPONENTS / f"{module}.py").is_file():
         package = __name__.rsplit(".", 1)[0]
         found = getattr(importlib.import_module(f"{package}.components.{module}"), name, None)
     if not (isinstance(found, type) and "Model" in [base.__name__ for base in found.__bases__]):
-        raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(_find_fmus(_COMPONENTS))}")
+        raise KeyError(f"unknown FMU {name!r}; FMUs: {', '.join(_registry())}")
     return found
 
 

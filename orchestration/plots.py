@@ -45,8 +45,8 @@ recording: list[Drawing] | None = None
 class Drawing(NamedTuple):
     """One figure function's call, recorded to be drawn later (in another process);
     ``cost`` estimates its drawing time, to draw the heaviest first: (axes, lines).  A
-    figure's time goes mostly to its axes (ticks, labels and layout, drawn twice: PNG and
-    SVG), less to the lines on them: scan_pitch's figures take 0.2–0.3 s with one axes,
+    figure's time goes mostly to its axes (ticks, labels, layout; once per format), less
+    to the lines on them: scan_pitch's figures (PNG and SVG) take 0.2–0.3 s with one axes,
     0.3–0.45 s with two, 0.45 s with three (3001 points)."""
 
     draw: Callable[..., Path]

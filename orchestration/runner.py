@@ -158,8 +158,7 @@ def run(
                         results,
                         out_dir,
                     )
-                    written = [p for path in paths for p in plots.formats(path)]
-                summary["figures"] = [str(p) for p in written]
+                    summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
                 _write_file(out_dir / "summary.json", _summary_text(summary))
     return results, summary
 

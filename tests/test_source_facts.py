@@ -115,6 +115,7 @@ def test_a_model_module_named_otherwise_is_found_through_the_registry(cache, tmp
 
     (tmp_path / "sensor_3d.py").write_text("class Sensor3d(Model):\n    pass\n")
     monkeypatch.setattr(fmus, "_COMPONENTS", tmp_path)
+    monkeypatch.delitem(vars(fmus), "FMUS", raising=False)  # the registry read afresh
     imported = []
 
     def import_module(name):
