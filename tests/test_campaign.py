@@ -3,10 +3,12 @@
 scheduler with two workers (one killed mid-campaign), and bit identity of a reused worker.
 """
 
+import contextlib
 import csv
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -95,6 +97,8 @@ def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
 
 def test_resume_after_an_interruption_and_extend(three, tmp_path):
     out = tmp_path / "resumed"
+    # 40 runs: the first two go one per task, then a task of ~2 s of runs (batch_size),
+    # which the SIGTERM interrupts (with 8 runs the campaign could end before it came)
     process = subprocess.Popen(
         [
             sys.executable,
@@ -102,7 +106,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
             "agilesat.orchestration",
             *COMMAND,
             "--runs",
-            "8",
+            "40",
             "--workers",
             "1",
             "--out",
@@ -122,7 +126,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
             assert process.poll() is None and time.monotonic() < deadline, (
                 process.stdout.read() if process.poll() is not None else "timeout"
             )
-            time.sleep(0.2)
+            time.sleep(0.005)
         process.send_signal(signal.SIGTERM)  # handled as Ctrl-C (KeyboardInterrupt)
         output, _ = process.communicate(timeout=120)
     finally:
@@ -133,26 +137,68 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path):
     summary = json.loads((out / "campaign.json").read_text())
     assert summary["status"] == "interrupted"
     made = journal(out)
-    assert 2 <= len(made) < 8 and len(rows(out)) == len(made)
+    assert 2 <= len(made) < 40 and len(rows(out)) == len(made)
+    assert summary["runs"]["made"] == len(made)
 
-    result = agilesat(*COMMAND, "--runs", "8", "--workers", "1", "--out", out, "--resume")
+    result = agilesat(*COMMAND, "--runs", "40", "--workers", "1", "--out", out, "--resume")
     assert result.returncode in (0, 3), result.stderr
     assert f"{len(made)} already made" in result.stderr
     after = journal(out)
     assert after[: len(made)] == made  # finished runs not redone
-    assert sorted(r["index"] for r in after) == list(range(8))
+    assert sorted(r["index"] for r in after) == list(range(40))
     assert rows(out)[:3] == rows(three)  # run i is run i, whatever N
 
-    result = agilesat(*COMMAND, "--runs", "10", "--workers", "1", "--out", out, "--resume")
+    result = agilesat(*COMMAND, "--runs", "42", "--workers", "1", "--out", out, "--resume")
     assert result.returncode in (0, 3), result.stderr
-    assert journal(out)[:8] == after and len(journal(out)) == 10
-    assert np.load(out / "signals.npy").shape[0] == 10
+    assert journal(out)[:40] == after and len(journal(out)) == 42
+    assert np.load(out / "signals.npy").shape[0] == 42
     assert not np.isnan(np.load(out / "signals.npy")).any()
 
-    result = agilesat(*COMMAND, "--runs", "10", "--workers", "1", "--out", out)
+    result = agilesat(*COMMAND, "--runs", "42", "--workers", "1", "--out", out)
     assert result.returncode == 1 and "--resume" in result.stderr
-    result = agilesat(*COMMAND, "--runs", "10", "--seed", "12", "--out", out, "--resume")
+    result = agilesat(*COMMAND, "--runs", "42", "--seed", "12", "--out", out, "--resume")
     assert result.returncode == 1 and "seed: 12 here, 11 in the campaign" in result.stderr
+
+
+@pytest.mark.parametrize("when", ["start", "close"])
+def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
+    three, tmp_path, monkeypatch, when
+):
+    """Ctrl-C or SIGTERM outside the loop over the runs (the LocalCluster starting, or
+    closing once every run is made) summarises the journal in campaign.json; it used to
+    escape and leave the campaign "running" (CI saw it: a fast campaign finished before
+    the test's SIGTERM, which came while the cluster closed).  While a resumed campaign
+    runs, campaign.json says "running" (it said the last run's "complete")."""
+    from agilesat.orchestration import cli
+    from agilesat.orchestration.campaign import engine
+
+    out = tmp_path / "copy"
+    shutil.copytree(three, out)
+    real = engine.cluster
+    seen = []  # the status while the runs go on: "running", not the last one's "complete"
+
+    @contextlib.contextmanager
+    def cluster(workers=None, scheduler=None):
+        seen.append(json.loads((out / "campaign.json").read_text())["status"])
+        if when == "start":
+            raise KeyboardInterrupt
+        with real(workers, scheduler) as client:
+            yield client
+        raise KeyboardInterrupt  # as if it came while the cluster closed
+
+    monkeypatch.setattr(engine, "cluster", cluster)
+    previous = signal.getsignal(signal.SIGTERM)  # the command sets its own
+    try:
+        code = cli.main([*COMMAND, "--runs", "4", "--workers", "1", "--out", str(out), "--resume"])
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    summary = json.loads((out / "campaign.json").read_text())
+    made = 3 if when == "start" else 4
+    assert seen == ["running"]
+    assert summary["runs"]["made"] == len(journal(out)) == len(rows(out)) == made
+    assert summary["status"] == ("interrupted" if when == "start" else "complete")
+    assert code == 130 if when == "start" else code in (0, 3)
+    assert rows(out)[:3] == rows(three)
 
 
 def test_resume_after_the_process_is_killed(three, tmp_path):

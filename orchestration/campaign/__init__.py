@@ -129,12 +129,19 @@ def run_campaign(
             f"grid points), {len(done)} already made in {out}",
             file=sys.stderr,
         )
-    with engine.cluster(workers, scheduler) as client:
-        environment = {
-            "scheduler": scheduler or "LocalCluster",
-            "workers": len(client.scheduler_info()["workers"]),
-        }
-        records, lost, status = engine.execute(plan, out, client, done, bar, metrics)
+    environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
+    records, lost, status = dict(done), [], "interrupted"
+    try:
+        with engine.cluster(workers, scheduler) as client:
+            environment["workers"] = len(client.scheduler_info()["workers"])
+            records, lost, status = engine.execute(plan, out, client, done, bar, metrics)
+    except KeyboardInterrupt:
+        # Ctrl-C or SIGTERM while the cluster starts or closes (``execute`` handles its
+        # own): what the journal holds is summarised all the same, not left "running"
+        if len(records) < plan.total:
+            status = "interrupted"
+    finally:
+        bar.close()
     return finish(plan, out, records, metrics, lost, status, environment)
 
 

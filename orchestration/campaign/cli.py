@@ -96,7 +96,8 @@ def main(args) -> int:
             spec, args.out, args.resume, args.workers, args.scheduler, progress=not args.no_progress
         )
     except KeyboardInterrupt:
-        print("interrupted before the first run finished")
+        # before the cluster started, or while the summary was written
+        print("interrupted: the runs made are in runs.jsonl; --resume continues")
         return 130
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")

@@ -97,6 +97,9 @@ def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
         raise CampaignExistsError(
             f"--resume {out}: the campaign there differs: " + "; ".join(differences)
         )
+    # running again (the rest of the last summary, lost workers included, is kept)
+    saved.update(status="running", spec=plan.spec.to_dict())
+    (out / "campaign.json").write_text(json.dumps(saved, indent=2) + "\n")
     # a truncated last line would be glued to the next record: rewrite the journal clean
     records = read_journal(journal)
     journal.write_text("".join(json.dumps(r) + "\n" for r in records.values()))
@@ -275,7 +278,6 @@ def execute(
     finally:
         if signals is not None:
             signals.flush()
-        progress.close()
     return records, watcher.lost, status
 
 
