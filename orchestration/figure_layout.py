@@ -53,7 +53,7 @@ def draw(fig, axes, canvas) -> bool:
     if _fits(fig, axes, canvas.get_renderer()):
         return True
     fig.tight_layout()
-    fig.set_layout_engine(None)  # laid out once: savefig does not lay it out again
+    fig.set_layout_engine("none")  # laid out once (None would read rcParams again)
     canvas.draw()
     return False
 

@@ -177,19 +177,19 @@ def _draw_taken(drawings, order, claims) -> list[tuple[int, BaseException]]:
 
 
 def _error_of(exc: BaseException):
-    """The exception if it pickles (raised as it is in the caller), else its traceback."""
+    """The exception if it pickles and unpickles (raised as it is in the caller: a class
+    whose ``__init__`` takes other arguments than its ``args`` does not), else its
+    traceback."""
     try:
-        pickle.dumps(exc)
+        pickle.loads(pickle.dumps(exc))
         return exc
     except Exception:  # noqa: BLE001
         return RuntimeError("".join(traceback.format_exception(exc)))
 
 
-def _serve(processes: int) -> None:
+def _serve(processes: int, reply) -> None:
     """The worker: read one job from stdin, draw it in ``processes`` processes, reply on
-    stdout (anything else printed goes to stderr)."""
-    reply = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)
+    ``reply`` (the original stdout)."""
     data = sys.stdin.buffer.read()
     if not data:  # the run ended without figures
         return
@@ -253,6 +253,9 @@ def _status(status: int) -> str:
 if __name__ == "__main__":
     # Ctrl-C reaches the whole process group: the run decides (it closes our input)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # the reply has stdout to itself: whatever else prints (an import too) goes to stderr
+    reply = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
     import importlib
     import io
 
@@ -268,7 +271,7 @@ if __name__ == "__main__":
         axes.figure.savefig(io.BytesIO(), format=suffix[1:])
     for module in sys.argv[2:]:
         importlib.import_module(module)
-    _serve(int(sys.argv[1]))
+    _serve(int(sys.argv[1]), reply)
     # done (every file written and closed): no interpreter teardown, which takes ~0.2 s
     # with matplotlib loaded and which the run waits for (FigurePool.close)
     sys.stdout.flush()

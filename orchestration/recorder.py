@@ -157,6 +157,18 @@ def file_error(path, exc: OSError, note: str = "") -> OSError:
     return error
 
 
+def write_text(path: Path, text: str) -> None:
+    """Write under a temporary name, then rename (a kill leaves the old file or the new,
+    never half of one); an OSError names the file."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        temporary.write_text(text, encoding="utf-8")
+        os.replace(temporary, path)
+    except OSError as exc:
+        temporary.unlink(missing_ok=True)
+        raise file_error(path, exc, "; not written") from None
+
+
 def _checked(path, action):
     try:
         return action()

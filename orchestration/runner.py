@@ -13,7 +13,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
 import threading
 import time
 import warnings
@@ -27,7 +26,7 @@ from . import scenarios
 from .fmu import Description
 from .master import Interrupted, SimulationError, simulate, stop_on_signals
 from .parameters import did_you_mean, scalar_parameters
-from .recorder import file_error
+from .recorder import write_text
 from .results import Results, units_path
 from .ssp import NS, SystemFile, read_system
 from .units import pretty
@@ -159,7 +158,7 @@ def run(
                         out_dir,
                     )
                     summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
-                _write_file(out_dir / "summary.json", _summary_text(summary))
+                write_text(out_dir / "summary.json", _summary_text(summary))
     return results, summary
 
 
@@ -201,17 +200,6 @@ def _summary_text(summary: dict) -> str:
     return json.dumps(summary, indent=2, default=str, ensure_ascii=False) + "\n"
 
 
-def _write_file(path: Path, text: str) -> None:
-    """Write under a temporary name, then rename; an OSError names the file."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
-        temporary.write_text(text, encoding="utf-8")
-        os.replace(temporary, path)
-    except OSError as exc:
-        temporary.unlink(missing_ok=True)
-        raise file_error(path, exc, "; not written") from None
-
-
 def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
     """The units of results.csv, log.txt and summary.json (the master writes results.csv
     row by row and results.npz); an OSError names each file not written."""
@@ -225,7 +213,7 @@ def _write_records(results: Results, summary: dict, out_dir: Path) -> None:
         (out_dir / "summary.json", _summary_text(summary)),
     ):
         try:
-            _write_file(path, text)
+            write_text(path, text)
         except OSError as exc:
             problems.append(str(exc))
     if problems:

@@ -104,3 +104,17 @@ def test_the_formats_are_set_per_thread_and_checked():
     with pytest.raises(ValueError, match=r"expected '.png' first"):
         with plots.written_as((".svg",)):
             pass
+
+
+@pytest.mark.parametrize("rc", ["figure.autolayout", "figure.constrained_layout.use"])
+def test_a_figure_laid_out_tight_stays_as_drawn_whatever_rcparams_say(rc):
+    """After the tight fallback no layout engine is left to lay the SVG twin out anew (it
+    would differ from the PNG drawn before it)."""
+    from matplotlib.layout_engine import PlaceHolderLayoutEngine
+
+    with matplotlib.rc_context({rc: True}):
+        fig, axes, canvas = _figure(2, sharex=False)
+        axes[0, 0].set_title("a title\non three\nlines")
+        assert not figure_layout.draw(fig, axes, canvas)
+        engine = fig.get_layout_engine()  # none, or matplotlib's place holder, a no-op
+        assert engine is None or isinstance(engine, PlaceHolderLayoutEngine)

@@ -298,6 +298,47 @@ def test_a_pool_raises_the_error_of_the_first_figure_that_failed(tmp_path, impor
     assert sorted(name for _, name in _noted_lines(tmp_path)) == sorted(HEAVIEST_FIRST)
 
 
+class _TwoArguments(Exception):
+    def __init__(self, what, where):
+        super().__init__(f"{what} at {where}")
+
+
+def _failing_oddly(results, out_dir):
+    raise _TwoArguments("an error pickle cannot rebuild", "figure 0")
+
+
+@pytest.mark.slow
+def test_a_pool_raises_the_text_of_an_error_that_does_not_unpickle(tmp_path, importable):
+    """Pickled, such an error raised TypeError (its __init__'s arguments) in the caller."""
+    from agilesat.orchestration.figure_pool import FigurePool
+
+    pool = FigurePool(2, (__name__,))
+    try:
+        with pytest.raises(RuntimeError, match="an error pickle cannot rebuild at figure 0"):
+            pool.draw(_failing_oddly, None, tmp_path)
+    finally:
+        pool.close()
+
+
+@pytest.mark.slow
+def test_a_module_that_prints_as_it_is_imported_leaves_the_reply_whole(
+    tmp_path, importable, monkeypatch
+):
+    """The worker's stdout is its reply: a preloaded module's print went into it and the
+    figures were drawn a second time in the run's process (a warning, an error here)."""
+    from agilesat.orchestration.figure_pool import FigurePool
+    from helpers import ROOT
+
+    (tmp_path / "noisy_figures.py").write_text("print('imported' * 1000)\n")
+    monkeypatch.setenv("PYTHONPATH", f"{ROOT / 'tests'}{os.pathsep}{tmp_path}")
+    pool = FigurePool(2, (__name__, "noisy_figures"))
+    try:
+        drawn = pool.draw(_figures, None, tmp_path)
+    finally:
+        pool.close()
+    assert all(p.exists() for p in drawn)
+
+
 _LOAD = """
 import json, os, sys
 os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..recorder import write_text
 from . import dispersion, engine, report
 from .plan import Plan, Spec, time_axis
 
@@ -118,30 +119,33 @@ def run_campaign(
     metrics = {}
     if done and (out / "metrics.json").exists():
         metrics = json.loads((out / "metrics.json").read_text())
-    if plan.scenario is not None:
-        from ...fmus.build import build_all
-
-        build_all(names=plan.scenario.components)
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
-    if len(done) < plan.total:
-        print(
-            f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
-            f"grid points), {len(done)} already made in {out}",
-            file=sys.stderr,
-        )
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
-    records, lost, status = dict(done), [], "interrupted"
+    lost, status = [], "interrupted"
     try:
+        if plan.scenario is not None:
+            from ...fmus.build import build_all
+
+            build_all(names=plan.scenario.components)
+        if len(done) < plan.total:
+            print(
+                f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
+                f"grid points), {len(done)} already made in {out}",
+                file=sys.stderr,
+            )
         with engine.cluster(workers, scheduler) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
-            records, lost, status = engine.execute(plan, out, client, done, bar, metrics)
+            _, lost, status = engine.execute(plan, out, client, done, bar, metrics)
     except KeyboardInterrupt:
-        # Ctrl-C or SIGTERM while the cluster starts or closes (``execute`` handles its
-        # own): what the journal holds is summarised all the same, not left "running"
-        if len(records) < plan.total:
-            status = "interrupted"
+        # Ctrl-C or SIGTERM outside the loop over the runs (``execute`` handles its own):
+        # while the FMUs build or the cluster starts or closes
+        pass
     finally:
         bar.close()
+    # the summary is the journal's: a run written there just as a signal came is in it
+    records = {i: r for i, r in engine.read_journal(out / "runs.jsonl").items() if i < plan.total}
+    if status == "interrupted" and len(records) == plan.total:
+        status = "complete"  # the signal came once every run was made
     return finish(plan, out, records, metrics, lost, status, environment)
 
 
@@ -194,13 +198,13 @@ def finish(
         else None,
         "files": [p.name for p in files],
     }
-    (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
+    write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     figures = report.histograms(table, metrics, out)
-    if plan.signals:
+    if plan.signals and (out / "signals.npy").exists():  # none if no run was made
         signals = np.load(out / "signals.npy", mmap_mode="r")
         figures += report.envelopes(signals, plan.signals, plan.units, time_axis(plan), out)
     summary["figures"] = [p.name for p in figures]
-    (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
+    write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)
 
 

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..recorder import write_text
 from .plan import Plan, Spec
 from .worker import run_batch
 
@@ -82,8 +83,9 @@ def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
     if not journal.exists():
         out.mkdir(parents=True, exist_ok=True)
         # the spec first: a campaign killed before it finishes can still be resumed
-        (out / "campaign.json").write_text(
-            json.dumps({"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n"
+        write_text(
+            out / "campaign.json",
+            json.dumps({"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n",
         )
         return {}
     if not resume:
@@ -99,7 +101,7 @@ def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
         )
     # running again (the rest of the last summary, lost workers included, is kept)
     saved.update(status="running", spec=plan.spec.to_dict())
-    (out / "campaign.json").write_text(json.dumps(saved, indent=2) + "\n")
+    write_text(out / "campaign.json", json.dumps(saved, indent=2) + "\n")
     # a truncated last line would be glued to the next record: rewrite the journal clean
     records = read_journal(journal)
     journal.write_text("".join(json.dumps(r) + "\n" for r in records.values()))
@@ -256,7 +258,7 @@ def execute(
                                 name,
                                 {k: v for k, v in m.items() if k not in ("value", "met", "paper")},
                             )
-                        (out / "metrics.json").write_text(json.dumps(metrics, indent=1) + "\n")
+                        write_text(out / "metrics.json", json.dumps(metrics, indent=1) + "\n")
                     record["metrics"] = {
                         k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
                         for k, m in record["metrics"].items()
