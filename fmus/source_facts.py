@@ -58,11 +58,20 @@ def _parse(source: str, filename: str) -> dict:
 
 
 def _well_formed(entry) -> bool:
-    return (
-        isinstance(entry, dict)
-        and isinstance(entry.get("classes"), list)
-        and isinstance(entry.get("imports"), list)
-    )
+    """An entry of :func:`_parse`'s shape, down to its strings (the file is anyone's)."""
+
+    def names(value) -> bool:
+        return isinstance(value, list) and all(isinstance(n, str) for n in value)
+
+    try:
+        return all(
+            isinstance(cls, str) and names(bases) for cls, bases in entry["classes"]
+        ) and all(
+            type(level) is int and (module is None or isinstance(module, str)) and names(imported)
+            for level, module, imported in entry["imports"]
+        )
+    except (TypeError, KeyError, ValueError):  # not a dict, a key missing, a row's length
+        return False
 
 
 def _path() -> Path:

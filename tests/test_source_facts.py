@@ -8,7 +8,7 @@ import types
 
 import pytest
 
-from agilesat.fmus import FMUS, build, source_facts
+from agilesat.fmus import build, source_facts
 from helpers import run_python
 
 SOURCE = "from .model import Model\n\n\nclass Wheel(Model):\n    pass\n"
@@ -58,6 +58,15 @@ KEY = hashlib.sha256(SOURCE.encode()).hexdigest()
         json.dumps({"version": source_facts.VERSION, "facts": None}),
         json.dumps({"version": source_facts.VERSION, "facts": {KEY: {"imports": []}}}),
         json.dumps({"version": source_facts.VERSION, "facts": {KEY: [1]}}),
+        json.dumps(
+            {"version": source_facts.VERSION, "facts": {KEY: {"classes": [["X"]], "imports": []}}}
+        ),
+        json.dumps(
+            {
+                "version": source_facts.VERSION,
+                "facts": {KEY: {"classes": [], "imports": [["1", "model", ["Model"]]]}},
+            }
+        ),
     ],
 )
 def test_a_cache_that_is_not_ours_is_parsed_over(cache, content):
@@ -87,15 +96,19 @@ def test_the_cache_keeps_the_newest_entries(cache, monkeypatch):
 
 
 def test_a_warm_staleness_check_parses_nothing(cache):
-    """In a new process with the cache filled: the same digests, no source parsed."""
-    digests = {name: build._sources(name)[1] for name in FMUS}
+    """In a new process with the cache filled: the same registry and digests, no source
+    parsed (``ast.parse`` is refused before the registry is read)."""
+    import agilesat.fmus as fmus
+
+    registry = fmus._find_fmus(fmus._COMPONENTS)
+    digests = {name: build._sources(name)[1] for name in registry}
     code = (
         "import ast, json, os, sys\n"
         "os.environ['AGILESAT_CACHE_DIR'] = sys.argv[1]\n"
-        "from agilesat.fmus import FMUS, build\n"
         "def parse(*args, **kwargs):\n"
         "    raise AssertionError('parsed')\n"
         "ast.parse = parse\n"
+        "from agilesat.fmus import FMUS, build\n"
         "print(json.dumps({name: build._sources(name)[1] for name in FMUS}))\n"
     )
     result = run_python(code, cache)
