@@ -212,7 +212,11 @@ def _draw(processes: int, function, args) -> tuple:
     sys.stderr.flush()
     for _ in range(min(processes, len(drawings)) - 1):
         read, write = os.pipe()
-        pid = os.fork()
+        try:
+            pid = os.fork()
+        except OSError:  # no process to be had (EAGAIN, ENOMEM): draw in those there are
+            os.close(read), os.close(write)
+            break
         if pid == 0:
             os.close(read)
             code = 0

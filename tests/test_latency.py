@@ -298,6 +298,22 @@ def test_a_pool_raises_the_error_of_the_first_figure_that_failed(tmp_path, impor
     assert sorted(name for _, name in _noted_lines(tmp_path)) == sorted(HEAVIEST_FIRST)
 
 
+def test_a_fork_refused_leaves_the_figures_to_the_processes_there_are(tmp_path, monkeypatch):
+    """``os.fork`` failing (EAGAIN at a process limit) used to stop the worker, and the run
+    drew every figure again beside the children already forked."""
+    import errno
+
+    from agilesat.orchestration import figure_pool
+
+    def refused():
+        raise OSError(errno.EAGAIN, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(figure_pool.os, "fork", refused)
+    status, drawn = figure_pool._draw(3, _noting, (None, tmp_path))
+    assert status == "ok" and drawn == [tmp_path / f"f{k}.png" for k in range(len(PANELS))]
+    assert [name for _, name in _noted_lines(tmp_path)] == HEAVIEST_FIRST  # here, in order
+
+
 class _TwoArguments(Exception):
     def __init__(self, what, where):
         super().__init__(f"{what} at {where}")
