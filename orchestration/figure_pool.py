@@ -44,6 +44,10 @@ _ENV = {
 
 #: free cores (cores less the 1-minute load average) a worker needs to pay
 FREE_CORES = 0.5
+#: the most array data (a run's ``Results.data``) sent to the worker: a longer run's
+#: figures are drawn in the calling process (sending copies the rows twice, pickled and
+#: in the worker: a 10^6-step run of 100 columns is 800 MB)
+MAX_SENT_BYTES = 64 << 20
 
 
 def processes_for_figures() -> int:
@@ -80,9 +84,13 @@ class FigurePool:
 
     def draw(self, function, *args):
         """``function(*args)`` (it draws figures with :mod:`.plots` and returns their
-        paths), its figures drawn by the worker's processes."""
+        paths), its figures drawn by the worker's processes (here if the arguments hold
+        more than :data:`MAX_SENT_BYTES` of array data)."""
         from . import plots
 
+        if sum(getattr(getattr(a, "data", None), "nbytes", 0) for a in args) > MAX_SENT_BYTES:
+            self.close()
+            return function(*args)
         try:  # with the formats this process writes
             job = pickle.dumps((plots.written(), function, args), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - a closure, an open file: draw here

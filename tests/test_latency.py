@@ -314,6 +314,27 @@ def test_a_fork_refused_leaves_the_figures_to_the_processes_there_are(tmp_path, 
     assert [name for _, name in _noted_lines(tmp_path)] == HEAVIEST_FIRST  # here, in order
 
 
+@pytest.mark.slow
+def test_a_long_runs_figures_are_drawn_here_not_sent(tmp_path, importable, monkeypatch):
+    """Rows past MAX_SENT_BYTES are not pickled to the worker (twice their memory)."""
+    import numpy as np
+
+    from agilesat.orchestration import figure_pool
+    from agilesat.orchestration.results import Results
+
+    rows = Results(["time", "y"], np.zeros((1000, 2)))
+    monkeypatch.setattr(figure_pool, "MAX_SENT_BYTES", rows.data.nbytes - 1)
+    monkeypatch.setattr(figure_pool.pickle, "dumps", None)  # nothing may be sent
+    pool = figure_pool.FigurePool(2, (__name__,))
+    try:
+        drawn = pool.draw(_noting, rows, tmp_path)
+    finally:
+        pool.close()
+    assert pool.worker.returncode is not None  # sent nothing: stopped
+    assert {int(pid) for pid, _ in _noted_lines(tmp_path)} == {os.getpid()}
+    assert drawn == [tmp_path / f"f{k}.png" for k in range(len(PANELS))]
+
+
 class _TwoArguments(Exception):
     def __init__(self, what, where):
         super().__init__(f"{what} at {where}")
