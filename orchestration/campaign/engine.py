@@ -274,6 +274,7 @@ def execute(
                     if nxt is None:
                         break
                     pending.add(nxt)
+        watcher.check(futures, force=True)  # a worker lost within the last second
     except KeyboardInterrupt:
         status = "interrupted"
         client.cancel(list(futures))
@@ -297,9 +298,12 @@ class WorkerWatch:
         self.lost = []
         self.last = 0.0
 
-    def check(self, futures: dict) -> None:
+    def check(self, futures: dict, force: bool = False) -> None:
+        """Note the workers gone since the last check (at most one a second, unless
+        ``force``: the campaign's end, else a worker lost in its last second went
+        unsaid)."""
         now = time.monotonic()
-        if now - self.last < 1.0:
+        if now - self.last < 1.0 and not force:
             return
         self.last = now
         workers = set(self.client.scheduler_info()["workers"])
