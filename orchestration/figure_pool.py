@@ -113,6 +113,12 @@ class FigurePool:
         self.close()
         return function(*args)
 
+    def __enter__(self) -> FigurePool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     def close(self) -> int | None:
         """Stop the worker (at once if it was sent nothing: the run failed or was
         interrupted); its exit status."""

@@ -176,10 +176,8 @@ def _figure_pool(processes: int, scenario):
         warnings.warn(f"figures drawn in this process: no figure worker ({exc})", stacklevel=3)
         yield None
         return
-    try:
+    with pool:
         yield pool
-    finally:
-        pool.close()
 
 
 def _facts(results: Results, wall: float) -> dict:

@@ -208,11 +208,8 @@ def test_a_pool_writes_the_figures_one_process_writes(tmp_path, importable):
 
     (tmp_path / "here").mkdir(), (tmp_path / "pool").mkdir()
     here = _figures(None, tmp_path / "here")
-    pool = FigurePool(3, (__name__,))
-    try:
+    with FigurePool(3, (__name__,)) as pool:
         drawn = pool.draw(_figures, None, tmp_path / "pool")
-    finally:
-        pool.close()
     assert [p.name for p in drawn] == [p.name for p in here]
     for path in here:
         for twin in (path, path.with_suffix(".svg")):
@@ -227,12 +224,9 @@ def test_a_pool_writes_the_figures_one_process_writes(tmp_path, importable):
 def test_a_pool_writes_the_formats_of_its_caller(tmp_path, importable):
     from agilesat.orchestration.figure_pool import FigurePool
 
-    pool = FigurePool(2, (__name__,))
-    try:
+    with FigurePool(2, (__name__,)) as pool:
         with plots.written_as((".png",)):
             drawn = pool.draw(_figures, None, tmp_path)
-    finally:
-        pool.close()
     assert sorted(p.name for p in tmp_path.glob("*.*")) == sorted(p.name for p in drawn)
 
 
@@ -240,20 +234,14 @@ def test_a_pool_writes_the_formats_of_its_caller(tmp_path, importable):
 def test_a_pool_raises_the_figure_codes_error_and_draws_a_closure_here(tmp_path, importable):
     from agilesat.orchestration.figure_pool import FigurePool
 
-    pool = FigurePool(2, (__name__,))
-    try:
+    with FigurePool(2, (__name__,)) as pool:
         with pytest.raises(ValueError, match="figure code failed here"):
             pool.draw(_failing, None, tmp_path)
-    finally:
-        pool.close()
     assert (tmp_path / "ok.png").exists()  # made before the error: drawn, as in one process
-    pool = FigurePool(2)
-    try:
+    with FigurePool(2) as pool:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             drawn = pool.draw(lambda r, out: _figures(r, out), None, tmp_path)
-    finally:
-        pool.close()
     assert pool.worker.returncode is not None  # sent nothing: stopped, not left waiting
     assert len(caught) == 1 and str(caught[0].message).startswith(
         "figures drawn in this process: the figure worker failed: the figure call cannot be "
@@ -269,11 +257,8 @@ def test_a_pool_draws_each_recorded_figure_once_heaviest_first(tmp_path, importa
     for processes in (1, 3):
         out = tmp_path / str(processes)
         out.mkdir()
-        pool = FigurePool(processes, (__name__,))
-        try:
+        with FigurePool(processes, (__name__,)) as pool:
             drawn = pool.draw(_noting, None, out)
-        finally:
-            pool.close()
         assert drawn == [out / f"f{k}.png" for k in range(len(PANELS))]
         noted = _noted_lines(out)
         # the figure function ran once (what it writes itself is written once)
@@ -289,12 +274,9 @@ def test_a_pool_draws_each_recorded_figure_once_heaviest_first(tmp_path, importa
 def test_a_pool_raises_the_error_of_the_first_figure_that_failed(tmp_path, importable):
     from agilesat.orchestration.figure_pool import FigurePool
 
-    pool = FigurePool(2, (__name__,))
-    try:
+    with FigurePool(2, (__name__,)) as pool:
         with pytest.raises(ValueError, match="could not draw f0.png"):  # f1 failed first
             pool.draw(_failing_figures, None, tmp_path)
-    finally:
-        pool.close()
     assert sorted(name for _, name in _noted_lines(tmp_path)) == sorted(HEAVIEST_FIRST)
 
 
@@ -325,11 +307,8 @@ def test_a_long_runs_figures_are_drawn_here_not_sent(tmp_path, importable, monke
     rows = Results(["time", "y"], np.zeros((1000, 2)))
     monkeypatch.setattr(figure_pool, "MAX_SENT_BYTES", rows.data.nbytes - 1)
     monkeypatch.setattr(figure_pool.pickle, "dumps", None)  # nothing may be sent
-    pool = figure_pool.FigurePool(2, (__name__,))
-    try:
+    with figure_pool.FigurePool(2, (__name__,)) as pool:
         drawn = pool.draw(_noting, rows, tmp_path)
-    finally:
-        pool.close()
     assert pool.worker.returncode is not None  # sent nothing: stopped
     assert {int(pid) for pid, _ in _noted_lines(tmp_path)} == {os.getpid()}
     assert drawn == [tmp_path / f"f{k}.png" for k in range(len(PANELS))]
@@ -349,12 +328,9 @@ def test_a_pool_raises_the_text_of_an_error_that_does_not_unpickle(tmp_path, imp
     """Pickled, such an error raised TypeError (its __init__'s arguments) in the caller."""
     from agilesat.orchestration.figure_pool import FigurePool
 
-    pool = FigurePool(2, (__name__,))
-    try:
+    with FigurePool(2, (__name__,)) as pool:
         with pytest.raises(RuntimeError, match="an error pickle cannot rebuild at figure 0"):
             pool.draw(_failing_oddly, None, tmp_path)
-    finally:
-        pool.close()
 
 
 @pytest.mark.slow
@@ -368,11 +344,8 @@ def test_a_module_that_prints_as_it_is_imported_leaves_the_reply_whole(
 
     (tmp_path / "noisy_figures.py").write_text("print('imported' * 1000)\n")
     monkeypatch.setenv("PYTHONPATH", f"{ROOT / 'tests'}{os.pathsep}{tmp_path}")
-    pool = FigurePool(2, (__name__, "noisy_figures"))
-    try:
+    with FigurePool(2, (__name__, "noisy_figures")) as pool:
         drawn = pool.draw(_figures, None, tmp_path)
-    finally:
-        pool.close()
     assert all(p.exists() for p in drawn)
 
 

@@ -121,7 +121,7 @@ def run_campaign(
         metrics = json.loads((out / "metrics.json").read_text())
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
-    lost, status = [], "interrupted"
+    lost = []
     try:
         if plan.scenario is not None:
             from ...fmus.build import build_all
@@ -135,7 +135,7 @@ def run_campaign(
             )
         with engine.cluster(workers, scheduler) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
-            _, lost, status = engine.execute(plan, out, client, done, bar, metrics)
+            _, lost, _ = engine.execute(plan, out, client, done, bar, metrics)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM outside the loop over the runs (``execute`` handles its own):
         # while the FMUs build or the cluster starts or closes
@@ -144,8 +144,7 @@ def run_campaign(
         bar.close()
     # the summary is the journal's: a run written there just as a signal came is in it
     records = {i: r for i, r in engine.read_journal(out / "runs.jsonl").items() if i < plan.total}
-    if status == "interrupted" and len(records) == plan.total:
-        status = "complete"  # the signal came once every run was made
+    status = "complete" if len(records) == plan.total else "interrupted"
     return finish(plan, out, records, metrics, lost, status, environment)
 
 
