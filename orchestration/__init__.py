@@ -15,11 +15,11 @@ import importlib
 
 _WHERE = {
     "run": "runner",
-    "simulate": "master",
-    "SimulationError": "master",
-    "read_system": "ssp",
-    "SystemFileError": "ssp",
-    "Results": "results",
+    "simulate": "cosim.master",
+    "SimulationError": "cosim.master",
+    "read_system": "system.ssp",
+    "SystemFileError": "system.ssp",
+    "Results": "output.results",
 }
 
 __all__ = ["run", "simulate", "read_system", "Results", "SimulationError", "SystemFileError"]

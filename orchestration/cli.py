@@ -60,7 +60,7 @@ def main(argv=None) -> int:
 def _interrupted(exc: BaseException) -> bool:
     """A run stopped by SIGINT/SIGTERM (master.Interrupted; only a command that imported
     the master can raise one)."""
-    master = sys.modules.get(f"{__package__}.master")
+    master = sys.modules.get(f"{__package__}.cosim.master")
     return master is not None and isinstance(exc, master.Interrupted)
 
 
@@ -282,7 +282,7 @@ def _info(args) -> int:
 def _build(args) -> int:
     from ..fmus import FMUS
     from ..fmus.build import BUILD_DIR, build_fmu
-    from .progress import Progress
+    from .output.progress import Progress
 
     names = args.names or list(FMUS)
     built = []
@@ -324,10 +324,10 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
-    from .figure_pool import processes_for_figures
-    from .parameters import parse_set
-    from .progress import Progress
+    from .output.figure_pool import processes_for_figures
+    from .output.progress import Progress
     from .runner import run
+    from .system.parameters import parse_set
 
     overrides = parse_set(args.set)
     out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
@@ -357,8 +357,8 @@ def _run(args) -> int:
 
 
 def _plot(args) -> int:
-    from . import plots
-    from .results import Results
+    from .output import plots
+    from .output.results import Results
 
     runs = [Path(item) for item in args.items if Path(item).is_dir()]
     variables = [item for item in args.items if not Path(item).is_dir()]
@@ -423,7 +423,7 @@ def _stare(args) -> int:
         )
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
     scenario = video_sar.pass_scenario(orbit, args.out, not args.no_yaw_compensation)
-    from .progress import Progress
+    from .output.progress import Progress
 
     with Progress("stare", quiet=args.quiet) as progress:
         _, summary = run(scenario, out_dir=args.out, echo=_echo(args.out), progress=progress)
@@ -443,8 +443,8 @@ def _overlap(args, altitude: float) -> None:
     """Frame overlap (eqs 1-5) at the asked frame rates, and its figure over 1-30 Hz."""
     import numpy as np
 
-    from ..components.analysis import mission
-    from . import plots
+    from .output import plots
+    from .studies import mission
 
     look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
     # the paper's carrier, resolution and target latitude; altitude and look as asked
@@ -481,7 +481,7 @@ def _overlap(args, altitude: float) -> None:
 
 def _walker(args, altitude: float) -> None:
     """Walker sizing (eqs 14-20) under both readings of the paper's β."""
-    from ..components.analysis import mission
+    from .studies import mission
 
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
@@ -498,7 +498,7 @@ def _walker(args, altitude: float) -> None:
 
 
 def _size_flywheel(args) -> int:
-    from .sizing import size_flywheel
+    from .studies.sizing import size_flywheel
 
     print("wheel torque limit [N·m]   accuracy [deg]   stability [deg/s]   momentum [N·m·s]")
     result = size_flywheel(

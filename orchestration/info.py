@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from . import scenarios
-from .fmu import Description
-from .parameters import did_you_mean, variables
-from .ssp import read_system
-from .units import pretty
+from .cosim.fmu import Description
+from .system.parameters import did_you_mean, variables
+from .system.ssp import read_system
+from .system.units import pretty
 
 
 def listing() -> str:

@@ -23,14 +23,14 @@ from lxml import etree
 
 from ..fmus.model_description import UNITS
 from . import scenarios
-from .fmu import Description
-from .master import Interrupted, SimulationError, simulate, stop_on_signals
-from .parameters import did_you_mean, scalar_parameters
-from .recorder import write_text
-from .results import Results, units_path
-from .ssp import NS, SystemFile, read_system
-from .units import pretty
-from .validation import override
+from .cosim.fmu import Description
+from .cosim.master import Interrupted, SimulationError, simulate, stop_on_signals
+from .output.recorder import write_text
+from .output.results import Results, units_path
+from .system.parameters import did_you_mean, scalar_parameters
+from .system.ssp import NS, SystemFile, read_system
+from .system.units import pretty
+from .system.validation import override
 
 
 def parse_target(target):
@@ -148,7 +148,7 @@ def run(
         if out_dir is not None:
             _write_records(results, summary, out_dir)
             if figures and signals.signal is None:
-                from . import plots
+                from .output import plots
 
                 draw = (lambda f, *a: f(*a)) if pool is None else pool.draw
                 with plots.written_as(plots.FORMATS if svg else plots.FORMATS[:1]):
@@ -168,7 +168,7 @@ def _figure_pool(processes: int, scenario):
     if processes <= 0:
         yield None
         return
-    from .figure_pool import FigurePool
+    from .output.figure_pool import FigurePool
 
     try:
         pool = FigurePool(processes, (scenario.figures.__module__,) if scenario is not None else ())

@@ -1,8 +1,13 @@
 """Shared fixtures (helpers that are not fixtures live in ``helpers.py``)."""
 
 import json
+import sys
 
 import pytest
+
+from helpers import TOOLS
+
+sys.path.insert(0, str(TOOLS))  # the tools: reference, coupling_cases, fault cases, hosts
 
 
 @pytest.fixture(scope="session")
@@ -18,7 +23,7 @@ def scan_pitch_run(fmus, tmp_path_factory):
     """The nominal scan_pitch run (0.05 s, with figures), once per session through the CLI
     in a fresh process: (out_dir, completed process, summary.json, results.csv).  Tests
     that need this very run share it instead of repeating it."""
-    from agilesat.orchestration.results import Results
+    from agilesat.orchestration.output.results import Results
     from helpers import agilesat
 
     out = tmp_path_factory.mktemp("scan_pitch")
@@ -30,3 +35,11 @@ def scan_pitch_run(fmus, tmp_path_factory):
         json.loads((out / "summary.json").read_text()),
         Results.from_csv(out / "results.csv"),
     )
+
+
+@pytest.fixture(scope="session")
+def c_host(tmp_path_factory):
+    """The plain C FMI 2.0 host (tests/tools/c_host/fmi2_host.c), compiled once."""
+    from c_host.harness import compile_host
+
+    return compile_host(tmp_path_factory.mktemp("c_host"))

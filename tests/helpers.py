@@ -10,6 +10,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+#: the tests' tools: benchmarks, hosts, fault cases, the monolithic references (on sys.path
+#: in the tests: ``conftest.py``)
+TOOLS = ROOT / "tests" / "tools"
 #: a real satellite's two-line elements: the ISS set printed in the python-sgp4 README
 #: (https://pypi.org/project/sgp4/), epoch 2019-12-09 16:38:29 UTC
 ISS_TLE = (

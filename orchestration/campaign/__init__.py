@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..recorder import write_text
+from ..output.recorder import write_text
 from . import dispersion, engine, report
 from .plan import Plan, Spec, time_axis
 

@@ -65,7 +65,7 @@ def add_parser(commands) -> argparse.ArgumentParser:
 
 
 def main(args) -> int:
-    from ..parameters import parse_set
+    from ..system.parameters import parse_set
 
     overrides = parse_set(args.set)
     files = [str(f) for f in args.dispersions]

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..recorder import write_text
+from ..output.recorder import write_text
 from .plan import Plan, Spec
 from .worker import run_batch
 
@@ -46,7 +46,7 @@ MAX_BATCH = 50
 #: page), the event-loop watchdog tick every 20 ms (it only warns when the loop is blocked
 #: for more than 3 s), the system monitor every 0.5 s and the memory monitor (spill,
 #: pause, terminate) every 0.1 s (idle Dask processes using CPU: dask/distributed#5000,
-#: #5062).  With these, 5-10 ms/s (tests/benchmark_campaign.py).  And the nanny spawns its
+#: #5062).  With these, 5-10 ms/s (tests/tools/benchmark_campaign.py).  And the nanny spawns its
 #: worker with MALLOC_TRIM_THRESHOLD_=65536 (for workers holding large data): setting it
 #: turns off glibc's dynamic mmap threshold, so every NumPy array over 128 KiB a run makes
 #: is mapped and unmapped again, ~500 page faults per scan_pitch run instead of ~30; our

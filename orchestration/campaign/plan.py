@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
-from ..fmu import Description
+from ..cosim.fmu import Description
 from ..runner import parse_target
-from ..ssp import read_system
+from ..system.ssp import read_system
 from . import dispersion as dispersions
 
 

@@ -155,7 +155,7 @@ def display(meta: dict) -> tuple[float, str]:
 
 
 def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
-    from ..plots import plt
+    from ..output.plots import plt
 
     paths = []
     for name, meta in metrics.items():
@@ -191,7 +191,7 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
 
 def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
     """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal."""
-    from ..plots import plt
+    from ..output.plots import plt
 
     paths = []
     for j, name in enumerate(names):

@@ -3,7 +3,7 @@
 Outcomes: ``ok``; ``failed`` — the scenario ran but did not fly as required (exit 3 of
 ``run``; the message is its diagnostics); ``error`` — the run stopped (a failed FMI call,
 bad values; the message says where).  Nothing raised here ends a campaign.  The worker
-process keeps its loaded FMUs between runs (``orchestration.fmu``).
+process keeps its loaded FMUs between runs (``orchestration.cosim.fmu``).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def run_one(
     signals: list[str],
     points: int,
 ) -> dict:
-    from ..master import SimulationError
+    from ..cosim.master import SimulationError
     from ..runner import run
 
     began = time.perf_counter()

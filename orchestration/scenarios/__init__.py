@@ -37,7 +37,8 @@ class Scenario:
     figures: Callable  # (Results, out_dir) -> [paths]
     variants: dict = field(default_factory=dict)  # name -> (description, {"A.p": value})
     # Jacobi: the hub extrapolates the devices' momentum over the step with their hdot, a
-    # coupling error of second order (tests/test_coupling.py, README "Coupling accuracy")
+    # coupling error of second order (tests/orchestration/test_coupling.py, README
+    # "Coupling accuracy")
     algorithm: str = "jacobi"
     steps: dict = field(default_factory=dict)  # instance -> its own step (multirate.py)
     system: Path | None = None  # the .ssd, if not the shipped systems/<name>
@@ -63,7 +64,7 @@ class Scenario:
         from ...components.variables import UNITS
         from ...fmus import model_class
         from ...fmus.build import BUILD_DIR
-        from ..ssp import render_ssd
+        from ..system.ssp import render_ssd
 
         tables = {}
         for name in self.components:

@@ -1,6 +1,6 @@
 """The papers' cases: the values the scenarios and the CLI's defaults take from the papers.
 
-The analysis layer (``components/analysis/``) takes every one of them as an argument; this
+The analysis layer (``orchestration/studies/``) takes every one of them as an argument; this
 is their one home.  Video SAR: [Liang 2019] §1, §3, §4 (DESIGN.md, References).
 """
 
@@ -22,7 +22,7 @@ VIDEO_SAR_TARGET_LON = 129.72 * DEG
 VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG  # β of §3
 VIDEO_SAR_STARE = 200.0  # s, 08:08:03–08:11:23
 
-#: :func:`~agilesat.components.analysis.mission.overlap_ratio`'s paper case (§1, Fig. 3)
+#: :func:`~agilesat.orchestration.studies.mission.overlap_ratio`'s paper case (§1, Fig. 3)
 VIDEO_SAR_OVERLAP = dict(
     carrier_frequency=VIDEO_SAR_CARRIER,
     look_angle=VIDEO_SAR_LOOK_ANGLE,

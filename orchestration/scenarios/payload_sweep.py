@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ...components.orbit_environment import WGS84_A
-from .. import plots
+from ..output import plots
 from . import Scenario, inertial_momentum, relative_drift, summarize
 from .constants import PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY
 

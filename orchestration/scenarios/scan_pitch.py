@@ -17,7 +17,7 @@ from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.orbit_environment import WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
-from .. import plots
+from ..output import plots
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
 

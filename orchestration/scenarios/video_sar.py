@@ -39,13 +39,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.analysis.passes import find_passes, look_geometry
 from ...components.cmg_steering import PSEUDO_INVERSE
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
-from .. import plots
+from ..output import plots
+from ..studies.passes import find_passes, look_geometry
 from . import Scenario, relative_drift, summarize
 from .common import cmg_hardware, hub_inertia
 from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
@@ -78,7 +78,7 @@ def real_epoch(orbit: dict) -> dict:
 
 #: The pass, frozen: ``design_pass(VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER,
 #: VIDEO_SAR_LOOK_ANGLE, "right", "ascending", t0=HALF_STARE)`` rounded to 12 digits
-#: (tests/test_passes.py solves it again and compares).
+#: (tests/orchestration/test_passes.py solves it again and compares).
 PASS = {
     "semi_major_axis": 6945137.0,
     "eccentricity": 0.0,
@@ -116,10 +116,11 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
 
 #: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set,
 #: frozen: ``zero_momentum_angles(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS),
-#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/test_passes.py solves it again)
+#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/orchestration/test_passes.py solves
+#: it again)
 DELTA0 = [0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566]
 #: (attitude0, rate0) on the reference at t = 0, frozen: ``initial_state(ORBIT, GUIDANCE)``
-#: and with yaw 0 (tests/test_passes.py computes them again)
+#: and with yaw 0 (tests/orchestration/test_passes.py computes them again)
 ON_REFERENCE = (
     [-0.446370651122, 0.804885764925, 0.0],
     [-0.000684611902, -0.004466724288, -0.000198845573],

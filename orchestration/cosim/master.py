@@ -1,0 +1,556 @@
+"""The co-simulation master: FMI 2.0 co-simulation FMUs wired by an SSP system description.
+
+Run (:func:`simulate`):
+
+1. Load every FMU and check the system against the model descriptions
+   (:func:`validation.check_system`), which also gives the dependency orders.
+2. Instantiate, set up the experiment, set the parameters, enter initialisation mode;
+   propagate the connected inputs in dependency order (FMI 2.0 ``InitialUnknowns``), then
+   set every input once more and exit initialisation mode.
+3. Fixed macro step H, time t_n = t0 + n H from the integer step counter n.
+   The outputs are read block by block in the order of :mod:`.schedule` (each block after
+   setting that FMU's inputs from the newest outputs).  Gauss-Seidel: an FMU steps at its
+   first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
+   has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
+   input was last set at its FMU's block, before the FMUs of later blocks had their t_n
+   outputs: setting them again before the step keeps it from lagging a step; after the
+   steps only blocks whose outputs depend on inputs directly have them set).  Either way
+   the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
+   the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
+   over m H at every m-th communication point and holds its outputs in between.
+   Input and output derivatives (FMI 2.0 section 4.2.1; :mod:`.derivatives`): an input
+   whose FMU declares its derivative (``canInterpolateInputs`` and the ``derivative``
+   attribute), fed by an output whose FMU declares its derivative
+   (``maxOutputDerivativeOrder`` ≥ 1 and the attribute), with no connection to the
+   derivative input itself, both at the base step, gets its first derivative by
+   ``fmi2SetRealInputDerivatives`` before each step: Jacobi extrapolates with the source's
+   ``fmi2GetRealOutputDerivatives`` at t_n; Gauss-Seidel, for a source that already
+   stepped, interpolates, value y_n and slope (y_{n+1} − y_n)/H (else it extrapolates as
+   Jacobi).  ``derivatives=False`` turns this off.
+4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
+   call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
+   when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
+   called on that FMU.
+5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
+   the run stops between two macro steps (the compiled loop: between two chunks of a few
+   milliseconds), terminates and frees the FMUs, keeps its rows and raises
+   :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
+
+The system is checked against the model descriptions before any FMU is instantiated; open
+inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
+in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
+the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
+
+The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
+for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
+be compiled; ``Results.meta["loop"]`` says which.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+import signal
+import threading
+
+import numpy as np
+
+from ..output.recorder import Recorder
+from ..output.results import Results
+from ..system.parameters import scalar_parameters
+from ..system.ssp import SystemFile, SystemFileError, read_system
+from ..system.validation import check_system, override
+from . import loop as compiled
+from . import multirate
+from .derivatives import Derivatives
+from .fmu import FmiCallError, Instance
+
+ALGORITHMS = ("gauss-seidel", "jacobi")
+MAX_STEPS = 10_000_000  # macro steps of one run (about 15 GB of CSV for scan_pitch)
+_CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
+    "Real": ctypes.c_double,
+    "Integer": ctypes.c_int,
+    "Boolean": ctypes.c_int,
+}
+
+
+class SimulationError(RuntimeError):
+    """A run stopped early; ``results`` holds everything recorded up to the failure."""
+
+    def __init__(self, message: str, results: Results | None):
+        super().__init__(message)
+        self.results = results
+
+
+class Interrupted(SimulationError):
+    """A run stopped by SIGINT or SIGTERM between two macro steps (``signal`` says which)."""
+
+    def __init__(self, message: str, results: Results | None, signum: int):
+        super().__init__(message, results)
+        self.signal = signum
+
+
+class _Stop:
+    signal: int | None = None
+
+    def handler(self, signum, _frame):
+        self.signal = signum
+
+
+_active: _Stop | None = None
+
+
+@contextlib.contextmanager
+def stop_on_signals():
+    """While inside: SIGINT and SIGTERM set ``.signal`` of the object yielded instead of
+    raising or killing; the previous handlers come back on exit.  Only the main thread can
+    install handlers; elsewhere (and nested) the active object, if any, is shared."""
+    global _active
+    if _active is not None or threading.current_thread() is not threading.main_thread():
+        yield _active or _Stop()
+        return
+    stop = _active = _Stop()
+    previous = {s: signal.signal(s, stop.handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        _active = None
+
+
+TYPES = ("Real", "Integer", "Boolean")  # of the values the master passes on
+
+
+def value_layout(descriptions: dict, order) -> dict[tuple[str, str], int]:
+    """(instance, output) -> its index in the master's value vector: FMU by FMU in
+    ``order``, within one by type (:data:`TYPES`), then by value reference."""
+    layout = {}
+    for name in order:
+        d = descriptions[name]
+        for type_ in TYPES:
+            for y in d.outputs:
+                if d.variables[y].type == type_:
+                    layout[(name, y)] = len(layout)
+    return layout
+
+
+def evaluation_sequence(schedule) -> list[tuple[str, tuple[str, ...], bool]]:
+    """(instance, outputs read, first block of that instance?) for each block of a
+    schedule; an FMU steps at its first block."""
+    seen, result = set(), []
+    for name, block in schedule.blocks:
+        result.append((name, block, name not in seen))
+        seen.add(name)
+    return result
+
+
+class _Port:
+    """Variables of one type of one instance and their places in the value vector:
+    value references, buffer, the bound FMI call."""
+
+    def __init__(
+        self, instance: Instance, type_: str, names: list[str], direction: str, index: list[int]
+    ):
+        self.instance, self.call = instance, f"fmi2{direction}{type_}"
+        self.n = len(names)
+        self.buffer = np.zeros(self.n, dtype=np.float64 if type_ == "Real" else np.int32)
+        self.vrs = (ctypes.c_uint * self.n)(*(instance.variables[n].valueReference for n in names))
+        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(_CTYPE[type_]))
+        self.function = getattr(instance, self.call)
+        self.index = np.array(index, dtype=np.intp)
+        contiguous = index == list(range(index[0], index[0] + self.n))
+        self.where = slice(index[0], index[0] + self.n) if contiguous else self.index
+
+    def transfer(self) -> None:
+        status = self.function(self.instance.component, self.vrs, self.n, self.ptr)
+        if status > 1:
+            self.instance.check(status, self.call)
+
+    def read(self, values: np.ndarray) -> None:
+        self.transfer()
+        values[self.where] = self.buffer
+
+    def write(self, values: np.ndarray) -> None:
+        np.take(values, self.index, out=self.buffer)
+        self.transfer()
+
+
+def _ports(instance: Instance, names, direction: str, index: dict) -> list[_Port]:
+    """One port per type over ``names`` (order kept); ``index`` maps a name to its place."""
+    ports = []
+    for type_ in TYPES:
+        chosen = [n for n in names if instance.variables[n].type == type_]
+        if chosen:
+            ports.append(_Port(instance, type_, chosen, direction, [index[n] for n in chosen]))
+    return ports
+
+
+class _Node:
+    """One instance: its output ports, its connected-input ports and its step in base
+    steps (``every``)."""
+
+    def __init__(self, instance: Instance, layout: dict, sources: dict, every: int = 1):
+        self.instance, self.every = instance, every
+        self.position = {y: layout[(instance.name, y)] for y in instance.outputs}
+        self.outputs = _ports(instance, instance.outputs, "Get", self.position)
+        connected = sorted(
+            (u for (b, u) in sources if b == instance.name),
+            key=lambda u: instance.variables[u].valueReference,
+        )
+        self.inputs = _ports(
+            instance, connected, "Set", {u: layout[sources[(instance.name, u)]] for u in connected}
+        )
+
+    def set_inputs(self, values: np.ndarray) -> None:
+        for port in self.inputs:
+            port.write(values)
+
+    def get_outputs(self, values: np.ndarray) -> None:
+        for port in self.outputs:
+            port.read(values)
+
+
+def simulate(
+    system,
+    *,
+    step: float | None = None,
+    stop: float | None = None,
+    algorithm: str | None = None,
+    parameters: dict | None = None,
+    out_dir=None,
+    logging_on: bool = False,
+    echo=None,
+    progress=None,
+    derivatives: bool = True,
+    loop: str | None = None,
+) -> Results:
+    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
+
+    ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
+    "A.inertia": 3×3) to values that override the system's.  With ``out_dir``,
+    ``results.csv`` is written there row by row and ``results.npz`` at the end, and the
+    Results returned map their rows from disk (memory independent of the run length);
+    without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
+    hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
+    plain scheme, for comparison).  ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled"
+    or "python" (:mod:`.loop`).  Returns :class:`Results` (``meta`` holds the settings, the
+    units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
+    (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
+    """
+    system = system if isinstance(system, SystemFile) else read_system(system)
+    start = system.start_time
+    step = system.step_size if step is None else step
+    stop = system.stop_time if stop is None else stop
+    algorithm = algorithm or system.algorithm or "gauss-seidel"
+    n_steps = _steps(system.path, start, step, stop)
+    every = multirate.multiples(system, step, n_steps)
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
+    loop = compiled.choose(loop)
+
+    with stop_on_signals() as signals:
+        log = compiled.ClockLog(echo=echo)
+        log.time = start
+        instances = {}
+        try:
+            for ref in system.components:
+                instances[ref.name] = _load(system, ref, log)
+            bindings = system.parameters + [
+                override(instances, k, v)
+                for k, v in scalar_parameters(instances, parameters or {}).items()
+            ]
+            plan = check_system(system, instances, bindings)
+            for entry in plan.open_inputs:
+                log.add(
+                    entry["input"].partition(".")[0],
+                    0 if entry["declared"] else 1,
+                    "master",
+                    f"input {entry['input']} is not connected: {entry['meaning']}",
+                )
+            return _run(
+                system,
+                plan,
+                every,
+                instances,
+                bindings,
+                start,
+                step,
+                n_steps,
+                algorithm,
+                log,
+                out_dir,
+                logging_on,
+                signals,
+                progress,
+                derivatives,
+                loop,
+            )
+        finally:
+            for instance in instances.values():
+                instance.free()
+
+
+def _steps(path, start: float, step, stop) -> int:
+    """The number of macro steps from start to stop, or a ValueError saying what is wrong."""
+    if step is None or not (math.isfinite(step) and step > 0):
+        raise ValueError(
+            f"{path}: the macro step must be a positive, finite number of "
+            f"seconds (got {step}); give one or set it in the system's "
+            "org.agilesat.master annotation"
+        )
+    if stop is None or not math.isfinite(stop) or stop <= start:
+        raise ValueError(
+            f"{path}: the stop time must be finite and after the start {start} s (got {stop})"
+        )
+    ratio = (stop - start) / step
+    if not ratio <= MAX_STEPS:  # also inf, from a tiny step
+        raise ValueError(
+            f"{path}: {stop - start} s at a step of {step} s would be "
+            f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have"
+        )
+    n_steps = int(round(ratio))
+    if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
+        raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
+    return n_steps
+
+
+def _load(system, ref, log) -> Instance:
+    try:
+        return Instance(ref.name, ref.source, log)
+    except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
+        raise SystemFileError(
+            f"{system.path}:{ref.line}: component '{ref.name}': "
+            f"{ref.source} is not a readable FMU: {exc}"
+        ) from None
+
+
+def _run(
+    system,
+    plan,
+    every,
+    instances,
+    bindings,
+    start,
+    step,
+    n_steps,
+    algorithm,
+    log,
+    out_dir,
+    logging_on,
+    signals,
+    progress=None,
+    derivatives=True,
+    loop="python",
+) -> Results:
+    layout = value_layout(instances, plan.steps.step_order)
+    nodes = {
+        name: _Node(instances[name], layout, plan.sources, every[name])
+        for name in plan.steps.step_order
+    }
+    columns = ["time"] + [f"{name}.{output}" for name, output in layout]
+    sequence = _sequence(plan.steps, nodes)
+    init_sequence = _sequence(plan.init, nodes)
+    jacobi_reads = _fed_reads(sequence, plan.sources)
+    links = Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
+    if links is not None and not links.consumers:
+        links = None
+    couple = None if links is None else links.couple
+
+    values = np.zeros(len(layout))
+    row = np.zeros(len(layout) + 1)
+    meta = {
+        "system": str(system.path),
+        "step": step,
+        "start": start,
+        "stop": start + n_steps * step,
+        "algorithm": algorithm,
+        "component_steps": {name: m * step for name, m in every.items() if m > 1},
+        "log": log.entries,
+        "order": plan.steps.step_order,
+        "unconnected_optional_inputs": plan.open_inputs,
+        "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
+    }
+    if links is not None:
+        meta["derivatives"] = links.described
+    dll = compiled.select(loop, log)
+    meta["loop"] = "python" if dll is None else "compiled"
+    recorder = Recorder(columns, out_dir)
+    failure, report_every = None, max(1, n_steps // 100)
+    try:
+        _initialize(
+            instances,
+            nodes,
+            init_sequence,
+            bindings,
+            values,
+            start,
+            start + n_steps * step,
+            log,
+            logging_on,
+        )
+        if links is not None:
+            links.read()
+        row[0], row[1:] = start, values
+        recorder.append(row)
+        if dll is not None:
+            program = compiled.Program(algorithm, nodes, sequence, jacobi_reads, step, links)
+            compiled.run(
+                dll, program, values, recorder, signals, progress, log, start, step, n_steps
+            )
+        else:
+            for n in range(n_steps):
+                if signals.signal is not None:
+                    break
+                t = start + n * step
+                log.time = t
+                if algorithm == "gauss-seidel":
+                    if links is not None and links.interpolating:
+                        links.previous[:] = values
+                    _evaluate(sequence, values, n + 1, t, step, couple)
+                else:
+                    for node in nodes.values():
+                        if n % node.every == 0:
+                            node.set_inputs(values)
+                            if couple is not None:
+                                couple(node, values, step)
+                            _do_step(node.instance, t, step * node.every)
+                    _read_after_steps(jacobi_reads, values, n + 1)
+                if links is not None:
+                    links.read()
+                row[0], row[1:] = start + (n + 1) * step, values
+                recorder.append(row)
+                if progress and (n + 1) % report_every == 0:
+                    progress(n + 1, n_steps)
+            else:
+                log.time = start + n_steps * step
+        for inst in instances.values():
+            inst.call("fmi2Terminate")
+    except (FmiCallError, OSError) as exc:
+        failure = str(exc)
+    results, problems = recorder.close(meta)
+    kept = [
+        f"Kept {recorder.rows} recorded rows"
+        + (f" in {recorder.csv.path}" if out_dir is not None else "")
+    ] + problems
+    if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
+        name = signal.Signals(signals.signal).name
+        raise Interrupted(
+            "\n".join(
+                [f"{system.path.name}: interrupted by {name} after t={results.time[-1]:.6g} s"]
+                + kept
+            ),
+            results,
+            signals.signal,
+        )
+    if failure is not None or problems:
+        raise SimulationError(
+            "\n".join([f"{system.path.name}: {failure or 'results lost'}"] + kept), results
+        )
+    return results
+
+
+def _do_step(instance: Instance, t: float, step: float) -> None:
+    status = instance.fmi2DoStep(instance.component, t, step, 1)
+    if status > 1:
+        instance.check(status, "fmi2DoStep")
+
+
+def _sequence(schedule, nodes) -> list:
+    """(node, output ports to read, first block?) for each block of a schedule."""
+    return [
+        (
+            nodes[name],
+            nodes[name].outputs
+            if first
+            else _ports(nodes[name].instance, block, "Get", nodes[name].position),
+            first,
+        )
+        for name, block, first in evaluation_sequence(schedule)
+    ]
+
+
+def _fed_reads(sequence, sources) -> list:
+    """(node, output ports, do its outputs depend directly on a connected input?) for each
+    block of a sequence."""
+    result = []
+    for node, reads, _ in sequence:
+        instance = node.instance
+        connected = {u for (b, u) in sources if b == instance.name}
+        outputs = [y for port in reads for y in _port_names(port, node)]
+        feeds = any(
+            instance.feedthrough.get(y) is None or instance.feedthrough[y] & connected
+            for y in outputs
+        )
+        result.append((node, reads, feeds))
+    return result
+
+
+def _port_names(port: _Port, node: _Node) -> list[str]:
+    by_place = {place: y for y, place in node.position.items()}
+    return [by_place[int(i)] for i in port.index]
+
+
+def _read_after_steps(reads, values, k: int) -> None:
+    """Jacobi: bring every output to communication point k once all FMUs stepped, block
+    by block, setting a block's inputs only if its outputs depend on them directly (the
+    next step sets every input anyway).  As :func:`_evaluate` without a step."""
+    for node, ports, feeds in reads:
+        if k % node.every == 0:
+            if feeds:
+                node.set_inputs(values)
+            for port in ports:
+                port.read(values)
+
+
+def _evaluate(
+    sequence, values, k: int, t: float = 0.0, step: float | None = None, couple=None
+) -> None:
+    """Bring every output to communication point k, block by block; with a step, each FMU
+    first steps from t = t_{k-1} at its first block (Gauss-Seidel; ``couple(node, values,
+    step)`` passes the input derivatives just before).  An FMU with its own
+    step m·H (:mod:`.multirate`) steps only from t_{k-1} with k − 1 a multiple of m, and
+    has its inputs set and outputs read only at k a multiple of m (else they hold)."""
+    for node, reads, first in sequence:
+        stepping = first and step is not None and (k - 1) % node.every == 0
+        reading = k % node.every == 0
+        if stepping or reading:
+            node.set_inputs(values)
+        if stepping:
+            moved = couple(node, values, step) if couple is not None else None
+            _do_step(node.instance, t, step * node.every)
+            if moved is not None and reading:  # inputs set to their t_{k-1} values
+                moved.restore(values)
+        if reading:
+            for port in reads:
+                port.read(values)
+
+
+def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log, logging_on):
+    log.time = start
+    for node in nodes.values():
+        inst = node.instance
+        inst.instantiate(logging_on)
+        inst.call("fmi2SetupExperiment", 0, 0.0, start, 1, stop)
+    for value in bindings:
+        _set_value(instances[value.component], value.name, value.type, value.value)
+    for inst in instances.values():
+        inst.call("fmi2EnterInitializationMode")
+    _evaluate(init_sequence, values, 0)
+    for node in nodes.values():
+        node.set_inputs(values)
+    for inst in instances.values():
+        inst.call("fmi2ExitInitializationMode")
+    for node in nodes.values():
+        node.get_outputs(values)
+
+
+def _set_value(inst: Instance, name: str, type_: str, value) -> None:
+    vr = (ctypes.c_uint * 1)(inst.variables[name].valueReference)
+    if type_ == "Real":
+        inst.call("fmi2SetReal", vr, 1, (ctypes.c_double * 1)(float(value)))
+    elif type_ in ("Integer", "Boolean"):
+        inst.call(f"fmi2Set{type_}", vr, 1, (ctypes.c_int * 1)(int(value)))
+    else:
+        inst.call("fmi2SetString", vr, 1, (ctypes.c_char_p * 1)(str(value).encode()))

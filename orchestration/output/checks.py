@@ -1,0 +1,118 @@
+"""Assertions AOCS engineers write again and again, on :class:`Results` and summaries.
+
+Each raises ``AssertionError`` with what failed, where (time) and by how much; values are
+in the signal's unit (SI) unless ``deg=True`` (the bound then in degrees, for angles).
+A signal is a column (``SatelliteDynamics.w_BI_B[2]``) or a whole array by base name
+(``AttitudeController.att_error``: every element must hold).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..system.units import pretty, to_degrees
+
+
+def _signal(results, name, start, stop, deg):
+    t = results.time
+    rows = np.ones(len(t), bool)
+    if start is not None:
+        rows &= t >= start - 1e-12
+    if stop is not None:
+        rows &= t <= stop + 1e-12
+    if not rows.any():
+        raise AssertionError(
+            f"{name}: no communication point in [{start}, {stop}] s (the run "
+            f"covers {t[0]:g} … {t[-1]:g} s)"
+        )
+    values = results.get(name, deg=deg).reshape(len(t), -1)[rows]
+    unit = results.unit(name)
+    return t[rows], values, pretty(to_degrees(unit)[1] if deg else unit)
+
+
+def assert_within(
+    results,
+    name: str,
+    low: float | None = None,
+    high: float | None = None,
+    *,
+    start: float | None = None,
+    stop: float | None = None,
+    deg: bool = False,
+) -> None:
+    """Every element of ``name`` in [low, high] (either may be None) over [start, stop]."""
+    t, values, unit = _signal(results, name, start, stop, deg)
+    for bound, bad, word in (
+        (low, values < low if low is not None else None, "below"),
+        (high, values > high if high is not None else None, "above"),
+    ):
+        if bad is not None and bad.any():
+            k, j = np.argwhere(bad)[0]
+            worst = values.min() if word == "below" else values.max()
+            raise AssertionError(
+                f"{name} is {word} {bound:g} {unit} at {bad.any(axis=1).sum()} of {len(t)} "
+                f"points, first at t = {t[k]:g} s ({values[k, j]:.6g} {unit}"
+                + (f", element {j + 1}" if values.shape[1] > 1 else "")
+                + f"); worst {worst:.6g} {unit}"
+            )
+
+
+def assert_settles(results, name: str, bound: float, after: float, *, deg: bool = False) -> None:
+    """|name| ≤ bound (every element) from t = ``after`` to the end: e.g. the pointing error
+    below 0.01° after a 60-s settling time."""
+    t, values, unit = _signal(results, name, after, None, deg)
+    magnitude = np.abs(values)
+    if (magnitude > bound).any():
+        last = t[(magnitude > bound).any(axis=1)][-1]
+        raise AssertionError(
+            f"{name} does not settle within ±{bound:g} {unit} after t = {after:g} s: max "
+            f"{magnitude.max():.6g} {unit}, last outside at t = {last:g} s"
+        )
+
+
+def assert_momentum_conserved(
+    results, rtol: float = 1e-9, name: str = "SatelliteDynamics.H_I"
+) -> None:
+    """max |H(t) − H(0)| / |H(0)| ≤ rtol for the recorded inertial momentum ``name``."""
+    H = results.vector(name)
+    drift = np.linalg.norm(H - H[0], axis=1) / max(np.linalg.norm(H[0]), 1e-300)
+    if drift.max() > rtol:
+        k = int(np.argmax(drift))
+        raise AssertionError(
+            f"{name} drifts by {drift.max():.3g} (relative) at "
+            f"t = {results.time[k]:g} s, above {rtol:g}"
+        )
+
+
+def requirement_met(metric: dict) -> bool:
+    """A summary metric's ``met`` flag, or else its value against its requirement: a bound
+    (value ≤ bound), a band [low, high], or {"min"/"max": ...}."""
+    if "met" in metric:
+        return bool(metric["met"])
+    requirement, value = metric["requirement"], metric["value"]
+    if value is None:
+        return False
+    if isinstance(requirement, dict):
+        low, high = requirement.get("min"), requirement.get("max")
+    elif isinstance(requirement, (list, tuple)):
+        low, high = requirement
+    else:
+        low, high = None, requirement
+    return (low is None or value >= low) and (high is None or value <= high)
+
+
+def assert_requirements_met(summary: dict, *names: str) -> None:
+    """The named metrics (default: every metric with a requirement) meet their requirement."""
+    metrics = summary["metrics"]
+    unknown = [n for n in names if n not in metrics]
+    if unknown:
+        raise AssertionError(f"no metric {unknown} in the summary; metrics: {', '.join(metrics)}")
+    chosen = names or [n for n, m in metrics.items() if "requirement" in m]
+    failed = [
+        f"{n} = {metrics[n]['value']!r} {metrics[n]['unit']} (required "
+        f"{metrics[n].get('requirement')!r})"
+        for n in chosen
+        if not requirement_met(metrics[n])
+    ]
+    if failed:
+        raise AssertionError("requirement not met: " + "; ".join(failed))

@@ -1,0 +1,290 @@
+"""Figures with matplotlib (non-interactive backend), fit for a report: every figure as a
+200-dpi PNG and an SVG beside it (:data:`FORMATS`; :func:`written_as` chooses: ``agilesat
+run`` writes the SVG only with ``--svg``), limits and requirements drawn where they exist.
+
+A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
+marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
+the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
+(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there).
+Later series are drawn thinner, so that lines lying on top of each other stay visible;
+"planned …" and "reference …" series are dashed.
+
+matplotlib is imported by the first figure drawn, not with this module (a run without
+figures, or whose figures a :mod:`.figure_pool` draws, never loads it).  A figure pool
+records the figure calls first and draws them after the figure function returns: a figure
+function must not change an array after handing it to a figure (each call is drawn with
+the arrays as they are at the end).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import inspect
+import textwrap
+from collections.abc import Callable
+from contextvars import ContextVar
+from pathlib import Path
+from typing import NamedTuple
+
+from ..system.units import label as unit_label
+from ..system.units import to_degrees
+from . import figure_layout
+
+DPI = 200
+#: the formats a figure can be written in: the PNG (the path given) and its vector twin
+FORMATS = (".png", ".svg")
+#: those figures are written in now: all, or as :func:`written_as` sets them (per thread)
+_written: ContextVar[tuple[str, ...]] = ContextVar("agilesat_figure_formats", default=FORMATS)
+_STYLES = ("-", "--", "-.", ":")
+#: None: every figure function draws its figure; a list: each records its call there (a
+#: :class:`Drawing`) and returns the path without drawing (a :mod:`.figure_pool` draws them)
+recording: list[Drawing] | None = None
+
+
+class Drawing(NamedTuple):
+    """One figure function's call, recorded to be drawn later (in another process);
+    ``cost`` estimates its drawing time, to draw the heaviest first: (axes, lines).  A
+    figure's time goes mostly to its axes (ticks, labels, layout; once per format), less
+    to the lines on them: scan_pitch's figures (PNG and SVG) take 0.2–0.3 s with one axes,
+    0.3–0.45 s with two, 0.45 s with three (3001 points)."""
+
+    draw: Callable[..., Path]
+    path: Path
+    args: tuple
+    kwargs: dict
+    cost: tuple[int, int]
+
+    def __call__(self) -> Path:
+        return self.draw(self.path, *self.args, **self.kwargs)
+
+
+def _shared(cost):
+    """A figure function that, while :data:`recording`, records its call instead of
+    drawing (it returns the path either way); ``cost``: its :attr:`Drawing.cost` from
+    the call's arguments by name."""
+
+    def decorate(draw):
+        signature = inspect.signature(draw)
+
+        @functools.wraps(draw)
+        def shared(path, *args, **kwargs):
+            if recording is None:
+                return draw(path, *args, **kwargs)
+            arguments = signature.bind(path, *args, **kwargs).arguments
+            recording.append(Drawing(draw, Path(path), args, kwargs, cost(arguments)))
+            return Path(path)
+
+        return shared
+
+    return decorate
+
+
+@contextlib.contextmanager
+def written_as(formats):
+    """Figures made inside (in this thread) are written in ``formats``: ".png" first, then
+    any of the others of :data:`FORMATS`."""
+    formats = tuple(formats)
+    if formats[:1] != (".png",) or not set(formats) <= set(FORMATS):
+        raise ValueError(f"figure formats {formats}: expected '.png' first, then of {FORMATS}")
+    token = _written.set(formats)
+    try:
+        yield
+    finally:
+        _written.reset(token)
+
+
+def written() -> tuple[str, ...]:
+    """The formats figures are written in now."""
+    return _written.get()
+
+
+def formats(path) -> list[Path]:
+    """Every file a figure is written as (the PNG path given, then its vector twin)."""
+    return [Path(path).with_suffix(suffix) for suffix in written()]
+
+
+def lines(
+    path: Path, title: str, t, series: dict, ylabel: str, xlabel: str = "time [s]", **marks
+) -> Path:
+    """One axes: each named series against time (or ``xlabel``)."""
+    return panels(path, title, [(t, series, ylabel, marks)], xlabel)
+
+
+@_shared(lambda a: (len(a["rows"]), sum(len(row[1]) for row in a["rows"])))
+def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
+    """Stacked axes sharing x, one per row (see the module docstring)."""
+    fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
+    for ax, row in zip(axes[:, 0], rows):
+        t, series, ylabel = row[:3]
+        for k, (name, values) in enumerate(series.items()):
+            ax.plot(
+                t,
+                values,
+                label=name,
+                linewidth=_width(k, len(series)),
+                linestyle="--" if name.startswith(("planned", "reference")) else "-",
+            )
+        _mark(ax, **(row[3] if len(row) > 3 else {}))
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        if len(ax.get_legend_handles_labels()[1]) > 1:
+            ax.legend(fontsize=8, ncol=3)
+    return _save(fig, axes, path, title, xlabel)
+
+
+def _width(k: int, n: int) -> float:
+    """Line widths falling from 2.2 to 0.9 over the series: a line lying exactly on an
+    earlier one still shows that one's colour at its edges."""
+    return 2.2 - 1.3 * k / max(n - 1, 1)
+
+
+def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
+    if band is not None:
+        low, high, text = band
+        ax.axhspan(low, high, color="tab:green", alpha=0.15, label=text)
+    if limit is not None:
+        value, text = limit
+        for k, y in enumerate(value if isinstance(value, (tuple, list)) else (-value, value)):
+            ax.axhline(
+                y, color="tab:red", linestyle="--", linewidth=1, label=text if k == 0 else None
+            )
+    if paper is not None:
+        value, text = paper
+        for k, y in enumerate(value if isinstance(value, (tuple, list)) else (value,)):
+            ax.axhline(
+                y, color="0.35", linestyle=":", linewidth=1.2, label=text if k == 0 else None
+            )
+    if bottom is not None:
+        ax.set_ylim(bottom=bottom)
+
+
+@_shared(lambda a: (len(a["rows"]), len(a["rows"]) * (len(a["x"]) + 1)))  # a line a point
+def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
+    """Metrics against a design variable (log x), each with its requirement line; points
+    that meet every requirement filled green, the others open red (legend says so)."""
+    from matplotlib.lines import Line2D
+
+    fig, axes = _subplots(len(rows))
+    for ax, (label, values, limit) in zip(axes[:, 0], rows):
+        ax.plot(x, values, color="0.6", linewidth=1)
+        for xi, v, ok in zip(x, values, met):
+            ax.plot(
+                xi,
+                v,
+                "o",
+                color="tab:green" if ok else "tab:red",
+                fillstyle="full" if ok else "none",
+            )
+        line = ax.axhline(limit, color="tab:blue", linestyle="--")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(
+            [
+                line,
+                Line2D([], [], marker="o", color="tab:green", linestyle=""),
+                Line2D([], [], marker="o", color="tab:red", fillstyle="none", linestyle=""),
+            ],
+            ["requirement", "meets both requirements", "fails one or both"],
+            fontsize=8,
+        )
+    return _save(fig, axes, path, title, xlabel)
+
+
+@_shared(
+    lambda a: (
+        len(a["variables"]),
+        sum(len(r.columns(v)) for r in a["runs"].values() for v in a["variables"]),
+    )
+)
+def signals(
+    path: Path, runs: dict, variables, deg: bool = False, instance: str | None = None
+) -> Path:
+    """Recorded variables (scalar columns or whole arrays by base name), one panel each,
+    every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
+    the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
+    one), it is the title and the axes name the variables alone."""
+    fig, axes = _subplots(len(variables), sharex=True)
+    for ax, name in zip(axes[:, 0], variables):
+        for k, (run, results) in enumerate(runs.items()):
+            values = results.get(name, deg=deg).reshape(len(results), -1)
+            for column, v in zip(results.columns(name), values.T):
+                element = column[len(name) :] or name.split(".")[-1]
+                ax.plot(
+                    results.time,
+                    v,
+                    linewidth=1.4,
+                    linestyle=_STYLES[k % len(_STYLES)],
+                    label=f"{run} {element}".strip(),
+                )
+        unit = results.unit(name)
+        ax.set_ylabel(
+            unit_label(
+                name.split(".", 1)[1] if instance else name, to_degrees(unit)[1] if deg else unit
+            )
+        )
+        ax.grid(True, alpha=0.3)
+        if len(ax.get_lines()) > 1:
+            ax.legend(fontsize=8, ncol=3)
+    return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
+
+
+def overview(results, out_dir) -> list[Path]:
+    """Generic figures of any run: per instance, one panel per output variable."""
+    by_instance: dict[str, list[str]] = {}
+    for name in results.names[1:]:
+        base = name.rsplit("[", 1)[0]
+        variables = by_instance.setdefault(name.split(".")[0], [])
+        if base not in variables:
+            variables.append(base)
+    paths = []
+    for instance, variables in by_instance.items():
+        paths.append(
+            signals(
+                Path(out_dir) / f"overview_{instance}.png",
+                {"": results},
+                variables,
+                instance=instance,
+            )
+        )
+    return paths
+
+
+def _subplots(n: int, sharex: bool = False):
+    """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide, at the
+    PNG's resolution."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 1.2 + 2.6 * n), dpi=DPI, layout="none")  # whatever rcParams say
+    return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
+
+
+def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
+    """Label the stacked axes, lay them out once (:mod:`.figure_layout`), write the PNG
+    from that one Agg drawing and each other format with its own renderer."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.image import imsave
+
+    axes[-1, 0].set_xlabel(xlabel)
+    axes[0, 0].set_title(title)
+    figure_layout.fixed(fig, axes, title)
+    canvas = FigureCanvasAgg(fig)
+    figure_layout.draw(fig, axes, canvas)
+    png, *others = formats(path)
+    imsave(png, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)  # as savefig
+    for target in others:
+        fig.savefig(target, dpi=DPI)
+    return Path(path)
+
+
+def __getattr__(name):
+    if name == "plt":  # pyplot for callers that use it (campaign reports), on first use
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot
+
+        return matplotlib.pyplot
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,45 @@
+"""The ``agilesat`` pytest plugin (entry point ``pytest11``; active after ``pip install
+agilesat``).
+
+Fixtures:
+
+* ``agilesat_run`` (session): ``agilesat_run(target, **options)`` runs a scenario[:variant]
+  or an ``.ssd``/``.ssp`` file once per session for each distinct set of options (those of
+  :func:`agilesat.orchestration.run`: ``step``, ``stop``, ``parameters``, ``figures``, ...)
+  and returns ``(results, summary)``; the run's files are in ``summary["out_dir"]``.
+
+Assertions (:mod:`agilesat.orchestration.output.checks`, re-exported here): ``assert_within``,
+``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from .checks import (  # noqa: F401
+    assert_momentum_conserved,
+    assert_requirements_met,
+    assert_settles,
+    assert_within,
+)
+
+
+@pytest.fixture(scope="session")
+def agilesat_run(tmp_path_factory):
+    from ..runner import run
+
+    cache = {}
+
+    def run_once(target, **options):
+        key = json.dumps([str(target), options], sort_keys=True, default=repr)
+        if key not in cache:
+            out = tmp_path_factory.mktemp(str(target).replace(":", "-").replace("/", "_")[-40:])
+            options = {"figures": False, **options}
+            results, summary = run(target, out_dir=out, **options)
+            summary["out_dir"] = str(out)
+            cache[key] = results, summary
+        return cache[key]
+
+    return run_once

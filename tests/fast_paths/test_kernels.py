@@ -1,0 +1,407 @@
+"""Compiled kernels (components/jit.py): the same results as the readable Python, a
+switch back to it, and a compile cache that survives fresh FMU extractions."""
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+from agilesat.components import cmg_cluster, cmg_steering, jit, rotations, satellite_dynamics
+from agilesat.components.cmg_cluster import CmgCluster
+from agilesat.components.cmg_steering import CmgSteering
+from agilesat.components.model import Model, ModelError
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.fmus import fmu_state
+from agilesat.orchestration.scenarios import get as get_scenario
+from helpers import run_python
+
+needs_numba = pytest.mark.skipif(
+    jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
+)
+
+
+def _random_dynamics(seed: int, gravity_gradient: bool, spin: float) -> SatelliteDynamics:
+    """A SatelliteDynamics at a random state, parameters and inputs (|w| ~ ``spin``)."""
+    rng = np.random.default_rng(seed)
+    J = np.diag([900.0, 950.0, 1000.0]) + rng.normal(scale=5.0, size=(3, 3))
+    model = SatelliteDynamics(inertia=(J + J.T) / 2, gravity_gradient=gravity_gradient)
+    model.set("attitude0", rng.uniform(-3.0, 3.0, size=3))
+    model.set("rate0", rng.normal(scale=spin, size=3))
+    model.start(0.0)
+    for v in model.layout.group("input"):
+        model.set(v.name, rng.normal(scale=20.0, size=v.size))
+    q = rng.normal(size=4)
+    model.set("q_OI", q / np.linalg.norm(q))
+    model.set("r_I", 7e6 * rng.normal(size=3))
+    model.set("w_OI_O", 1e-3 * rng.normal(size=3))
+    return model
+
+
+def _both(function, *arrays_and_args):
+    """function's compiled and Python results on copies of the arrays: (returns, arrays)."""
+    runs = []
+    for f in (function.compiled, function.py_func):
+        arrays = [a.copy() for a in arrays_and_args if isinstance(a, np.ndarray)]
+        others = [a for a in arrays_and_args if not isinstance(a, np.ndarray)]
+        runs.append((f(*arrays, *others), arrays))
+    return runs
+
+
+@needs_numba
+@pytest.mark.parametrize("gravity_gradient", [False, True])
+@pytest.mark.parametrize("seed, spin, dt", [(1, 0.01, 0.05), (2, 0.3, 0.1), (3, 2.0, 0.5)])
+def test_step_and_output_kernels_are_bit_identical_to_the_python(seed, spin, dt, gravity_gradient):
+    model = _random_dynamics(seed, gravity_gradient, spin)
+    (compiled, arrays), (readable, py_arrays) = _both(
+        satellite_dynamics._step, model.values, model.state, dt
+    )
+    assert compiled == readable and compiled[0] == satellite_dynamics.OK
+    assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
+    assert not np.array_equal(arrays[1], model.state)  # it integrated something
+    substeps = math.ceil(compiled[2])
+    assert (substeps > 1) == (spin > 0.1)  # sub-stepping covered
+    (compiled, arrays), (readable, py_arrays) = _both(satellite_dynamics._output, *arrays)
+    assert compiled == readable
+    assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
+    outputs = model.layout.range["output"]
+    assert np.all(arrays[0][outputs.start : outputs.stop] != 0.0)  # every output written
+
+
+@pytest.mark.slow
+@needs_numba
+def test_euler_angles_compiled_are_those_of_the_python_through_the_gimbal_lock():
+    """euler123 / euler123_dot (rotations) compiled as in a kernel, on pitches across ±90°
+    (the lock zone, and exact lock) from random previous angles."""
+    numba = jit._numba()
+    angles = numba.njit(lambda q, C, previous: rotations.euler123(q, C, previous, True))
+    rates = numba.njit(rotations.euler123_dot)
+    rng = np.random.default_rng(5)
+    pitches = np.concatenate([np.linspace(-1.7, 1.7, 101), [math.pi / 2, -math.pi / 2]])
+    zone = exact = 0
+    half = math.sqrt(0.5)
+    for pitch in pitches:
+        euler = (rng.uniform(-3, 3), pitch, rng.uniform(-3, 3))
+        q = tuple(rotations.quat_from_euler123(euler).tolist())
+        if pitch == pitches[-1]:
+            q = (half, 0.0, -half, 0.0)  # pitch -90° exactly
+        C = rotations.dcm(q)
+        previous = tuple((np.array(euler) + rng.normal(scale=0.3, size=3)).tolist())
+        readable = rotations.euler123(q, C, previous, True)
+        assert angles(q, C, previous) == readable
+        w = tuple(rng.normal(size=3).tolist())
+        assert rates(readable, w) == rotations.euler123_dot(readable, w)
+        zone += abs(math.cos(readable[1])) < rotations.LOCK_ZONE_COS
+        exact += abs(math.cos(readable[1])) <= rotations.GIMBAL_LOCK_COS
+    assert zone >= 3 and exact >= 1  # the lock zone was crossed, exact lock reached
+
+
+@pytest.fixture(params=["compiled", "python"])
+def dynamics_kernels(request, monkeypatch):
+    """SatelliteDynamics' kernels run compiled (numba) or as their Python."""
+    if request.param == "compiled" and jit._numba() is None:
+        pytest.skip("numba not installed or AGILESAT_JIT=0")
+    for kernel in jit.kernels(satellite_dynamics).values():
+        attribute = "compiled" if request.param == "compiled" else "py_func"
+        monkeypatch.setattr(kernel, "_run", getattr(kernel, attribute))
+    return request.param
+
+
+@pytest.mark.parametrize(
+    "inputs, message",
+    [
+        (
+            {"r_I": [0.0, 0.0, 0.0]},
+            "^gravity_gradient is on but r_I is zero: connect r_I or set gravity_gradient = false$",
+        ),
+        (
+            {"h_cmg": [0.0, 0.0, -4e5]},
+            r"^t=2 s: body rate 418 rad/s would need 1046\d sub-steps "
+            r"of 0.5 s: the state is unphysical$",
+        ),
+        ({"h_cmg": [math.nan, 0.0, 0.0]}, r"^t=2 s: body rate nan rad/s would need nan sub-steps"),
+        ({"tau_ext": [math.inf, 0.0, 0.0]}, r"^non-finite state at t=2.5 s$"),
+        (
+            {"q_OI": [0.0, 0.0, 0.0, 0.0]},
+            r"^q_OI must be a unit quaternion, got \[0.0, 0.0, 0.0, "
+            r"0.0\] \(norm 0.0\)$",
+        ),
+    ],
+    ids=["no r_I", "too many sub-steps", "nan rate", "non-finite state", "q_OI"],
+)
+def test_each_error_of_the_kernels_is_raised_with_its_message(inputs, message, dynamics_kernels):
+    model = SatelliteDynamics(rate0=[0.01, 0.02, 0.0]).start(0.0).advance(0.0, 2.0)
+    for name, value in inputs.items():
+        model.set(name, value)
+    values, state = model.values.copy(), model.state.copy()
+    with pytest.raises(ModelError) as error:
+        model.output() if "q_OI" in inputs else model.step(2.0, 0.5)  # q_OI: output's check
+    assert re.search(message, str(error.value)), error.value
+    assert np.array_equal(model.values, values, equal_nan=True)  # nothing changed
+    assert np.array_equal(model.state, state)
+
+
+def test_inputs_set_after_initialisation_are_still_caught(dynamics_kernels):
+    model = SatelliteDynamics()
+    model.initialize(0.0)  # as an FMU does: the first step checks the inputs it used
+    model.set("q_OI", [0.6, 0.8, 0.0, 0.0])
+    with pytest.raises(ModelError, match=r"^at the first step the inputs \['q_OI'\] are not"):
+        model.step(0.0, 0.05)
+
+
+def test_a_saved_state_restores_the_run_bit_for_bit(dynamics_kernels):
+    """get_state / set_state through the FMU state's bytes (fmus/fmu_state.py)."""
+    model = _random_dynamics(4, True, 0.3)
+
+    def run(steps):
+        rows = []
+        for k in range(steps):
+            model.set("tau_ext", [1e-3 * k, -2e-3, 0.0])
+            model.advance(k * 0.1, 0.1)
+            rows.append(model.values.copy())
+        return np.array(rows)
+
+    run(20)
+    saved = fmu_state.encode("test", model.get_state(), "agilesat")
+    first = run(30)
+    model.set_state(fmu_state.decode("test", saved, "agilesat"))
+    assert np.array_equal(run(30), first)
+
+
+def _spin_up(model: SatelliteDynamics, steps: int) -> np.ndarray:
+    """A tumbling body (several sub-steps per step) with moving device momentum."""
+    model.set("inertia", [[900.0, 12.0, -4.0], [12.0, 950.0, 7.0], [-4.0, 7.0, 1010.0]])
+    model.set("rate0", [0.05, -0.4, 0.2])
+    model.set("h_cmg", [3.0, -2.0, 1.0])
+    model.start(0.0)
+    rows = []
+    for k in range(steps):
+        model.set("hdot_cmg", [0.3 * math.sin(0.1 * k), 0.2, -0.1 * math.cos(0.05 * k)])
+        model.set("tau_ext", [1e-3 * k, 0.0, -2e-3])
+        model.advance(k * 0.05, 0.05)
+        rows.append(model.values.copy())
+    return np.array(rows)
+
+
+def _gimbals(model: Model, steps: int) -> np.ndarray:
+    """Random gimbal-rate commands (some beyond the rate limit) or steering inputs."""
+    rng = np.random.default_rng(7)
+    model.start(0.0)
+    rows = []
+    for k in range(steps):
+        for v in model.layout.group("input"):
+            model.set(v.name, rng.uniform(-0.8, 0.8, size=v.size))
+        model.advance(k * 0.05, 0.05)
+        rows.append(model.values.copy())
+    return np.array(rows)
+
+
+_RUNS = {
+    SatelliteDynamics: (satellite_dynamics, _spin_up),
+    CmgCluster: (cmg_cluster, _gimbals),
+    CmgSteering: (cmg_steering, _gimbals),
+}
+
+
+def _runs() -> str:
+    return "".join(run(model(), 300).tobytes().hex() for model, (_, run) in _RUNS.items())
+
+
+@needs_numba
+@pytest.mark.parametrize("model", list(_RUNS), ids=lambda m: m.__name__)
+def test_compiled_and_readable_model_runs_are_identical(model, monkeypatch):
+    module, run = _RUNS[model]
+    kernels = jit.kernels(module).values()
+    assert kernels
+    for kernel in kernels:
+        monkeypatch.setattr(kernel, "_run", kernel.compiled)
+    compiled = run(model(), 300)
+    for kernel in kernels:
+        monkeypatch.setattr(kernel, "_run", kernel.py_func)
+    readable = run(model(), 300)
+    assert np.array_equal(compiled, readable)
+    assert np.all(np.ptp(compiled, axis=0)[model().layout.range["output"].start :] > 0)
+
+
+_RUN_AS_TEXT = """
+import os, sys
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+{prelude}
+sys.path.insert(0, "tests/fast_paths")
+from agilesat.components import satellite_dynamics
+from test_kernels import _runs
+runs = _runs()
+kernel = satellite_dynamics._step
+print(kernel.compiled is kernel.py_func, kernel._run is kernel.py_func, "numba" in sys.modules)
+print(runs)
+"""
+_NO_NUMBA = """
+import importlib.abc
+class _NoNumba(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.split(".")[0] in ("numba", "llvmlite"):
+            raise ImportError("no numba here")
+sys.meta_path.insert(0, _NoNumba())
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "prelude",
+    ["import os; os.environ['AGILESAT_JIT'] = '0'", _NO_NUMBA],
+    ids=["AGILESAT_JIT=0", "numba not installed"],
+)
+def test_without_the_compiler_the_readable_path_gives_the_same_results(prelude):
+    result = run_python(_RUN_AS_TEXT.format(prelude=prelude))
+    assert result.returncode == 0, result.stderr
+    *switch, values = result.stdout.split()
+    assert switch == ["True", "True", "False"]  # the Python ran; numba was not imported
+    assert values == _runs()
+
+
+_LOAD_EXTRACTED = """
+import json, os, sys, tempfile
+os.environ["AGILESAT_CACHE_DIR"] = sys.argv[2]
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+import fmpy
+folder = tempfile.mkdtemp(prefix="fmu_")
+fmpy.extract(sys.argv[1], unzipdir=folder)
+fmpy.simulate_fmu(folder, stop_time=1.0, output_interval=0.1)
+module = next(m for n, m in sys.modules.items() if n.endswith(".components.satellite_dynamics"))
+stats = module._step.compiled.stats
+print(json.dumps({"folder": folder, "hits": len(stats.cache_hits),
+                  "misses": len(stats.cache_misses), "path": stats.cache_path}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@needs_numba
+def test_an_fmu_extracted_twice_compiles_its_kernels_once(fmus, tmp_path):
+    """Two hosts unpack the FMU to two new folders: the first compiles, the second loads."""
+    cache = tmp_path / "cache"
+    loads = []
+    for _ in range(2):
+        result = run_python(_LOAD_EXTRACTED, fmus["SatelliteDynamics"], cache)
+        assert result.returncode == 0, result.stderr
+        loads.append(json.loads(result.stdout.splitlines()[-1]))
+    first, second = loads
+    assert first["folder"] != second["folder"]
+    assert (first["misses"], first["hits"]) == (1, 0)  # compiled and saved
+    assert (second["misses"], second["hits"]) == (0, 1)  # loaded, not compiled
+    assert first["path"] == second["path"] and first["path"].startswith(str(cache))
+
+
+_UNWRITABLE = """
+import os, sys
+os.environ["AGILESAT_CACHE_DIR"] = os.path.join(sys.argv[1], "cache")
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+from agilesat.components import satellite_dynamics
+from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.fmus import fmu_state
+model = SatelliteDynamics().start(0.0).advance(0.0, 0.1)
+print(len(satellite_dynamics._step.compiled.stats.cache_misses), model.get("q_BI").tolist())
+"""
+
+
+@pytest.mark.slow
+@needs_numba
+def test_an_unwritable_cache_costs_a_compile_and_says_so(tmp_path):
+    (tmp_path / "a_file").write_text("not a directory")
+    result = run_python(_UNWRITABLE, tmp_path / "a_file")
+    assert result.returncode == 0, result.stderr
+    assert "no compile cache for _step" in result.stderr
+    misses, q = result.stdout.split(" ", 1)
+    assert misses == "1"  # compiled in this process
+    assert q.strip() == str(SatelliteDynamics().start(0.0).advance(0.0, 0.1).get("q_BI").tolist())
+
+
+@needs_numba
+def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function():
+    tiered = jit.Kernel(satellite_dynamics._step.py_func, 3)
+    models = [_random_dynamics(seed, True, 0.3) for seed in range(6)]
+    states = [m.state.copy() for m in models]
+    results = []
+    for k, model in enumerate(models):
+        results.append(tiered(model.values, model.state, 0.1))
+        assert (tiered._run is tiered.compiled) == (k >= 3)
+    expected = [tiered.py_func(m.values, state, 0.1) for m, state in zip(models, states)]
+    assert results == expected
+    assert all(np.array_equal(m.state, state) for m, state in zip(models, states))
+
+
+def _not_jitable(x):  # a plain function kernels may not call (no @jitable)
+    return x + 1.0
+
+
+def _calls_a_plain_function(x):
+    return 2.0 * _not_jitable(x)
+
+
+@needs_numba
+def test_a_kernel_numba_cannot_compile_keeps_its_python_and_says_so():
+    tiered = jit.Kernel(_calls_a_plain_function, 1)
+    assert tiered(1.0) == 4.0  # the Python
+    with pytest.warns(UserWarning, match=r"_calls_a_plain_function could not be compiled \(Typing"):
+        assert tiered(2.0) == 6.0
+    assert tiered._run is tiered.compiled is tiered.py_func
+    assert not jit.runs_compiled(tiered)  # no C entry: the FMU's C path stays off
+    assert tiered(3.0) == 8.0
+
+
+_SHORT_RUN = """
+import os, sys
+os.environ.pop("AGILESAT_JIT_AFTER", None)  # the default threshold
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+simulate(get("scan_pitch").ssd, step=0.05, stop=5.0)
+print("numba" in sys.modules)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_a_short_run_does_not_import_numba(fmus):
+    """Below the threshold the kernels' Python runs: no numba import, no compile load."""
+    result = run_python(_SHORT_RUN)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["False"]
+
+
+_IMPORTED_LATER = """
+import os
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+from agilesat.components.cmg_cluster import CmgCluster
+CmgCluster().start(0.0).advance(0.0, 0.1)  # the first compile sets numba up
+from agilesat.components import satellite_dynamics
+satellite_dynamics.SatelliteDynamics().start(0.0).advance(0.0, 0.1)
+print(satellite_dynamics._step._run is satellite_dynamics._step.compiled)
+"""
+
+
+@pytest.mark.slow
+@needs_numba
+def test_a_module_imported_after_the_first_compile_compiles_too():
+    result = run_python(_IMPORTED_LATER)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["True"]
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@needs_numba
+def test_the_c_host_with_compiled_kernels_matches_the_master(fmus, c_host, tmp_path):
+    """Kernels compiled from the first call in a host without Python (the FMUs' own
+    interpreter) give the master's results (the kernels' Python) bit for bit."""
+    from c_host import harness as c
+    from c_host.script import write_script
+
+    ssd = get_scenario("scan_pitch").ssd
+    write_script(ssd, tmp_path / "script.txt", tmp_path / "fmus", c.STOP)
+    env = {**c.CLEAN_ENV, "AGILESAT_JIT_AFTER": "0"}
+    run = c.run_host(c_host, tmp_path / "script.txt", tmp_path / "c.csv", env=env)
+    assert run.returncode == 0, run.stderr
+    names, data = c.read_csv(tmp_path / "c.csv")
+    m_names, m_data = c.master_results(ssd, c.STOP, tmp_path / "master.npz")
+    assert np.array_equal(data, m_data[:, [m_names.index(n) for n in names]])

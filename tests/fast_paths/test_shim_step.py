@@ -1,0 +1,228 @@
+"""The shim's C step path (fmus/shim/agilesat_fmi2.c, "the C step path"; fmus/slave.py, "The
+C step path"; components/jit.py, "C entries"): with the kernels compiled, fmi2DoStep and the
+evaluation of the outputs run in C, calling the models' compiled kernels.  Driven through
+the built FMUs in clean processes (tests/tools/shim_step_host.py), with the path on and off
+(AGILESAT_SHIM_STEP=0): the path is taken (the shim's counters), and everything a host sees
+is the same bit for bit: values, statuses, messages, FMU states (serialized bytes), the run
+after a state restore, a reset, a step the kernel leaves to the Python (a warning, an
+error), bad steps."""
+
+import ctypes
+import json
+import math
+
+import numpy as np
+import pytest
+
+from agilesat.components import jit
+from helpers import TOOLS, run_python
+
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+HOST = (TOOLS / "shim_step_host.py").read_text()
+#: the FMUs with C entries (scan_pitch's five)
+NAMES = (
+    "SatelliteDynamics",
+    "CmgCluster",
+    "CmgSteering",
+    "PitchManeuverController",
+    "OrbitEnvironment",
+)
+OK, WARNING, ERROR = 0, 1, 3
+
+
+@pytest.fixture(scope="module")
+def hosts(fmus):
+    """{"on": results, "off": results} of the host, one clean process each."""
+    got = {}
+    for mode in ("on", "off"):
+        result = run_python(HOST, mode, *(f"{name}={fmus[name]}" for name in NAMES))
+        assert result.returncode == 0, result.stderr
+        got[mode] = json.loads(result.stdout.strip().splitlines()[-1])
+    return got
+
+
+def same(on, off, *keys):
+    for key in keys:
+        assert on[key] == off[key], key  # JSON floats: bit for bit
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_steps_are_served_in_c_and_give_the_same_answers(hosts, name):
+    on, off = hosts["on"][f"{name}:run"], hosts["off"][f"{name}:run"]
+    same(on, off, "record")
+    assert {row[0] for row in on["record"]} == {OK}
+    enabled, steps, outputs, fallbacks = on["counts"]
+    # every step in C but, where the step is a kernel, the first (its first call switches
+    # it to the compiled tier; SatelliteDynamics checks its initial inputs there); a step
+    # that changes only the time is C's once the output kernel has run (the first get)
+    first_in_python = name in ("SatelliteDynamics", "CmgCluster")
+    assert (enabled, steps, fallbacks) == (1, 30 - first_in_python, 0)
+    if name == "PitchManeuverController":
+        assert outputs == 0  # CPython's math.hypot: the output stays Python
+    else:
+        assert outputs >= 29
+    assert off["counts"] == [-1, 0, 0, 0]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_fmu_states_after_c_steps_are_those_of_the_python(hosts, name):
+    on, off = hosts["on"][f"{name}:states"], hosts["off"][f"{name}:states"]
+    same(on, off, "state", "after", "restored", "deserialized")
+    assert on["restored"] == on["after"] and on["deserialized"] == on["after"]
+    assert on["counts"][1] > 20
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_bad_steps_after_c_steps_get_the_slaves_status_and_message(hosts, name):
+    on, off = hosts["on"][f"{name}:faults"], hosts["off"][f"{name}:faults"]
+    same(on, off, "calls", "messages", "record")
+    calls = on["calls"]
+    assert calls["close enough"] == calls["terminate"] == OK
+    assert {calls[k] for k in calls if k not in ("close enough", "terminate")} == {ERROR}
+    text = "\n".join(message for _, message in on["messages"])
+    assert "time discontinuity: the last step ended at t=0.25, doStep starts at t=0.55" in text
+    assert "step size must be positive and finite, got 0.0" in text
+    assert "not allowed in mode 'terminated'" in text
+    assert on["counts"][1] >= 4 + 3  # the steps before and after the bad ones
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_reset_hands_the_new_slaves_arrays_over(hosts, name):
+    on, off = hosts["on"][f"{name}:reset"], hosts["off"][f"{name}:reset"]
+    same(on, off, "first", "again")
+    assert on["again"] == on["first"]
+    # the kernels are compiled by then (in this process): every step in C but
+    # SatelliteDynamics' first (its initial inputs are checked)
+    assert on["after"][1] - on["before"][1] == 6 - (name == "SatelliteDynamics")
+
+
+def test_a_warning_from_the_step_falls_back_to_the_slave(hosts):
+    on, off = hosts["on"]["CmgCluster:saturation"], hosts["off"]["CmgCluster:saturation"]
+    same(on, off, "record", "messages")
+    assert [row[0] for row in on["record"]] == [OK] * 5 + [WARNING] + [OK] * 6
+    assert "rate command 5.000 rad/s exceeds the rate limit" in on["messages"][0][1]
+    enabled, steps, _, fallbacks = on["counts"]
+    # steps 5 (the kernel's warning: fallback) and 6 (saturated: the step may end it) in
+    # Python, the others in C (the kernels were compiled by the programs before)
+    assert (fallbacks, steps) == (1, 10)
+
+
+def test_an_error_from_the_step_falls_back_to_the_slave(hosts):
+    on = hosts["on"]["SatelliteDynamics:unphysical"]
+    off = hosts["off"]["SatelliteDynamics:unphysical"]
+    same(on, off, "record", "messages")
+    assert [row[0] for row in on["record"]] == [OK] * 5 + [ERROR] + [OK] * 4
+    assert "sub-steps of 0.05 s: the state is unphysical" in on["messages"][0][1]
+    assert on["counts"][3] == 1 and on["counts"][1] == 8  # the first step is the Python's
+
+
+_BROKEN_BUILD = """
+import json, os, sys
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+sys.path.insert(0, sys.argv[2])
+import fmi_host
+fmu = fmi_host.Fmu(sys.argv[1], "a")
+jit = next(m for n, m in sys.modules.items() if n.startswith("agilesat_") and n.endswith(".jit"))
+def broken(self):
+    raise TypeError("numba moved")
+jit.CEntry._cfunc = property(broken)  # every C entry fails to build
+fmu.initialize(fmi_host.plausible_inputs(fmu))
+statuses = [fmu.step(k * 0.05, 0.05) for k in range(5)]
+said = [m for s, m in fmu.messages if "C step path is off" in m]
+print(json.dumps({"statuses": statuses, "said": said}))
+"""
+
+
+def test_a_c_entry_that_cannot_be_built_leaves_the_steps_to_the_python_with_a_warning(fmus):
+    """(Another numba version, say.)  The calls still succeed; the first step reports it
+    once, as a warning; the Python steps from then on."""
+    result = run_python(_BROKEN_BUILD, fmus["CmgCluster"], TOOLS)
+    assert result.returncode == 0, result.stderr
+    answer = json.loads(result.stdout.strip().splitlines()[-1])
+    assert answer["statuses"] == [WARNING, OK, OK, OK, OK]
+    assert len(answer["said"]) == 1 and "TypeError: numba moved" in answer["said"][0]
+
+
+def test_a_restored_state_must_have_the_models_array_shapes():
+    """The compiled kernels index the state array without bounds checks: a crafted FMU
+    state with another array is refused before the model takes it."""
+    from agilesat.components.cmg_cluster import CmgCluster
+    from agilesat.fmus.slave import _CallRejected, _same_arrays
+
+    model = CmgCluster().start(0.0)
+    _same_arrays(model, {"state": model.state.copy(), "t": 1.0})  # a state of its own: taken
+    for wrong in (np.zeros(1), model.state.astype(np.float32), model.state.tolist()):
+        with pytest.raises(_CallRejected, match="the state's state is not a float64 array"):
+            _same_arrays(model, {"state": wrong})
+
+
+def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
+    """numba's cfunc wrapper would print an exception and return an undefined value: the C
+    entry catches it (here a ZeroDivisionError, numba's Python error model) and returns -1,
+    so the shim falls back to the Python, which raises it with its message."""
+    monkeypatch.setenv("AGILESAT_CACHE_DIR", str(tmp_path))
+
+    def divide(values, state, dt):
+        state[0] = values[0] / dt
+        return 0
+
+    inner = jit.Kernel(divide, 0)
+    entry = jit.CEntry(lambda values, state, dt: inner(values, state, dt), inner)
+    assert entry.address is None  # not compiled yet
+    values, state = np.array([3.0]), np.zeros(1)
+    inner(values, state, 2.0)  # the tier switch
+    assert entry.address is not None
+    call = ctypes.CFUNCTYPE(
+        ctypes.c_int32,
+        ctypes.c_void_p,
+        ctypes.c_int64,
+        ctypes.c_void_p,
+        ctypes.c_int64,
+        ctypes.c_double,
+    )(entry.address)
+    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 4.0) == 0 and state[0] == 0.75
+    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 0.0) == -1 and state[0] == 0.75
+    with pytest.raises(ZeroDivisionError):
+        inner(values, state, 0.0)
+    assert math.isfinite(state[0])
+
+
+def test_scan_pitch_enters_python_once_per_macro_step(monkeypatch):
+    """With the kernels compiled, a macro step of scan_pitch (five FMUs, the master's Jacobi
+    passes) enters Python once: the pitch controller's output (CPython's math.hypot); its
+    phase (an Integer) is then served by the shim too."""
+    from count_python_entries import count
+
+    monkeypatch.setenv("AGILESAT_JIT_AFTER", "0")
+    short, long = count("1", 0.05, 1.0), count("1", 0.05, 2.0)
+    per_step = {name: (long[name] - short.get(name, 0)) / 20 for name in long}
+    assert {name: n for name, n in per_step.items() if n} == {"get_real": 1.0}
+
+
+SCAN_PITCH = r"""
+import json, os, sys
+os.environ["AGILESAT_JIT_AFTER"], os.environ["AGILESAT_SHIM_STEP"] = sys.argv[1:3]
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+steps = []  # the slaves' do_step entries (Python)
+sys.setprofile(lambda frame, event, arg: event == "call" and frame.f_code.co_name == "do_step"
+               and frame.f_code.co_filename.endswith("fmus/slave.py") and steps.append(1))
+results = simulate(get("scan_pitch").ssd, stop=20.0)
+sys.setprofile(None)
+print(json.dumps({"names": list(results.names), "data": results.data.tolist(),
+                  "python steps": len(steps)}))
+"""
+
+
+def test_kernels_switching_mid_run_hand_the_steps_to_c_bit_for_bit():
+    """The tier switch after 150 calls (400 macro steps): the C step path takes over mid-run
+    and the results are those of the run without it, bit for bit."""
+    runs = []
+    for step_path in ("1", "0"):
+        result = run_python(SCAN_PITCH, "150", step_path)
+        assert result.returncode == 0, result.stderr
+        runs.append(json.loads(result.stdout.strip().splitlines()[-1]))
+    assert runs[0]["names"] == runs[1]["names"] and len(runs[0]["data"]) == 401
+    assert runs[0]["data"] == runs[1]["data"]
+    # 5 FMUs x 400 steps in Python without the path; with it only until the switch
+    assert runs[1]["python steps"] == 2000 and runs[0]["python steps"] < 1000

@@ -1,0 +1,136 @@
+"""Our FMUs in a plain C FMI 2.0 host (tests/tools/c_host/fmi2_host.c), as a C/C++ tool
+loads them.
+
+The host runs in an empty environment (no PYTHONPATH, no LD_PRELOAD, no virtualenv on
+PATH): the FMU binary itself must load libpython and find numpy in the environment it
+was built in.  Fed the master's own sequence of FMI calls (tests/tools/c_host/script.py), it
+must reproduce the master's results bit for bit.
+"""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from c_host.harness import CLEAN_ENV, STOP, master_results, read_csv, run_host
+from c_host.script import write_script
+
+from agilesat.orchestration.scenarios import NAMES, get
+from helpers import ISS_TLE
+
+pytestmark = [pytest.mark.slow, pytest.mark.integration]
+
+
+@pytest.mark.parametrize("scenario", NAMES)
+def test_the_c_host_reproduces_the_master_bit_for_bit(scenario, fmus, c_host, tmp_path):
+    script = tmp_path / "script.txt"
+    names = write_script(get(scenario).ssd, script, tmp_path / "fmus", STOP)
+    run = run_host(c_host, script, tmp_path / "c.csv")
+    assert run.returncode == 0, run.stderr
+    c_names, c_data = read_csv(tmp_path / "c.csv")
+    assert c_names == ["time", *names]
+    m_names, m_data = master_results(get(scenario).ssd, STOP, tmp_path / "master.npz")
+    assert len(c_data) == len(m_data) == round(STOP / 0.05) + 1
+    master = m_data[:, [m_names.index(n) for n in c_names]]
+    assert np.array_equal(c_data, master), np.nanmax(np.abs(c_data - master))
+
+
+def test_a_real_satellites_orbit_through_the_c_host(fmus, c_host, tmp_path):
+    """video_sar over an ISS pass: OrbitEnvironment runs SGP4 from the ``sgp4`` package,
+    which only the build environment has: the C host's interpreter must be that
+    environment's.  Bit-identical to the master on the same system."""
+    from agilesat.orchestration.scenarios import video_sar
+
+    orbit, _, _ = video_sar.tle_pass(*ISS_TLE)
+    ssd = video_sar.pass_scenario(orbit, tmp_path).ssd
+    script = tmp_path / "script.txt"
+    write_script(ssd, script, tmp_path / "fmus", 10.0)
+    run = run_host(c_host, script, tmp_path / "c.csv")
+    assert run.returncode == 0, run.stderr
+    c_names, c_data = read_csv(tmp_path / "c.csv")
+    m_names, m_data = master_results(ssd, 10.0, tmp_path / "master.npz")
+    assert np.array_equal(c_data, m_data[:, [m_names.index(n) for n in c_names]])
+
+
+def test_the_hosts_python_variables_do_not_reach_the_fmus_python(c_host, tmp_path, fmus):
+    """A C host that sets PYTHONHOME/PYTHONPATH for its own reasons: ignored by the FMU."""
+    script = tmp_path / "script.txt"
+    write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
+    env = {**CLEAN_ENV, "PYTHONHOME": "/nonexistent", "PYTHONPATH": "/nonexistent"}
+    run = run_host(c_host, script, tmp_path / "c.csv", env)
+    assert run.returncode == 0, run.stderr
+
+
+def test_an_environment_under_a_non_ascii_path(c_host, tmp_path, fmus):
+    """The recorded environment's path is decoded as Python decodes paths, whatever the
+    host's locale (an alias of the build environment under 'vé/')."""
+    import sys
+    import sysconfig
+
+    venv = Path(sys.prefix)
+    alias = tmp_path / "vé"
+    (alias / "bin").mkdir(parents=True)
+    (alias / "pyvenv.cfg").write_text((venv / "pyvenv.cfg").read_text())
+    (alias / "bin" / "python").symlink_to(Path(sys.executable).resolve())
+    (alias / "lib").symlink_to(venv / "lib")
+    assert Path(sysconfig.get_paths()["purelib"]).is_relative_to(venv)
+    script = tmp_path / "script.txt"
+    write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
+    run = run_host(
+        c_host,
+        script,
+        tmp_path / "c.csv",
+        {**CLEAN_ENV, "LANG": "C", "AGILESAT_PYTHON": str(alias / "bin" / "python")},
+    )
+    assert run.returncode == 0, run.stderr
+
+
+@pytest.fixture
+def scan_pitch_script(fmus, tmp_path):
+    script = tmp_path / "script.txt"
+    write_script(get("scan_pitch").ssd, script, tmp_path / "fmus", 1.0)
+    return script
+
+
+def test_a_missing_python_environment_is_named(c_host, scan_pitch_script, tmp_path):
+    env = {**CLEAN_ENV, "AGILESAT_PYTHON": str(tmp_path / "gone" / "bin" / "python")}
+    run = run_host(c_host, scan_pitch_script, tmp_path / "c.csv", env)
+    assert run.returncode == 2
+    assert "fmi2Instantiate returned NULL" in run.stderr
+    assert re.search(
+        r"runs Python as .*gone/bin/python, which does not exist here.*"
+        "AGILESAT_PYTHON",
+        run.stderr,
+    )
+
+
+def test_a_missing_libpython_is_named(c_host, scan_pitch_script, tmp_path):
+    env = {**CLEAN_ENV, "AGILESAT_LIBPYTHON": str(tmp_path / "libpython3.so")}
+    run = run_host(c_host, scan_pitch_script, tmp_path / "c.csv", env)
+    assert run.returncode == 2
+    assert re.search(r"cannot load .*libpython3.so.*AGILESAT_LIBPYTHON", run.stderr)
+
+
+def test_an_error_mid_run_is_reported_and_the_rows_so_far_are_kept(
+    c_host, scan_pitch_script, tmp_path
+):
+    """A NaN input at t = 1 s: fmi2Error from the FMU, named by the host; 21 rows kept."""
+    lines = scan_pitch_script.read_text().splitlines()
+    body = lines[
+        lines.index(next(l for l in lines if l.startswith("loop"))) + 1 : lines.index("end") + 1
+    ]
+    k = next(
+        l.split()[1] for l in lines if l.startswith("fmu") and l.endswith(" SatelliteDynamics")
+    )
+    vr = next(l.split()[3] for l in body if l.startswith(f"put {k} R"))
+    lines[lines.index("end") + 1 : lines.index("end") + 1] = [
+        f"set {k} R {vr} nan",
+        "loop 1 1.0 0.05",
+        *body,
+    ]
+    scan_pitch_script.write_text("\n".join(lines) + "\n")
+    run = run_host(c_host, scan_pitch_script, tmp_path / "c.csv")
+    assert run.returncode == 2
+    assert re.search(r"\[SatelliteDynamics\] status 3 .*non-finite values rejected", run.stderr)
+    assert "SatelliteDynamics: fmi2SetReal at t=1 returned status 3" in run.stderr
+    assert len(read_csv(tmp_path / "c.csv")[1]) == 21

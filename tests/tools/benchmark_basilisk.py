@@ -1,0 +1,89 @@
+"""Basilisk (``bsk`` on PyPI, all-C++ dynamics) as a speed anchor for
+tests/tools/benchmark_scan_pitch.py: a rigid hub (our SatelliteDynamics' inertia and mass) with
+six VSCMGs (balanced model, 16.65 N.m.s rotors) or three reaction wheels (Honeywell HR16),
+RK4, at a given step and duration, no flight software (constant zero commands): the time of
+Basilisk's own dynamics loop alone.  Optional: ``pip install -e '.[basilisk]'`` (bsk pins
+older sgp4, tqdm, pandas, matplotlib; a separate environment keeps ours intact).
+
+    python tests/tools/benchmark_basilisk.py      # 150 s at 0.05 s, both hubs
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from Basilisk.architecture import messaging
+from Basilisk.simulation import (
+    reactionWheelStateEffector,
+    spacecraft,
+    svIntegrators,
+    vscmgStateEffector,
+)
+from Basilisk.utilities import SimulationBaseClass, macros, simIncludeRW
+
+KINDS = ("vscmg", "rw")
+
+
+def hub_time(kind: str, step: float, stop: float) -> float:
+    """Wall time of Basilisk's ExecuteSimulation for the hub ``kind`` (vscmg or rw)."""
+    sim = SimulationBaseClass.SimBaseClass()
+    proc = sim.CreateNewProcess("p")
+    proc.addTask(sim.CreateNewTask("t", macros.sec2nano(step)))
+    sc = spacecraft.Spacecraft()
+    sc.hub.mHub = 750.0
+    sc.hub.IHubPntBc_B = [[956.0, 0, 0], [0, 956.0, 0], [0, 0, 956.0]]
+    sc.hub.omega_BN_BInit = [[0.001], [0.002], [0.003]]
+    sc.setIntegrator(svIntegrators.svIntegratorRK4(sc))
+    keep = []
+    if kind == "vscmg":
+        eff = vscmgStateEffector.VSCMGStateEffector()
+        for i in range(6):
+            c = messaging.VSCMGConfigMsgPayload()
+            c.VSCMGModel = 0
+            a = np.radians(60.0 * i)
+            g = [np.cos(a) * 0.447, np.sin(a) * 0.447, 0.894]
+            s = np.cross(g, [0, 0, 1.0] if i else [1.0, 0, 0])
+            s = s / np.linalg.norm(s)
+            t = np.cross(g, s)
+            c.ggHat_B = [[g[0]], [g[1]], [g[2]]]
+            c.gsHat0_B = [[s[0]], [s[1]], [s[2]]]
+            c.gtHat0_B = [[t[0]], [t[1]], [t[2]]]
+            c.IW1, c.IW2, c.IW3, c.IG1, c.IG2, c.IG3 = 0.1, 0.05, 0.05, 0.1, 0.1, 0.1
+            c.Omega, c.gamma, c.gammaDot = 166.5, 0.1 * i, 0.0
+            c.u_s_max = c.u_g_max = -1
+            c.massW = c.massG = 1.0
+            c.rGB_B = [[0.0], [0.0], [0.0]]
+            c.Omega_max = 6000.0  # rad/s
+            c.gammaDot_max = -1
+            eff.AddVSCMG(c)
+            keep.append(c)
+        sc.addStateEffector(eff)
+        cmd = messaging.VSCMGArrayTorqueMsgPayload()
+        msg = messaging.VSCMGArrayTorqueMsg().write(cmd)
+        eff.cmdsInMsg.subscribeTo(msg)
+        keep += [eff, cmd, msg]
+        sim.AddModelToTask("t", eff)
+    else:
+        f = simIncludeRW.rwFactory()
+        for axis in ([1, 0, 0], [0, 1, 0], [0, 0, 1]):
+            f.create("Honeywell_HR16", axis, maxMomentum=50.0, Omega=100.0)
+        eff = reactionWheelStateEffector.ReactionWheelStateEffector()
+        f.addToSpacecraft("rw", eff, sc)
+        cmd = messaging.ArrayMotorTorqueMsgPayload()
+        msg = messaging.ArrayMotorTorqueMsg().write(cmd)
+        eff.rwMotorCmdInMsg.subscribeTo(msg)
+        keep += [eff, f, cmd, msg]
+        sim.AddModelToTask("t", eff)
+    sim.AddModelToTask("t", sc)
+    sim.InitializeSimulation()
+    sim.ConfigureStopTime(macros.sec2nano(stop))
+    start = time.perf_counter()
+    sim.ExecuteSimulation()
+    elapsed = time.perf_counter() - start
+    return elapsed
+
+
+if __name__ == "__main__":
+    for kind in KINDS:
+        print(kind, f"{hub_time(kind, 0.05, 150.0):.3f} s")

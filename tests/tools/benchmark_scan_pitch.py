@@ -1,0 +1,310 @@
+"""Benchmark of scan_pitch (and payload_sweep, video_sar): prints a report (not a test;
+timings on shared machines vary: compare the ratios, measured in one run).
+
+    python tests/tools/benchmark_scan_pitch.py [--repeat N]
+
+scan_pitch at macro steps 0.01, 0.05 and 0.1 s, payload_sweep and video_sar at their own
+steps, on one core, best of N runs each (CPU time of this process, see best()):
+- the co-simulation (our master, the FMUs) and its real-time factor;
+- its time per macro step split into model compute (the rest of the below), FMI layer
+  (the same run with every model's initialize/step/output replaced by a no-op inside the
+  loaded FMUs, the shim's C step path kept: ctypes, our shim, and pythonfmu and our slave
+  where a call enters Python; less the master) and master (that run again with every FMI
+  call of the compiled loop a C no-op: the loop, its rows and their CSV text);
+- the previous design in the same run: the kernels (components/jit.py) running their
+  readable Python (AGILESAT_JIT=0), the shim's get/set through pythonfmu and the slave
+  (AGILESAT_SHIM_FAST=0) and the Python master loop (loop="python"), split into model
+  compute, FMI layer and master (the Python loop with every FMI call a Python no-op), and
+  the ratio previous / now;
+- the monolithic NumPy reference of scan_pitch at the same step
+  (tests/tools/reference/scan_pitch.py), and the ratio of the two wall times.
+Basilisk (tests/tools/benchmark_basilisk.py) as an anchor where bsk is installed.
+Targets (issue 10): >= 1,000x real time at 0.05 s, and <= 1.5x the monolithic reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import platform
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("AGILESAT_JIT_AFTER", "0")  # compiled from the first call (jit.py)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from agilesat.fmus.build import build_all
+from agilesat.orchestration import simulate
+from agilesat.orchestration.cosim import master
+from agilesat.orchestration.scenarios import get
+from reference import scan_pitch as reference
+
+STEPS = (0.01, 0.05, 0.1)
+STOP = 150.0
+OTHERS = ("payload_sweep", "video_sar")
+
+
+def best(function, repeat: int) -> float:
+    """Least CPU time of this process over ``repeat`` calls (single-threaded: on a quiet
+    machine the wall time; on a shared one not inflated by other processes' load)."""
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        function()
+        times.append(time.process_time() - start)
+    return min(times)
+
+
+def _fmu_modules():
+    return [(n, m) for n, m in list(sys.modules.items()) if n.startswith("agilesat_")]
+
+
+@contextlib.contextmanager
+def patched(changes):
+    """Set (object, attribute, value) for the block, then restore."""
+    saved = [(obj, name, vars(obj)[name]) for obj, name, _ in changes]
+    try:
+        for obj, name, value in changes:
+            setattr(obj, name, value)
+        yield
+    finally:
+        for obj, name, value in saved:
+            setattr(obj, name, value)
+
+
+def stub_models(c_path: bool = False):
+    """Every loaded FMU model's work replaced by a no-op.  ``c_path``: the shim's C step
+    path kept (components/jit.py, "C entries"): the models initialise and evaluate their
+    outputs until their first step as they do (the C path needs their state and valid
+    values), then do nothing, and every C entry is a compiled no-op of its signature."""
+    changes = []
+    noop = _noop_c_entry() if c_path else None
+    for name, module in _fmu_modules():
+        for obj in vars(module).values():
+            if isinstance(obj, type) and "VARIABLES" in vars(obj) and obj.__module__ == name:
+                if c_path:
+                    changes += [(obj, "step", _stepped), (obj, "output", _until_stepped(obj))]
+                else:
+                    changes += [
+                        (obj, "initialize", lambda self, t0: None),
+                        (obj, "step", lambda self, t, dt: None),
+                        (obj, "output", lambda self: None),
+                    ]
+            if c_path and type(obj).__name__ == "CEntry" and "_cfunc" in vars(obj):
+                changes.append((obj, "_cfunc", noop))
+    return patched(changes)
+
+
+def _stepped(self, t, dt):
+    self._initial_inputs = None  # as the first step's check leaves it (the C path's cue)
+    self._stub_stepped = True
+
+
+def _until_stepped(model_class):
+    real = vars(model_class)["output"]
+    return lambda self: None if getattr(self, "_stub_stepped", False) else real(self)
+
+
+def _noop_c_entry():
+    import numba
+
+    double_p = numba.types.CPointer(numba.types.float64)
+    signature = numba.types.int32(double_p, numba.types.int64, double_p, numba.types.int64,
+                                  numba.types.float64)  # fmt: skip
+    return numba.cfunc(signature)(lambda values, n_values, state, n_state, x: 0)
+
+
+def readable_kernels():
+    """Every compiled kernel of the loaded FMUs running its readable Python."""
+    changes = []
+    for _, module in _fmu_modules():
+        if module.__name__.endswith(".components.jit"):
+            for other_name, other in _fmu_modules():
+                if other_name.startswith(module.__name__.split(".")[0] + ".components."):
+                    for kernel in module.kernels(other).values():
+                        changes.append((kernel, "_run", kernel.py_func))
+    return patched(changes)
+
+
+def stub_fmi_c():
+    """The compiled loop's FMI calls (get/set/doStep) made to a C function that returns
+    fmi2OK and reads nothing (the C calling convention lets it ignore any arguments)."""
+    import numba
+
+    from agilesat.orchestration.cosim import loop
+
+    noop = numba.cfunc(numba.types.int32())(lambda: 0)
+    return patched([(loop, "_address", lambda function: noop.address)])
+
+
+def stub_fmi():
+    """The master's FMI calls in the loop (get/set/doStep) replaced by Python no-ops."""
+    return patched(
+        [
+            (master._Port, "transfer", lambda self: None),
+            (master, "_do_step", lambda instance, t, step: None),
+        ]
+    )
+
+
+@contextlib.contextmanager
+def previous_design(ssd, step):
+    """The previous design's paths (see the module docstring).  The shim reads
+    AGILESAT_SHIM_FAST at fmi2Reset, which the master calls on the FMUs it keeps at the end
+    of each run: a one-step run after each change of the variable."""
+    os.environ["AGILESAT_SHIM_FAST"] = "0"
+    try:
+        simulate(ssd, step=step, stop=step)
+        with readable_kernels():
+            yield
+    finally:
+        del os.environ["AGILESAT_SHIM_FAST"]
+        simulate(ssd, step=step, stop=step)
+
+
+def measure(ssd, step, stop, repeat):
+    run = lambda loop=None: simulate(ssd, step=step, stop=stop, loop=loop)  # noqa: E731
+    cosim = best(run, repeat)
+    with stub_models(c_path=True):
+        run()  # the FMUs reset with the no-op entries armed
+        stubbed = best(run, repeat)
+        with stub_fmi_c():
+            loop_alone = best(run, repeat)
+    with previous_design(ssd, step):
+        previous = best(lambda: run("python"), repeat)
+        with stub_models():
+            previous_stubbed = best(lambda: run("python"), repeat)
+            with stub_fmi():
+                previous_loop = best(lambda: run("python"), repeat)
+    n = round(stop / step)
+    per_step = {
+        "total": cosim / n * 1e6,
+        "model": (cosim - stubbed) / n * 1e6,
+        "fmi": (stubbed - loop_alone) / n * 1e6,
+        "master": loop_alone / n * 1e6,
+        "previous": previous / n * 1e6,
+        "previous model": (previous - previous_stubbed) / n * 1e6,
+        "previous fmi": (previous_stubbed - previous_loop) / n * 1e6,
+        "previous master": previous_loop / n * 1e6,
+    }
+    return cosim, previous, per_step
+
+
+def models_report(repeat: int) -> None:
+    """Each scan_pitch model alone (in-process, at its defaults, 500 steps of 0.05 s with
+    step + output): us per step with its kernels compiled and with their Python,
+    alternated, best of ``repeat`` (less noisy than the co-simulation's split)."""
+    from agilesat.components import jit
+    from agilesat.fmus import FMUS, model_class
+
+    print("\nmodels alone, us per step + output (compiled kernels / their Python):")
+    for name in get("scan_pitch").components:
+        model = model_class(name)
+        module = sys.modules[model.__module__]
+        kernels = [
+            k
+            for m in list(sys.modules.values())
+            if m is not None
+            and getattr(m, "__name__", "").startswith(module.__name__.rsplit(".", 1)[0] + ".")
+            for k in jit.kernels(m).values()
+        ]
+
+        def run():
+            instance = model().start(0.0)
+            for k in range(500):
+                instance.advance(k * 0.05, 0.05)
+
+        times = {}
+        for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+            changes = [(k, "_run", getattr(k, attribute)) for k in kernels]
+            with patched(changes):
+                run()  # compile or load outside the timing
+        for _ in range(repeat):
+            for label, attribute in (("compiled", "compiled"), ("python", "py_func")):
+                with patched([(k, "_run", getattr(k, attribute)) for k in kernels]):
+                    elapsed = best(run, 1) / 500 * 1e6
+                times[label] = min(times.get(label, elapsed), elapsed)
+        print(
+            f"  {name:>24} ({FMUS[name]}): {times['compiled']:6.1f} / {times['python']:6.1f}"
+            f"{'' if kernels else '  (no kernels)'}"
+        )
+
+
+def basilisk(cosim: float, monolithic: float, repeat: int) -> None:
+    """The Basilisk anchor (tests/tools/benchmark_basilisk.py) where bsk is installed."""
+    try:
+        from benchmark_basilisk import KINDS, hub_time
+    except ImportError as exc:
+        print(f"\nBasilisk: not installed ({exc}); pip install -e '.[basilisk]' for the anchor")
+        return
+    print("\nBasilisk at 0.05 s, 150 s, RK4 (dynamics only):")
+    for kind in KINDS:
+        elapsed = best(lambda: hub_time(kind, 0.05, STOP), repeat)
+        print(
+            f"  {kind:>5}: {elapsed:.3f}s, {STOP / elapsed:.0f}x real time, "
+            f"{elapsed / monolithic:.2f}x the reference, co-simulation / Basilisk "
+            f"{cosim / elapsed:.2f}"
+        )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    build_all()
+    ssd = get("scan_pitch").ssd
+    simulate(ssd, step=0.1, stop=1.0)  # load every FMU module once
+    for name in OTHERS:
+        simulate(get(name).ssd, step=get(name).step, stop=1.0)
+    print(f"benchmark: best of {args.repeat} runs per entry")
+    print(
+        f"  {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+        f"numpy {np.__version__}, one core\n"
+    )
+    print(
+        f"{'':>19} {'now':>38} | {'previous design':>33} |"
+        f"\n{'scenario':>13} {'step':>5} {'co-sim':>8} {'RTF':>6} {'us/step':>8} "
+        f"{'model':>6} {'FMI':>5} {'master':>6} | {'us/step':>8} {'model':>6} {'FMI':>5} "
+        f"{'master':>6} {'ratio':>6} | {'reference':>9} {'ratio':>6}"
+    )
+    rows = {}
+    cases = [("scan_pitch", step, STOP) for step in STEPS]
+    cases += [(name, get(name).step, get(name).stop) for name in OTHERS]
+    for name, step, stop in cases:
+        cosim, previous, us = measure(get(name).ssd, step, stop, args.repeat)
+        if name == "scan_pitch":
+            monolithic = best(lambda: reference.simulate(step, stop), args.repeat)
+            ref = f"{monolithic:>8.3f}s {cosim / monolithic:>6.2f}"
+            rows[step] = (cosim, monolithic)
+        else:
+            ref = f"{'':>9} {'':>6}"
+        print(
+            f"{name:>13} {step:>5} {cosim:>7.3f}s {stop / cosim:>6.0f} {us['total']:>8.0f} "
+            f"{us['model']:>6.0f} {us['fmi']:>5.0f} {us['master']:>6.0f} | {us['previous']:>8.0f} "
+            f"{us['previous model']:>6.0f} {us['previous fmi']:>5.0f} "
+            f"{us['previous master']:>6.0f} {previous / cosim:>5.2f}x | {ref}"
+        )
+    cosim, monolithic = rows[0.05]
+    rtf = STOP / cosim
+    models_report(max(args.repeat, 5))
+    basilisk(cosim, monolithic, args.repeat)
+    print(
+        "\nus/step: CPU time per macro step = model + FMI layer + master; previous design: "
+        "kernels' Python, get/set through pythonfmu, Python loop; ratio = previous / now"
+    )
+    print(
+        f"targets at 0.05 s: real-time factor {rtf:.0f} (target >= 1000: "
+        f"{'met' if rtf >= 1000 else 'NOT met'}); co-simulation / reference "
+        f"{cosim / monolithic:.2f} "
+        f"(target <= 1.5: {'met' if cosim / monolithic <= 1.5 else 'NOT met'})"
+    )
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak resident memory {peak:.0f} MiB")
+
+
+if __name__ == "__main__":
+    main()

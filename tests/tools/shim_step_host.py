@@ -1,0 +1,212 @@
+"""A plain fmpy host driving built FMUs through the shim's C step path, or with it off
+(``AGILESAT_SHIM_STEP=0``), with the kernels compiled from the first call
+(``AGILESAT_JIT_AFTER=0``).  It does not import agilesat.  Run by
+tests/fast_paths/test_shim_step.py in a fresh interpreter:
+``python shim_step_host.py on|off NAME=FMU...``; prints, per FMU and program, what a host
+sees (statuses, log messages, values, serialized states) and the shim's counters, as JSON."""
+
+import ctypes
+import json
+import math
+import os
+import sys
+
+os.environ["AGILESAT_JIT_AFTER"] = "0"
+if sys.argv[1] == "off":
+    os.environ["AGILESAT_SHIM_STEP"] = "0"
+
+from fmpy import extract, read_model_description  # noqa: E402
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE  # noqa: E402
+
+H = 0.05
+
+
+class Fmu:
+    def __init__(self, path, name):
+        md = read_model_description(path)
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        real = [v for v in md.modelVariables if v.type == "Real"]
+        self.outputs = [v.valueReference for v in real if v.causality == "output"]
+        self.inputs = [v.valueReference for v in real if v.causality == "input"]
+        self.integers = [
+            v.valueReference
+            for v in md.modelVariables
+            if v.type == "Integer" and v.causality == "output"
+        ]
+        self.messages = []
+        self.slave = FMU2Slave(
+            guid=md.guid,
+            unzipDirectory=extract(path),
+            modelIdentifier=md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(
+            lambda env, inst, status, cat, msg: self.messages.append([status, msg.decode()])
+        )
+        self._callbacks = callbacks
+        self.slave.instantiate(callbacks=callbacks)
+        self.c, self.dll = self.slave.component, self.slave.dll
+        self.dll.fmi2DoStep.argtypes = [
+            ctypes.c_void_p,
+            ctypes.c_double,
+            ctypes.c_double,
+            ctypes.c_int,
+        ]
+        counters = self.dll.agilesat_shim_step_counters
+        counters.argtypes, counters.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
+        self._counters = counters
+
+    def counts(self):
+        """[on, doSteps served in C, outputs evaluated in C, steps left to the slave]"""
+        c = (ctypes.c_ulonglong * 3)()
+        return [self._counters(self.c, c), *c]
+
+    def initialize(self):
+        assert self.dll.fmi2SetupExperiment(self.c, 0, 0.0, 0.0, 0, 0.0) == 0
+        assert self.dll.fmi2EnterInitializationMode(self.c) == 0
+        assert self.dll.fmi2ExitInitializationMode(self.c) == 0
+
+    def step(self, t, h=H):
+        return self.dll.fmi2DoStep(self.c, t, h, 1)
+
+    def set_real(self, vrs, values):
+        array = (ctypes.c_double * len(vrs))(*values)
+        return self.dll.fmi2SetReal(self.c, (ctypes.c_uint * len(vrs))(*vrs), len(vrs), array)
+
+    def get_real(self, vrs):
+        array = (ctypes.c_double * len(vrs))()
+        status = self.dll.fmi2GetReal(self.c, (ctypes.c_uint * len(vrs))(*vrs), len(vrs), array)
+        return [status, list(array)]
+
+    def get_integer(self, vrs):
+        array = (ctypes.c_int * len(vrs))()
+        status = self.dll.fmi2GetInteger(self.c, (ctypes.c_uint * len(vrs))(*vrs), len(vrs), array)
+        return [status, list(array)]
+
+    def get_state(self):
+        state = ctypes.c_void_p()
+        assert self.dll.fmi2GetFMUstate(self.c, ctypes.byref(state)) == 0
+        return state
+
+    def serialize(self, state):
+        size = ctypes.c_size_t()
+        assert self.dll.fmi2SerializedFMUstateSize(self.c, state, ctypes.byref(size)) == 0
+        data = (ctypes.c_char * size.value)()
+        assert self.dll.fmi2SerializeFMUstate(self.c, state, data, size) == 0
+        return data.raw
+
+    def deserialize(self, data):
+        state = ctypes.c_void_p()
+        buffer = ctypes.create_string_buffer(data, len(data))
+        assert self.dll.fmi2DeSerializeFMUstate(self.c, buffer, len(data), ctypes.byref(state)) == 0
+        return state
+
+    def steps(self, t0, n, inputs=None):
+        """n steps from t0: each a doStep, every third a set of the inputs (to the values
+        read at the start: a feedthrough set after the step, before the gets), the gets."""
+        inputs = self.get_real(self.inputs)[1] if inputs is None else inputs
+        record = []
+        for k in range(n):
+            row = [self.step(t0 + k * H)]
+            if k % 3 == 1:
+                row.append(self.set_real(self.inputs, inputs))
+            row.append(self.get_real(self.outputs))
+            if self.integers:
+                row.append(self.get_integer(self.integers))
+            record.append(row)
+        return record
+
+
+def run(fmu):
+    fmu.initialize()
+    return {"record": fmu.steps(0.0, 30), "counts": fmu.counts()}
+
+
+def states(fmu):
+    """FMU state get, set, serialize and deserialize mid-run after C steps."""
+    fmu.initialize()
+    fmu.steps(0.0, 10)
+    fmu.step(10 * H)  # a step whose outputs the shim evaluated (predicted), no get yet
+    state = fmu.get_state()
+    data = fmu.serialize(state)
+    after = fmu.steps(11 * H, 5)
+    assert fmu.dll.fmi2SetFMUstate(fmu.c, state) == 0
+    restored = fmu.steps(11 * H, 5)
+    assert fmu.dll.fmi2SetFMUstate(fmu.c, fmu.deserialize(data)) == 0
+    deserialized = fmu.steps(11 * H, 5)
+    return {
+        "state": data.hex(),
+        "after": after,
+        "restored": restored,
+        "deserialized": deserialized,
+        "counts": fmu.counts(),
+    }
+
+
+def faults(fmu):
+    """Bad calls after C steps: the slave's status and message, then the run goes on."""
+    fmu.initialize()
+    fmu.steps(0.0, 5)
+    t = 5 * H
+    calls = {
+        "discontinuity": fmu.step(t + 0.3),
+        "zero step": fmu.step(t, 0.0),
+        "negative step": fmu.step(t, -H),
+        "nan step": fmu.step(t, math.nan),
+        "nan time": fmu.step(math.nan),
+        "close enough": fmu.step(t + 1e-13),  # within math.isclose: accepted
+    }
+    record = fmu.steps(t + H, 3)
+    calls["terminate"] = fmu.dll.fmi2Terminate(fmu.c)
+    calls["step after terminate"] = fmu.step(t + 4 * H)
+    return {"calls": calls, "messages": fmu.messages, "record": record, "counts": fmu.counts()}
+
+
+def reset(fmu):
+    fmu.initialize()
+    first = fmu.steps(0.0, 6)
+    before = fmu.counts()
+    assert fmu.dll.fmi2Reset(fmu.c) == 0
+    fmu.initialize()
+    return {"first": first, "again": fmu.steps(0.0, 6), "before": before, "after": fmu.counts()}
+
+
+def saturation(fmu):
+    """CmgCluster: a command over the rate limit in step 5 (a warning from the step)."""
+    fmu.initialize()
+    command = [fmu.vr[f"delta_dot_cmd[{i}]"] for i in range(1, 7)]
+    record = []
+    for k in range(12):
+        fmu.set_real(command, [5.0 if k == 5 else 0.1 * (k % 3)] + [0.0] * 5)
+        record.append([fmu.step(k * H), fmu.get_real(fmu.outputs)])
+    return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
+
+
+def unphysical(fmu):
+    """SatelliteDynamics: a body rate needing too many sub-steps in step 5 (an error from
+    the step, nothing changed), then the run goes on."""
+    fmu.initialize()
+    h = [fmu.vr[f"h_cmg[{i}]"] for i in (1, 2, 3)]
+    record, done = [], 0
+    for k in range(10):
+        fmu.set_real(h, [1e9 if k == 5 else 0.0, 0.0, 0.0])
+        record.append([fmu.step(done * H), fmu.get_real(fmu.outputs)])
+        done += record[-1][0] == 0  # a failed step leaves the time: the next one retries
+    return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
+
+
+PROGRAMS = {"run": run, "states": states, "faults": faults, "reset": reset}
+SPECIAL = {
+    "CmgCluster": {"saturation": saturation},
+    "SatelliteDynamics": {"unphysical": unphysical},
+}
+
+results = {}
+for argument in sys.argv[2:]:
+    name, path = argument.split("=", 1)
+    for program, function in {**PROGRAMS, **SPECIAL.get(name, {})}.items():
+        fmu = Fmu(path, "a")
+        results[f"{name}:{program}"] = function(fmu)
+        fmu.dll.fmi2FreeInstance(fmu.c)
+print(json.dumps(results))
