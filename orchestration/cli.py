@@ -382,7 +382,7 @@ def _plot(args) -> int:
 
 def _report(summary) -> int:
     """Print the summary's numbers; the exit status of a run."""
-    from .runner import format_summary
+    from .output.summary import format_summary
 
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0

@@ -1,7 +1,7 @@
 """What ``agilesat list`` and ``agilesat info`` print: the scenarios and their variants; a
 system's components, connections (whole variables) and every settable parameter with unit,
 value and description; an FMU's interface.  Arrays are shown as arrays, and addressed as
-whole arrays or elements (:mod:`.parameters`)."""
+whole arrays or elements (:mod:`.system.parameters`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import scenarios
-from .cosim.fmu import Description
+from .system.description import Description
 from .system.parameters import did_you_mean, variables
 from .system.ssp import read_system
 from .system.units import pretty

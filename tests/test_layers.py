@@ -1,6 +1,7 @@
-"""The layers point one way: components/ (physics and analysis, plain NumPy) imports
-neither the FMI wrappers, the FMI libraries nor the orchestration; the scenarios' constants
-live in orchestration/scenarios/, and the analysis layer takes them as arguments."""
+"""The layers point one way: components/ (physics, plain NumPy) imports neither the FMI
+wrappers, the FMI libraries nor the orchestration; the scenarios' constants live in
+orchestration/scenarios/; the generic master (orchestration/system/, cosim/) knows no model
+of ours."""
 
 import ast
 
@@ -43,3 +44,29 @@ def test_no_scenario_constant_is_defined_in_components():
         and target.id.startswith(("VIDEO_SAR_", "SCAN_PITCH_", "PAYLOAD_SWEEP_", "PAPER_"))
     ]
     assert not defined, defined
+
+
+#: what the generic master (orchestration/system/, cosim/) may take from outside the
+#: orchestration: the cache's root and the C compiler the FMU build uses
+MASTER_MAY_IMPORT = {"components.jit", "fmus.build"}
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted((ROOT / "orchestration" / "system").glob("*.py"))
+    + sorted((ROOT / "orchestration" / "cosim").glob("*.py")),
+    ids=lambda p: f"{p.parent.name}/{p.name}",
+)
+def test_the_generic_master_knows_no_model(path):
+    """Reading, checking and running a system reads what the FMUs' model descriptions say,
+    never our model registry (fmus.FMUS, model_class) or the components' variable tables:
+    a third-party FMU is treated as ours."""
+    bad = [
+        f"{path.relative_to(ROOT)}:{line}: imports {module}"
+        for line, module in imports(path)
+        if module.startswith("...")
+        and module.lstrip(".") not in MASTER_MAY_IMPORT
+        or module.split(".")[0] == "agilesat"
+        and module.split(".")[1] != "orchestration"
+    ]
+    assert not bad, bad

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
-from ..cosim.fmu import Description
 from ..runner import parse_target
+from ..system.description import Description
 from ..system.ssp import read_system
 from . import dispersion as dispersions
 

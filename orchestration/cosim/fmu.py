@@ -25,19 +25,16 @@ from __future__ import annotations
 import atexit
 import compileall
 import ctypes
-import functools
-import hashlib
 import os
 import shutil
 import sys
 import tempfile
 import threading
 import time
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmpy import extract, platform, read_model_description, sharedLibraryExtension
+from fmpy import extract, platform, sharedLibraryExtension
 from fmpy.fmi2 import (
     FMU2Slave,
     calloc,
@@ -47,12 +44,11 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
     free,
 )
-from lxml import etree
 
 from ...components.jit import cache_root
+from ..system.description import Description, content_key
 
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
-AGILESAT_TOOL = "agilesat"
 
 
 class FmiCallError(RuntimeError):
@@ -97,42 +93,13 @@ class Log:
         return [e.message for e in self.entries[since:] if e.instance == instance]
 
 
-class Description:
-    """What the model description of an FMU in a system says: variables by name, output
-    dependencies, optional inputs.  Nothing is loaded."""
-
-    def __init__(self, name: str, path: Path):
-        self.name, self.path = name, Path(path)
-        #: optional input -> what its default means, as our FMUs declare them
-        #: (VendorAnnotations; every other input is required); None: not our FMU
-        self.md, self.optional_inputs = _described(_content_key(self.path), str(path))
-        if self.md.coSimulation is None:
-            raise ValueError(f"{path}: not a co-simulation FMU")
-        self.variables = {v.name: v for v in self.md.modelVariables}
-        self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
-        self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
-        # FMI 2.0 input/output derivatives (orchestration.cosim.derivatives): the capability
-        # flags, and {variable: the variable declared its derivative} (``derivative``)
-        self.can_interpolate_inputs = bool(self.md.coSimulation.canInterpolateInputs)
-        self.max_output_derivative_order = int(self.md.coSimulation.maxOutputDerivativeOrder or 0)
-        self.derivatives = {
-            v.derivative.name: v.name for v in self.md.modelVariables if v.derivative is not None
-        }
-        #: output names in value-reference order
-        self.outputs = [
-            v.name
-            for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
-            if v.causality == "output"
-        ]
-
-
 class Instance(Description):
     """An FMU instance: its description, the loaded binary, raw FMI calls."""
 
     def __init__(self, name: str, path: Path, log: Log):
         super().__init__(name, path)
         self.log = log
-        self._key = _content_key(self.path)
+        self._key = content_key(self.path)
         self.unzip_dir = _unpacked(self._key, str(path), self.md.coSimulation.modelIdentifier)
         self.slave = _take_slave(self._key, name, self.md, self.unzip_dir)
         dll = self.slave.dll
@@ -298,39 +265,9 @@ def _keep_slave(key: str, name: str, slave: FMU2Slave) -> None:
 # -- one load per FMU file content, per process -----------------------------------------
 _lock = threading.Lock()
 _unpacked_dirs: dict[str, str] = {}  # content key -> extraction directory
-_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
 _pinned: list = []  # one handle per loaded binary: never unloaded
 _temporary: list[str] = []  # extractions outside the cache, removed at exit
-_KEYS_KEPT = 1024
 _EXTRACTIONS_KEPT = 64  # in the cache, the most recently used
-
-
-@functools.lru_cache(maxsize=_KEYS_KEPT)
-def _file_digest(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
-def _content_key(path: Path) -> str:
-    """The SHA-256 of the FMU file (hashed once per path, size and modification time)."""
-    stat = os.stat(path)
-    return _file_digest(os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
-
-
-def _described(key: str, path: str):
-    """(model description, optional inputs) of the FMU with content ``key``."""
-    with _lock:
-        described = _descriptions.get(key)
-    if described is None:
-        described = (read_model_description(path), _optional_inputs(Path(path)))
-        with _lock:
-            if len(_descriptions) >= _KEYS_KEPT:
-                _descriptions.pop(next(iter(_descriptions)))
-            _descriptions[key] = described
-    return described
 
 
 def _unpacked(key: str, path: str, model_identifier: str) -> str:
@@ -401,27 +338,3 @@ def _prune(root: Path) -> None:
 def _remove_unpacked() -> None:
     for directory in _temporary:
         shutil.rmtree(directory, ignore_errors=True)
-
-
-def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
-    """Output name -> names of the variables it depends on (None: depends on all)."""
-    result = {}
-    for unknown in unknowns:
-        deps = unknown.dependencies
-        result[unknown.variable.name] = None if deps is None else {d.name for d in deps}
-    return result
-
-
-def _optional_inputs(path: Path) -> dict[str, str] | None:
-    """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
-    None: nothing declared."""
-    with zipfile.ZipFile(path) as archive:
-        root = etree.fromstring(archive.read("modelDescription.xml"))
-    tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
-    if tool is None:
-        return None
-    return {
-        e.get("name"): e.get("optional")
-        for e in tool.findall("Inputs/Input")
-        if e.get("optional") is not None
-    }

@@ -315,10 +315,10 @@ def _previous(consumer, kind: int, links) -> dict:
     )
 
 
-def run(
-    dll, program: Program, values, recorder, signals, progress, log: ClockLog, start, step, n_steps
-) -> None:
-    """Steps 0 .. n_steps - 1 in chunks, as the Python loop of :mod:`.master` runs them."""
+def run(dll, program: Program, plan, values, recorder, signals, log: ClockLog) -> None:
+    """Steps 0 .. n_steps - 1 of a :class:`.plan.RunPlan` in chunks, as the Python loop of
+    :mod:`.master` runs them."""
+    start, step, n_steps, progress = plan.start, plan.step, plan.n_steps, plan.progress
     report_every = max(1, n_steps // 100) if progress else n_steps  # a chunk ends there
     width = len(values) + 1
     rows = np.empty((max(1, min(report_every, 1024, (1 << 22) // (8 * width))), width))

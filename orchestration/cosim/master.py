@@ -1,14 +1,16 @@
 """The co-simulation master: FMI 2.0 co-simulation FMUs wired by an SSP system description.
 
-Run (:func:`simulate`):
+Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
 
-1. Load every FMU and check the system against the model descriptions
-   (:func:`validation.check_system`), which also gives the dependency orders.
+1. Plan the run from the system file and the model descriptions (:mod:`.plan`): the time
+   grid, the parameter values typed, the system checked
+   (:func:`..system.validation.check_system`, which also gives the dependency orders);
+   then load every FMU.
 2. Instantiate, set up the experiment, set the parameters, enter initialisation mode;
    propagate the connected inputs in dependency order (FMI 2.0 ``InitialUnknowns``), then
    set every input once more and exit initialisation mode.
 3. Fixed macro step H, time t_n = t0 + n H from the integer step counter n.
-   The outputs are read block by block in the order of :mod:`.schedule` (each block after
+   The outputs are read block by block in the order of :mod:`..system.schedule` (each block after
    setting that FMU's inputs from the newest outputs).  Gauss-Seidel: an FMU steps at its
    first block, so it sees the outputs of the FMUs before it at t_{n+1}.  Jacobi: every FMU
    has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
@@ -29,7 +31,7 @@ Run (:func:`simulate`):
    Jacobi).  ``derivatives=False`` turns this off.
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
-   when an output directory is given: :mod:`.recorder`).  After fmi2Fatal nothing more is
+   when an output directory is given: :mod:`..output.recorder`).  After fmi2Fatal nothing more is
    called on that FMU.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
    the run stops between two macro steps (the compiled loop: between two chunks of a few
@@ -37,9 +39,10 @@ Run (:func:`simulate`):
    :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
 
 The system is checked against the model descriptions before any FMU is instantiated; open
-inputs follow the rule of :mod:`.validation` and the allowed ones are logged (and listed
+inputs follow the rule of :mod:`..system.validation` and the allowed ones are logged (and listed
 in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive and finite,
-the stop time finite and after the start, and the run at most :data:`MAX_STEPS` macro steps.
+the stop time finite and after the start, and the run at most :data:`.plan.MAX_STEPS` macro
+steps.
 
 The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
 for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
@@ -50,7 +53,6 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import math
 import signal
 import threading
 
@@ -58,16 +60,11 @@ import numpy as np
 
 from ..output.recorder import Recorder
 from ..output.results import Results
-from ..system.parameters import scalar_parameters
-from ..system.ssp import SystemFile, SystemFileError, read_system
-from ..system.validation import check_system, override
 from . import loop as compiled
-from . import multirate
 from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance
+from .plan import RunPlan, plan_run, unreadable
 
-ALGORITHMS = ("gauss-seidel", "jacobi")
-MAX_STEPS = 10_000_000  # macro steps of one run (about 15 GB of CSV for scan_pitch)
 _CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
     "Real": ctypes.c_double,
     "Integer": ctypes.c_int,
@@ -237,123 +234,68 @@ def simulate(
     plain scheme, for comparison).  ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled"
     or "python" (:mod:`.loop`).  Returns :class:`Results` (``meta`` holds the settings, the
     units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
-    (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.
+    (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.  The same as
+    ``execute(plan_run(system, ...))`` (:mod:`.plan`).
     """
-    system = system if isinstance(system, SystemFile) else read_system(system)
-    start = system.start_time
-    step = system.step_size if step is None else step
-    stop = system.stop_time if stop is None else stop
-    algorithm = algorithm or system.algorithm or "gauss-seidel"
-    n_steps = _steps(system.path, start, step, stop)
-    every = multirate.multiples(system, step, n_steps)
-    if algorithm not in ALGORITHMS:
-        raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
-    loop = compiled.choose(loop)
+    return execute(
+        plan_run(
+            system,
+            step=step,
+            stop=stop,
+            algorithm=algorithm,
+            parameters=parameters,
+            derivatives=derivatives,
+            loop=loop,
+            out_dir=out_dir,
+            progress=progress,
+            echo=echo,
+            logging_on=logging_on,
+        )
+    )
 
+
+def execute(plan: RunPlan) -> Results:
+    """Run a :class:`RunPlan`: load its FMUs, initialise, step, record; as
+    :func:`simulate`."""
     with stop_on_signals() as signals:
-        log = compiled.ClockLog(echo=echo)
-        log.time = start
+        log = compiled.ClockLog(echo=plan.echo)
+        log.time = plan.start
         instances = {}
         try:
-            for ref in system.components:
-                instances[ref.name] = _load(system, ref, log)
-            bindings = system.parameters + [
-                override(instances, k, v)
-                for k, v in scalar_parameters(instances, parameters or {}).items()
-            ]
-            plan = check_system(system, instances, bindings)
-            for entry in plan.open_inputs:
+            for ref in plan.system.components:
+                instances[ref.name] = _load(plan, ref, log)
+            for entry in plan.wiring.open_inputs:
                 log.add(
                     entry["input"].partition(".")[0],
                     0 if entry["declared"] else 1,
                     "master",
                     f"input {entry['input']} is not connected: {entry['meaning']}",
                 )
-            return _run(
-                system,
-                plan,
-                every,
-                instances,
-                bindings,
-                start,
-                step,
-                n_steps,
-                algorithm,
-                log,
-                out_dir,
-                logging_on,
-                signals,
-                progress,
-                derivatives,
-                loop,
-            )
+            return _run(plan, instances, log, signals)
         finally:
             for instance in instances.values():
                 instance.free()
 
 
-def _steps(path, start: float, step, stop) -> int:
-    """The number of macro steps from start to stop, or a ValueError saying what is wrong."""
-    if step is None or not (math.isfinite(step) and step > 0):
-        raise ValueError(
-            f"{path}: the macro step must be a positive, finite number of "
-            f"seconds (got {step}); give one or set it in the system's "
-            "org.agilesat.master annotation"
-        )
-    if stop is None or not math.isfinite(stop) or stop <= start:
-        raise ValueError(
-            f"{path}: the stop time must be finite and after the start {start} s (got {stop})"
-        )
-    ratio = (stop - start) / step
-    if not ratio <= MAX_STEPS:  # also inf, from a tiny step
-        raise ValueError(
-            f"{path}: {stop - start} s at a step of {step} s would be "
-            f"{ratio:.4g} macro steps, more than the {MAX_STEPS} a run may have"
-        )
-    n_steps = int(round(ratio))
-    if not math.isclose(start + n_steps * step, stop, rel_tol=1e-9, abs_tol=1e-12):
-        raise ValueError(f"stop - start = {stop - start} is not a multiple of the step {step}")
-    return n_steps
-
-
-def _load(system, ref, log) -> Instance:
+def _load(plan: RunPlan, ref, log) -> Instance:
     try:
         return Instance(ref.name, ref.source, log)
     except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
-        raise SystemFileError(
-            f"{system.path}:{ref.line}: component '{ref.name}': "
-            f"{ref.source} is not a readable FMU: {exc}"
-        ) from None
+        raise unreadable(plan.system, ref, exc) from None
 
 
-def _run(
-    system,
-    plan,
-    every,
-    instances,
-    bindings,
-    start,
-    step,
-    n_steps,
-    algorithm,
-    log,
-    out_dir,
-    logging_on,
-    signals,
-    progress=None,
-    derivatives=True,
-    loop="python",
-) -> Results:
-    layout = value_layout(instances, plan.steps.step_order)
+def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results:
+    wiring, step, n_steps = plan.wiring, plan.step, plan.n_steps
+    layout = value_layout(instances, wiring.steps.step_order)
     nodes = {
-        name: _Node(instances[name], layout, plan.sources, every[name])
-        for name in plan.steps.step_order
+        name: _Node(instances[name], layout, wiring.sources, plan.every[name])
+        for name in wiring.steps.step_order
     }
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
-    sequence = _sequence(plan.steps, nodes)
-    init_sequence = _sequence(plan.init, nodes)
-    jacobi_reads = _fed_reads(sequence, plan.sources)
-    links = Derivatives(nodes, plan.sources, layout, algorithm) if derivatives else None
+    sequence = _sequence(wiring.steps, nodes)
+    init_sequence = _sequence(wiring.init, nodes)
+    jacobi_reads = _fed_reads(sequence, wiring.sources)
+    links = Derivatives(nodes, wiring.sources, layout, plan.algorithm) if plan.derivatives else None
     if links is not None and not links.consumers:
         links = None
     couple = None if links is None else links.couple
@@ -361,51 +303,40 @@ def _run(
     values = np.zeros(len(layout))
     row = np.zeros(len(layout) + 1)
     meta = {
-        "system": str(system.path),
+        "system": str(plan.system.path),
         "step": step,
-        "start": start,
-        "stop": start + n_steps * step,
-        "algorithm": algorithm,
-        "component_steps": {name: m * step for name, m in every.items() if m > 1},
+        "start": plan.start,
+        "stop": plan.stop,
+        "algorithm": plan.algorithm,
+        "component_steps": {name: m * step for name, m in plan.every.items() if m > 1},
         "log": log.entries,
-        "order": plan.steps.step_order,
-        "unconnected_optional_inputs": plan.open_inputs,
+        "order": wiring.steps.step_order,
+        "unconnected_optional_inputs": wiring.open_inputs,
         "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
     }
     if links is not None:
         meta["derivatives"] = links.described
-    dll = compiled.select(loop, log)
+    dll = compiled.select(plan.loop, log)
     meta["loop"] = "python" if dll is None else "compiled"
-    recorder = Recorder(columns, out_dir)
+    recorder = Recorder(columns, plan.out_dir)
+    progress = plan.progress
     failure, report_every = None, max(1, n_steps // 100)
     try:
-        _initialize(
-            instances,
-            nodes,
-            init_sequence,
-            bindings,
-            values,
-            start,
-            start + n_steps * step,
-            log,
-            logging_on,
-        )
+        _initialize(plan, instances, nodes, init_sequence, values, log)
         if links is not None:
             links.read()
-        row[0], row[1:] = start, values
+        row[0], row[1:] = plan.start, values
         recorder.append(row)
         if dll is not None:
-            program = compiled.Program(algorithm, nodes, sequence, jacobi_reads, step, links)
-            compiled.run(
-                dll, program, values, recorder, signals, progress, log, start, step, n_steps
-            )
+            program = compiled.Program(plan.algorithm, nodes, sequence, jacobi_reads, step, links)
+            compiled.run(dll, program, plan, values, recorder, signals, log)
         else:
             for n in range(n_steps):
                 if signals.signal is not None:
                     break
-                t = start + n * step
+                t = plan.start + n * step
                 log.time = t
-                if algorithm == "gauss-seidel":
+                if plan.algorithm == "gauss-seidel":
                     if links is not None and links.interpolating:
                         links.previous[:] = values
                     _evaluate(sequence, values, n + 1, t, step, couple)
@@ -419,12 +350,12 @@ def _run(
                     _read_after_steps(jacobi_reads, values, n + 1)
                 if links is not None:
                     links.read()
-                row[0], row[1:] = start + (n + 1) * step, values
+                row[0], row[1:] = plan.start + (n + 1) * step, values
                 recorder.append(row)
                 if progress and (n + 1) % report_every == 0:
                     progress(n + 1, n_steps)
             else:
-                log.time = start + n_steps * step
+                log.time = plan.stop
         for inst in instances.values():
             inst.call("fmi2Terminate")
     except (FmiCallError, OSError) as exc:
@@ -432,22 +363,20 @@ def _run(
     results, problems = recorder.close(meta)
     kept = [
         f"Kept {recorder.rows} recorded rows"
-        + (f" in {recorder.csv.path}" if out_dir is not None else "")
+        + (f" in {recorder.csv.path}" if plan.out_dir is not None else "")
     ] + problems
+    name = plan.system.path.name
     if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
-        name = signal.Signals(signals.signal).name
+        signame = signal.Signals(signals.signal).name
         raise Interrupted(
             "\n".join(
-                [f"{system.path.name}: interrupted by {name} after t={results.time[-1]:.6g} s"]
-                + kept
+                [f"{name}: interrupted by {signame} after t={results.time[-1]:.6g} s"] + kept
             ),
             results,
             signals.signal,
         )
     if failure is not None or problems:
-        raise SimulationError(
-            "\n".join([f"{system.path.name}: {failure or 'results lost'}"] + kept), results
-        )
+        raise SimulationError("\n".join([f"{name}: {failure or 'results lost'}"] + kept), results)
     return results
 
 
@@ -527,13 +456,13 @@ def _evaluate(
                 port.read(values)
 
 
-def _initialize(instances, nodes, init_sequence, bindings, values, start, stop, log, logging_on):
-    log.time = start
+def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
+    log.time = plan.start
     for node in nodes.values():
         inst = node.instance
-        inst.instantiate(logging_on)
-        inst.call("fmi2SetupExperiment", 0, 0.0, start, 1, stop)
-    for value in bindings:
+        inst.instantiate(plan.logging_on)
+        inst.call("fmi2SetupExperiment", 0, 0.0, plan.start, 1, plan.stop)
+    for value in plan.bindings:
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")

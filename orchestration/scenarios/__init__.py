@@ -140,17 +140,6 @@ def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:
     return np.array(rotate_back(C, tuple(body.T))).T
 
 
-def relative_drift(H: np.ndarray, scale: float = 0.0) -> float:
-    """max |H(t) − H(0)| / max(|H(0)|, scale) over the rows of H (N, 3).  ``scale``: the
-    largest momentum a part of the system carries, for a system whose total starts at
-    zero (at rest in inertial space), where |H(0)| alone would divide rounding by zero."""
-    import numpy as np
-
-    change = float(np.abs(H - H[0]).max())
-    norm = max(float(np.linalg.norm(H[0])), scale)
-    return change / norm if norm > 0 else (0.0 if change == 0 else math.inf)
-
-
 def scalar_values(values: dict) -> dict:
     """{"A.x": array} -> {"A.x[1,1]": ..., ...} in FMI structured names (1-based)."""
     import numpy as np

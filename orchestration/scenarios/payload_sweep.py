@@ -21,7 +21,8 @@ import numpy as np
 
 from ...components.orbit_environment import WGS84_A
 from ..output import plots
-from . import Scenario, inertial_momentum, relative_drift, summarize
+from ..output.summary import relative_drift
+from . import Scenario, inertial_momentum, summarize
 from .constants import PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY
 
 DEG = math.pi / 180

@@ -18,7 +18,8 @@ from ...components.orbit_environment import WGS84_A
 from ...components.pitch_maneuver_controller import PitchProfile
 from ...components.rotations import dcm, qmul, rotate
 from ..output import plots
-from . import Scenario, relative_drift, summarize
+from ..output.summary import relative_drift
+from . import Scenario, summarize
 from .common import cmg_hardware, hub_inertia
 
 DEG = math.pi / 180

@@ -45,8 +45,9 @@ from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
 from ..output import plots
+from ..output.summary import relative_drift
 from ..studies.passes import find_passes, look_geometry
-from . import Scenario, relative_drift, summarize
+from . import Scenario, summarize
 from .common import cmg_hardware, hub_inertia
 from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
 from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT

@@ -68,8 +68,9 @@ RULES = (
 
 
 def disagreements(instances: dict, bindings: list, sources: dict) -> list[str]:
-    """One message per rule broken: ``instances`` {name: orchestration.cosim.fmu.Description},
-    ``bindings`` the system's ParameterValues, ``sources`` {(B, input): (A, output)}."""
+    """One message per rule broken: ``instances`` {name: its
+    :class:`.description.Description`}, ``bindings`` the system's ParameterValues,
+    ``sources`` {(B, input): (A, output)}."""
     bound = {(p.component, p.name): p for p in bindings}
     kind = {name: d.md.coSimulation.modelIdentifier for name, d in instances.items()}
     problems = []

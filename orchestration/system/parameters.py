@@ -1,7 +1,8 @@
-"""Parameter values addressed by whole variables: ``--set SatelliteDynamics.inertia=...``.
+"""Parameter values given to a run (``--set``, ``parameters=``, a scenario's variant, a
+campaign's draws), parsed and typed once, here: :func:`typed_parameters`.
 
-FMI 2.0 knows only scalars; an array variable is the scalars ``inertia[1,1]`` …
-``inertia[3,3]`` (1-based, row-major).  A value can be given
+Whole variables: FMI 2.0 knows only scalars; an array variable is the scalars
+``inertia[1,1]`` … ``inertia[3,3]`` (1-based, row-major).  A value can be given
 
 * for one element: ``SatelliteDynamics.inertia[2,2]=900``;
 * for the whole array, with its shape: ``SatelliteDynamics.inertia=[[900,0,0],[0,900,0],
@@ -10,6 +11,13 @@ FMI 2.0 knows only scalars; an array variable is the scalars ``inertia[1,1]`` �
 A bare number for an array is refused, never broadcast: ``inertia=900`` could mean 900 on
 every element or 900 times the identity, and an attitude engineer means the second as often
 as the first.  The error says which elements there are and shows both forms.
+
+Types: each scalar value takes the type of the FMU's variable (a Real from ``"0.01"`` or
+``1``, a Boolean from ``true``/``yes``/``1``).  Named choices: an Integer parameter whose
+model-description ``description`` lists its values as ``0 = NAME (meaning), 1 = NAME
+(meaning), …`` (as every choice of our variable tables says it, ``components/variables.py``
+:func:`choice`) takes a name in any case, or the number: ``CmgSteering.law=SR_INVERSE``.
+Only the model description is read: any FMU that lists its values so has named choices.
 """
 
 from __future__ import annotations
@@ -21,9 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ssp import SystemFileError
+from .ssp import ParameterValue, SystemFileError
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
+#: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
+_CHOICE = re.compile(r"(?:^|[:,] )(\d+) = ([A-Za-z_][A-Za-z0-9_]*) \(")
 
 
 @dataclass
@@ -80,29 +90,33 @@ def parse_value(text):
     return text
 
 
-def scalar_parameters(instances: dict, parameters: dict) -> dict:
-    """{"A.x": value} -> {"A.x" or "A.x[i,j]": scalar value}: whole arrays split into their
-    elements; unknown instances and variables answered with the closest names."""
+def typed_parameters(descriptions: dict, parameters: dict) -> dict[str, ParameterValue]:
+    """{"A.x": value} -> {"A.x" or "A.x[i,j]": ParameterValue}: each value parsed
+    (:func:`parse_value`), whole arrays split into their elements, each element typed by
+    the FMU's variable (:func:`typed_value`); unknown instances and variables answered
+    with the closest names.  ``descriptions``: {instance: its
+    :class:`.description.Description`}."""
     result, tables = {}, {}
     for key, value in parameters.items():
         name, _, variable = key.partition(".")
-        if name not in instances or not variable:
+        if name not in descriptions or not variable:
             raise SystemFileError(
                 f"--set {key}: expected Instance.variable with an instance "
-                f"of {', '.join(instances)}" + did_you_mean(name, instances)
+                f"of {', '.join(descriptions)}" + did_you_mean(name, descriptions)
             )
-        table = tables.get(name) or tables.setdefault(name, variables(instances[name]))
+        description = descriptions[name]
+        table = tables.get(name) or tables.setdefault(name, variables(description))
         value = parse_value(value)
-        if variable in instances[name].variables:
+        if variable in description.variables:
             if np.ndim(value):
                 raise SystemFileError(
                     f"--set {key}: {name}.{variable} is a scalar, got an array {value}"
                 )
-            result[key] = value
+            result[key] = typed_value(description, key, value)
             continue
         if variable not in table:
             raise SystemFileError(
-                f"--set {key}: {name} ({instances[name].path.name}) has "
+                f"--set {key}: {name} ({description.path.name}) has "
                 f"no variable {variable!r}" + did_you_mean(variable, table)
             )
         array = table[variable]
@@ -115,8 +129,54 @@ def scalar_parameters(instances: dict, parameters: dict) -> dict:
                 f"{value!r}; a single number is not spread over the elements)"
             )
         for scalar, element in zip(array.scalars, np.asarray(value, dtype=object).ravel()):
-            result[f"{name}.{scalar.name}"] = element
+            element_key = f"{name}.{scalar.name}"
+            result[element_key] = typed_value(description, element_key, element)
     return result
+
+
+def typed_value(description, key: str, value) -> ParameterValue:
+    """The value of the scalar variable ``key`` ("Instance.variable") of the FMU described
+    by ``description``, in that variable's type; a named choice by its name or number."""
+    name, _, variable = key.partition(".")
+    kind = description.variables[variable].type
+    names = choice_names(description.variables[variable])
+    if names is not None:
+        value = choice_value(variable, names, value, f"--set {key}={value}")
+    elif kind == "Boolean" and isinstance(value, str):
+        value = value.lower() in ("1", "true", "yes")
+    elif kind in ("Real", "Integer"):
+        try:
+            value = float(value) if kind == "Real" else int(value)
+        except ValueError:
+            raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
+    return ParameterValue(name, variable, kind, value, f"--set {key}")
+
+
+def choice_names(variable) -> tuple[str, ...] | None:
+    """The names of the values 0, 1, … of an Integer parameter whose model-description
+    ``description`` lists them ("steering law: 0 = PSEUDO_INVERSE (pseudo-inverse with
+    null motion), 1 = SR_INVERSE (…)"), or None."""
+    if variable.type != "Integer" or variable.causality != "parameter":
+        return None
+    found = _CHOICE.findall(variable.description or "")
+    if len(found) < 2 or [int(number) for number, _ in found] != list(range(len(found))):
+        return None
+    return tuple(name for _, name in found)
+
+
+def choice_value(variable: str, names, value, where: str) -> int:
+    """The value of a choice given by its name (any case) or its number; a SystemFileError
+    listing the choices for anything else."""
+    text = str(value).strip()
+    if text.upper() in names:
+        return names.index(text.upper())
+    number = value if isinstance(value, int) and not isinstance(value, bool) else None
+    if number is None and text.isdigit():
+        number = int(text)
+    if number is None or number not in range(len(names)):
+        listing = ", ".join(f"{i} ({name})" for i, name in enumerate(names))
+        raise SystemFileError(f"{where}: {variable} must be one of {listing}, got {value!r}")
+    return number
 
 
 def _literal(array) -> str:
@@ -152,7 +212,7 @@ def _element(name: str) -> re.Match:
 
 def parse_set(items) -> dict[str, str]:
     """``--set INSTANCE.VARIABLE=VALUE`` options -> {"INSTANCE.VARIABLE": "VALUE"} (the values
-    are typed later, against the FMU's variable)."""
+    are typed later, against the FMU's variable: :func:`typed_parameters`)."""
     overrides = {}
     for item in items:
         key, sep, value = item.partition("=")

@@ -28,7 +28,7 @@ from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
-from ..cosim import multirate
+from .steps import read_step, write_step
 
 NS = {
     "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -65,7 +65,7 @@ class ComponentRef:
     source: Path  # absolute path of the FMU
     line: int
     connectors: list[ConnectorRef] = field(default_factory=list)
-    step_size: float | None = None  # its own communication step (multirate.py), if any
+    step_size: float | None = None  # its own communication step (steps.py), if any
 
 
 @dataclass
@@ -233,7 +233,7 @@ def _read_components(
                 source,
                 element.sourceline,
                 _read_connectors(element),
-                multirate.read_step(element, where),
+                read_step(element, where),
             )
         )
         for binding in element.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):
@@ -422,7 +422,7 @@ def render_ssd(
     out (hosts that cannot set Strings); the step is also written in the annotations
     that libcosim (Open Simulation Platform, on the default experiment) and OMSimulator
     (OpenModelica, on the system; it refuses a system without one) read.  ``steps`` maps
-    an instance to its own communication step (:mod:`.multirate`).
+    an instance to its own communication step (:mod:`.steps`).
     """
     E = _Maker()
     root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
@@ -457,7 +457,7 @@ def _write_component(
     """One ``ssd:Component``: a scalar connector per element of every variable (a Real with
     its unit; a String only when it is given a value), then its bound parameter values in
     one inline ``ssv:ParameterSet`` named ``set_name``, then its own communication step, if
-    it has one (:func:`.multirate.write_step`).  Returns the units it used."""
+    it has one (:func:`.steps.write_step`).  Returns the units it used."""
     component = E.sub(
         elements,
         "ssd:Component",
@@ -485,7 +485,7 @@ def _write_component(
         for scalar, (kind, text) in values.items():
             parameter = E.sub(listing, "ssv:Parameter", name=scalar)
             E.sub(parameter, f"ssv:{kind}", value=text)
-    multirate.write_step(component, step)
+    write_step(component, step)
     return used_units
 
 

@@ -9,7 +9,7 @@ while computing the schedules, :mod:`.schedule`).
 Open inputs, the rule: every input of every component is connected, or given a value in
 the system's parameter values, or declared optional by its FMU (our FMUs' VendorAnnotations
 say what the default of each optional input means).  An open optional input is listed in
-``Plan.open_inputs`` with that meaning (the master logs it, the runner's summary lists it);
+``Wiring.open_inputs`` with that meaning (the master logs it, the runner's summary lists it);
 an array input is connected as a whole or not at all.  Any other open input of our FMUs is an
 error.  An FMU that is not ours declares nothing: its open inputs are listed too, as keeping
 their start value, and logged as warnings.
@@ -19,14 +19,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..cosim.fmu import Description
 from .agreement import disagreements
+from .description import Description
 from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
 
 
 @dataclass
-class Plan:
+class Wiring:
+    """What the checks give the master: who feeds each input, and in which orders."""
+
     steps: Schedule  # stepping: step order and output evaluation blocks
     init: Schedule  # initialisation
     sources: dict[tuple[str, str], tuple[str, str]]  # (B, input) -> (A, output)
@@ -36,7 +38,7 @@ class Plan:
 
 def check_system(
     system: SystemFile, instances: dict[str, Description], bindings: list[ParameterValue]
-) -> Plan:
+) -> Wiring:
     """Check connections and parameters against the FMUs; return the schedules.
 
     Every problem is collected first (connections, parameter values, SSD connectors, open
@@ -50,7 +52,7 @@ def check_system(
     problems += disagreements(instances, bindings, sources)
     if problems:
         raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    return Plan(
+    return Wiring(
         schedule(instances, sources, "feedthrough", where),
         schedule(instances, sources, "initial_feedthrough", where),
         sources,
@@ -200,41 +202,3 @@ def _connector_problems(system, instances) -> list[str]:
                     f"{at}: declared unit '{c.unit}', the FMU's variable has '{var.unit or ''}'"
                 )
     return problems
-
-
-def override(instances, key: str, value) -> ParameterValue:
-    """A ``--set Instance.variable=value`` override, typed by the FMU's variable; a named
-    choice of our FMUs (``CmgSteering.law=SR_INVERSE``) by its name or its number."""
-    name, _, variable = key.partition(".")
-    if name not in instances or not variable:
-        raise SystemFileError(
-            f"--set {key}: expected Instance.variable with an instance of {', '.join(instances)}"
-        )
-    var = instances[name].variables.get(variable)
-    kind = var.type if var is not None else "Real"
-    named = _choices(instances[name], variable) if kind == "Integer" else None
-    if named is not None:
-        try:
-            value = named.choice_value(value)
-        except ValueError as exc:
-            raise SystemFileError(f"--set {key}={value}: {exc}") from None
-    elif kind == "Boolean" and isinstance(value, str):
-        value = value.lower() in ("1", "true", "yes")
-    elif kind in ("Real", "Integer"):
-        try:
-            value = float(value) if kind == "Real" else int(value)
-        except ValueError:
-            raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
-    return ParameterValue(name, variable, kind, value, f"--set {key}")
-
-
-def _choices(inst: Description, variable: str):
-    """The variable-table row of a named choice of one of our FMUs (the table of the model
-    the FMU is named after), or None."""
-    from ...fmus import FMUS, model_class
-
-    identifier = inst.md.coSimulation.modelIdentifier
-    if inst.optional_inputs is None or identifier not in FMUS:
-        return None
-    row = next((v for v in model_class(identifier).VARIABLES if v.name == variable), None)
-    return row if row is not None and row.choices else None

@@ -6,11 +6,12 @@ import re
 
 import pytest
 
-from agilesat.orchestration.cosim.fmu import Description
 from agilesat.orchestration.scenarios import NAMES, get
 from agilesat.orchestration.system.agreement import disagreements
+from agilesat.orchestration.system.description import Description
+from agilesat.orchestration.system.parameters import typed_parameters
 from agilesat.orchestration.system.ssp import ParameterValue, SystemFileError, read_system
-from agilesat.orchestration.system.validation import check_system, override
+from agilesat.orchestration.system.validation import check_system
 
 _SYSTEMS: dict = {}
 
@@ -87,5 +88,6 @@ def test_the_feedforward_inertia_is_the_satellites_when_the_feedforward_is_on(fm
 def test_a_value_given_at_run_time_is_the_users_choice(fmus):
     """A robustness study: the satellite's inertia changed, the controller's model not."""
     ssd, instances = system("scan_pitch", fmus)
-    bindings = ssd.parameters + [override(instances, "SatelliteDynamics.inertia[2,2]", 900.0)]
+    given = typed_parameters(instances, {"SatelliteDynamics.inertia[2,2]": 900.0})
+    bindings = ssd.parameters + list(given.values())
     assert disagreements(instances, bindings, sources_of(ssd)) == []

@@ -7,12 +7,11 @@ import struct
 import numpy as np
 import pytest
 
-from agilesat.orchestration.cosim.fmu import Description
 from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.scenarios import get
-from agilesat.orchestration.system.parameters import scalar_parameters, variables
+from agilesat.orchestration.system.description import Description
+from agilesat.orchestration.system.parameters import typed_parameters, variables
 from agilesat.orchestration.system.ssp import SystemFileError
-from agilesat.orchestration.system.validation import override
 from helpers import agilesat
 
 IDENTITY_900 = "[[900,0,0],[0,900,0],[0,0,900]]"
@@ -31,20 +30,26 @@ def test_arrays_are_grouped_with_their_shape(described):
     assert variables(described["Flywheel"])["axis"].shape == (4, 3)
 
 
-def test_a_whole_array_splits_into_its_elements(described):
-    values = scalar_parameters(
+def test_a_whole_array_splits_into_its_elements_each_typed_by_its_variable(described):
+    typed = typed_parameters(
         described,
         {
             "SatelliteDynamics.inertia": IDENTITY_900,
             "SatelliteDynamics.rate0[2]": "0.01",
             "Flywheel.speed0": [1, 2, 3, 4],
+            "SatelliteDynamics.gravity_gradient": "yes",
         },
     )
-    assert values["SatelliteDynamics.inertia[2,2]"] == 900
-    assert values["SatelliteDynamics.inertia[2,3]"] == 0
-    assert values["SatelliteDynamics.rate0[2]"] == "0.01"
-    assert [values[f"Flywheel.speed0[{i}]"] for i in range(1, 5)] == [1, 2, 3, 4]
-    assert len(values) == 9 + 1 + 4
+    values = {key: (p.component, p.name, p.type, p.value) for key, p in typed.items()}
+    element = values["SatelliteDynamics.inertia[2,2]"]
+    assert element == ("SatelliteDynamics", "inertia[2,2]", "Real", 900.0)
+    assert values["SatelliteDynamics.inertia[2,3]"][2:] == ("Real", 0.0)
+    assert values["SatelliteDynamics.rate0[2]"][2:] == ("Real", 0.01)
+    assert [values[f"Flywheel.speed0[{i}]"][3] for i in range(1, 5)] == [1.0, 2.0, 3.0, 4.0]
+    assert all(type(p.value) is float for key, p in typed.items() if p.type == "Real")
+    assert values["SatelliteDynamics.gravity_gradient"][2:] == ("Boolean", True)
+    assert {p.origin for p in typed.values()} == {f"--set {key}" for key in typed}
+    assert len(values) == 9 + 1 + 4 + 1
 
 
 @pytest.mark.parametrize(
@@ -65,20 +70,21 @@ def test_a_whole_array_splits_into_its_elements(described):
 )
 def test_a_wrong_override_says_what_is_expected(described, key, value, message):
     with pytest.raises(SystemFileError, match=message):
-        scalar_parameters(described, {key: value})
+        typed_parameters(described, {key: value})
 
 
 def test_a_named_choice_is_set_by_its_name_or_its_number(fmus):
     described = {"CmgSteering": Description("CmgSteering", fmus["CmgSteering"])}
     for text, value in (("SR_INVERSE", 1), ("sr_inverse", 1), ("PSEUDO_INVERSE", 0), ("1", 1)):
-        assert override(described, "CmgSteering.law", text).value == value
+        [typed] = typed_parameters(described, {"CmgSteering.law": text}).values()
+        assert (typed.type, typed.value) == ("Integer", value)
     for bad in ("FOO", "2"):
         with pytest.raises(
             SystemFileError,
             match=rf"--set CmgSteering.law={bad}: law must be one of 0 \(PSEUDO_INVERSE\), "
             rf"1 \(SR_INVERSE\), got '{bad}'",
         ):
-            override(described, "CmgSteering.law", bad)
+            typed_parameters(described, {"CmgSteering.law": bad})
 
 
 @pytest.mark.slow
@@ -299,17 +305,17 @@ def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
 
 @pytest.mark.slow
 def test_no_derivatives_reaches_the_master(fmus, tmp_path, monkeypatch):
-    """`agilesat run --no-derivatives` passes derivatives=False to simulate (what it does
+    """`agilesat run --no-derivatives` plans the run with derivatives=False (what it does
     there is in tests/orchestration/test_derivatives.py); without the flag, True."""
     from agilesat.orchestration import cli, runner
 
     seen = []
 
-    def simulate(system, **kwargs):
-        seen.append(kwargs["derivatives"])
+    def execute(plan):
+        seen.append(plan.derivatives)
         raise ValueError("stopped before anything runs")
 
-    monkeypatch.setattr(runner, "simulate", simulate)
+    monkeypatch.setattr(runner, "execute", execute)
     ssd = get("scan_pitch").ssd
     for flag in (["--no-derivatives"], []):
         assert cli.main(["run", str(ssd), "--out", str(tmp_path), "--quiet", *flag]) != 0

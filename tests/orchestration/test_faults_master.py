@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.cosim import master
-from agilesat.orchestration.cosim.fmu import Description
+from agilesat.orchestration.cosim.plan import MAX_STEPS
 from agilesat.orchestration.output import recorder
 from agilesat.orchestration.output.results import Results
+from agilesat.orchestration.system.description import Description
 from agilesat.orchestration.system.ssp import SystemFileError, read_system
 from agilesat.orchestration.system.validation import check_system
 from helpers import ROOT
@@ -90,7 +91,7 @@ def test_simulate_rejects_a_zero_step_and_absurd_stop_times_before_loading_anyth
         with pytest.raises(ValueError, match="stop time must be finite and after the start"):
             master.simulate(ssd, stop=stop)
     for step, stop in ((None, 1e9), (1e-320, None)):
-        with pytest.raises(ValueError, match=f"more than the {master.MAX_STEPS}"):
+        with pytest.raises(ValueError, match=f"more than the {MAX_STEPS}"):
             master.simulate(ssd, step=step, stop=stop)
 
 

@@ -1,5 +1,6 @@
-"""Multi-rate stepping (orchestration/cosim/multirate.py): the SSD annotation, its checks and
-the master's schedule (controller and steering at their flight rate, the plant finer)."""
+"""Multi-rate stepping (orchestration/cosim/multirate.py, orchestration/system/steps.py): the
+SSD annotation, its checks and the master's schedule (controller and steering at their flight
+rate, the plant finer)."""
 
 import dataclasses
 import math

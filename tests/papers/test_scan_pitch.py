@@ -8,7 +8,7 @@ import pytest
 
 from agilesat.components.rotations import dcm_from_quat
 from agilesat.orchestration.output.results import Results
-from agilesat.orchestration.runner import format_summary
+from agilesat.orchestration.output.summary import format_summary
 from helpers import agilesat
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]

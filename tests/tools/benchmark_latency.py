@@ -74,7 +74,7 @@ def timed(owner, name, before=None, after=None):
 timed(build, "build_all", "build", "built")
 timed(master, "_initialize", None, "initialized")
 timed(recorder.Recorder, "close", "closing", "closed")
-timed(runner, "_write_records", None, "written")
+timed(runner, "write_records", None, "written")
 try:
     code = cli.main(sys.argv[2:])
 finally:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import zipfile
 from pathlib import Path
 
-from agilesat.orchestration.cosim.fmu import Description
 from agilesat.orchestration.cosim.master import evaluation_sequence, value_layout
+from agilesat.orchestration.system.description import Description
 from agilesat.orchestration.system.ssp import read_system
 from agilesat.orchestration.system.validation import check_system
 

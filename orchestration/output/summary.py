@@ -1,0 +1,161 @@
+"""A run's summary: ``summary.json`` and the lines ``agilesat run`` prints.
+
+``summary.json`` (UTF-8 text): the target and settings, every parameter override with its
+FMI type, status, wall time and real-time factor (simulated seconds per wall-clock
+second), the metrics (a scenario's, each with unit, display unit, the paper's value and its
+requirement where there is one) or, for any other system, min/max/final of every recorded
+output and the momentum drift where ``H_I`` is recorded; the figures written.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ...components.variables import UNITS
+from ..system.units import pretty
+from .recorder import write_text
+from .results import Results, units_path
+
+
+def facts(results: Results, wall: float) -> dict:
+    meta = results.meta
+    settings = {k: meta[k] for k in ("start", "stop", "step", "algorithm")}
+    simulated = float(results.time[-1]) - settings["start"] if len(results) else 0.0
+    return {
+        "settings": settings,
+        "rows": len(results),
+        "wall_time": wall,
+        "real_time_factor": simulated / max(wall, 1e-9),
+        "unconnected_optional_inputs": meta["unconnected_optional_inputs"],
+        "fmu_messages": [str(e) for e in meta["log"] if e.status >= 1],
+    }
+
+
+def summary_text(summary: dict) -> str:
+    return json.dumps(summary, indent=2, default=str, ensure_ascii=False) + "\n"
+
+
+def write_records(results: Results, summary: dict, out_dir: Path) -> None:
+    """The units of results.csv, log.txt and summary.json (the master writes results.csv
+    row by row and results.npz); an OSError names each file not written."""
+    problems = []
+    for path, text in (
+        (
+            units_path(out_dir / "results.csv"),
+            json.dumps(results.units, indent=1, ensure_ascii=False) + "\n",
+        ),
+        (out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+        (out_dir / "summary.json", summary_text(summary)),
+    ):
+        try:
+            write_text(path, text)
+        except OSError as exc:
+            problems.append(str(exc))
+    if problems:
+        raise OSError("\n".join(problems))
+
+
+def generic_summary(results: Results) -> dict:
+    """Any system: min/max/final of every output, the momentum drift of every recorded
+    ``H_I`` (max |H(t) − H(0)| / |H(0)|); status ok (nothing is required of it)."""
+    outputs = {}
+    for name, column in zip(results.names[1:], results.data[:, 1:].T):
+        outputs[name] = {
+            "min": float(np.min(column)),
+            "max": float(np.max(column)),
+            "final": float(column[-1]),
+            "unit": results.units.get(name),
+        }
+    metrics = {}
+    for base in sorted(
+        {n.rsplit("[", 1)[0] for n in results.names if n.rsplit("[", 1)[0].endswith(".H_I")}
+    ):
+        metrics[f"{base.split('.')[0]}.momentum_drift"] = {
+            "value": relative_drift(results.vector(base)),
+            "unit": "1",
+            "display_unit": "1",
+            "description": f"max |H_I(t) − H_I(0)| / |H_I(0)| of {base}",
+        }
+    return {"metrics": metrics, "outputs": outputs, "diagnostics": [], "status": "ok"}
+
+
+def _join(number: str, unit: str) -> str:
+    """'0.5 rad/s', '2.1°' (no space before a degree sign), '0.57' (no unit)."""
+    return number + ("" if not unit or unit.startswith("°") and "/" not in unit else " ") + unit
+
+
+def _display(value, unit, display_unit):
+    """(value in the display unit, the display unit as people write it)."""
+    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit, 1.0)
+    return value * scale, pretty(display_unit or unit)
+
+
+def _requirement(requirement, unit, display_unit) -> str:
+    """A requirement as text in the display unit: a bound (≤ x), a band [a, b], or
+    {"min"/"max": ...} (either may be missing)."""
+    if isinstance(requirement, dict):
+        low = requirement.get("min", requirement.get("lower"))
+        high = requirement.get("max", requirement.get("upper"))
+    elif isinstance(requirement, (list, tuple)):
+        low, high = requirement
+    else:
+        low, high = None, requirement
+    show = lambda x: f"{_display(x, unit, display_unit)[0]:.4g}"  # noqa: E731
+    u = _display(0.0, unit, display_unit)[1]
+    if low is not None and high is not None:
+        return _join(f"in [{show(low)}, {show(high)}]", u)
+    if high is not None:
+        return _join(f"≤ {show(high)}", u)
+    return _join(f"≥ {show(low)}", u) if low is not None else ""
+
+
+def format_summary(summary: dict) -> str:
+    """The headline numbers beside the paper's and the requirement, in each metric's display
+    unit; for a system without a scenario, min/max/final of every output."""
+    lines = []
+    for name, m in summary.get("metrics", {}).items():
+        unit, display = m["unit"], m.get("display_unit")
+        value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
+        text = "not reached" if value is None else _join(f"{value:.6g}", u)
+        paper = (
+            "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
+            if "paper" in m
+            else ""
+        )
+        required = (
+            f"required {_requirement(m['requirement'], unit, display)}"
+            if "requirement" in m
+            else ""
+        )
+        verdict = {True: "PASS", False: "FAIL"}.get(m.get("met"), "")
+        lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}".rstrip())
+    outputs = summary.get("outputs", {})
+    if outputs:
+        lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")
+        for name, o in outputs.items():
+            lines.append(
+                f"  {name:40s} {o['min']:12.5g} {o['max']:12.5g} {o['final']:12.5g}"
+                f"  {pretty(o['unit'])}".rstrip()
+            )
+    if "wall_time" in summary:
+        lines.append(
+            f"  status {summary.get('status', '?')}, wall time "
+            f"{summary['wall_time']:.2f} s, {summary['real_time_factor']:.3g}× real "
+            "time"
+        )
+    for problem in summary.get("diagnostics", []):
+        lines.append(f"  FAILED: {problem}")
+    return "\n".join(lines)
+
+
+def relative_drift(H: np.ndarray, scale: float = 0.0) -> float:
+    """max |H(t) − H(0)| / max(|H(0)|, scale) over the rows of H (N, 3).  ``scale``: the
+    largest momentum a part of the system carries, for a system whose total starts at
+    zero (at rest in inertial space), where |H(0)| alone would divide rounding by zero."""
+    change = float(np.abs(H - H[0]).max())
+    norm = max(float(np.linalg.norm(H[0])), scale)
+    return change / norm if norm > 0 else (0.0 if change == 0 else math.inf)

@@ -1,0 +1,107 @@
+"""What the model description of an FMU in a system says, read without loading the FMU.
+
+:class:`Description`: the variables by name, the output dependencies (at a step and at
+initialisation), the derivative declarations and the optional inputs our FMUs declare in
+their VendorAnnotations.  The model description of each FMU file is read once per process
+and content (SHA-256 of the file: a rebuilt FMU is a new one, a copy of the same file is
+the same one).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import threading
+import zipfile
+from pathlib import Path
+
+from fmpy import read_model_description
+from lxml import etree
+
+AGILESAT_TOOL = "agilesat"
+_KEYS_KEPT = 1024
+_lock = threading.Lock()
+_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
+
+
+class Description:
+    """What the model description of an FMU in a system says: variables by name, output
+    dependencies, optional inputs.  Nothing is loaded."""
+
+    def __init__(self, name: str, path: Path):
+        self.name, self.path = name, Path(path)
+        #: optional input -> what its default means, as our FMUs declare them
+        #: (VendorAnnotations; every other input is required); None: not our FMU
+        self.md, self.optional_inputs = _described(content_key(self.path), str(path))
+        if self.md.coSimulation is None:
+            raise ValueError(f"{path}: not a co-simulation FMU")
+        self.variables = {v.name: v for v in self.md.modelVariables}
+        self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
+        self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
+        # FMI 2.0 input/output derivatives (orchestration.cosim.derivatives): the capability
+        # flags, and {variable: the variable declared its derivative} (``derivative``)
+        self.can_interpolate_inputs = bool(self.md.coSimulation.canInterpolateInputs)
+        self.max_output_derivative_order = int(self.md.coSimulation.maxOutputDerivativeOrder or 0)
+        self.derivatives = {
+            v.derivative.name: v.name for v in self.md.modelVariables if v.derivative is not None
+        }
+        #: output names in value-reference order
+        self.outputs = [
+            v.name
+            for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
+            if v.causality == "output"
+        ]
+
+
+@functools.lru_cache(maxsize=_KEYS_KEPT)
+def _file_digest(path: str, size: int, mtime_ns: int) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def content_key(path: Path) -> str:
+    """The SHA-256 of the FMU file (hashed once per path, size and modification time): the
+    key of everything read from or made of it once per process."""
+    stat = os.stat(path)
+    return _file_digest(os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
+
+
+def _described(key: str, path: str):
+    """(model description, optional inputs) of the FMU with content ``key``."""
+    with _lock:
+        described = _descriptions.get(key)
+    if described is None:
+        described = (read_model_description(path), _optional_inputs(Path(path)))
+        with _lock:
+            if len(_descriptions) >= _KEYS_KEPT:
+                _descriptions.pop(next(iter(_descriptions)))
+            _descriptions[key] = described
+    return described
+
+
+def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
+    """Output name -> names of the variables it depends on (None: depends on all)."""
+    result = {}
+    for unknown in unknowns:
+        deps = unknown.dependencies
+        result[unknown.variable.name] = None if deps is None else {d.name for d in deps}
+    return result
+
+
+def _optional_inputs(path: Path) -> dict[str, str] | None:
+    """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
+    None: nothing declared."""
+    with zipfile.ZipFile(path) as archive:
+        root = etree.fromstring(archive.read("modelDescription.xml"))
+    tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
+    if tool is None:
+        return None
+    return {
+        e.get("name"): e.get("optional")
+        for e in tool.findall("Inputs/Input")
+        if e.get("optional") is not None
+    }
