@@ -24,29 +24,23 @@ on the reference (attitude and rate of the guidance at t = 0).
 Variants: ``no_yaw_compensation`` (yaw 0, eq 11 only: the footprint turns on the ground),
 ``no_feedforward`` (PD alone: the tracking lag shows).
 
-Other passes (``agilesat stare``): :func:`tle_pass` finds, for a real satellite's
-two-line elements, a target and a search window, the zero-Doppler passes (SGP4 inside
-OrbitEnvironment), and :func:`pass_scenario` makes this scenario for one of them: 200 s
-centred on zero Doppler, the satellite starting on the reference.
+Other passes, of a real satellite: ``agilesat stare`` (:mod:`..studies.stare`).
 """
 
 from __future__ import annotations
 
-import dataclasses
-import datetime
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ...components.cmg_steering import PSEUDO_INVERSE
-from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
+from ...components.ephemeris import J2000, parse_epoch
 from ...components.orbit_environment import OrbitEnvironment
 from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
 from ...components.staring_guidance import StaringGuidance, footprint_azimuth
 from ..output import plots
 from ..output.summary import relative_drift
-from ..studies.passes import find_passes, look_geometry
+from ..studies.passes import look_geometry
 from . import Scenario, summarize
 from .common import cmg_hardware, hub_inertia
 from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
@@ -190,74 +184,6 @@ VARIANTS = {
         {"AttitudeController.acceleration_feedforward": False},
     ),
 }
-
-
-def tle_pass(
-    line1: str,
-    line2: str,
-    target=TARGET,
-    epoch=None,
-    hours: float = 24.0,
-    look_angle: float | None = None,
-    max_look_angle: float = 60 * DEG,
-):
-    """(OrbitEnvironment parameters of the stare, the chosen pass, every pass found).
-
-    Searches ``hours`` from ``epoch`` (default: the TLE's epoch) for zero-Doppler passes
-    with the target visible and at most ``max_look_angle`` off nadir; takes the one whose
-    look angle is closest to ``look_angle``, or the first.  The parameters date t = 0 at
-    zero Doppler − 100 s.  ValueError if there is no such pass.
-    """
-    search = {
-        "tle_line1": line1,
-        "tle_line2": line2,
-        "epoch": "" if epoch is None else format_epoch(epoch),
-        **dict(zip(("target_lat", "target_lon", "target_alt"), target)),
-    }
-    if epoch is None:
-        days, seconds = tle_epoch(load_tle(line1, line2))
-        start = J2000 + datetime.timedelta(days=days, seconds=seconds)
-    else:
-        start = parse_epoch(epoch)
-    passes = [
-        g
-        for g in find_passes(search, 0.0, hours * 3600.0)
-        if g.look_angle <= max_look_angle and g.time >= HALF_STARE
-    ]
-    if not passes:
-        raise ValueError(
-            f"no pass within {math.degrees(max_look_angle):g}° off nadir in "
-            f"{hours:g} h from {format_epoch(start)}"
-        )
-    chosen = (
-        passes[0]
-        if look_angle is None
-        else min(passes, key=lambda g: abs(g.look_angle - look_angle))
-    )
-    orbit = dict(
-        search, epoch=format_epoch(start + datetime.timedelta(seconds=chosen.time - HALF_STARE))
-    )
-    return orbit, chosen, passes
-
-
-def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> Scenario:
-    """This scenario for another pass (``orbit``: OrbitEnvironment parameters, t = 0 at the
-    start of the stare), its system written to ``out_dir/video_sar_pass.ssd`` with the FMUs
-    of fmus/build."""
-    from ...fmus.build import BUILD_DIR
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    scenario = dataclasses.replace(
-        SCENARIO,
-        parameters=parameters(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation)),
-        variants={},
-        system=out_dir / "video_sar_pass.ssd",
-    )
-    scenario.system.write_bytes(
-        scenario.render_ssd({name: str(BUILD_DIR / f"{name}.fmu") for name in scenario.components})
-    )
-    return scenario
 
 
 def boresight_B(results) -> np.ndarray:

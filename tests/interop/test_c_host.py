@@ -39,10 +39,10 @@ def test_a_real_satellites_orbit_through_the_c_host(fmus, c_host, tmp_path):
     """video_sar over an ISS pass: OrbitEnvironment runs SGP4 from the ``sgp4`` package,
     which only the build environment has: the C host's interpreter must be that
     environment's.  Bit-identical to the master on the same system."""
-    from agilesat.orchestration.scenarios import video_sar
+    from agilesat.orchestration.studies.stare import pass_scenario, tle_pass
 
-    orbit, _, _ = video_sar.tle_pass(*ISS_TLE)
-    ssd = video_sar.pass_scenario(orbit, tmp_path).ssd
+    orbit, _, _ = tle_pass(*ISS_TLE)
+    ssd = pass_scenario(orbit, tmp_path).ssd
     script = tmp_path / "script.txt"
     write_script(ssd, script, tmp_path / "fmus", 10.0)
     run = run_host(c_host, script, tmp_path / "c.csv")
