@@ -234,7 +234,6 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
-    from .output.figure_pool import processes_for_figures
     from .output.progress import Progress
     from .runner import run
     from .system.parameters import parse_set
@@ -254,7 +253,6 @@ def _run(args) -> int:
             echo=echo_to(out),
             progress=progress,
             derivatives=not args.no_derivatives,
-            figure_processes=processes_for_figures(),
         )
     if args.mat:
         results.to_mat(out / "results.mat")

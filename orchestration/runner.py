@@ -5,9 +5,7 @@ figures.  The CLI's ``agilesat run`` is a thin layer on this.
 
 from __future__ import annotations
 
-import contextlib
 import time
-import warnings
 from pathlib import Path
 
 from . import scenarios
@@ -57,7 +55,6 @@ def run(
     build: bool = True,
     progress=None,
     derivatives: bool = True,
-    figure_processes: int = 0,
 ) -> tuple[Results, dict]:
     """Run a scenario[:variant] (a name or a :class:`Scenario`) or a system file; returns
     (results, summary).  ``parameters``: {"Instance.variable": value}, whole arrays or
@@ -72,9 +69,6 @@ def run(
 
     ``figures``: the scenario's figures (a system file's: an overview of its outputs) as
     200-dpi PNGs, with ``svg`` an SVG beside each (~25 % more figure time).
-    ``figure_processes``: 0 draws the figures in this process; n > 0 in n processes of a
-    worker started with the run, which imports matplotlib while the run simulates
-    (:mod:`.figure_pool`; the CLI's choice, :func:`.figure_pool.processes_for_figures`).
     """
     scenario, variant = parse_target(target)
     overrides = dict(parameters or {})
@@ -108,10 +102,7 @@ def run(
         "system": str(path),
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in plan.overrides.items()},
     }
-    with (
-        stop_on_signals() as signals,
-        _figure_pool(figure_processes if figures and out_dir is not None else 0, scenario) as pool,
-    ):
+    with stop_on_signals() as signals:
         try:
             results = execute(plan)
         except SimulationError as failure:
@@ -137,31 +128,9 @@ def run(
             if figures and signals.signal is None:
                 from .output import plots
 
-                draw = (lambda f, *a: f(*a)) if pool is None else pool.draw
+                draw = scenario.figures if scenario is not None else plots.overview
                 with plots.written_as(plots.FORMATS if svg else plots.FORMATS[:1]):
-                    paths = draw(
-                        scenario.figures if scenario is not None else plots.overview,
-                        results,
-                        out_dir,
-                    )
+                    paths = draw(results, out_dir)
                     summary["figures"] = [str(p) for path in paths for p in plots.formats(path)]
                 write_text(out_dir / "summary.json", summary_text(summary))
     return results, summary
-
-
-@contextlib.contextmanager
-def _figure_pool(processes: int, scenario):
-    """A :class:`.figure_pool.FigurePool` of ``processes`` (None for 0), stopped at the end."""
-    if processes <= 0:
-        yield None
-        return
-    from .output.figure_pool import FigurePool
-
-    try:
-        pool = FigurePool(processes, (scenario.figures.__module__,) if scenario is not None else ())
-    except OSError as exc:  # no process to be had: draw here
-        warnings.warn(f"figures drawn in this process: no figure worker ({exc})", stacklevel=3)
-        yield None
-        return
-    with pool:
-        yield pool

@@ -10,22 +10,15 @@ Later series are drawn thinner, so that lines lying on top of each other stay vi
 "planned …" and "reference …" series are dashed.
 
 matplotlib is imported by the first figure drawn, not with this module (a run without
-figures, or whose figures a :mod:`.figure_pool` draws, never loads it).  A figure pool
-records the figure calls first and draws them after the figure function returns: a figure
-function must not change an array after handing it to a figure (each call is drawn with
-the arrays as they are at the end).
+figures never loads it).
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
-import inspect
 import textwrap
-from collections.abc import Callable
 from contextvars import ContextVar
 from pathlib import Path
-from typing import NamedTuple
 
 from ..system.units import label as unit_label
 from ..system.units import to_degrees
@@ -37,47 +30,6 @@ FORMATS = (".png", ".svg")
 #: those figures are written in now: all, or as :func:`written_as` sets them (per thread)
 _written: ContextVar[tuple[str, ...]] = ContextVar("agilesat_figure_formats", default=FORMATS)
 _STYLES = ("-", "--", "-.", ":")
-#: None: every figure function draws its figure; a list: each records its call there (a
-#: :class:`Drawing`) and returns the path without drawing (a :mod:`.figure_pool` draws them)
-recording: list[Drawing] | None = None
-
-
-class Drawing(NamedTuple):
-    """One figure function's call, recorded to be drawn later (in another process);
-    ``cost`` estimates its drawing time, to draw the heaviest first: (axes, lines).  A
-    figure's time goes mostly to its axes (ticks, labels, layout; once per format), less
-    to the lines on them: scan_pitch's figures (PNG and SVG) take 0.2–0.3 s with one axes,
-    0.3–0.45 s with two, 0.45 s with three (3001 points)."""
-
-    draw: Callable[..., Path]
-    path: Path
-    args: tuple
-    kwargs: dict
-    cost: tuple[int, int]
-
-    def __call__(self) -> Path:
-        return self.draw(self.path, *self.args, **self.kwargs)
-
-
-def _shared(cost):
-    """A figure function that, while :data:`recording`, records its call instead of
-    drawing (it returns the path either way); ``cost``: its :attr:`Drawing.cost` from
-    the call's arguments by name."""
-
-    def decorate(draw):
-        signature = inspect.signature(draw)
-
-        @functools.wraps(draw)
-        def shared(path, *args, **kwargs):
-            if recording is None:
-                return draw(path, *args, **kwargs)
-            arguments = signature.bind(path, *args, **kwargs).arguments
-            recording.append(Drawing(draw, Path(path), args, kwargs, cost(arguments)))
-            return Path(path)
-
-        return shared
-
-    return decorate
 
 
 @contextlib.contextmanager
@@ -111,7 +63,6 @@ def lines(
     return panels(path, title, [(t, series, ylabel, marks)], xlabel)
 
 
-@_shared(lambda a: (len(a["rows"]), sum(len(row[1]) for row in a["rows"])))
 def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
     fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
@@ -159,7 +110,6 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
         ax.set_ylim(bottom=bottom)
 
 
-@_shared(lambda a: (len(a["rows"]), len(a["rows"]) * (len(a["x"]) + 1)))  # a line a point
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     """Metrics against a design variable (log x), each with its requirement line; points
     that meet every requirement filled green, the others open red (legend says so)."""
@@ -193,12 +143,6 @@ def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
     return _save(fig, axes, path, title, xlabel)
 
 
-@_shared(
-    lambda a: (
-        len(a["variables"]),
-        sum(len(r.columns(v)) for r in a["runs"].values() for v in a["variables"]),
-    )
-)
 def signals(
     path: Path, runs: dict, variables, deg: bool = False, instance: str | None = None
 ) -> Path:
