@@ -9,8 +9,9 @@ import time
 from pathlib import Path
 
 from . import scenarios
-from .cosim.master import Interrupted, SimulationError, execute, stop_on_signals
+from .cosim.master import Interrupted, SimulationError, execute
 from .cosim.plan import plan_run
+from .cosim.signals import stop_on_signals
 from .output.recorder import write_text
 from .output.results import Results
 from .output.summary import facts, generic_summary, summary_text, write_records

@@ -23,6 +23,7 @@ Files in the output directory, written as runs finish:
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 import uuid
@@ -31,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cosim.signals import signal_at
 from ..output.recorder import write_text
 from .plan import Plan, Spec
 from .worker import run_batch
@@ -191,6 +193,7 @@ def execute(
     values = {}  # of the runs in flight (drawn once)
     timed = [0.0, 0]  # seconds and number of the runs made here, for the batch size
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
+    hook = signal_at("run")
 
     def submit():
         workers = len(watcher.workers)
@@ -267,6 +270,9 @@ def execute(
                     records[index] = record
                     progress.update(record["status"])
                 journal.flush()
+                if hook is not None and len(records) - len(done) >= hook[1]:
+                    os.kill(os.getpid(), hook[0])  # $AGILESAT_TEST_SIGNAL=SIGNAL@run:K
+                    hook = None
                 watcher.check(futures)
                 # keep IN_FLIGHT_PER_WORKER batches per worker there is now
                 while len(futures) < in_flight():

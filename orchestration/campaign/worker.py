@@ -13,6 +13,10 @@ import time
 
 import numpy as np
 
+from ..cosim.signals import signal_at
+
+_started = 0  # runs this process started
+
 
 def run_one(
     index: int,
@@ -27,6 +31,11 @@ def run_one(
     from ..cosim.master import SimulationError
     from ..runner import run
 
+    global _started
+    _started += 1
+    hook = signal_at("worker")
+    if hook is not None and _started >= hook[1]:
+        os.kill(os.getpid(), hook[0])  # $AGILESAT_TEST_SIGNAL=SIGNAL@worker:K
     began = time.perf_counter()
     record = {
         "index": index,

@@ -33,7 +33,8 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`..output.recorder`).  After fmi2Fatal nothing more is
    called on that FMU.
-5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes (:func:`stop_on_signals`):
+5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes
+   (:func:`.signals.stop_on_signals`):
    the run stops between two macro steps (the compiled loop: between two chunks of a few
    milliseconds), terminates and frees the FMUs, keeps its rows and raises
    :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
@@ -51,10 +52,9 @@ be compiled; ``Results.meta["loop"]`` says which.
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
+import dataclasses
 import signal
-import threading
 
 import numpy as np
 
@@ -64,6 +64,7 @@ from . import loop as compiled
 from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance
 from .plan import RunPlan, plan_run, unreadable
+from .signals import at_step, stop_on_signals
 
 _CTYPE: dict[str, type[ctypes.c_double] | type[ctypes.c_int]] = {
     "Real": ctypes.c_double,
@@ -86,35 +87,6 @@ class Interrupted(SimulationError):
     def __init__(self, message: str, results: Results | None, signum: int):
         super().__init__(message, results)
         self.signal = signum
-
-
-class _Stop:
-    signal: int | None = None
-
-    def handler(self, signum, _frame):
-        self.signal = signum
-
-
-_active: _Stop | None = None
-
-
-@contextlib.contextmanager
-def stop_on_signals():
-    """While inside: SIGINT and SIGTERM set ``.signal`` of the object yielded instead of
-    raising or killing; the previous handlers come back on exit.  Only the main thread can
-    install handlers; elsewhere (and nested) the active object, if any, is shared."""
-    global _active
-    if _active is not None or threading.current_thread() is not threading.main_thread():
-        yield _active or _Stop()
-        return
-    stop = _active = _Stop()
-    previous = {s: signal.signal(s, stop.handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield stop
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-        _active = None
 
 
 TYPES = ("Real", "Integer", "Boolean")  # of the values the master passes on
@@ -257,6 +229,9 @@ def simulate(
 def execute(plan: RunPlan) -> Results:
     """Run a :class:`RunPlan`: load its FMUs, initialise, step, record; as
     :func:`simulate`."""
+    hooked = at_step(plan.progress)  # $AGILESAT_TEST_SIGNAL (tests of interruptions)
+    if hooked is not plan.progress:
+        plan = dataclasses.replace(plan, progress=hooked)
     with stop_on_signals() as signals:
         log = compiled.ClockLog(echo=plan.echo)
         log.time = plan.start

@@ -219,12 +219,24 @@ def test_a_signal_between_chunks_keeps_the_same_rows_with_both_loops(fmus):
 
 @pytest.mark.slow
 def test_a_signal_during_a_compiled_chunk_stops_the_run_and_keeps_its_rows(fmus, tmp_path):
-    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
+    """SIGINT 50 ms after the first progress report (the run is going: no race with its
+    start), inside a chunk of the C loop."""
+    timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+
+    def progress(done, total):
+        if not timer.is_alive() and not timer.finished.is_set():
+            timer.start()
+
     try:
         with pytest.raises(Interrupted) as error:
-            # 120,000 steps: well over 1 s even with the kernels compiled (~30 µs a step)
-            simulate(get("scan_pitch").ssd, stop=6000.0, out_dir=tmp_path, loop="compiled")
+            # 120,000 steps: seconds even with the kernels compiled (~30 µs a step)
+            simulate(
+                get("scan_pitch").ssd,
+                stop=6000.0,
+                out_dir=tmp_path,
+                loop="compiled",
+                progress=progress,
+            )
     finally:
         timer.cancel()
     kept = error.value.results

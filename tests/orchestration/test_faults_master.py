@@ -17,6 +17,7 @@ import pytest
 
 from agilesat.orchestration.cosim import master
 from agilesat.orchestration.cosim.plan import MAX_STEPS
+from agilesat.orchestration.cosim.signals import at_step, signal_at, stop_on_signals
 from agilesat.orchestration.output import recorder
 from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.system.description import Description
@@ -148,8 +149,8 @@ def test_a_connector_unit_is_read_from_the_ssd():
 
 def test_signals_set_a_flag_while_inside_and_the_old_handlers_come_back():
     before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    with master.stop_on_signals() as stop:
-        with master.stop_on_signals() as inner:
+    with stop_on_signals() as stop:
+        with stop_on_signals() as inner:
             assert inner is stop  # nested: one flag
         os.kill(os.getpid(), signal.SIGTERM)  # would end this process otherwise
         os.kill(os.getpid(), signal.SIGINT)  # would raise KeyboardInterrupt
@@ -161,13 +162,33 @@ def test_signal_handlers_are_left_alone_outside_the_main_thread():
     seen = []
 
     def worker():
-        with master.stop_on_signals() as stop:
+        with stop_on_signals() as stop:
             seen.append((stop.signal, signal.getsignal(signal.SIGINT)))
 
     thread = threading.Thread(target=worker)
     thread.start()
     thread.join()
     assert seen == [(None, signal.default_int_handler)]
+
+
+def test_a_test_signal_comes_once_at_the_first_report_at_or_after_its_step(monkeypatch):
+    """$AGILESAT_TEST_SIGNAL=SIGNAL@step:K (the interruption tests' hook): the progress
+    callback sends the signal at the first report >= K, once; the run's own callback
+    still sees every report; other points (run, worker) are not a run's."""
+    sent, seen = [], []
+    monkeypatch.setattr(os, "kill", lambda pid, signum: sent.append((pid, signum)))
+    monkeypatch.setenv("AGILESAT_TEST_SIGNAL", "SIGTERM@step:95")
+    progress = at_step(lambda done, total: seen.append(done))
+    for done in range(30, 300, 30):
+        progress(done, 3000)
+        assert len(sent) == (done >= 95)
+    assert sent == [(os.getpid(), signal.SIGTERM)] and seen == list(range(30, 300, 30))
+    monkeypatch.setenv("AGILESAT_TEST_SIGNAL", "SIGKILL@run:2")
+    assert at_step(None) is None and signal_at("run") == (signal.SIGKILL, 2)
+    for bad in ("SIGFOO@step:3", "SIGINT@step:x", "SIGINT@minute:3", "SIGINT"):
+        monkeypatch.setenv("AGILESAT_TEST_SIGNAL", bad)
+        with pytest.raises(ValueError, match="AGILESAT_TEST_SIGNAL"):
+            signal_at("step")
 
 
 # ---------------------------------------------------------------------------------------

@@ -238,13 +238,14 @@ def connector_unit():
 # signals, kill -9, fatal
 
 
-def _start_run(out: Path, *extra) -> subprocess.Popen:
+def _start_run(out: Path, *extra, env=None) -> subprocess.Popen:
     return subprocess.Popen(
         [*CLI, "run", "scan_pitch", "--out", str(out), "--no-figures", *extra],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        env=env,
     )
 
 
@@ -259,13 +260,17 @@ def _wait_rows(out: Path, rows: int, process, timeout: float = 120.0) -> None:
 
 
 def _interrupt(signum: int, tries: int) -> dict:
+    """The signal at the progress report of macro step 30, 90, 150 ... of scan_pitch's
+    3000 ($AGILESAT_TEST_SIGNAL: at that step, whatever the machine's load)."""
     observed, ok = [], True
+    name = signal.Signals(signum).name
     for k in range(tries):
+        at = 30 + 60 * k
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp) / "out"
-            process = _start_run(out)
-            _wait_rows(out, 20 + 40 * k, process)
-            process.send_signal(signum)
+            process = _start_run(
+                out, env={**os.environ, "AGILESAT_TEST_SIGNAL": f"{name}@step:{at}"}
+            )
             _, stderr = process.communicate(timeout=120)
             rows, whole = _csv_rows(out / "results.csv")
             summary = _summary(out)
@@ -276,7 +281,7 @@ def _interrupt(signum: int, tries: int) -> dict:
             good = (
                 process.returncode == 130
                 and whole
-                and rows > 1
+                and rows == at + 1
                 and npz_rows == rows
                 and summary.get("status") == "interrupted"
                 and summary.get("rows") == rows
@@ -285,14 +290,14 @@ def _interrupt(signum: int, tries: int) -> dict:
             )
             ok &= good
             observed.append(
-                f"exit {process.returncode}, {rows} rows (npz {npz_rows}), "
+                f"at step {at}: exit {process.returncode}, {rows} rows (npz {npz_rows}), "
                 f"status {summary.get('status')}"
             )
-    name = signal.Signals(signum).name
     return _case(
         f"{name} to `agilesat run scan_pitch` mid-run ({tries} tries)",
-        "exit 130; results.csv (whole rows), results.npz with the same rows, "
-        "log.txt, summary.json status 'interrupted'; no traceback or segfault",
+        "exit 130; results.csv (whole rows, up to the step of the signal), results.npz "
+        "with the same rows, log.txt, summary.json status 'interrupted'; no traceback or "
+        "segfault",
         "; ".join(observed),
         ok,
     )
@@ -311,23 +316,24 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def kill_9(seconds: float = 4.0):
+def kill_9(step: int = 30000):
     """Rows reach the file as they are computed (sampled against the run's own CPU time,
-    so that a busy machine does not matter), and kill -9 leaves only whole rows."""
+    so that a busy machine does not matter), and kill -9 leaves only whole rows: the run
+    (60,000 steps) kills itself at macro step ``step`` ($AGILESAT_TEST_SIGNAL, at a
+    progress report: every row computed so far is written by then)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
-        # 60,000 steps: still running at the kill on any machine (a single run's kernels
-        # stay in Python, components/jit.py: some 100-400 us a step)
-        process = _start_run(out, "--stop", "3000")
+        hook = {"AGILESAT_TEST_SIGNAL": f"SIGKILL@step:{step}"}
+        process = _start_run(out, "--stop", "3000", env={**os.environ, **hook})
         _wait_rows(out, 2, process)
-        samples, torn = [], 0
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            rows, whole = _csv_rows(out / "results.csv")
-            samples.append((_cpu_seconds(process.pid), rows))
-            torn += not whole
+        samples = []
+        while process.poll() is None:
+            rows = _csv_rows(out / "results.csv")[0]
+            try:
+                samples.append((_cpu_seconds(process.pid), rows))
+            except OSError:  # gone between the poll and the read
+                break
             time.sleep(0.01)
-        process.kill()
         process.communicate(timeout=60)
         rows, whole = _csv_rows(out / "results.csv")
         # the longest stretch of the run's CPU time during which no row was added
@@ -338,19 +344,19 @@ def kill_9(seconds: float = 4.0):
             stall = max(stall, cpu - since[0])
         times = np.loadtxt(out / "results.csv", delimiter=",", skiprows=1, usecols=0, ndmin=1)
         ok = (
-            whole
-            and rows >= samples[-1][1]
+            process.returncode == -signal.SIGKILL
+            and whole
+            and rows == step + 1
             and stall < 0.1
-            and rows < 60001
             and np.allclose(np.diff(times), 0.05)
         )
         return _case(
-            "kill -9 of a run; its CSV sampled every 10 ms before",
-            "each row on disk once computed (no stretch of >= 0.1 s of the run's "
-            "CPU time without a new row); after the kill whole rows only",
-            f"{rows} whole rows after the kill (last sample {samples[-1][1]}); "
-            f"longest stretch without a new row {stall:.2f} CPU-s; torn row: "
-            f"{not whole}",
+            f"kill -9 of a run at step {step} of 60,000; its CSV sampled every 10 ms before",
+            "each row on disk once computed (no stretch of >= 0.1 s of the run's CPU time "
+            "without a new row); after the kill whole rows only, every row up to the kill",
+            f"exit {process.returncode}, {rows} whole rows after the kill (last sample "
+            f"{samples[-1][1]}); longest stretch without a new row {stall:.2f} CPU-s; torn "
+            f"row: {not whole}",
             ok,
         )
 
