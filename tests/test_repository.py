@@ -8,11 +8,18 @@ from helpers import ROOT
 
 
 def test_ci_runs_the_readme_test_command():
+    """The README's test command is CI's set-up and then ``.venv/bin/python -m pytest``;
+    .ci/run runs that set-up verbatim and the two layers the whole ``pytest`` is made of:
+    ``-m "not slow"`` (stage 1, with the checks) and ``-m slow`` (stage 2)."""
     readme = (ROOT / "README.md").read_text()
     commands = re.findall(r"```\n((?:apt-get [^\n]*&& )?python3 -m venv[^\n]*)\n```", readme)
-    assert len(commands) == 2, commands  # set up and run; set up and test
     test_command = next(c for c in commands if "pytest" in c)
-    assert test_command in (ROOT / ".ci" / "run").read_text().splitlines()
+    setup, _, pytest_command = test_command.rpartition(" && ")
+    assert pytest_command == ".venv/bin/python -m pytest", test_command
+    lines = [line.strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert setup in lines
+    stages = [line for line in lines if line.startswith(pytest_command)]
+    assert stages == [f'{pytest_command} -m "not slow"', f"{pytest_command} -m slow"]
 
 
 def test_every_component_model_is_an_fmu_named_after_its_module():
