@@ -1,11 +1,16 @@
 """The co-simulation master, system files (SSP), results, scenarios and the CLI.
 
+The flow: :mod:`.system` reads and checks a system, :mod:`.cosim` runs it, :mod:`.output`
+records and shows what it did; :mod:`.scenarios`, :mod:`.campaign` and :mod:`.studies`
+are built on them, and :mod:`.runner` and :mod:`.cli` put them together.
+
 Python API::
 
     from agilesat.orchestration import run, simulate
     results, summary = run("scan_pitch", out_dir="out/scan_pitch")   # a shipped scenario
     results = simulate("my_system.ssd", step=0.05, stop=100.0)       # any SSP system
     results["SatelliteDynamics.w_BI_B[2]"], results.vector("CmgCluster.delta")
+    assert_within(results, "SatelliteDynamics.w_BI_B[2]", -0.02, 0.02)  # and the other checks
 
 The names are imported on first use (PEP 562), so that a submodule (the CLI's
 ``agilesat --help``) does not load the master, fmpy and NumPy before it needs them.
@@ -20,9 +25,13 @@ _WHERE = {
     "read_system": "system.ssp",
     "SystemFileError": "system.ssp",
     "Results": "output.results",
+    "assert_within": "output.checks",
+    "assert_settles": "output.checks",
+    "assert_momentum_conserved": "output.checks",
+    "assert_requirements_met": "output.checks",
 }
 
-__all__ = ["run", "simulate", "read_system", "Results", "SimulationError", "SystemFileError"]
+__all__ = list(_WHERE)
 
 
 def __getattr__(name):

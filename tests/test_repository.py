@@ -1,4 +1,5 @@
-"""Repository-level promises: CI runs the README's test command; every model is an FMU."""
+"""Repository-level promises: CI runs the README's test command; every model is an FMU; the
+public names, the command and the pytest plugin are where users find them."""
 
 import importlib
 import re
@@ -20,6 +21,21 @@ def test_ci_runs_the_readme_test_command():
     assert setup in lines
     stages = [line for line in lines if line.startswith(pytest_command)]
     assert stages == [f'{pytest_command} -m "not slow"', f"{pytest_command} -m slow"]
+
+
+def test_the_public_api_the_command_and_the_plugin_resolve():
+    """``from agilesat.orchestration import ...`` (each name of ``__all__``), the
+    ``agilesat`` command and the ``agilesat`` pytest plugin, as installed."""
+    from importlib import metadata
+
+    import agilesat.orchestration as api
+
+    for name in api.__all__:
+        assert getattr(api, name).__name__ == name
+    (script,) = metadata.entry_points(group="console_scripts", name="agilesat")
+    assert script.load() is importlib.import_module("agilesat.orchestration.cli").main
+    (plugin,) = metadata.entry_points(group="pytest11", name="agilesat")
+    assert hasattr(plugin.load(), "agilesat_run")
 
 
 def test_every_component_model_is_an_fmu_named_after_its_module():

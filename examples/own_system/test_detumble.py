@@ -11,11 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agilesat.orchestration.output.checks import (
-    assert_momentum_conserved,
-    assert_settles,
-    assert_within,
-)
+from agilesat.orchestration import assert_momentum_conserved, assert_settles, assert_within
 
 SYSTEM = Path(os.environ.get("DETUMBLE_SSD", "out/own_system/detumble.ssd"))
 J, GAIN = 50.0, 5.0  # kg·m², N·m·s/rad: as make_system.py sets them

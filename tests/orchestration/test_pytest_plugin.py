@@ -8,7 +8,7 @@ pytest_plugins = ["pytester"]
 USER_TESTS = """
 import math
 import pytest
-from agilesat.orchestration.output.checks import (
+from agilesat.orchestration import (
     assert_momentum_conserved, assert_requirements_met, assert_settles, assert_within)
 
 DEG = math.pi / 180
