@@ -12,7 +12,8 @@ Every error names the file, component or variable before anything is instantiate
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,15 +30,14 @@ MAX_STEPS = 10_000_000  # macro steps of one run (about 15 GB of CSV for scan_pi
 
 @dataclass(frozen=True)
 class RunPlan:
-    """Everything one run needs, checked: what to run (``system``, its ``descriptions``,
-    the ``overrides`` on top of its own parameter values, the ``wiring``), on which time
+    """Everything one run needs, checked: what to run (``system``, the ``overrides`` on
+    top of its own parameter values, the ``wiring``), on which time
     grid and how (``loop``: "auto", "compiled" or "python"; ``derivatives``: couple
     through FMI input/output derivatives where declared), and where its rows go
     (``out_dir``; ``progress(steps done, steps)``, ``echo(log entry)``, ``logging_on``:
     the FMUs' debug logging)."""
 
     system: SystemFile
-    descriptions: dict[str, Description]
     overrides: dict[str, ParameterValue]  # "A.x[i]" -> typed value, on top of the system's
     wiring: Wiring
     start: float
@@ -48,8 +48,8 @@ class RunPlan:
     derivatives: bool = True
     loop: str = "auto"
     out_dir: Path | None = None
-    progress: Any = field(default=None, compare=False)
-    echo: Any = field(default=None, compare=False)
+    progress: Callable[[int, int], None] | None = None
+    echo: Callable[[Any], None] | None = None
     logging_on: bool = False
 
     @property
@@ -94,7 +94,6 @@ def plan_run(
     wiring = check_system(system, descriptions, system.parameters + list(overrides.values()))
     return RunPlan(
         system,
-        descriptions,
         overrides,
         wiring,
         start,
@@ -102,12 +101,12 @@ def plan_run(
         n_steps,
         algorithm,
         every,
-        derivatives,
-        chosen,
-        None if out_dir is None else Path(out_dir),
-        progress,
-        echo,
-        logging_on,
+        derivatives=derivatives,
+        loop=chosen,
+        out_dir=None if out_dir is None else Path(out_dir),
+        progress=progress,
+        echo=echo,
+        logging_on=logging_on,
     )
 
 
