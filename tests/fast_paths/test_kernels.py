@@ -228,7 +228,7 @@ _RUN_AS_TEXT = """
 import os, sys
 os.environ["AGILESAT_JIT_AFTER"] = "0"
 {prelude}
-sys.path.insert(0, "tests/fast_paths")
+sys.path[:0] = ["tests/fast_paths", "tests"]
 from agilesat.components import satellite_dynamics
 from test_kernels import _runs
 runs = _runs()
