@@ -117,3 +117,16 @@ def test_no_page_but_the_performance_log_keeps_a_diary():
         if page.name != "performance-log.md":
             text = page.read_text(encoding="utf-8")
             assert not diary.search(text), f"{page}: {diary.search(text).group(0)!r}"
+
+
+def test_every_file_and_test_the_pages_name_exists():
+    """A file moved or a test renamed is a page to update, not a dead pointer: every
+    repository path and test name in a page's code spans exists (but the build's output)."""
+    tests = "\n".join(p.read_text(encoding="utf-8") for p in (ROOT / "tests").rglob("*.py"))
+    folders = "tests|examples|components|fmus|orchestration|docs"
+    for page in PAGES:
+        code = " ".join(re.findall(r"`([^`\n]+)`", page.read_text(encoding="utf-8")))
+        for path in re.findall(rf"(?<![\w/.])((?:{folders})/[\w/.]*\w)", code):
+            assert path == "fmus/build" or (ROOT / path).exists(), f"{page}: no {path}"
+        for name in re.findall(r"\b(test_\w+)\b(?!\.py)", code):
+            assert f"def {name}(" in tests, f"{page}: no test {name}"
