@@ -1,10 +1,10 @@
 """The numbers in README.md and docs/ are a run's, not a copy left to age.
 
-A table right after ``<!-- checked: agilesat run TARGET [OPTIONS] -->`` has a row per
-metric, its ``summary.json`` name in backticks in the first cell; the "ours" (and "paper")
-cell is checked against that run's ``summary.json`` in the metric's display unit, to the
-digits printed (``0 (exactly)``: zero; ``≤ x``: a bound).  A fenced block right after
-``<!-- output of: agilesat COMMAND -->`` holds lines the command prints, in order.
+A table right after a line ```agilesat run TARGET [OPTIONS]`:`` has a row per metric, its
+``summary.json`` name in backticks in the first cell; the "ours" (and "paper") cell is
+checked against that run's ``summary.json`` in the metric's display unit, to the digits
+printed (``0 (exactly)``: zero; ``≤ x``: a bound).  A fenced block whose first line is
+``$ agilesat COMMAND`` holds lines the command prints, in order.
 """
 
 import json
@@ -19,8 +19,8 @@ from agilesat.fmus import FMUS
 from helpers import ROOT, agilesat
 
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
-CHECKED = re.compile(r"<!-- checked: agilesat (.+?) -->\n((?:\|.*\n)+)")
-OUTPUT = re.compile(r"<!-- output of: agilesat (.+?) -->\n```\w*\n(.*?)```", re.S)
+CHECKED = re.compile(r"^`agilesat (run [^`]+)`:\n\n((?:\|.*\n)+)", re.M)
+OUTPUT = re.compile(r"^```\w*\n\$ agilesat ([^\n]+)\n(.*?)```", re.M | re.S)
 NUMBER = re.compile(r"([≤<]\s*)?([+−-]?\d+(?:\.(\d+))?(?:e([+−-]?\d+))?)\s*([^\s(]*)")
 PRETTY = {"°": "deg", "·": ".", "²": "2", "³": "3"}
 
@@ -130,3 +130,11 @@ def test_every_file_and_test_the_pages_name_exists():
             assert path == "fmus/build" or (ROOT / path).exists(), f"{page}: no {path}"
         for name in re.findall(r"\b(test_\w+)\b(?!\.py)", code):
             assert f"def {name}(" in tests, f"{page}: no test {name}"
+
+
+def test_every_table_of_ours_against_the_paper_is_checked():
+    """A slip in the line naming the command would leave a table unchecked, silently."""
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        tables = re.findall(r"^\|[^\n]*\| ours \|", text, re.M)
+        assert len(tables) == len(CHECKED.findall(text)), f"{page}: a table without its command"
