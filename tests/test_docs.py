@@ -1,7 +1,8 @@
 """The numbers in README.md and docs/ are a run's, not a copy left to age.
 
-A table right after a line ```agilesat run TARGET [OPTIONS]`:`` has a row per metric, its
-``summary.json`` name in backticks in the first cell; the "ours" (and "paper") cell is
+A table right after a line that is a command in backticks and a colon
+(`` `agilesat run TARGET [OPTIONS]`: ``) has a row per metric, its ``summary.json`` name
+in backticks in the first cell; the "ours" (and "paper") cell is
 checked against that run's ``summary.json`` in the metric's display unit, to the digits
 printed (``0 (exactly)``: zero; ``≤ x``: a bound).  A fenced block whose first line is
 ``$ agilesat COMMAND`` holds lines the command prints, in order.
