@@ -11,7 +11,14 @@ the orchestration, so it works on any arrays.  See docs/pointing.md.
     print(result.line("arcsec"))
 """
 
-from .errors import ErrorHistory, knowledge_error, performance_error
+from .errors import (
+    ErrorHistory,
+    knowledge_error,
+    performance_error,
+    quaternion_product,
+    rotation_quaternion,
+    rotation_vector,
+)
 from .indices import INDICES, IndexSeries, NotEvaluable, index_series, magnitude
 from .requirement import ANGLE_UNITS, PointingRequirement, PointingResult, format_angle
 from .statistics import (
@@ -40,6 +47,9 @@ __all__ = [
     "knowledge_error",
     "magnitude",
     "performance_error",
+    "quaternion_product",
+    "rotation_quaternion",
+    "rotation_vector",
     "runs_needed",
     "statistic",
 ]

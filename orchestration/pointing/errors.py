@@ -38,6 +38,16 @@ KINDS = ("performance", "knowledge")
 UNIT_NORM_TOLERANCE = 1e-6
 #: tolerated relative spread of the time steps of a uniform grid
 UNIFORM_STEP_TOLERANCE = 1e-6
+#: runs computed at a time: bounds the temporaries of a long campaign's arrays
+BLOCK = 64
+
+
+def by_blocks(function, shape: tuple, *arrays: np.ndarray) -> np.ndarray:
+    """``function`` of the arrays' blocks of ``BLOCK`` runs (axis 0), into one ``shape``."""
+    out = np.empty(shape)
+    for start in range(0, shape[0], BLOCK):
+        out[start : start + BLOCK] = function(*(a[start : start + BLOCK] for a in arrays))
+    return out
 
 
 def quaternion_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -57,13 +67,21 @@ def rotation_vector(q: np.ndarray) -> np.ndarray:
     return scale * q[..., 1:]
 
 
+def rotation_quaternion(phi: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(cos θ/2, sin θ/2 n)`` of rotation vectors ``θ n`` (last axis)."""
+    phi = np.asarray(phi, dtype=float)
+    angle = np.linalg.norm(phi, axis=-1, keepdims=True)
+    axis = np.divide(phi, angle, out=np.zeros_like(phi), where=angle > 0.0)
+    return np.concatenate((np.cos(angle / 2), np.sin(angle / 2) * axis), axis=-1)
+
+
 def _unit_quaternions(q, name: str) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     if q.ndim == 2:
         q = q[None]
     if q.ndim != 3 or q.shape[-1] != 4:
         raise ValueError(f"{name}: expected (samples, 4) or (runs, samples, 4), got {q.shape}")
-    norm = np.linalg.norm(q, axis=-1)
+    norm = np.sqrt(np.einsum("...i,...i->...", q, q))
     bad = ~(np.abs(norm - 1.0) <= UNIT_NORM_TOLERANCE)  # NaN is bad too
     if bad.any():
         run, sample = np.argwhere(bad)[0]
@@ -71,7 +89,13 @@ def _unit_quaternions(q, name: str) -> np.ndarray:
             f"{name} is not a unit quaternion at run {run}, sample {sample}: "
             f"|q| = {norm[run, sample]} (expected 1 within {UNIT_NORM_TOLERANCE})"
         )
-    return q / norm[..., None]
+    return q
+
+
+def _error_rotation(q_x: np.ndarray, q_y: np.ndarray) -> np.ndarray:
+    q_x = q_x / np.linalg.norm(q_x, axis=-1, keepdims=True)
+    conjugate = q_y * (np.array([1.0, -1.0, -1.0, -1.0]) / np.linalg.norm(q_y, axis=-1)[..., None])
+    return rotation_vector(quaternion_product(conjugate, q_x))
 
 
 def attitude_error(q_XI, q_YI, t, kind: str) -> ErrorHistory:
@@ -80,8 +104,7 @@ def attitude_error(q_XI, q_YI, t, kind: str) -> ErrorHistory:
     q_y = _unit_quaternions(q_YI, "q_YI")
     if q_x.shape != q_y.shape:
         raise ValueError(f"quaternion histories differ in shape: {q_x.shape} and {q_y.shape}")
-    conjugate = q_y * np.array([1.0, -1.0, -1.0, -1.0])
-    return ErrorHistory(rotation_vector(quaternion_product(conjugate, q_x)), t, kind)
+    return ErrorHistory(by_blocks(_error_rotation, q_x.shape[:-1] + (3,), q_x, q_y), t, kind)
 
 
 def knowledge_error(q_est, q_true, t) -> ErrorHistory:
@@ -182,19 +205,29 @@ class ErrorHistory:
         ``ε = ∠(b, b') (b × b')/|b × b'|``."""
         b = direction(boresight, "boresight")
         phi = self._rotation_vectors("a line-of-sight error")
-        angle = np.linalg.norm(phi, axis=-1, keepdims=True)
-        n = np.divide(phi, angle, out=np.zeros_like(phi), where=angle > 0.0)
-        n_x_b = np.cross(n, b)
-        turned = (  # Rodrigues: b rotated by φ
-            b * np.cos(angle) + n_x_b * np.sin(angle) + n * (n @ b)[..., None] * (1 - np.cos(angle))
-        )
-        normal = np.cross(b, turned)
-        sine = np.linalg.norm(normal, axis=-1, keepdims=True)
-        cosine = turned @ b
-        if np.any((sine[..., 0] == 0.0) & (cosine < 0.0)):
-            raise ValueError("the line of sight is reversed (a 180° error): no half-cone axis")
-        scale = np.divide(
-            np.arctan2(sine, cosine[..., None]), sine, out=np.ones_like(sine), where=sine > 0.0
-        )
+        epsilon = by_blocks(lambda block: _line_of_sight(block, b), phi.shape, phi)
         signal = f"line of sight of {describe(b)}, half-cone"
-        return ErrorHistory(scale * normal, self.t, self.kind, signal)
+        return ErrorHistory(epsilon, self.t, self.kind, signal)
+
+    def runs_between(self, start: int, stop: int) -> ErrorHistory:
+        """The runs ``start`` to ``stop − 1``."""
+        return ErrorHistory(self.values[start:stop], self.t, self.kind, self.signal)
+
+
+def _line_of_sight(phi: np.ndarray, b: np.ndarray) -> np.ndarray:
+    angle = np.linalg.norm(phi, axis=-1, keepdims=True)
+    n = np.divide(phi, angle, out=np.zeros_like(phi), where=angle > 0.0)
+    turned = (  # Rodrigues: b rotated by φ
+        b * np.cos(angle)
+        + np.cross(n, b) * np.sin(angle)
+        + n * (n @ b)[..., None] * (1 - np.cos(angle))
+    )
+    normal = np.cross(b, turned)
+    sine = np.linalg.norm(normal, axis=-1, keepdims=True)
+    cosine = turned @ b
+    if np.any((sine[..., 0] == 0.0) & (cosine < 0.0)):
+        raise ValueError("the line of sight is reversed (a 180° error): no half-cone axis")
+    scale = np.divide(
+        np.arctan2(sine, cosine[..., None]), sine, out=np.ones_like(sine), where=sine > 0.0
+    )
+    return scale * normal

@@ -118,13 +118,14 @@ def index_series(
     window: float | None = None,
     separation: float | None = None,
     t_in_window: str = "end",
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> IndexSeries:
     """The values of ``index`` over the record (see the module's docstring).
 
     ``window`` is Δt (s) for every index but APE/AKE; ``separation`` is Δt_s (s), the
     time from the start of the first window to the start of the second, for PDE/PRE/KDE/KRE;
-    ``t_in_window`` ("end" or "random") for RPE/RKE; ``seed`` draws the random positions.
+    ``t_in_window`` ("end" or "random") for RPE/RKE; ``seed`` (or a generator, whose
+    stream the draw continues) draws the random positions, run after run.
     """
     operation, kind = check_index(index, window, separation, t_in_window)
     if error.kind != kind:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ErrorHistory, describe, direction
+from .errors import BLOCK, ErrorHistory, describe, direction
 from .indices import INDICES, NotEvaluable, check_index, index_series, magnitude
 from .statistics import (
     Statistic,
@@ -129,16 +129,15 @@ class PointingRequirement:
     def evaluate(self, error: ErrorHistory, seed: int = 0) -> PointingResult:
         """The verdict on ``error`` (``seed``: the draw of t in the window, if random)."""
         needed = self.runs_needed()
+        rng = np.random.default_rng(seed)
         try:
-            series = index_series(
-                self.signal(error),
-                self.index,
-                self.window,
-                self.separation,
-                self.t_in_window,
-                seed,
-            )
-            m = magnitude(series)
+            parts = []
+            for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once
+                block = self.signal(error.runs_between(start, start + BLOCK))
+                args = (self.index, self.window, self.separation, self.t_in_window, rng)
+                series = index_series(block, *args)
+                parts.append(magnitude(series))
+            m = np.concatenate(parts)
             stat = statistic(m, self.level, self.interpretation, self.confidence)
         except NotEvaluable as reason:
             return PointingResult(self, "not evaluable", error.runs, needed, reason=str(reason))

@@ -32,6 +32,12 @@ def test_the_runs_the_issue_quotes():
     assert 0.9973**1109 <= 0.05 < 0.9973**1108
 
 
+def test_a_case_exact_in_real_numbers_is_not_lost_to_rounding():
+    """0.9³ = 1 − 0.271: three runs suffice (in floats 0.9³ = 0.7290000000000001 > 0.729)."""
+    assert runs_needed(0.9, 0.271) == 3
+    assert allowed_exceedances(3, 0.9, 0.271) == 0
+
+
 @pytest.mark.parametrize("level,confidence", [(0.9973, 0.95), (0.99, 0.9), (0.95, 0.99)])
 @pytest.mark.parametrize("k", [1, 2, 5])
 def test_runs_needed_with_exceedances_is_the_smallest_binomial_solution(level, confidence, k):

@@ -6,8 +6,14 @@ import numpy as np
 import pytest
 
 from agilesat.components import rotations
-from agilesat.orchestration.pointing import ErrorHistory, knowledge_error, performance_error
-from agilesat.orchestration.pointing.errors import quaternion_product, rotation_vector
+from agilesat.orchestration.pointing import (
+    ErrorHistory,
+    knowledge_error,
+    performance_error,
+    quaternion_product,
+    rotation_quaternion,
+    rotation_vector,
+)
 
 T = np.arange(5) * 0.1
 
@@ -31,6 +37,7 @@ def test_the_error_rotation_is_the_dcm_of_the_toolkit_and_its_rotation_vector():
         assert angle <= math.pi
         rebuilt = rotations.quat_from_axis_angle(p / angle, angle)
         assert rebuilt == pytest.approx(e * np.sign(e[0]), abs=1e-12)
+        assert rotation_quaternion(p) == pytest.approx(rebuilt, abs=1e-15)
 
 
 def test_signs_estimate_minus_truth_and_truth_minus_reference():

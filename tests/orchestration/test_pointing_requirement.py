@@ -15,6 +15,8 @@ from agilesat.orchestration.pointing import (
     PointingRequirement,
     format_angle,
     index_series,
+    magnitude,
+    statistic,
 )
 
 ARCSEC = math.pi / 648_000
@@ -98,6 +100,17 @@ def test_the_error_signal_the_requirement_names():
     assert PointingRequirement("APE", 1.0, 0.5, "mixed").evaluate(scalar).value == 2e-6
     with pytest.raises(ValueError, match="needs a rotation-vector error"):
         PointingRequirement("APE", 1.0, 0.5, "mixed", axis=(1, 0, 0)).evaluate(scalar)
+
+
+def test_a_campaign_is_computed_in_blocks_of_runs_with_the_same_draws():
+    error = white_campaign(runs=150, samples=100)
+    requirement = rpe(t_in_window="random", axis=None, boresight=(0, 0, 1), confidence=None)
+    whole = index_series(error.line_of_sight((0, 0, 1)), "RPE", 1.0, None, "random", seed=4)
+    expected = statistic(magnitude(whole), 0.9973, "ensemble")
+    result = requirement.evaluate(error, seed=4)
+    assert result.value == expected.value
+    assert np.array_equal(result.statistic.profile, expected.profile)
+    assert result.value != requirement.evaluate(error, seed=5).value
 
 
 def test_knowledge_indices_take_knowledge_errors():
