@@ -143,7 +143,7 @@ class ErrorHistory:
     values: np.ndarray
     t: np.ndarray
     kind: str = "performance"
-    signal: str = "rotation vector, body axes"
+    signal: str | None = None  # default: "rotation vector, body axes" or "scalar"
 
     def __post_init__(self):
         values = np.asarray(self.values, dtype=float)
@@ -177,6 +177,9 @@ class ErrorHistory:
             raise ValueError(f"{self.kind} error of run {run} is not finite at t = {t[sample]} s")
         object.__setattr__(self, "values", values)
         object.__setattr__(self, "t", t)
+        if self.signal is None:
+            scalar = values.shape[-1] == 1
+            object.__setattr__(self, "signal", "scalar" if scalar else "rotation vector, body axes")
 
     @property
     def dt(self) -> float:

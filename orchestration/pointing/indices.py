@@ -9,8 +9,9 @@ perf.   knowl.  definition
 APE     AKE     absolute error: e(t), the instantaneous error
 MPE     MKE     mean error: ē(Δt), the mean over a window Δt
 RPE     RKE     relative error: e(t) − ē(Δt), t ∈ Δt, the instantaneous error about the mean
-                of a window containing t (the standard leaves the relation of t to Δt to the
-                requirement; its Annex A.1.4 names "t at the end of Δt" and "t random in Δt")
+                of a window containing t (the definition's note leaves the relation of t to
+                Δt to the requirement, e.g. "t random in Δt" or "t at the end of Δt", and
+                refers to Annex A.1.4)
 PDE     KDE     drift error: ē(Δt₂) − ē(Δt₁), the difference of the means of two windows in
                 one observation period, Δt₂ starting Δt_s after Δt₁
 PRE     KRE     reproducibility error: the same difference, the windows in different

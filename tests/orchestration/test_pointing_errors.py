@@ -74,6 +74,8 @@ def test_about_an_axis_is_the_rotation_vector_component():
     about = ErrorHistory(phi, [0.0, 1.0]).about([0, 2, 0])
     assert about.values[0, :, 0] == pytest.approx([-0.2, 0.5])
     assert about.signal == "about axis (0, 1, 0)"
+    assert ErrorHistory(phi, [0.0, 1.0]).signal == "rotation vector, body axes"
+    assert ErrorHistory(phi[:, 0], [0.0, 1.0]).signal == "scalar"
     with pytest.raises(ValueError, match="needs a rotation-vector error"):
         about.about([1, 0, 0])
     with pytest.raises(ValueError, match="non-zero 3-vector"):
