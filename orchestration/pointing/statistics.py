@@ -1,0 +1,186 @@
+"""An index at a probability level under a statistical interpretation, and the confidence
+of an ensemble statistic from order statistics.
+
+A requirement states a bound that the index's magnitude keeps with probability P.  The
+probability is over time, over the statistical ensemble (the runs), or both: the standard's
+three statistical interpretations ([Ecss 2008], detailed in [Esa 2011]):
+
+- temporal: for each run, the fraction P of its time; the worst run is the statistic
+  (profile: one value per run);
+- ensemble: at each time, the fraction P of the runs; the worst time is the statistic
+  (profile: one value per time);
+- mixed: the fraction P of all (run, time) samples together (no profile).
+
+The empirical P-quantile of n values is the ⌈P n⌉-th smallest: the smallest value that at
+least a fraction P of the values do not exceed.
+
+Confidence (ensemble only: its n values at one time come from n independent runs; the
+samples of one run in time are correlated and give no such statement).  If k of n runs may
+exceed a value X, X is the (n − k)-th smallest of the n; it bounds the true P-quantile
+with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  So
+
+- the bound a campaign supports at P with confidence C is the (n − k)-th smallest value
+  with k the largest count such that Pr[Bin(n, 1 − P) ≤ k] ≤ 1 − C;
+- the runs needed with k runs allowed above the bound: the smallest n with
+  Pr[Bin(n, 1 − P) ≤ k] = Σ_{i≤k} C(n, i) (1 − P)^i P^(n−i) ≤ 1 − C; for k = 0,
+  P^n ≤ 1 − C, n = ⌈ln(1 − C)/ln P⌉: 1109 runs for 99.73 % with 95 % confidence;
+- the confidence a campaign achieves for a bound that k of its n runs exceed:
+  C = Pr[Bin(n, 1 − P) > k], the level at which the one-sided Clopper-Pearson lower limit
+  of the fraction within the bound is exactly P ([Clopper 1934]).
+
+At the worst time the statement holds for that time; the maximum over time of the per-time
+bounds is at least the bound at the true worst time, so it keeps the confidence.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import binom
+
+from .indices import NotEvaluable
+
+INTERPRETATIONS = ("temporal", "ensemble", "mixed")
+#: relative slack on Pr[...] ≤ 1 − C, so that a case exact in real numbers (0.5² ≤ 0.25)
+#: is not lost to rounding
+_ROUNDING = 1e-12
+
+
+def check_probability(value: float, name: str) -> None:
+    if not 0.0 < value < 1.0:
+        raise ValueError(f"{name} must be a probability strictly between 0 and 1, got {value}")
+
+
+def check_statistic(level: float, interpretation: str, confidence: float | None) -> None:
+    check_probability(level, "level")
+    if interpretation not in INTERPRETATIONS:
+        raise ValueError(f"interpretation {interpretation!r}: expected one of {INTERPRETATIONS}")
+    if confidence is not None:
+        check_probability(confidence, "confidence")
+        if interpretation != "ensemble":
+            raise ValueError(
+                "a confidence needs the ensemble interpretation: order statistics need "
+                "independent samples (runs); the samples of one run in time are correlated"
+            )
+
+
+def percent(p: float) -> str:
+    return f"{100 * p:.6g} %"
+
+
+def quantile_rank(count: int, level: float) -> int:
+    """0-based rank of the empirical ``level``-quantile of ``count`` values: ⌈P n⌉ − 1."""
+    return max(0, math.ceil(level * count - 1e-9) - 1)
+
+
+def order_statistic(x: np.ndarray, rank: int, axis: int | None) -> np.ndarray:
+    """The ``rank``-th smallest (0-based) along ``axis`` (all values if None)."""
+    if axis is None:
+        x, axis = x.ravel(), 0
+    return np.take(np.partition(x, rank, axis=axis), rank, axis=axis)
+
+
+def _exceeds_at_most(k: int, runs: int, level: float) -> float:
+    """Pr[Bin(runs, 1 − level) ≤ k]."""
+    return float(binom.cdf(k, runs, 1.0 - level))
+
+
+def runs_needed(level: float, confidence: float, exceedances: int = 0) -> int:
+    """The fewest runs whose (n − k)-th smallest value bounds the ``level``-quantile with
+    ``confidence``, k = ``exceedances`` runs allowed above it."""
+    check_probability(level, "level")
+    check_probability(confidence, "confidence")
+    if exceedances < 0:
+        raise ValueError(f"exceedances must be ≥ 0, got {exceedances}")
+    limit = (1.0 - confidence) * (1.0 + _ROUNDING)
+
+    def enough(n: int) -> bool:
+        return _exceeds_at_most(exceedances, n, level) <= limit
+
+    low, high = exceedances, exceedances + 1  # low: too few (n = k cannot do)
+    while not enough(high):
+        low, high = high, 2 * high
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (low, middle) if enough(middle) else (middle, high)
+    return high
+
+
+def allowed_exceedances(runs: int, level: float, confidence: float) -> int:
+    """The most runs that may exceed the bound a campaign of ``runs`` supports at ``level``
+    with ``confidence``; :class:`NotEvaluable` if even none is too many."""
+    check_probability(level, "level")
+    check_probability(confidence, "confidence")
+    limit = (1.0 - confidence) * (1.0 + _ROUNDING)
+    if runs < 1 or _exceeds_at_most(0, runs, level) > limit:
+        raise NotEvaluable(
+            f"the campaign is too small: a bound at {percent(level)} with "
+            f"{percent(confidence)} confidence needs at least "
+            f"{runs_needed(level, confidence)} runs (none above it); it has {runs}"
+        )
+    k = int(binom.ppf(1.0 - confidence, runs, 1.0 - level))
+    while k > 0 and _exceeds_at_most(k, runs, level) > limit:
+        k -= 1
+    while _exceeds_at_most(k + 1, runs, level) <= limit:
+        k += 1
+    return k
+
+
+def confidence_achieved(runs: int, exceedances: int, level: float) -> float:
+    """Pr[Bin(runs, 1 − level) > exceedances]: the confidence that at least ``level`` of the
+    ensemble is within a bound that ``exceedances`` of ``runs`` runs exceed."""
+    check_probability(level, "level")
+    return float(binom.sf(exceedances, runs, 1.0 - level))
+
+
+@dataclass(frozen=True, eq=False)
+class Statistic:
+    """An index's magnitude at ``level`` under ``interpretation``.
+
+    ``value`` is the worst case of ``profile`` (per run for temporal, per time for
+    ensemble, none for mixed): the empirical quantile, or with ``confidence`` the order
+    statistic that bounds it (``allowed`` runs may exceed it).  ``estimate`` is the worst
+    case of the empirical quantile either way; ``worst`` the run or time index of ``value``.
+    """
+
+    interpretation: str
+    level: float
+    value: float
+    estimate: float
+    profile: np.ndarray | None
+    worst: int | None
+    confidence: float | None = None
+    allowed: int | None = None
+
+
+def statistic(
+    magnitudes: np.ndarray, level: float, interpretation: str, confidence: float | None = None
+) -> Statistic:
+    """The statistic of ``magnitudes[run, time]`` (see the module's docstring)."""
+    check_statistic(level, interpretation, confidence)
+    m = np.asarray(magnitudes, dtype=float)
+    if m.ndim != 2 or m.size == 0:
+        raise ValueError(f"magnitudes: expected a non-empty (runs, times) array, got {m.shape}")
+    runs = m.shape[0]
+    if interpretation == "mixed":
+        value = float(order_statistic(m, quantile_rank(m.size, level), None))
+        return Statistic(interpretation, level, value, value, None, None)
+    axis = 1 if interpretation == "temporal" else 0
+    estimates = order_statistic(m, quantile_rank(m.shape[axis], level), axis)
+    profile, allowed = estimates, None
+    if confidence is not None:
+        allowed = allowed_exceedances(runs, level, confidence)
+        profile = order_statistic(m, runs - allowed - 1, 0)
+    worst = int(np.argmax(profile))
+    return Statistic(
+        interpretation,
+        level,
+        float(profile[worst]),
+        float(estimates.max()),
+        profile,
+        worst,
+        confidence,
+        allowed,
+    )

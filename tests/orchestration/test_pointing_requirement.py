@@ -1,0 +1,163 @@
+"""A pointing requirement's verdict, text and record; the package stands on NumPy alone."""
+
+import ast
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import agilesat.orchestration.pointing as pointing
+from agilesat.orchestration.pointing import (
+    ErrorHistory,
+    NotEvaluable,
+    PointingRequirement,
+    format_angle,
+    index_series,
+    magnitude,
+    statistic,
+)
+
+ARCSEC = math.pi / 648_000
+
+
+def white_campaign(runs=1200, samples=400, sigma=1.0 * ARCSEC, seed=9, kind="performance"):
+    rng = np.random.default_rng(seed)
+    return ErrorHistory(rng.normal(size=(runs, samples, 3)) * sigma, np.arange(samples) * 0.1, kind)
+
+
+def rpe(bound=1.0, **changes):
+    settings = dict(index="RPE", bound=bound, level=0.9973, interpretation="ensemble")
+    settings.update(window=1.0, axis=(0, 0, 1), confidence=0.95)
+    settings.update(changes)
+    return PointingRequirement(**settings)
+
+
+def test_met_and_not_met_agree_with_the_confidence_achieved():
+    """A bound is met with confidence C exactly when the runs above it, at the worst time,
+    are few enough that Pr[Bin(n, 1 − P) > k] ≥ C.  With 1200 runs no run may exceed it
+    (k = 0 up to 1755 runs at 99.73 %, 95 %): the bound is the largest of the 1200 × 391
+    values, about 5σ here, though each time's 99.73 % quantile is 3σ."""
+    error = white_campaign()
+    sigma = math.sqrt((1 - 1 / 20) ** 2 + 1 / 400 + 9 / 100) * ARCSEC  # RPE end, N = 10
+    for bound_sigmas, status in ((6.0, "met"), (4.0, "not met"), (2.5, "not met")):
+        result = rpe(bound_sigmas * sigma).evaluate(error)
+        assert result.status == status and result.met is (status == "met")
+        assert (result.confidence_achieved >= 0.95) is (status == "met")
+        assert result.value >= result.estimate  # the bound with confidence is the larger
+        assert result.runs == 1200 and result.runs_needed == 1109
+    assert result.exceedances > 3  # 2.5 σ: 1.2 % of 1200 runs above, at the worst time
+
+
+def test_not_evaluable_says_why():
+    few = rpe(ARCSEC).evaluate(white_campaign(runs=100))
+    assert few.status == "not evaluable" and few.met is None and few.value is None
+    assert "needs at least 1109 runs" in few.reason and few.runs_needed == 1109
+    short = rpe(ARCSEC, window=50.0).evaluate(white_campaign(runs=1200, samples=400))
+    assert short.status == "not evaluable" and "too short" in short.reason
+    with pytest.raises(NotEvaluable, match="too short"):
+        index_series(white_campaign(runs=2), "PDE", window=20.0, separation=20.0)
+
+
+def test_the_line_and_the_record():
+    result = rpe(0.001 * math.pi / 180).evaluate(white_campaign(sigma=0.5 * ARCSEC))
+    assert result.line("deg") == (
+        f"RPE(1 s) about (0, 0, 1) at 99.73 % (ensemble) with 95 % confidence: "
+        f"{format_angle(result.value, 'deg')} (requirement 0.001°): met"
+    )
+    assert result.line("arcsec").endswith("(requirement 3.6 arcsec): met")
+    record = json.loads(json.dumps(result.to_dict()))
+    assert record["requirement"]["window"] == 1.0 and record["requirement"]["t_in_window"] == "end"
+    assert record["status"] == "met" and record["value"] == result.value
+    assert 0.0 <= record["worst_time"] <= 39.9
+    temporal = PointingRequirement("APE", ARCSEC, 0.9, "temporal", boresight=(0, 0, 1))
+    record = temporal.evaluate(white_campaign(runs=5)).to_dict()
+    assert record["confidence_achieved"] is None and record["runs_needed"] is None
+    assert record["worst_run"] in range(5) and record["requirement"]["t_in_window"] is None
+    assert temporal.label() == "APE half-cone of (0, 0, 1)"
+    drift = PointingRequirement("KDE", ARCSEC, 0.9, "mixed", window=10.0, separation=60.0)
+    assert drift.label() == "KDE(10 s, Δt_s 60 s)"
+    assert rpe(ARCSEC, t_in_window="random").label() == "RPE(1 s, t random in Δt) about (0, 0, 1)"
+    assert format_angle(1e-6, "urad") == "1 urad" and format_angle(ARCSEC, "arcsec") == "1 arcsec"
+    with pytest.raises(ValueError, match="unknown angle unit 'gon'"):
+        format_angle(1.0, "gon")
+
+
+def test_the_error_signal_the_requirement_names():
+    """About an axis, the half-cone of a boresight, or the 3-axis angle."""
+    t = np.arange(3) * 1.0
+    phi = np.tile([3e-6, 4e-6, 12e-6], (3, 1))
+    error = ErrorHistory(phi, t)
+    for kwargs, expected in (
+        ({"axis": (0, 1, 0)}, 4e-6),
+        ({"boresight": (0, 0, 1)}, 5e-6),
+        ({}, 13e-6),
+    ):
+        result = PointingRequirement("APE", 1.0, 0.5, "mixed", **kwargs).evaluate(error)
+        assert result.value == pytest.approx(expected, rel=1e-6)
+    scalar = ErrorHistory(np.full(3, 2e-6), t)
+    assert PointingRequirement("APE", 1.0, 0.5, "mixed").evaluate(scalar).value == 2e-6
+    with pytest.raises(ValueError, match="needs a rotation-vector error"):
+        PointingRequirement("APE", 1.0, 0.5, "mixed", axis=(1, 0, 0)).evaluate(scalar)
+
+
+def test_a_campaign_is_computed_in_blocks_of_runs_with_the_same_draws():
+    error = white_campaign(runs=150, samples=100)
+    requirement = rpe(t_in_window="random", axis=None, boresight=(0, 0, 1), confidence=None)
+    whole = index_series(error.line_of_sight((0, 0, 1)), "RPE", 1.0, None, "random", seed=4)
+    expected = statistic(magnitude(whole), 0.9973, "ensemble")
+    result = requirement.evaluate(error, seed=4)
+    assert result.value == expected.value
+    assert np.array_equal(result.statistic.profile, expected.profile)
+    assert result.value != requirement.evaluate(error, seed=5).value
+
+
+def test_knowledge_indices_take_knowledge_errors():
+    knowledge = white_campaign(runs=3, kind="knowledge")
+    assert PointingRequirement("RKE", 1.0, 0.9, "mixed", window=1.0).evaluate(knowledge).met
+    with pytest.raises(ValueError, match="RPE is a performance index: it needs the performance"):
+        rpe(1.0, confidence=None, interpretation="mixed").evaluate(knowledge)
+
+
+@pytest.mark.parametrize(
+    "changes,message",
+    [
+        ({"index": "JITTER"}, "unknown index 'JITTER'"),
+        ({"window": None}, "RPE needs a window > 0 s"),
+        ({"index": "APE"}, "APE takes no window"),
+        ({"separation": 5.0}, "RPE takes no separation"),
+        ({"index": "PDE"}, "PDE needs a separation > 0 s"),
+        ({"index": "MPE", "t_in_window": "random"}, "of RPE/RKE only"),
+        ({"t_in_window": "start"}, "t_in_window 'start'"),
+        ({"interpretation": "temporal"}, "a confidence needs the ensemble interpretation"),
+        ({"interpretation": "worst"}, "interpretation 'worst'"),
+        ({"level": 1.0}, "level must be a probability"),
+        ({"confidence": 95}, "confidence must be a probability"),
+        ({"level": 0.9, "bound": -1.0}, "bound must be a positive angle"),
+        ({"boresight": (0, 0, 1)}, "an axis or a boresight, not both"),
+        ({"axis": (0, 0)}, "axis must be a non-zero 3-vector"),
+    ],
+)
+def test_a_malformed_requirement_is_refused(changes, message):
+    with pytest.raises(ValueError, match=message):
+        rpe(**changes)
+
+
+def test_a_window_must_be_whole_samples():
+    with pytest.raises(ValueError, match=r"window Δt = 0.25 s is not a whole number of samples"):
+        index_series(white_campaign(runs=1), "MPE", window=0.25)
+
+
+def test_the_package_imports_only_numpy_scipy_and_itself():
+    """Usable on any arrays: no FMI, no other part of the toolkit."""
+    allowed = {"numpy", "scipy", "math", "dataclasses", "__future__"}
+    for path in Path(pointing.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module]
+            else:
+                continue
+            assert {n.split(".")[0] for n in names} <= allowed, f"{path.name}: {names}"
