@@ -121,7 +121,8 @@ def on_files(files, config):
     for name in FMUS:
         files.append(File.generated(config, f"fmus/{name}.md", content=fmu_page(name)))
     design = (ROOT / "DESIGN.md").read_text(encoding="utf-8")
-    design = design.replace("(fmus/INTERFACES.md)", "(fmus/index.md)")
+    # links relative to the repository become links relative to the site
+    design = design.replace("(fmus/INTERFACES.md)", "(fmus/index.md)").replace("(docs/", "(")
     files.append(File.generated(config, "design.md", content=design))
     return files
 
