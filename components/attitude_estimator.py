@@ -32,9 +32,10 @@ star tracker's latency) is processed at its own time: the filter goes back to th
 it had then (a history of its cycles over the last ``history`` seconds is kept), updates,
 and propagates again with the same gyro readings — exactly what a filter without latency
 would have done.  Ignored: measurements not newer than the last one processed, older
-than ``history``, or invalid; a time of validity after the cycle is taken as the cycle.  At
-the first cycle t_meas counts as changed if it lies within the history (a connected star
-tracker's first sample), else the measurement is taken as of the cycle.
+than ``history`` (with a warning, once), or invalid; a time of validity after the cycle is
+taken as the cycle.  At the first cycle t_meas counts as changed if it lies within the
+history (a connected star tracker's first sample), else the measurement is taken as of the
+cycle.
 
 Initialisation: at the first valid measurement, q̂ = q_m, b̂ = 0, P = diag(R, σ_b0² I).
 Before it, ``valid`` is false, q_BI_est the identity, sigma_att π (no knowledge) and
@@ -69,7 +70,8 @@ from .sensing import (
 from .star_tracker import RIGEL_NEA_BORESIGHT, RIGEL_NEA_CROSS
 from .variables import input_, output, parameter
 
-_INPUTS = ("w_meas_B", "q_BI_meas", "meas_valid", "t_meas")
+_MEASUREMENT = ("q_BI_meas", "meas_valid", "t_meas")
+_INPUTS = ("w_meas_B",) + _MEASUREMENT
 _I3 = np.eye(3)
 
 
@@ -168,8 +170,10 @@ class AttitudeEstimator(Model):
             depends=_INPUTS,
         ),
         output("nis", "1", "normalised innovation squared of the latest update", depends=_INPUTS),
-        output("valid", "1", "initialised by a valid measurement", type="Boolean", depends=_INPUTS),
-        output("n_updates", "1", "measurements processed", type="Integer", depends=_INPUTS),
+        output(
+            "valid", "1", "initialised by a valid measurement", type="Boolean", depends=_MEASUREMENT
+        ),
+        output("n_updates", "1", "measurements processed", type="Integer", depends=_MEASUREMENT),
     )
 
     def initialize(self, t0):
@@ -198,11 +202,14 @@ class AttitudeEstimator(Model):
         self.innovation = (0.0, 0.0, 0.0)
         self.nis = 0.0
         self.n_updates = 0
+        self.late_warned = False
         self.t = t0
 
     def step(self, t, dt):
         # at the model's clock, as output() (components/gyro.py, step)
-        vars(self).update(self._advance(self.t, self._inputs()))
+        state = self._advance(self.t, self._inputs())
+        self.warnings.extend(state.pop("notes"))
+        vars(self).update(state)
         self.t = t + dt
 
     def output(self):
@@ -248,6 +255,8 @@ class AttitudeEstimator(Model):
             "innovation": self.innovation,
             "nis": self.nis,
             "n_updates": self.n_updates,
+            "late_warned": self.late_warned,
+            "notes": [],
         }
         newest = tick(now, self.t0, p.rate)
         first = newest if self.j is None else self.j + 1
@@ -279,6 +288,13 @@ class AttitudeEstimator(Model):
             if t_m >= horizon and (anchor is None or t_m > anchor):
                 records = self._measure(records, t_m, q_m, state)
                 state["anchor"] = t_m
+            elif t_m < horizon and not state["late_warned"]:
+                state["late_warned"] = True
+                state["notes"].append(
+                    f"t={t_j:.6g} s: a measurement valid at t_meas={t_m:.6g} s is older than "
+                    f"history ({self.p.history} s) and is ignored (warned once): raise history "
+                    "above the star tracker's latency"
+                )
         while len(records) > 1 and records[1][0] <= horizon:
             records.pop(0)  # keep the last record at or before the horizon
         state["records"] = tuple(records)

@@ -39,7 +39,8 @@ maximum: σ_β = B / 0.61736.  The Allan deviation of a stationary record is the
 σ_A² = arw²/τ + σ_A,β²(τ) + rrw² τ/3 (+ quantisation), which tests/components/test_gyro.py
 checks against long records.
 
-Output: saturated at ±saturation per axis (the residual of the quantiser is reset), then
+Output: saturated at ±saturation per axis (the residual of the quantiser is reset; a
+warning when an axis enters saturation), then
 quantised to multiples of ``quantization`` (rad/s per LSB) with the remainder carried to
 the next sample, as a rate-integrating unit's angle counter does: Σ w_meas T differs from
 Σ raw T by less than half an LSB times T at every sample (angle quantisation, IEEE Std
@@ -201,13 +202,16 @@ class Gyro(Model):
         self.b_rw = tuple(p.bias0.tolist())
         self.b_gm = (0.0, 0.0, 0.0)
         self.residual = (0.0, 0.0, 0.0)  # quantiser remainder (rad/s)
+        self.saturated = (False, False, False)
         self.w_meas = (0.0, 0.0, 0.0)
         self.t = t0
 
     def step(self, t, dt):
         # commit at the model's clock, where output() evaluated (the host's t may differ
         # from it by rounding: the samples must not)
-        vars(self).update(self._advance(self.t, tuple(self.u.w_BI_B.tolist())))
+        state = self._advance(self.t, tuple(self.u.w_BI_B.tolist()))
+        self.warnings.extend(state.pop("notes"))
+        vars(self).update(state)
         self.t = t + dt
 
     def output(self):
@@ -227,7 +231,7 @@ class Gyro(Model):
             t_last, w_last = t0 - T, w_now
         span = now - t_last
         state = {"b_rw": self.b_rw, "b_gm": self.b_gm, "residual": self.residual}
-        state["w_meas"] = self.w_meas
+        state.update(w_meas=self.w_meas, saturated=self.saturated, notes=[])
         segment = t_last  # start of the part of (t_last, now] not yet integrated
         for j in range(k + 1, tick(now, t0, rate) + 1):
             end = min(tick_time(j, t0, rate), now)
@@ -258,15 +262,21 @@ class Gyro(Model):
             b_gm_mean = tuple(0.5 * (a + b) for a, b in zip(state["b_gm"], b_gm))
             white = self.white
         quantum, limit = p.quantization, p.saturation
-        measured, residual = [], []
+        measured, residual, saturated = [], [], []
         for i, row in enumerate(self.matrix):
             raw = (
                 row[0] * w_true[0] + row[1] * w_true[1] + row[2] * w_true[2]
                 + bias_mean[i] + b_gm_mean[i] + white * normal(keys[ARW + i], j)
             )  # fmt: skip
-            if raw >= limit or raw <= -limit:
+            saturated.append(raw >= limit or raw <= -limit)
+            if saturated[i]:
                 measured.append(limit if raw > 0.0 else -limit)
                 residual.append(0.0)
+                if not state["saturated"][i]:
+                    state["notes"].append(
+                        f"t={tick_time(j, self.t0, self.rate):.6g} s: axis {i + 1} saturated "
+                        f"at +-{limit} rad/s (the measurement is clipped)"
+                    )
             elif quantum > 0.0:
                 carried = state["residual"][i] + raw
                 value = math.floor(carried / quantum + 0.5) * quantum
@@ -276,6 +286,7 @@ class Gyro(Model):
                 measured.append(raw)
                 residual.append(0.0)
         state.update(b_rw=b_rw, b_gm=b_gm, residual=tuple(residual), w_meas=tuple(measured))
+        state["saturated"] = tuple(saturated)
 
 
 def _add_linear(integral, a, b, t_last, span, w_last, w_now) -> tuple:

@@ -154,7 +154,7 @@ class StarTracker(Model):
             "1",
             "measured attitude of B relative to I (the latest released sample)",
             shape=(4,),
-            depends=_INPUTS,
+            depends=("q_BI", "w_BI_B"),  # w_BI_B: the samples before t0 only
         ),
         output(
             "valid",
@@ -168,10 +168,9 @@ class StarTracker(Model):
             "rad",
             "measured-minus-true rotation vector of the sample, in B (for analysis)",
             shape=(3,),
-            depends=_INPUTS,
             display_unit="deg",
         ),
-        output("t_meas", "s", "time of validity t_k of the sample", depends=_INPUTS),
+        output("t_meas", "s", "time of validity t_k of the sample"),
     )
 
     def initialize(self, t0):

@@ -230,3 +230,10 @@ def test_initialisation_and_invalid_measurements():
     for k in range(6, 20):
         model.advance(k * 0.05, 0.05)
     assert model.y.n_updates == 1 and np.all(model.y.sigma_att > before)
+    assert model.warnings == []
+    model.set("meas_valid", True)
+    for k, t_meas in enumerate((-5.0, -4.0), start=20):  # older than history (1 s)
+        model.set("t_meas", t_meas)
+        model.advance(k * 0.05, 0.05)
+    assert model.y.n_updates == 1 and len(model.warnings) == 1
+    assert "older than history (1.0 s) and is ignored" in model.warnings[0]

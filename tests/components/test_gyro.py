@@ -154,10 +154,15 @@ def test_quantisation_carries_the_remainder_exactly():
     assert np.array_equal(cumulative[:, 2], np.zeros(41))
 
 
-def test_saturation_clips_exactly():
-    limit = 1.0
-    measured, _ = record(3, 16.0, w=(1.5, -3.0, 0.5), **{**QUIET, "saturation": limit})
-    assert np.array_equal(measured, np.tile([1.0, -1.0, 0.5], (3, 1)))
+def test_saturation_clips_exactly_and_warns_once_per_axis():
+    gyro = Gyro(rate=16.0, saturation=1.0, **QUIET)
+    gyro.u.w_BI_B[:] = (1.5, -3.0, 0.5)
+    gyro.start(0.0)
+    for k in range(3):
+        gyro.advance(k / 16.0, 1 / 16.0)
+        assert gyro.y.w_meas_B.tolist() == [1.0, -1.0, 0.5]
+    assert len(gyro.warnings) == 2
+    assert "axis 1 saturated" in gyro.warnings[0] and "axis 2 saturated" in gyro.warnings[1]
 
 
 def test_the_output_is_the_average_rate_over_the_sample_interval():
