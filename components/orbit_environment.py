@@ -61,6 +61,12 @@ calendar day, leap seconds not counted), so whole seconds are exact; 0 means non
 With an epoch, ``earth_angle0`` must be 0, and classical elements are referred to the
 frame that GMST turns into the Earth-fixed one (TEME of the epoch, as for a TLE below).
 
+Sun
+---
+``sun_I`` is the unit Sun direction (Earth-centred) of the low-precision ephemeris of
+components/sun.py at epoch + t, or at J2000.0 + t without an epoch (0.01° accuracy, in the
+frame of date, which is I with an epoch or a TLE).
+
 Two-line elements (SGP4)
 ------------------------
 With ``tle_line1`` and ``tle_line2`` set, the orbit is the SGP4 propagation (the ``sgp4``
@@ -112,6 +118,7 @@ from .flat import remainder
 from .jit import TimeStep, c_entry, floats, jitable, kernel
 from .model import Model, ModelError
 from .rotations import quat_of_rows
+from .sun import sun_direction
 from .variables import Layout, output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
@@ -304,6 +311,13 @@ class OrbitEnvironment(Model):
         output(
             "earth_angle", "rad", "Earth rotation angle, wrapped to [0, 2 pi)", display_unit="deg"
         ),
+        output(
+            "sun_I",
+            "1",
+            "unit Sun direction in I (low-precision ephemeris at the epoch + t; without "
+            "an epoch, J2000.0 + t)",
+            shape=(3,),
+        ),
     )
     # the SGP4 record cannot be deep-copied and does not evolve: not part of the FMU state
     _NOT_STATE = Model._NOT_STATE | {"_satrec"}
@@ -362,6 +376,7 @@ class OrbitEnvironment(Model):
         self.state[EARTH_ANGLE0] = self.earth_angle0
         self.state[R_T_E : R_T_E + 3] = self.r_T_E
         self.state[[GIVEN_ORBIT, GIVEN_EARTH]] = self._satrec is not None, self._gmst0 is not None
+        self.state[EPOCH : EPOCH + 2] = self._epoch or (0, 0.0)
         self.t = t0
         if self._satrec is not None:
             self._sgp4(t0)  # SGP4 errors at the start: fail here
@@ -459,15 +474,17 @@ class OrbitEnvironment(Model):
 # -- kernel (components/jit.py) -------------------------------------------------------
 _AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.values
 Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
-Y_R_T, Y_V_T, Y_EARTH = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"]
+Y_R_T, Y_V_T, Y_EARTH, Y_SUN = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"], _AT["sun_I"]
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
-#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, and those given values
+#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, those given values, and the
+#: epoch (whole days, seconds since J2000.0; 0 without one) for the Sun
 A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0, COS_I, SIN_I, MU_KEPLER = range(12)
 N_KEPLER = MU_KEPLER + 1
 EARTH_ANGLE0, R_T_E = N_KEPLER, N_KEPLER + 1
 GIVEN_ORBIT, GIVEN_EARTH = R_T_E + 3, R_T_E + 4
 R_I, THETA = GIVEN_EARTH + 1, GIVEN_EARTH + 10  # r_I, v_I, w_OI_O; θ_E, θ̇_E
-N_STATE = THETA + 2
+EPOCH = THETA + 2
+N_STATE = EPOCH + 2
 #: orbit_output's status: Kepler's equation did not converge (nothing written)
 KEPLER_DIVERGED = 1
 
@@ -478,7 +495,8 @@ jitable(wrap_2pi)  # kernels may call it (components/ephemeris.py)
 def orbit_output(values, state, t):
     """The outputs at time t (module docstring): the orbit (Kepler/J2 at t, or the given
     SGP4 r_I, v_I, w_OI_O), the orbit frame O, the Earth angle (earth_angle0 + ω_E t, or
-    the given GMST) and the target.  Returns KEPLER_DIVERGED (nothing written) or 0."""
+    the given GMST), the target and the Sun (components/sun.py).  Returns
+    KEPLER_DIVERGED (nothing written) or 0."""
     s = floats(state)
     if s[GIVEN_ORBIT]:
         r = s[R_I], s[R_I + 1], s[R_I + 2]
@@ -514,6 +532,9 @@ def orbit_output(values, state, t):
     values[Y_R_T], values[Y_R_T + 1], values[Y_R_T + 2] = xT, yT, zE
     values[Y_V_T], values[Y_V_T + 1], values[Y_V_T + 2] = -rate * yT, rate * xT, 0.0
     values[Y_EARTH] = wrap_2pi(theta)
+    sun = sun_direction(s[EPOCH], s[EPOCH + 1] + t)
+    for k in range(3):
+        values[Y_SUN + k] = sun[k]
     return 0
 
 

@@ -41,6 +41,15 @@ UNITS = {
     "N.m/rad": ({"kg": 1, "m": 2, "s": -2, "rad": -1}, {}),
     "N.m.s/rad": ({"kg": 1, "m": 2, "s": -1, "rad": -1}, {}),
     "Hz": ({"s": -1}, {}),
+    "m2": ({"m": 2}, {}),
+    "kg/m3": ({"kg": 1, "m": -3}, {}),
+    "N/m2": ({"kg": 1, "m": -1, "s": -2}, {}),
+    "A.m2": ({"A": 1, "m": 2}, {}),
+    "T": ({"kg": 1, "s": -2, "A": -1}, {"nT": 1e9}),
+    # gyro noise densities (IEEE Std 952-1997): FMI 2.0 base-unit exponents are integers,
+    # so these two carry their dimension in the name only (an empty BaseUnit)
+    "rad/s0.5": ({}, {"deg/h0.5": 180 / math.pi * 60}),
+    "rad/s1.5": ({}, {"deg/h1.5": 180 / math.pi * 3600 * 60}),
 }
 
 

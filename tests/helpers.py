@@ -61,20 +61,23 @@ def logged(instance, status: str = "error") -> list[str]:
 
 
 def operating_point(name: str, rng) -> dict:
-    """Input values (by variable) away from zero: quaternions unit, the staring guidance
-    fed a real orbit and target (from OrbitEnvironment's defaults)."""
+    """Real input values (by variable) away from zero: quaternions unit, the staring
+    guidance fed a real orbit and target and the disturbance torques a real orbit (from
+    OrbitEnvironment's defaults); Boolean and Integer inputs keep their start values."""
     import numpy as np
 
     from agilesat.fmus import model_class as _model_class
 
+    orbit = _model_class("OrbitEnvironment")().start(0.0)
     if name == "StaringGuidance":
-        orbit = _model_class("OrbitEnvironment")().start(0.0)
         return {v: orbit.get(v) for v in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}
     values = {}
     for v in _model_class(name).VARIABLES:
-        if v.causality == "input":
+        if v.causality == "input" and v.type == "Real":
             x = rng.uniform(-0.3, 0.3, v.size)
             values[v.name] = x / np.linalg.norm(x) if v.name.startswith("q_") else x
+    if name == "DisturbanceTorques":  # the atmosphere and the field need a real height
+        values.update(r_I=orbit.get("r_I"), v_I=orbit.get("v_I"))
     return values
 
 

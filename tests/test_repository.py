@@ -89,6 +89,16 @@ def test_references_resolve_inside_the_repository():
         "Esa 2011",
         "Wilks 1941",
         "Clopper 1934",
+        "Alken 2021",
+        "Crassidis 2012",
+        "Farrenkopf 1978",
+        "Kopp 2011",
+        "Lefferts 1982",
+        "Markley 2014",
+        "Meeus 1998",
+        "Steele 2014",
+        "Vallado 2013",
+        "Wertz 1978",
     }
     sections = set(re.findall(r"^#+ (\d+(?:\.\d+)?)\.? ", design, re.M))
     for name, text in _tracked_text_files().items():

@@ -25,6 +25,8 @@ PATHS_ON = {
         **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)},
     },
     "StaringGuidance": {"yaw_compensation": [False]},  # q_ref <- q_OI after the capture
+    "StarTracker": {"latency": [0.0], "rate": [10.0]},  # a sample at t = STEP, released
+    "Gyro": {"quantization": [0.0]},  # a perturbation far below one LSB moves nothing
 }
 #: declared, but measured not to feed through: the reference frame's orientation follows
 #: from the positions and q_OI alone, the velocities only enter its rates.  Conservative
@@ -36,6 +38,18 @@ CONSERVATIVE = {
         for out in ("q_ref", "euler_ref_BO", "footprint_rotation")
         for v in ("v_I", "v_T_I")
     },
+    # the rate turns the attitude only of the samples before t0
+    "StarTracker": {("q_BI_meas", "w_BI_B")},
+    # the position switches the solar pressure only on entering or leaving the shadow
+    "DisturbanceTorques": {("tau_srp_B", "r_I")},
+    # through an update at the cycle only (none at this point: the measurement is not new),
+    # and meas_valid (Boolean) is not perturbed here
+    "AttitudeEstimator": {
+        (out, "meas_valid")
+        for out in ("q_BI_est", "w_BI_B_est", "bias_est_B", "sigma_att", "sigma_bias")
+        + ("innovation", "nis")
+    }
+    | {(out, "w_meas_B") for out in ("bias_est_B", "sigma_bias", "innovation", "nis")},
 }
 _GET = {"Real": "get_real", "Integer": "get_integer", "Boolean": "get_boolean"}
 _SET = {"Real": "set_real", "Integer": "set_integer", "Boolean": "set_boolean"}
