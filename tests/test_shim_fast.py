@@ -17,7 +17,7 @@ import pytest
 from count_python_entries import count
 
 from agilesat.fmus import FMUS, model_class
-from agilesat.fmus.slave import FAST_PATH_N, FAST_PATH_VR, OUTPUTS_VALID, PREDICTED, STEP_MODE
+from agilesat.fmus.protocol import FAST_PATH_N, FAST_PATH_VR, OUTPUTS_VALID, PREDICTED, STEP_MODE
 from helpers import logged, operating_point, run_python, slave
 
 STEP = 0.05
@@ -43,8 +43,13 @@ def test_the_shared_arrays_are_never_replaced(name):
     """The shim keeps the addresses of the handshake: state restore, steps and terminate
     copy into the same arrays (fmi2Reset makes a new slave, and the shim asks again)."""
     fmu = started(name)
-    values, kind, control, block = fmu.model.values, fmu._kind, fmu._control, fmu._block
-    answer = fmu.get_real([FAST_PATH_VR[0]] * FAST_PATH_N)
+    values, kind, control, block = (
+        fmu.model.values,
+        fmu._fast.kind,
+        fmu._fast.control,
+        fmu._fast.block,
+    )
+    answer = fmu.get_real([FAST_PATH_VR] * FAST_PATH_N)
     assert answer[1:] == [
         values.__array_interface__["data"][0],
         values.size,
@@ -59,26 +64,28 @@ def test_the_shared_arrays_are_never_replaced(name):
     fmu._set_fmu_state(state)
     assert fmu.do_step(0.0, STEP)
     fmu.terminate()
-    assert fmu.model.values is values and fmu._kind is kind and fmu._control is control
-    assert fmu._block is block
+    assert fmu.model.values is values and fmu._fast.kind is kind and fmu._fast.control is control
+    assert fmu._fast.block is block
     assert logged(fmu) == []
 
 
 @pytest.mark.parametrize("name", FMUS)
 def test_the_flags_follow_the_mode_and_the_outputs(name):
     fmu = slave(name)
-    assert not fmu._control[STEP_MODE]
+    assert not fmu._fast.control[STEP_MODE]
     fmu.exit_initialization_mode()
-    assert fmu._control[STEP_MODE] and not fmu._control[OUTPUTS_VALID]
+    assert fmu._fast.control[STEP_MODE] and not fmu._fast.control[OUTPUTS_VALID]
     assert fmu.do_step(0.0, STEP)
-    assert fmu._control[OUTPUTS_VALID] and fmu._control[PREDICTED]  # evaluated at the step
+    assert (
+        fmu._fast.control[OUTPUTS_VALID] and fmu._fast.control[PREDICTED]
+    )  # evaluated at the step
     fmu.get_real([fmu._outputs.start])
-    assert fmu._control[OUTPUTS_VALID] and not fmu._control[PREDICTED]  # used
+    assert fmu._fast.control[OUTPUTS_VALID] and not fmu._fast.control[PREDICTED]  # used
     for vr in feedthrough_inputs(fmu)[:1]:
         fmu.set_real([vr], [fmu.get_real([vr])[0]])
-        assert not fmu._control[OUTPUTS_VALID]
+        assert not fmu._fast.control[OUTPUTS_VALID]
     fmu.terminate()
-    assert not fmu._control[STEP_MODE]
+    assert not fmu._fast.control[STEP_MODE]
     assert logged(fmu) == []
 
 
@@ -90,7 +97,7 @@ def test_predictions_stop_while_a_feedthrough_set_comes_first_and_resume():
     predicted = []
     for k in range(6):
         assert fmu.do_step(k * STEP, STEP)
-        predicted.append(bool(fmu._control[PREDICTED]))
+        predicted.append(bool(fmu._fast.control[PREDICTED]))
         if k in (1, 2):  # as a Jacobi master's feedthrough pass
             fmu.set_real(turned, fmu.model.values[turned].tolist())
         fmu.get_real([first])
@@ -112,7 +119,7 @@ def test_output_assigns_its_memories_instead_of_modifying_them(name):
     model = fmu.model
     for k in range(3):
         assert fmu.do_step(k * STEP, STEP)
-        fmu._consume_prediction()
+        fmu._fast.consume()
         found = attributes(model)
         copies = copy.deepcopy(found)
         model.output()
@@ -135,7 +142,7 @@ def test_an_undone_prediction_puts_the_state_arrays_back(name):
     for k in range(2):
         assert fmu.do_step(k * STEP, STEP)
         model.step(k * STEP, STEP)
-    fmu._consume_prediction()
+    fmu._fast.consume()
     ours, plain = attributes(fmu.model), attributes(model)
     for key in plain:
         if type(plain[key]) is np.ndarray:
@@ -166,7 +173,7 @@ def test_a_prediction_no_get_used_leaves_no_trace(name):
         if k % 3 != 2:
             model.output()
             assert fmu.get_real(reals) == model.values[reals].tolist()
-    fmu._consume_prediction()
+    fmu._fast.consume()
     assert fmu.model.values.tolist() == model.values.tolist()
     ours, plain = attributes(fmu.model), attributes(model)
     ours.pop("_initial_inputs", None), plain.pop("_initial_inputs", None)  # start() sets it
