@@ -59,21 +59,21 @@ SWITCHES = {
             "AGILESAT_JIT",
             True,
             _flag,
-            "0: the model kernels always run their Python (components/jit.py)",
+            "1: the model kernels run compiled after AGILESAT_JIT_AFTER calls; 0: their Python",
             "components/jit.py, at import",
         ),
         Switch(
             "AGILESAT_JIT_AFTER",
             50_000,
             _count,
-            "calls of a kernel before it runs compiled (0: from the first call)",
+            "the calls of a kernel before it runs compiled; 0: from the first call",
             "components/jit.py, at import",
         ),
         Switch(
             "AGILESAT_CACHE_DIR",
             None,
             _path,
-            "the compile cache (kernels, C entries, the master's loop, unpacked FMUs); "
+            "the compile cache: kernels, C entries, the master's loop, unpacked FMUs; "
             "default $XDG_CACHE_HOME/agilesat or ~/.cache/agilesat",
             "components/jit.py cache_root()",
         ),
@@ -81,44 +81,44 @@ SWITCHES = {
             "AGILESAT_SHIM_FAST",
             True,
             _flag,
-            "0: the shim serves no call itself (every get/set/doStep reaches the slave)",
+            "0: the shim serves no call itself, every get, set and doStep reaches the slave",
             "the shim (C) at fmi2Instantiate and fmi2Reset; checked by fmus/fast_paths.py",
         ),
         Switch(
             "AGILESAT_SHIM_STEP",
             True,
             _flag,
-            "0: the shim's C step path is off (its fast get/set stay on)",
+            "0: the shim's C step path is off, its fast get/set stay on",
             "the shim (C) and fmus/fast_paths.py, at the handshake",
         ),
         Switch(
             "AGILESAT_LIBPYTHON",
             None,
             _path,
-            "the shared libpython an FMU loads in a host without Python (default: the "
-            "building environment's)",
+            "the shared libpython an FMU loads in a host without Python; default: the "
+            "building environment's",
             "the shim (C), at the first fmi2Instantiate",
         ),
         Switch(
             "AGILESAT_PYTHON",
             None,
             _path,
-            "the python executable an FMU runs as in a host without Python (default: the "
-            "building environment's)",
+            "the python executable an FMU runs as in a host without Python; default: the "
+            "building environment's",
             "the shim (C), at the first fmi2Instantiate",
         ),
         Switch(
             "AGILESAT_LOOP",
             None,
             _loop,
-            "the master's loop: auto (the default), compiled or python",
+            "the master's loop; default auto",
             "orchestration/loop.py choose()",
         ),
         Switch(
             "AGILESAT_FIGURE_PROCESSES",
             None,
             _count,
-            "processes drawing figures (0: in the command's own process); default: from "
+            "the processes drawing figures; 0: in the command's own process; default: from "
             "the idle cores",
             "orchestration/figure_pool.py",
         ),
@@ -126,14 +126,14 @@ SWITCHES = {
             "AGILESAT_SSP_MAX_BYTES",
             None,
             _count,
-            "the most bytes an SSP package may unpack to (default 256 MiB)",
+            "the most bytes an SSP package may unpack to; default 256 MiB",
             "orchestration/ssp.py",
         ),
         Switch(
             "AGILESAT_FAULT_FMUS",
             None,
             _path,
-            "the built FMUs the fault matrix runs (a test tool)",
+            "the built FMUs the fault matrix runs, a test tool's",
             "tests/fault_cases_fmu.py",
         ),
     )
@@ -150,4 +150,6 @@ def value(name: str, environ=None):
     try:
         return switch.parse(text)
     except ValueError as expected:
-        raise SwitchError(f"{name}={text!r}: expected {expected} ({switch.meaning})") from None
+        raise SwitchError(
+            f"{name}={text!r}: expected {expected} ({name}: {switch.meaning})"
+        ) from None

@@ -8,38 +8,29 @@ Fast get/set.  At instantiation (and after fmi2Reset, which makes pythonfmu crea
 slave) the shim asks for the addresses of the model's value array and of ``kind``,
 ``control`` and ``block`` (the handshake), which live as long as the slave: the value
 array is never replaced (state restore and initialisation copy into it).  The slave keeps
-``control`` up to date at the end of every call (``leave``): STEP_MODE, OUTPUTS_VALID (the
-slave's own flag lives there) and the prediction flags; the step's end lives in ``block``.
-In step mode the shim answers gets of Real, Integer and Boolean scalars itself while the
-outputs are valid, and writes sets of finite Real inputs itself (a feedthrough input
-invalidates the outputs and sets FED).  Every other call reaches the slave.
-
-Predicted outputs, so that a macro step enters Python once.  ``predict`` evaluates the
-outputs at the end of ``do_step``, predicting that a get comes next; a model that raises
-or gives non-finite outputs leaves them invalid (the get then reports it).  If something
-else comes first (a feedthrough set, the next step, an FMU state taken), ``consume``
-undoes the prediction: the model's attributes, the contents of its arrays, its outputs
-and warnings as they were, so ``output()`` later runs exactly as without the prediction,
-also for models whose output remembers its last result (a quaternion's sign, an Euler
-branch).  The undo restores attribute references and array contents: ``output()`` must
-assign any other memory, not modify it in place (tests/test_shim_fast.py checks every
-model).  After an undone prediction the slave stops predicting until a get comes first
-after a step again (FED cleared by a step, set by a feedthrough set).
+``control`` up to date: STEP_MODE at the end of every call (``leave``) and OUTPUTS_VALID
+(the slave's own flag lives there); the step's end lives in ``block``.  In step mode the
+shim answers gets of Real, Integer and Boolean scalars itself while the outputs are valid,
+and writes sets of finite Real inputs itself (a feedthrough input invalidates the
+outputs).  Every other call reaches the slave.
 
 The C step path.  A model whose kernels follow the kernel convention (components/jit.py)
 has C entries (``c_entries.py``): once its kernels run compiled, the shim also takes
-``fmi2DoStep`` and evaluates the outputs in C.  ``arm`` (at the end of every call the slave
-answers) tells it what it may do until the next call: the step (C_STEP: the slave's, the
-step entry's, or only the time for a stateless model) and the output (C_OUTPUT), with the
-addresses of the entries, of the model's state array and of the snapshot buffer
-``saved`` (both may be replaced by a call here, never between two).  The shim serves a
-step only when ``do_step`` would accept it with nothing to report, does what ``do_step``
-and ``predict`` do, and sets C_DIRTY; at the start of the next call here ``sync`` takes
-over what it did (the model's time; a prediction it made, whose snapshot is in ``saved``).
+``fmi2DoStep`` and evaluates the outputs at a get, in C.  ``leave`` (at the end of every
+call the slave answers) arms it with what it may do until the next call: the step
+(C_STEP: the slave's, the step entry's, or only the time for a stateless model) and the
+output (C_OUTPUT), with the addresses of the entries, of the model's state array and of
+the snapshot buffer ``saved`` (both may be replaced by a call here, never between two).
+The shim serves a step only when ``do_step`` would accept it, does what ``do_step`` does
+and sets C_DIRTY; at the start of the next call here ``sync`` takes over the model's time.
 An entry leaving the call to the Python (a warning, an error) makes the shim put the
-arrays back and forward the call: the slave gives its status and message.  Left to the
-Python: a step while the first step's input check is pending
+arrays back from the snapshot and forward the call: the slave gives its status and
+message.  Left to the Python: a step while the first step's input check is pending
 (``Model.remember_initial_inputs``) and any call while warnings wait to be reported.
+
+Outputs are evaluated when a get asks for them, never ahead of it: evaluating them at a
+step's end in anticipation of a get (and undoing that when a feedthrough set came first)
+saved nothing measurable (docs/fast_paths.md).
 """
 
 from __future__ import annotations
@@ -62,13 +53,11 @@ from .protocol import (
     B_TIME,
     C_DIRTY,
     C_OUTPUT,
-    C_PREDICTED,
     C_STEP,
     C_STEP_ENTRY,
     C_STEP_PYTHON,
     C_STEP_TIME,
     FAST_PATH_VERSION,
-    FED,
     KIND_BOOLEAN,
     KIND_FEEDTHROUGH,
     KIND_INPUT,
@@ -78,9 +67,6 @@ from .protocol import (
     KIND_PARAMETER,
     N_BLOCK,
     N_CONTROL,
-    OUTPUTS_VALID,
-    PREDICTED,
-    PREDICTING,
     STEP_MODE,
 )
 
@@ -109,14 +95,11 @@ class FastPaths:
         self.control = np.zeros(N_CONTROL, dtype=np.int32)  # never replaced
         self.block = np.zeros(N_BLOCK)  # never replaced
         self.block[B_TIME] = math.nan
-        self.control[PREDICTING] = 1
         self.saved = np.zeros(0)  # the C path's snapshot (its address is in block)
         self.entries = c_entries.of(type(slave.model))
         self.c_path = False  # the shim asked for the addresses, the model has C entries
         self.armed = False  # C_STEP or C_OUTPUT set
         self.armed_state = None  # the model's state array, checked
-        self.prediction: tuple | None = None
-        self.arrays: list | None = None  # the model's array attributes but values
 
     def handshake(self) -> list:
         """The addresses the shim asks for (protocol.py, "the handshake")."""
@@ -133,18 +116,10 @@ class FastPaths:
 
     # -- the door: start and end of every call the slave answers ------------------------
     def sync(self) -> None:
-        """Take over what the shim did since the slave's last call (the model's time; a
-        prediction it made becomes the slave's, with its snapshot), so that everything
-        goes on as if every call had come here."""
-        control, model = self.control, self.slave.model
-        control[C_DIRTY] = 0
-        model.t = float(self.block[B_TIME])
-        if control[C_PREDICTED]:
-            control[C_PREDICTED] = 0
-            n, saved = self.values.size, self.saved
-            arrays = {"state": saved[n : n + model.state.size].copy()}
-            outputs = saved[self.slave._outputs].copy()
-            self.prediction = (dict(vars(model)), arrays, outputs, len(model.warnings))
+        """Take over what the shim did since the slave's last call: the model's time (the
+        step's end), so that everything goes on as if every call had come here."""
+        self.control[C_DIRTY] = 0
+        self.slave.model.t = float(self.block[B_TIME])
 
     def leave(self) -> None:
         slave = self.slave
@@ -196,71 +171,3 @@ class FastPaths:
         block[B_STATE], block[B_N_STATE] = _address(state), state.size
         block[B_SAVED], block[B_N_SAVED] = _address(self.saved), self.saved.size
         block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = slave._outputs.start, slave._outputs.stop
-
-    # -- predicted outputs ------------------------------------------------------------
-    def predict(self) -> None:
-        """End of a step: evaluate the outputs, so that the shim answers the gets.  A model
-        that raises or produces non-finite outputs is put back and leaves them invalid.
-        Only while predictions pay: one undone stops them until a get comes first after
-        a step again (FED: no feedthrough set since the step)."""
-        control = self.control
-        control[FED] = 0
-        if not control[PREDICTING]:
-            return
-        model, outputs = self.slave.model, self.slave._outputs
-        before = self.values[outputs].copy()
-        attributes = vars(model)
-        if self.arrays is None:  # the kernels' state arrays, which output() updates in place
-            self.arrays = [
-                k for k, v in attributes.items() if type(v) is np.ndarray and v is not self.values
-            ]
-        arrays = {k: attributes[k].copy() for k in self.arrays if k in attributes}
-        self.prediction = (dict(attributes), arrays, before, len(model.warnings))
-        try:
-            model.output()
-        except Exception:  # noqa: BLE001 - reported by the get that needs them
-            self._undo()
-            return
-        if not math.isfinite(self.values[outputs].sum()):
-            self._undo()
-            return
-        control[OUTPUTS_VALID] = control[PREDICTED] = 1
-
-    def _undo(self) -> None:
-        attributes, arrays, outputs, n_warnings = self.prediction
-        self.prediction = None
-        model = self.slave.model
-        vars(model).clear()
-        vars(model).update(attributes)
-        for name, saved in arrays.items():
-            attributes[name][...] = saved
-        self.values[self.slave._outputs] = outputs
-        del model.warnings[n_warnings:]
-        self.control[OUTPUTS_VALID] = self.control[PREDICTED] = 0
-
-    def consume(self, wrong: bool = True) -> None:
-        """A call that changes what a get would compute: a prediction no get used is
-        undone (and, ``wrong``, no longer made)."""
-        if self.control[PREDICTED]:
-            self._undo()
-            if wrong:
-                self.control[PREDICTING] = 0
-
-    def drop(self) -> None:
-        """An FMU state restored: no prediction to undo."""
-        self.prediction = None
-        self.control[PREDICTED] = 0
-
-    def read(self, evaluated: bool) -> None:
-        """A get came first (the prediction, if any, was right); ``evaluated``: it
-        evaluated the outputs (after a step with no feedthrough set: predict again)."""
-        control = self.control
-        if evaluated and self.slave._mode == "step" and not control[FED]:
-            control[PREDICTING] = 1
-        control[PREDICTED] = 0
-
-    def fed(self) -> None:
-        """A feedthrough input set in step mode: the outputs are no longer valid."""
-        self.consume()
-        self.control[OUTPUTS_VALID] = 0
-        self.control[FED] = 1

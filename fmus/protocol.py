@@ -33,14 +33,11 @@ KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = range(5)
 KIND_INTEGER, KIND_BOOLEAN = 5, 6
 
 #: control[]: the slave is in step mode (and its value array is the one shared); the
-#: outputs are those of the current state and inputs; they were evaluated at the step's
-#: end and no get has used them yet; a feedthrough input was set since the step; the
-#: slave predicts outputs at the step's end; the C step path's step (C_STEP_*) and output
-#: (1: the output entry does all of output()); the prediction is the shim's (its snapshot
-#: in the slave's buffer); the shim served calls since the slave's last one
-STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING = range(5)
-C_STEP, C_OUTPUT, C_PREDICTED, C_DIRTY = 5, 6, 7, 8
-N_CONTROL = 9
+#: outputs are those of the current state and inputs; the C step path's step (C_STEP_*) and
+#: output (1: the output entry does all of output()); the shim served calls since the
+#: slave's last one
+STEP_MODE, OUTPUTS_VALID, C_STEP, C_OUTPUT, C_DIRTY = range(5)
+N_CONTROL = 5
 #: control[C_STEP]: the next step is the slave's, the step entry's, or changes only the time
 C_STEP_PYTHON, C_STEP_ENTRY, C_STEP_TIME = range(3)
 
@@ -64,8 +61,7 @@ SECTIONS = (
     ),
     (
         "control[] (int32)",
-        ("STEP_MODE", "OUTPUTS_VALID", "PREDICTED", "FED", "PREDICTING", "C_STEP", "C_OUTPUT")
-        + ("C_PREDICTED", "C_DIRTY", "N_CONTROL"),
+        ("STEP_MODE", "OUTPUTS_VALID", "C_STEP", "C_OUTPUT", "C_DIRTY", "N_CONTROL"),
     ),
     ("control[C_STEP]", ("C_STEP_PYTHON", "C_STEP_ENTRY", "C_STEP_TIME")),
     (

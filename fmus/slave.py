@@ -213,7 +213,6 @@ class ModelSlave(Fmi2Slave):
     @_guarded(False)
     def do_step(self, current_time, step_size):
         self._require_mode("step")
-        self._fast.consume()
         if not (math.isfinite(step_size) and step_size > 0.0):
             raise _CallRejected(f"step size must be positive and finite, got {step_size!r}")
         if not continuous(current_time, self._next_time):
@@ -225,7 +224,6 @@ class ModelSlave(Fmi2Slave):
         self._flush_warnings()
         self._next_time = current_time + step_size
         self._outputs_valid = False
-        self._fast.predict()
         return True
 
     @_guarded(None)
@@ -334,7 +332,6 @@ class ModelSlave(Fmi2Slave):
     @_guarded(None)
     def set_string(self, vrs, values):
         self._plan(vrs, "String", setting=True)
-        self._fast.consume()
         for vr, value in zip(vrs, values):
             self.model.strings[self._scalar_names[vr]] = value
         self._state_valid = self._outputs_valid = False
@@ -347,7 +344,6 @@ class ModelSlave(Fmi2Slave):
     # reason; the shim refuses such a state with fmi2Error and that reason.
     @_guarded(None)
     def _get_fmu_state(self):
-        self._fast.consume(wrong=False)  # the state as without the shim
         wrapper = (
             self._mode,
             self._start_time,
@@ -366,7 +362,6 @@ class ModelSlave(Fmi2Slave):
         )
         _same_arrays(self.model, model_state[2])
         self.model.set_state(model_state)
-        self._fast.drop()
         (self._mode, self._start_time, self._next_time, self._state_valid, self._outputs_valid) = (
             wrapper
         )
@@ -490,8 +485,7 @@ class ModelSlave(Fmi2Slave):
     def _read(self, vrs, type_name):
         index = self._plan(vrs, type_name)
         values = self.model.values
-        evaluated = not self._outputs_valid
-        if evaluated:
+        if not self._outputs_valid:
             self._ensure_state()
             self.model.output()
             outputs = values[self._outputs].tolist()
@@ -505,7 +499,6 @@ class ModelSlave(Fmi2Slave):
                     f"the model produced non-finite outputs {bad} at t={self.model.t!r}"
                 )
             self._outputs_valid = True
-        self._fast.read(evaluated)
         return values[index]
 
     def _write(self, vrs, values, type_name):
@@ -522,7 +515,7 @@ class ModelSlave(Fmi2Slave):
             self._state_valid = False
             self._outputs_valid = False
         elif self._feeds[index].any():  # else the outputs stay what they are
-            self._fast.fed()
+            self._outputs_valid = False
 
     def _ensure_state(self):
         if not self._state_valid:

@@ -14,22 +14,17 @@
  * AGILESAT_SHIM_STEP=0 the C step path only.
  *
  * Fast get/set.  In step mode (STEP_MODE), a fmi2GetReal of Real scalars is served while
- * the outputs are valid (OUTPUTS_VALID; PREDICTED is then cleared: a get came first), the
- * same for fmi2GetInteger (KIND_INTEGER: int(x)) and fmi2GetBoolean (KIND_BOOLEAN: x != 0);
- * a fmi2SetReal of finite values to Real inputs is written in, a feedthrough input
- * (KIND_FEEDTHROUGH) clearing OUTPUTS_VALID and setting FED, unless a prediction the shim
- * cannot undo is pending.
+ * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: int(x))
+ * and fmi2GetBoolean (KIND_BOOLEAN: x != 0); a fmi2SetReal of finite values to Real inputs
+ * is written in, a feedthrough input (KIND_FEEDTHROUGH) clearing OUTPUTS_VALID.
  *
  * The C step path.  Once the model's kernels run compiled, the slave arms (control[C_STEP],
  * control[C_OUTPUT]) the model's C entries (fmus/c_entries.py) in block[], with its state
  * array and a snapshot buffer.  A fmi2DoStep the slave would accept (step mode, a step size
- * positive and finite, the time continuous, no prediction of the slave's own to undo) is
- * served: undo an unused prediction (and stop predicting), call the step entry (nothing for
- * a stateless model), set the step's end, invalidate the outputs and, while predicting,
- * predict them with the output entry (C_PREDICTED: the snapshot before it stays in the
- * buffer).  A get with the outputs invalid evaluates them with the output entry; a
- * feedthrough set undoes a prediction made here.  An entry returning anything but 0, or
- * non-finite outputs: the arrays are put back from the snapshot and the call forwarded.
+ * positive and finite, the time continuous) is served: the step entry (nothing for a
+ * stateless model), the step's end, the outputs invalid.  A get with the outputs invalid
+ * evaluates them with the output entry.  An entry returning anything but 0, or non-finite
+ * outputs: the arrays are put back from the snapshot and the call forwarded.
  * C_DIRTY tells the slave, at its next call, to take over what was done here. */
 #include <math.h>
 #include <stdlib.h>
@@ -113,17 +108,8 @@ static void restore(const FastPaths *f, const Armed *a) {
     memcpy(a->state, a->saved + f->n_values, a->n_state * sizeof(double));
 }
 
-/* The slave's consume() of a prediction made here: the outputs and the state as before
- * it, and no more predictions until a get comes first. */
-static void unpredict(const FastPaths *f, const Armed *a) {
-    memcpy(f->values + a->start, a->saved + a->start, (a->stop - a->start) * sizeof(double));
-    memcpy(a->state, a->saved + f->n_values, a->n_state * sizeof(double));
-    f->control[OUTPUTS_VALID] = f->control[PREDICTED] = f->control[C_PREDICTED] = 0;
-    f->control[PREDICTING] = 0;
-}
-
 /* model.output() by the output entry; 0 (everything put back) if it leaves it to the Python
- * or the outputs are not finite.  The snapshot stays in the slave's buffer. */
+ * or the outputs are not finite. */
 static int output_in_c(FastPaths *f, const Armed *a) {
     if (!a->output) return 0;
     snapshot(f, a);
@@ -150,11 +136,9 @@ int fast_do_step(FastPaths *f, double t, double h) {
     Armed a;
     if (!f->values || !f->step_path || !control[STEP_MODE] || control[C_STEP] == C_STEP_PYTHON)
         return 0;
-    if (!(isfinite(h) && h > 0.0) || !continuous(t, f->block[B_TIME])) return 0;
-    if ((control[PREDICTED] && !control[C_PREDICTED]) || !armed(f, &a)) return 0;
-    if (control[C_STEP] == C_STEP_ENTRY && !a.step) return 0;
-    if (control[PREDICTED]) unpredict(f, &a);  /* do_step's consume() */
+    if (!(isfinite(h) && h > 0.0) || !continuous(t, f->block[B_TIME]) || !armed(f, &a)) return 0;
     if (control[C_STEP] == C_STEP_ENTRY) {
+        if (!a.step) return 0;
         snapshot(f, &a);
         if (a.step(f->values, (int64_t)f->n_values, a.state, (int64_t)a.n_state, h) != 0) {
             restore(f, &a);
@@ -165,9 +149,6 @@ int fast_do_step(FastPaths *f, double t, double h) {
     f->block[B_TIME] = t + h;
     control[OUTPUTS_VALID] = 0;
     control[C_DIRTY] = 1;
-    control[FED] = 0;  /* predict() */
-    if (control[PREDICTING] && control[C_OUTPUT] && output_in_c(f, &a))
-        control[OUTPUTS_VALID] = control[PREDICTED] = control[C_PREDICTED] = 1;
     f->c_steps++;
     return 1;
 }
@@ -194,14 +175,7 @@ static int outputs_ready(FastPaths *f) {
     if (control[OUTPUTS_VALID]) return 1;
     if (!f->step_path || !control[C_OUTPUT] || !armed(f, &a) || !output_in_c(f, &a)) return 0;
     control[OUTPUTS_VALID] = 1;
-    if (!control[FED]) control[PREDICTING] = 1;  /* a get came first after the step */
     return 1;
-}
-
-/* A get came first: a prediction was right (the slave's read()). */
-static void got(FastPaths *f) {
-    f->control[PREDICTED] = f->control[C_PREDICTED] = 0;
-    f->served++;
 }
 
 /* As the slave's int(x) (truncation; values a C int cannot hold are forwarded). */
@@ -211,7 +185,7 @@ int fast_get_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
     for (size_t i = 0; i < n; i++)
         if (!(f->values[vr[i]] > -2147483649.0 && f->values[vr[i]] < 2147483648.0)) return 0;
     for (size_t i = 0; i < n; i++) value[i] = (fmi2Integer)f->values[vr[i]];
-    got(f);
+    f->served++;
     return 1;
 }
 
@@ -220,7 +194,7 @@ int fast_get_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                      fmi2Boolean value[]) {
     if (!gettable(f, vr, n, 0, 1) || !outputs_ready(f)) return 0;
     for (size_t i = 0; i < n; i++) value[i] = f->values[vr[i]] != 0.0;
-    got(f);
+    f->served++;
     return 1;
 }
 
@@ -230,36 +204,24 @@ int fast_get_real(FastPaths *f, const fmi2ValueReference vr[], size_t n, fmi2Rea
         return 0;
     }
     for (size_t i = 0; i < n; i++) value[i] = f->values[vr[i]];
-    got(f);
-    return 1;
-}
-
-static int settable(FastPaths *f, const fmi2ValueReference vr[], size_t n,
-                    const fmi2Real value[], int *feeds) {
-    if (!f->values || !f->control[STEP_MODE]) return 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= f->n_values || !isfinite(value[i])) return 0;
-        unsigned char kind = f->kind[vr[i]];
-        if (kind != KIND_INPUT && kind != KIND_FEEDTHROUGH) return 0;
-        *feeds |= kind == KIND_FEEDTHROUGH;
-    }
-    if (*feeds && f->control[PREDICTED]) {  /* the slave's consume() */
-        Armed a;
-        if (!f->control[C_PREDICTED] || !armed(f, &a)) return 0;
-        unpredict(f, &a);
-    }
+    f->served++;
     return 1;
 }
 
 int fast_set_real(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                   const fmi2Real value[]) {
-    int feeds = 0;
-    if (!settable(f, vr, n, value, &feeds)) {
+    int ok = f->values && f->control[STEP_MODE], feeds = 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        unsigned char kind = vr[i] < f->n_values ? f->kind[vr[i]] : KIND_OTHER;
+        ok = isfinite(value[i]) && (kind == KIND_INPUT || kind == KIND_FEEDTHROUGH);
+        feeds |= kind == KIND_FEEDTHROUGH;
+    }
+    if (!ok) {
         f->forwarded++;
         return 0;
     }
     for (size_t i = 0; i < n; i++) f->values[vr[i]] = value[i];
-    if (feeds) f->control[OUTPUTS_VALID] = 0, f->control[FED] = 1;
+    if (feeds) f->control[OUTPUTS_VALID] = 0;
     f->served++;
     return 1;
 }

@@ -24,14 +24,10 @@
 /* control[] (int32) */
 #define STEP_MODE 0
 #define OUTPUTS_VALID 1
-#define PREDICTED 2
-#define FED 3
-#define PREDICTING 4
-#define C_STEP 5
-#define C_OUTPUT 6
-#define C_PREDICTED 7
-#define C_DIRTY 8
-#define N_CONTROL 9
+#define C_STEP 2
+#define C_OUTPUT 3
+#define C_DIRTY 4
+#define N_CONTROL 5
 
 /* control[C_STEP] */
 #define C_STEP_PYTHON 0
