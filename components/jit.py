@@ -63,6 +63,8 @@ _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
 _REGISTERED: set = set()  # those of them numba was told about
 _SET_UP = False  # numba imported (then a function declared later is registered at once)
+#: a kernel has switched to its compiled tier in this process (a long run)
+compiled_tier = False
 
 
 def cache_root() -> Path:
@@ -147,7 +149,8 @@ class Kernel:
             )
             self.__dict__["compiled"] = self._run = self.py_func
             return self.py_func(*args)
-        self._run = self.compiled
+        global compiled_tier
+        self._run, compiled_tier = self.compiled, True
         return result
 
     @functools.cached_property

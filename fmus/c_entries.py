@@ -28,11 +28,14 @@ class CEntry:
 
     def __init__(self, kernel: jit.Kernel):
         self.kernel = kernel
+        self._address: int | None = None
 
     @property
     def address(self) -> int | None:
         """The C function's address once the kernel runs compiled, else None."""
-        return self._cfunc.address if jit.runs_compiled(self.kernel) else None
+        if self._address is None and jit.runs_compiled(self.kernel):
+            self._address = self._cfunc.address
+        return self._address
 
     @functools.cached_property
     def _cfunc(self):

@@ -39,6 +39,7 @@ import math
 
 import numpy as np
 
+from ..components import jit
 from ..components.switches import value
 from . import c_entries
 from .protocol import (
@@ -98,7 +99,7 @@ class FastPaths:
         self.saved = np.zeros(0)  # the C path's snapshot (its address is in block)
         self.entries = c_entries.of(type(slave.model))
         self.c_path = False  # the shim asked for the addresses, the model has C entries
-        self.armed = False  # C_STEP or C_OUTPUT set
+        self.armed = (C_STEP_PYTHON, 0.0, 0.0)  # (C_STEP, step entry, output entry)
         self.armed_state = None  # the model's state array, checked
 
     def handshake(self) -> list:
@@ -124,32 +125,30 @@ class FastPaths:
     def leave(self) -> None:
         slave = self.slave
         self.control[STEP_MODE] = slave._mode == "step" and slave.model.values is self.values
-        if self.c_path:
+        if self.c_path and jit.compiled_tier:  # before, arming costs what it saves
             try:
                 self._arm()
             except Exception as exc:  # noqa: BLE001 - never into pythonfmu (fmi2Fatal)
                 # the call itself succeeded: the Python steps from now on, and says so once
-                self.control[C_STEP] = self.control[C_OUTPUT] = self.armed = 0
+                self._set(C_STEP_PYTHON, 0.0, 0.0)
                 self.c_path = False
                 why = f"{type(exc).__name__}: {exc}"
                 slave._warn([f"the C step path is off ({why}); the Python steps"])
 
     def _arm(self) -> None:
         """Tell the shim what its C step path may do until the next call (module
-        docstring): the entries usable now, the state array and buffer, the outputs."""
-        slave, control, block, model = self.slave, self.control, self.block, self.slave.model
+        docstring): the step and output entries usable now."""
+        slave, model = self.slave, self.slave.model
         state = getattr(model, "state", None)
-        if state is not self.armed_state:  # checked once per array
-            plain = type(state) is np.ndarray and state.dtype == np.float64
-            self.armed_state = state if plain and state.flags.c_contiguous else None
-        step = C_STEP_PYTHON
-        output = None
+        if state is not self.armed_state:
+            self._point_at(state)
+        step, step_entry, output = C_STEP_PYTHON, 0.0, 0.0
         if (
             slave._mode == "step"
             and slave._state_valid
             and self.armed_state is not None
             and not model.warnings  # the next doStep reports them
-            and model.t == block[B_TIME]
+            and model.t == self.block[B_TIME]
         ):
             entries = self.entries
             if model._initial_inputs is not None:  # the first step checks the inputs
@@ -157,17 +156,28 @@ class FastPaths:
             elif entries.stateless:
                 step = C_STEP_TIME
             elif entries.step is not None and (address := entries.step.address):
-                step, block[B_STEP] = C_STEP_ENTRY, address
-            output = entries.output.address if entries.output is not None else None
-        if not (step or output):
-            if self.armed:
-                control[C_STEP] = control[C_OUTPUT] = self.armed = 0
+                step, step_entry = C_STEP_ENTRY, address
+            if entries.output is not None:
+                output = entries.output.address or 0.0
+        if (step, step_entry, output) != self.armed:
+            self._set(step, step_entry, output)
+
+    def _set(self, step: int, step_entry: float, output: float) -> None:
+        self.armed = (step, step_entry, output)
+        self.control[C_STEP], self.block[B_STEP] = step, step_entry
+        self.control[C_OUTPUT], self.block[B_OUTPUT] = output != 0.0, output
+
+    def _point_at(self, state) -> None:
+        """The model's state array (once per array: initialisation and state restore
+        make new ones) and a snapshot buffer for it and the values, in the block."""
+        plain = type(state) is np.ndarray and state.dtype == np.float64
+        self.armed_state = state if plain and state.flags.c_contiguous else None
+        if self.armed_state is None:
             return
-        control[C_OUTPUT], block[B_OUTPUT] = (1, output) if output else (0, 0.0)
-        control[C_STEP], self.armed = step, 1
-        need = self.values.size + state.size
+        block, need = self.block, self.values.size + state.size
         if self.saved.size < need:
             self.saved = np.zeros(need)
         block[B_STATE], block[B_N_STATE] = _address(state), state.size
         block[B_SAVED], block[B_N_SAVED] = _address(self.saved), self.saved.size
-        block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = slave._outputs.start, slave._outputs.stop
+        outputs = self.slave._outputs
+        block[B_OUTPUTS_START], block[B_OUTPUTS_STOP] = outputs.start, outputs.stop

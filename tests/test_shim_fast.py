@@ -1,4 +1,4 @@
-"""The shim's fast path (fmus/shim/agilesat_fmi2.c, "fast get/set"; fmus/slave.py): valid
+"""The shim's fast path (fmus/shim/fast_paths.c, fmus/fast_paths.py, "Fast get/set"): valid
 fmi2GetReal/fmi2SetReal in step mode are served in C from the slave's value array, every
 other call reaches the slave as before.  In-process: the slave's side of the contract (the
 arrays it shares are never replaced, the flags follow the mode and the outputs).  In clean
