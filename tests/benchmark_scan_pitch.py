@@ -90,7 +90,7 @@ def stub_models(c_path: bool = False):
                     changes += [(obj, "step", _stepped), (obj, "output", _until_stepped(obj))]
                     entries = dict(modules)[name.split(".")[0] + ".fmus.c_entries"].of(obj)
                     changes += [
-                        (e, "_cfunc", noop) for e in entries[:2] if e and "_cfunc" in vars(e)
+                        (e, "_address", noop.address) for e in entries[:2] if e and e._address
                     ]
                 else:
                     changes += [
@@ -104,6 +104,7 @@ def stub_models(c_path: bool = False):
 def _stepped(self, t, dt):
     self._initial_inputs = None  # as the first step's check leaves it (the C path's cue)
     self._stub_stepped = True
+    self.t = t + dt
 
 
 def _until_stepped(model_class):
