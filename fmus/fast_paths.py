@@ -89,10 +89,10 @@ def kind(causality: str, type_name: str, feeds: bool) -> int:
 class FastPaths:
     """What the slave shares with the shim, and what it does for it (module docstring)."""
 
-    def __init__(self, slave, kind: np.ndarray):
+    def __init__(self, slave, kinds: np.ndarray):
         self.slave = slave
         self.values = slave.model.values  # the array the shim reads and writes
-        self.kind = kind
+        self.kind = kinds  # per scalar
         self.control = np.zeros(N_CONTROL, dtype=np.int32)  # never replaced
         self.block = np.zeros(N_BLOCK)  # never replaced
         self.block[B_TIME] = math.nan
@@ -151,11 +151,10 @@ class FastPaths:
             and model.t == self.block[B_TIME]
         ):
             entries = self.entries
-            if model._initial_inputs is not None:  # the first step checks the inputs
-                pass
-            elif entries.stateless:
+            first = model._initial_inputs is not None  # the first step checks the inputs
+            if entries.stateless and not first:
                 step = C_STEP_TIME
-            elif entries.step is not None and (address := entries.step.address):
+            elif entries.step is not None and not first and (address := entries.step.address):
                 step, step_entry = C_STEP_ENTRY, address
             if entries.output is not None:
                 output = entries.output.address or 0.0
