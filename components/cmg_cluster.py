@@ -28,7 +28,8 @@ import math
 
 import numpy as np
 
-from .jit import c_entry, floats, jitable, kernel
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .variables import Layout, input_, output, parameter
 
@@ -247,32 +248,25 @@ class CmgCluster(Model):
                 f"rate_limit ({p.rate_limit}) and accel_limit ({p.accel_limit}) must be positive"
             )
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.state = np.zeros(N_STATE)
+        self.state = STATE.zeros()
         self.state[ST : ST + 6 * N_GYROS] = self.geometry.st
         self.state[[H_ROTOR, RATE_LIMIT, ACCEL_LIMIT]] = p.h_rotor, p.rate_limit, p.accel_limit
         self.state[DELTA : DELTA + N_GYROS] = p.delta0
-        self.saturated = False
         self.t = t0
 
     def step(self, t, dt):
-        worst = cluster_step(self.values, self.state, dt)
-        if worst >= 0 and not self.saturated:
-            command = float(self.values[Y_CMD + worst])
+        gimbal = cluster_step(self.values, self.state, dt)
+        if gimbal:
+            command = float(self.values[Y_CMD + gimbal - 1])
             self.warnings.append(
-                f"t={t:.3f} s: gimbal {worst + 1} rate command {command:.3f} rad/s "
+                f"t={t:.3f} s: gimbal {gimbal} rate command {command:.3f} rad/s "
                 f"exceeds the rate limit {float(self.state[RATE_LIMIT])} rad/s (the cluster cannot "
                 "deliver the commanded torque)"
             )
-        self.saturated = worst >= 0
         self.t = t + dt
 
     def output(self):
-        cluster_output(self.values, self.state)
-
-    def c_entries(self):
-        """(step, output) for the FMU's C path (components/jit.py, "C entries"): a step
-        while saturated is the Python's (it may end the saturation)."""
-        return (None if self.saturated else c_step), c_output
+        cluster_output(self.values, self.state, self.t)
 
 
 # -- kernels (components/jit.py) ------------------------------------------------------
@@ -280,18 +274,20 @@ _AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
 Y_CMD = _AT["delta_dot_cmd"]  # input
 Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
 Y_Q = _AT["singularity"]
-#: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st)
-DELTA, RATE = 0, N_GYROS
-RATE_LIMIT, ACCEL_LIMIT, H_ROTOR = 2 * N_GYROS, 2 * N_GYROS + 1, 2 * N_GYROS + 2
-ST = H_ROTOR + 1
-N_STATE = ST + 6 * N_GYROS
+#: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
+#: and 1 while a rate command exceeds the rate limit (saturated)
+STATE = StateTable(
+    delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1, st=6 * N_GYROS, saturated=1
+)
+DELTA, RATE, RATE_LIMIT, ACCEL_LIMIT, H_ROTOR, ST, SATURATED = STATE.offsets
 
 
-@kernel
+@step_kernel(CmgCluster)
 def cluster_step(values, state, dt):
-    """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  Returns the gimbal
-    with the largest |command| (the first of equals) if that exceeds the rate limit (the
-    cluster cannot deliver the commanded torque), else −1."""
+    """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  The cluster is
+    saturated while the largest |command| exceeds the rate limit (it cannot deliver the
+    commanded torque): returns 1 + the gimbal with the largest |command| (the first of
+    equals) when it becomes saturated (step() warns), else 0."""
     command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state[:ST])
     delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
     angles, rates = servo_step(delta, rate, command, dt, s[RATE_LIMIT], s[ACCEL_LIMIT])
@@ -301,11 +297,14 @@ def cluster_step(values, state, dt):
     for i in range(N_GYROS):
         if abs(command[i]) > largest:
             worst, largest = i, abs(command[i])
-    return worst if largest > s[RATE_LIMIT] else -1
+    saturated = largest > s[RATE_LIMIT]
+    started = saturated and state[SATURATED] == 0.0
+    state[SATURATED] = 1.0 if saturated else 0.0
+    return worst + 1 if started else 0
 
 
-@kernel
-def cluster_output(values, state):
+@output_kernel(CmgCluster)
+def cluster_output(values, state, t):
     """δ, δ̇, h = h_rotor Σ σ_i, hdot = h_rotor Σ a_i δ̇_i and Q = det(A Aᵀ) (module doc)."""
     s = floats(state)
     delta, rates = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
@@ -318,15 +317,4 @@ def cluster_output(values, state):
     for k in range(3):
         values[Y_H + k], values[Y_HDOT + k] = h_rotor * h[k], h_rotor * hdot[k]
     values[Y_Q] = det3(gram(columns))
-
-
-@c_entry(cluster_step)
-def c_step(values, state, dt):
-    """0, or 1 when a gimbal exceeds the rate limit (step() warns)."""
-    return 0 if cluster_step(values, state, dt) < 0 else 1
-
-
-@c_entry(cluster_output)
-def c_output(values, state, t):
-    cluster_output(values, state)
     return 0

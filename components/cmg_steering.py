@@ -42,7 +42,8 @@ from .cmg_cluster import (
     gram,
     inv3,
 )
-from .jit import TimeStep, c_entry, floats, jitable, kernel
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import rotate
 from .variables import Layout, choice, input_, output, parameter
@@ -115,6 +116,8 @@ class CmgSteering(Model):
         ),
         output("singularity", "1", "singularity measure Q = det(A A^T)", depends=("delta",)),
     )
+    #: step() only advances t (stateless between communication points)
+    STATELESS = True
 
     def initialize(self, t0):
         p = self.p
@@ -123,37 +126,27 @@ class CmgSteering(Model):
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.state = np.zeros(N_STATE)
+        self.state = STATE.zeros()
         self.state[ST:H_ROTOR] = self.geometry.st
-        self.state[H_ROTOR:] = p.h_rotor, p.law, p.null_gain, p.sr_lambda0, p.sr_mu
-        self.singular = False
+        self.state[H_ROTOR : SR_MU + 1] = p.h_rotor, p.law, p.null_gain, p.sr_lambda0, p.sr_mu
         self.t = t0
 
     def step(self, t, dt):
-        self.t = t + dt  # stateless between communication points
+        self.t = t + dt
 
     def output(self):
-        if steering_output(self.values, self.state) == PSEUDO_INVERSE_SINGULAR:
+        status = steering_output(self.values, self.state, self.t)
+        if status & PSEUDO_INVERSE_SINGULAR:
             _, columns = self.geometry.axes(self.u.delta.tolist())
             h_dot = wanted_hdot(self.values[U_0:U_1].tolist())
             rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
             self.y.delta_dot_cmd[:] = rates
-        self._note_singularity(self.y.singularity)
-
-    def c_entries(self):
-        """(step, output) for the FMU's C path (components/jit.py, "C entries"): outputs
-        while singular are the Python's (it may end the singularity)."""
-        return TimeStep(steering_output), (None if self.singular else c_output)
-
-    def _note_singularity(self, Q):
-        singular = Q <= SINGULAR_Q
-        if singular and not self.singular:
+        if status & BECAME_SINGULAR:
             self.warnings.append(
                 f"t={self.t:.3f} s: singular gimbal configuration "
-                f"(Q = {Q:.2e}); torque along the singular direction is "
+                f"(Q = {self.y.singularity:.2e}); torque along the singular direction is "
                 "not delivered"
             )
-        self.singular = singular
 
 
 # -- kernel (components/jit.py) -------------------------------------------------------
@@ -162,24 +155,29 @@ Y_RATES, Y_Q = _AT["delta_dot_cmd"], _AT["singularity"]
 #: the inputs, values[U_0:U_1], and the offsets of each in them
 U_0, U_1 = _AT["tau_cmd"], _AT["h"] + 3
 TAU, DELTA, W, H = (_AT[name] - U_0 for name in ("tau_cmd", "delta", "w_BI_B", "h"))
-#: the state array: s_i, t_i of each gyro (ClusterGeometry.st), then the law's constants
-ST = 0
-H_ROTOR, LAW, NULL_GAIN, SR_LAMBDA0, SR_MU = range(6 * N_GYROS, 6 * N_GYROS + 5)
-N_STATE = SR_MU + 1
-#: steering_output's status: the pseudo-inverse at a singularity, left to the SVD
-PSEUDO_INVERSE_SINGULAR = 1
+#: the state array: s_i, t_i of each gyro (ClusterGeometry.st), the law's constants, and 1
+#: while the configuration is singular (Q ≤ SINGULAR_Q)
+STATE = StateTable(st=6 * N_GYROS, h_rotor=1, law=1, null_gain=1, sr_lambda0=1, sr_mu=1, singular=1)
+ST, H_ROTOR, LAW, NULL_GAIN, SR_LAMBDA0, SR_MU, SINGULAR = STATE.offsets
+#: steering_output's status, bits: the pseudo-inverse at a singularity, left to the SVD;
+#: the configuration became singular (output() warns)
+PSEUDO_INVERSE_SINGULAR, BECAME_SINGULAR = 1, 2
 
 
-@kernel
-def steering_output(values, state):
-    """Gimbal-rate commands δ̇ and Q for the wanted torque (module docstring): writes both
-    and returns 0, or writes Q and returns PSEUDO_INVERSE_SINGULAR where the law is the
-    pseudo-inverse and Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's)."""
+@output_kernel(CmgSteering)
+def steering_output(values, state, t):
+    """Gimbal-rate commands δ̇ and Q for the wanted torque (module docstring): writes both,
+    or only Q and returns PSEUDO_INVERSE_SINGULAR where the law is the pseudo-inverse and
+    Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's); keeps whether the
+    configuration is singular (Q ≤ SINGULAR_Q) and adds BECAME_SINGULAR when it becomes so."""
     u, s = floats(values[U_0:U_1]), floats(state)
     spins, columns = axes(u[DELTA : DELTA + N_GYROS], s[ST:H_ROTOR])
     M = gram(columns)
     Q = det3(M)
     values[Y_Q] = Q
+    singular = Q <= SINGULAR_Q
+    became = BECAME_SINGULAR if singular and state[SINGULAR] == 0.0 else 0
+    state[SINGULAR] = 1.0 if singular else 0.0
     law = s[LAW]
     if law == SR_INVERSE:
         lam = s[SR_LAMBDA0] * math.exp(-s[SR_MU] * Q)
@@ -189,7 +187,7 @@ def steering_output(values, state):
             (M[2][0], M[2][1], M[2][2] + lam),
         )
     elif not Q > SINGULAR_Q:
-        return PSEUDO_INVERSE_SINGULAR
+        return PSEUDO_INVERSE_SINGULAR | became
     M_inv = inv3(M)
     x = rotate(M_inv, wanted_hdot(u))
     rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / s[H_ROTOR] for a in columns]
@@ -198,15 +196,7 @@ def steering_output(values, state):
         moves = _null_motion(columns, M_inv, Q, spins)
         rates = [r + null_gain * n for r, n in zip(rates, moves)]
     values[Y_RATES : Y_RATES + N_GYROS] = rates
-    return 0
-
-
-@c_entry(steering_output)
-def c_output(values, state, t):
-    """0, or 1 at a singularity (the SVD pseudo-inverse, the warning: output())."""
-    if steering_output(values, state) != 0:
-        return 1
-    return 0 if values[Y_Q] > SINGULAR_Q else 1
+    return became
 
 
 @jitable

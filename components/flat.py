@@ -1,19 +1,40 @@
-"""Compilable equivalents of CPython functions numba lacks or computes otherwise, bit for
-bit (tests/test_kernels_models.py), for the models' step/output kernels.
+"""The flat arrays of the models' step/output kernels (components/jit.py), and compilable
+equivalents of CPython functions numba lacks or computes otherwise, bit for bit
+(tests/test_kernels_models.py).
 
-Those kernels (components/jit.py) are one function each on the model's value array
-(:mod:`.variables`: parameters, inputs, outputs at the offsets of its table, named by
-module constants) and a small float64 state array of the model; they read both through
-:func:`.jit.floats`, write outputs and state by index and return a status code, from
-which the model's Python wrapper raises its ModelError or issues its warning, so that the
-messages are those of the readable code.
+Those kernels are one function each on the model's value array (:mod:`.variables`:
+parameters, inputs, outputs at the offsets of its table, named by module constants) and a
+small float64 state array of the model, laid out by a :class:`StateTable`; they read both
+through :func:`.jit.floats`, write outputs and state by index and return a status code,
+from which the model's Python wrapper raises its ModelError or issues its warning, so that
+the messages are those of the readable code.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .jit import jitable
+
+
+class StateTable:
+    """A kernel's state array: named rows of given sizes, one after the other, as the
+    variable table lays out the value array.  ``offsets`` in row order (the kernels' module
+    constants), ``offset[name]``, ``size``; ``zeros()`` a state array."""
+
+    def __init__(self, **sizes: int):
+        self.offset: dict[str, int] = {}
+        at = 0
+        for name, size in sizes.items():
+            self.offset[name] = at
+            at += size
+        self.offsets = tuple(self.offset.values())
+        self.size = at
+
+    def zeros(self) -> np.ndarray:
+        return np.zeros(self.size)
 
 
 @jitable

@@ -3,7 +3,7 @@
 A hot loop of a model is written once, as a plain Python function on floats and tuples, in
 the model's module, with its equations; ``@kernel`` marks it and ``@jitable`` the plain
 functions it calls.  A kernel runs that Python for its first ``AGILESAT_JIT_AFTER`` calls
-(default :data:`DEFAULT_AFTER`), then the same function compiled by numba in nopython
+(default 50,000), then the same function compiled by numba in nopython
 mode without fastmath: IEEE double arithmetic in the order written, the same libm, so the
 results are those of the Python bit for bit (tests/test_kernels.py) and switching midway
 changes nothing.  The threshold is measured, not guessed: importing numba and loading the
@@ -32,20 +32,16 @@ by loading each built FMU once (``fmus/build.py``).  numba's index key adds the
 signature, the CPU and the bytecode.  An unwritable cache directory costs a compile per
 process, nothing else (a warning says so).
 
-C entries (the FMU's step in C, fmus/slave.py and fmus/shim/agilesat_fmi2.c).  A model whose
-``step`` or ``output`` is one kernel may say so with ``@c_entry(kernel)`` on a small
-adapter ``(values, state, x) -> status`` in its module (x: the step size, or the time):
-0 when the kernel did everything the method would do, with nothing left for the Python
-but ``t``; anything else leaves the call to the method (a warning, an error, a case the
-Python handles).  :attr:`CEntry.address` is a C function
-``int32 (double *values, int64 n_values, double *state, int64 n_state, double x)``, a
-numba ``cfunc`` calling the adapter, which calls the compiled kernel: the same machine
-code as the compiled ``step``/``output``, no second copy of the physics.  It exists only
-once the kernel has switched to its compiled tier (None before, and without numba).  An
-exception inside (a ``ZeroDivisionError`` under numba's Python error model) is caught and
-returns -1, so the caller falls back to the Python, which raises it with its message
-(numba's cfunc wrapper would only print it and return an undefined value).  The cfuncs
-are cached beside the kernels, under the adapter's module and name.
+The kernel convention.  A model whose ``step`` or ``output`` is, but for ``t``, one kernel
+``(values, state, x) -> status`` on its value array and a float64 state array (x: the step
+size, or the time) declares it with ``@step_kernel(Model)`` / ``@output_kernel(Model)``;
+a model whose step changes nothing but ``t`` says ``STATELESS = True``.  Status 0: the
+kernel did everything the method does; anything else: the method has more to do (raise
+or warn with the readable message, a case the Python handles), so a caller that ran the
+kernel alone puts the arrays back and calls the method.  Everything the kernel changes
+lives in the two arrays (a flag the method warns from, too).  The FMU derives C functions
+from the declared kernels (fmus/c_entries.py) and steps the model in C once they run
+compiled; a model declaring nothing is stepped by its methods, as any.
 """
 
 from __future__ import annotations
@@ -58,20 +54,23 @@ from pathlib import Path
 
 import numpy as np
 
+from .switches import value
+
+ENABLED = value("AGILESAT_JIT")
 #: calls of a kernel before it is compiled (see the module docstring)
-DEFAULT_AFTER = 50_000
-ENABLED = os.environ.get("AGILESAT_JIT", "1") != "0"
-AFTER = int(os.environ.get("AGILESAT_JIT_AFTER", DEFAULT_AFTER))
+AFTER = value("AGILESAT_JIT_AFTER")
 _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
 _REGISTERED: set = set()  # those of them numba was told about
 _SET_UP = False  # numba imported (then a function declared later is registered at once)
+#: a kernel has switched to its compiled tier in this process (a long run)
+compiled_tier = False
 
 
 def cache_root() -> Path:
     """agilesat's compile cache: $AGILESAT_CACHE_DIR, else $XDG_CACHE_HOME/agilesat, else
     ~/.cache/agilesat (kernels in ``numba/``, the master's loop in ``loop/``)."""
-    root = os.environ.get("AGILESAT_CACHE_DIR")
+    root = value("AGILESAT_CACHE_DIR")
     if root:
         return Path(root)
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
@@ -150,7 +149,8 @@ class Kernel:
             )
             self.__dict__["compiled"] = self._run = self.py_func
             return self.py_func(*args)
-        self._run = self.compiled
+        global compiled_tier
+        self._run, compiled_tier = self.compiled, True
         return result
 
     @functools.cached_property
@@ -161,7 +161,7 @@ class Kernel:
             return self.py_func
         dispatcher = numba.njit(self.py_func)
         try:
-            dispatcher._cache = _content_cache(self.py_func)  # what enable_caching() does
+            dispatcher._cache = content_cache(self.py_func)  # what enable_caching() does
         except (OSError, RuntimeError, AttributeError) as exc:  # AttributeError: API moved
             warnings.warn(
                 f"agilesat: no compile cache for {self.py_func.__qualname__} ({exc}): "
@@ -171,93 +171,40 @@ class Kernel:
         return dispatcher
 
 
-class CEntry:
-    """A model's step or output as a C function (module docstring, "C entries")."""
-
-    def __init__(self, adapter, kernel: Kernel):
-        functools.update_wrapper(self, adapter)
-        self.py_func = adapter
-        self.kernel = kernel
-
-    def __call__(self, values, state, x):
-        return self.py_func(values, state, x)
-
-    @property
-    def address(self) -> int | None:
-        """The C function's address once the kernel runs compiled, else None."""
-        return self._cfunc.address if runs_compiled(self.kernel) else None
-
-    @functools.cached_property
-    def _cfunc(self):
-        numba = _numba()
-        from numba.core.ccallback import CFunc
-
-        adapter = numba.njit(self.py_func)
-        names = {"co_name": self.__name__ + "_c"}
-        if hasattr(_c_template.__code__, "co_qualname"):  # Python 3.11 on
-            names["co_qualname"] = self.__qualname__ + "_c"
-        code = _c_template.__code__.replace(
-            co_filename=self.py_func.__code__.co_filename,
-            co_firstlineno=self.py_func.__code__.co_firstlineno,
-            **names,
-        )
-        namespace = {"__name__": self.py_func.__module__, "adapter": adapter}
-        namespace["carray"] = numba.carray
-        entry = type(_c_template)(code, namespace, self.__name__ + "_c")
-        entry.__module__ = self.py_func.__module__
-        cfunc = CFunc(entry, _C_SIGNATURE(numba), locals={}, options={})
-        try:
-            adapter._cache = _content_cache(self.py_func)
-            cfunc._cache = _content_cache(entry)
-        except (OSError, RuntimeError, AttributeError) as exc:
-            warnings.warn(
-                f"agilesat: no compile cache for {self.__qualname__} ({exc}): "
-                "compiling it in every process",
-                stacklevel=2,
-            )
-        cfunc.compile()
-        return cfunc
-
-
-def _c_template(values, n_values, state, n_state, x):
-    """The body of every C entry (``adapter`` and ``carray`` are its globals)."""
-    try:
-        return adapter(carray(values, n_values), carray(state, n_state), x)  # noqa: F821
-    except Exception:  # noqa: BLE001 - the caller runs the Python, which raises it
-        return -1
-
-
-def _C_SIGNATURE(numba):
-    double_p = numba.types.CPointer(numba.types.float64)
-    i64 = numba.types.int64
-    return (double_p, i64, double_p, i64, numba.types.float64), numba.types.int32
-
-
-class TimeStep:
-    """A model's step that changes nothing but ``t`` (a stateless model): the C path may
-    take it once ``kernel`` (its output's) runs compiled."""
-
-    def __init__(self, kernel: Kernel):
-        self.kernel = kernel
-
-    @property
-    def ready(self) -> bool:
-        return runs_compiled(self.kernel)
-
-
 def runs_compiled(kernel: Kernel) -> bool:
     """Has ``kernel`` switched to its compiled tier (with numba)?"""
     compiled = kernel.__dict__.get("compiled")
     return compiled is not None and kernel._run is compiled is not kernel.py_func
 
 
-def c_entry(kernel: Kernel):
-    """Decorator: the adapter of ``kernel`` for the FMU's C path (module docstring)."""
-    return lambda adapter: CEntry(adapter, kernel)
-
-
 def kernel(function) -> Kernel:
     return Kernel(function, AFTER)
+
+
+_DECLARED: dict[type, dict[str, Kernel]] = {}
+
+
+def step_kernel(model: type):
+    """Decorator: the kernel ``(values, state, dt) -> status`` is ``model``'s step
+    (module docstring, "The kernel convention")."""
+    return lambda function: _declare(model, "step", function)
+
+
+def output_kernel(model: type):
+    """Decorator: the kernel ``(values, state, t) -> status`` is ``model``'s output."""
+    return lambda function: _declare(model, "output", function)
+
+
+def _declare(model: type, role: str, function) -> Kernel:
+    declared = kernel(function)
+    _DECLARED.setdefault(model, {})[role] = declared
+    return declared
+
+
+def declared(model: type) -> tuple[Kernel | None, Kernel | None]:
+    """(step kernel, output kernel) that ``model`` declared (None: none)."""
+    roles = _DECLARED.get(model, {})
+    return roles.get("step"), roles.get("output")
 
 
 def kernels(module) -> dict[str, Kernel]:
@@ -290,11 +237,6 @@ def _set_up() -> None:
             return lambda x: x
         return None
 
-    if Kernel not in _REGISTERED:  # an adapter calls a kernel: its compiled function
-        from numba.extending import typeof_impl
-
-        _REGISTERED.add(Kernel)
-        typeof_impl.register(Kernel)(lambda kernel, c: numba.typeof(kernel.compiled))
     for function in _FLOATS:
         if function not in _REGISTERED:
             _REGISTERED.add(function)
@@ -305,7 +247,8 @@ def _set_up() -> None:
             register_jitable(function)
 
 
-def _content_cache(py_func):
+def content_cache(py_func):
+    """numba's cache of ``py_func``, keyed on content (module docstring)."""
     return _content_cache_class()(py_func)
 
 

@@ -102,8 +102,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .ephemeris import (
     DAY,
     TWO_PI,
@@ -114,8 +112,8 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
-from .flat import remainder
-from .jit import TimeStep, c_entry, floats, jitable, kernel
+from .flat import StateTable, remainder
+from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import quat_of_rows
 from .sun import sun_direction
@@ -321,6 +319,8 @@ class OrbitEnvironment(Model):
     )
     # the SGP4 record cannot be deep-copied and does not evolve: not part of the FMU state
     _NOT_STATE = Model._NOT_STATE | {"_satrec"}
+    #: step() only advances t (the outputs are functions of t)
+    STATELESS = True
 
     def initialize(self, t0):
         p = self.p
@@ -367,9 +367,10 @@ class OrbitEnvironment(Model):
             )
         self.earth_angle0 = p.earth_angle0
         self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
-        self.state = np.zeros(N_STATE)
+        self.state = STATE.zeros()
+        self.state[GIVEN_AT] = math.nan  # no SGP4 or GMST values yet
         if self._satrec is None:
-            self.state[A:N_KEPLER] = (
+            self.state[A : MU_KEPLER + 1] = (
                 self.a, self.e, self.b, self.M0, self.mean_motion, self.raan_rate,
                 self.argp_rate, self.raan0, self.argp0, self.cos_i, self.sin_i, self.mu_kepler,
             )  # fmt: skip
@@ -459,16 +460,12 @@ class OrbitEnvironment(Model):
         if self._satrec is not None:
             r, v, w = self._sgp4_state(t)
             self.state[R_I : R_I + 9] = (*r, *v, *w)
+            self.state[GIVEN_AT] = t
         if self._gmst0 is not None:
             self.state[THETA : THETA + 2] = sidereal_time(*self._gmst0, t)
+            self.state[GIVEN_AT] = t
         if orbit_output(self.values, self.state, t) == KEPLER_DIVERGED:
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
-
-    def c_entries(self):
-        """(step, output) for the FMU's C path (components/jit.py, "C entries"): SGP4 and
-        the GMST of an epoch are the Python's."""
-        given = self._satrec is not None or self._gmst0 is not None
-        return TimeStep(orbit_output), (None if given else c_output)
 
 
 # -- kernel (components/jit.py) -------------------------------------------------------
@@ -476,28 +473,33 @@ _AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.v
 Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
 Y_R_T, Y_V_T, Y_EARTH, Y_SUN = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"], _AT["sun_I"]
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
-#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, those given values, and the
-#: epoch (whole days, seconds since J2000.0; 0 without one) for the Sun
-A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0, COS_I, SIN_I, MU_KEPLER = range(12)
-N_KEPLER = MU_KEPLER + 1
-EARTH_ANGLE0, R_T_E = N_KEPLER, N_KEPLER + 1
-GIVEN_ORBIT, GIVEN_EARTH = R_T_E + 3, R_T_E + 4
-R_I, THETA = GIVEN_EARTH + 1, GIVEN_EARTH + 10  # r_I, v_I, w_OI_O; θ_E, θ̇_E
-EPOCH = THETA + 2
-N_STATE = EPOCH + 2
-#: orbit_output's status: Kepler's equation did not converge (nothing written)
-KEPLER_DIVERGED = 1
+#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, those given values and the time
+#: they are given at (output() computes them), and the epoch (whole days, seconds since
+#: J2000.0; 0 without one) for the Sun
+STATE = StateTable(
+    a=1, e=1, b=1, M0=1, mean_motion=1, raan_rate=1, argp_rate=1, raan0=1, argp0=1, cos_i=1,
+    sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1, given_earth=1, r_v_w_I=9,
+    theta=2, given_at=1, epoch=2,
+)  # fmt: skip
+A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0 = STATE.offsets[:9]
+COS_I, SIN_I, MU_KEPLER, EARTH_ANGLE0, R_T_E = STATE.offsets[9:14]
+GIVEN_ORBIT, GIVEN_EARTH, R_I, THETA, GIVEN_AT, EPOCH = STATE.offsets[14:]
+#: orbit_output's status: Kepler's equation did not converge (nothing written); the SGP4
+#: or GMST values are not those at t (output() computes them)
+KEPLER_DIVERGED, NOT_GIVEN = 1, 2
 
 jitable(wrap_2pi)  # kernels may call it (components/ephemeris.py)
 
 
-@kernel
+@output_kernel(OrbitEnvironment)
 def orbit_output(values, state, t):
     """The outputs at time t (module docstring): the orbit (Kepler/J2 at t, or the given
     SGP4 r_I, v_I, w_OI_O), the orbit frame O, the Earth angle (earth_angle0 + ω_E t, or
-    the given GMST), the target and the Sun (components/sun.py).  Returns
-    KEPLER_DIVERGED (nothing written) or 0."""
+    the given GMST), the target and the Sun (components/sun.py).  Returns 0,
+    KEPLER_DIVERGED or NOT_GIVEN (nothing written)."""
     s = floats(state)
+    if (s[GIVEN_ORBIT] or s[GIVEN_EARTH]) and s[GIVEN_AT] != t:
+        return NOT_GIVEN
     if s[GIVEN_ORBIT]:
         r = s[R_I], s[R_I + 1], s[R_I + 2]
         v = s[R_I + 3], s[R_I + 4], s[R_I + 5]
@@ -595,9 +597,3 @@ def kepler_state(s, t):
     h = math.sqrt(hx * hx + hy * hy + hz * hz)
     a_h = (ax * hx + ay * hy + az * hz) / h
     return (rx, ry, rz), (vx, vy, vz), (0.0, -h / (r * r), -r * a_h / h), converged
-
-
-@c_entry(orbit_output)
-def c_output(values, state, t):
-    """0, or KEPLER_DIVERGED (output() raises)."""
-    return orbit_output(values, state, t)

@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .jit import TimeStep, floats, jitable, kernel
+from .flat import StateTable
+from .jit import floats, jitable, kernel
 from .model import Model, ModelError
 from .variables import Layout, input_, output, parameter
 
@@ -148,6 +149,8 @@ class PitchManeuverController(Model):
         output("pitch_ref", "rad", "planned pitch", display_unit="deg"),
         output("pitch_rate_ref", "rad/s", "planned pitch rate", display_unit="deg/s"),
     )
+    #: step() only advances t (the outputs are functions of t and the inputs)
+    STATELESS = True
 
     def initialize(self, t0):
         p = self.p
@@ -163,11 +166,6 @@ class PitchManeuverController(Model):
     def step(self, t, dt):
         self.t = t + dt
 
-    def c_entries(self):
-        """(step, output) for the FMU's C path (components/jit.py, "C entries"): the
-        output needs CPython's math.hypot."""
-        return TimeStep(pitch_output), None
-
     def output(self):
         # CPython's math.hypot is its own algorithm, numba's libm's (1 ulp apart at times)
         n = math.hypot(self.values[U_Q], self.values[U_Q + 2])
@@ -181,8 +179,12 @@ Y_TAU, Y_PHASE, Y_PITCH, Y_PITCH_RATE = (
     _AT["tau_cmd"], _AT["phase"], _AT["pitch_ref"], _AT["pitch_rate_ref"]
 )  # fmt: skip
 #: the state array: the profile (t1..t5, θ̈m, θ̇m, θ̇0, θ0, θf), the inertia and the gains
-TIMES, ACCEL, RATE_MAX, SCAN_RATE, THETA0, THETA_F = 0, 5, 6, 7, 8, 9
-INERTIA, KP, KD, KP_ROLL, KD_ROLL, KP_YAW, KD_YAW = range(10, 17)
+STATE = StateTable(
+    times=5, accel=1, rate_max=1, scan_rate=1, theta0=1, theta_f=1, inertia=1, kp=1, kd=1,
+    kp_roll=1, kd_roll=1, kp_yaw=1, kd_yaw=1,
+)  # fmt: skip
+TIMES, ACCEL, RATE_MAX, SCAN_RATE, THETA0, THETA_F = STATE.offsets[:6]
+INERTIA, KP, KD, KP_ROLL, KD_ROLL, KP_YAW, KD_YAW = STATE.offsets[6:]
 
 
 @kernel

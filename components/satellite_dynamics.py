@@ -24,8 +24,8 @@ rates (video-SAR eq. 13).
 ``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
 runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
 read and written at the offsets of the variable table, and on ``self.state``: q_BI, H_I,
-the last q_BO and euler_BO, and the constants ``initialize`` derives (offsets ``S_*``).
-A kernel returns a status code; the methods raise its ModelError.
+the last q_BO and euler_BO, and the constants ``initialize`` derives (the state table
+``STATE``).  A kernel returns a status code; the methods raise its ModelError.
 """
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ import math
 
 import numpy as np
 
-from .jit import c_entry, floats, jitable, kernel
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
@@ -203,8 +204,8 @@ class SatelliteDynamics(Model):
         w_BI_B = p.rate0 + C_BO @ u.w_OI_O
         H_B = rotate(J.tolist(), w_BI_B)
         h = (u.h_cmg + u.h_wheel + u.h_payload).tolist()
-        #: the state and the constants of the step and output kernels (offsets S_*)
-        self.state = state = np.zeros(STATE_SIZE)
+        #: the state and the constants of the step and output kernels (STATE)
+        self.state = state = STATE.zeros()
         state[S_Q_BI : S_Q_BI + 4] = q_BI
         state[S_H_I : S_H_I + 3] = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
         state[S_Q_BO : S_Q_BO + 4] = q_BO
@@ -219,13 +220,14 @@ class SatelliteDynamics(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        status, rate, needed = _step(self.values, self.state, dt)
+        status = _step(self.values, self.state, dt)
         if status == NO_POSITION:
             raise ModelError(
                 "gravity_gradient is on but r_I is zero: connect r_I or set "
                 "gravity_gradient = false"
             )
         if status == TOO_MANY_SUBSTEPS:
+            rate, needed = _substeps(floats(self.values), floats(self.state), dt)
             n = math.ceil(needed) if math.isfinite(needed) else needed
             raise ModelError(
                 f"t={t:.6g} s: body rate {rate:.3g} rad/s would need "
@@ -236,15 +238,8 @@ class SatelliteDynamics(Model):
         self.t = t + dt
 
     def output(self):
-        status, norm = _output(self.values, self.state)
-        if status == NOT_UNIT:
-            q_OI = self.u.q_OI.tolist()
-            raise ModelError(f"q_OI must be a unit quaternion, got {q_OI} (norm {norm})")
-
-    def c_entries(self):
-        """(step, output) for the FMU's C path (components/jit.py, "C entries"); the first
-        step checks the inputs in Python."""
-        return (c_step if self._initial_inputs is None else None), c_output
+        if _output(self.values, self.state, self.t) == NOT_UNIT:
+            _unit(self.u.q_OI, "q_OI")  # raises its ModelError
 
     def initial_input_jumps(self, used, dt):
         """Bounds of one step of dt (margin 4): the orbit frame turns by at most
@@ -278,64 +273,72 @@ TAU_EXT, R_I, Q_OI, W_OI_O = (_OFFSET[n] for n in ("tau_ext", "r_I", "q_OI", "w_
 Y_Q_BI, Y_W_BI_B, Y_Q_BO, Y_EULER_BO, Y_EULER_RATE_BO, Y_W_BO_B, Y_H_I = (
     _OFFSET[n] for n in ("q_BI", "w_BI_B", "q_BO", "euler_BO", "euler_rate_BO", "w_BO_B", "H_I")
 )
-#: offsets in SatelliteDynamics.state: the state (q_BI, H_I), the last output's q_BO and
-#: euler_BO (their sign and branch are kept continuous), and constants set by initialize
-S_Q_BI, S_H_I, S_Q_BO, S_EULER = 0, 4, 7, 11
-S_J, S_J_INV = 14, 23  # hub inertia and its inverse, row-major
-S_MU = 32
-S_GRAVITY_GRADIENT = 33  # 1: apply the torque (gravity_gradient on and J not ∝ 1)
-S_NEEDS_POSITION = 34  # 1: gravity_gradient on, so r_I must not be zero
-STATE_SIZE = 35
+#: SatelliteDynamics.state: the state (q_BI, H_I), the last output's q_BO and euler_BO
+#: (their sign and branch are kept continuous), and constants set by initialize: the hub
+#: inertia and its inverse (row-major), μ, whether to apply the gravity-gradient torque
+#: (gravity_gradient on and J not ∝ 1) and whether r_I must not be zero (gravity_gradient on)
+STATE = StateTable(
+    q_BI=4, H_I=3, q_BO=4, euler=3, J=9, J_inv=9, mu=1, gravity_gradient=1, needs_position=1
+)
+S_Q_BI, S_H_I, S_Q_BO, S_EULER, S_J, S_J_INV, S_MU = STATE.offsets[:7]
+S_GRAVITY_GRADIENT, S_NEEDS_POSITION = STATE.offsets[7:]
 #: the kernels' status codes (the Python wrapper raises the message)
 OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT = range(5)
 
 
-@kernel
+@step_kernel(SatelliteDynamics)
 def _step(values, state, dt):
     """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values`` (held at
     the step's start, the devices' momentum extrapolated with its derivative): RK4 in
     n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉ sub-steps, q_BI normalised after.
-    Returns (status, max|w_BI_B|, the sub-steps needed); on an error nothing changes."""
+    Returns the status; on an error nothing changes."""
     v, s = floats(values), floats(state)
     h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
     hdot = _device_sum(v, HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD)
     tau, r_I = _vector(v, TAU_EXT), _vector(v, R_I)
     if s[S_NEEDS_POSITION] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
-        return NO_POSITION, 0.0, 0.0
+        return NO_POSITION
     q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
     J, J_inv = _matrix(s, S_J), _matrix(s, S_J_INV)
-    w = _rate(q_BI, H_I, h0, J_inv)
-    rate = abs(w[0])
-    if abs(w[1]) > rate:
-        rate = abs(w[1])
-    if abs(w[2]) > rate:
-        rate = abs(w[2])
-    needed = rate * dt / MAX_ROTATION_PER_SUBSTEP
+    needed = _substeps(v, s, dt)[1]
     if not needed <= MAX_SUBSTEPS:
-        return TOO_MANY_SUBSTEPS, rate, needed
+        return TOO_MANY_SUBSTEPS
     n = max(1, int(math.ceil(needed)))
     x = _integrate(
         q_BI + H_I, n, dt / n, h0, hdot, tau, r_I, J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0
     )
     for xi in x:
         if not math.isfinite(xi):
-            return NON_FINITE, rate, needed
+            return NON_FINITE
     norm = _norm(x)
     _put(state, S_Q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
     _put(state, S_H_I, x[4:])
-    return OK, rate, needed
+    return OK
 
 
-@kernel
-def _output(values, state):
+@jitable
+def _substeps(v, s, dt):
+    """(max|w_BI_B| at the step's start, the RK4 sub-steps of ``dt`` it needs, unrounded)."""
+    h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
+    w = _rate(_quaternion(s, S_Q_BI), _vector(s, S_H_I), h0, _matrix(s, S_J_INV))
+    rate = abs(w[0])
+    if abs(w[1]) > rate:
+        rate = abs(w[1])
+    if abs(w[2]) > rate:
+        rate = abs(w[2])
+    return rate, rate * dt / MAX_ROTATION_PER_SUBSTEP
+
+
+@output_kernel(SatelliteDynamics)
+def _output(values, state, t):
     """Write the outputs into ``values`` from ``state`` and the inputs; keep q_BO's sign
-    and euler_BO's branch in ``state``.  Returns (status, |q_OI|); NOT_UNIT (nothing
-    written) if q_OI is not a unit quaternion."""
+    and euler_BO's branch in ``state``.  Returns the status: NOT_UNIT (nothing written) if
+    q_OI is not a unit quaternion."""
     v, s = floats(values), floats(state)
     q0, q1, q2, q3 = q = _quaternion(v, Q_OI)
     norm = _norm(q)
     if not _is_unit(norm):
-        return NOT_UNIT, norm
+        return NOT_UNIT
     q_OI = (q0 / norm, q1 / norm, q2 / norm, q3 / norm)
     q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
     w_BI_B = _rate(q_BI, H_I, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), _matrix(s, S_J_INV))
@@ -356,17 +359,7 @@ def _output(values, state):
     _put(values, Y_EULER_RATE_BO, euler123_dot(euler, w_BO_B))
     _put(values, Y_W_BO_B, w_BO_B)
     _put(values, Y_H_I, H_I)
-    return OK, norm
-
-
-@c_entry(_step)
-def c_step(values, state, dt):
-    return _step(values, state, dt)[0]
-
-
-@c_entry(_output)
-def c_output(values, state, t):
-    return _output(values, state)[0]
+    return OK
 
 
 @jitable

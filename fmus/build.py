@@ -3,7 +3,7 @@
 Layout of an FMU::
 
     modelDescription.xml                 generated from the model's variable table
-    binaries/linux64/<Name>.so           our C shim (shim/agilesat_fmi2.c), compiled here
+    binaries/linux64/<Name>.so           our C shim (shim/*.c), compiled here
     binaries/linux64/pythonfmu-export.so pythonfmu's binary, which the shim forwards to
     resources/slavemodule.txt            -> <Name>_<hash>
     resources/<Name>_<hash>.py           pythonfmu entry point: makes the slave class
@@ -29,17 +29,23 @@ import sys
 import sysconfig
 import uuid
 import zipfile
+from collections.abc import Callable
 from html import escape
 from importlib import metadata
 from pathlib import Path
 
-from . import FMUS, model_class
+from . import FMUS, model_class, protocol
 from .model_description import model_description
 from .source_facts import facts
 
 FMUS_DIR = Path(__file__).resolve().parent
 BUILD_DIR = FMUS_DIR / "build"
-SHIM_SOURCES = (FMUS_DIR / "shim" / "agilesat_fmi2.c", FMUS_DIR / "shim" / "fmi2_abi.h")
+SHIM_DIR = FMUS_DIR / "shim"
+#: the shim's translation units: the FMI forwarding and the fast paths
+SHIM_C_FILES = (SHIM_DIR / "agilesat_fmi2.c", SHIM_DIR / "fast_paths.c")
+#: the header generated from protocol.py (`agilesat generate`)
+PROTOCOL_HEADER = SHIM_DIR / "protocol.h"
+SHIM_SOURCES = (*SHIM_C_FILES, SHIM_DIR / "shim.h", SHIM_DIR / "fmi2_abi.h", PROTOCOL_HEADER)
 PLATFORM = "linux64"
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 _GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
@@ -99,11 +105,11 @@ fmu, name, package, module = sys.argv[1:]
 with tempfile.TemporaryDirectory() as folder:
     zipfile.ZipFile(fmu).extractall(folder)
     sys.path.insert(0, folder + "/resources")
-    source = importlib.import_module(package + ".components." + module)
-    getattr(source, name)().start(0.0).advance(0.0, 0.1)
-    jit = importlib.import_module(package + ".components.jit")
-    for entry in vars(source).values():  # the C entries of the FMU's C step path
-        if isinstance(entry, jit.CEntry):
+    model = getattr(importlib.import_module(package + ".components." + module), name)
+    model().start(0.0).advance(0.0, 0.1)
+    c_entries = importlib.import_module(package + ".fmus.c_entries")
+    for entry in c_entries.of(model)[:2]:  # the C entries of the FMU's C step path
+        if entry is not None:
             entry.address
 """
 
@@ -257,6 +263,8 @@ def python_runtime() -> tuple[str, str]:
 def _shim_library(out_dir: Path) -> Path:
     """Compile the shim once per source version and Python runtime (cached in
     <out_dir>/.shim/)."""
+    if PROTOCOL_HEADER.read_text() != protocol.header():
+        raise BuildError(f"{PROTOCOL_HEADER} is out of date: run `agilesat generate`")
     runtime = python_runtime()
     digest = hashlib.sha256(
         b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(runtime).encode()
@@ -268,27 +276,11 @@ def _shim_library(out_dir: Path) -> Path:
     compiler = c_compiler()
     if not compiler:
         raise BuildError(
-            "building FMUs needs a C compiler (cc or gcc, or set CC) for the "
-            "FMI shim fmus/shim/agilesat_fmi2.c"
+            "building FMUs needs a C compiler (cc or gcc, or set CC) for the FMI shim fmus/shim/"
         )
     partial = _partial(library)
-    defines = [
-        f"-DAGILESAT_{key}={_c_string(value)}"
-        for key, value in zip(("LIBPYTHON", "PYTHON"), runtime)
-    ]
-    command = [
-        compiler,
-        "-shared",
-        "-fPIC",
-        "-O2",
-        "-fvisibility=hidden",
-        *defines,
-        "-o",
-        str(partial),
-        str(SHIM_SOURCES[0]),
-        "-ldl",
-        "-lpthread",
-    ]
+    command = [compiler, "-O2", *shim_flags(*runtime), *map(str, SHIM_C_FILES)]
+    command += ["-o", str(partial), "-ldl", "-lpthread"]
     try:
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
@@ -299,6 +291,25 @@ def _shim_library(out_dir: Path) -> Path:
     finally:
         partial.unlink(missing_ok=True)
     return library
+
+
+def shim_flags(libpython: str, python: str) -> list[str]:
+    """The compiler flags that make the shim's sources (SHIM_C_FILES) a shared library, for
+    a Python runtime (:func:`python_runtime`)."""
+    defines = [
+        f"-DAGILESAT_{key}={_c_string(value)}"
+        for key, value in (("LIBPYTHON", libpython), ("PYTHON", python))
+    ]
+    return ["-shared", "-fPIC", "-fvisibility=hidden", *defines]
+
+
+def generated_files() -> dict[Path, Callable[[], bytes]]:
+    """The files `agilesat generate` writes from the tables: the FMUs' interfaces and the
+    shim's protocol header."""
+    return {
+        FMUS_DIR / "INTERFACES.md": lambda: interfaces_markdown().encode(),
+        PROTOCOL_HEADER: lambda: protocol.header().encode(),
+    }
 
 
 def c_compiler() -> str | None:

@@ -318,11 +318,11 @@ def echo_to(out: Path, limit: int = 5):
 
 
 def _generate(args) -> int:
-    from ..fmus.build import FMUS_DIR, interfaces_markdown
+    from ..fmus.build import generated_files
     from . import scenarios
 
     files = {scenarios.get(name).ssd: scenarios.get(name).render_ssd for name in NAMES}
-    files[FMUS_DIR / "INTERFACES.md"] = lambda: interfaces_markdown().encode()
+    files.update(generated_files())
     stale = []
     for path, render in files.items():
         content = render()

@@ -36,13 +36,11 @@
  *  - Late calls.  Once Python is finalized or the process is exiting, calls return at
  *    once (fmi2Error; fmi2FreeInstance does nothing): a host calling from a static
  *    destructor would otherwise take the GIL of a dead interpreter inside pythonfmu.
- *  - Speed.  A valid fmi2GetReal/fmi2SetReal (and fmi2GetInteger/fmi2GetBoolean) in step
- *    mode is served here, in C, straight from/to the model's value array, without entering
- *    Python (see "fast get/set"); once the model's kernels run compiled, so is a valid
- *    fmi2DoStep and the evaluation of the outputs, calling the compiled kernels (see "the
- *    C step path"; AGILESAT_SHIM_STEP=0 turns that part off).  Every other call, and any
- *    the model leaves to its Python, is forwarded as before, so the slave keeps every check
- *    and message.
+ *  - Speed.  Valid gets and sets in step mode, and once the model's kernels run compiled
+ *    fmi2DoStep and the evaluation of the outputs, are served in C from the slave's arrays
+ *    without entering Python: the fast paths, fast_paths.c (this file only asks them, and
+ *    forwards what they leave).  Every other call, and any the model leaves to its Python,
+ *    is forwarded as before, so the slave keeps every check and message.
  *
  *  - Resources.  fmuResourceLocation is decoded here (a percent-encoded file URI, as FMI
  *    2.0 asks hosts to pass it) and handed to pythonfmu as a plain file URI, after checking
@@ -65,9 +63,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "fmi2_abi.h"
+#include "shim.h"
 
-#define EXPORT __attribute__((visibility("default")))
 #define INNER_LIBRARY "pythonfmu-export.so"
 
 /* ---- the forwarded library ------------------------------------------------------- */
@@ -247,15 +244,7 @@ typedef struct Shim {
     fmi2Status worst;            /* worst status logged during the current call */
     int fatal;                   /* a call returned fmi2Fatal: only fmi2FreeInstance now */
     State *states;
-    /* the fast path (see "fast get/set"): NULL values when off */
-    double *values;              /* the slave's model.values */
-    size_t n_values;
-    const unsigned char *kind;   /* per value reference: KIND_* */
-    int32_t *control;            /* STEP_MODE, OUTPUTS_VALID, ..., C_*: the slave's */
-    double *block;               /* the C step path's times and addresses (B_*): the slave's */
-    int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
-    unsigned long long fast_calls, forwarded_calls;  /* get/set calls served / forwarded */
-    unsigned long long c_steps, c_outputs, c_fallbacks; /* the C step path's counts */
+    FastPaths fast;              /* fast_paths.c */
     struct Shim *next;
 } Shim;
 
@@ -272,8 +261,10 @@ static Shim *find_instance(fmi2Component c, int unlink) {
     return s;
 }
 
-/* Largest array a call may pass (pythonfmu indexes with int and builds Python lists). */
-#define MAX_VALUES ((size_t)1 << 24)
+FastPaths *fast_paths_of(fmi2Component c) {
+    Shim *s = find_instance(c, 0);
+    return s ? &s->fast : NULL;
+}
 
 static int category_enabled(const Shim *s, const char *category) {
     if (s->n_categories == 0) return 1;
@@ -422,300 +413,14 @@ static fmi2Status leave(Shim *s, fmi2Status status) {
 
 #define INNER(type, fn) ((type)inner.fn)
 
-/* ---- fast get/set ----------------------------------------------------------------------
- * Most of a co-simulation step's calls are valid gets and sets of Reals, and through
- * pythonfmu each one costs a Python call, the GIL and a list or two.  The shim serves them
- * itself from the slave's own arrays (fmus/slave.py, "The shim's fast path"):
- *  - Handshake.  After fmi2Instantiate and after fmi2Reset (pythonfmu then creates a new
- *    slave: the old arrays are gone) the shim asks the slave for FAST_PATH_N values of the
- *    reserved value reference FAST_PATH_VR (no host can: plain calls on value references
- *    from DERIVATIVE_BASE up are refused).  The answer: FAST_PATH_VERSION, the address and
- *    length of model.values (value reference = offset), the address of kind[] (KIND_* per
- *    value reference), of control[] (STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, and the C
- *    step path's flags) and of block[] (the C step path's, below).  The slave
- *    owns the four for its whole life and never replaces them; it keeps the flags up to
- *    date, and evaluates the outputs at the end of fmi2DoStep (PREDICTED: until a get
- *    confirms it, the slave can undo that evaluation, see fmus/slave.py).
- *  - fmi2GetReal is served when STEP_MODE and OUTPUTS_VALID are set and every value
- *    reference is a Real scalar (parameter, input or output): the values are copied out,
- *    and PREDICTED is cleared (a get came first: the prediction was right).  The same for
- *    fmi2GetInteger (KIND_INTEGER: int(x)) and fmi2GetBoolean (KIND_BOOLEAN: x != 0).
- *    With OUTPUTS_VALID clear, the C step path may evaluate the outputs first (below).
- *  - fmi2SetReal is served when STEP_MODE is set, every value reference is a Real input
- *    and every value is finite, unless one of the inputs feeds an output through
- *    (KIND_FEEDTHROUGH, the model description's dependencies) while PREDICTED is set (the
- *    slave undoes the prediction): the values are copied in, and if one of the inputs
- *    feeds an output through, OUTPUTS_VALID is cleared and FED set, as the slave does.
- *  - Anything else (another mode, an unknown value reference, a wrong type, an output or
- *    parameter set, a non-finite value, outputs not evaluated yet or invalid) is forwarded
- *    to pythonfmu exactly as before: the slave gives its status and message.  The answer
- *    is the same either way; so are results, bit for bit.
- *  - AGILESAT_SHIM_FAST=0 in the environment at fmi2Instantiate (or fmi2Reset, after which
- *    the instance is as if just instantiated) turns it off for that instance (every call
- *    forwarded).  agilesat_shim_counters() gives an instance's counts
- *    of get/set calls served and forwarded (for tests and benchmarks).
- * Only the instance's own fields are used: one instance per thread is safe, as FMI 2.0
- * allows. */
-#define FAST_PATH_VR 0xFFFFFFFFu
-#define FAST_PATH_N 6
-#define FAST_PATH_VERSION 2.0
-enum { KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH, KIND_INTEGER,
-       KIND_BOOLEAN };
-enum { STEP_MODE, OUTPUTS_VALID, PREDICTED, FED, PREDICTING, C_STEP, C_OUTPUT, C_PREDICTED,
-       C_DIRTY };
-enum { PYTHON_STEP, ENTRY_STEP, TIME_STEP };
-enum { B_TIME, B_NEXT_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED,
-       B_OUTPUTS_START, B_OUTPUTS_STOP };
-
-static void *address(double x) {
-    uintptr_t a = (uintptr_t)x;
-    return x > 0 && x < 9007199254740992.0 && (double)a == x ? (void *)a : NULL;
-}
-
-static void handshake(Shim *s) {
+/* The fast paths' handshake question, as pythonfmu's fmi2GetReal (see Ask in shim.h). */
+static int ask_slave(void *shim, const fmi2ValueReference vr[], size_t n, fmi2Real got[]) {
     typedef fmi2Status (*Get)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Real *);
-    s->values = NULL;
-    s->kind = NULL;
-    s->control = NULL;
-    s->block = NULL;
-    s->n_values = 0;
-    const char *fast = getenv("AGILESAT_SHIM_FAST");
-    if (fast && strcmp(fast, "0") == 0) return;
-    const char *step = getenv("AGILESAT_SHIM_STEP");
-    s->step_path = !(step && strcmp(step, "0") == 0);
-    fmi2ValueReference vr[FAST_PATH_N];
-    fmi2Real got[FAST_PATH_N] = {0};
-    for (int i = 0; i < FAST_PATH_N; i++) vr[i] = FAST_PATH_VR;
-    fmi2Status status = INNER(Get, fmi2GetReal)(s->inner, vr, FAST_PATH_N, got);
+    Shim *s = shim;
+    fmi2Status status = INNER(Get, fmi2GetReal)(s->inner, vr, n, got);
     fmi2Status worst = s->worst;
     s->worst = fmi2OK;
-    if (status != fmi2OK || worst != fmi2OK || got[0] != FAST_PATH_VERSION) return;
-    double *values = address(got[1]);
-    unsigned char *kind = address(got[3]);
-    int32_t *control = address(got[4]);
-    double *block = address(got[5]);
-    if (!values || !kind || !control || !block || !(got[2] >= 0 && got[2] < (double)MAX_VALUES))
-        return;
-    s->n_values = (size_t)got[2];
-    s->kind = kind;
-    s->control = control;
-    s->block = block;
-    s->values = values;
-}
-
-/* ---- the C step path -----------------------------------------------------------------
- * fmi2DoStep, and the evaluation of the outputs, in C: the model's compiled step and output
- * kernels as C functions (components/jit.py, "C entries"), which the slave hands over in
- * the block (B_*) at the end of every call it answers, with what they may do until the
- * next one (fmus/slave.py, "The C step path"): C_STEP (PYTHON_STEP: the step is the
- * slave's; ENTRY_STEP: the step entry does all of it; TIME_STEP: the step changes nothing
- * but the time) and C_OUTPUT (the output entry does all of model.output()).  A step is
- * served here only when the slave would accept it: step mode, a step size positive and
- * finite, the time continuous (math.isclose with rel_tol 1e-9, abs_tol 1e-12, as CPython
- * computes it) and no prediction of the slave's own to undo; else it is forwarded, and the
- * slave gives its status and message.  A served step does what do_step does: undo an
- * unused prediction (and stop predicting), step, set the times (B_TIME: the model's t,
- * B_NEXT_TIME: the step's end), invalidate the outputs and, while predicting, predict
- * them with the output entry (C_PREDICTED: the snapshot before it is in the slave's
- * buffer, B_SAVED, which the slave uses if it must undo it).  A fmi2GetReal with the
- * outputs invalid evaluates them with the output entry; a feedthrough fmi2SetReal undoes a
- * prediction made here.  An entry returning anything but 0 (a warning, an error, a case
- * the Python handles), or non-finite outputs: the value and state arrays are put back from
- * the snapshot taken before the call, and the call is forwarded: the slave does it in
- * Python, with its message, bit for bit as if it had come there first.  C_DIRTY tells the
- * slave, at its next call, to take over the times and a prediction made here.
- * AGILESAT_SHIM_STEP=0 (at fmi2Instantiate or fmi2Reset) turns this part off (the fast
- * get/set stay on); agilesat_shim_step_counters() gives the counts. */
-typedef int32_t (*Entry)(double *values, int64_t n_values, double *state, int64_t n_state,
-                         double x);
-
-typedef struct {
-    Entry step, output;
-    double *state, *saved;
-    size_t n_state, start, stop;   /* outputs: values[start:stop] */
-} Armed;
-
-/* The block's addresses and sizes, checked; 0 when they do not fit together. */
-static int armed(Shim *s, Armed *a) {
-    const double *b = s->block;
-    a->step = (Entry)address(b[B_STEP]);
-    a->output = (Entry)address(b[B_OUTPUT]);
-    a->state = address(b[B_STATE]);
-    a->saved = address(b[B_SAVED]);
-    if (!a->state || !a->saved || !(b[B_N_STATE] >= 0 && b[B_N_STATE] < (double)MAX_VALUES) ||
-        !(b[B_OUTPUTS_START] >= 0 && b[B_OUTPUTS_START] <= b[B_OUTPUTS_STOP] &&
-          b[B_OUTPUTS_STOP] <= (double)s->n_values))
-        return 0;
-    a->n_state = (size_t)b[B_N_STATE];
-    a->start = (size_t)b[B_OUTPUTS_START];
-    a->stop = (size_t)b[B_OUTPUTS_STOP];
-    return b[B_N_SAVED] >= (double)(s->n_values + a->n_state);
-}
-
-static void snapshot(Shim *s, const Armed *a) {
-    memcpy(a->saved, s->values, s->n_values * sizeof(double));
-    memcpy(a->saved + s->n_values, a->state, a->n_state * sizeof(double));
-}
-
-static void restore(Shim *s, const Armed *a) {
-    memcpy(s->values, a->saved, s->n_values * sizeof(double));
-    memcpy(a->state, a->saved + s->n_values, a->n_state * sizeof(double));
-}
-
-/* The slave's _unpredict and _consume_prediction of a prediction made here: the outputs
- * and the state as before it, and no more predictions until a get comes first. */
-static void unpredict(Shim *s, const Armed *a) {
-    memcpy(s->values + a->start, a->saved + a->start, (a->stop - a->start) * sizeof(double));
-    memcpy(a->state, a->saved + s->n_values, a->n_state * sizeof(double));
-    s->control[OUTPUTS_VALID] = s->control[PREDICTED] = s->control[C_PREDICTED] = 0;
-    s->control[PREDICTING] = 0;
-}
-
-/* model.output() by the output entry; 0 (everything put back) if it leaves it to the Python
- * or the outputs are not finite.  The snapshot stays in the slave's buffer. */
-static int output_in_c(Shim *s, const Armed *a) {
-    if (!a->output) return 0;
-    snapshot(s, a);
-    int ok = a->output(s->values, (int64_t)s->n_values, a->state, (int64_t)a->n_state,
-                       s->block[B_TIME]) == 0;
-    for (size_t i = a->start; ok && i < a->stop; i++) ok = isfinite(s->values[i]);
-    if (!ok) restore(s, a);
-    else s->c_outputs++;
-    return ok;
-}
-
-/* CPython's math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12) (Modules/mathmodule.c). */
-static int is_close(double a, double b) {
-    if (a == b) return 1;
-    if (isinf(a) || isinf(b)) return 0;
-    double diff = fabs(b - a);
-    return diff <= fabs(1e-9 * b) || diff <= fabs(1e-9 * a) || diff <= 1e-12;
-}
-
-static int fast_step(Shim *s, double t, double h) {
-    int32_t *control = s->control;
-    Armed a;
-    if (!s->values || !s->step_path || !control[STEP_MODE] || control[C_STEP] == PYTHON_STEP)
-        return 0;
-    if (!(isfinite(h) && h > 0.0) || !is_close(t, s->block[B_NEXT_TIME])) return 0;
-    if ((control[PREDICTED] && !control[C_PREDICTED]) || !armed(s, &a)) return 0;
-    if (control[C_STEP] == ENTRY_STEP && !a.step) return 0;
-    if (control[PREDICTED]) unpredict(s, &a);  /* do_step's _consume_prediction() */
-    if (control[C_STEP] == ENTRY_STEP) {
-        snapshot(s, &a);
-        if (a.step(s->values, (int64_t)s->n_values, a.state, (int64_t)a.n_state, h) != 0) {
-            restore(s, &a);
-            s->c_fallbacks++;
-            return 0;
-        }
-    }
-    s->block[B_TIME] = s->block[B_NEXT_TIME] = t + h;
-    control[OUTPUTS_VALID] = 0;
-    control[C_DIRTY] = 1;
-    control[FED] = 0;  /* _predict_outputs */
-    if (control[PREDICTING] && control[C_OUTPUT] && output_in_c(s, &a))
-        control[OUTPUTS_VALID] = control[PREDICTED] = control[C_PREDICTED] = 1;
-    s->c_steps++;
-    return 1;
-}
-
-/* The counts of instance c's fmi2DoStep calls served here, outputs evaluated here and
- * steps whose entry left them to the slave; 0 when c is not a live instance, -1 when the
- * C step path is off. */
-EXPORT int agilesat_shim_step_counters(fmi2Component c, unsigned long long counts[3]) {
-    Shim *s = find_instance(c, 0);
-    if (!s || !counts) return 0;
-    counts[0] = s->c_steps;
-    counts[1] = s->c_outputs;
-    counts[2] = s->c_fallbacks;
-    return s->values && s->step_path ? 1 : -1;
-}
-
-/* A get may be served: step mode and every value reference of the kind(s) asked for. */
-static int gettable(Shim *s, const fmi2ValueReference vr[], size_t n, int integer, int boolean) {
-    if (!s->values || !s->control[STEP_MODE]) return 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= s->n_values) return 0;
-        unsigned char kind = s->kind[vr[i]];
-        if (integer || boolean ? kind != (integer ? KIND_INTEGER : KIND_BOOLEAN)
-                               : kind == KIND_OTHER || kind >= KIND_INTEGER)
-            return 0;
-    }
-    return 1;
-}
-
-/* The outputs are valid, or evaluated here now (the slave's _read, with the output entry). */
-static int outputs_ready(Shim *s) {
-    int32_t *control = s->control;
-    Armed a;
-    if (control[OUTPUTS_VALID]) return 1;
-    if (!s->step_path || !control[C_OUTPUT] || !armed(s, &a) || !output_in_c(s, &a)) return 0;
-    control[OUTPUTS_VALID] = 1;
-    if (!control[FED]) control[PREDICTING] = 1;  /* a get came first after the step */
-    return 1;
-}
-
-/* A get came first: a prediction was right (the slave's _read). */
-static void got(Shim *s) {
-    s->control[PREDICTED] = s->control[C_PREDICTED] = 0;
-    s->fast_calls++;
-}
-
-/* fmi2GetInteger and fmi2GetBoolean of Integer and Boolean variables, as the slave's
- * int(x) (truncation; values a C int cannot hold are forwarded) and bool(x) (x != 0). */
-static int fast_get_integer(Shim *s, const fmi2ValueReference vr[], size_t n,
-                            fmi2Integer value[]) {
-    if (!gettable(s, vr, n, 1, 0) || !outputs_ready(s)) return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!(s->values[vr[i]] > -2147483649.0 && s->values[vr[i]] < 2147483648.0)) return 0;
-    for (size_t i = 0; i < n; i++) value[i] = (fmi2Integer)s->values[vr[i]];
-    got(s);
-    return 1;
-}
-
-static int fast_get_boolean(Shim *s, const fmi2ValueReference vr[], size_t n,
-                            fmi2Boolean value[]) {
-    if (!gettable(s, vr, n, 0, 1) || !outputs_ready(s)) return 0;
-    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]] != 0.0;
-    got(s);
-    return 1;
-}
-
-static int fast_get(Shim *s, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-    if (!gettable(s, vr, n, 0, 0) || !outputs_ready(s)) return 0;
-    for (size_t i = 0; i < n; i++) value[i] = s->values[vr[i]];
-    got(s);
-    return 1;
-}
-
-static int fast_set(Shim *s, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
-    if (!s->values || !s->control[STEP_MODE]) return 0;
-    int feeds = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (vr[i] >= s->n_values || !isfinite(value[i])) return 0;
-        unsigned char kind = s->kind[vr[i]];
-        if (kind != KIND_INPUT && kind != KIND_FEEDTHROUGH) return 0;
-        feeds |= kind == KIND_FEEDTHROUGH;
-    }
-    if (feeds && s->control[PREDICTED]) {  /* the slave's _consume_prediction() */
-        Armed a;
-        if (!s->control[C_PREDICTED] || !armed(s, &a)) return 0;
-        unpredict(s, &a);
-    }
-    for (size_t i = 0; i < n; i++) s->values[vr[i]] = value[i];
-    if (feeds) s->control[OUTPUTS_VALID] = 0, s->control[FED] = 1;
-    s->fast_calls++;
-    return 1;
-}
-
-/* The counts of fmi2GetReal/fmi2SetReal calls of instance c served here and forwarded to
- * the slave; 0 when c is not a live instance, -1 when the fast path is off. */
-EXPORT int agilesat_shim_counters(fmi2Component c, unsigned long long counts[2]) {
-    Shim *s = find_instance(c, 0);
-    if (!s || !counts) return 0;
-    counts[0] = s->fast_calls;
-    counts[1] = s->forwarded_calls;
-    return s->values ? 1 : -1;
+    return status == fmi2OK && worst == fmi2OK;
 }
 
 /* ---- FMI 2.0 API -------------------------------------------------------------------- */
@@ -776,7 +481,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         free(s);
         return NULL;
     }
-    handshake(s);
+    fast_paths_connect(&s->fast, ask_slave, s);
     pthread_mutex_lock(&registry_lock);
     s->next = instances;
     instances = s;
@@ -852,11 +557,11 @@ FORWARD_NOARGS(fmi2CancelStep)
 EXPORT fmi2Status fmi2Reset(fmi2Component c) {
     Shim *s = enter(c, "fmi2Reset");
     if (!s) return fmi2Error;
-    s->values = NULL;
+    fast_paths_disconnect(&s->fast);
     fmi2Status status = leave(s, INNER(fmi2Status (*)(fmi2Component), fmi2Reset)(s->inner));
     if (status <= fmi2Warning) {
         fmi2Status worst = s->worst;
-        handshake(s);
+        fast_paths_connect(&s->fast, ask_slave, s);
         s->worst = worst;
     }
     return status;
@@ -875,18 +580,12 @@ static int bad_arrays(Shim *s, const char *call, size_t n, const void *vr, const
     return 0;
 }
 
-/* Value references from DERIVATIVE_BASE up carry the derivative calls to the slave (see
- * "input and output derivatives" below); a plain fmi2GetReal/fmi2SetReal may not use them. */
-#define DERIVATIVE_BASE (1u << 30)
-#define ORDER_SHIFT 24
-#define MAX_ORDER 63
-
-static int not_served(Shim *s, const fmi2ValueReference vr[], size_t n, const void *value) {
-    (void)s, (void)vr, (void)n, (void)value;
+static int not_served(FastPaths *f, const fmi2ValueReference vr[], size_t n, const void *value) {
+    (void)f, (void)vr, (void)n, (void)value;
     return 0;
 }
 
-#define FORWARD_ARRAY(fn, type, check_strings, fast)                                      \
+#define FORWARD_ARRAY(fn, type, check_strings, served)                                      \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
@@ -895,24 +594,25 @@ static int not_served(Shim *s, const fmi2ValueReference vr[], size_t n, const vo
         if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
         for (size_t i = 0; check_strings && i < n; i++)                                   \
             if (!((const void *const *)value)[i]) return refuse(s, #fn, "a string is NULL"); \
-        if (fast(s, vr, n, value)) return fmi2OK;                                         \
+        if (served(&s->fast, vr, n, value)) return fmi2OK;                                \
         return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
-#define FORWARD_REAL(fn, type, fast)                                                      \
+/* Value references from DERIVATIVE_BASE up carry the derivative calls to the slave (see
+ * "input and output derivatives" below); a plain fmi2GetReal/fmi2SetReal may not use them. */
+#define FORWARD_REAL(fn, type, served)                                                      \
     EXPORT fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t n,        \
                          type value[]) {                                                  \
         typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, type *); \
         Shim *s = enter(c, #fn);                                                          \
         if (!s) return fmi2Error;                                                         \
         if (bad_arrays(s, #fn, n, vr, value)) return fmi2Error;                           \
-        if (fast(s, vr, n, value)) return fmi2OK;                                         \
         for (size_t i = 0; i < n; i++)                                                    \
             if (vr[i] >= DERIVATIVE_BASE) return refuse(s, #fn, "unknown value reference"); \
-        s->forwarded_calls++;                                                             \
+        if (served(&s->fast, vr, n, value)) return fmi2OK;                                \
         return leave(s, INNER(F, fn)(s->inner, vr, n, value));                            \
     }
-FORWARD_REAL(fmi2GetReal, fmi2Real, fast_get)
-FORWARD_REAL(fmi2SetReal, const fmi2Real, fast_set)
+FORWARD_REAL(fmi2GetReal, fmi2Real, fast_get_real)
+FORWARD_REAL(fmi2SetReal, const fmi2Real, fast_set_real)
 FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0, fast_get_integer)
 FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0, fast_get_boolean)
 FORWARD_ARRAY(fmi2GetString, fmi2String, 0, not_served)
@@ -1148,7 +848,7 @@ EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolea
     typedef fmi2Status (*F)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
     Shim *s = enter(c, "fmi2DoStep");
     if (!s) return fmi2Error;
-    if (fast_step(s, t, h)) return fmi2OK;
+    if (fast_do_step(&s->fast, t, h)) return fmi2OK;
     return leave(s, INNER(F, fmi2DoStep)(s->inner, t, h, no_set_prior));
 }
 

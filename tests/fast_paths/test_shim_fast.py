@@ -1,23 +1,21 @@
-"""The shim's fast path (fmus/shim/agilesat_fmi2.c, "fast get/set"; fmus/slave.py): valid
+"""The shim's fast path (fmus/shim/fast_paths.c, fmus/fast_paths.py, "Fast get/set"): valid
 fmi2GetReal/fmi2SetReal in step mode are served in C from the slave's value array, every
 other call reaches the slave as before.  In-process: the slave's side of the contract (the
-arrays it shares are never replaced, a prediction no get used is undone exactly).  In clean
+arrays it shares are never replaced, the flags follow the mode and the outputs).  In clean
 processes through FMPy's ctypes bindings: the path is taken (the shim's counters) and off
 with AGILESAT_SHIM_FAST=0, the answers and the results are the same either way, and FMU
 states and fmi2Reset leave no stale pointer or flag in the shim.  The statuses and messages
 of invalid calls are those of tests/fmus/test_faults_fmu.py and
 tests/orchestration/test_faults_master.py, which run on the same built FMUs, fast path on."""
 
-import copy
 import json
-import pickle
 
 import numpy as np
 import pytest
 from count_python_entries import count
 
-from agilesat.fmus import FMUS, model_class
-from agilesat.fmus.slave import FAST_PATH_N, FAST_PATH_VR, OUTPUTS_VALID, PREDICTED, STEP_MODE
+from agilesat.fmus import FMUS
+from agilesat.fmus.protocol import FAST_PATH_N, FAST_PATH_VR, OUTPUTS_VALID, STEP_MODE
 from helpers import logged, operating_point, run_python, slave
 
 STEP = 0.05
@@ -43,8 +41,13 @@ def test_the_shared_arrays_are_never_replaced(name):
     """The shim keeps the addresses of the handshake: state restore, steps and terminate
     copy into the same arrays (fmi2Reset makes a new slave, and the shim asks again)."""
     fmu = started(name)
-    values, kind, control, block = fmu.model.values, fmu._kind, fmu._control, fmu._block
-    answer = fmu.get_real([FAST_PATH_VR[0]] * FAST_PATH_N)
+    values, kind, control, block = (
+        fmu.model.values,
+        fmu._fast.kind,
+        fmu._fast.control,
+        fmu._fast.block,
+    )
+    answer = fmu.get_real([FAST_PATH_VR] * FAST_PATH_N)
     assert answer[1:] == [
         values.__array_interface__["data"][0],
         values.size,
@@ -59,120 +62,26 @@ def test_the_shared_arrays_are_never_replaced(name):
     fmu._set_fmu_state(state)
     assert fmu.do_step(0.0, STEP)
     fmu.terminate()
-    assert fmu.model.values is values and fmu._kind is kind and fmu._control is control
-    assert fmu._block is block
+    assert fmu.model.values is values and fmu._fast.kind is kind and fmu._fast.control is control
+    assert fmu._fast.block is block
     assert logged(fmu) == []
 
 
 @pytest.mark.parametrize("name", FMUS)
 def test_the_flags_follow_the_mode_and_the_outputs(name):
     fmu = slave(name)
-    assert not fmu._control[STEP_MODE]
+    assert not fmu._fast.control[STEP_MODE]
     fmu.exit_initialization_mode()
-    assert fmu._control[STEP_MODE] and not fmu._control[OUTPUTS_VALID]
+    assert fmu._fast.control[STEP_MODE] and not fmu._fast.control[OUTPUTS_VALID]
     assert fmu.do_step(0.0, STEP)
-    assert fmu._control[OUTPUTS_VALID] and fmu._control[PREDICTED]  # evaluated at the step
+    assert not fmu._fast.control[OUTPUTS_VALID]  # evaluated when a get asks
     fmu.get_real([fmu._outputs.start])
-    assert fmu._control[OUTPUTS_VALID] and not fmu._control[PREDICTED]  # used
+    assert fmu._fast.control[OUTPUTS_VALID]
     for vr in feedthrough_inputs(fmu)[:1]:
         fmu.set_real([vr], [fmu.get_real([vr])[0]])
-        assert not fmu._control[OUTPUTS_VALID]
+        assert not fmu._fast.control[OUTPUTS_VALID]
     fmu.terminate()
-    assert not fmu._control[STEP_MODE]
-    assert logged(fmu) == []
-
-
-def test_predictions_stop_while_a_feedthrough_set_comes_first_and_resume():
-    fmu = started("SatelliteDynamics")
-    q_OI = fmu.model.layout.offset["q_OI"]
-    turned = [q_OI, q_OI + 1, q_OI + 2, q_OI + 3]
-    first = fmu._outputs.start
-    predicted = []
-    for k in range(6):
-        assert fmu.do_step(k * STEP, STEP)
-        predicted.append(bool(fmu._control[PREDICTED]))
-        if k in (1, 2):  # as a Jacobi master's feedthrough pass
-            fmu.set_real(turned, fmu.model.values[turned].tolist())
-        fmu.get_real([first])
-    assert predicted == [True, True, False, False, True, True]
-    assert logged(fmu) == []
-
-
-def attributes(model):
-    return {k: v for k, v in vars(model).items() if k not in model._NOT_STATE}
-
-
-@pytest.mark.parametrize("name", FMUS)
-def test_output_assigns_its_memories_instead_of_modifying_them(name):
-    """The undo of a prediction puts the model's attribute references back and the contents
-    of its arrays (the kernels' state arrays, updated in place): output() must leave every
-    other object it found unchanged (a model that updates a remembered list in place would
-    make the undo incomplete, and results depend on whether a host reads)."""
-    fmu = started(name)
-    model = fmu.model
-    for k in range(3):
-        assert fmu.do_step(k * STEP, STEP)
-        fmu._consume_prediction()
-        found = attributes(model)
-        copies = copy.deepcopy(found)
-        model.output()
-        for key, value in found.items():
-            if type(value) is not np.ndarray:
-                assert pickle.dumps(value) == pickle.dumps(copies[key]), f"{name}.{key}"
-
-
-@pytest.mark.parametrize("name", FMUS)
-def test_an_undone_prediction_puts_the_state_arrays_back(name):
-    """Two steps with no get between them: the first step's prediction is undone, also in
-    the arrays output() updates in place (a kernel's state array: the last q_BO and Euler
-    angles of SatelliteDynamics, for the sign and branch continuity), so the model ends as
-    the plain model stepped twice."""
-    fmu = started(name)
-    model = model_class(name)()
-    model.values[:] = fmu.model.values
-    model.start(0.0)
-    fmu.get_real([fmu._outputs.start])
-    for k in range(2):
-        assert fmu.do_step(k * STEP, STEP)
-        model.step(k * STEP, STEP)
-    fmu._consume_prediction()
-    ours, plain = attributes(fmu.model), attributes(model)
-    for key in plain:
-        if type(plain[key]) is np.ndarray:
-            assert ours[key].tobytes() == plain[key].tobytes(), key
-
-
-@pytest.mark.parametrize("name", FMUS)
-def test_a_prediction_no_get_used_leaves_no_trace(name):
-    """Steps read only every other step, and feedthrough inputs set between a step and the
-    first get: the slave's model ends exactly (values, attributes, warnings) as the plain
-    model evaluated only where a host reads, which is what the FMU did before the shim
-    predicted outputs."""
-    fmu = started(name)
-    model = model_class(name)()
-    model.values[:] = fmu.model.values
-    model.start(0.0)
-    fmu.get_real([fmu._outputs.start])
-    inputs = feedthrough_inputs(fmu)
-    reals = np.flatnonzero(fmu._type == 0).tolist()
-    rng = np.random.default_rng(11)
-    for k in range(6):
-        assert fmu.do_step(k * STEP, STEP)
-        model.step(k * STEP, STEP)
-        if k % 3 == 1 and inputs:
-            x = model.values[inputs] * (1 + 1e-9 * rng.standard_normal(len(inputs)))
-            fmu.set_real(inputs, x.tolist())
-            model.values[inputs] = x
-        if k % 3 != 2:
-            model.output()
-            assert fmu.get_real(reals) == model.values[reals].tolist()
-    fmu._consume_prediction()
-    assert fmu.model.values.tolist() == model.values.tolist()
-    ours, plain = attributes(fmu.model), attributes(model)
-    ours.pop("_initial_inputs", None), plain.pop("_initial_inputs", None)  # start() sets it
-    assert sorted(ours) == sorted(plain)
-    for key in plain:
-        assert pickle.dumps(ours[key]) == pickle.dumps(plain[key]), key
+    assert not fmu._fast.control[STEP_MODE]
     assert logged(fmu) == []
 
 
@@ -297,13 +206,11 @@ def test_valid_calls_are_served_by_the_shim_and_give_the_same_answers(fmus):
     on, served, forwarded = zip(*fast["counts"])
     assert set(on) == {1}
     # the set in initialization mode is forwarded.  Then each step the set of h_cmg before
-    # it is served, and the two gets after it (outputs evaluated by the step).  From step
-    # 10 on, q_OI, which feeds outputs through, is set between the step and the gets: at
-    # step 10 that set and the first get go to the slave (which undoes the evaluation and
-    # evaluates again), after that the slave no longer predicts: the set is served, the
-    # first get goes to the slave
-    assert np.diff(served).tolist() == [3] * 10 + [2] + [3] * 9 + [0]
-    assert np.diff(forwarded).tolist() == [0] * 10 + [2] + [1] * 9 + [0] and forwarded[0] == 1
+    # it is served, the first get after it goes to the slave (which evaluates the outputs:
+    # the kernels run their Python in this short run) and the second is served.  From step
+    # 10 on, q_OI, which feeds outputs through, is set between the step and the gets: served
+    assert np.diff(served).tolist() == [2] * 10 + [3] * 10 + [0]
+    assert np.diff(forwarded).tolist() == [1] * 20 + [0] and forwarded[0] == 1
     assert {c[0] for c in slow["counts"]} == {-1} and {c[1] for c in slow["counts"]} == {0}
     assert np.diff([c[2] for c in slow["counts"]]).tolist() == [3] * 10 + [4] * 10 + [0]
 

@@ -1,5 +1,5 @@
-"""The shim's C step path (fmus/shim/agilesat_fmi2.c, "the C step path"; fmus/slave.py, "The
-C step path"; components/jit.py, "C entries"): with the kernels compiled, fmi2DoStep and the
+"""The shim's C step path (fmus/shim/fast_paths.c, fmus/fast_paths.py, fmus/c_entries.py):
+with the kernels compiled, fmi2DoStep and the
 evaluation of the outputs run in C, calling the models' compiled kernels.  Driven through
 the built FMUs in clean processes (tests/tools/shim_step_host.py), with the path on and off
 (AGILESAT_SHIM_STEP=0): the path is taken (the shim's counters), and everything a host sees
@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from agilesat.components import jit
+from agilesat.fmus import c_entries
 from helpers import TOOLS, run_python
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
@@ -102,9 +103,9 @@ def test_a_warning_from_the_step_falls_back_to_the_slave(hosts):
     assert [row[0] for row in on["record"]] == [OK] * 5 + [WARNING] + [OK] * 6
     assert "rate command 5.000 rad/s exceeds the rate limit" in on["messages"][0][1]
     enabled, steps, _, fallbacks = on["counts"]
-    # steps 5 (the kernel's warning: fallback) and 6 (saturated: the step may end it) in
-    # Python, the others in C (the kernels were compiled by the programs before)
-    assert (fallbacks, steps) == (1, 10)
+    # step 5 (the kernel's warning: fallback) in Python, the others in C (the kernels were
+    # compiled by the programs before), the saturated step 6 too (the saturation is state)
+    assert (fallbacks, steps) == (1, 11)
 
 
 def test_an_error_from_the_step_falls_back_to_the_slave(hosts):
@@ -122,10 +123,12 @@ os.environ["AGILESAT_JIT_AFTER"] = "0"
 sys.path.insert(0, sys.argv[2])
 import fmi_host
 fmu = fmi_host.Fmu(sys.argv[1], "a")
-jit = next(m for n, m in sys.modules.items() if n.startswith("agilesat_") and n.endswith(".jit"))
+c_entries = next(
+    m for n, m in sys.modules.items() if n.startswith("agilesat_") and n.endswith(".c_entries")
+)
 def broken(self):
     raise TypeError("numba moved")
-jit.CEntry._cfunc = property(broken)  # every C entry fails to build
+c_entries.CEntry._cfunc = property(broken)  # every C entry fails to build
 fmu.initialize(fmi_host.plausible_inputs(fmu))
 statuses = [fmu.step(k * 0.05, 0.05) for k in range(5)]
 said = [m for s, m in fmu.messages if "C step path is off" in m]
@@ -167,7 +170,7 @@ def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
         return 0
 
     inner = jit.Kernel(divide, 0)
-    entry = jit.CEntry(lambda values, state, dt: inner(values, state, dt), inner)
+    entry = c_entries.CEntry(inner)
     assert entry.address is None  # not compiled yet
     values, state = np.array([3.0]), np.zeros(1)
     inner(values, state, 2.0)  # the tier switch

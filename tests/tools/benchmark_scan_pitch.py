@@ -78,30 +78,34 @@ def patched(changes):
 
 def stub_models(c_path: bool = False):
     """Every loaded FMU model's work replaced by a no-op.  ``c_path``: the shim's C step
-    path kept (components/jit.py, "C entries"): the models initialise and evaluate their
+    path kept (fmus/c_entries.py): the models initialise and evaluate their
     outputs until their first step as they do (the C path needs their state and valid
     values), then do nothing, and every C entry is a compiled no-op of its signature."""
     changes = []
     noop = _noop_c_entry() if c_path else None
-    for name, module in _fmu_modules():
+    modules = _fmu_modules()
+    for name, module in modules:
         for obj in vars(module).values():
             if isinstance(obj, type) and "VARIABLES" in vars(obj) and obj.__module__ == name:
                 if c_path:
                     changes += [(obj, "step", _stepped), (obj, "output", _until_stepped(obj))]
+                    entries = dict(modules)[name.split(".")[0] + ".fmus.c_entries"].of(obj)
+                    changes += [
+                        (e, "_address", noop.address) for e in entries[:2] if e and e._address
+                    ]
                 else:
                     changes += [
                         (obj, "initialize", lambda self, t0: None),
                         (obj, "step", lambda self, t, dt: None),
                         (obj, "output", lambda self: None),
                     ]
-            if c_path and type(obj).__name__ == "CEntry" and "_cfunc" in vars(obj):
-                changes.append((obj, "_cfunc", noop))
     return patched(changes)
 
 
 def _stepped(self, t, dt):
     self._initial_inputs = None  # as the first step's check leaves it (the C path's cue)
     self._stub_stepped = True
+    self.t = t + dt
 
 
 def _until_stepped(model_class):

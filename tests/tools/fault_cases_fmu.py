@@ -223,21 +223,13 @@ CASES += [
 
 
 def _warning_case():
+    from agilesat.fmus.build import SHIM_C_FILES, shim_flags
+
     directory = Path(tempfile.mkdtemp(prefix="agilesat-fake-"))
     try:
-        _compile(
-            HERE / "c_host" / "fake_inner.c", directory / "pythonfmu-export.so", "-shared", "-fPIC"
-        )
-        _compile(
-            ROOT / "fmus" / "shim" / "agilesat_fmi2.c",
-            directory / "Fake.so",
-            "-shared",
-            "-fPIC",
-            "-fvisibility=hidden",
-            '-DAGILESAT_LIBPYTHON=""',
-            '-DAGILESAT_PYTHON=""',
-            "-lpthread",
-        )
+        inner = directory / "pythonfmu-export.so"
+        _compile([HERE / "c_host" / "fake_inner.c"], inner, "-shared", "-fPIC")
+        _compile(SHIM_C_FILES, directory / "Fake.so", *shim_flags("", ""), "-lpthread")
         answer, process = _child("warning_as_ok", directory / "Fake.so")
     finally:
         shutil.rmtree(directory, ignore_errors=True)
@@ -256,7 +248,7 @@ _warning_case.__name__ = "warning_as_ok"
 CASES.append(_warning_case)
 
 
-def _compile(source: Path, output: Path, *flags: str) -> None:
+def _compile(sources, output: Path, *flags: str) -> None:
     compiler = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     subprocess.run(
         [
@@ -269,7 +261,7 @@ def _compile(source: Path, output: Path, *flags: str) -> None:
             *flags,
             "-o",
             str(output),
-            str(source),
+            *map(str, sources),
             "-ldl",
         ],
         check=True,
@@ -279,7 +271,7 @@ def _compile(source: Path, output: Path, *flags: str) -> None:
 @functools.cache
 def _hostile_host() -> Path:
     binary = Path(tempfile.mkdtemp(prefix="agilesat-host-")) / "hostile_host"
-    _compile(HERE / "c_host" / "hostile_host.c", binary)
+    _compile([HERE / "c_host" / "hostile_host.c"], binary)
     return binary
 
 

@@ -127,7 +127,7 @@ def states(fmu):
     """FMU state get, set, serialize and deserialize mid-run after C steps."""
     fmu.initialize()
     fmu.steps(0.0, 10)
-    fmu.step(10 * H)  # a step whose outputs the shim evaluated (predicted), no get yet
+    fmu.step(10 * H)  # a step in C, no get yet: the model's time is the shim's
     state = fmu.get_state()
     data = fmu.serialize(state)
     after = fmu.steps(11 * H, 5)

@@ -1,0 +1,155 @@
+"""Every ``AGILESAT_*`` environment variable, in one table (docs/fast_paths.md lists the
+same; tests/fast_paths/test_switches.py keeps the repository to this table).
+
+Python reads them through :func:`value`, which checks what a variable holds: a value it
+cannot take is a :class:`SwitchError` naming the variable, what it holds and what it
+accepts (``agilesat`` prints it as a one-line error).  The FMU's C shim reads four itself
+(``fmus/shim``): AGILESAT_SHIM_FAST and AGILESAT_SHIM_STEP (off with ``0``; the slave checks
+both at the shim's handshake and turns the fast paths off, with this message, on anything
+but ``0`` or ``1``), AGILESAT_LIBPYTHON and AGILESAT_PYTHON (paths; the shim says when they
+do not exist).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+
+
+class SwitchError(ValueError):
+    """An environment variable holds a value it cannot take."""
+
+
+def _flag(text: str) -> bool:
+    if text not in ("0", "1"):
+        raise ValueError("0 (off) or 1 (on)")
+    return text == "1"
+
+
+def _count(text: str) -> int:
+    if not (text.strip().isdigit()):
+        raise ValueError("a whole number >= 0")
+    return int(text)
+
+
+def _loop(text: str) -> str:
+    if text not in ("auto", "compiled", "python"):
+        raise ValueError("auto, compiled or python")
+    return text
+
+
+def _path(text: str) -> str:
+    return text
+
+
+@dataclass(frozen=True)
+class Switch:
+    name: str
+    default: object  # the value when the variable is unset or empty
+    parse: Callable[[str], object]
+    meaning: str
+    read_by: str
+
+
+SWITCHES = {
+    s.name: s
+    for s in (
+        Switch(
+            "AGILESAT_JIT",
+            True,
+            _flag,
+            "1: the model kernels run compiled after AGILESAT_JIT_AFTER calls; 0: their Python",
+            "components/jit.py, at import",
+        ),
+        Switch(
+            "AGILESAT_JIT_AFTER",
+            50_000,
+            _count,
+            "the calls of a kernel before it runs compiled; 0: from the first call",
+            "components/jit.py, at import",
+        ),
+        Switch(
+            "AGILESAT_CACHE_DIR",
+            None,
+            _path,
+            "the compile cache: kernels, C entries, the master's loop, unpacked FMUs; "
+            "default $XDG_CACHE_HOME/agilesat or ~/.cache/agilesat",
+            "components/jit.py cache_root()",
+        ),
+        Switch(
+            "AGILESAT_SHIM_FAST",
+            True,
+            _flag,
+            "0: the shim serves no call itself, every get, set and doStep reaches the slave",
+            "the shim (C) at fmi2Instantiate and fmi2Reset; checked by fmus/fast_paths.py",
+        ),
+        Switch(
+            "AGILESAT_SHIM_STEP",
+            True,
+            _flag,
+            "0: the shim's C step path is off, its fast get/set stay on",
+            "the shim (C) and fmus/fast_paths.py, at the handshake",
+        ),
+        Switch(
+            "AGILESAT_LIBPYTHON",
+            None,
+            _path,
+            "the shared libpython an FMU loads in a host without Python; default: the "
+            "building environment's",
+            "the shim (C), at the first fmi2Instantiate",
+        ),
+        Switch(
+            "AGILESAT_PYTHON",
+            None,
+            _path,
+            "the python executable an FMU runs as in a host without Python; default: the "
+            "building environment's",
+            "the shim (C), at the first fmi2Instantiate",
+        ),
+        Switch(
+            "AGILESAT_LOOP",
+            None,
+            _loop,
+            "the master's loop; default auto",
+            "orchestration/loop.py choose()",
+        ),
+        Switch(
+            "AGILESAT_FIGURE_PROCESSES",
+            None,
+            _count,
+            "the processes drawing figures; 0: in the command's own process; default: from "
+            "the idle cores",
+            "orchestration/figure_pool.py",
+        ),
+        Switch(
+            "AGILESAT_SSP_MAX_BYTES",
+            None,
+            _count,
+            "the most bytes an SSP package may unpack to; default 256 MiB",
+            "orchestration/ssp.py",
+        ),
+        Switch(
+            "AGILESAT_FAULT_FMUS",
+            None,
+            _path,
+            "the built FMUs the fault matrix runs, a test tool's",
+            "tests/fault_cases_fmu.py",
+        ),
+    )
+}
+
+
+def value(name: str, environ=None):
+    """The value of switch ``name``: its default when unset or empty, else what it holds,
+    checked (:class:`SwitchError` if it cannot take it)."""
+    switch = SWITCHES[name]
+    text = (os.environ if environ is None else environ).get(name, "")
+    if not text:
+        return switch.default
+    try:
+        return switch.parse(text)
+    except ValueError as expected:
+        raise SwitchError(
+            f"{name}={text!r}: expected {expected} ({name}: {switch.meaning})"
+        ) from None

@@ -1,0 +1,105 @@
+"""A model's C entries: its step and output kernels (components/jit.py, "The kernel
+convention") as C functions, for the shim's C step path (``fast_paths.py``).
+
+An entry is ``int32 (double *values, int64 n_values, double *state, int64 n_state,
+double x)``: a numba ``cfunc`` that calls the kernel's compiled function on the two arrays
+(x: the step size, or the time) and returns its status: 0 when it did everything the
+method does but advance ``t``, anything else to leave the call to the method (which then
+raises or warns with the readable message).  The same machine code as the compiled kernel,
+no second copy of the physics.  An entry exists once its kernel has switched to its
+compiled tier (``address`` is None before, and without numba).  An exception inside (a
+``ZeroDivisionError`` under numba's Python error model) is caught and returns -1, so the
+caller falls back to the Python, which raises it with its message (numba's cfunc wrapper
+would only print it and return an undefined value).  The cfuncs are cached beside the
+kernels (jit.py, "Compile cache"), under the kernel's module, name and line.
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+from typing import NamedTuple
+
+from ..components import jit
+
+
+class CEntry:
+    """A step or output kernel as a C function (module docstring)."""
+
+    def __init__(self, kernel: jit.Kernel):
+        self.kernel = kernel
+        self._address: int | None = None
+
+    @property
+    def address(self) -> int | None:
+        """The C function's address once the kernel runs compiled, else None."""
+        if self._address is None and jit.runs_compiled(self.kernel):
+            self._address = self._cfunc.address
+        return self._address
+
+    @functools.cached_property
+    def _cfunc(self):
+        numba = jit._numba()
+        from numba.core.ccallback import CFunc
+
+        py_func, name = self.kernel.py_func, self.kernel.__name__ + "_c"
+        names = {"co_name": name}
+        if hasattr(_c_template.__code__, "co_qualname"):  # Python 3.11 on
+            names["co_qualname"] = self.kernel.__qualname__ + "_c"
+        code = _c_template.__code__.replace(
+            co_filename=py_func.__code__.co_filename,
+            co_firstlineno=py_func.__code__.co_firstlineno,
+            **names,
+        )
+        namespace = {"__name__": py_func.__module__, "carray": numba.carray}
+        namespace["kernel"] = self.kernel.compiled
+        entry = type(_c_template)(code, namespace, name)
+        entry.__module__ = py_func.__module__
+        cfunc = CFunc(entry, _signature(numba), locals={}, options={})
+        try:
+            cfunc._cache = jit.content_cache(entry)
+        except (OSError, RuntimeError, AttributeError) as exc:
+            warnings.warn(
+                f"agilesat: no compile cache for {name} ({exc}): compiling it in every process",
+                stacklevel=2,
+            )
+        cfunc.compile()
+        return cfunc
+
+
+def _c_template(values, n_values, state, n_state, x):
+    """The body of every C entry (``kernel`` and ``carray`` are its globals)."""
+    try:
+        return kernel(carray(values, n_values), carray(state, n_state), x)  # noqa: F821
+    except Exception:  # noqa: BLE001 - the caller runs the Python, which raises it
+        return -1
+
+
+def _signature(numba):
+    double_p = numba.types.CPointer(numba.types.float64)
+    i64 = numba.types.int64
+    return (double_p, i64, double_p, i64, numba.types.float64), numba.types.int32
+
+
+class Entries(NamedTuple):
+    """A model's C entries: step and output (None: the method's), and whether its step
+    changes nothing but ``t`` (``STATELESS``)."""
+
+    step: CEntry | None
+    output: CEntry | None
+    stateless: bool
+
+    @property
+    def any(self) -> bool:
+        return bool(self.step or self.output or self.stateless)
+
+
+@functools.cache
+def of(model_class) -> Entries:
+    """The C entries of ``model_class`` (one per kernel and process)."""
+    step, output = jit.declared(model_class)
+    return Entries(
+        CEntry(step) if step else None,
+        CEntry(output) if output else None,
+        bool(getattr(model_class, "STATELESS", False)),
+    )

@@ -1,0 +1,94 @@
+"""What the slave (Python, ``slave.py`` and ``fast_paths.py``) and the shim (C,
+``shim/*.c``) share: one table, from which ``agilesat generate`` writes the C header the
+shim compiles against (``shim/protocol.h``; ``agilesat generate --check`` and the build
+refuse a stale one).  Nothing here is written twice.
+
+- The derivative calls.  pythonfmu 0.7 has no fmi2SetRealInputDerivatives and
+  fmi2GetRealOutputDerivatives; the shim passes them on as fmi2SetReal/fmi2GetReal of the
+  value references ``DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr`` (orders up to
+  ``MAX_ORDER``), a range no variable has.
+- The handshake.  A fmi2GetReal of ``FAST_PATH_N`` copies of ``FAST_PATH_VR`` (which
+  pythonfmu, passing value references as C ints, hands the slave as -1) answers
+  (``FAST_PATH_VERSION``, address of the model's value array, its length, addresses of
+  ``kind``, ``control`` and ``block``); the shim uses the arrays only if the version is
+  its own.
+- ``kind``: per scalar (value reference), ``KIND_*``.
+- ``control`` (int32): the flags of the state machine and of the fast paths.
+- ``block`` (float64): the step's end and the C step path's addresses (exact doubles).
+- Time continuity: a step starts where the last one ended when
+  ``math.isclose(t, end, rel_tol=TIME_REL_TOL, abs_tol=TIME_ABS_TOL)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
+
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 3.0
+
+#: per scalar: a String (or anything the shim leaves alone), a Real parameter, output,
+#: input, input some output depends on directly (feedthrough), an Integer, a Boolean
+KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = range(5)
+KIND_INTEGER, KIND_BOOLEAN = 5, 6
+
+#: control[]: the slave is in step mode (and its value array is the one shared); the
+#: outputs are those of the current state and inputs; the C step path's step (C_STEP_*) and
+#: output (1: the output entry does all of output()); the shim served calls since the
+#: slave's last one
+STEP_MODE, OUTPUTS_VALID, C_STEP, C_OUTPUT, C_DIRTY = range(5)
+N_CONTROL = 5
+#: control[C_STEP]: the next step is the slave's, the step entry's, or changes only the time
+C_STEP_PYTHON, C_STEP_ENTRY, C_STEP_TIME = range(3)
+
+#: block[]: the step's end (the model's time t; NaN before the first step's start is
+#: known), the C entries' addresses, the model's state array (address, length), the
+#: snapshot buffer (address, length: values then state), the outputs values[start:stop]
+B_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED = range(7)
+B_OUTPUTS_START, B_OUTPUTS_STOP = 7, 8
+N_BLOCK = 9
+
+TIME_REL_TOL, TIME_ABS_TOL = 1e-9, 1e-12
+
+#: the header's sections: (comment, names)
+SECTIONS = (
+    ("derivative calls", ("DERIVATIVE_BASE", "ORDER_SHIFT", "MAX_ORDER")),
+    ("the handshake", ("FAST_PATH_VR", "FAST_PATH_N", "FAST_PATH_VERSION")),
+    (
+        "kind[]: per scalar",
+        ("KIND_OTHER", "KIND_PARAMETER", "KIND_OUTPUT", "KIND_INPUT", "KIND_FEEDTHROUGH")
+        + ("KIND_INTEGER", "KIND_BOOLEAN"),
+    ),
+    (
+        "control[] (int32)",
+        ("STEP_MODE", "OUTPUTS_VALID", "C_STEP", "C_OUTPUT", "C_DIRTY", "N_CONTROL"),
+    ),
+    ("control[C_STEP]", ("C_STEP_PYTHON", "C_STEP_ENTRY", "C_STEP_TIME")),
+    (
+        "block[] (float64)",
+        ("B_TIME", "B_STEP", "B_OUTPUT", "B_STATE", "B_N_STATE", "B_SAVED", "B_N_SAVED")
+        + ("B_OUTPUTS_START", "B_OUTPUTS_STOP", "N_BLOCK"),
+    ),
+    ("time continuity (math.isclose)", ("TIME_REL_TOL", "TIME_ABS_TOL")),
+)
+
+
+def continuous(t: float, end: float) -> bool:
+    """Does a step starting at ``t`` continue one that ended at ``end``?"""
+    return math.isclose(t, end, rel_tol=TIME_REL_TOL, abs_tol=TIME_ABS_TOL)
+
+
+def header() -> str:
+    """``shim/protocol.h``."""
+    lines = [
+        "/* Generated from fmus/protocol.py by `agilesat generate`: do not edit. */",
+        "#ifndef AGILESAT_PROTOCOL_H",
+        "#define AGILESAT_PROTOCOL_H",
+    ]
+    for comment, names in SECTIONS:
+        lines.append(f"\n/* {comment} */")
+        for name in names:
+            value = globals()[name]
+            text = repr(value) if isinstance(value, float) else f"{value}{'u' * (value > 2**31)}"
+            lines.append(f"#define {name} {text}")
+    return "\n".join(lines) + "\n\n#endif\n"

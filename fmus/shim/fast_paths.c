@@ -1,0 +1,249 @@
+/* The shim's fast paths: valid calls answered in C from the slave's arrays, without
+ * entering Python (the slave's half: fmus/fast_paths.py; the flags and indices:
+ * protocol.h, generated from fmus/protocol.py).  Each either serves a call completely, as
+ * the slave would, or leaves it untouched to be forwarded: the slave then gives its status
+ * and message.  The answer is the same either way; so are results, bit for bit.  Only the
+ * instance's own fields are used: one instance per thread is safe, as FMI 2.0 allows.
+ *
+ * Handshake.  After fmi2Instantiate and fmi2Reset (pythonfmu then creates a new slave) the
+ * shim asks the slave for FAST_PATH_N values of the reserved value reference FAST_PATH_VR
+ * (no host can: plain calls on value references from DERIVATIVE_BASE up are refused): the
+ * version, the address and length of model.values (value reference = offset) and the
+ * addresses of kind[], control[] and block[], which the slave never replaces.
+ * AGILESAT_SHIM_FAST=0 at that moment turns everything here off for the instance;
+ * AGILESAT_SHIM_STEP=0 the C step path only.
+ *
+ * Fast get/set.  In step mode (STEP_MODE), a fmi2GetReal of Real scalars is served while
+ * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: int(x))
+ * and fmi2GetBoolean (KIND_BOOLEAN: x != 0); a fmi2SetReal of finite values to Real inputs
+ * is written in, a feedthrough input (KIND_FEEDTHROUGH) clearing OUTPUTS_VALID.
+ *
+ * The C step path.  Once the model's kernels run compiled, the slave arms (control[C_STEP],
+ * control[C_OUTPUT]) the model's C entries (fmus/c_entries.py) in block[], with its state
+ * array and a snapshot buffer.  A fmi2DoStep the slave would accept (step mode, a step size
+ * positive and finite, the time continuous) is served: the step entry (nothing for a
+ * stateless model), the step's end, the outputs invalid.  A get with the outputs invalid
+ * evaluates them with the output entry.  An entry returning anything but 0, or non-finite
+ * outputs: the arrays are put back from the snapshot and the call forwarded.
+ * C_DIRTY tells the slave, at its next call, to take over what was done here. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shim.h"
+
+static void *address(double x) {
+    uintptr_t a = (uintptr_t)x;
+    return x > 0 && x < 9007199254740992.0 && (double)a == x ? (void *)a : NULL;
+}
+
+void fast_paths_disconnect(FastPaths *f) {
+    f->values = NULL;
+    f->kind = NULL;
+    f->control = NULL;
+    f->block = NULL;
+    f->n_values = 0;
+}
+
+static int switched_off(const char *variable) {
+    const char *value = getenv(variable);
+    return value && strcmp(value, "0") == 0;
+}
+
+void fast_paths_connect(FastPaths *f, Ask ask, void *shim) {
+    fast_paths_disconnect(f);
+    if (switched_off("AGILESAT_SHIM_FAST")) return;
+    f->step_path = !switched_off("AGILESAT_SHIM_STEP");
+    fmi2ValueReference vr[FAST_PATH_N];
+    fmi2Real got[FAST_PATH_N] = {0};
+    for (int i = 0; i < FAST_PATH_N; i++) vr[i] = FAST_PATH_VR;
+    if (!ask(shim, vr, FAST_PATH_N, got) || got[0] != FAST_PATH_VERSION) return;
+    double *values = address(got[1]);
+    unsigned char *kind = address(got[3]);
+    int32_t *control = address(got[4]);
+    double *block = address(got[5]);
+    if (!values || !kind || !control || !block || !(got[2] >= 0 && got[2] < (double)MAX_VALUES))
+        return;
+    f->n_values = (size_t)got[2];
+    f->kind = kind;
+    f->control = control;
+    f->block = block;
+    f->values = values;
+}
+
+/* ---- the C step path ------------------------------------------------------------------ */
+typedef int32_t (*Entry)(double *values, int64_t n_values, double *state, int64_t n_state,
+                         double x);
+
+typedef struct {
+    Entry step, output;
+    double *state, *saved;
+    size_t n_state, start, stop;   /* outputs: values[start:stop] */
+} Armed;
+
+/* The block's addresses and sizes, checked; 0 when they do not fit together. */
+static int armed(const FastPaths *f, Armed *a) {
+    const double *b = f->block;
+    a->step = (Entry)address(b[B_STEP]);
+    a->output = (Entry)address(b[B_OUTPUT]);
+    a->state = address(b[B_STATE]);
+    a->saved = address(b[B_SAVED]);
+    if (!a->state || !a->saved || !(b[B_N_STATE] >= 0 && b[B_N_STATE] < (double)MAX_VALUES) ||
+        !(b[B_OUTPUTS_START] >= 0 && b[B_OUTPUTS_START] <= b[B_OUTPUTS_STOP] &&
+          b[B_OUTPUTS_STOP] <= (double)f->n_values))
+        return 0;
+    a->n_state = (size_t)b[B_N_STATE];
+    a->start = (size_t)b[B_OUTPUTS_START];
+    a->stop = (size_t)b[B_OUTPUTS_STOP];
+    return b[B_N_SAVED] >= (double)(f->n_values + a->n_state);
+}
+
+static void snapshot(const FastPaths *f, const Armed *a) {
+    memcpy(a->saved, f->values, f->n_values * sizeof(double));
+    memcpy(a->saved + f->n_values, a->state, a->n_state * sizeof(double));
+}
+
+static void restore(const FastPaths *f, const Armed *a) {
+    memcpy(f->values, a->saved, f->n_values * sizeof(double));
+    memcpy(a->state, a->saved + f->n_values, a->n_state * sizeof(double));
+}
+
+/* model.output() by the output entry; 0 (everything put back) if it leaves it to the Python
+ * or the outputs are not finite. */
+static int output_in_c(FastPaths *f, const Armed *a) {
+    if (!a->output) return 0;
+    snapshot(f, a);
+    int ok = a->output(f->values, (int64_t)f->n_values, a->state, (int64_t)a->n_state,
+                       f->block[B_TIME]) == 0;
+    for (size_t i = a->start; ok && i < a->stop; i++) ok = isfinite(f->values[i]);
+    if (!ok) restore(f, a);
+    else f->c_outputs++;
+    return ok;
+}
+
+/* fmus/protocol.py continuous(): CPython's math.isclose (Modules/mathmodule.c) with the
+ * protocol's tolerances. */
+static int continuous(double t, double end) {
+    if (t == end) return 1;
+    if (isinf(t) || isinf(end)) return 0;
+    double diff = fabs(end - t);
+    return diff <= fabs(TIME_REL_TOL * end) || diff <= fabs(TIME_REL_TOL * t) ||
+           diff <= TIME_ABS_TOL;
+}
+
+int fast_do_step(FastPaths *f, double t, double h) {
+    int32_t *control = f->control;
+    Armed a;
+    if (!f->values || !f->step_path || !control[STEP_MODE] || control[C_STEP] == C_STEP_PYTHON)
+        return 0;
+    if (!(isfinite(h) && h > 0.0) || !continuous(t, f->block[B_TIME]) || !armed(f, &a)) return 0;
+    if (control[C_STEP] == C_STEP_ENTRY) {
+        if (!a.step) return 0;
+        snapshot(f, &a);
+        if (a.step(f->values, (int64_t)f->n_values, a.state, (int64_t)a.n_state, h) != 0) {
+            restore(f, &a);
+            f->c_fallbacks++;
+            return 0;
+        }
+    }
+    f->block[B_TIME] = t + h;
+    control[OUTPUTS_VALID] = 0;
+    control[C_DIRTY] = 1;
+    f->c_steps++;
+    return 1;
+}
+
+/* ---- fast get/set --------------------------------------------------------------------- */
+/* A get may be served: step mode and every value reference of the kind(s) asked for. */
+static int gettable(const FastPaths *f, const fmi2ValueReference vr[], size_t n, int integer,
+                    int boolean) {
+    if (!f->values || !f->control[STEP_MODE]) return 0;
+    for (size_t i = 0; i < n; i++) {
+        if (vr[i] >= f->n_values) return 0;
+        unsigned char kind = f->kind[vr[i]];
+        if (integer || boolean ? kind != (integer ? KIND_INTEGER : KIND_BOOLEAN)
+                               : kind == KIND_OTHER || kind >= KIND_INTEGER)
+            return 0;
+    }
+    return 1;
+}
+
+/* The outputs are valid, or evaluated here now (the slave's _read, with the output entry). */
+static int outputs_ready(FastPaths *f) {
+    int32_t *control = f->control;
+    Armed a;
+    if (control[OUTPUTS_VALID]) return 1;
+    if (!f->step_path || !control[C_OUTPUT] || !armed(f, &a) || !output_in_c(f, &a)) return 0;
+    control[OUTPUTS_VALID] = 1;
+    return 1;
+}
+
+/* As the slave's int(x) (truncation; values a C int cannot hold are forwarded). */
+int fast_get_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     fmi2Integer value[]) {
+    if (!gettable(f, vr, n, 1, 0) || !outputs_ready(f)) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!(f->values[vr[i]] > -2147483649.0 && f->values[vr[i]] < 2147483648.0)) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = (fmi2Integer)f->values[vr[i]];
+    f->served++;
+    return 1;
+}
+
+/* As the slave's bool(x): x != 0. */
+int fast_get_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     fmi2Boolean value[]) {
+    if (!gettable(f, vr, n, 0, 1) || !outputs_ready(f)) return 0;
+    for (size_t i = 0; i < n; i++) value[i] = f->values[vr[i]] != 0.0;
+    f->served++;
+    return 1;
+}
+
+int fast_get_real(FastPaths *f, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
+    if (!gettable(f, vr, n, 0, 0) || !outputs_ready(f)) {
+        f->forwarded++;
+        return 0;
+    }
+    for (size_t i = 0; i < n; i++) value[i] = f->values[vr[i]];
+    f->served++;
+    return 1;
+}
+
+int fast_set_real(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                  const fmi2Real value[]) {
+    int ok = f->values && f->control[STEP_MODE], feeds = 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        unsigned char kind = vr[i] < f->n_values ? f->kind[vr[i]] : KIND_OTHER;
+        ok = isfinite(value[i]) && (kind == KIND_INPUT || kind == KIND_FEEDTHROUGH);
+        feeds |= kind == KIND_FEEDTHROUGH;
+    }
+    if (!ok) {
+        f->forwarded++;
+        return 0;
+    }
+    for (size_t i = 0; i < n; i++) f->values[vr[i]] = value[i];
+    if (feeds) f->control[OUTPUTS_VALID] = 0;
+    f->served++;
+    return 1;
+}
+
+/* ---- counts, for tests and benchmarks ------------------------------------------------- */
+/* Instance c's fmi2GetReal/fmi2SetReal calls served here and forwarded to the slave; 0 when
+ * c is not a live instance, -1 when the fast paths are off. */
+EXPORT int agilesat_shim_counters(fmi2Component c, unsigned long long counts[2]) {
+    FastPaths *f = fast_paths_of(c);
+    if (!f || !counts) return 0;
+    counts[0] = f->served;
+    counts[1] = f->forwarded;
+    return f->values ? 1 : -1;
+}
+
+/* Instance c's fmi2DoStep calls served here, outputs evaluated here and steps whose entry
+ * left them to the slave; 0 when c is not a live instance, -1 when the C step path is off. */
+EXPORT int agilesat_shim_step_counters(fmi2Component c, unsigned long long counts[3]) {
+    FastPaths *f = fast_paths_of(c);
+    if (!f || !counts) return 0;
+    counts[0] = f->c_steps;
+    counts[1] = f->c_outputs;
+    counts[2] = f->c_fallbacks;
+    return f->values && f->step_path ? 1 : -1;
+}

@@ -1,0 +1,49 @@
+/* The shim's two halves and what they share: the FMI forwarding (agilesat_fmi2.c) and the
+ * fast paths (fast_paths.c), which answer calls from the slave's arrays without entering
+ * Python.  The forwarding knows the fast paths only through the functions below: each
+ * returns 1 when it served the call (the caller returns fmi2OK), 0 to forward it. */
+#ifndef AGILESAT_SHIM_H
+#define AGILESAT_SHIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "fmi2_abi.h"
+#include "protocol.h"
+
+#define EXPORT __attribute__((visibility("default")))
+
+/* Largest array a call may pass (pythonfmu indexes with int and builds Python lists). */
+#define MAX_VALUES ((size_t)1 << 24)
+
+/* An instance's fast paths: the slave's arrays (NULL values when off) and the counts. */
+typedef struct {
+    double *values;              /* the slave's model.values */
+    size_t n_values;
+    const unsigned char *kind;   /* per value reference: KIND_* */
+    int32_t *control;            /* the flags (protocol.h): the slave's */
+    double *block;               /* the step's end, the C step path's addresses: the slave's */
+    int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
+    unsigned long long served, forwarded;           /* fmi2GetReal/fmi2SetReal calls */
+    unsigned long long c_steps, c_outputs, c_fallbacks;  /* the C step path's */
+} FastPaths;
+
+/* Asks the slave for n Reals of the value references vr (pythonfmu's fmi2GetReal): 1 when it
+ * answered fmi2OK and logged nothing. */
+typedef int (*Ask)(void *shim, const fmi2ValueReference vr[], size_t n, fmi2Real got[]);
+
+void fast_paths_connect(FastPaths *f, Ask ask, void *shim);
+void fast_paths_disconnect(FastPaths *f);
+int fast_get_real(FastPaths *f, const fmi2ValueReference vr[], size_t n, fmi2Real value[]);
+int fast_set_real(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                  const fmi2Real value[]);
+int fast_get_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     fmi2Integer value[]);
+int fast_get_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     fmi2Boolean value[]);
+int fast_do_step(FastPaths *f, double t, double h);
+
+/* agilesat_fmi2.c: the fast paths of the live instance c, or NULL. */
+FastPaths *fast_paths_of(fmi2Component c);
+
+#endif
