@@ -43,6 +43,15 @@ def _path(text: str) -> str:
     return text
 
 
+def _test_signal(text: str) -> tuple[str, str, int]:
+    """'SIGTERM@run:3' -> ('SIGTERM', 'run', 3)."""
+    name, _, where = text.partition("@")
+    point, _, count = where.partition(":")
+    if not (name.startswith("SIG") and point in ("step", "run", "worker") and count.isdigit()):
+        raise ValueError("SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K, SIGNAL as SIGTERM")
+    return name, point, int(count)
+
+
 @dataclass(frozen=True)
 class Switch:
     name: str
@@ -112,29 +121,30 @@ SWITCHES = {
             None,
             _loop,
             "the master's loop; default auto",
-            "orchestration/loop.py choose()",
-        ),
-        Switch(
-            "AGILESAT_FIGURE_PROCESSES",
-            None,
-            _count,
-            "the processes drawing figures; 0: in the command's own process; default: from "
-            "the idle cores",
-            "orchestration/figure_pool.py",
+            "orchestration/cosim/loop.py choose()",
         ),
         Switch(
             "AGILESAT_SSP_MAX_BYTES",
             None,
             _count,
             "the most bytes an SSP package may unpack to; default 256 MiB",
-            "orchestration/ssp.py",
+            "orchestration/system/ssp.py",
         ),
         Switch(
             "AGILESAT_FAULT_FMUS",
             None,
             _path,
             "the built FMUs the fault matrix runs, a test tool's",
-            "tests/fault_cases_fmu.py",
+            "tests/tools/fault_cases_fmu.py",
+        ),
+        Switch(
+            "AGILESAT_TEST_SIGNAL",
+            None,
+            _test_signal,
+            "a test's hook: SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K sends the signal "
+            "at macro step K of a run, once K runs of a campaign are journaled, or as a "
+            "campaign worker starts its K-th run",
+            "orchestration/cosim/signals.py signal_at()",
         ),
     )
 }

@@ -48,7 +48,7 @@ def test_no_scenario_constant_is_defined_in_components():
 
 #: what the generic master (orchestration/system/, cosim/) may take from outside the
 #: orchestration: the cache's root and the C compiler the FMU build uses
-MASTER_MAY_IMPORT = {"components.jit", "fmus.build"}
+MASTER_MAY_IMPORT = {"components.jit", "components.switches", "fmus.build"}
 
 
 @pytest.mark.parametrize(

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ...components.jit import cache_root
+from ...components.switches import value as switch
 from .fmu import Log
 
 LOOPS = ("auto", "compiled", "python")
@@ -91,7 +92,7 @@ class ClockLog(Log):
 
 def choose(loop: str | None) -> str:
     """The loop asked for: ``loop``, else $AGILESAT_LOOP, else "auto"."""
-    chosen = loop or os.environ.get("AGILESAT_LOOP") or "auto"
+    chosen = loop or switch("AGILESAT_LOOP") or "auto"
     if chosen not in LOOPS:
         raise ValueError(f"loop must be one of {LOOPS} (or $AGILESAT_LOOP), got {chosen!r}")
     return chosen

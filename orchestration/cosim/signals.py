@@ -20,6 +20,8 @@ import os
 import signal
 import threading
 
+from ...components.switches import SwitchError, value
+
 
 class _Stop:
     signal: int | None = None
@@ -53,21 +55,15 @@ def stop_on_signals():
 def signal_at(point: str) -> tuple[int, int] | None:
     """(signal number, K) of ``$AGILESAT_TEST_SIGNAL`` if it names ``point`` ("step",
     "run" or "worker"), else None."""
-    text = os.environ.get("AGILESAT_TEST_SIGNAL")
-    if not text:
+    asked = value("AGILESAT_TEST_SIGNAL")
+    if asked is None:
         return None
-    name, _, where = text.partition("@")
-    kind, _, count = where.partition(":")
+    name, kind, count = asked
     try:
-        asked = signal.Signals[name].value, int(count)
-    except (KeyError, ValueError):
-        raise ValueError(
-            f"$AGILESAT_TEST_SIGNAL={text!r}: expected SIGNAL@step:K, SIGNAL@run:K or "
-            "SIGNAL@worker:K (SIGINT, SIGTERM, SIGKILL, ...)"
-        ) from None
-    if kind not in ("step", "run", "worker"):
-        raise ValueError(f"$AGILESAT_TEST_SIGNAL={text!r}: the point is step, run or worker")
-    return asked if kind == point else None
+        signum = signal.Signals[name].value
+    except KeyError:
+        raise SwitchError(f"AGILESAT_TEST_SIGNAL: {name} is not a signal of this system") from None
+    return (signum, count) if kind == point else None
 
 
 def at_step(progress):

@@ -20,7 +20,6 @@ Write: :func:`render_ssd` expands a compact vector-level system description (see
 from __future__ import annotations
 
 import math
-import os
 import tempfile
 import zipfile
 from dataclasses import dataclass, field
@@ -28,6 +27,7 @@ from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
+from ...components.switches import value as switch
 from .steps import read_step, write_step
 
 NS = {
@@ -134,7 +134,7 @@ def read_system(path, *, max_unpacked: int | None = None) -> SystemFile:
 def _unpack(path: Path, root: Path, limit: int | None) -> None:
     """Unpack an SSP package into root: no member outside it, at most limit bytes."""
     if limit is None:
-        limit = int(os.environ.get("AGILESAT_SSP_MAX_BYTES", MAX_UNPACKED_BYTES))
+        limit = switch("AGILESAT_SSP_MAX_BYTES") or MAX_UNPACKED_BYTES
     try:
         with zipfile.ZipFile(path) as archive:
             members = archive.infolist()

@@ -50,7 +50,12 @@ def test_the_fast_paths_page_lists_exactly_the_switches():
         ("AGILESAT_JIT", "yes", "0 (off) or 1 (on)"),
         ("AGILESAT_SHIM_STEP", "off", "0 (off) or 1 (on)"),
         ("AGILESAT_LOOP", "fast", "auto, compiled or python"),
-        ("AGILESAT_FIGURE_PROCESSES", "2.5", "a whole number >= 0"),
+        ("AGILESAT_SSP_MAX_BYTES", "2.5", "a whole number >= 0"),
+        (
+            "AGILESAT_TEST_SIGNAL",
+            "SIGTERM@end",
+            "SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K, SIGNAL as SIGTERM",
+        ),
     ],
 )
 def test_a_value_a_switch_cannot_take_names_the_variable_and_what_it_accepts(name, text, expected):
