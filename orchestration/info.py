@@ -7,8 +7,6 @@ angles in degrees beside radians."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .cosim.derivatives import derivative_links, describe
@@ -64,7 +62,8 @@ def scenario_info(scenario, variant: str | None) -> str:
         lines += [f"  not judged: {n} ({why})" for n, why in chosen.exempt().items()]
     lines.append("metrics (summary.json; [display unit]):")
     for m in scenario.metrics_for(variant):
-        unit = pretty(m.display_unit or m.unit) or "-"
+        unit = "its signal's" if m.unit is None and not m.display_unit else None
+        unit = unit or pretty(m.display_unit or m.unit) or "-"
         lines.append(f"  {m.name:34s} [{unit}] {m.description}")
     requirements = scenario.requirements_for(variant)
     if requirements:

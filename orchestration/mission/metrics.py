@@ -10,13 +10,15 @@ and a campaign counts and says those runs instead of averaging a made-up number.
 
 A signal is a recorded column or array by name (``"AttitudeController.att_error"``, its
 unit from the run) or a function of the results returning an (N,) or (N, k) array (give
-the metric's ``unit``).  Bounds and limits take a unit (``deg(0.01)``, ``"0.01 deg/s"``;
+the metric's ``unit``, or set the function's ``unit`` attribute, as :func:`pointing_angle`
+does).  Bounds and limits take a unit (``deg(0.01)``, ``"0.01 deg/s"``;
 a plain number is SI).  ``start``/``stop`` select a window of the run (s).
 
 Library (each returns a :class:`Metric`): :func:`settling_time`, :func:`max_abs`,
-:func:`rms`, :func:`pointing_error`, :func:`rate_error`, :func:`saturation_fraction`,
-:func:`momentum_margin`, :func:`singularity_measure`, :func:`momentum_drift`, and
-:func:`minimum`, :func:`maximum`, :func:`mean`, :func:`final_value`.
+:func:`rms`, :func:`pointing_error` (:func:`pointing_angle` is its signal),
+:func:`rate_error`, :func:`saturation_fraction`, :func:`momentum_margin`,
+:func:`singularity_measure`, :func:`momentum_drift`, and :func:`minimum`, :func:`maximum`,
+:func:`mean`, :func:`final_value`.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from ..output.results import ColumnError
 from ..output.summary import relative_drift
 from ..pointing.errors import performance_error
 from ..pointing.indices import NotEvaluable
-from ..system.units import Quantity, quantity, to_si
+from ..system.units import quantity, to_si
 
 __all__ = [
     "Metric",
@@ -44,6 +46,7 @@ __all__ = [
     "minimum",
     "momentum_drift",
     "momentum_margin",
+    "pointing_angle",
     "pointing_error",
     "rate_error",
     "rms",
@@ -111,8 +114,8 @@ class Metric:
 def _signal(results, signal, start=None, stop=None) -> tuple[np.ndarray, np.ndarray, str | None]:
     """(t, values (N, k), unit) of a signal over [start, stop]."""
     t = results.time
-    if callable(signal):
-        values, unit = np.asarray(signal(results), dtype=float), None
+    if callable(signal):  # its unit: its ``unit`` attribute, if it has one
+        values, unit = np.asarray(signal(results), dtype=float), getattr(signal, "unit", None)
     else:
         values, unit = np.asarray(results[signal], dtype=float), results.unit(signal)
     values = values.reshape(len(t), -1)
@@ -185,71 +188,71 @@ def settling_time(
     return _metric(name, compute, "s", display_unit, text, require, paper)
 
 
-def _statistic(function, what: str, signal, start, stop, norm, name, unit, display_unit,
-               description, require, paper) -> Metric:  # fmt: skip
+def _statistic(function, what: str, signal, start, stop, norm: bool, name: str, options):
+    """A metric of ``function`` of the signal over the window (its norm, if ``norm``);
+    ``options``: the :class:`Metric`'s unit, display_unit, description, require, paper."""
+    unit = options.get("unit")
+
     def compute(results):
         _, x, recorded = _signal(results, signal, start, stop)
         values = np.linalg.norm(x, axis=1) if norm else x
         return function(values), unit or recorded
 
     window = "" if start is None and stop is None else f" over [{start or 0:g}, {stop or '…'}] s"
-    text = description or f"{what} {'|' + _label(signal) + '|' if norm else _label(signal)}{window}"
-    return _metric(name, compute, unit, display_unit, text, require, paper)
+    label = f"|{_label(signal)}|" if norm else _label(signal)
+    return Metric(
+        name,
+        compute,
+        unit,
+        options.get("display_unit"),
+        options.get("description") or f"{what} {label}{window}",
+        options.get("require"),
+        options.get("paper"),
+    )
 
 
-def max_abs(signal, *, start=None, stop=None, norm=False, name=None, unit=None,
-            display_unit=None, description=None, require=None, paper=None) -> Metric:  # fmt: skip
-    """max |x| over the window: of every element, or (``norm``) of the vector's norm."""
+def max_abs(signal, *, start=None, stop=None, norm=False, name=None, **options) -> Metric:
+    """max |x| over the window: of every element, or (``norm``) of the vector's norm.
+    ``options``: ``unit`` (of a function signal), ``display_unit``, ``description``,
+    ``require``, ``paper`` (:class:`Metric`); so for the others."""
+    name = name or f"max_abs_{_base(signal)}"
     return _statistic(
-        lambda x: np.abs(x).max(), "max |·| of", signal, start, stop, norm,
-        name or f"max_abs_{_base(signal)}", unit, display_unit, description, require, paper,
-    )  # fmt: skip
+        lambda x: np.abs(x).max(), "max |·| of", signal, start, stop, norm, name, options
+    )
 
 
-def rms(signal, *, start=None, stop=None, norm=True, name=None, unit=None, display_unit=None,
-        description=None, require=None, paper=None) -> Metric:  # fmt: skip
+def rms(signal, *, start=None, stop=None, norm=True, name=None, **options) -> Metric:
     """Root mean square over the window, of the vector's norm (``norm``, the default:
     √(mean |x|²)) or of every element."""
+    name = name or f"rms_{_base(signal)}"
     return _statistic(
-        lambda x: math.sqrt(np.mean(np.square(x))), "RMS of", signal, start, stop, norm,
-        name or f"rms_{_base(signal)}", unit, display_unit, description, require, paper,
+        lambda x: math.sqrt(np.mean(np.square(x))), "RMS of", signal, start, stop, norm, name,
+        options,
     )  # fmt: skip
 
 
-def minimum(signal, *, start=None, stop=None, name=None, unit=None, display_unit=None,
-            description=None, require=None, paper=None) -> Metric:  # fmt: skip
+def minimum(signal, *, start=None, stop=None, name=None, **options) -> Metric:
     """The smallest value of any element over the window."""
-    return _statistic(
-        np.min, "min of", signal, start, stop, False, name or f"min_{_base(signal)}", unit,
-        display_unit, description, require, paper,
-    )  # fmt: skip
+    name = name or f"min_{_base(signal)}"
+    return _statistic(np.min, "min of", signal, start, stop, False, name, options)
 
 
-def maximum(signal, *, start=None, stop=None, name=None, unit=None, display_unit=None,
-            description=None, require=None, paper=None) -> Metric:  # fmt: skip
+def maximum(signal, *, start=None, stop=None, name=None, **options) -> Metric:
     """The largest value of any element over the window."""
-    return _statistic(
-        np.max, "max of", signal, start, stop, False, name or f"max_{_base(signal)}", unit,
-        display_unit, description, require, paper,
-    )  # fmt: skip
+    name = name or f"max_{_base(signal)}"
+    return _statistic(np.max, "max of", signal, start, stop, False, name, options)
 
 
-def mean(signal, *, start=None, stop=None, name=None, unit=None, display_unit=None,
-         description=None, require=None, paper=None) -> Metric:  # fmt: skip
+def mean(signal, *, start=None, stop=None, name=None, **options) -> Metric:
     """The mean of a scalar signal over the window."""
-    return _statistic(
-        np.mean, "mean of", signal, start, stop, False, name or f"mean_{_base(signal)}", unit,
-        display_unit, description, require, paper,
-    )  # fmt: skip
+    name = name or f"mean_{_base(signal)}"
+    return _statistic(np.mean, "mean of", signal, start, stop, False, name, options)
 
 
-def final_value(signal, *, name=None, unit=None, display_unit=None, description=None,
-                require=None, paper=None) -> Metric:  # fmt: skip
+def final_value(signal, *, name=None, **options) -> Metric:
     """The value of a scalar signal at the end of the run."""
-    return _statistic(
-        lambda x: x[-1, 0], "final", signal, None, None, False, name or f"final_{_base(signal)}",
-        unit, display_unit, description, require, paper,
-    )  # fmt: skip
+    name = name or f"final_{_base(signal)}"
+    return _statistic(lambda x: x[-1, 0], "final", signal, None, None, False, name, options)
 
 
 def _quaternions(results, q) -> np.ndarray:
@@ -257,6 +260,27 @@ def _quaternions(results, q) -> np.ndarray:
     if isinstance(q, str):
         return results.vector(q)
     return np.broadcast_to(np.asarray(q, dtype=float), (len(results), 4))
+
+
+def pointing_angle(
+    attitude: str = "SatelliteDynamics.q_BI", reference="StaringGuidance.q_ref", *, boresight=None
+) -> Callable:
+    """A signal for the metrics and figures: the angle (rad, per sample) of the true
+    attitude ``attitude`` from ``reference`` (a recorded quaternion or a constant one):
+    with ``boresight`` (body axes) the half-cone angle between where it points and where it
+    should, else the 3-axis rotation angle."""
+
+    def angle(results) -> np.ndarray:
+        error = performance_error(
+            results.vector(attitude), _quaternions(results, reference), results.time
+        )
+        if boresight is not None:
+            error = error.line_of_sight(boresight)
+        return np.linalg.norm(error.values[0], axis=1)
+
+    angle.__name__ = f"angle of {attitude} from {_label(reference)}"
+    angle.unit = "rad"  # type: ignore[attr-defined]
+    return angle
 
 
 def pointing_error(
@@ -280,14 +304,7 @@ def pointing_error(
     (:func:`..pointing.performance_error`)."""
     if statistic not in ("max", "rms"):
         raise ValueError(f"statistic must be 'max' or 'rms', got {statistic!r}")
-
-    def angle(results):
-        error = performance_error(
-            results.vector(attitude), _quaternions(results, reference), results.time
-        )
-        if boresight is not None:
-            error = error.line_of_sight(boresight)
-        return np.linalg.norm(error.values[0], axis=1)
+    angle = pointing_angle(attitude, reference, boresight=boresight)
 
     def compute(results):
         _, x, _ = _signal(results, angle, start, stop)
@@ -325,10 +342,17 @@ def rate_error(
     function = np.max if statistic == "max" else (lambda a: math.sqrt(np.mean(a * a)))
     against = "" if reference is None else f" − {_label(reference)}"
     text = description or f"{statistic} |{rate}{against}|"
+    options = dict(unit="rad/s", display_unit=display_unit, description=text)
     return _statistic(
-        function, statistic, difference, start, stop, True, name, "rad/s", display_unit, text,
-        require, paper,
-    )  # fmt: skip
+        function,
+        statistic,
+        difference,
+        start,
+        stop,
+        True,
+        name,
+        options | dict(require=require, paper=paper),
+    )
 
 
 def saturation_fraction(
@@ -359,14 +383,17 @@ def momentum_margin(
 ) -> Metric:
     """min over the window of capacity − |h|: how far the devices' momentum ``h`` (a
     recorded 3-vector) stays inside their capacity (N·m·s, a number, or a function of the
-    unit direction of h for a cluster whose envelope depends on it).  Negative: beyond."""
+    unit direction of h for a cluster whose envelope depends on it; samples with h = 0,
+    which have no direction, are then left out).  Negative: beyond."""
 
     def compute(results):
         _, x, unit = _signal(results, h, start, stop)
         size = np.linalg.norm(x, axis=1)
-        if callable(capacity):
-            direction = np.divide(x, size[:, None], out=np.zeros_like(x), where=size[:, None] > 0)
-            room = np.array([capacity(d) for d in direction])
+        if callable(capacity):  # h = 0 has no direction: those samples are left out
+            x, size = x[size > 0], size[size > 0]
+            if not len(size):
+                raise NotEvaluable(f"{_label(h)} is zero throughout: no direction")
+            room = np.array([capacity(d) for d in x / size[:, None]])
         else:
             room = float(_si(capacity, unit))
         return float(np.min(room - size)), unit
@@ -388,9 +415,16 @@ def singularity_measure(
     """The smallest singularity measure of a CMG cluster over the window (its recorded
     det(A Aᵀ), A the torque axes: 0 at a singular gimbal set)."""
     return minimum(
-        signal, start=start, stop=stop, name=name, unit="1", display_unit="1",
-        description=description, require=require, paper=paper,
-    )  # fmt: skip
+        signal,
+        start=start,
+        stop=stop,
+        name=name,
+        unit="1",
+        display_unit="1",
+        description=description,
+        require=require,
+        paper=paper,
+    )
 
 
 def momentum_drift(
@@ -412,8 +446,3 @@ def momentum_drift(
 
     text = description or f"max |H(t) − H(0)| / |H(0)| of {_label(H)}"
     return _metric(name, compute, "1", "1", text, require, None)
-
-
-def value_in(value, unit: str):
-    """A number with a unit (``deg(5)``, ``"5 deg"``) in ``unit`` (SI), or a plain number."""
-    return _si(value, unit) if isinstance(value, (str, Quantity)) else value

@@ -104,7 +104,7 @@ class Bound(Requirement):
         """'pointing_accuracy ≤ 0.032°' (without the metric's unit: as the bound is given)."""
         if unit is None:
             limits = {k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None}
-            show = lambda x: str(x) if quantity(x) is not None else f"{x:g}"  # noqa: E731
+            show = lambda x: str(x) if quantity(x) is not None else f"{x:g} (SI)"  # noqa: E731
         else:
             limits = self.limits(unit)
             show = lambda x: format_value(x, unit, display_unit)  # noqa: E731
@@ -202,8 +202,9 @@ class Pointing(Requirement):
         complete = np.isfinite(signals).all(axis=(1, 2))
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
-        verdict = self._verdict(signals[complete, :4].transpose(0, 2, 1),
-                                signals[complete, 4:].transpose(0, 2, 1), t)  # fmt: skip
+        verdict = self._verdict(
+            signals[complete, :4].transpose(0, 2, 1), signals[complete, 4:].transpose(0, 2, 1), t
+        )
         left = int((~complete).sum())
         if left:
             note = f"{left} run(s) that stopped early left out"

@@ -226,11 +226,13 @@ class Scenario:
                 entries[metric]["requirement"] = r.limits(unit)
                 entries[metric]["met"] = verdict.met
                 entries[metric]["verdict"] = verdict.status
-            if verdict.status == NOT_MET:
-                shown = verdict.text or (
-                    f"{format_value(verdict.value, unit, display)}"
+            if verdict.status == NOT_MET and verdict.text:
+                problems.append(f"requirement {verdict.text}")
+            elif verdict.status == NOT_MET:
+                shown = (
+                    format_value(verdict.value, unit, display)
                     if verdict.value is not None and unit
-                    else f"{verdict.value!r}"
+                    else repr(verdict.value)
                 )
                 problems.append(f"requirement {statement} not met: {shown}")
         diagnose = self.diagnose if self.diagnose is not None and not partial else None

@@ -97,9 +97,10 @@ def scenario(name: str) -> Scenario:
         loaded = entries[name].load()
         return loaded if isinstance(loaded, Scenario) else _scenario_of(loaded, name)
     raise KeyError(
-        f"unknown scenario {name!r}" + did_you_mean(name, names())
+        f"unknown scenario {name!r}"
+        + did_you_mean(name, names())
         + f" (scenarios: {', '.join(names())})"
-    )  # fmt: skip
+    )
 
 
 def resolve(target) -> Target:
@@ -195,10 +196,13 @@ def _scenario_of(module, where: str) -> Scenario:
         return candidates[0]
     raise KeyError(
         f"{where} defines "
-        + (f"{len(candidates)} scenarios ({', '.join(c.name for c in candidates)})" if candidates
-           else "no scenario")
+        + (
+            f"{len(candidates)} scenarios ({', '.join(c.name for c in candidates)})"
+            if candidates
+            else "no scenario"
+        )
         + ": name the one to run SCENARIO = Scenario(...)"
-    )  # fmt: skip
+    )
 
 
 def single(fmu) -> System:

@@ -155,11 +155,8 @@ def format_summary(summary: dict) -> str:
             if r["verdict"] == "not judged":
                 lines.append(f"  {'':34s} not judged: {r.get('reason', '')}")
             continue
-        shown = r.get("text") or r["statement"]
-        lines.append(
-            f"  requirement {shown}: {r['verdict']}"
-            + (f" ({r['reason']})" if r.get("reason") else "")
-        )
+        shown = r.get("text") or f"{r['statement']}: {r['verdict']}"
+        lines.append(f"  requirement {shown}" + (f" ({r['reason']})" if r.get("reason") else ""))
     outputs = summary.get("outputs", {})
     if outputs:
         lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")
