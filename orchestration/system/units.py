@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
 
 _SUPERSCRIPT = str.maketrans("23", "²³")
 _PRETTY = {"deg": "°", "deg/s": "°/s", "deg/s2": "°/s²", "1": ""}
@@ -107,7 +108,7 @@ class Quantity:
     """A value (a number or a nested list/array) in a unit: ``Quantity(120, "deg")``,
     ``Quantity([0, 0.5, 0], "deg/s")``.  :func:`to_si` converts it to a variable's unit."""
 
-    value: object
+    value: Any
     unit: str
 
     def __post_init__(self):
@@ -155,7 +156,7 @@ def kind(unit: str | None) -> str:
     return f"{_KINDS[unit]} [{unit}]" if unit in _KINDS else f"[{unit}]"
 
 
-def to_si(value: Quantity, unit: str | None, display_units=()) -> object:
+def to_si(value: Quantity, unit: str | None, display_units=()) -> Any:
     """The number(s) of ``value`` in ``unit`` (a variable's SI unit); ``display_units``:
     (name, factor, offset) of the unit's FMI display units.  A ValueError says both units
     when they do not convert."""
@@ -166,11 +167,8 @@ def to_si(value: Quantity, unit: str | None, display_units=()) -> object:
         return number
     if value.unit in CONVERSIONS and CONVERSIONS[value.unit][0] == unit:
         factor = CONVERSIONS[value.unit][1]
-        return (
-            float(number) * factor
-            if np.ndim(number) == 0
-            else (np.asarray(number) * factor).tolist()
-        )
+        scaled = np.asarray(number, dtype=float) * factor
+        return float(scaled) if scaled.ndim == 0 else scaled.tolist()
     for name, factor, offset in display_units:
         if plain(name) == value.unit:
             array = (np.asarray(number, dtype=float) - offset) / factor
