@@ -60,17 +60,24 @@ def scenario_info(scenario, variant: str | None) -> str:
         if chosen.system is not None:
             lines.append(f"  and its system edited by {chosen.system.__name__}()")
         lines += [f"  not judged: {n} ({why})" for n, why in chosen.exempt().items()]
+    system = scenario.system_for(variant)
+    described = system.descriptions()
+    units = {m.name: m.unit or _unit_of(m.signal, described) for m in scenario.metrics_for(variant)}
     lines.append("metrics (summary.json; [display unit]):")
     for m in scenario.metrics_for(variant):
-        unit = "its signal's" if m.unit is None and not m.display_unit else None
-        unit = unit or pretty(m.display_unit or m.unit) or "-"
+        unit = pretty(m.display_unit or units[m.name]) or "-"
         lines.append(f"  {m.name:34s} [{unit}] {m.description}")
     requirements = scenario.requirements_for(variant)
     if requirements:
         lines.append("requirements:")
         for r in requirements:
-            lines.append(f"  {r.name:34s} {_statement(scenario, variant, r)}")
-    system = scenario.system_for(variant)
+            metric = {m.name: m for m in scenario.metrics_for(variant)}.get(
+                getattr(r, "metric", None)
+            )
+            shown = (
+                r.statement(units[metric.name], metric.display_unit) if metric else r.statement()
+            )
+            lines.append(f"  {r.name:34s} {shown}")
     changed = set(chosen.parameters) | (
         set(system.parameters) - set(scenario.system.parameters)
         if chosen.system is not None
@@ -81,13 +88,17 @@ def scenario_info(scenario, variant: str | None) -> str:
     )
 
 
-def _statement(scenario, variant, requirement) -> str:
-    metric = {m.name: m for m in scenario.metrics_for(variant)}.get(
-        getattr(requirement, "metric", None)
+def _unit_of(signal: str | None, described: dict) -> str | None:
+    """The unit of a recorded output ("A.x", "A.x[2]" or a whole array), from its FMU's
+    model description."""
+    if signal is None:
+        return None
+    component, _, name = signal.partition(".")
+    variables = described[component].variables if component in described else {}
+    found = variables.get(name) or next(
+        (v for n, v in variables.items() if n.partition("[")[0] == name), None
     )
-    if metric is None:
-        return requirement.statement()
-    return requirement.statement(metric.unit, metric.display_unit)
+    return None if found is None else found.unit
 
 
 def system_info(system, described: dict, changed=frozenset()) -> str:

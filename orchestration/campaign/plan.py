@@ -3,8 +3,9 @@ values of every run.
 
 Run index i (0 ≤ i < runs × grid points) is grid point ``i % G`` and replicate ``i // G``
 (G: the number of grid points, 1 without grids), so extending ``--runs`` keeps every run
-already made.  Run i's values are the system's (its ``.ssd``, the variant, ``--set``) with
-the grid point's values and the draws of :meth:`Dispersion.draw` for index i on top.
+already made.  Run i's values are the system's (the target's, a variant's values in it),
+``--set``'s, and the grid point's values and the draws of :meth:`Dispersion.draw` for
+index i on top.
 """
 
 from __future__ import annotations

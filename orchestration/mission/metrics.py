@@ -80,6 +80,8 @@ class Metric:
     description: str = ""
     require: object = None
     paper: float | None = None
+    #: the recorded output it is computed from, if one (its unit is the metric's)
+    signal: str | None = None
 
     def __post_init__(self):
         if not self.name.isidentifier():
@@ -149,8 +151,8 @@ def _base(signal) -> str:
     return _label(signal).split(".")[-1].split("[")[0]
 
 
-def _metric(name, compute, unit, display_unit, description, require, paper) -> Metric:
-    return Metric(name, compute, unit, display_unit, description, require, paper)
+def _metric(name, compute, unit, display_unit, description, require, paper, signal=None):
+    return Metric(name, compute, unit, display_unit, description, require, paper, signal)
 
 
 # -- the library --------------------------------------------------------------------------
@@ -208,6 +210,7 @@ def _statistic(function, what: str, signal, start, stop, norm: bool, name: str, 
         options.get("description") or f"{what} {label}{window}",
         options.get("require"),
         options.get("paper"),
+        signal if isinstance(signal, str) and unit is None else None,
     )
 
 
@@ -399,7 +402,8 @@ def momentum_margin(
         return float(np.min(room - size)), unit
 
     text = description or f"min (capacity − |{_label(h)}|)"
-    return _metric(name, compute, None, None, text, require, None)
+    signal = h if isinstance(h, str) else None
+    return _metric(name, compute, None, None, text, require, None, signal)
 
 
 def singularity_measure(

@@ -144,10 +144,6 @@ class Scenario:
         ``build``)."""
         return self.system_for(variant).system_file(build)
 
-    def render_ssd(self, sources: dict | None = None, variant: str | None = None) -> bytes:
-        """The SSD of a variant; ``sources``: {component: FMU source as written}."""
-        return self.system_for(variant).ssd(sources)
-
     @property
     def ssd(self) -> Path | None:
         """The SSD file ``agilesat generate`` writes (shipped scenarios), else None."""

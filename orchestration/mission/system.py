@@ -110,7 +110,7 @@ class System:
         self._components: dict[str, _Component] = {}
         self._connections: list[tuple[str, str, int]] = []
         self._parameters: dict[str, tuple[object, int]] = {}
-        self._resolved: dict[bool, tuple] = {}
+        self._resolved: dict[tuple, tuple] = {}  # (built?, settings) -> (system, described)
 
     # -- building ---------------------------------------------------------------------
     def add(self, name: str, fmu=None, *, step: float | None = None, **parameters) -> System:
@@ -266,9 +266,10 @@ class System:
         return self
 
     def _resolve(self, build: bool) -> tuple[SystemFile, dict]:
+        settings = (self.start, self.stop, self.step, self.algorithm, self.derivatives)
         for done in (True, build):  # checked with the FMUs built serves either
-            if done in self._resolved:
-                return self._resolved[done]
+            if (done, settings) in self._resolved:
+                return self._resolved[(done, settings)]
         problems: list[str] = []
         described, refs = {}, []
         for c in self._components.values():
@@ -306,7 +307,7 @@ class System:
             self.derivatives,
         )
         check_system(system, described, system.parameters)
-        self._resolved[build] = system, described
+        self._resolved[(build, settings)] = system, described
         return system, described
 
     def _expanded(self, described: dict, problems: list) -> list[ConnectionRef]:

@@ -17,6 +17,7 @@ TARGET is, optionally with ``:variant`` after a scenario:
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import importlib
 import importlib.util
@@ -62,9 +63,10 @@ class Target:
         return self.text
 
 
-def shipped() -> list[str]:
+@functools.cache
+def shipped() -> tuple[str, ...]:
     """The shipped scenarios: modules of the scenarios package that define ``SCENARIO``
-    (read from the sources, nothing imported)."""
+    (read from the sources once per process, nothing imported)."""
     names = []
     for path in sorted(SHIPPED_DIR.glob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
@@ -74,7 +76,7 @@ def shipped() -> list[str]:
             for node in tree.body
         ):
             names.append(path.stem)
-    return names
+    return tuple(names)
 
 
 def registered() -> dict[str, metadata.EntryPoint]:
@@ -85,11 +87,12 @@ def registered() -> dict[str, metadata.EntryPoint]:
 def names() -> list[str]:
     """Every scenario by name: the shipped ones, then the registered ones."""
     found = shipped()
-    return found + [n for n in registered() if n not in found]
+    return [*found, *(n for n in registered() if n not in found)]
 
 
 def scenario(name: str) -> Scenario:
-    """A scenario by name (shipped or registered)."""
+    """A scenario by name (shipped or registered; the package's entry points are read only
+    for a name that is not shipped)."""
     if name in shipped():
         return _scenario_of(importlib.import_module(f"{SHIPPED_PACKAGE}.{name}"), name)
     entries = registered()
@@ -121,7 +124,7 @@ def resolve(target) -> Target:
         return Target(text, system=single(Path(text)))
     if suffix == ".py":
         found = load_file(Path(name))
-    elif name in names():
+    elif name in shipped() or name in registered():
         found = scenario(name)
     elif "." in name and _importable(name):
         found = _scenario_of(importlib.import_module(name), name)

@@ -114,16 +114,17 @@ VARIANTS = {
 
 
 def _during(function, phase: int, what: str):
-    """``function`` of a column's values in a phase of the maneuver (1 … 5), or no value
-    when the run did not reach it."""
+    """``function`` of a column's values over a phase of the maneuver (1 … 5, phase p ending
+    at t_p), or no value when the run did not get through it."""
+    end = PROFILE.times[phase - 1]
 
     def compute(values, results):
-        chosen = values[results["PitchManeuverController.phase"] == phase]
-        if not len(chosen):
+        if results.time[-1] < end - 1e-9:
             raise NotEvaluable(
-                f"the run ends at {results.time[-1]:g} s, before the {what} (phase {phase})"
+                f"the run ends at {results.time[-1]:g} s, before the end of the {what} "
+                f"(phase {phase}) at {end:.4g} s"
             )
-        return function(chosen)
+        return function(values[results["PitchManeuverController.phase"] == phase])
 
     return compute
 

@@ -70,11 +70,10 @@ def tle_pass(
 
 def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> Scenario:
     """This scenario for another pass (``orbit``: OrbitEnvironment parameters, t = 0 at the
-    start of the stare), its system also written to ``out_dir/video_sar_pass.ssd`` (with
-    the FMUs of fmus/build)."""
+    start of the stare), its system also written to ``out_dir/video_sar.ssd`` (its
+    ``ssd``; the FMUs of fmus/build)."""
     system = make_system(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation))
-    system.write(Path(out_dir) / "video_sar_pass.ssd")
-    return Scenario(
+    scenario = Scenario(
         SCENARIO.name,
         SCENARIO.title,
         system,
@@ -82,4 +81,7 @@ def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> 
         requirements=SCENARIO.requirements,
         figures=SCENARIO.figures,
         diagnose=SCENARIO.diagnose,
+        systems_dir=out_dir,
     )
+    system.write(scenario.ssd)
+    return scenario

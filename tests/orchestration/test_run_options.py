@@ -140,3 +140,15 @@ def test_export_a_system_file_with_set_values(fmus, tmp_path):
     assert values[("CmgSteering", "law")] == 1
     assert values[("SatelliteDynamics", "attitude0[2]")] == 100 * math.pi / 180
     assert values[("CmgCluster", "h_rotor")] == 16.65  # the system's own values kept
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_a_run_that_ends_before_it_settles_has_no_settling_time(fmus, tmp_path):
+    """scan_pitch to 100 s: the pitch rate is still above 0.01 °/s at the end, so there is
+    no settling time (it was once stop + step, a number a campaign averaged)."""
+    result = agilesat("run", "scan_pitch", "--stop", 100, "--no-figures", "-q", "--out", tmp_path)
+    assert result.returncode == 0, result.stderr
+    settling = json.loads((tmp_path / "summary.json").read_text())["metrics"]["settling_time"]
+    assert settling["value"] is None and settling["reason"].startswith("not settled")
+    assert "no value" in result.stdout and "(not settled: " in result.stdout

@@ -29,7 +29,7 @@ def mission_dir(tmp_path, monkeypatch):
 
 
 def test_the_shipped_scenarios_are_the_modules_that_define_one():
-    assert targets.shipped() == ["payload_sweep", "scan_pitch", "video_sar"]
+    assert targets.shipped() == ("payload_sweep", "scan_pitch", "video_sar")
     assert isinstance(targets.scenario("scan_pitch"), Scenario)
 
 
@@ -75,3 +75,22 @@ def test_a_module_with_two_scenarios_must_name_one(tmp_path):
     )
     with pytest.raises(KeyError, match=r"defines 2 scenarios \(a, b\): name the one to run"):
         targets.resolve(str(path))
+
+
+def test_info_of_a_variant_marks_what_it_changes_and_lists_the_outputs(fmus):
+    from agilesat.orchestration.info import info
+
+    text = info("scan_pitch:literal_spin")
+    assert "> variant :literal_spin" in text
+    changed = [line for line in text.splitlines() if line.startswith(" !")]
+    assert [line.split()[0] for line in changed] == [
+        "!CmgCluster.spin_ref[6×3]",
+        "!CmgSteering.spin_ref[6×3]",
+    ]
+    assert "imaging_pitch_rate_mean in [-0.82 °/s, -0.78 °/s]" in text
+    assert "jacobi; input/output derivatives where both FMUs declare them: 0 link(s)" in text
+    attitude = next(line for line in text.splitlines() if "SatelliteDynamics.attitude0" in line)
+    assert "[0,2.0944,0] ([0,120,0])" in attitude  # rad, and degrees beside
+    assert " SatelliteDynamics.w_BI_B[3]" in text.split("outputs (recorded")[1]
+    with pytest.raises(KeyError, match="did you mean literal_spin"):
+        info("scan_pitch:literal")
