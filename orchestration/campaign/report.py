@@ -203,7 +203,7 @@ def display(meta: dict) -> tuple[float, str]:
 def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
     """A histogram of each metric that varies over the runs, with its requirement's
     bounds (a constant metric has none: one value says it all)."""
-    from ..output.plots import DPI, plt
+    from ..output.plots import plt
 
     paths = []
     for name, meta in catalog.get("metrics", {}).items():
@@ -231,12 +231,7 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             f"{name}: {len(values)} runs" + (f" ({missing} without a value)" if missing else ""),
             fontsize=10,
         )
-        ax.grid(True, alpha=0.3)
-        fig.tight_layout()
-        path = out / f"hist_{name}.png"
-        fig.savefig(path, dpi=DPI)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(_save(fig, ax, out / f"hist_{name}.png"))
     return paths
 
 
@@ -244,7 +239,7 @@ def sweeps(plan, array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
     """For a sweep: each metric against each swept parameter (every run a point, the
     median per grid value a line; one series per value of the other swept parameters),
     with its requirement's bounds."""
-    from ..output.plots import DPI, plt
+    from ..output.plots import plt
 
     paths = []
     for name, meta in catalog.get("metrics", {}).items():
@@ -266,20 +261,26 @@ def sweeps(plan, array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
                 medians = [np.nanmedian(y[x == g]) for g in grid]
                 ax.plot(grid, medians, "-", color=points.get_color(), linewidth=1.4)
             for bound, value in meta.get("requirement", {}).items():
-                ax.axhline(value * scale, color="tab:red", linestyle="--", linewidth=1,
-                           label=f"requirement ({bound})")  # fmt: skip
+                label = f"requirement ({bound})"
+                ax.axhline(value * scale, color="tab:red", linestyle="--", label=label)
             ax.set_xlabel(key)
             ax.set_ylabel(f"{name} [{unit}]" if unit else name)
             ax.set_title(f"{name} against {key}: {len(array)} runs", fontsize=10)
-            ax.grid(True, alpha=0.3)
             if ax.get_legend_handles_labels()[1]:
                 ax.legend(fontsize=8)
-            fig.tight_layout()
-            path = out / f"sweep_{name}_{_file_name(key)}.png"
-            fig.savefig(path, dpi=DPI)
-            plt.close(fig)
-            paths.append(path)
+            paths.append(_save(fig, ax, out / f"sweep_{name}_{_file_name(key)}.png"))
     return paths
+
+
+def _save(fig, ax, path: Path) -> Path:
+    """A campaign figure written (grid, layout, the run figures' resolution) and closed."""
+    from ..output.plots import DPI, plt
+
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
 
 
 def _shown(value) -> str:
@@ -292,7 +293,7 @@ def _file_name(name: str) -> str:
 
 def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
     """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal."""
-    from ..output.plots import DPI, plt
+    from ..output.plots import plt
 
     paths = []
     for j, name in enumerate(names):
@@ -309,12 +310,7 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
         ax.set_ylabel(f"{name} [{units.get(name, 'SI')}]")
         ax.set_title(f"{name}: {len(data)} runs", fontsize=10)
         ax.legend(fontsize=8)
-        ax.grid(True, alpha=0.3)
-        fig.tight_layout()
-        path = out / f"envelope_{_file_name(name)}.png"
-        fig.savefig(path, dpi=DPI)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(_save(fig, ax, out / f"envelope_{_file_name(name)}.png"))
     return paths
 
 
