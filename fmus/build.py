@@ -69,9 +69,20 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     sources, digest = _sources(name)
     if not force and is_current(target, name, digest):
         return target
-    model = model_class(name)
     package = f"agilesat_{digest}"
-    entry = f"{name}_{digest}"
+    entry = _entry_module(name, package)
+    entries = fmu_entries(name, model_class(name), digest, sources, entry, out_dir)
+    write_archive(target, entries)
+    if any(b"@kernel\n" in path.read_bytes() for path in sources.values()):
+        compile_kernels(target, name, package)
+    return target
+
+
+def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str, out_dir) -> dict:
+    """The files of the FMU ``name`` of ``model`` (see the module): ``sources`` our code
+    packed (:func:`_sources`), ``entry_module`` the module pythonfmu imports; the shim is
+    compiled once into ``out_dir``."""
+    package, entry = f"agilesat_{digest}", f"{name}_{digest}"
     description = (model.__doc__ or name).strip().splitlines()[0]
     entries = {
         "modelDescription.xml": model_description(
@@ -81,10 +92,10 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
             description,
             f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
         ),
-        f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
+        f"binaries/{PLATFORM}/{name}.so": _shim_library(Path(out_dir)).read_bytes(),
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
         "resources/slavemodule.txt": entry.encode(),
-        f"resources/{entry}.py": _entry_module(name, package).encode(),
+        f"resources/{entry}.py": entry_module.encode(),
         f"resources/{package}/__init__.py": b"",
         "documentation/index.html": _documentation(name, model).encode(),
     }
@@ -92,10 +103,7 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
     for path in sorted(_pythonfmu_dir().glob("*.py")):
         entries[f"resources/pythonfmu/{path.name}"] = path.read_bytes()
-    write_archive(target, entries)
-    if any(b"@kernel\n" in path.read_bytes() for path in sources.values()):
-        compile_kernels(target, name, package)
-    return target
+    return entries
 
 
 _COMPILE_KERNELS = """
@@ -173,15 +181,17 @@ def is_current(path: Path, name: str, digest: str | None = None) -> bool:
         return False
 
 
-def _sources(name: str) -> tuple[dict[str, Path], str]:
+def _sources(name: str, modules=None) -> tuple[dict[str, Path], str]:
     """Files packed as our code (relative path -> file) and the content hash of the FMU.
 
     Our code is the FMU's model module, the generic slave and the registry that makes the
     slave class (``fmus/__init__.py``), and everything they import from our packages,
-    followed through relative imports (``from ..components.cmg_cluster import ...``).
+    followed through relative imports (``from ..components.cmg_cluster import ...``);
+    ``modules`` (paths like 'components/noise.py') instead of the model module: those a
+    model of a user's imports (:mod:`.user_models`).
     """
     files: dict[str, Path] = {}
-    pending = ["fmus/__init__.py", "fmus/slave.py", f"components/{FMUS[name]}.py"]
+    pending = ["fmus/__init__.py", "fmus/slave.py", *(modules or [f"components/{FMUS[name]}.py"])]
     while pending:
         relative = pending.pop()
         if relative in files:

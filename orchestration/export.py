@@ -1,33 +1,42 @@
-"""``agilesat export``: a scenario as a self-contained SSP package.
+"""``agilesat export``: anything that runs, as a self-contained SSP package.
 
 An ``.ssp`` file (SSP 1.0, §5 "SSP package") is a zip archive holding
 ``SystemStructure.ssd`` and, here, every FMU it uses under ``resources/``; the SSD names
 them by relative URI (``resources/SatelliteDynamics.fmu``), so the package runs wherever it
 is copied: in our master (``agilesat run FILE.ssp``), in libcosim
-(``CosimExecution.from_ssp_file``) or in any SSP importer.  A variant's parameter values
-are written into the package's SSD.  The archive is deterministic: the same sources give
-the same file.
+(``CosimExecution.from_ssp_file``) or in any SSP importer.  The target is a shipped
+scenario or variant, a mission file of your own (``mission.py[:variant]``), or an
+``.ssd``/``.ssp`` system file; a variant's and ``--set``'s values are written into the
+package's SSD (typed as a run types them, units converted).  The archive is deterministic:
+the same sources give the same file.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
-from ..fmus.build import build_all, write_archive
-from .runner import parse_target
+from .mission.system import write_package
+from .mission.targets import resolve
+from .system.description import Description
+from .system.parameters import typed_parameters
+from .system.validation import check_system
 
 
-def export_ssp(target: str, out: Path) -> Path:
-    """Write ``scenario[:variant]`` as the SSP package ``out``; return its path."""
-    scenario, variant = parse_target(target)
-    if scenario is None:
-        raise KeyError(f"export takes a scenario[:variant], not a file: {target!r}")
+def export_ssp(target, out: Path, parameters: dict | None = None) -> Path:
+    """Write ``target`` (see :func:`.mission.targets.resolve`) with ``parameters``
+    ({"Instance.variable": value}, as ``--set`` gives them) as the SSP package ``out``."""
     out = Path(out)
     if out.suffix != ".ssp":
         raise ValueError(f"--out {out}: an SSP package is a .ssp file")
-    fmus = build_all(names=scenario.components)
-    sources = {path.stem: f"resources/{path.name}" for path in fmus}
-    entries = {f"resources/{path.name}": path.read_bytes() for path in fmus}
-    entries["SystemStructure.ssd"] = scenario.render_ssd(sources, variant)
+    found = resolve(target)
+    system = found.system_file(build=True)
+    described = {c.name: Description(c.name, c.source) for c in system.components}
+    given = typed_parameters(described, dict(parameters or {}))
+    if given:
+        keys = {(p.component, p.name) for p in given.values()}
+        values = [p for p in system.parameters if (p.component, p.name) not in keys]
+        system = dataclasses.replace(system, parameters=values + list(given.values()))
+        check_system(system, described, system.parameters)
     out.parent.mkdir(parents=True, exist_ok=True)
-    return write_archive(out, entries)
+    return write_package(system, described, out)

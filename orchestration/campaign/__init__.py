@@ -113,20 +113,16 @@ def run_campaign(
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
         spec.set = {**fixed, **spec.set}
-    plan = Plan(spec)
+    plan = Plan(spec)  # builds the FMUs the target needs
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
     done = engine.open_directory(plan, out, resume)
-    metrics = {}
+    metrics: dict = {}
     if done and (out / "metrics.json").exists():
         metrics = json.loads((out / "metrics.json").read_text())
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
     lost = []
     try:
-        if plan.scenario is not None:
-            from ...fmus.build import build_all
-
-            build_all(names=plan.scenario.components)
         if len(done) < plan.total:
             print(
                 f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
@@ -151,7 +147,8 @@ def run_campaign(
 def finish(
     plan: Plan, out: Path, records: dict, metrics: dict, lost: list, status: str, environment: dict
 ) -> Campaign:
-    """runs.csv (+ Parquet), campaign.json and the figures, from the records so far."""
+    """runs.csv (+ Parquet), campaign.json and the figures, from the records so far.
+    ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`)."""
     table = report.table(plan, records, metrics)
     files = report.write_table(table, out)
     counts = {s: int(np.sum(table["status"] == s)) for s in report.STATUSES}
@@ -174,8 +171,15 @@ def finish(
         "versions": versions(),
         "cluster": environment,
         "lost_workers": previous.get("lost_workers", []) + lost,
-        "statistics": report.statistics(table, metrics),
+        "requirements": metrics.get("requirements", {}),
+        "statistics": report.statistics(table, metrics, records),
         "pass_rates": report.pass_rates(table, metrics),
+        "not_judged": {
+            name: r["not_judged"]
+            for name, r in metrics.get("requirements", {}).items()
+            if "not_judged" in r
+        },
+        "ensemble": _ensemble(plan, out, len(records)),
         "grid_pass_rates": report.grid_pass_rates(plan, table, metrics),
         "failures": [
             {
@@ -198,13 +202,35 @@ def finish(
         "files": [p.name for p in files],
     }
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
-    figures = report.histograms(table, metrics, out)
-    if plan.signals and (out / "signals.npy").exists():  # none if no run was made
+    figures = report.histograms(table, metrics, out) if plan.spec.runs > 1 else []
+    figures += report.sweeps(plan, table, metrics, out)
+    if plan.kept and (out / "signals.npy").exists():  # none if no run was made
         signals = np.load(out / "signals.npy", mmap_mode="r")
-        figures += report.envelopes(signals, plan.signals, plan.units, time_axis(plan), out)
+        kept = signals[:, : len(plan.kept)]
+        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)
+
+
+def _ensemble(plan: Plan, out: Path, made: int) -> dict:
+    """The verdict of each requirement judged over the whole campaign (an ensemble or
+    mixed statistic of every run, :mod:`..mission.requirements`)."""
+    if not plan.ensemble or not made or not (out / "signals.npy").exists():
+        return {}
+    signals = np.load(out / "signals.npy", mmap_mode="r")
+    result = {}
+    for requirement in plan.ensemble:
+        index = [plan.signals.index(c) for c in requirement.signals]
+        verdict = requirement.evaluate_campaign(np.asarray(signals[:, index]), time_axis(plan))
+        result[requirement.name] = {
+            "statement": requirement.statement(),
+            "verdict": verdict.status,
+            "value": verdict.value,
+            **({"reason": verdict.reason} if verdict.reason else {}),
+            **({"text": verdict.text} if verdict.text else {}),
+        }
+    return result
 
 
 def replay_arguments(plan: Plan, index: int) -> list[str]:

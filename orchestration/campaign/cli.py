@@ -105,7 +105,9 @@ def main(args) -> int:
         print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
         return 130
     runs = result.summary["runs"]
-    unmet = any(r["met"] < r["runs"] for r in result.summary["pass_rates"].values())
+    unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
+        r["verdict"] == "not met" for r in result.summary["ensemble"].values()
+    )
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
 
 
@@ -129,30 +131,43 @@ def format_campaign(summary: dict) -> str:
         f"{'99 %':>11s}  unit"
     )
     for name, s in summary["statistics"].items():
-        if not s["count"]:
-            continue
-        scale, unit = display(s)
-        p = s["percentiles"]
-        lines.append(
-            f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
-            f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
-            f"  {unit}"
-        )
+        if s["count"]:
+            scale, unit = display(s)
+            p = s["percentiles"]
+            lines.append(
+                f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
+                f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
+                f"  {unit}"
+            )
+        if s.get("missing"):
+            why = "; ".join(f"{k} ({n})" for k, n in s.get("reasons", {}).items())
+            lines.append(
+                f"  {name if not s['count'] else '':32s} {s['missing']} of "
+                f"{s['count'] + s['missing']} runs without a value"
+                + (f": {why}" if why else "")
+                + (" (left out of the statistics)" if s["count"] else "")
+            )
+    statements = {n: r.get("statement", n) for n, r in summary.get("requirements", {}).items()}
     for name, r in summary["pass_rates"].items():
         low, high = r["ci95"]
-        bound = ""
-        if name != "all":
-            scale, unit = display(summary["statistics"][name])
-            req = summary["statistics"][name]["requirement"]
-            bound = " and ".join(
-                f"{'≥' if k == 'min' else '≤'} {v * scale:.4g} {unit}" for k, v in req.items()
-            )
+        what = "all requirements" if name == "all" else f"requirement {statements.get(name, name)}"
+        others = ", ".join(
+            f"{r[k]} {k.replace('_', ' ')}" for k in ("not_met", "not_evaluated", "stopped") if r[k]
+        )
         lines.append(
-            f"  requirement {name} {bound}: met in {r['met']}/{r['runs']} runs, "
+            f"  {what}: met in {r['met']}/{r['runs']} runs, "
             f"{100 * r['rate']:.2f} % (95 % CI {100 * low:.2f}–{100 * high:.2f} %, "
-            f"{r['method']})"
+            f"{r['method']})" + (f"; {others}" if others else "")
             if r["runs"]
-            else f"  requirement {name}: no runs"
+            else f"  {what}: no runs"
+        )
+    for name, why in summary.get("not_judged", {}).items():
+        lines.append(f"  requirement {statements.get(name, name)}: not judged ({why})")
+    for r in summary.get("ensemble", {}).values():
+        lines.append(
+            f"  over the campaign: {r.get('text') or r['statement']}"
+            + ("" if r.get("text") else f": {r['verdict']}")
+            + (f" ({r['reason']})" if r.get("reason") else "")
         )
     for point in summary["grid_pass_rates"]:
         rates = point["pass_rates"]

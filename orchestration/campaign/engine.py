@@ -13,7 +13,8 @@ Files in the output directory, written as runs finish:
 
 - ``runs.jsonl`` — the journal: one line per finished run (index, values, outcome,
   metrics), flushed as each batch is back; ``--resume`` and extensions skip the runs it holds.
-- ``metrics.json`` — each metric's unit, description and requirement (first run).
+- ``metrics.json`` — each metric's unit, description and bound, and each requirement's
+  statement (``{"metrics": ..., "requirements": ...}``, from the first run with them).
 - ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
   run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
 - at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
@@ -180,8 +181,9 @@ def execute(
 ) -> tuple[dict, list, str]:
     """Run what is not in ``done`` on ``client``; returns (records by index, lost workers,
     "complete" or "interrupted").  Runs go in batches (:func:`batch_size`), each run its
-    own record; every run is in the journal as soon as its batch is back; ``metrics`` collects each
-    metric's unit, description and requirement."""
+    own record; every run is in the journal as soon as its batch is back; ``metrics``
+    ({"metrics": ..., "requirements": ...}) collects each metric's unit, description and
+    bound and each requirement's statement (:func:`catalog`)."""
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
@@ -206,7 +208,7 @@ def execute(
         future = client.submit(
             run_batch,
             [(index, {**plan.spec.set, **values[index]}) for index in batch],
-            plan.spec.target,
+            plan.target,
             plan.step,
             plan.stop,
             plan.spec.algorithm,
@@ -255,16 +257,17 @@ def execute(
                         grid=index % len(plan.grid),
                         batch=batch[0],  # the first run of its Dask task
                     )
-                    if set(record["metrics"]) - set(metrics):
-                        for name, m in record["metrics"].items():
-                            metrics.setdefault(
-                                name,
-                                {k: v for k, v in m.items() if k not in ("value", "met", "paper")},
-                            )
+                    if catalog(metrics, record):
                         write_text(out / "metrics.json", json.dumps(metrics, indent=1) + "\n")
                     record["metrics"] = {
-                        k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
+                        k: {
+                            "value": m["value"],
+                            **({"reason": m["reason"]} if "reason" in m else {}),
+                        }
                         for k, m in record["metrics"].items()
+                    }
+                    record["requirements"] = {
+                        k: r["verdict"] for k, r in record.get("requirements", {}).items()
                     }
                     journal.write(json.dumps(record) + "\n")
                     records[index] = record
@@ -290,8 +293,30 @@ def execute(
     return records, watcher.lost, status
 
 
+def catalog(known: dict, record: dict) -> bool:
+    """Add what a run's summary says of its metrics (unit, display unit, description,
+    bound) and requirements (statement, and why not judged) to ``known``; True if any was
+    new."""
+    metrics = known.setdefault("metrics", {})
+    requirements = known.setdefault("requirements", {})
+    new = False
+    for name, m in record["metrics"].items():
+        if name not in metrics:
+            drop = ("value", "met", "verdict", "reason", "paper")
+            metrics[name] = {k: v for k, v in m.items() if k not in drop}
+            new = True
+    for name, r in record.get("requirements", {}).items():
+        if name not in requirements:
+            keep = ("statement", "unit", "display_unit")
+            requirements[name] = {k: r[k] for k in keep if k in r}
+            if r["verdict"] == "not judged":
+                requirements[name]["not_judged"] = r.get("reason", "")
+            new = True
+    return new
+
+
 def _failed(index: int, status: str, message: str) -> dict:
-    return {"index": index, "status": status, "metrics": {}, "message": message}
+    return {"index": index, "status": status, "metrics": {}, "requirements": {}, "message": message}
 
 
 class WorkerWatch:

@@ -5,7 +5,8 @@ run`` writes the SVG only with ``--svg``), limits and requirements drawn where t
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
-(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there).
+(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there),
+``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 
@@ -90,7 +91,7 @@ def _width(k: int, n: int) -> float:
     return 2.2 - 1.3 * k / max(n - 1, 1)
 
 
-def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
+def _mark(ax, limit=None, band=None, paper=None, bottom=None, log=False) -> None:
     if band is not None:
         low, high, text = band
         ax.axhspan(low, high, color="tab:green", alpha=0.15, label=text)
@@ -108,6 +109,8 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
             )
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
+    if log:
+        ax.set_yscale("log")
 
 
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:

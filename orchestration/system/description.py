@@ -22,7 +22,8 @@ from lxml import etree
 AGILESAT_TOOL = "agilesat"
 _KEYS_KEPT = 1024
 _lock = threading.Lock()
-_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
+#: content key -> (model description, optional inputs, base units)
+_descriptions: dict[str, tuple] = {}
 
 
 class Description:
@@ -33,7 +34,9 @@ class Description:
         self.name, self.path = name, Path(path)
         #: optional input -> what its default means, as our FMUs declare them
         #: (VendorAnnotations; every other input is required); None: not our FMU
-        self.md, self.optional_inputs = _described(content_key(self.path), str(path))
+        self.md, self.optional_inputs, self.base_units = _described(
+            content_key(self.path), str(path)
+        )
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -71,11 +74,13 @@ def content_key(path: Path) -> str:
 
 
 def _described(key: str, path: str):
-    """(model description, optional inputs) of the FMU with content ``key``."""
+    """(model description, optional inputs, base units) of the FMU with content ``key``."""
     with _lock:
         described = _descriptions.get(key)
     if described is None:
-        described = (read_model_description(path), _optional_inputs(Path(path)))
+        with zipfile.ZipFile(path) as archive:
+            root = etree.fromstring(archive.read("modelDescription.xml"))
+        described = (read_model_description(path), _optional_inputs(root), _base_units(root))
         with _lock:
             if len(_descriptions) >= _KEYS_KEPT:
                 _descriptions.pop(next(iter(_descriptions)))
@@ -92,11 +97,9 @@ def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
     return result
 
 
-def _optional_inputs(path: Path) -> dict[str, str] | None:
+def _optional_inputs(root) -> dict[str, str] | None:
     """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
     None: nothing declared."""
-    with zipfile.ZipFile(path) as archive:
-        root = etree.fromstring(archive.read("modelDescription.xml"))
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
         return None
@@ -104,4 +107,14 @@ def _optional_inputs(path: Path) -> dict[str, str] | None:
         e.get("name"): e.get("optional")
         for e in tool.findall("Inputs/Input")
         if e.get("optional") is not None
+    }
+
+
+def _base_units(root) -> dict[str, dict[str, str]]:
+    """{unit: the attributes of its BaseUnit, in the order written} of the FMU's
+    UnitDefinitions (an SSD's unit definitions copy them)."""
+    return {
+        unit.get("name"): dict(unit.find("BaseUnit").attrib)
+        for unit in root.iterfind("UnitDefinitions/Unit")
+        if unit.find("BaseUnit") is not None
     }

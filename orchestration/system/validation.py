@@ -82,7 +82,7 @@ def _connections(system, instances, problems) -> dict[tuple[str, str], tuple[str
             problems.append(f"{at}: {b.name} ({b.path.name}) has no variable '{c.end_connector}'")
         if va is None or vb is None:
             continue
-        problems += _variable_pair_problems(at, a, va, b, vb)
+        problems += variable_pair_problems(at, a, va, b, vb)
         key = (b.name, vb.name)
         if key in sources:
             problems.append(
@@ -92,7 +92,7 @@ def _connections(system, instances, problems) -> dict[tuple[str, str], tuple[str
     return sources
 
 
-def _variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
+def variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
     """One connection's ends: an output of ``a`` to an input of ``b``, same type and unit."""
     problems = []
     if va.causality != "output":

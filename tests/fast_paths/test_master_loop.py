@@ -3,7 +3,6 @@ the same results bit for bit, the same errors and rows kept, interrupts, the fal
 when no compiler or cache is available, the content-keyed compile cache."""
 
 import ctypes
-import dataclasses
 import os
 import signal
 import subprocess
@@ -44,11 +43,11 @@ def test_every_shipped_scenario_is_the_python_loop_bit_for_bit(fmus, name):
 
 
 def _multirate(fmus, tmp_path):
-    scenario = dataclasses.replace(
-        get("scan_pitch"), steps=dict.fromkeys(("PitchManeuverController", "CmgSteering"), 0.1)
-    )
+    scenario = get("scan_pitch").system.copy()
+    for name in ("PitchManeuverController", "CmgSteering"):
+        scenario.set_step(name, 0.1)
     path = tmp_path / "multirate.ssd"
-    path.write_bytes(scenario.render_ssd({n: str(fmus[n]) for n in scenario.components}))
+    path.write_bytes(scenario.ssd({n: str(fmus[n]) for n in scenario.components}))
     return path
 
 

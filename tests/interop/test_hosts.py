@@ -267,7 +267,7 @@ def test_epoch_j2000_is_the_same_instant_as_the_epoch_string():
         model.advance(0.0, 100.0)
     for name in ("earth_angle", "r_T_I", "v_T_I", "r_I"):
         assert np.array_equal(by_real.get(name), by_string.get(name)), name
-    assert get("video_sar").parameters["OrbitEnvironment.epoch_j2000"] == seconds
+    assert get("video_sar").system.parameters["OrbitEnvironment.epoch_j2000"] == seconds
 
 
 def test_giving_the_epoch_twice_is_an_error():

@@ -196,7 +196,7 @@ def test_set_a_whole_array_and_record_it_typed(short_run):
     assert parameters["SatelliteDynamics.inertia[1,2]"] == {"value": 0.0, "type": "Real"}
     assert parameters["SatelliteDynamics.gravity_gradient"] == {"value": False, "type": "Boolean"}
     # the dynamics FMU got the matrix: its H_I = C_BIᵀ (J w + h) with J = 900 I
-    from agilesat.orchestration.scenarios import inertial_momentum
+    from agilesat.orchestration.scenarios.payload_sweep import inertial_momentum
 
     results = Results.load(out)
     H = results["SatelliteDynamics.H_I"]

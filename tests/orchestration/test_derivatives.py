@@ -13,7 +13,6 @@ P = 0.05 s, the plant FMUs at H (multi-rate), so a smaller H changes the couplin
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import sys
@@ -46,11 +45,12 @@ def twist(q):
 def system(directory: Path, fmus: dict, wired: bool, step: float):
     """scan_pitch with controller and steering at P and the plant at ``step``; without the
     ḣ wires unless ``wired``."""
-    scenario = get("scan_pitch")
+    scenario = get("scan_pitch").system.copy()
     if step != P:
-        scenario = dataclasses.replace(scenario, steps=dict.fromkeys(CONTROLLERS, P))
+        for name in CONTROLLERS:
+            scenario.set_step(name, P)
     path = directory / f"scan_pitch_{step}.ssd"
-    path.write_bytes(scenario.render_ssd({n: str(fmus[n]) for n in scenario.components}))
+    path.write_bytes(scenario.ssd({n: str(fmus[n]) for n in scenario.components}))
     result = read_system(path)
     if not wired:
         result.connections = [
