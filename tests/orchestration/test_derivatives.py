@@ -126,7 +126,7 @@ def test_a_declared_derivative_reaches_the_model_description():
     assert variables[int(derivative["hdot_wheel[2]"]) - 1].get("name") == "h_wheel[2]"
     assert derivative["h_wheel[2]"] is None and derivative["tau_ext[1]"] is None
     assert root.find("CoSimulation").get("canInterpolateInputs") == "true"
-    assert root.find("CoSimulation").get("maxOutputDerivativeOrder") == "0"
+    assert root.find("CoSimulation").get("maxOutputDerivativeOrder") == "1"
 
 
 @pytest.fixture(scope="module")
@@ -157,8 +157,9 @@ def order(errors, label) -> float:
 @pytest.mark.integration
 def test_without_the_wires_jacobi_with_derivatives_is_the_wired_run_bit_for_bit(fmus, tmp_path):
     """Tolerance zero, by construction: fmi2GetRealOutputDerivatives of the cluster's h is
-    its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg stores it in
-    the hub's input hdot_cmg: the same number the wire passes, at the same time."""
+    its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg makes it the
+    slope of h_cmg over the step, where the wired run has hdot_cmg: the same number the wire
+    passes, at the same time."""
     wired = run(tmp_path, fmus, P, "jacobi", wired=True, stop=20.0)
     derived = run(tmp_path, fmus, P, "jacobi", stop=20.0)
     assert wired.names == derived.names
@@ -252,10 +253,11 @@ def test_model_descriptions_declare_the_derivatives(fmus):
         cs = md.coSimulation
         declared[name] = (cs.canInterpolateInputs, cs.maxOutputDerivativeOrder, pairs)
     device = {f"hdot[{i}]": f"h[{i}]" for i in (1, 2, 3)}
-    for name in ("CmgCluster", "Flywheel", "PayloadGimbals"):
-        assert declared[name] == (False, 1, device), name
+    for name in ("CmgCluster", "PayloadGimbals"):
+        assert declared[name] == (True, 1, device), name
+    assert declared["Flywheel"] == (False, 1, device)  # its drive samples its inputs
     hub = {f"hdot_{d}[{i}]": f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)}
-    assert declared["SatelliteDynamics"] == (True, 0, hub)
+    assert declared["SatelliteDynamics"] == (True, 1, hub)
     assert declared["CmgSteering"] == (False, 0, {})
 
 
