@@ -46,7 +46,15 @@ SHIM_C_FILES = (SHIM_DIR / "agilesat_fmi2.c", SHIM_DIR / "fast_paths.c")
 #: the header generated from protocol.py (`agilesat generate`)
 PROTOCOL_HEADER = SHIM_DIR / "protocol.h"
 SHIM_SOURCES = (*SHIM_C_FILES, SHIM_DIR / "shim.h", SHIM_DIR / "fmi2_abi.h", PROTOCOL_HEADER)
+#: the shim's libraries, kept as dependencies whether or not a symbol binds there: a glibc
+#: older than 2.34 has dlopen and pthread_once there (shim/shim.h, symbol versions)
+SHIM_LIBRARIES = ("-Wl,--no-as-needed", "-l:libdl.so.2", "-l:libpthread.so.0")
 PLATFORM = "linux64"
+#: the newest symbol versions pythonfmu's binary (pythonfmu-export.so) needs of the system,
+#: as ``objdump -T`` lists them (tests/fmus/test_portability.py checks them on the binary):
+#: glibc 2.32 (__libc_single_threaded), libstdc++ of GCC 12 (GLIBCXX_3.4.30:
+#: std::condition_variable::wait).  The shim needs glibc 2.2.5 (shim/shim.h).
+PYTHONFMU_NEEDS = ("GLIBC_2.32", "GLIBCXX_3.4.30")
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 _GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
 
@@ -72,7 +80,7 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     model = model_class(name)
     package = f"agilesat_{digest}"
     entry = f"{name}_{digest}"
-    description = (model.__doc__ or name).strip().splitlines()[0]
+    description = (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0]
     entries = {
         "modelDescription.xml": model_description(
             name,
@@ -86,7 +94,7 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": _entry_module(name, package).encode(),
         f"resources/{package}/__init__.py": b"",
-        "documentation/index.html": _documentation(name, model).encode(),
+        "documentation/index.html": _documentation(name, model, requirements()).encode(),
     }
     for relative, path in sources.items():
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
@@ -244,8 +252,9 @@ def _pythonfmu_binary() -> Path:
     return path
 
 
-def python_runtime() -> tuple[str, str]:
-    """(shared libpython, python executable) the FMUs start in a host without Python.
+def python_runtime() -> tuple[str, str, str]:
+    """(shared libpython, python executable, "X.Y") the FMUs start in a host without
+    Python.
 
     The executable is this environment's own (``sys.executable``, not resolved: a virtual
     environment is recognised by the pyvenv.cfg beside its ``bin/``).  The library is ""
@@ -257,7 +266,7 @@ def python_runtime() -> tuple[str, str]:
             sysconfig.get_config_var("LIBDIR") or "", sysconfig.get_config_var("INSTSONAME") or ""
         )
         library = str(path) if path.is_file() else ""
-    return library, os.path.abspath(sys.executable)
+    return library, os.path.abspath(sys.executable), "{}.{}".format(*sys.version_info)
 
 
 def _shim_library(out_dir: Path) -> Path:
@@ -265,9 +274,9 @@ def _shim_library(out_dir: Path) -> Path:
     <out_dir>/.shim/)."""
     if PROTOCOL_HEADER.read_text() != protocol.header():
         raise BuildError(f"{PROTOCOL_HEADER} is out of date: run `agilesat generate`")
-    runtime = python_runtime()
+    flags = [*shim_flags(*python_runtime()), *map(str, SHIM_C_FILES), *SHIM_LIBRARIES]
     digest = hashlib.sha256(
-        b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(runtime).encode()
+        b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(flags).encode()
     ).hexdigest()[:12]
     library = out_dir / ".shim" / f"agilesat_fmi2_{digest}.so"
     if library.exists():
@@ -279,8 +288,7 @@ def _shim_library(out_dir: Path) -> Path:
             "building FMUs needs a C compiler (cc or gcc, or set CC) for the FMI shim fmus/shim/"
         )
     partial = _partial(library)
-    command = [compiler, "-O2", *shim_flags(*runtime), *map(str, SHIM_C_FILES)]
-    command += ["-o", str(partial), "-ldl", "-lpthread"]
+    command = [compiler, "-O2", *flags, "-o", str(partial)]
     try:
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
@@ -293,14 +301,21 @@ def _shim_library(out_dir: Path) -> Path:
     return library
 
 
-def shim_flags(libpython: str, python: str) -> list[str]:
+def shim_flags(libpython: str, python: str, version: str) -> list[str]:
     """The compiler flags that make the shim's sources (SHIM_C_FILES) a shared library, for
-    a Python runtime (:func:`python_runtime`)."""
+    a Python runtime (:func:`python_runtime`).  ``-z nodelete``: a host that unloads the
+    library between two instances (ECOS loads and unloads an FMU's library per instance)
+    keeps its instance registry and pythonfmu's handles alive, as pythonfmu's own binary
+    is (its GNU-unique C++ symbols make it NODELETE)."""
     defines = [
         f"-DAGILESAT_{key}={_c_string(value)}"
-        for key, value in (("LIBPYTHON", libpython), ("PYTHON", python))
+        for key, value in (
+            ("LIBPYTHON", libpython),
+            ("PYTHON", python),
+            ("PYTHON_VERSION", version),
+        )
     ]
-    return ["-shared", "-fPIC", "-fvisibility=hidden", *defines]
+    return ["-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-z,nodelete", *defines]
 
 
 def generated_files() -> dict[Path, Callable[[], bytes]]:
@@ -368,15 +383,49 @@ def _short(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _documentation(name: str, model) -> str:
+def requirements() -> tuple[str, list[str]]:
+    """What an FMU needs where it runs: (one line for the model description, the points of
+    its documentation/index.html), from the package's metadata, the Python building it and
+    what pythonfmu's binary needs (docs/hosts.md says the same)."""
+    _, python, version = python_runtime()
+    needed = {r.split(">")[0]: r for r in metadata.requires("agilesat") or []}
+    numpy, sgp4 = needed.get("numpy", "numpy"), needed.get("sgp4", "sgp4")
+    glibc, libstdcxx = (v.split("_")[1] for v in PYTHONFMU_NEEDS)
+    line = (
+        f"Needs Python {metadata.metadata('agilesat')['Requires-Python']} with {numpy}; in a "
+        f"host without Python, Python {version} (set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
+        f"Linux x86-64, glibc >= {glibc}, libstdc++ >= GLIBCXX_{libstdcxx} (see "
+        "documentation/index.html)."
+    )
+    points = [
+        f"In a Python host (FMPy, libcosimpy, ecospy, agilesat's master) the FMU runs in the "
+        f"host's own interpreter: Python {metadata.metadata('agilesat')['Requires-Python']} "
+        f"with {numpy} ({sgp4} for an OrbitEnvironment given a TLE; numba, optional, "
+        "compiles the models' hot loops in long runs).",
+        f"In a host without Python (a C/C++ tool, OMSimulator, libcosim's or ECOS's command "
+        f"line) the FMU starts the Python it was built with, Python {version}: the shared "
+        f"libpython and the environment of {python}.  On another machine, make a Python "
+        f"{version} environment with numpy (and sgp4) and set AGILESAT_LIBPYTHON to its "
+        f"shared libpython (libpython{version}.so.1.0) and AGILESAT_PYTHON to its python; "
+        "anything missing is named by fmi2Instantiate through the host's logger.",
+        f"Linux x86-64 with glibc >= {glibc} and the libstdc++ of GCC 12 or later "
+        f"(GLIBCXX_{libstdcxx}): what pythonfmu's binary needs (Debian 12, Ubuntu 22.04 and "
+        "later; not Ubuntu 20.04, RHEL 8 or RHEL 9).  The FMU's own binary needs glibc 2.2.5.",
+    ]
+    return line, points
+
+
+def _documentation(name: str, model, needs: tuple[str, list[str]]) -> str:
     rows = "\n".join(
         "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
         for row in interface_rows(model)
     )
     doc = escape(model.__doc__ or "")
+    points = "".join(f"<li>{escape(point)}</li>" for point in needs[1])
     return (
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
-        f"<body><h1>{name}</h1><pre>{doc}</pre><table border='1'>"
+        f"<body><h1>{name}</h1><pre>{doc}</pre><h2>What this FMU needs</h2><ul>{points}</ul>"
+        "<table border='1'>"
         "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"
         f"<th>description</th></tr>\n{rows}</table></body></html>\n"
     )

@@ -224,13 +224,14 @@ CASES += [
 
 
 def _warning_case():
-    from agilesat.fmus.build import SHIM_C_FILES, shim_flags
+    from agilesat.fmus.build import SHIM_C_FILES, SHIM_LIBRARIES, shim_flags
 
     directory = Path(tempfile.mkdtemp(prefix="agilesat-fake-"))
     try:
         inner = directory / "pythonfmu-export.so"
         _compile([HERE / "c_host" / "fake_inner.c"], inner, "-shared", "-fPIC")
-        _compile(SHIM_C_FILES, directory / "Fake.so", *shim_flags("", ""), "-lpthread")
+        flags = shim_flags("", "", "3.0")
+        _compile(SHIM_C_FILES, directory / "Fake.so", *flags, *SHIM_LIBRARIES)
         answer, process = _child("warning_as_ok", directory / "Fake.so")
     finally:
         shutil.rmtree(directory, ignore_errors=True)
