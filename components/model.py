@@ -15,8 +15,9 @@ A model owns one flat float64 array holding its parameters, inputs and outputs (
 
 Every model also has the parameter ``warnings_return_ok`` (:data:`COMMON_VARIABLES`,
 appended to each table): the FMU logs the model's warnings (limits, saturation,
-singularity) at category ``logStatusWarning`` in any case; with it set the call returns
-``fmi2OK`` instead of ``fmi2Warning``, for hosts that stop on a warning (OMSimulator).
+singularity) at category ``logStatusWarning`` in any case, as warnings; with it set the
+call returns ``fmi2OK`` instead of ``fmi2Warning``, for hosts that stop on a warning
+(OMSimulator).  Exported packages set it (orchestration/export.py).
 
 A model whose initial state depends on inputs (``INITIAL_STATE_DEPENDS``) calls
 :meth:`Model.remember_initial_inputs` at the end of ``initialize`` and

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import os
 import shutil
 import subprocess
@@ -80,21 +81,14 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     model = model_class(name)
     package = f"agilesat_{digest}"
     entry = f"{name}_{digest}"
-    description = (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0]
     entries = {
-        "modelDescription.xml": model_description(
-            name,
-            model,
-            str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
-            description,
-            f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
-        ),
+        "modelDescription.xml": description_xml(name, digest),
         f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": _entry_module(name, package).encode(),
         f"resources/{package}/__init__.py": b"",
-        "documentation/index.html": _documentation(name, model, requirements()).encode(),
+        "documentation/index.html": documentation(name, model).encode(),
     }
     for relative, path in sources.items():
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
@@ -136,21 +130,43 @@ def compile_kernels(fmu: Path, name: str, package: str) -> None:
         raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
 
 
+def description_xml(name: str, digest: str, starts: dict | None = None, key: str = "") -> bytes:
+    """The model description of FMU ``name`` built from the sources of hash ``digest``;
+    ``starts`` ({scalar name: start text}) and ``key`` (their hash) for a configured FMU
+    (fmus/configure.py), whose GUID is its own."""
+    model = model_class(name)
+    return model_description(
+        name,
+        model,
+        str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}" + (f":{key}" if key else ""))),
+        (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0],
+        f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
+        starts,
+    )
+
+
 def write_archive(target: Path, entries: dict[str, bytes]) -> Path:
     """A deterministic zip (sorted entries, fixed timestamps), written atomically (under a
     name unique to this writer, then renamed: parallel builds never share a file)."""
     partial = _partial(target)
     try:
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            for arcname in sorted(entries):
-                info = zipfile.ZipInfo(arcname, _ZIP_TIME)
-                info.compress_type = zipfile.ZIP_DEFLATED
-                info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
-                archive.writestr(info, entries[arcname])
+        partial.write_bytes(archive_bytes(entries))
         os.replace(partial, target)
     finally:
         partial.unlink(missing_ok=True)
     return target
+
+
+def archive_bytes(entries: dict[str, bytes]) -> bytes:
+    """A deterministic zip of ``entries`` (sorted, fixed timestamps), in memory."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        for arcname in sorted(entries):
+            info = zipfile.ZipInfo(arcname, _ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
+            archive.writestr(info, entries[arcname])
+    return buffer.getvalue()
 
 
 def _entry_module(name: str, package: str) -> str:
@@ -415,20 +431,31 @@ def requirements() -> tuple[str, list[str]]:
     return line, points
 
 
-def _documentation(name: str, model, needs: tuple[str, list[str]]) -> str:
-    rows = "\n".join(
-        "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
-        for row in interface_rows(model)
-    )
-    doc = escape(model.__doc__ or "")
-    points = "".join(f"<li>{escape(point)}</li>" for point in needs[1])
-    return (
-        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
-        f"<body><h1>{name}</h1><pre>{doc}</pre><h2>What this FMU needs</h2><ul>{points}</ul>"
-        "<table border='1'>"
-        "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"
-        f"<th>description</th></tr>\n{rows}</table></body></html>\n"
-    )
+def _table(header, rows) -> str:
+    cells = ["".join(f"<th>{escape(h)}</th>" for h in header)]
+    cells += ["".join(f"<td>{escape(str(c))}</td>" for c in row) for row in rows]
+    return "<table border='1'>" + "\n".join(f"<tr>{c}</tr>" for c in cells) + "</table>"
+
+
+def documentation(name: str, model, configured: dict | None = None) -> str:
+    """documentation/index.html: the model's docstring, what the FMU needs, the values it
+    was configured with (fmus/configure.py), its variables."""
+    points = "".join(f"<li>{escape(point)}</li>" for point in requirements()[1])
+    parts = [
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>",
+        f"<body><h1>{name}</h1><pre>{escape(model.__doc__ or '')}</pre>",
+        f"<h2>What this FMU needs</h2><ul>{points}</ul>",
+    ]
+    if configured:
+        parts.append(
+            "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
+            "defaults (the start values of its model description, and the model's values "
+            "at instantiation); the package's parameter set gives them too.</p>"
+            + _table(("name", "value"), sorted(configured.items()))
+        )
+    header = ("name", "causality", "type", "unit", "start", "description")
+    parts.append(f"<h2>Variables</h2>{_table(header, interface_rows(model))}</body></html>\n")
+    return "".join(parts)
 
 
 if __name__ == "__main__":

@@ -30,8 +30,15 @@ LOG_CATEGORIES = {
 
 
 def model_description(
-    name: str, model_class, guid: str, description: str, generation_tool: str
+    name: str,
+    model_class,
+    guid: str,
+    description: str,
+    generation_tool: str,
+    starts: dict[str, str] | None = None,
 ) -> bytes:
+    """The model description; ``starts`` ({scalar name: text}) replaces the table's start
+    values of those scalars (an FMU configured with them: fmus/configure.py)."""
     layout = Layout(model_class.VARIABLES)
     for causality, capable in (
         ("input", model_class.INTERPOLATES_INPUTS),
@@ -80,7 +87,7 @@ def model_description(
     for category, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": category, "description": text})
     _input_annotation(root, layout)
-    _model_variables(root, layout)
+    _model_variables(root, layout, starts or {})
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
     return tostring(root, encoding="UTF-8", xml_declaration=True)
@@ -115,7 +122,7 @@ def _input_annotation(root, layout):
             )
 
 
-def _model_variables(root, layout):
+def _model_variables(root, layout, starts: dict[str, str]):
     variables = SubElement(root, "ModelVariables")
     index = {name: i for i, (_, name) in enumerate(layout.scalars, start=1)}
     for vr, (var, scalar_name) in enumerate(layout.scalars):
@@ -143,17 +150,26 @@ def _model_variables(root, layout):
                 base = scalar_name.replace(var.name, var.derivative_of, 1)
                 type_attributes["derivative"] = str(index[base])
         if var.causality != "output":
-            type_attributes["start"] = _start_text(var, vr - layout.offset[var.name])
+            at = vr - layout.offset[var.name]
+            type_attributes["start"] = (
+                starts[scalar_name] if scalar_name in starts else _start_text(var, at)
+            )
         SubElement(element, var.type, type_attributes)
 
 
 def _start_text(var, element_index: int) -> str:
-    if var.type == "String":
-        return str(var.start)
-    value = var.start_array()[element_index]
-    if var.type == "Boolean":
+    return start_text(
+        var.type, var.start if var.type == "String" else var.start_array()[element_index]
+    )
+
+
+def start_text(type_name: str, value) -> str:
+    """A start value as modelDescription.xml writes a value of that type."""
+    if type_name == "String":
+        return str(value)
+    if type_name == "Boolean":
         return "true" if value else "false"
-    if var.type == "Integer":
+    if type_name == "Integer":
         return str(int(value))
     return repr(float(value))
 

@@ -41,7 +41,9 @@ and tell it what it may do after (``leave``).
 from __future__ import annotations
 
 import functools
+import json
 import math
+import os
 import traceback
 
 import numpy as np
@@ -50,7 +52,7 @@ from pythonfmu.enums import Fmi2Status
 
 from ..components.model import ModelError
 from ..components.switches import SwitchError
-from . import fmu_state
+from . import CONFIGURATION, fmu_state
 from .fast_paths import FastPaths, kind
 from .protocol import (
     B_TIME,
@@ -146,6 +148,7 @@ class ModelSlave(Fmi2Slave):
         layout = self.model.layout
         self._layout = layout
         self._scalar_names = [name for _, name in layout.scalars]
+        self._configure(kwargs.get("resources"))
         self._causality = np.array([_CAUSALITY_CODE[v.causality] for v, _ in layout.scalars])
         self._type = np.array([_TYPE_CODE[v.type] for v, _ in layout.scalars])
         self._string_names = [v.name for v in layout.variables if v.type == "String"]
@@ -175,6 +178,22 @@ class ModelSlave(Fmi2Slave):
         self._mode = "instantiated"
         self._start_time = 0.0
         self._state_valid = False
+
+    def _configure(self, resources) -> None:
+        """The defaults of an FMU configured by ``agilesat export`` (fmus/configure.py):
+        the values in its resources' configuration.json, its model description's start
+        values."""
+        path = os.path.join(resources or "", CONFIGURATION)
+        if not resources or not os.path.isfile(path):
+            return
+        with open(path, encoding="utf-8") as file:
+            values = json.load(file)["values"]
+        for scalar, value in values.items():
+            vr = self._scalar_names.index(scalar)
+            if self._layout.scalars[vr][0].type == "String":
+                self.model.strings[scalar] = value
+            else:
+                self.model.values[vr] = float(value)
 
     # -- the state machine's flags that live in the arrays shared with the shim --------
     @property
@@ -541,8 +560,8 @@ class ModelSlave(Fmi2Slave):
 
     def _flush_warnings(self):
         """The model's warnings, at category logStatusWarning; with the parameter
-        warnings_return_ok at status fmi2OK, which the shim forwards to the host (even
-        with debug logging off) without raising the call's status."""
+        warnings_return_ok at status fmi2OK, which the shim forwards to the host as a
+        warning message (even with debug logging off) without raising the call's status."""
         if self.model.warnings:
             self._warn(self.model.warnings)
             self.model.warnings.clear()

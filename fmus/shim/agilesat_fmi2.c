@@ -10,7 +10,8 @@
  *    The shim keeps pythonfmu's logging on and applies the host's wish itself: warnings
  *    and errors always reach the host, OK-level messages only with logging on (and the
  *    category enabled), except OK-level messages of category "logStatusWarning" (warnings
- *    a user asked not to fail the call with): those always reach the host, as OK.
+ *    a user asked not to fail the call with): those always reach the host, as warnings
+ *    (the message's status fmi2Warning; the call's status stays what it is).
  *
  *  - Exit.  At process exit pythonfmu's ELF destructor (onLibraryUnload, run by _dl_fini)
  *    calls finalizePythonInterpreter(), which resets a static std::shared_ptr that the exit
@@ -310,16 +311,18 @@ static fmi2Status refuse(Shim *s, const char *call, const char *why) {
 
 /* The slave logs limit and saturation conditions at status OK with category
  * "logStatusWarning" when the user asks for warnings that do not fail the call (hosts that
- * treat fmi2Warning from fmi2DoStep as failure): those always reach the host, as OK. */
+ * treat fmi2Warning from fmi2DoStep as failure, OMSimulator): those always reach the host,
+ * as messages of status fmi2Warning (a host logs them as warnings), and leave the call's
+ * status OK. */
 static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     (void)instance;
     Shim *s = env;
     if (status > s->worst && status != fmi2Pending) s->worst = status;
-    int warning_as_ok = category && strcmp(category, "logStatusWarning") == 0;
+    int warning_as_ok = status == fmi2OK && category && !strcmp(category, "logStatusWarning");
     if (status == fmi2OK && !warning_as_ok && (!s->logging_on || !category_enabled(s, category)))
         return;
-    host_log(s, status, category, message ? message : "");
+    host_log(s, warning_as_ok ? fmi2Warning : status, category, message ? message : "");
 }
 
 static void free_categories(Shim *s) {

@@ -235,12 +235,12 @@ def _warning_case():
         answer, process = _child("warning_as_ok", directory / "Fake.so")
     finally:
         shutil.rmtree(directory, ignore_errors=True)
-    want = {"step": 0, "messages": [[0, "logStatusWarning", "gimbal rate command limited"]]}
+    want = {"step": 0, "messages": [[1, "logStatusWarning", "gimbal rate command limited"]]}
     return {
         "fault": "the slave logs a warning at status OK, category logStatusWarning "
         "(the shim alone, on a stand-in for pythonfmu's binary), logging off",
-        "expected": "the host's logger gets it as OK with that category; fmi2DoStep "
-        "returns fmi2OK; OK-level debug messages stay filtered",
+        "expected": "the host's logger gets it as a warning (status fmi2Warning) with that "
+        "category; fmi2DoStep returns fmi2OK; OK-level debug messages stay filtered",
         "observed": process if answer is None else f"{process}; {json.dumps(answer)}",
         "ok": answer == want,
     }
