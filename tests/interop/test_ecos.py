@@ -22,6 +22,7 @@ import sys
 import numpy as np
 import pytest
 
+from agilesat.orchestration.cosim.master import simulate
 from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.scenarios import NAMES, get
 from helpers import HOST_CASES, TOOLS, agilesat, export_elsewhere
@@ -114,3 +115,38 @@ def test_without_a_parameter_set_name_ecos_runs_the_named_run_exactly(scenario, 
     if scenario == "scan_pitch":
         pitch = "SatelliteDynamics.euler_BO[2]"
         assert math.degrees(nameless[pitch][0]) == pytest.approx(120.0, abs=0.1)
+
+
+def test_two_components_of_one_fmu_file(fmus, tmp_path):
+    """ECOS's loader closes and reopens an FMU's binary per instance, the first instance
+    alive: the shim is NODELETE, so both hubs of one FMU file run as in our master (an
+    unloaded shim forgot the first: its pitch read 0)."""
+    from agilesat.components.satellite_dynamics import SatelliteDynamics
+    from agilesat.components.variables import UNITS
+    from agilesat.fmus.build import write_archive
+    from agilesat.orchestration.export import package
+    from agilesat.orchestration.system.ssp import render_ssd
+
+    uri = "resources/SatelliteDynamics.fmu"
+    rate = [0.01, -0.02, 0.03]
+    ssd = render_ssd(
+        "two_hubs",
+        {"A": uri, "B": uri},
+        dict.fromkeys("AB", SatelliteDynamics.VARIABLES),
+        [("A.H_I", "B.h_wheel")],
+        {"A.rate0": rate, "B.rate0": rate},  # the same values: one configured FMU file
+        UNITS,
+        0.0,
+        2.0,
+        0.05,
+        "jacobi",
+    )
+    entries = package(ssd, {uri: fmus["SatelliteDynamics"]})
+    assert sorted(entries) == ["SystemStructure.ssd", uri]
+    system = write_archive(tmp_path / "two_hubs.ssp", entries)
+    columns = ["A.euler_BO[2]", "B.euler_BO[2]", "B.w_BI_B[1]"]
+    theirs = ecos(system, 2.0, 0.05, "two_hubs", columns, tmp_path / "ecos.npz")
+    mine = simulate(system, stop=2.0)
+    for column in columns:
+        assert np.allclose(theirs[column], mine[column][1:], rtol=1e-12, atol=1e-15), column
+    assert theirs["A.euler_BO[2]"][-1] != 0.0
