@@ -7,7 +7,8 @@ silently.  A configured FMU carries the values itself: the start values of its m
 description, the model's values at instantiation (``resources/configuration.json``, which
 the slave applies: fmus/slave.py), its documentation — all from one mapping — and a GUID of
 its own (the values' hash beside the code's).  Its code, binaries and compiled kernels are
-those of the built FMU.
+those of the built FMU.  Only an FMU built from these sources can be configured (its model
+description is written again from the variable table); any other is :class:`NotConfigurable`.
 """
 
 from __future__ import annotations
@@ -17,20 +18,28 @@ import json
 import zipfile
 from pathlib import Path
 
-from . import CONFIGURATION, model_class
-from .build import archive_bytes, description_xml, documentation
+from . import CONFIGURATION, FMUS, model_class
+from .build import archive_bytes, description_xml, documentation, is_current
 from .model_description import start_text
 
 _PYTHON = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
+class NotConfigurable(ValueError):
+    """The FMU is not one agilesat built from these sources (a third party's, or older)."""
+
+
 def configured_fmu(fmu: Path, values: dict) -> bytes:
     """The built FMU ``fmu`` with ``values`` ({scalar name: value}, parameters and inputs)
     as its defaults, as the bytes of an FMU (module docstring).  ValueError naming the
-    FMU and variable for a name it does not have or an output."""
+    FMU and variable for a name it does not have or an output; NotConfigurable for an FMU
+    not built from these sources."""
     with zipfile.ZipFile(fmu) as archive:
         entries = {name: archive.read(name) for name in archive.namelist()}
-    name, digest = entries["resources/slavemodule.txt"].decode().rsplit("_", 1)
+    entry = entries.get("resources/slavemodule.txt", b"").decode()
+    name, _, digest = entry.rpartition("_")
+    if name not in FMUS or not is_current(fmu, name):
+        raise NotConfigurable(f"{fmu}: not an FMU agilesat built from these sources")
     model = model_class(name)
     variables = {scalar: v for v, scalar in model.table_layout().scalars}
     typed = {}

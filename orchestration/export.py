@@ -15,18 +15,21 @@ system as described.  They also default ``warnings_return_ok`` to true: the FMUs
 (limits, saturation) reach every host's log at category ``logStatusWarning`` with status
 fmi2OK, so that hosts that stop on fmi2Warning (OMSimulator) run to the end.  One FMU file
 per FMU and set of values: ``resources/<FMU>.fmu``, or ``resources/<FMU>_<component>.fmu``
-where components of one FMU have different values.
+where components of one FMU have different values.  An FMU that is not one of ours as
+built from these sources (a third party's) is packed as it is, with a warning: its values
+are in the SSD's parameter sets only.
 """
 
 from __future__ import annotations
 
 import tempfile
+import warnings
 from pathlib import Path
 
 from lxml import etree
 
 from ..fmus.build import build_all, write_archive
-from ..fmus.configure import configured_fmu
+from ..fmus.configure import NotConfigurable, configured_fmu
 from .runner import parse_target
 from .system.ssp import NS, read_system
 
@@ -67,7 +70,13 @@ def package(ssd: bytes, fmus: dict[str, Path]) -> dict[str, bytes]:
         values = {**EXPORT_DEFAULTS}
         values.update((p.name, p.value) for p in parameters if p.component == component)
         path = Path(fmus[uri])
-        configured[component] = (path.stem, configured_fmu(path, values))
+        try:
+            configured[component] = (path.stem, configured_fmu(path, values))
+        except NotConfigurable as exc:
+            warnings.warn(
+                f"{exc}: packed as it is, its values in the parameter sets only", stacklevel=2
+            )
+            configured[component] = (path.stem, path.read_bytes())
     entries = {}
     for element in tree.iterfind(".//ssd:Component", NS):
         component = element.get("name")

@@ -123,3 +123,29 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
     }
     run = agilesat("run", tmp_path / "p.ssp", "--out", tmp_path / "out", "--no-figures")
     assert run.returncode == 0, run.stderr
+
+
+def test_an_fmu_not_built_from_these_sources_is_packed_as_it_is(fmus, tmp_path):
+    """A third party's FMU, or one of ours built from other sources (here: a stale build),
+    cannot be configured: it is packed unchanged, with a warning naming it."""
+    from agilesat.components.satellite_dynamics import SatelliteDynamics
+    from agilesat.components.variables import UNITS
+    from agilesat.orchestration.export import package
+    from agilesat.orchestration.system.ssp import render_ssd
+
+    stale = tmp_path / "SatelliteDynamics.fmu"
+    with zipfile.ZipFile(fmus["SatelliteDynamics"]) as built, zipfile.ZipFile(stale, "w") as out:
+        entry = built.read("resources/slavemodule.txt").decode()
+        for item in built.namelist():  # the entry module of other sources' hash
+            renamed = item.replace(entry, "SatelliteDynamics_0123456789ab")
+            out.writestr(
+                renamed, built.read(item).replace(entry.encode(), b"SatelliteDynamics_0123456789ab")
+            )
+    uri = "resources/SatelliteDynamics.fmu"
+    ssd = render_ssd(
+        "one", {"A": uri}, {"A": SatelliteDynamics.VARIABLES}, [("A.H_I", "A.h_wheel")],
+        {"A.rate0": [0.01, 0.0, 0.0]}, UNITS, 0.0, 1.0, 0.05,
+    )  # fmt: skip
+    with pytest.warns(UserWarning, match="not an FMU agilesat built from these sources"):
+        entries = package(ssd, {uri: stale})
+    assert entries[uri] == stale.read_bytes()
