@@ -39,6 +39,12 @@ restarts the other way.  A speed limiter in the drive clamps Ω at the momentum 
 (J_w |Ω| ≤ max(momentum_limit, J_w |Ω| at the step's start)) if it is reached within
 the step.
 
+Output derivatives at the current time, along the step's motion with the motor torque
+held: Ω̇_i = (J Ω̇_i) / J_w as the drive delivers it, ḣ, ḧ = −(c_v / J_w) ḣ (J_w Ω̈_i = −c_v Ω̇_i
+between zero crossings; zero for a wheel at rest or held), and zero for the motor torques
+(held over the step).  The inputs are sampled by the drive at communication points, not
+integrated: the model does not interpolate them (no canInterpolateInputs).
+
 Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
 of [Chang 2015]: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
 friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
@@ -109,6 +115,8 @@ def wheel_step(
 
 class Flywheel(Model):
     """Reaction-wheel assembly: torque command to wheel motor torques, exact wheel dynamics."""
+
+    OUTPUT_DERIVATIVES = True
 
     VARIABLES = (
         parameter(
@@ -253,6 +261,16 @@ class Flywheel(Model):
         y.speed[:] = speed
         y.motor_torque[:] = motor
         y.saturated = bool(limited)
+
+    def output_derivatives(self):
+        """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
+        _, accel_torques, _, _ = self._drive()
+        speed_rate = [0.0] * N_WHEELS
+        for i, a in zip(self.wheels, accel_torques):
+            speed_rate[i] = a / self.inertia
+        hdot = self.y.hdot.tolist()
+        k = self.viscous / self.inertia
+        return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
 
     # -- internals -----------------------------------------------------------------
     def _momentum(self) -> tuple[float, float, float]:

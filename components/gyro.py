@@ -9,6 +9,11 @@ is taken linear, so the average is exact for a rate varying linearly over a step
 the noise of sample k is drawn from index k (components/noise.py): the record is the same
 for any master step (only the true-rate integral depends on it, through rounding).
 Before t0 the body rate and the bias are taken constant, so sample 0 at t0 is valid.
+A host that interpolates inputs (FMI 2.0 input derivatives, components/model.py) gives the
+rate's slope ẇ at the step's start: between communication points the true rate is then the
+parabola through w(t_c) with that slope and w(t_c + h), w_c + ẇ s + (w(t_c + h) − w_c − ẇ h)
+s²/h², whose average is exact for a rate quadratic over the step (per axis; the line where
+no slope was set).
 
 Error model (IEEE Std 952-1997, Annex C; [Farrenkopf 1978]; [Markley 2014] ch. 4).  For
 axis i, with the true average rate ω̄ over the interval::
@@ -97,6 +102,8 @@ FILTER_BIAS_WALK = filter_bias_walk(STIM300_RRW, STIM300_BIAS_INSTABILITY, BIAS_
 
 class Gyro(Model):
     """Three-axis rate-integrating gyro with noise, bias, scale factor and misalignment."""
+
+    INTERPOLATES_INPUTS = True
 
     VARIABLES = (
         parameter(
@@ -198,6 +205,7 @@ class Gyro(Model):
         self.k = -1
         self.t_last = None  # last communication point seen (None: none yet)
         self.w_last = (0.0, 0.0, 0.0)
+        self.slope_last = (None, None, None)  # ẇ set for the step from t_last (None: none)
         self.integral = (0.0, 0.0, 0.0)  # of the true rate since t_k
         self.b_rw = tuple(p.bias0.tolist())
         self.b_gm = (0.0, 0.0, 0.0)
@@ -227,19 +235,24 @@ class Gyro(Model):
         (constant before t0).  Pure: returns the new state."""
         t0, rate, T = self.t0, self.rate, self.period
         k, t_last, w_last, integral = self.k, self.t_last, self.w_last, self.integral
+        slope = self.slope_last
         if t_last is None:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
-            t_last, w_last = t0 - T, w_now
+            t_last, w_last, slope = t0 - T, w_now, (None, None, None)
         span = now - t_last
         state = {"b_rw": self.b_rw, "b_gm": self.b_gm, "residual": self.residual}
         state.update(w_meas=self.w_meas, saturated=self.saturated, notes=[])
         segment = t_last  # start of the part of (t_last, now] not yet integrated
         for j in range(k + 1, tick(now, t0, rate) + 1):
             end = min(tick_time(j, t0, rate), now)
-            integral = _add_linear(integral, segment, end, t_last, span, w_last, w_now)
+            integral = _add_rate(integral, segment, end, t_last, span, w_last, w_now, slope)
             self._sample(j, tuple(x / T for x in integral), state)
             integral, segment, k = (0.0, 0.0, 0.0), end, j
-        integral = _add_linear(integral, segment, now, t_last, span, w_last, w_now)
-        state.update(k=k, t_last=now, w_last=w_now, integral=integral)
+        integral = _add_rate(integral, segment, now, t_last, span, w_last, w_now, slope)
+        given = self._given("w_BI_B").tolist()
+        now_slope = tuple(
+            x if g else None for g, x in zip(given, self.input_rate("w_BI_B").tolist())
+        )
+        state.update(k=k, t_last=now, w_last=w_now, integral=integral, slope_last=now_slope)
         return state
 
     def _sample(self, j: int, w_true: tuple, state: dict) -> None:
@@ -289,9 +302,20 @@ class Gyro(Model):
         state["saturated"] = tuple(saturated)
 
 
-def _add_linear(integral, a, b, t_last, span, w_last, w_now) -> tuple:
-    """integral + ∫_a^b w dt for w linear from w_last at t_last to w_now at t_last + span."""
+def _add_rate(integral, a, b, t_last, span, w_last, w_now, slope) -> tuple:
+    """integral + ∫_a^b w dt for w from w_last at t_last to w_now at t_last + span: per
+    axis linear, or where ``slope`` gives ẇ at t_last the parabola with that slope."""
     if b <= a:
         return integral
     s = (0.5 * (a + b) - t_last) / span  # the midpoint value integrates a line exactly
-    return tuple(i + (b - a) * (wl + s * (wn - wl)) for i, wl, wn in zip(integral, w_last, w_now))
+    out = []
+    for i, wl, wn, d in zip(integral, w_last, w_now, slope):
+        if d is None:
+            out.append(i + (b - a) * (wl + s * (wn - wl)))
+            continue
+        sa, sb = a - t_last, b - t_last  # ∫ (wl + d x + c x²) dx over [sa, sb] / (sb − sa)
+        c = (wn - wl - d * span) / (span * span)
+        out.append(
+            i + (b - a) * (wl + d * 0.5 * (sa + sb) + c * (sa * sa + sa * sb + sb * sb) / 3.0)
+        )
+    return tuple(out)

@@ -73,6 +73,21 @@ error e = θ − θ_cmd(s) then obeys ë + 2ζωn ė + ωn² e = 0, integrated i
 
 The accelerations in ḣ are the servo law evaluated with the current inputs.  The servo
 state starts at the commands at t0 (the payloads are parked at the sweep's start).
+
+Interpolated commands (FMI 2.0 input derivatives, components/model.py; servo mode, the
+only one that integrates its inputs): the angle command moves at its slope a (the
+derivative a host set for it, else the rate command: :meth:`Model.slope`) and the rate
+command at its derivative β, θ_cmd(s) = θ_cmd + a s, θ̇_cmd(s) = θ̇_cmd + β s.  The error
+e = θ − θ_cmd(s) then obeys ë + 2ζωn ė + ωn² e = 2ζωn ((θ̇_cmd − a) + β s), whose solution
+is the particular e_p = p0 + p1 s (p1 = 2ζβ/ωn, p0 = (2ζωn (θ̇_cmd − a) − 2ζωn p1)/ωn²) plus
+the homogeneous motion above from e0 − p0, ė0 − p1.  Ideal tracking takes the commands at
+the communication points (nothing to interpolate).
+
+Output derivatives at the current time (the model's own angles θ, rates θ̇, accelerations
+θ̈ and jerks θ⃛: in servo mode θ⃛ = ωn² (a − θ̇) + 2ζωn (β − θ̈); in ideal tracking the
+derivatives of the acceleration commands with ``accel_inputs``, else zero, the
+accelerations being held over the step): the angles' θ̇, the rates' θ̈, ḣ, ḧ_b = R_mbᵀ (J Ω̈
++ Ω̇ × J Ω + 2 Ω × J Ω̇ + Ω × (Ω × J Ω)) and the boresights' R_mbᵀ (Ω × ẑ).
 """
 
 from __future__ import annotations
@@ -114,9 +129,47 @@ def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     )
 
 
-def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
-    """Angle and rate after ``dt`` of θ̈ = ωn² (θc + θ̇c s − θ) + 2ζωn (θ̇c − θ̇), exactly."""
-    e0, de0 = angle - command, rate - rate_command
+def payload_momentum_rate(J, angles, rates, accels, jerks):
+    """(ḧ_b, boresight rate) of one payload, in B (module docstring); each argument a
+    (roll, pitch) pair of the angles and their first three derivatives."""
+    (phi, theta), (pd, td), (pdd, tdd), (pddd, tddd) = angles, rates, accels, jerks
+    Jx, Jy, Jz = J
+    c, s = math.cos(theta), math.sin(theta)
+    w = np.array([pd * c, td, pd * s])  # Ω, Ω̇, Ω̈ (eq. 1 differentiated)
+    w_dot = np.array([pdd * c - pd * td * s, tdd, pdd * s + pd * td * c])
+    k = 2.0 * pdd * td + pd * tdd
+    w_ddot = np.array(
+        [pddd * c - k * s - pd * td * td * c, tddd, pddd * s + k * c - pd * td * td * s]
+    )
+    inertia = np.array([Jx, Jy, Jz])
+    h, h_dot = inertia * w, inertia * w_dot
+    v = inertia * w_ddot + np.cross(w_dot, h) + 2.0 * np.cross(w, h_dot)
+    v += np.cross(w, np.cross(w, h))
+    return _to_body(phi, theta, v), _to_body(phi, theta, (w[1], -w[0], 0.0))
+
+
+def _to_body(phi, theta, v):
+    """R_mbᵀ v = R_x(φ)ᵀ (R_y(θ)ᵀ v)."""
+    cf, sf, c, s = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+    x, y, z = c * v[0] + s * v[2], v[1], c * v[2] - s * v[0]
+    return (x, cf * y - sf * z, sf * y + cf * z)
+
+
+def servo_step(angle, rate, command, rate_command, dt, omega, zeta, slope=None, rate_slope=0.0):
+    """Angle and rate after ``dt`` of θ̈ = ωn² (θc + a s − θ) + 2ζωn (θ̇c + β s − θ̇),
+    exactly; a = ``slope`` (None: θ̇c), β = ``rate_slope`` (module docstring)."""
+    if slope is None and rate_slope == 0.0:
+        e, de = _free(angle - command, rate - rate_command, dt, omega, zeta)
+        return command + rate_command * dt + e, rate_command + de
+    a = rate_command if slope is None else slope
+    p1 = 2.0 * zeta * rate_slope / omega
+    p0 = (2.0 * zeta * omega * (rate_command - a) - 2.0 * zeta * omega * p1) / (omega * omega)
+    e, de = _free(angle - command - p0, rate - a - p1, dt, omega, zeta)
+    return command + a * dt + e + p0 + p1 * dt, a + de + p1
+
+
+def _free(e0, de0, dt, omega, zeta):
+    """e, ė after ``dt`` of ë + 2ζωn ė + ωn² e = 0 from e0, ė0."""
     sigma = zeta * omega
     omega2 = omega * omega
     lam2 = omega2 * (zeta * zeta - 1.0)
@@ -137,11 +190,14 @@ def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
         S = 0.5 * (slow - fast) / lam
     e = C * e0 + S * (sigma * e0 + de0)
     de = C * de0 - S * (omega2 * e0 + sigma * de0)
-    return command + rate_command * dt + e, rate_command + de
+    return e, de
 
 
 class PayloadGimbals(Model):
     """Two payloads, each on a roll-then-pitch gimbal: momentum relative to the body."""
+
+    INTERPOLATES_INPUTS = True
+    OUTPUT_DERIVATIVES = True
 
     VARIABLES = (
         parameter(
@@ -297,6 +353,7 @@ class PayloadGimbals(Model):
         self.rates = commands[4:8]
         self.last_rate_cmd = None  # ideal tracking: rate commands at the last step
         self.last_dt = 0.0
+        self.slope_reported = False  # a rate command differing from a set derivative
         self.t = t0
         if not self.ideal:  # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
@@ -321,30 +378,39 @@ class PayloadGimbals(Model):
             self.last_rate_cmd, self.last_dt = commands[4:8], dt
         else:
             omega, zeta, angles, rates = self.omega, self.zeta, self.angles, self.rates
+            slopes, rate_slopes = self._command_rates()
             for i in range(4):
                 angles[i], rates[i] = servo_step(
-                    angles[i], rates[i], commands[i], commands[4 + i], dt, omega, zeta
+                    angles[i], rates[i], commands[i], commands[4 + i], dt, omega, zeta,
+                    slopes[i], rate_slopes[i],
+                )  # fmt: skip
+            conflicts = [
+                text
+                for angle, rate in (("roll_cmd", "roll_rate_cmd"), ("pitch_cmd", "pitch_rate_cmd"))
+                for text in self.slope_conflicts(angle, rate)
+            ]
+            if conflicts and not self.slope_reported:
+                self.slope_reported = True
+                self.warnings.append(
+                    f"t={t:.6g} s: {'; '.join(conflicts)}: the derivative a host sets for an "
+                    "angle command (fmi2SetRealInputDerivatives) is its slope over the "
+                    "step, the rate command only where none was set (reported once)"
                 )
         self.t = t + dt
 
+    def _command_rates(self) -> tuple[list, list]:
+        """Per axis (roll 1, roll 2, pitch 1, pitch 2): the angle command's slope (None:
+        the rate command, no derivative set) and the rate command's derivative."""
+        slopes = []
+        for angle in ("roll_cmd", "pitch_cmd"):
+            given = self._given(angle).tolist()
+            rate = self.input_rate(angle).tolist()
+            slopes += [x if g else None for g, x in zip(given, rate)]
+        rate_slopes = [*self.input_rate("roll_rate_cmd"), *self.input_rate("pitch_rate_cmd")]
+        return slopes, [float(x) for x in rate_slopes]
+
     def output(self):
-        commands = self.values[self._inputs].tolist()
-        if self.ideal:
-            angles, rates = commands[:4], commands[4:8]
-            last = self.last_rate_cmd
-            if self.accel_inputs:
-                accels = commands[8:]
-            elif last is None:
-                accels = (0.0, 0.0, 0.0, 0.0)
-            else:
-                k = 1.0 / self.last_dt
-                accels = [(a - b) * k for a, b in zip(rates, last)]
-        else:
-            angles, rates = self.angles, self.rates
-            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
-            accels = [
-                w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
-            ]
+        angles, rates, accels = self._motion()
         J = self.J
         h1, d1, l1 = payload_momentum(
             J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2]
@@ -364,3 +430,56 @@ class PayloadGimbals(Model):
             *l1,
             *l2,
         )
+
+    def output_derivatives(self):
+        """See the module docstring: d/dt of the outputs at ``self.t``."""
+        angles, rates, accels = self._motion()
+        if self.ideal:
+            jerks = [0.0] * 4
+            if self.accel_inputs:
+                jerks = [*self.input_rate("roll_accel_cmd"), *self.input_rate("pitch_accel_cmd")]
+        else:
+            slopes, rate_slopes = self._command_rates()
+            commands = self.values[self._inputs].tolist()
+            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
+            jerks = [
+                w2 * ((commands[4 + i] if slopes[i] is None else slopes[i]) - rates[i])
+                + d * (rate_slopes[i] - accels[i])
+                for i in range(4)
+            ]
+        pair = [(k, k + 2) for k in (0, 1)]  # (roll, pitch) of payloads 1 and 2
+        moved = [
+            payload_momentum_rate(self.J, *([x[i], x[j]] for x in (angles, rates, accels, jerks)))
+            for i, j in pair
+        ]
+        return np.array(
+            [
+                *rates,
+                *accels,
+                *self.values[self._outputs][11:14],  # hdot
+                *np.add(moved[0][0], moved[1][0]),
+                *moved[0][1],
+                *moved[1][1],
+            ]
+        )
+
+    def _motion(self) -> tuple[list, list, list]:
+        """(angles, rates, accelerations), each roll 1, roll 2, pitch 1, pitch 2, now."""
+        commands = self.values[self._inputs].tolist()
+        if self.ideal:
+            angles, rates = commands[:4], commands[4:8]
+            last = self.last_rate_cmd
+            if self.accel_inputs:
+                accels = commands[8:]
+            elif last is None:
+                accels = (0.0, 0.0, 0.0, 0.0)
+            else:
+                k = 1.0 / self.last_dt
+                accels = [(a - b) * k for a, b in zip(rates, last)]
+        else:
+            angles, rates = self.angles, self.rates
+            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
+            accels = [
+                w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
+            ]
+        return angles, rates, accels

@@ -138,6 +138,13 @@ SWITCHES = {
             "tests/tools/fault_cases_fmu.py",
         ),
         Switch(
+            "AGILESAT_OMSIMULATOR",
+            None,
+            _path,
+            "the OMSimulator executable the OMSimulator tests run (not on the package registries)",
+            "tests/interop/test_omsimulator.py",
+        ),
+        Switch(
             "AGILESAT_TEST_SIGNAL",
             None,
             _test_signal,

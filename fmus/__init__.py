@@ -17,6 +17,9 @@ import re
 from pathlib import Path
 
 _COMPONENTS = Path(__file__).resolve().parent.parent / "components"
+#: the file in an exported FMU's resources holding the defaults it was configured with
+#: (written by configure.py, applied by the slave)
+CONFIGURATION = "configuration.json"
 FMUS: dict[str, str]  # see __getattr__
 
 

@@ -380,18 +380,20 @@ class System:
 
 def write_package(system: SystemFile, described: dict, path) -> Path:
     """An SSP package (SSP 1.0 §5): ``SystemStructure.ssd`` and every FMU under
-    ``resources/``, named by relative URI, so it runs wherever it is copied; deterministic
-    (the same system gives the same file)."""
+    ``resources/``, named by relative URI, so it runs wherever it is copied, each FMU
+    configured with the values the system binds to it (:func:`..export.package`);
+    deterministic (the same system gives the same file)."""
     from ...fmus.build import write_archive
+    from ..export import package
 
-    entries: dict[str, bytes] = {}
-    sources = {}
+    fmus: dict[str, bytes] = {}
+    sources, files = {}, {}
     for ref in system.components:
-        member = _member(Path(ref.source), entries)
-        entries.setdefault(member, Path(ref.source).read_bytes())
-        sources[ref.name] = member
-    entries["SystemStructure.ssd"] = render_ssd(system, described, sources)
-    return write_archive(Path(path), entries)
+        member = _member(Path(ref.source), fmus)
+        fmus.setdefault(member, Path(ref.source).read_bytes())
+        sources[ref.name], files[member] = member, Path(ref.source)
+    ssd = render_ssd(system, described, sources)
+    return write_archive(Path(path), package(ssd, files))
 
 
 def _member(fmu: Path, entries: dict) -> str:
