@@ -42,6 +42,14 @@ Before it, ``valid`` is false, q_BI_est the identity, sigma_att π (no knowledge
 bias_est zero with sigma_bias0.  Outputs are those of the latest cycle, held between
 cycles: w_BI_B_est = ω̃ − b̂.
 
+Relative to the orbit frame (an extension: for a controller that reads q_BO and w_BO_B, as
+the pitch-maneuver law does), with O given by the optional inputs q_OI and w_OI_O, the
+relations of SatelliteDynamics' q_BO and w_BO_B applied to the estimate::
+
+    q_BO_est = q_OI* ⊗ q_BI_est,   w_BO_B_est = w_BI_B_est − C(q_BO_est) w_OI_O
+
+(at the communication point, with the orbit frame of that time; unconnected, O = I).
+
 Defaults: the sensors' own defaults (components/gyro.py, components/star_tracker.py):
 σ_v = the gyro's ARW; σ_u = √(rrw² + 2 σ_β²/T_c), the random walk that covers the
 gyro's bias instability (its Gauss–Markov drive); σ_c, σ_b and q_SB of the star tracker;
@@ -139,6 +147,21 @@ class AttitudeEstimator(Model):
             "time of validity of q_BI_meas (StarTracker.t_meas)",
             optional="unconnected: a new q_BI_meas is valid at the cycle that first sees it",
         ),
+        input_(
+            "q_OI",
+            "1",
+            "attitude of the orbit frame O relative to I (for q_BO_est)",
+            IDENTITY_Q,
+            shape=(4,),
+            optional="identity: O is the inertial frame (q_BO_est = q_BI_est)",
+        ),
+        input_(
+            "w_OI_O",
+            "rad/s",
+            "angular velocity of O relative to I, in O (for w_BO_B_est)",
+            shape=(3,),
+            optional="zero: O does not rotate",
+        ),
         output(
             "q_BI_est", "1", "estimated attitude of B relative to I", shape=(4,), depends=_INPUTS
         ),
@@ -174,6 +197,21 @@ class AttitudeEstimator(Model):
             "valid", "1", "initialised by a valid measurement", type="Boolean", depends=_MEASUREMENT
         ),
         output("n_updates", "1", "measurements processed", type="Integer", depends=_MEASUREMENT),
+        output(
+            "q_BO_est",
+            "1",
+            "estimated attitude of B relative to O: q_OI* ⊗ q_BI_est",
+            shape=(4,),
+            depends=_INPUTS + ("q_OI",),
+        ),
+        output(
+            "w_BO_B_est",
+            "rad/s",
+            "estimated angular velocity of B relative to O, in B: w_BI_B_est − C_BO w_OI_O",
+            shape=(3,),
+            depends=_INPUTS + ("q_OI", "w_OI_O"),
+            display_unit="deg/s",
+        ),
     )
 
     def initialize(self, t0):
@@ -233,6 +271,20 @@ class AttitudeEstimator(Model):
         y.nis = state["nis"]
         y.valid = q is not None
         y.n_updates = state["n_updates"]
+        self._orbit_frame()
+
+    def _orbit_frame(self) -> None:
+        """q_BO_est = q_OI* ⊗ q_BI_est, w_BO_B_est = w_BI_B_est − C_BO w_OI_O (the
+        relations SatelliteDynamics' q_BO and w_BO_B follow, on the estimate)."""
+        u, y = self.u, self.y
+        q_OI = u.q_OI.tolist()
+        n = math.sqrt(sum(x * x for x in q_OI))
+        if abs(n - 1.0) > 1e-6:
+            raise ModelError(f"t={self.t:.6g} s: q_OI must be a unit quaternion, got {q_OI}")
+        q_BO = qmul((q_OI[0] / n, -q_OI[1] / n, -q_OI[2] / n, -q_OI[3] / n), y.q_BI_est.tolist())
+        w_OI_B = np.array(dcm(q_BO)) @ u.w_OI_O
+        y.q_BO_est[:] = q_BO
+        y.w_BO_B_est[:] = y.w_BI_B_est - w_OI_B
 
     # -- internals -------------------------------------------------------------------
     def _inputs(self) -> tuple:

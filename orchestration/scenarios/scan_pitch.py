@@ -4,6 +4,12 @@
 Variant ``literal_spin``: the rotor spin exactly as printed in the paper's A_s0.  The
 cluster momentum bias then lies along +y and the maneuver pushes it beyond the cluster's
 capacity: the run is diagnosed as failed instead of flying a wrong maneuver silently.
+
+Variant ``sensed``: the loop as flown (:mod:`.closed_loop`): star tracker, gyro and MEKF,
+the controller on the estimate relative to the orbit frame (``q_BO_est``, ``w_BO_B_est``)
+and the steering's w × h on the estimated rate, disturbance torques on.  The star tracker
+looks 60° from −z_B towards +x_B, at the zenith when the pitch is 60°: within 60° of the
+zenith over the whole 120° maneuver, never near the Earth's limb.
 """
 
 from __future__ import annotations
@@ -30,6 +36,14 @@ from agilesat.orchestration.mission import (
     within,
 )
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.pointing import performance_error, quaternion_product
+from agilesat.orchestration.scenarios.closed_loop import (
+    KNOWLEDGE_METRICS,
+    close_the_loop,
+    knowledge_rows,
+    magnitude_row,
+    mounting,
+)
 
 DEG = math.pi / 180
 # the paper's case ([Zhao 2016], DESIGN.md §4.1)
@@ -105,10 +119,94 @@ SYSTEM.connect("CmgCluster.h", "CmgSteering.h")
 SYSTEM.connect("SatelliteDynamics.w_BI_B", "CmgSteering.w_BI_B")
 SYSTEM.connect("CmgSteering.delta_dot_cmd", "CmgCluster.delta_dot_cmd")
 
+#: the star tracker's boresight: at the zenith when the pitch is 60°, halfway through the
+#: maneuver (−z_B turned 60° about y_B towards +x_B)
+STAR_TRACKER_BORESIGHT = (math.sin(60 * DEG), 0.0, -math.cos(60 * DEG))
+
+
+def sensed(system: System) -> None:
+    """The loop as flown (:func:`.closed_loop.close_the_loop`): the controller on the
+    estimate relative to the orbit frame, the steering's w × h on the estimated rate."""
+    close_the_loop(
+        system,
+        controller="PitchManeuverController",
+        mount=mounting(STAR_TRACKER_BORESIGHT),
+        frame="BO",
+        rate_inputs=("CmgSteering.w_BI_B",),
+    )
+
+
+def planned_attitude(results) -> np.ndarray:
+    """q_RI (N, 4) of the planned attitude R: the planned pitch about the orbit's y axis,
+    roll and yaw zero (q_RI = q_OI ⊗ q_RO)."""
+    half = results["PitchManeuverController.pitch_ref"] / 2
+    zero = np.zeros_like(half)
+    q_RO = np.column_stack((np.cos(half), zero, np.sin(half), zero))
+    return quaternion_product(results.vector("OrbitEnvironment.q_OI"), q_RO)
+
+
+def attitude_error(results) -> np.ndarray:
+    """The angle (rad) of the body from the planned attitude (3-axis), per sample."""
+    error = performance_error(
+        results.vector("SatelliteDynamics.q_BI"), planned_attitude(results), results.time
+    )
+    return np.linalg.norm(error.values[0], axis=1)
+
+
+def imaging_rate_error(results) -> tuple[np.ndarray, np.ndarray]:
+    """(t, pitch rate − scan rate) over the imaging phase (t3, t4]."""
+    t = results.time
+    imaging = (t > PROFILE.times[2]) & (t <= PROFILE.times[3])
+    rate = results["SatelliteDynamics.euler_rate_BO[2]"][imaging]
+    return t[imaging], rate - PROFILE.scan_rate
+
+
+def sensed_figure(results, out_dir):
+    """The attitude's departure from the plan, the imaging rate against its band (truth)
+    and the attitude knowledge error (estimate against the truth), in arcseconds."""
+    t_imaging, rate_error = imaging_rate_error(results)
+    tolerance = SCAN_RATE_TOLERANCE / DEG
+    return panels(
+        out_dir / "pointing_and_knowledge.png",
+        "Attitude from the plan, imaging rate (performance) and attitude knowledge",
+        [
+            magnitude_row(
+                results.time, "from the planned attitude", attitude_error(results), "angle [{unit}]"
+            ),
+            magnitude_row(
+                t_imaging,
+                "pitch rate − scan rate (imaging)",
+                rate_error,
+                "rate error [{unit}/s]",
+                limit=(SCAN_RATE_TOLERANCE, f"required within ±{tolerance:g} °/s"),
+            ),
+            *knowledge_rows(results),
+        ],
+    )
+
+
 VARIANTS = {
     "literal_spin": Variant(
         "rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
         parameters={"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS},
+    ),
+    "sensed": Variant(
+        "star tracker, gyro and MEKF in the loop, disturbance torques on",
+        system=sensed,
+        metrics=[
+            m.max_abs(
+                attitude_error,
+                start=PROFILE.times[2],
+                stop=PROFILE.times[3],
+                unit="rad",
+                name="attitude_error_imaging_max",
+                display_unit="arcsec",
+                description="max angle of the body from the planned attitude over the "
+                "imaging phase (performance, 3-axis)",
+            ),
+            *KNOWLEDGE_METRICS,
+        ],
+        figures=[sensed_figure],
     ),
 }
 

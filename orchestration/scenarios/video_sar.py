@@ -22,7 +22,10 @@ reference's angular acceleration (our extension of DESIGN.md §3).  The satellit
 on the reference (attitude and rate of the guidance at t = 0).
 
 Variants: ``no_yaw_compensation`` (yaw 0, eq 11 only: the footprint turns on the ground),
-``no_feedforward`` (PD alone: the tracking lag shows).
+``no_feedforward`` (PD alone: the tracking lag shows), ``sensed`` (the loop as flown: star
+tracker, gyro and MEKF, the controller and the steering on the estimate, disturbance
+torques on; :mod:`.closed_loop`).  The star tracker looks along −z_B, away from the Earth
+the radar's +z_B boresight looks at.
 
 Other passes, of a real satellite: ``agilesat stare`` (:mod:`..studies.stare`).
 """
@@ -42,6 +45,13 @@ from agilesat.components.rotations import dcm, dcm_from_quat, quat_conj, quat_mu
 from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuth
 from agilesat.orchestration.mission import Metric, Scenario, System, Variant, at_most, lines, panels
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.scenarios.closed_loop import (
+    KNOWLEDGE_METRICS,
+    close_the_loop,
+    knowledge_rows,
+    magnitude_row,
+    mounting,
+)
 from agilesat.orchestration.scenarios.constants import (
     VIDEO_SAR_STARE,
     VIDEO_SAR_TARGET_LAT,
@@ -178,6 +188,40 @@ def make_system(
 
 SYSTEM = make_system(ORBIT, GUIDANCE, ON_REFERENCE)
 
+#: the star tracker's boresight: the zenith side, away from the radar's +z_B
+STAR_TRACKER_BORESIGHT = (0.0, 0.0, -1.0)
+
+
+def sensed(system: System) -> None:
+    """The loop as flown (:func:`.closed_loop.close_the_loop`): controller and CMG
+    steering on the estimate."""
+    close_the_loop(
+        system,
+        controller="AttitudeController",
+        mount=mounting(STAR_TRACKER_BORESIGHT),
+        rate_inputs=("CmgSteering.w_BI_B",),
+    )
+
+
+def sensed_figure(results, out_dir):
+    """The boresight's pointing error (truth against the target) and the attitude
+    knowledge error (estimate against the truth), in arcseconds."""
+    return panels(
+        out_dir / "pointing_and_knowledge.png",
+        "Boresight to target (performance) and attitude knowledge (estimate − truth)",
+        [
+            magnitude_row(
+                results.time,
+                "boresight to target",
+                boresight_error(results),
+                "pointing error [{unit}]",
+                limit=(POINTING_REQUIREMENT, f"required ≤ {POINTING_REQUIREMENT / DEG:g}° (ours)"),
+            ),
+            *knowledge_rows(results),
+        ],
+    )
+
+
 VARIANTS = {
     "no_yaw_compensation": Variant(
         "yaw 0 (eq 11 only): the footprint turns on the ground",
@@ -190,6 +234,12 @@ VARIANTS = {
     "no_feedforward": Variant(
         "PD attitude law alone, no feedforward of the reference acceleration",
         parameters={"AttitudeController.acceleration_feedforward": False},
+    ),
+    "sensed": Variant(
+        "star tracker, gyro and MEKF in the loop, disturbance torques on",
+        system=sensed,
+        metrics=KNOWLEDGE_METRICS,
+        figures=[sensed_figure],
     ),
 }
 

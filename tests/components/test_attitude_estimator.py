@@ -11,6 +11,8 @@ from scipy import stats
 
 from agilesat.components.attitude_estimator import AttitudeEstimator
 from agilesat.components.gyro import Gyro
+from agilesat.components.model import ModelError
+from agilesat.components.rotations import dcm_from_quat as dcm
 from agilesat.components.rotations import quat_conj, quat_mul
 from agilesat.components.sensing import quat_exp, rotation_vector
 from agilesat.components.star_tracker import StarTracker
@@ -237,3 +239,26 @@ def test_initialisation_and_invalid_measurements():
         model.advance(k * 0.05, 0.05)
     assert model.y.n_updates == 1 and len(model.warnings) == 1
     assert "older than history (1.0 s) and is ignored" in model.warnings[0]
+
+
+def test_the_orbit_frame_outputs_are_the_estimate_seen_from_o():
+    """q_BO_est and w_BO_B_est against direction cosines: C_BO = C_BI C_OIᵀ, and the rate
+    of B relative to O is the rate relative to I less that of O, both in B; unconnected,
+    O is the inertial frame."""
+    model = AttitudeEstimator(rate=20.0)
+    q_BI, q_OI = quat_exp((0.4, -0.1, 0.9)), quat_exp((-1.2, 0.3, 0.5))
+    w_meas, w_OI_O = np.array([0.01, -0.02, 0.03]), np.array([0.0, -1.1e-3, 0.0])
+    model.set("q_BI_meas", q_BI)
+    model.set("w_meas_B", w_meas)
+    model.start(0.0)
+    assert np.array_equal(model.y.q_BO_est, model.y.q_BI_est)
+    assert np.array_equal(model.y.w_BO_B_est, model.y.w_BI_B_est)
+    model.set("q_OI", q_OI)
+    model.set("w_OI_O", w_OI_O)
+    model.output()
+    C_BI, C_OI, C_BO = dcm(model.y.q_BI_est), dcm(q_OI), dcm(model.y.q_BO_est)
+    assert np.allclose(C_BO, C_BI @ C_OI.T, rtol=0, atol=1e-15)
+    assert np.allclose(model.y.w_BO_B_est, w_meas - C_BO @ w_OI_O, rtol=0, atol=1e-18)
+    model.set("q_OI", [1.0, 0.0, 0.0, 0.1])
+    with pytest.raises(ModelError, match="q_OI must be a unit quaternion"):
+        model.output()
