@@ -48,7 +48,6 @@ PROTOCOL_HEADER = SHIM_DIR / "protocol.h"
 SHIM_SOURCES = (*SHIM_C_FILES, SHIM_DIR / "shim.h", SHIM_DIR / "fmi2_abi.h", PROTOCOL_HEADER)
 PLATFORM = "linux64"
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
-_GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
 
 
 class BuildError(RuntimeError):
@@ -73,16 +72,20 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     package = f"agilesat_{digest}"
     entry = f"{name}_{digest}"
     description = (model.__doc__ or name).strip().splitlines()[0]
+    binaries = {
+        f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
+        f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
+    }
     entries = {
         "modelDescription.xml": model_description(
             name,
             model,
-            str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
+            protocol.fmu_guid(name, digest),
             description,
             f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
+            binaries,
         ),
-        f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
-        f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
+        **binaries,
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": _entry_module(name, package).encode(),
         f"resources/{package}/__init__.py": b"",

@@ -1,10 +1,10 @@
 """What the model description of an FMU in a system says, read without loading the FMU.
 
 :class:`Description`: the variables by name, the output dependencies (at a step and at
-initialisation), the derivative declarations and the optional inputs our FMUs declare in
-their VendorAnnotations.  The model description of each FMU file is read once per process
-and content (SHA-256 of the file: a rebuilt FMU is a new one, a copy of the same file is
-the same one).
+initialisation), the derivative declarations, and what our FMUs declare in their
+VendorAnnotations: the optional inputs and the SHA-256 of the binaries.  The model
+description of each FMU file is read once per process and content (SHA-256 of the file: a
+rebuilt FMU is a new one, a copy of the same file is the same one).
 """
 
 from __future__ import annotations
@@ -20,9 +20,10 @@ from fmpy import read_model_description
 from lxml import etree
 
 AGILESAT_TOOL = "agilesat"
+BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it
 _KEYS_KEPT = 1024
 _lock = threading.Lock()
-_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
+_descriptions: dict[str, tuple] = {}  # content key -> (description, optional inputs, binaries)
 
 
 class Description:
@@ -32,8 +33,9 @@ class Description:
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
         #: optional input -> what its default means, as our FMUs declare them
-        #: (VendorAnnotations; every other input is required); None: not our FMU
-        self.md, self.optional_inputs = _described(content_key(self.path), str(path))
+        #: (VendorAnnotations; every other input is required); None: not our FMU.
+        #: ``binaries``: {file in the FMU: SHA-256} as our FMUs declare them (or {})
+        self.md, self.optional_inputs, self.binaries = _described(content_key(self.path), str(path))
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -71,11 +73,11 @@ def content_key(path: Path) -> str:
 
 
 def _described(key: str, path: str):
-    """(model description, optional inputs) of the FMU with content ``key``."""
+    """(model description, optional inputs, binaries) of the FMU with content ``key``."""
     with _lock:
         described = _descriptions.get(key)
     if described is None:
-        described = (read_model_description(path), _optional_inputs(Path(path)))
+        described = (read_model_description(path), *_annotations(Path(path)))
         with _lock:
             if len(_descriptions) >= _KEYS_KEPT:
                 _descriptions.pop(next(iter(_descriptions)))
@@ -92,16 +94,21 @@ def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
     return result
 
 
-def _optional_inputs(path: Path) -> dict[str, str] | None:
-    """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
-    None: nothing declared."""
+def _annotations(path: Path) -> tuple[dict[str, str] | None, dict[str, str]]:
+    """What an agilesat FMU declares in its VendorAnnotations: {optional input: what its
+    default means} (None: nothing declared), {binary: its SHA-256}."""
     with zipfile.ZipFile(path) as archive:
         root = etree.fromstring(archive.read("modelDescription.xml"))
+    binaries = {
+        e.get("name"): e.get("sha256")
+        for e in root.findall(f"VendorAnnotations/Tool[@name='{BINARIES_TOOL}']/Files/File")
+    }
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
-        return None
-    return {
+        return None, binaries
+    optional = {
         e.get("name"): e.get("optional")
         for e in tool.findall("Inputs/Input")
         if e.get("optional") is not None
     }
+    return optional, binaries
