@@ -37,7 +37,7 @@ def test_a_whole_array_splits_into_its_elements_each_typed_by_its_variable(descr
             "SatelliteDynamics.inertia": IDENTITY_900,
             "SatelliteDynamics.rate0[2]": "0.01",
             "Flywheel.speed0": [1, 2, 3, 4],
-            "SatelliteDynamics.gravity_gradient": "yes",
+            "SatelliteDynamics.gravity_gradient": "TRUE",
         },
     )
     values = {key: (p.component, p.name, p.type, p.value) for key, p in typed.items()}
