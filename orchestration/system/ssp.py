@@ -184,15 +184,15 @@ def _nested_fmus(path: Path, root: Path, total: int, limit: int) -> None:
     for fmu in sorted(root.rglob("*.fmu")):
         try:
             with zipfile.ZipFile(fmu) as archive:
-                total += sum(info.file_size for info in archive.infolist())
+                size = sum(info.file_size for info in archive.infolist())
         except (zipfile.BadZipFile, OSError):
             continue  # not a zip: the run says so when it reads it
+        total += size
         if total > limit:
             raise SystemFileError(
                 f"{path}: unpacks, with its FMUs, to more than the limit of {limit} bytes "
-                f"({fmu.relative_to(root)} alone unpacks to "
-                f"{sum(i.file_size for i in zipfile.ZipFile(fmu).infolist())}; raise the "
-                "limit with AGILESAT_SSP_MAX_BYTES or max_unpacked=)"
+                f"({fmu.relative_to(root)} alone unpacks to {size} bytes; raise the limit "
+                "with AGILESAT_SSP_MAX_BYTES or max_unpacked=)"
             )
 
 
