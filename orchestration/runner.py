@@ -132,13 +132,14 @@ def run(
             summary["status"] = "failed" if summary["diagnostics"] else "ok"
         else:
             summary.update(generic_summary(results))
+        stopped = False  # the figures, by a signal
         if out_dir is not None:
             write_records(results, summary, out_dir)
             if figures and signals.signal is None:
-                summary["figures"] = _figures(scenario, results, out_dir, svg, signals)
+                summary["figures"], stopped = _figures(scenario, results, out_dir, svg, signals)
                 write_text(out_dir / "summary.json", summary_text(summary))
         if signals.signal is not None:  # after the last macro step: said, and exit 130/143
-            during = "the figures" if summary.get("figures") is not None else "the results"
+            during = "the figures" if stopped else "the results"
             _interruption(summary, signals.signal, during, [], figures)
             if out_dir is not None:
                 write_text(out_dir / "summary.json", summary_text(summary))
@@ -156,9 +157,10 @@ class _Stopped(Exception):
     """A signal came while the figures were drawn."""
 
 
-def _figures(scenario, results, out_dir: Path, svg: bool, signals) -> list[str]:
-    """Draw the figures; stop before the next one once a signal came.  The files
-    written ($AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the K-th starts)."""
+def _figures(scenario, results, out_dir: Path, svg: bool, signals) -> tuple[list[str], bool]:
+    """Draw the figures; stop before the next one once a signal came.  (The files
+    written, whether it stopped.)  $AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the
+    K-th starts."""
     from .output import plots
 
     draw = scenario.figures if scenario is not None else plots.overview
@@ -176,8 +178,8 @@ def _figures(scenario, results, out_dir: Path, svg: bool, signals) -> list[str]:
             try:
                 draw(results, out_dir)
             except _Stopped:
-                pass
-    return [str(p) for p in drawn]
+                return [str(p) for p in drawn], True
+    return [str(p) for p in drawn], False
 
 
 def _interruption(summary: dict, signum: int, during: str, lost: list, figures: bool) -> None:
