@@ -10,7 +10,6 @@ rebuilt FMU is a new one, a copy of the same file is the same one).
 from __future__ import annotations
 
 import functools
-import hashlib
 import os
 import threading
 import zipfile
@@ -18,6 +17,8 @@ from pathlib import Path
 
 from fmpy import read_model_description
 from lxml import etree
+
+from ...components.cache_files import digest
 
 AGILESAT_TOOL = "agilesat"
 BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it
@@ -58,11 +59,7 @@ class Description:
 
 @functools.lru_cache(maxsize=_KEYS_KEPT)
 def _file_digest(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
+    return digest(path)
 
 
 def content_key(path: Path) -> str:

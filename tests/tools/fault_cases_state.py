@@ -28,21 +28,12 @@ CLI = [sys.executable, "-m", "agilesat.orchestration"]
 ERROR = 3
 
 
-def _child(case: str, *args, env=None, timeout: float = 600) -> tuple[dict | None, str]:
-    run = subprocess.run(
-        [sys.executable, str(Path(__file__)), case, *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        cwd=ROOT,
-        env={**os.environ, **(env or {})},
-    )
-    if run.returncode < 0:
-        return None, f"killed by signal {-run.returncode}; stderr: {run.stderr[-400:]}"
-    lines = run.stdout.strip().splitlines()
-    if run.returncode != 0 or not lines:
-        return None, f"exit code {run.returncode}; stderr: {run.stderr[-600:]}"
-    return json.loads(lines[-1]), "exit code 0"
+def _child(case: str, *args, env=None) -> tuple[dict | None, str]:
+    """A case of this file in a child process (fault_cases_fmu's, with this script)."""
+    sys.path.insert(0, str(HERE))
+    from fault_cases_fmu import _child as child
+
+    return child(case, *args, timeout=600, script=Path(__file__), env=env)
 
 
 # -- tampered FMU states ------------------------------------------------------------------
