@@ -354,7 +354,9 @@ def corrupted_cache():
                 )
             except (OSError, ValueError, KeyError):
                 same = False
-            warned = [l for l in result.stderr.splitlines() if "damaged" in l]
+            warned = [
+                l.partition("agilesat: ")[2] for l in result.stderr.splitlines() if "damaged" in l
+            ]
             good = result.returncode == 0 and same and bool(warned)
             ok &= good
             observed.append(
