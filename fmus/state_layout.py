@@ -87,10 +87,12 @@ def _class_member(model_class, name: str) -> str:
 
 def _check_values(model_class, values: np.ndarray, outputs_valid: bool) -> None:
     layout = model_class._layouts.get(model_class) or model_class().layout
-    if values.size != layout.n_numeric:
+    if values.size != layout.n_values:  # the variables, then the input derivatives' block
         raise StateError(
-            f"the state has {values.size} values, {model_class.__name__} has {layout.n_numeric}"
+            f"the state has {values.size} values, {model_class.__name__} has {layout.n_values}"
         )
+    if not np.isfinite(values[layout.n_numeric :]).all():
+        raise StateError("the state's input derivatives are not all finite")
     for v in layout.variables:
         if v.type == "String" or v.causality == "output" and not outputs_valid:
             continue

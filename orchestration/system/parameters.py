@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .ssp import ParameterValue, SystemFileError
-from .units import Quantity, quantity, to_si
+from .units import Quantity, is_unit, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
 #: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
@@ -173,8 +173,14 @@ def typed_value(description, key: str, value, origin: str | None = None) -> Para
     if names is not None:
         value = choice_value(variable, names, value, f"{origin}={value}")
     elif with_unit is not None:
+        display = _display_units(description, declared)
+        if with_unit.unit != declared.unit and not is_unit(with_unit.unit, display):
+            raise SystemFileError(
+                f"{origin}={value}: expected a finite Real number (like 0.01 or 1e-3), or one "
+                f"with a unit: {with_unit.unit!r} is no unit"
+            )
         try:
-            value = float(to_si(with_unit, declared.unit, _display_units(description, declared)))
+            value = float(to_si(with_unit, declared.unit, display))
         except ValueError as exc:
             raise SystemFileError(f"{origin}: {name}.{variable}: {exc}") from None
     elif kind in _READERS:

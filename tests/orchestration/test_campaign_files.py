@@ -50,10 +50,10 @@ def test_the_content_of_the_system_and_its_fmus_is_recorded(fmus, tmp_path):
     plan = Plan(Spec("scan_pitch"))
     content = system_content(plan)
     assert len(content) == 1 + len(plan.system.components)
-    assert str(plan.scenario.ssd) in content
+    assert str(plan.system.path) in content
     assert "the FMU of CmgCluster (CmgCluster.fmu)" in content
-    edited = dict(content, **{str(plan.scenario.ssd): "0" * 64})
-    assert changed(content, edited) == [str(plan.scenario.ssd)] and changed(content, content) == []
+    edited = dict(content, **{str(plan.system.path): "0" * 64})
+    assert changed(content, edited) == [str(plan.system.path)] and changed(content, content) == []
 
 
 def test_kept_signals_grow_with_the_campaign_and_never_shrink(fmus, tmp_path):

@@ -50,7 +50,7 @@ TAMPERINGS = {
         "geometry of another class (a dict)",
     ],
     "SatelliteDynamics": [
-        "state cut to 30 of 35 values",
+        "state cut to 30 of 36 values",
         "state as float32",
         "state with a NaN",
         "t as a string",
@@ -71,7 +71,7 @@ def _tamper(model_state, wrapper, what: str):
         if "st cut" in what:
             geometry.st = geometry.st[:30].copy()
     elif what.startswith("state cut"):
-        attributes["state"] = attributes["state"][: 30 if "35" in what else 40].copy()
+        attributes["state"] = attributes["state"][: 30 if "30 of" in what else 40].copy()
     elif what == "state as float32":
         attributes["state"] = attributes["state"].astype(np.float32)
     elif what == "state with a NaN":
