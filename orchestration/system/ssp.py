@@ -474,7 +474,8 @@ def render_ssd(system: SystemFile, descriptions: dict, sources: dict | None = No
             ref.step_size,
             used_units,
         )
-    wires = E.sub(element, "ssd:Connections")
+    if system.connections:  # the schema wants a Connections element to hold one or more
+        wires = E.sub(element, "ssd:Connections")
     if system.step_size is not None:
         _oms_annotation(E, element, system.step_size)
     for c in system.connections:
