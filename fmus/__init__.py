@@ -23,6 +23,14 @@ CONFIGURATION = "configuration.json"
 FMUS: dict[str, str]  # see __getattr__
 
 
+def configuration_key(data: bytes) -> str:
+    """The hash of a configuration file's bytes that the configured FMU's GUID carries
+    (fmus/protocol.py ``fmu_guid``)."""
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()[:12]
+
+
 def _camel(snake: str) -> str:
     return "".join(part.capitalize() for part in snake.split("_"))
 

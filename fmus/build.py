@@ -57,7 +57,6 @@ PLATFORM = "linux64"
 #: std::condition_variable::wait).  The shim needs glibc 2.2.5 (shim/shim.h).
 PYTHONFMU_NEEDS = ("GLIBC_2.32", "GLIBCXX_3.4.30")
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
-_GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
 
 
 class BuildError(RuntimeError):
@@ -92,10 +91,13 @@ def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str,
     packed (:func:`_sources`), ``entry_module`` the module pythonfmu imports; the shim is
     compiled once into ``out_dir``."""
     package, entry = f"agilesat_{digest}", f"{name}_{digest}"
-    entries = {
-        "modelDescription.xml": description_xml(name, digest, model=model),
+    binaries = {
         f"binaries/{PLATFORM}/{name}.so": _shim_library(Path(out_dir)).read_bytes(),
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
+    }
+    entries = {
+        "modelDescription.xml": description_xml(name, digest, model=model, binaries=binaries),
+        **binaries,
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": entry_module.encode(),
         f"resources/{package}/__init__.py": b"",
@@ -139,19 +141,26 @@ def compile_kernels(fmu: Path, name: str, package: str) -> None:
 
 
 def description_xml(
-    name: str, digest: str, starts: dict | None = None, key: str = "", model=None
+    name: str,
+    digest: str,
+    starts: dict | None = None,
+    key: str = "",
+    model=None,
+    binaries: dict[str, bytes] | None = None,
 ) -> bytes:
     """The model description of FMU ``name`` (of ``model``, default ours of that name) built
-    from the sources of hash ``digest``; ``starts`` ({scalar name: start text}) and ``key``
-    (their hash) for a configured FMU (fmus/configure.py), whose GUID is its own."""
+    from the sources of hash ``digest``, with the SHA-256 of its ``binaries``; ``starts``
+    ({scalar name: start text}) and ``key`` (their hash) for a configured FMU
+    (fmus/configure.py), whose GUID is its own (:func:`.protocol.fmu_guid`)."""
     model = model or model_class(name)
     return model_description(
         name,
         model,
-        str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}" + (f":{key}" if key else ""))),
+        protocol.fmu_guid(name, digest, key),
         (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0],
         f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
         starts,
+        binaries,
     )
 
 

@@ -13,12 +13,11 @@ description is written again from the variable table); any other is :class:`NotC
 
 from __future__ import annotations
 
-import hashlib
 import json
 import zipfile
 from pathlib import Path
 
-from . import CONFIGURATION, FMUS, model_class
+from . import CONFIGURATION, FMUS, configuration_key, model_class
 from .build import archive_bytes, description_xml, documentation, is_current
 from .model_description import start_text
 
@@ -49,9 +48,10 @@ def configured_fmu(fmu: Path, values: dict) -> bytes:
             raise ValueError(f"{fmu.name}: {scalar!r} is not a parameter or input of {name}")
         typed[scalar] = _PYTHON[v.type](value)
     text = json.dumps({"values": typed}, indent=1, sort_keys=True)
-    key = hashlib.sha256(text.encode()).hexdigest()[:12]
+    key = configuration_key(text.encode())
     starts = {scalar: start_text(variables[scalar].type, x) for scalar, x in typed.items()}
-    entries["modelDescription.xml"] = description_xml(name, digest, starts, key)
+    binaries = {path: data for path, data in entries.items() if path.startswith("binaries/")}
+    entries["modelDescription.xml"] = description_xml(name, digest, starts, key, binaries=binaries)
     entries[f"resources/{CONFIGURATION}"] = text.encode()
     entries["documentation/index.html"] = documentation(name, model, typed).encode()
     return archive_bytes(entries)

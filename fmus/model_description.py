@@ -18,10 +18,13 @@ capability.
 
 from __future__ import annotations
 
+import hashlib
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from ..components.variables import UNITS, Layout
 
+#: the vendor annotation that lists the SHA-256 of the FMU's binaries
+BINARIES_TOOL = "agilesat.binaries"
 LOG_CATEGORIES = {
     "logStatusWarning": "Messages with status fmi2Warning",
     "logStatusError": "Messages with status fmi2Error",
@@ -36,9 +39,12 @@ def model_description(
     description: str,
     generation_tool: str,
     starts: dict[str, str] | None = None,
+    binaries: dict[str, bytes] | None = None,
 ) -> bytes:
     """The model description; ``starts`` ({scalar name: text}) replaces the table's start
-    values of those scalars (an FMU configured with them: fmus/configure.py)."""
+    values of those scalars (an FMU configured with them: fmus/configure.py); ``binaries``:
+    {path in the FMU: content} of its shared libraries, whose SHA-256 a master checks
+    before loading them (:func:`_binaries_annotation`)."""
     layout = Layout(model_class.VARIABLES)
     for causality, capable in (
         ("input", model_class.INTERPOLATES_INPUTS),
@@ -86,7 +92,7 @@ def model_description(
     categories = SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": category, "description": text})
-    _input_annotation(root, layout)
+    _binaries_annotation(_input_annotation(root, layout), binaries or {})
     _model_variables(root, layout, starts or {})
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
@@ -111,7 +117,8 @@ def _input_annotation(root, layout):
     """Every input, for masters that read it (ours does): ``<Input name=.../>`` a system
     must connect, ``<Input name=... optional="what the default means"/>`` it may leave open
     (one element under Tool: the FMI 2.0 schema allows no more)."""
-    tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", {"name": "agilesat"})
+    annotations = SubElement(root, "VendorAnnotations")
+    tool = SubElement(annotations, "Tool", {"name": "agilesat"})
     inputs = SubElement(tool, "Inputs")
     for var in layout.group("input"):
         for name in var.scalar_names():
@@ -120,6 +127,17 @@ def _input_annotation(root, layout):
                 "Input",
                 {"name": name} if var.required else {"name": name, "optional": var.optional},
             )
+    return annotations
+
+
+def _binaries_annotation(annotations, binaries: dict[str, bytes]) -> None:
+    """``<Tool name="agilesat.binaries"><Files><File name=... sha256=.../>``: the SHA-256
+    of each shared library, which our master checks before loading it: a damaged binary
+    is refused with a message instead of crashing the host (``orchestration/cosim/fmu.py``)."""
+    if binaries:
+        files = SubElement(SubElement(annotations, "Tool", {"name": BINARIES_TOOL}), "Files")
+        for path, data in sorted(binaries.items()):
+            SubElement(files, "File", {"name": path, "sha256": hashlib.sha256(data).hexdigest()})
 
 
 def _model_variables(root, layout, starts: dict[str, str]):

@@ -2,17 +2,21 @@
 
 Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C)
-or SIGTERM (everything recorded so far is kept).
+as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
+by SIGTERM (everything recorded so far is kept, and the summary says what was not
+written; a second signal changes nothing).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+from contextlib import nullcontext
 from importlib import metadata
 from pathlib import Path
 
+from .cosim.signals import interruptible
 from .studies import cli as study_cli
 
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
@@ -28,34 +32,46 @@ TARGETS = (
 def main(argv=None) -> int:
     """The command line.  Nothing heavy is imported here: each command imports what it
     uses (``agilesat --help`` and ``agilesat run --no-figures`` load no matplotlib)."""
+    program = argv is None  # the process ends with the command
     argv = sys.argv[1:] if argv is None else list(argv)
     campaign = bool(argv) and argv[0] == "campaign"
     if campaign:
         from .campaign import cli as campaign_cli
     args = _parser(campaign).parse_args(argv)
-    try:
-        return {
-            "list": _list,
-            "info": _info,
-            "build": _build,
-            "validate": _validate,
-            "run": _run,
-            "plot": _plot,
-            "export": _export,
-            "generate": _generate,
-            **study_cli.COMMANDS,
-            "campaign": campaign_cli.main if campaign else None,
-        }[args.command](args)
-    except KeyboardInterrupt as exc:
-        print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
-        return 130
-    except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
-        if _interrupted(exc):
-            print(f"agilesat {args.command}: {exc}", file=sys.stderr)
-            return 130
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
-        return 1
+    # a signal stops a command at once until a run writes, then is a flag (signals.py);
+    # a campaign handles its own (campaign/cli.py)
+    with nullcontext() if campaign else interruptible(restore=not program) as signals:
+        try:
+            code = {
+                "list": _list,
+                "info": _info,
+                "build": _build,
+                "validate": _validate,
+                "run": _run,
+                "plot": _plot,
+                "export": _export,
+                "generate": _generate,
+                **study_cli.COMMANDS,
+                "campaign": campaign_cli.main if campaign else None,
+            }[args.command](args)
+        except KeyboardInterrupt as exc:
+            print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
+            return 128 + getattr(exc, "signal", signal.SIGINT)
+        except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
+            if _interrupted(exc):
+                print(f"agilesat {args.command}: {exc}", file=sys.stderr)
+                return 128 + exc.signal
+            message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+            print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
+            return 1
+        if signals is not None and signals.signal is not None:  # at the very end
+            name = signal.Signals(signals.signal).name
+            print(
+                f"agilesat {args.command}: {name} at the end: everything was written",
+                file=sys.stderr,
+            )
+            return 128 + signals.signal
+        return code
 
 
 def _interrupted(exc: BaseException) -> bool:

@@ -6,15 +6,19 @@ layer on this.
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
 import time
 import warnings
+from contextlib import nullcontext
 from pathlib import Path
 
 from .cosim.master import Interrupted, SimulationError, execute
 from .cosim.plan import plan_run
-from .cosim.signals import stop_on_signals
+from .cosim.signals import signal_at, stop_on_signals
 from .mission.targets import resolve
+from .output.lock import holding
 from .output.recorder import write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
@@ -52,11 +56,13 @@ def run(
 
     With ``out_dir``: results.csv (row by row), results.npz, log.txt and summary.json, also
     when the run fails (``status: "error"``) or is interrupted by SIGINT/SIGTERM
-    (``status: "interrupted"``); the exception is raised after they are written.  The
-    summary lists every input left open with what its default means
-    (``unconnected_optional_inputs``).  A run that will write more than
-    :data:`LARGE_OUTPUT` bytes says so first, through ``notice(text)`` (default: a
-    warning).
+    (``status: "interrupted"``, and ``interruption``: the signal, while what, what was not
+    written; a signal while the results or figures are written stops the figures and is
+    said the same way); the exception is raised after they are written.  The run holds
+    ``out_dir`` (:mod:`.output.lock`): a second run on it is refused.  The summary lists
+    every input left open with what its default means (``unconnected_optional_inputs``).  A
+    run that will write more than :data:`LARGE_OUTPUT` bytes says so first, through
+    ``notice(text)`` (default: a warning).
 
     ``figures``: the scenario's figures (any other system's: an overview of its outputs)
     as 200-dpi PNGs, with ``svg`` an SVG beside each (~25 % more figure time).
@@ -89,7 +95,8 @@ def run(
         "system": str(system.path),
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in plan.overrides.items()},
     }
-    with stop_on_signals() as signals:
+    figures = figures and out_dir is not None
+    with stop_on_signals() as signals, holding(out_dir) if out_dir else nullcontext():
         try:
             results = execute(plan)
         except SimulationError as failure:
@@ -99,6 +106,9 @@ def run(
                     error=str(failure),
                     status="interrupted" if isinstance(failure, Interrupted) else "error",
                 )
+                if isinstance(failure, Interrupted):
+                    said = f"the rows after t={failure.results.time[-1]:.6g} s"
+                    _interruption(summary, failure.signal, "the run", [said], figures)
                 try:
                     write_records(failure.results, summary, out_dir)
                 except OSError as exc:  # say both
@@ -109,29 +119,83 @@ def run(
             summary.update(scenario.evaluate(results, variant, partial=record is not None))
         else:
             summary.update(generic_summary(results))
+        stopped = False  # the figures, by a signal
         if out_dir is not None:
             write_records(results, summary, out_dir)
             if figures and signals.signal is None:
-                summary["figures"] = _figures(scenario, variant, results, out_dir, svg, summary)
+                summary["figures"], stopped = _figures(
+                    scenario, variant, results, out_dir, svg, summary, signals
+                )
                 write_text(out_dir / "summary.json", summary_text(summary))
+        if signals.signal is not None:  # after the last macro step: said, and exit 130/143
+            during = "the figures" if stopped else "the results"
+            _interruption(summary, signals.signal, during, [], figures)
+            if out_dir is not None:
+                write_text(out_dir / "summary.json", summary_text(summary))
+            raise Interrupted(
+                f"{Path(system.path).name}: interrupted by {signal.Signals(signals.signal).name} "
+                f"while "
+                f"writing {during}; the run is complete"
+                + (f", what was written is in {out_dir / 'summary.json'}" if out_dir else ""),
+                results,
+                signals.signal,
+            )
     return results, summary
 
 
-def _figures(scenario, variant, results, out_dir: Path, svg: bool, summary: dict) -> list[str]:
+class _Stopped(Exception):
+    """A signal came while the figures were drawn."""
+
+
+def _figures(
+    scenario, variant, results, out_dir: Path, svg: bool, summary: dict, signals
+) -> tuple[list[str], bool]:
+    """Draw the figures; stop before the next one once a signal came.  (The files
+    written, whether it stopped.)  $AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the
+    K-th starts.  Figures that need outputs not recorded (``--record``) are not drawn, and
+    the summary says why."""
     from .output import plots
 
+    hook, started = signal_at("figure"), [0]
+
+    def before():
+        started[0] += 1
+        if hook is not None and started[0] == hook[1]:
+            os.kill(os.getpid(), hook[0])
+        if signals.signal is not None:
+            raise _Stopped
+
     with plots.written_as(plots.FORMATS if svg else plots.FORMATS[:1]):
-        try:
-            if scenario is not None:
-                paths = scenario.draw(results, out_dir, variant)
-            else:
-                paths = plots.overview(results, out_dir)
-        except ColumnError as missing:
-            if len(results.names) == len(results.meta.get("units", {})) + 1:
-                raise  # every output was recorded: a mistake of the figure's
-            summary["figures_not_drawn"] = f"they need outputs not recorded ({missing})"
-            return []
-        return [str(p) for path in paths for p in plots.formats(path)]
+        with plots.drawing(before) as drawn:
+            try:
+                if scenario is not None:
+                    scenario.draw(results, out_dir, variant)
+                else:
+                    plots.overview(results, out_dir)
+            except _Stopped:
+                return [str(p) for p in drawn], True
+            except ColumnError as missing:
+                if len(results.names) == len(results.meta.get("units", {})) + 1:
+                    raise  # every output was recorded: a mistake of the figure's
+                summary["figures_not_drawn"] = f"they need outputs not recorded ({missing})"
+                return [], False
+    return [str(p) for p in drawn], False
+
+
+def _interruption(summary: dict, signum: int, during: str, lost: list, figures: bool) -> None:
+    """Say in the summary that a signal stopped the run (status "interrupted"), while
+    what, and what it did not write (the figures not drawn, the rows not computed)."""
+    drawn = summary.get("figures")
+    if figures and drawn is None:
+        lost = [*lost, "the figures (none drawn)"]
+    elif figures and during == "the figures":
+        lost = [*lost, f"the figures not drawn after these {len(drawn)} files: {drawn}"]
+    summary["status"] = "interrupted"
+    summary["interruption"] = {
+        "signal": signal.Signals(signum).name,
+        "during": during,
+        "not_written": lost,
+    }
 
 
 def _say_size(plan, out_dir: Path, notice) -> None:

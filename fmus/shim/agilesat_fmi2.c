@@ -49,7 +49,8 @@
  *    segfaults on a location without its resources (a path with a comma, which fmpy
  *    encodes, or a wrong location); such a location gets fmi2Error and a message instead.
  *
- * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
+ * It also checks the GUID against modelDescription.xml and against the GUID the binary was
+ * built with (same_guid), as FMI 2.0 asks of an FMU.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -439,6 +440,24 @@ static int ask_slave(void *shim, const fmi2ValueReference vr[], size_t n, fmi2Re
     return status == fmi2OK && worst == fmi2OK;
 }
 
+/* The GUID the slave says this binary was built with (fmus/protocol.py fmu_guid: its
+ * code's content hash), asked as fmi2GetString of FAST_PATH_VR, against the host's: FMI 2.0
+ * section 2.1.5 makes the GUID the tie between modelDescription.xml and the binary, and a
+ * modelDescription.xml edited or taken from another build names another.  1 if they are
+ * the same (or the slave does not say), else 0 and why. */
+static int same_guid(Shim *s, const char *guid, char *why, size_t n) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, fmi2String *);
+    fmi2ValueReference vr = FAST_PATH_VR;
+    fmi2String own = NULL;
+    fmi2Status status = INNER(F, fmi2GetString)(s->inner, &vr, 1, &own);
+    s->worst = fmi2OK;
+    if (status != fmi2OK || !own || !*own || (guid && strcmp(own, guid) == 0)) return 1;
+    snprintf(why, n, "fmi2Instantiate: GUID %.100s is not this FMU's: its binary was built as "
+             "%.100s (its modelDescription.xml is not the one built with it; FMI 2.0 section "
+             "2.1.5)", guid ? guid : "(NULL)", own);
+    return 0;
+}
+
 /* ---- FMI 2.0 API -------------------------------------------------------------------- */
 EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
 EXPORT const char *fmi2GetVersion(void) { return "2.0"; }
@@ -492,7 +511,11 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
                                const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
     s->inner = INNER(F, fmi2Instantiate)(name, type, guid, location, &s->ours, visible,
                                          fmi2True);
-    if (!s->inner) {
+    if (!s->inner || !same_guid(s, guid, why, sizeof why)) {
+        if (s->inner) {
+            host_log(&probe, fmi2Error, "logStatusError", why);
+            INNER(void (*)(fmi2Component), fmi2FreeInstance)(s->inner);
+        }
         free(s->name);
         free(s);
         return NULL;

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..output.recorder import write_text
 from . import dispersion, engine, report
+from .files import CampaignFileError, read_object
 from .plan import Plan, Spec, time_axis
 
 SHIPPED_DIR = Path(__file__).resolve().parent / "shipped"
@@ -106,22 +107,33 @@ def campaign(
 
 
 def run_campaign(
-    spec: Spec, out_dir=None, resume=False, workers=None, scheduler=None, progress=True
+    spec: Spec,
+    out_dir=None,
+    resume=False,
+    workers=None,
+    scheduler=None,
+    progress=True,
+    *,
+    listen: str = "127.0.0.1",
+    dashboard: str | None = None,
 ) -> Campaign:
-    """:func:`campaign` returning a :class:`Campaign` (table, summary, directory)."""
+    """:func:`campaign` returning a :class:`Campaign` (table, summary, directory).
+    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`)."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
         spec.set = {**fixed, **spec.set}
-    plan = Plan(spec)  # builds the FMUs the target needs
+    plan = Plan(spec)  # builds the FMUs the target needs: their content is recorded
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
     done = engine.open_directory(plan, out, resume)
     metrics: dict = {}
     if done and (out / "metrics.json").exists():
-        metrics = json.loads((out / "metrics.json").read_text())
+        metrics = read_object(out / "metrics.json", "an object of each metric's unit and text")
+        if not all(isinstance(m, dict) for m in metrics.values()):
+            raise CampaignFileError(f"{out / 'metrics.json'}: expected an object per metric")
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
-    lost = []
+    lost, lost_scheduler = [], None
     try:
         if len(done) < plan.total:
             print(
@@ -129,38 +141,63 @@ def run_campaign(
                 f"grid points), {len(done)} already made in {out}",
                 file=sys.stderr,
             )
-        with engine.cluster(workers, scheduler) as client:
+        with engine.cluster(workers, scheduler, listen, dashboard) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
             _, lost, _ = engine.execute(plan, out, client, done, bar, metrics)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM outside the loop over the runs (``execute`` handles its own):
-        # while the FMUs build or the cluster starts or closes
+        # while the cluster starts or closes
         pass
+    except engine.SchedulerLost as exc:
+        lost_scheduler = exc
     finally:
         bar.close()
     # the summary is the journal's: a run written there just as a signal came is in it
-    records = {i: r for i, r in engine.read_journal(out / "runs.jsonl").items() if i < plan.total}
+    journal = engine.read_journal(out / "runs.jsonl")
+    records = {i: r for i, r in journal.items() if i < plan.total}
+    if len(journal) > len(records):
+        print(
+            f"campaign: {len(journal) - len(records)} runs made beyond --runs {spec.runs} are "
+            "kept in runs.jsonl and signals.npy, not in this summary",
+            file=sys.stderr,
+        )
     status = "complete" if len(records) == plan.total else "interrupted"
-    return finish(plan, out, records, metrics, lost, status, environment)
+    said = None if lost_scheduler is None else str(lost_scheduler)
+    result = finish(plan, out, records, metrics, lost, status, environment, said)
+    if lost_scheduler is not None:
+        raise engine.SchedulerLost(
+            f"{said}: {out / 'campaign.json'} says 'interrupted'; `--resume` continues it"
+        )
+    return result
 
 
 def finish(
-    plan: Plan, out: Path, records: dict, metrics: dict, lost: list, status: str, environment: dict
+    plan: Plan,
+    out: Path,
+    records: dict,
+    metrics: dict,
+    lost: list,
+    status: str,
+    environment: dict,
+    interruption: str | None = None,
 ) -> Campaign:
     """runs.csv (+ Parquet), campaign.json and the figures, from the records so far.
-    ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`)."""
+    ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`);
+    ``interruption``: what stopped the campaign, other than a signal."""
     table = report.table(plan, records, metrics)
     files = report.write_table(table, out)
     counts = {s: int(np.sum(table["status"] == s)) for s in report.STATUSES}
     previous = {}
     if (out / "campaign.json").exists():
-        previous = json.loads((out / "campaign.json").read_text())
+        previous = read_object(out / "campaign.json", "a campaign's summary")
     summary = {
         "status": status,
+        **({"interruption": interruption} if interruption else {}),
         "spec": plan.spec.to_dict(),
         "runs": {"planned": plan.total, "made": len(records), **counts},
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),
+        "system_sha256": previous.get("system_sha256"),
         "settings": {
             "start": plan.start,
             "stop": plan.stop,
@@ -205,7 +242,7 @@ def finish(
     figures = report.histograms(table, metrics, out) if plan.spec.runs > 1 else []
     figures += report.sweeps(plan, table, metrics, out)
     if plan.kept and (out / "signals.npy").exists():  # none if no run was made
-        signals = np.load(out / "signals.npy", mmap_mode="r")
+        signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
         figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
     summary["figures"] = [p.name for p in figures]

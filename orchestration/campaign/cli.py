@@ -2,7 +2,7 @@
 
 Exit status: 0 every run met every requirement; 3 the campaign finished but some run
 failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
-130 interrupted (``--resume`` continues).
+130 interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
 """
 
 from __future__ import annotations
@@ -41,6 +41,19 @@ def add_parser(commands) -> argparse.ArgumentParser:
     where.add_argument("--workers", type=int, help="local worker processes (default: cores)")
     where.add_argument(
         "--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786"
+    )
+    p.add_argument(
+        "--listen",
+        default="127.0.0.1",
+        metavar="HOST",
+        help="the interface the LocalCluster's scheduler and workers listen on "
+        "(default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--dashboard",
+        metavar="HOST:PORT",
+        help="serve Dask's dashboard of the LocalCluster there, e.g. 127.0.0.1:8787 "
+        "(default: none)",
     )
     p.add_argument(
         "--keep",
@@ -93,17 +106,24 @@ def main(args) -> int:
     signal.signal(signal.SIGTERM, _interrupt)  # a batch system's stop: as Ctrl-C
     try:
         result = run_campaign(
-            spec, args.out, args.resume, args.workers, args.scheduler, progress=not args.no_progress
+            spec,
+            args.out,
+            args.resume,
+            args.workers,
+            args.scheduler,
+            progress=not args.no_progress,
+            listen=args.listen,
+            dashboard=args.dashboard,
         )
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
         print("interrupted: the runs made are in runs.jsonl; --resume continues")
-        return 130
+        return 128 + (_signals[0] if _signals else signal.SIGINT)
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if result.summary["status"] == "interrupted":
         print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
-        return 130
+        return 128 + (_signals[0] if _signals else signal.SIGINT)
     runs = result.summary["runs"]
     unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
         r["verdict"] == "not met" for r in result.summary["ensemble"].values()
@@ -111,7 +131,11 @@ def main(args) -> int:
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
 
 
+_signals: list[int] = []  # SIGTERM, once it came (Ctrl-C is Python's KeyboardInterrupt)
+
+
 def _interrupt(signum, frame):
+    _signals.append(signum)
     raise KeyboardInterrupt
 
 

@@ -11,6 +11,7 @@ index i on top.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -97,6 +98,13 @@ class Plan:
             raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
         grids = [d for d in self.dispersions if d.is_grid]
         self.grid_keys = [d.key for d in grids]
+        total = spec.runs * math.prod(d.points for d in grids)
+        if total > dispersions.MAX_RUNS:
+            raise ValueError(
+                f"{spec.runs} run(s) × {' × '.join(str(d.points) for d in grids) or 1} grid "
+                f"points = {total} runs, more than the {dispersions.MAX_RUNS} a campaign may "
+                "have (its journal and table are held in memory): split it"
+            )
         self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
         self.units = {}  # of the kept signals, where the variable table says
         #: the signals kept of every run: those asked for (``kept``), then those the

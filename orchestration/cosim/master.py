@@ -32,7 +32,8 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`..output.recorder`).  After fmi2Fatal nothing more is
-   called on that FMU.
+   called on that FMU.  The run holds its output directory (:mod:`..output.lock`): a
+   second run on it is refused before it writes anything.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes
    (:func:`.signals.stop_on_signals`):
    the run stops between two macro steps (the compiled loop: between two chunks of a few
@@ -52,12 +53,14 @@ be compiled; ``Results.meta["loop"]`` says which.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import dataclasses
 import signal
 
 import numpy as np
 
+from ..output.lock import holding
 from ..output.recorder import Recorder
 from ..output.results import Results
 from . import loop as compiled
@@ -242,7 +245,8 @@ def execute(plan: RunPlan) -> Results:
     hooked = at_step(plan.progress)  # $AGILESAT_TEST_SIGNAL (tests of interruptions)
     if hooked is not plan.progress:
         plan = dataclasses.replace(plan, progress=hooked)
-    with stop_on_signals() as signals:
+    held = holding(plan.out_dir) if plan.out_dir is not None else contextlib.nullcontext()
+    with held, stop_on_signals() as signals:
         log = compiled.ClockLog(echo=plan.echo)
         log.time = plan.start
         instances = {}

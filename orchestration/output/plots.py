@@ -47,6 +47,23 @@ def written_as(formats):
         _written.reset(token)
 
 
+#: (figures written so far, called before each is drawn) while :func:`drawing` (per thread)
+_drawing: ContextVar[tuple[list, object] | None] = ContextVar("agilesat_drawing", default=None)
+
+
+@contextlib.contextmanager
+def drawing(before=None):
+    """Figures made inside (in this thread) are listed, as they are written, in the list
+    yielded; ``before()`` is called before each one is drawn (it may raise: a run stopped
+    by a signal then says which figures were written)."""
+    drawn: list[Path] = []
+    token = _drawing.set((drawn, before))
+    try:
+        yield drawn
+    finally:
+        _drawing.reset(token)
+
+
 def written() -> tuple[str, ...]:
     """The formats figures are written in now."""
     return _written.get()
@@ -214,6 +231,9 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.image import imsave
 
+    watched = _drawing.get()
+    if watched is not None and watched[1] is not None:
+        watched[1]()
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     figure_layout.fixed(fig, axes, title)
@@ -223,6 +243,8 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     imsave(png, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)  # as savefig
     for target in others:
         fig.savefig(target, dpi=DPI)
+    if watched is not None:
+        watched[0].extend([png, *others])
     return Path(path)
 
 

@@ -12,13 +12,16 @@ A bare number for an array is refused, never broadcast: ``inertia=900`` could me
 every element or 900 times the identity, and an attitude engineer means the second as often
 as the first.  The error says which elements there are and shows both forms.
 
-Types: each scalar value takes the type of the FMU's variable (a Real from ``"0.01"`` or
-``1``, a Boolean from ``true``/``yes``/``1``).  A Real also takes a value with a unit that
-converts to its own (``"120 deg"``, ``deg(120)``, ``"[0, 120, 0] deg"``; :mod:`.units`): a
-unit that does not convert is an error naming both.  Named choices: an Integer parameter whose
-model-description ``description`` lists its values as ``0 = NAME (meaning), 1 = NAME
-(meaning), …`` (as every choice of our variable tables says it, ``components/variables.py``
-:func:`choice`) takes a name in any case, or the number: ``CmgSteering.law=SR_INVERSE``.
+Types: each scalar value takes the type of the FMU's variable, and must be one: a Real a
+finite number (``"0.01"``, ``1``, ``1e-3``; not ``1_000``, ``inf`` or ``nan``), an Integer
+whole digits within fmi2Integer's 32 bits, a Boolean ``true``, ``false``, ``1`` or ``0``
+(any case); anything else is an error naming the parameter.  A Real also takes a value
+with a unit that converts to its own (``"120 deg"``, ``deg(120)``, ``"[0, 120, 0] deg"``;
+:mod:`.units`): a unit that does not convert is an error naming both.  Named choices: an
+Integer parameter whose model-description ``description`` lists its values as ``0 = NAME
+(meaning), 1 = NAME (meaning), …`` (as every choice of our variable tables says it,
+``components/variables.py`` :func:`choice`) takes a name in any case, or the number:
+``CmgSteering.law=SR_INVERSE``.
 Only the model description is read: any FMU that lists its values so has named choices.
 """
 
@@ -26,13 +29,14 @@ from __future__ import annotations
 
 import ast
 import difflib
+import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from .ssp import ParameterValue, SystemFileError
-from .units import Quantity, quantity, to_si
+from .units import Quantity, is_unit, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
 #: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
@@ -169,19 +173,20 @@ def typed_value(description, key: str, value, origin: str | None = None) -> Para
     if names is not None:
         value = choice_value(variable, names, value, f"{origin}={value}")
     elif with_unit is not None:
+        display = _display_units(description, declared)
+        if with_unit.unit != declared.unit and not is_unit(with_unit.unit, display):
+            raise SystemFileError(
+                f"{origin}={value}: expected a finite Real number (like 0.01 or 1e-3), or one "
+                f"with a unit: {with_unit.unit!r} is no unit"
+            )
         try:
-            value = float(to_si(with_unit, declared.unit, _display_units(description, declared)))
+            value = float(to_si(with_unit, declared.unit, display))
         except ValueError as exc:
             raise SystemFileError(f"{origin}: {name}.{variable}: {exc}") from None
-    elif kind == "Boolean" and isinstance(value, str):
-        value = value.lower() in ("1", "true", "yes")
-    elif kind in ("Real", "Integer"):
+    elif kind in _READERS:
         if isinstance(value, Quantity):
             raise SystemFileError(f"{origin}: {name}.{variable} is an {kind}, not {value}")
-        try:
-            value = float(value) if kind == "Real" else int(value)
-        except ValueError:
-            raise SystemFileError(f"{origin}={value}: expected a {kind}") from None
+        value = _READERS[kind](value, f"{origin}={value}")
     return ParameterValue(name, variable, kind, value, origin)
 
 
@@ -192,6 +197,50 @@ def _display_units(description, variable) -> list[tuple[str, float, float]]:
         if unit.name == variable.unit:
             return [(d.name, d.factor, d.offset) for d in unit.displayUnits]
     return []
+
+
+#: a number as a user writes it: no "1_000" (Python's int() and float() take it), no
+#: "inf" or "nan", no hexadecimal
+_REAL = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+_INTEGER = re.compile(r"^[+-]?\d+$")
+_BOOLEANS = {"true": True, "false": False, "1": True, "0": False}
+#: fmi2Integer is a 32-bit int (FMI 2.0 section 2.1.2)
+INTEGER_RANGE = (-(2**31), 2**31 - 1)
+
+
+def _real(value, where: str) -> float:
+    text = str(value).strip()
+    if isinstance(value, (int, float, np.number)) and not isinstance(value, (bool, np.bool_)):
+        number = float(value)
+    else:
+        number = float(text) if _REAL.match(text) else math.nan
+    if not math.isfinite(number):
+        raise SystemFileError(f"{where}: expected a finite Real number, like 0.01 or 1e-3")
+    return number
+
+
+def _integer(value, where: str) -> int:
+    text = str(value).strip()
+    if isinstance(value, (float, np.floating)) and float(value).is_integer():
+        text = str(int(value))
+    if not _INTEGER.match(text) or not INTEGER_RANGE[0] <= int(text) <= INTEGER_RANGE[1]:
+        raise SystemFileError(
+            f"{where}: expected an Integer from {INTEGER_RANGE[0]} to {INTEGER_RANGE[1]} "
+            "(fmi2Integer is 32 bits), written as digits"
+        )
+    return int(text)
+
+
+def _boolean(value, where: str) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    text = str(value).strip().lower()
+    if text not in _BOOLEANS:
+        raise SystemFileError(f"{where}: expected a Boolean: true, false, 1 or 0")
+    return _BOOLEANS[text]
+
+
+_READERS = {"Real": _real, "Integer": _integer, "Boolean": _boolean}
 
 
 def choice_names(variable) -> tuple[str, ...] | None:

@@ -9,9 +9,10 @@ The check against the FMUs themselves (variables, causality, type, unit, also of
 declared connectors) is :func:`validation.check_system`, which needs the model descriptions.
 
 An ``.ssp`` package is unpacked into a temporary directory, refusing members with absolute
-paths or ``..`` and more than ``max_unpacked`` bytes in total (default
-:data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable ``AGILESAT_SSP_MAX_BYTES``);
-its component and parameter-binding sources must resolve inside the package.
+paths or ``..`` and more than ``max_unpacked`` bytes in total, counting what its FMUs unpack
+to when they run (default :data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable
+``AGILESAT_SSP_MAX_BYTES``); its component and parameter-binding sources must resolve
+inside the package.  A parameter bound twice in one parameter set is refused.
 
 Write: :func:`render_ssd` writes a :class:`SystemFile` (read from a file, or made in Python
 by :class:`..mission.System`) as an SSD: each component's connectors, types and units as its
@@ -176,6 +177,26 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
                         sink.write(chunk)
     except (zipfile.BadZipFile, EOFError) as exc:
         raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
+    _nested_fmus(path, root, total, limit)
+
+
+def _nested_fmus(path: Path, root: Path, total: int, limit: int) -> None:
+    """The bound covers what the package's FMUs unpack to when they are run (each one is
+    unpacked by the master: ``cosim/fmu.py``), by their declared sizes, which unpacking
+    holds them to (zipfile stops at a member's declared size: its CRC then fails)."""
+    for fmu in sorted(root.rglob("*.fmu")):
+        try:
+            with zipfile.ZipFile(fmu) as archive:
+                size = sum(info.file_size for info in archive.infolist())
+        except (zipfile.BadZipFile, OSError):
+            continue  # not a zip: the run says so when it reads it
+        total += size
+        if total > limit:
+            raise SystemFileError(
+                f"{path}: unpacks, with its FMUs, to more than the limit of {limit} bytes "
+                f"({fmu.relative_to(root)} alone unpacks to {size} bytes; raise the limit "
+                "with AGILESAT_SSP_MAX_BYTES or max_unpacked=)"
+            )
 
 
 def _inside(source: Path, package: Path | None, where: str, what: str) -> None:
@@ -195,7 +216,7 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
         parameters += _read_binding(binding, None, path, display, package)
     connections = _read_connections(system, display)
     result = SystemFile(path, root.get("name"), components, connections, parameters)
-    _read_experiment(root, result)
+    _read_experiment(root, result, display)
     return result
 
 
@@ -265,7 +286,7 @@ def _read_connections(system, display: str) -> list[ConnectionRef]:
     return connections
 
 
-def _read_experiment(root, result: SystemFile) -> None:
+def _read_experiment(root, result: SystemFile, display: str) -> None:
     """Start and stop time from ``ssd:DefaultExperiment``; step size and algorithm from
     its ``org.agilesat.master`` annotation (other hosts' annotations are ignored)."""
     experiment = root.find("ssd:DefaultExperiment", NS)
@@ -277,8 +298,15 @@ def _read_experiment(root, result: SystemFile) -> None:
     for annotation in experiment.findall("ssd:Annotations/ssc:Annotation", NS):
         if annotation.get("type") == MASTER_ANNOTATION and len(annotation):
             settings = annotation[0]
-            if settings.get("stepSize") is not None:
-                result.step_size = float(settings.get("stepSize"))
+            text = settings.get("stepSize")
+            if text is not None:
+                try:
+                    result.step_size = float(text)
+                except ValueError:
+                    raise SystemFileError(
+                        f"{display}:{settings.sourceline}: the {MASTER_ANNOTATION} annotation's "
+                        f"stepSize is {text!r}: expected the macro step in seconds, like 0.05"
+                    ) from None
             result.algorithm = settings.get("algorithm")
             if settings.get("derivatives") is not None:
                 result.derivatives = settings.get("derivatives") == "true"
@@ -304,9 +332,16 @@ def _read_binding(
     prefix = binding.get("prefix", "")
     parameter_set, ssv_display = _parameter_set(binding, ssd_path, display, package)
     values = []
+    lines: dict[str, int] = {}  # name -> the line it is bound at
     for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
         name = prefix + parameter.get("name")
         origin = f"{ssv_display}:{parameter.sourceline}"
+        if name in lines:
+            raise SystemFileError(
+                f"{origin}: parameter '{name}' is bound twice in one parameter set "
+                f"(first at line {lines[name]}): which value holds would be a guess"
+            )
+        lines[name] = parameter.sourceline
         owner = component
         if owner is None:  # system-level binding: "Component.variable"
             owner, _, name = name.partition(".")
@@ -439,7 +474,8 @@ def render_ssd(system: SystemFile, descriptions: dict, sources: dict | None = No
             ref.step_size,
             used_units,
         )
-    wires = E.sub(element, "ssd:Connections")
+    if system.connections:  # the schema wants a Connections element to hold one or more
+        wires = E.sub(element, "ssd:Connections")
     if system.step_size is not None:
         _oms_annotation(E, element, system.step_size)
     for c in system.connections:

@@ -182,5 +182,15 @@ def to_si(value: Quantity, unit: str | None, display_units=()) -> Any:
     )
 
 
+def is_unit(text: str, display_units=()) -> bool:
+    """Does ``text`` name a unit the toolkit converts (an SI unit of a model description, a
+    unit of :data:`CONVERSIONS`, one of the display units given)?"""
+    return (
+        text in CONVERSIONS
+        or text in _KINDS
+        or any(plain(name) == text for name, _, _ in display_units)
+    )
+
+
 def _si_of(unit: str) -> str:
     return CONVERSIONS[unit][0] if unit in CONVERSIONS else unit

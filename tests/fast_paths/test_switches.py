@@ -61,7 +61,7 @@ def test_the_fast_paths_page_lists_exactly_the_switches():
         (
             "AGILESAT_TEST_SIGNAL",
             "SIGTERM@end",
-            "SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K, SIGNAL as SIGTERM",
+            "SIGNAL@step:K, SIGNAL@run:K, SIGNAL@worker:K or SIGNAL@figure:K, SIGNAL as SIGTERM",
         ),
     ],
 )

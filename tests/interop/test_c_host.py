@@ -155,27 +155,13 @@ def test_an_error_mid_run_is_reported_and_the_rows_so_far_are_kept(
 def two_hubs(fmus, directory: Path) -> Path:
     """Two components of one FMU file (two hubs turning at different rates, B carrying A's
     momentum as its wheels')."""
-    from agilesat.components.satellite_dynamics import SatelliteDynamics
-    from agilesat.components.variables import UNITS
-    from agilesat.orchestration.system.ssp import render_ssd
+    from agilesat.orchestration.mission import System
 
-    source = str(fmus["SatelliteDynamics"])
-    ssd = directory / "two_hubs.ssd"
-    ssd.write_bytes(
-        render_ssd(
-            "two_hubs",
-            {"A": source, "B": source},
-            dict.fromkeys("AB", SatelliteDynamics.VARIABLES),
-            [("A.H_I", "B.h_wheel")],
-            {"A.rate0": [0.01, -0.02, 0.03], "B.rate0": [-0.05, 0.0, 0.01]},
-            UNITS,
-            0.0,
-            2.0,
-            0.05,
-            "jacobi",
-        )
-    )
-    return ssd
+    system = System("two_hubs", stop=2.0, step=0.05, algorithm="jacobi")
+    system.add("A", fmus["SatelliteDynamics"], rate0=[0.01, -0.02, 0.03])
+    system.add("B", fmus["SatelliteDynamics"], rate0=[-0.05, 0.0, 0.01])
+    system.connect("A.H_I", "B.h_wheel")
+    return system.write(directory / "two_hubs.ssd")
 
 
 def test_two_components_of_one_fmu_file_in_a_host_that_reloads_it_per_instance(

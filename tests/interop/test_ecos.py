@@ -18,6 +18,7 @@ import ctypes.util
 import math
 import subprocess
 import sys
+import zipfile
 
 import numpy as np
 import pytest
@@ -121,29 +122,19 @@ def test_two_components_of_one_fmu_file(fmus, tmp_path):
     """ECOS's loader closes and reopens an FMU's binary per instance, the first instance
     alive: the shim is NODELETE, so both hubs of one FMU file run as in our master (an
     unloaded shim forgot the first: its pitch read 0)."""
-    from agilesat.components.satellite_dynamics import SatelliteDynamics
-    from agilesat.components.variables import UNITS
-    from agilesat.fmus.build import write_archive
-    from agilesat.orchestration.export import package
-    from agilesat.orchestration.system.ssp import render_ssd
+    from agilesat.orchestration.mission import System
 
-    uri = "resources/SatelliteDynamics.fmu"
-    rate = [0.01, -0.02, 0.03]
-    ssd = render_ssd(
-        "two_hubs",
-        {"A": uri, "B": uri},
-        dict.fromkeys("AB", SatelliteDynamics.VARIABLES),
-        [("A.H_I", "B.h_wheel")],
-        {"A.rate0": rate, "B.rate0": rate},  # the same values: one configured FMU file
-        UNITS,
-        0.0,
-        2.0,
-        0.05,
-        "jacobi",
-    )
-    entries = package(ssd, {uri: fmus["SatelliteDynamics"]})
-    assert sorted(entries) == ["SystemStructure.ssd", uri]
-    system = write_archive(tmp_path / "two_hubs.ssp", entries)
+    rate = [0.01, -0.02, 0.03]  # the same values: one configured FMU file
+    hubs = System("two_hubs", stop=2.0, step=0.05, algorithm="jacobi")
+    hubs.add("A", "SatelliteDynamics", rate0=rate)
+    hubs.add("B", "SatelliteDynamics", rate0=rate)
+    hubs.connect("A.H_I", "B.h_wheel")
+    system = hubs.write(tmp_path / "two_hubs.ssp")
+    with zipfile.ZipFile(system) as archive:
+        assert sorted(archive.namelist()) == [
+            "SystemStructure.ssd",
+            "resources/SatelliteDynamics.fmu",
+        ]
     columns = ["A.euler_BO[2]", "B.euler_BO[2]", "B.w_BI_B[1]"]
     theirs = ecos(system, 2.0, 0.05, "two_hubs", columns, tmp_path / "ecos.npz")
     mine = simulate(system, stop=2.0)

@@ -88,26 +88,15 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
     """One FMU serving three components, two of them with the same values: a configured
     FMU file per component (the same bytes for the same values), each component pointing at
     its own, and the package runs."""
-    from agilesat.components.satellite_dynamics import SatelliteDynamics
-    from agilesat.components.variables import UNITS
-    from agilesat.fmus.build import build_fmu, write_archive
-    from agilesat.orchestration.export import package
-    from agilesat.orchestration.system.ssp import render_ssd
+    from agilesat.orchestration.mission import System
 
-    fmu = build_fmu("SatelliteDynamics")
-    uri = "resources/SatelliteDynamics.fmu"
-    ssd = render_ssd(
-        "hubs",
-        {"A": uri, "B": uri, "C": uri},
-        dict.fromkeys("ABC", SatelliteDynamics.VARIABLES),
-        [("A.H_I", "B.h_wheel"), ("B.H_I", "C.h_wheel")],
-        {"A.rate0": [0.01, 0.0, 0.0], "B.rate0": [0.02, 0.0, 0.0], "C.rate0": [0.01, 0.0, 0.0]},
-        UNITS,
-        0.0,
-        1.0,
-        0.05,
-    )
-    entries = package(ssd, {uri: fmu})
+    hubs = System("hubs", stop=1.0, step=0.05)
+    for name, rate in zip("ABC", (0.01, 0.02, 0.01)):
+        hubs.add(name, "SatelliteDynamics", rate0=[rate, 0.0, 0.0])
+    hubs.connect("A.H_I", "B.h_wheel")
+    hubs.connect("B.H_I", "C.h_wheel")
+    with zipfile.ZipFile(hubs.write(tmp_path / "p.ssp")) as archive:
+        entries = {item: archive.read(item) for item in archive.namelist()}
     assert sorted(entries) == [
         "SystemStructure.ssd",
         "resources/SatelliteDynamics_A.fmu",
@@ -116,7 +105,6 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
     ]
     files = {k: entries[f"resources/SatelliteDynamics_{k}.fmu"] for k in "ABC"}
     assert files["A"] == files["C"] != files["B"]
-    write_archive(tmp_path / "p.ssp", entries)
     system = read_system(tmp_path / "p.ssp")
     assert {c.name: c.source.name for c in system.components} == {
         k: f"SatelliteDynamics_{k}.fmu" for k in "ABC"
@@ -128,10 +116,7 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
 def test_an_fmu_not_built_from_these_sources_is_packed_as_it_is(fmus, tmp_path):
     """A third party's FMU, or one of ours built from other sources (here: a stale build),
     cannot be configured: it is packed unchanged, with a warning naming it."""
-    from agilesat.components.satellite_dynamics import SatelliteDynamics
-    from agilesat.components.variables import UNITS
-    from agilesat.orchestration.export import package
-    from agilesat.orchestration.system.ssp import render_ssd
+    from agilesat.orchestration.mission import System
 
     stale = tmp_path / "SatelliteDynamics.fmu"
     with zipfile.ZipFile(fmus["SatelliteDynamics"]) as built, zipfile.ZipFile(stale, "w") as out:
@@ -141,11 +126,11 @@ def test_an_fmu_not_built_from_these_sources_is_packed_as_it_is(fmus, tmp_path):
             out.writestr(
                 renamed, built.read(item).replace(entry.encode(), b"SatelliteDynamics_0123456789ab")
             )
-    uri = "resources/SatelliteDynamics.fmu"
-    ssd = render_ssd(
-        "one", {"A": uri}, {"A": SatelliteDynamics.VARIABLES}, [("A.H_I", "A.h_wheel")],
-        {"A.rate0": [0.01, 0.0, 0.0]}, UNITS, 0.0, 1.0, 0.05,
-    )  # fmt: skip
+    one = System("one", stop=1.0, step=0.05)
+    one.add("A", stale, rate0=[0.01, 0.0, 0.0])
     with pytest.warns(UserWarning, match="not an FMU agilesat built from these sources"):
-        entries = package(ssd, {uri: stale})
+        package = one.write(tmp_path / "one.ssp")
+    uri = "resources/SatelliteDynamics.fmu"
+    with zipfile.ZipFile(package) as archive:
+        entries = {item: archive.read(item) for item in archive.namelist()}
     assert entries[uri] == stale.read_bytes()

@@ -174,6 +174,17 @@ def test_the_written_ssd_is_the_system_checked(fmus, tmp_path):
     assert (read.start_time, read.stop_time, read.step_size) == (0.0, 2.0, 0.05)
 
 
+def test_a_system_of_one_unconnected_component_writes_and_runs(fmus, tmp_path):
+    """No connections: the SSD has no (empty, schema-invalid) Connections element."""
+    from agilesat.orchestration.cosim.master import simulate
+
+    alone = System("alone", step=0.05, stop=0.5)
+    alone.add("hub", "SatelliteDynamics", rate0=[0.01, 0.0, 0.0])
+    path = alone.write(tmp_path / "alone.ssd")
+    assert read_system(path).connections == []
+    assert simulate(path)["hub.w_BI_B[1]"][-1] == pytest.approx(0.01)
+
+
 def test_a_third_party_fmu_is_described_from_its_model_description(fmus, tmp_path):
     """An FMU made with pythonfmu alone (no units, no agilesat annotations): its connectors
     come from its model description, an array connects element by element."""

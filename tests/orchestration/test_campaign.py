@@ -103,7 +103,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path, monkeypatch):
     monkeypatch.setenv("AGILESAT_TEST_SIGNAL", "SIGTERM@run:2")
     result = agilesat(*COMMAND, "--runs", "40", "--workers", "1", "--out", out)
     monkeypatch.delenv("AGILESAT_TEST_SIGNAL")
-    assert result.returncode == 130, result.stdout + result.stderr
+    assert result.returncode == 143, result.stdout + result.stderr  # 128 + SIGTERM
     summary = json.loads((out / "campaign.json").read_text())
     assert summary["status"] == "interrupted"
     made = journal(out)
@@ -152,11 +152,11 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     seen = []  # campaign.json's status while the runs go on
 
     @contextlib.contextmanager
-    def cluster(workers=None, scheduler=None):
+    def cluster(workers=None, scheduler=None, *settings):
         seen.append(json.loads((out / "campaign.json").read_text())["status"])
         if when != "close":
             raise KeyboardInterrupt
-        with real(workers, scheduler) as client:
+        with real(workers, scheduler, *settings) as client:
             yield client
         raise KeyboardInterrupt  # as if it came while the cluster closed
 

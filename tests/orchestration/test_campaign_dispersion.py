@@ -158,11 +158,42 @@ def test_plan_whole_variables_start_from_the_system_values():
         ),
         ("CmgCluster.h_rotor=choice(A, B)", "CmgCluster.h_rotor has none: give numbers"),
         ("CmgSteering.law=+choice(0, 1)", "a named choice cannot be added or multiplied"),
+        ("CmgCluster.h_rotor=normal(1e999, 1)", "normal must be finite numbers, got inf"),
+        ("CmgCluster.h_rotor=*uniform(1, 1e400)", "uniform must be finite numbers"),
+        ("CmgCluster.h_rotor=linspace(0, 1, 1e9)", "1e\\+09 points, more than the 100000 runs"),
     ],
 )
 def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
     with pytest.raises(ValueError, match=match):
         Plan(Spec("scan_pitch", vary=[vary]))
+
+
+@pytest.mark.parametrize(
+    "runs, vary, total",
+    [
+        (10**9, ["CmgCluster.h_rotor=normal(16.65, 0.1)"], "1000000000 runs"),
+        (
+            1,
+            ["CmgCluster.h_rotor=linspace(1, 2, 1000)", "CmgCluster.rate_limit=values(0.5, 0.6)"],
+            None,
+        ),
+        (
+            1,
+            [
+                "CmgCluster.h_rotor=linspace(1, 2, 1000)",
+                "CmgCluster.rate_limit=linspace(0, 1, 1000)",
+            ],
+            "1 run\\(s\\) × 1000 × 1000 grid points = 1000000 runs",
+        ),
+    ],
+)
+def test_a_campaign_of_more_than_max_runs_is_refused_before_anything_is_made(runs, vary, total):
+    """At once, from the counts alone: the grid is not built, no run index listed."""
+    if total is None:
+        assert Plan(Spec("scan_pitch", runs=runs, vary=vary)).total == 2000
+        return
+    with pytest.raises(ValueError, match=f"{total}, more than the {dispersion.MAX_RUNS}"):
+        Plan(Spec("scan_pitch", runs=runs, vary=vary))
 
 
 def test_dispersion_files_toml_and_json_agree(tmp_path):

@@ -34,14 +34,18 @@ FMU, OTHER = "AttitudeController", "CmgCluster"  # two small FMUs
 
 
 # -- the parent side: one child process per case ------------------------------------------
-def _child(case: str, *args, timeout: float = 300) -> tuple[dict | None, str]:
-    """(the child's JSON answer or None, what happened to the process)."""
+def _child(
+    case: str, *args, timeout: float = 300, script: Path | None = None, env=None
+) -> tuple[dict | None, str]:
+    """(the child's JSON answer or None, what happened to the process): ``case`` of this
+    file (or of ``script``), with ``env`` added to the environment."""
     run = subprocess.run(
-        [sys.executable, str(Path(__file__)), case, *map(str, args)],
+        [sys.executable, str(script or Path(__file__)), case, *map(str, args)],
         capture_output=True,
         text=True,
         timeout=timeout,
         cwd=ROOT,
+        env={**os.environ, **(env or {})},
     )
     if run.returncode < 0:
         return None, f"killed by signal {-run.returncode}; stderr: {run.stderr[-400:]}"

@@ -10,9 +10,6 @@ from pathlib import Path
 
 import numpy as np
 
-from agilesat.components.variables import UNITS
-from agilesat.fmus import model_class
-
 COMPONENTS = (
     "OrbitEnvironment",
     "SatelliteDynamics",
@@ -65,21 +62,16 @@ STEP, STOP = 0.05, 60.0
 
 def write_ssd(directory: Path, fmus: dict) -> Path:
     """The loop's SSD in ``directory``, its FMUs ``fmus`` ({name: path})."""
-    from agilesat.orchestration.system.ssp import render_ssd
+    from agilesat.orchestration.mission import System
 
-    path = Path(directory) / "sensing_loop.ssd"
-    path.write_bytes(
-        render_ssd(
-            "sensing_loop",
-            {name: str(fmus[name]) for name in COMPONENTS},
-            {name: model_class(name).VARIABLES for name in COMPONENTS},
-            CONNECTIONS,
-            PARAMETERS,
-            UNITS,
-            0.0,
-            STOP,
-            STEP,
-            "jacobi",
-        )
-    )
-    return path
+    system = System("sensing_loop", stop=STOP, step=STEP, algorithm="jacobi")
+    for name in COMPONENTS:
+        values = {
+            key.split(".", 1)[1]: value
+            for key, value in PARAMETERS.items()
+            if key.split(".", 1)[0] == name
+        }
+        system.add(name, fmus[name], **values)
+    for a, b in CONNECTIONS:
+        system.connect(a, b)
+    return system.write(Path(directory) / "sensing_loop.ssd")
