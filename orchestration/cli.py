@@ -52,6 +52,7 @@ def main(argv=None) -> int:
                 "export": _export,
                 "generate": _generate,
                 **study_cli.COMMANDS,
+                "pointing": _pointing,
                 "campaign": campaign_cli.main if campaign else None,
             }[args.command](args)
         except KeyboardInterrupt as exc:
@@ -102,6 +103,9 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     _system_commands(commands, quiet)
     study_cli.add_parsers(commands, quiet)
+    from .output import recorded_cli
+
+    recorded_cli.add_parser(commands)
     if campaign:
         from .campaign import cli as campaign_cli
 
@@ -338,6 +342,12 @@ def _run(args) -> int:
         f"{settings['algorithm']}; results in {out}/"
     )
     return report(summary)
+
+
+def _pointing(args) -> int:
+    from .output import recorded_cli
+
+    return recorded_cli.main(args)
 
 
 def _plot(args) -> int:

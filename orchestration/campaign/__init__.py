@@ -266,6 +266,7 @@ def _ensemble(plan: Plan, out: Path, made: int) -> dict:
             "value": verdict.value,
             **({"reason": verdict.reason} if verdict.reason else {}),
             **({"text": verdict.text} if verdict.text else {}),
+            **({"details": verdict.details} if verdict.details else {}),
         }
     return result
 

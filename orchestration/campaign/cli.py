@@ -191,7 +191,7 @@ def format_campaign(summary: dict) -> str:
         lines.append(
             f"  over the campaign: {r.get('text') or r['statement']}"
             + ("" if r.get("text") else f": {r['verdict']}")
-            + (f" ({r['reason']})" if r.get("reason") else "")
+            + (f" ({r['reason']})" if r.get("reason") and not r.get("text") else "")
         )
     for point in summary["grid_pass_rates"]:
         rates = point["pass_rates"]

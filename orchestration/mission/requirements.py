@@ -26,7 +26,7 @@ points)); :class:`Pointing` does, for its ensemble and mixed interpretations.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -46,6 +46,7 @@ class Verdict:
     value: float | None = None
     reason: str = ""
     text: str = ""  # the verdict in a line, where the requirement words it itself
+    details: dict | None = None  # a JSON-ready record, where the requirement keeps one
 
     def __post_init__(self):
         if self.status not in VERDICTS:
@@ -147,23 +148,39 @@ class Pointing(Requirement):
     against ``reference`` (q_RI), or with ``kind="knowledge"`` the knowledge error of the
     estimate ``attitude`` against the truth ``reference``; over [``start``, ``stop``] (s).
 
+    ``reference`` is a recorded quaternion (its base name), or a function of the recorded
+    columns ``reference_signals`` that gives q_RI: ``reference(columns)`` with
+    ``columns[name]`` an array (..., points), returning (..., points, 4) (a planned attitude
+    that no component outputs, scan_pitch's).
+
     In a run it is evaluated on that run (the temporal interpretation needs no more; an
-    ensemble or mixed one over a single run is as the requirement states it).  In a
-    campaign, :meth:`evaluate_campaign` evaluates it over every run's error history."""
+    ensemble or mixed one over a single run is as the requirement states it; one with a
+    confidence is not evaluated: a run is not a campaign, and the verdict says what it
+    shows).  In a campaign, :meth:`evaluate_campaign` evaluates it over every run's error
+    history."""
 
     name: str  # type: ignore[misc]
     requirement: object
     attitude: str = "SatelliteDynamics.q_BI"
-    reference: str = "StaringGuidance.q_ref"
+    reference: object = "StaringGuidance.q_ref"
     kind: str = "performance"
     start: float | None = None
     stop: float | None = None
+    reference_signals: tuple = ()
     signals: tuple = field(init=False, default=())
 
     def __post_init__(self):
         if self.kind not in ("performance", "knowledge"):
             raise ValueError(f"kind must be 'performance' or 'knowledge', got {self.kind!r}")
-        columns = tuple(f"{q}[{i}]" for q in (self.attitude, self.reference) for i in range(1, 5))
+        if getattr(self.requirement, "bound", None) is None:
+            raise ValueError(f"requirement {self.name}: the pointing requirement needs a bound")
+        if callable(self.reference) == (not self.reference_signals):
+            raise ValueError(
+                "a reference function needs reference_signals (the columns it reads), "
+                "a recorded reference quaternion none"
+            )
+        columns = _quaternion(self.attitude)
+        columns += tuple(self.reference_signals) or _quaternion(self.reference)  # type: ignore[arg-type]
         object.__setattr__(self, "signals", columns)
 
     def statement(self, unit=None, display_unit=None) -> str:
@@ -172,46 +189,75 @@ class Pointing(Requirement):
 
         return f"{r.label()} {r.probability()} ≤ {format_angle(r.bound)}"  # type: ignore[attr-defined]
 
-    def _verdict(self, q_x, q_y, t) -> Verdict:
-        from ..pointing import knowledge_error, performance_error
-
-        rows = np.ones(len(t), bool)
-        if self.start is not None:
-            rows &= t >= self.start - 1e-12
-        if self.stop is not None:
-            rows &= t <= self.stop + 1e-12
-        if rows.sum() < 2:
-            return Verdict(
-                NOT_EVALUATED, None, f"fewer than 2 samples in [{self.start}, {self.stop}] s"
-            )
-        error = (performance_error if self.kind == "performance" else knowledge_error)(
-            q_x[..., rows, :], q_y[..., rows, :], t[rows]
+    def error(self, columns, t: np.ndarray):
+        """The error history over [start, stop] of the recorded ``columns``
+        (:func:`recorded_error`)."""
+        return recorded_error(
+            columns, t, self.attitude, self.reference, self.kind, self.start, self.stop
         )
+
+    def _verdict(self, columns, t) -> Verdict:
+        from ..pointing import NotEvaluable
+
+        try:
+            error = self.error(columns, t)
+        except NotEvaluable as reason:
+            return Verdict(NOT_EVALUATED, None, str(reason))
         result = self.requirement.evaluate(error)  # type: ignore[attr-defined]
         status = {"met": MET, "not met": NOT_MET}.get(result.status, NOT_EVALUATED)
-        return Verdict(status, result.value, result.reason or "", result.line())
+        return Verdict(status, result.value, result.reason or "", result.line(), result.to_dict())
 
     def evaluate(self, results, metrics: dict) -> Verdict:
-        return self._verdict(
-            results.vector(self.attitude), results.vector(self.reference), results.time
-        )
+        return self._verdict(results, results.time)
 
     def evaluate_campaign(self, signals: np.ndarray, t: np.ndarray) -> Verdict:
-        """Over every run: ``signals`` (runs, 8, points) holds :attr:`signals` (NaN where a
-        run stopped early: those runs are left out, and said)."""
+        """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds
+        :attr:`signals` (NaN where a run stopped early: those runs are left out, and said)."""
         complete = np.isfinite(signals).all(axis=(1, 2))
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
-        verdict = self._verdict(
-            signals[complete, :4].transpose(0, 2, 1), signals[complete, 4:].transpose(0, 2, 1), t
-        )
+        kept = signals[complete]
+        verdict = self._verdict({c: kept[:, i] for i, c in enumerate(self.signals)}, t)
         left = int((~complete).sum())
         if left:
             note = f"{left} run(s) that stopped early left out"
-            return Verdict(
-                verdict.status,
-                verdict.value,
-                "; ".join(filter(None, (verdict.reason, note))),
-                verdict.text,
-            )
+            reason = "; ".join(filter(None, (verdict.reason, note)))
+            return replace(verdict, reason=reason, text=f"{verdict.text} ({note})")
         return verdict
+
+
+def _quaternion(name: str) -> tuple[str, ...]:
+    """The four recorded columns of a quaternion output."""
+    return tuple(f"{name}[{i}]" for i in range(1, 5))
+
+
+def recorded_error(
+    columns,
+    t: np.ndarray,
+    attitude: str,
+    reference,
+    kind: str = "performance",
+    start=None,
+    stop=None,
+):
+    """The :class:`..pointing.ErrorHistory` of the recorded quaternion ``attitude`` against
+    ``reference`` (a recorded quaternion, or a function of the columns: :class:`Pointing`)
+    over [``start``, ``stop``]: ``columns[name]`` is (points,) for a run, (runs, points) for
+    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples."""
+    from ..pointing import NotEvaluable, knowledge_error, performance_error
+
+    rows = np.ones(len(t), bool)
+    if start is not None:
+        rows &= t >= start - 1e-12
+    if stop is not None:
+        rows &= t <= stop + 1e-12
+    if rows.sum() < 2:
+        raise NotEvaluable(f"fewer than 2 samples in [{start}, {stop}] s")
+    q_x = np.stack([columns[c] for c in _quaternion(attitude)], axis=-1)
+    if callable(reference):
+        q_y = np.asarray(reference(columns))
+    else:
+        q_y = np.stack([columns[c] for c in _quaternion(reference)], axis=-1)
+    return (performance_error if kind == "performance" else knowledge_error)(
+        q_x[..., rows, :], q_y[..., rows, :], t[rows]
+    )

@@ -217,6 +217,7 @@ class Scenario:
                 **({"unit": unit, "display_unit": display} if unit else {}),
                 **({"reason": verdict.reason} if verdict.reason else {}),
                 **({"text": verdict.text} if verdict.text else {}),
+                **({"details": verdict.details} if verdict.details else {}),
             }
             if metric in entries and isinstance(r, Bound):
                 entries[metric]["requirement"] = r.limits(unit)

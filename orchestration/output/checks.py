@@ -148,3 +148,52 @@ def _metrics_meet(summary: dict, names) -> None:
     ]
     if failed:
         raise AssertionError("requirement not met: " + "; ".join(failed))
+
+
+def assert_pointing(
+    source,
+    index: str,
+    *,
+    bound: float,
+    level: float = 0.9973,
+    interpretation: str = "temporal",
+    window: float | None = None,
+    separation: float | None = None,
+    t_in_window: str = "end",
+    axis=None,
+    boresight=None,
+    confidence: float | None = None,
+    attitude: str | None = None,
+    reference: str | None = None,
+    start: float | None = None,
+    stop: float | None = None,
+):
+    """The ECSS pointing index ``index`` (APE … KRE, docs/pointing.md) of ``source`` is
+    within ``bound`` (rad) at ``level`` under ``interpretation``: ``source`` is a run
+    (:class:`.results.Results` or its directory) or a campaign (its
+    :class:`..campaign.Campaign` or directory, the quaternions kept); the error is that of
+    ``attitude`` against ``reference`` (:func:`.recorded.evaluate`: a knowledge index
+    defaults to the estimate against the truth).  Fails when it is not met or cannot be
+    shown (a record too short, a campaign too small for the confidence), saying why;
+    returns the :class:`..pointing.PointingResult`."""
+    from ..pointing import PointingRequirement
+    from .recorded import evaluate
+
+    requirement = PointingRequirement(
+        index,
+        bound,
+        level,
+        interpretation,
+        window,
+        separation,
+        t_in_window,
+        axis,
+        boresight,
+        confidence,
+    )
+    result = evaluate(
+        source, requirement, attitude=attitude, reference=reference, start=start, stop=stop
+    )
+    if not result.met:
+        raise AssertionError(result.line("deg"))
+    return result

@@ -10,7 +10,8 @@ Fixtures:
   the run's files are in ``summary["out_dir"]``.
 
 Assertions (:mod:`agilesat.orchestration.output.checks`, re-exported here): ``assert_within``,
-``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``.
+``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``,
+``assert_pointing`` (an ECSS index of a run or a campaign).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import pytest
 
 from .checks import (  # noqa: F401
     assert_momentum_conserved,
+    assert_pointing,
     assert_requirements_met,
     assert_settles,
     assert_within,

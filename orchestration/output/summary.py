@@ -156,7 +156,8 @@ def format_summary(summary: dict) -> str:
                 lines.append(f"  {'':34s} not judged: {r.get('reason', '')}")
             continue
         shown = r.get("text") or f"{r['statement']}: {r['verdict']}"
-        lines.append(f"  requirement {shown}" + (f" ({r['reason']})" if r.get("reason") else ""))
+        reason = f" ({r['reason']})" if r.get("reason") and not r.get("text") else ""
+        lines.append(f"  requirement {shown}{reason}")
     outputs = summary.get("outputs", {})
     if outputs:
         lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")

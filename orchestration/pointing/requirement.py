@@ -68,10 +68,11 @@ class PointingRequirement:
     about ``axis``, the half-cone of ``boresight``, or (neither) the 3-axis angle; a scalar
     error history takes neither.  ``confidence`` (ensemble only): the value compared to
     the bound is then the order statistic that bounds the level's quantile with it.
+    ``bound`` None: the index is computed, not judged (status "computed").
     """
 
     index: str
-    bound: float
+    bound: float | None
     level: float
     interpretation: str
     window: float | None = None
@@ -83,7 +84,7 @@ class PointingRequirement:
 
     def __post_init__(self):
         check_index(self.index, self.window, self.separation, self.t_in_window)
-        if not (math.isfinite(self.bound) and self.bound > 0.0):
+        if self.bound is not None and not (math.isfinite(self.bound) and self.bound > 0.0):
             raise ValueError(f"bound must be a positive angle (rad), got {self.bound}")
         check_statistic(self.level, self.interpretation, self.confidence)
         if self.axis is not None and self.boresight is not None:
@@ -138,16 +139,28 @@ class PointingRequirement:
                 series = index_series(block, *args)
                 parts.append(magnitude(series))
             m = np.concatenate(parts)
-            stat = statistic(m, self.level, self.interpretation, self.confidence)
         except NotEvaluable as reason:
             return PointingResult(self, "not evaluable", error.runs, needed, reason=str(reason))
         exceedances = achieved = None
-        if self.interpretation == "ensemble":
+        if self.interpretation == "ensemble" and self.bound is not None:
             exceedances = int((m > self.bound).sum(axis=0).max())
             achieved = confidence_achieved(error.runs, exceedances, self.level)
+        try:
+            stat = statistic(m, self.level, self.interpretation, self.confidence)
+        except NotEvaluable as reason:  # too few runs for the confidence: say what they show
+            return PointingResult(
+                self,
+                "not evaluable",
+                error.runs,
+                needed,
+                estimate=statistic(m, self.level, self.interpretation).value,
+                confidence_achieved=achieved,
+                exceedances=exceedances,
+                reason=str(reason),
+            )
         return PointingResult(
             self,
-            "met" if stat.value <= self.bound else "not met",
+            "computed" if self.bound is None else "met" if stat.value <= self.bound else "not met",
             error.runs,
             needed,
             value=stat.value,
@@ -161,14 +174,17 @@ class PointingRequirement:
 
 @dataclass(frozen=True, eq=False)
 class PointingResult:
-    """The verdict: ``status`` "met", "not met" or "not evaluable" (then ``reason``).
+    """The verdict: ``status`` "met", "not met", "computed" (no bound) or "not evaluable"
+    (then ``reason``).
 
     ``value`` (rad) is what was compared to the bound, ``estimate`` the empirical quantile
     (equal to ``value`` without a confidence).  Ensemble: ``exceedances`` is the most runs
     above the bound at one time, ``confidence_achieved`` the confidence that at least the
     level's fraction of runs is within the bound (at the worst time); ``runs_needed`` the
     fewest runs the stated confidence takes.  ``statistic`` holds the profile (per run or
-    per time ``t``), for figures.  Values that do not exist are None.
+    per time ``t``), for figures.  Values that do not exist are None.  A campaign too
+    small for the stated confidence is "not evaluable" with no ``value``, but its
+    ``estimate``, ``exceedances`` and ``confidence_achieved`` (what it does show).
     """
 
     requirement: PointingRequirement
@@ -185,17 +201,29 @@ class PointingResult:
 
     @property
     def met(self) -> bool | None:
-        return None if self.status == "not evaluable" else self.status == "met"
+        return {"met": True, "not met": False}.get(self.status)
 
     def line(self, unit: str = "deg") -> str:
         """The verdict in a line: ``RPE(1 s) about (0, 0, 1) at 99.73 % (ensemble) with 95 %
         confidence: 0.0007° (requirement 0.001°): met``."""
         r = self.requirement
         head = f"{r.label()} {r.probability()}"
-        if self.value is None:
+        if self.value is None and self.estimate is None:
             return f"{head}: {self.status} ({self.reason})"
-        value, bound = format_angle(self.value, unit), format_angle(r.bound, unit)
-        return f"{head}: {value} (requirement {bound}): {self.status}"
+        if self.value is None:  # a campaign too small for the confidence
+            text = f"{head}: {self.status} ({self.reason}); estimate "
+            text += format_angle(self.estimate, unit)  # type: ignore[arg-type]
+            if r.bound is None:
+                return text
+            return (
+                f"{text} (requirement {format_angle(r.bound, unit)}), "
+                f"{self.exceedances} of {self.runs} run(s) above it: "
+                f"{100 * self.confidence_achieved:.3g} % confidence"
+            )
+        value = format_angle(self.value, unit)
+        if r.bound is None:
+            return f"{head}: {value}"
+        return f"{head}: {value} (requirement {format_angle(r.bound, unit)}): {self.status}"
 
     def to_dict(self) -> dict:
         """JSON-ready record (SI: rad, s)."""

@@ -29,9 +29,10 @@ ARCSEC = math.pi / 648_000
 UNITS = {"arcsec": (ARCSEC, "arcsec"), "urad": (1e-6, "µrad")}
 #: what makes the sensors exact: no noise, bias, scale factor, misalignment, quantisation
 #: or latency; the star tracker samples at every step of 0.05 s; the filter trusts it
-#: (a tiny NEA: the estimate is the measurement) and keeps a zero bias estimate.  The
-#: gyro still measures the average rate over its sample interval (a rate-integrating
-#: unit), a lag of half its period: ``gyro_rate`` sets it (tests/papers/test_closed_loop.py).
+#: (a tiny NEA: the estimate is the measurement) and keeps a zero bias estimate; no
+#: disturbance torque.  The gyro still measures the average rate over its sample interval
+#: (a rate-integrating unit), half its period late: with the step it is a first-order
+#: coupling error (tests/papers/test_closed_loop.py).
 PERFECT = {
     "StarTracker.nea_cross": 0.0,
     "StarTracker.nea_boresight": 0.0,

@@ -27,9 +27,17 @@ import numpy as np
 
 from agilesat.components.orbit_environment import WGS84_A
 from agilesat.components.rotations import dcm, rotate_back
-from agilesat.orchestration.mission import Metric, Scenario, System, Variant, at_most, panels
+from agilesat.orchestration.mission import (
+    Metric,
+    Pointing,
+    Scenario,
+    System,
+    Variant,
+    at_most,
+    panels,
+)
 from agilesat.orchestration.mission import metrics as m
-from agilesat.orchestration.pointing import performance_error
+from agilesat.orchestration.pointing import PointingRequirement, performance_error
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
     close_the_loop,
@@ -40,6 +48,8 @@ from agilesat.orchestration.scenarios.closed_loop import (
 from agilesat.orchestration.scenarios.constants import (
     PAYLOAD_SWEEP_ACCURACY,
     PAYLOAD_SWEEP_STABILITY,
+    POINTING_CONFIDENCE,
+    POINTING_LEVEL,
 )
 
 DEG = math.pi / 180
@@ -141,8 +151,8 @@ def sensed_figure(results, out_dir):
 _AT_REST_INERTIAL = {"SatelliteDynamics.rate0": [0.0, ORBIT_RATE, 0.0]}  # w_BI = 0 at t = 0
 #: nothing is asked of an uncontrolled satellite
 _UNCONTROLLED = {
-    "pointing_accuracy": "the wheel motors are off: the pointing requirement is for control",
-    "pointing_stability": "the wheel motors are off: the pointing requirement is for control",
+    name: "the wheel motors are off: the pointing requirement is for control"
+    for name in ("pointing_accuracy", "pointing_stability", "pointing_ape", "stability_pde")
 }
 VARIANTS = {
     "no_control": Variant(
@@ -422,11 +432,41 @@ def figures(results, out_dir) -> list:
     ]
 
 
+#: the paper's requirements as a contract states them ([Ecss 2008], docs/pointing.md):
+#: accuracy, the 3-axis angle of the body from the orbit frame (it bounds the error about
+#: each axis); stability, the drift of the mean pointing from one second to the next, the
+#: mean rate error over a second times a second; both at every time for 99.73 % of the
+#: runs, with 95 % confidence
+REQUIREMENTS = [
+    Pointing(
+        "pointing_ape",
+        PointingRequirement(
+            "APE", ACCURACY, POINTING_LEVEL, "ensemble", confidence=POINTING_CONFIDENCE
+        ),
+        reference="OrbitEnvironment.q_OI",
+    ),
+    Pointing(
+        "stability_pde",
+        PointingRequirement(
+            "PDE",
+            STABILITY * 1.0,  # rad/s over Δt_s = 1 s
+            POINTING_LEVEL,
+            "ensemble",
+            window=1.0,
+            separation=1.0,
+            confidence=POINTING_CONFIDENCE,
+        ),
+        reference="OrbitEnvironment.q_OI",
+    ),
+]
+
+
 SCENARIO = Scenario(
     "payload_sweep",
     "Two symmetric swinging payloads compensated by a reaction wheel",
     SYSTEM,
     metrics=METRICS,
+    requirements=REQUIREMENTS,
     variants=VARIANTS,
     figures=figures,
     diagnose=diagnose,

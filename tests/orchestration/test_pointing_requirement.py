@@ -54,6 +54,17 @@ def test_not_evaluable_says_why():
     few = rpe(ARCSEC).evaluate(white_campaign(runs=100))
     assert few.status == "not evaluable" and few.met is None and few.value is None
     assert "needs at least 1109 runs" in few.reason and few.runs_needed == 1109
+    # what the too-small campaign shows: its 99.73 % quantile at each time (the largest of
+    # 100 values), the runs above the bound, Pr[Bin(100, 0.0027) > k]
+    few = rpe(10 * ARCSEC).evaluate(white_campaign(runs=100))
+    assert few.status == "not evaluable" and few.value is None
+    assert few.exceedances == 0 and few.confidence_achieved == pytest.approx(1 - 0.9973**100)
+    series = index_series(white_campaign(runs=100).about((0, 0, 1)), "RPE", 1.0)
+    assert few.estimate == magnitude(series).max()
+    assert few.line("arcsec").endswith(
+        f"it has 100); estimate {format_angle(few.estimate, 'arcsec')} (requirement 10 arcsec), "
+        "0 of 100 run(s) above it: 23.7 % confidence"
+    )
     short = rpe(ARCSEC, window=50.0).evaluate(white_campaign(runs=1200, samples=400))
     assert short.status == "not evaluable" and "too short" in short.reason
     with pytest.raises(NotEvaluable, match="too short"):

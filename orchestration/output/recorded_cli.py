@@ -1,0 +1,131 @@
+"""``agilesat pointing DIR``: ECSS pointing indices of a recorded run or campaign.
+
+With ``--index``, that index (the options of :class:`..pointing.PointingRequirement`);
+without, the pointing requirements the run's or campaign's scenario states
+(:class:`..mission.Pointing`).  Exit 0, or 3 when a requirement is not met.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from ..pointing import ANGLE_UNITS, INDICES, INTERPRETATIONS, PointingRequirement, format_angle
+
+_ANGLE = re.compile(r"^\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*([a-zµ]*)\s*$")
+
+
+def angle(text: str) -> float:
+    """``0.05deg``, ``3 arcsec``, ``1e-5`` (rad) in rad."""
+    match = _ANGLE.match(text)
+    unit = match.group(2) if match else ""
+    if not match or unit and unit not in ANGLE_UNITS:
+        raise ValueError(
+            f"--bound {text!r}: expected a number with an angle unit "
+            f"({', '.join(ANGLE_UNITS)}; none: rad), e.g. 0.05deg"
+        )
+    return float(match.group(1)) * ANGLE_UNITS[unit or "rad"]
+
+
+def add_parser(commands) -> None:
+    p = commands.add_parser(
+        "pointing",
+        help="ECSS-E-ST-60-10C pointing indices (APE, RPE, ... AKE, RKE, ...) of a recorded "
+        "run or campaign directory",
+        description=__doc__.split("\n\n")[0] + "  See docs/pointing.md.",
+    )
+    p.add_argument("directory", type=Path, help="a run's or a campaign's output directory")
+    p.add_argument("--index", choices=list(INDICES), help="default: the scenario's requirements")
+    p.add_argument("--window", type=float, help="Δt [s] (all but APE/AKE)")
+    p.add_argument("--separation", type=float, help="Δt_s [s] (PDE/PRE/KDE/KRE)")
+    p.add_argument("--t-in-window", choices=("end", "random"), default="end")
+    p.add_argument("--level", type=float, default=0.9973, help="probability (default 0.9973)")
+    p.add_argument(
+        "--interpretation",
+        choices=INTERPRETATIONS,
+        help="default: ensemble for a campaign, temporal for a run",
+    )
+    p.add_argument("--confidence", type=float, help="of the ensemble statistic (e.g. 0.95)")
+    p.add_argument("--bound", type=angle, help="the requirement (0.05deg, 3arcsec; none: computed)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--axis", type=float, nargs=3, metavar=("X", "Y", "Z"), help="about it")
+    where.add_argument(
+        "--boresight", type=float, nargs=3, metavar=("X", "Y", "Z"), help="its half-cone"
+    )
+    p.add_argument(
+        "--attitude",
+        help="quaternion: default SatelliteDynamics.q_BI (performance), "
+        "AttitudeEstimator.q_BI_est (knowledge)",
+    )
+    p.add_argument(
+        "--reference",
+        help="quaternion: the reference (performance; required), "
+        "default SatelliteDynamics.q_BI (knowledge)",
+    )
+    p.add_argument("--start", type=float, help="[s]")
+    p.add_argument("--stop", type=float, help="[s]")
+    p.add_argument("--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout")
+    p.add_argument("--json", type=Path, help="also write the records to this file")
+
+
+def main(args) -> int:
+    from ..mission.requirements import Pointing
+    from ..mission.targets import resolve
+    from .recorded import evaluate, load
+
+    recorded = load(args.directory)
+    what = f"{recorded.runs} run(s)" + (
+        f", {recorded.left_out} that stopped early left out" if recorded.left_out else ""
+    )
+    print(f"{args.directory}: {recorded.target or 'a run'}, {what}")
+    records = []
+    if args.index:
+        requirement = PointingRequirement(
+            args.index,
+            args.bound,
+            args.level,
+            args.interpretation or ("ensemble" if recorded.runs > 1 else "temporal"),
+            args.window,
+            args.separation,
+            args.t_in_window,
+            args.axis,
+            args.boresight,
+            args.confidence,
+        )
+        result = evaluate(
+            None,
+            requirement,
+            attitude=args.attitude,
+            reference=args.reference,
+            start=args.start,
+            stop=args.stop,
+            recorded=recorded,
+        )
+        print(f"  {_line(result, args.unit)}")
+        records.append(result.to_dict())
+    else:
+        target = resolve(recorded.target) if recorded.target else None
+        if target is None or target.scenario is None:
+            raise ValueError(f"{args.directory}: no scenario recorded: give --index ...")
+        stated = [
+            r for r in target.scenario.requirements_for(target.variant) if isinstance(r, Pointing)
+        ]
+        if not stated:
+            raise ValueError(f"{recorded.target} states no pointing requirement: give --index")
+        for r in stated:
+            result = r.requirement.evaluate(r.error(recorded.columns, recorded.t))  # type: ignore[attr-defined]
+            print(f"  {r.name}: {_line(result, args.unit)}")
+            records.append({"name": r.name, **result.to_dict()})
+    if args.json:
+        args.json.write_text(json.dumps(records, indent=2) + "\n")
+    return 3 if any(r["met"] is False for r in records) else 0
+
+
+def _line(result, unit: str) -> str:
+    """The result's line, with the empirical quantile where a confidence made the value
+    compared the order statistic that bounds it."""
+    line = result.line(unit)
+    if result.value is not None and result.requirement.confidence is not None:
+        line += f" (empirical quantile {format_angle(result.estimate, unit)})"
+    return line
