@@ -14,7 +14,7 @@ Python API::
     results = simulate("my_system.ssd", step=0.05, stop=100.0)       # any SSP system
     results["SatelliteDynamics.w_BI_B[2]"], results.vector("CmgCluster.delta")
     assert_within(results, "SatelliteDynamics.w_BI_B[2]", -0.02, 0.02)  # and the other checks
-    assert_pointing(results, "RPE", window=1.0, bound=deg(0.001), reference="StaringGuidance.q_ref")
+    assert_pointing(results, "RPE", window=1.0, bound=1.7e-5, reference="StaringGuidance.q_ref")
 
 The names are imported on first use (PEP 562), so that a submodule (the CLI's
 ``agilesat --help``) does not load the master, fmpy and NumPy before it needs them.

@@ -55,6 +55,15 @@ def shipped(name: str) -> Path:
     return path
 
 
+def shipped_files(target: str) -> list[Path]:
+    """The shipped dispersion files of a scenario[:variant]: the scenario's, then the
+    variant's additions where it has some (``shipped/<name>.<variant>.toml``: the sensed
+    variants' sensor noise)."""
+    name, _, variant = target.partition(":")
+    extra = SHIPPED_DIR / f"{name}.{variant}.toml"
+    return [shipped(name), *([extra] if variant and extra.exists() else [])]
+
+
 def campaign(
     target: str,
     runs: int = 1,

@@ -11,7 +11,7 @@ import argparse
 import signal
 from pathlib import Path
 
-from . import Spec, run_campaign, shipped
+from . import Spec, run_campaign, shipped_files
 from .report import display
 
 
@@ -20,7 +20,8 @@ def add_parser(commands) -> argparse.ArgumentParser:
         "campaign",
         help="Monte Carlo campaign or parameter sweep of a scenario on Dask",
         description="Run TARGET many times with dispersed parameters.  DIST: normal(mean,sd), "
-        "uniform(lo,hi), choice(a,b,...), rotate(sd) (unit vectors), inertia(sd_rel,sd_angle) "
+        "uniform(lo,hi), choice(a,b,...), integers(lo,hi) (seeds), rotate(sd) (unit "
+        "vectors), inertia(sd_rel,sd_angle) "
         "(3×3 inertia), linspace(lo,hi,n), values(a,b,...) (grids: full factorial); a "
         "leading + or * applies it to the nominal value; SI, 'deg' after a number for "
         "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.",
@@ -83,14 +84,13 @@ def main(args) -> int:
     overrides = parse_set(args.set)
     files = [str(f) for f in args.dispersions]
     if not args.vary and not files:
-        name = args.target.partition(":")[0]
         try:
-            files = [str(shipped(name))]
+            files = [str(path) for path in shipped_files(args.target)]
         except KeyError:
             raise ValueError(
                 f"campaign {args.target}: nothing to vary: give --vary or --dispersions"
             ) from None
-        print(f"dispersions: {files[0]} (the shipped campaign)")
+        print(f"dispersions: {', '.join(files)} (the shipped campaign)")
     spec = Spec(
         args.target,
         args.runs,

@@ -4,7 +4,9 @@ A dispersion is ``Instance.variable=DIST`` (``--vary``, or one entry of a TOML/J
 ``variable`` is a scalar FMI name (``inertia[2,3]``) or a whole array variable.
 
 Random (Monte Carlo) — drawn anew for every run:
-  ``normal(mean, sd)``, ``uniform(lo, hi)``, ``choice(a, b, ...)``; on a whole array each
+  ``normal(mean, sd)``, ``uniform(lo, hi)``, ``choice(a, b, ...)``, ``integers(lo, hi)``
+  (a whole number uniform in [lo, hi]: a noise ``seed``, so that every run draws its own
+  noise, ``StarTracker.seed=integers(0, 2147483647)``); on a whole array each
   element is drawn independently from the same distribution.  ``choice`` and ``values``
   take the names of a named-choice parameter too (``CmgSteering.law=choice(PSEUDO_INVERSE,
   SR_INVERSE)``); the table records the name, as ``--set`` takes it.
@@ -43,7 +45,7 @@ import numpy as np
 #: the most runs a campaign may have (grid points × runs per point): its journal and table
 #: are held in memory, at about a kilobyte a run (a larger study: several campaigns)
 MAX_RUNS = 100_000
-RANDOM = {"normal": 2, "uniform": 2, "choice": None, "rotate": 1, "inertia": 2}
+RANDOM = {"normal": 2, "uniform": 2, "choice": None, "rotate": 1, "inertia": 2, "integers": 2}
 GRIDS = {"linspace": 3, "values": None}
 _EXPR = re.compile(r"^\s*([+*]?)\s*([a-z_]+)\s*\((.*)\)\s*$", re.S)
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(deg)?\s*$")
@@ -102,6 +104,9 @@ class Dispersion:
             return self.apply(rng.uniform(self.args[0], self.args[1], shape), nominal)
         if self.kind == "choice":
             return self.apply(rng.choice(np.asarray(self.args), shape), nominal)
+        if self.kind == "integers":
+            low, high = (int(a) for a in self.args)
+            return self.apply(rng.integers(low, high, shape, endpoint=True), nominal)
         if self.kind == "rotate":
             return rotate_rows(nominal, self.args[0], rng)
         if self.kind == "inertia":
@@ -158,8 +163,10 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
         )
     if kind in ("normal", "rotate") and args[-1] < 0 or kind == "inertia" and min(args) < 0:
         raise ValueError(f"{origin} {key}: a standard deviation must be ≥ 0, got {args}")
-    if kind == "uniform" and args[0] > args[1]:
-        raise ValueError(f"{origin} {key}: uniform(lo, hi) needs lo <= hi, got {args}")
+    if kind in ("uniform", "integers") and args[0] > args[1]:
+        raise ValueError(f"{origin} {key}: {kind}(lo, hi) needs lo <= hi, got {args}")
+    if kind == "integers" and any(a != int(a) for a in args):
+        raise ValueError(f"{origin} {key}: integers(lo, hi) takes whole numbers, got {args}")
     if kind == "linspace" and (args[2] < 1 or args[2] != int(args[2])):
         raise ValueError(f"{origin} {key}: linspace's n must be a positive integer")
     if kind == "linspace" and args[2] > MAX_RUNS:

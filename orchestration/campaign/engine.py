@@ -353,7 +353,7 @@ def catalog(known: dict, record: dict) -> bool:
             new = True
     for name, r in record.get("requirements", {}).items():
         if name not in requirements:
-            keep = ("statement", "unit", "display_unit")
+            keep = ("statement", "unit", "display_unit", "judged_over")
             requirements[name] = {k: r[k] for k in keep if k in r}
             if r["verdict"] == "not judged":
                 requirements[name]["not_judged"] = r.get("reason", "")

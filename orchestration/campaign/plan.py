@@ -192,8 +192,10 @@ class Plan:
                 f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
                 f"{var.causality}; only numeric parameters can be dispersed"
             )
-        if var.type != "Real" and d.kind not in ("choice", "values"):
-            raise ValueError(f"--vary {d.text}: {var.type} parameter: use choice() or values()")
+        if var.type != "Real" and d.kind not in ("choice", "values", "integers"):
+            raise ValueError(
+                f"--vary {d.text}: {var.type} parameter: use choice(), values() or integers()"
+            )
         if var.choices:
             d = self._named(d, var)
         elif var.type == "Integer":

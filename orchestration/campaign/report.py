@@ -146,9 +146,15 @@ def pass_rates(array: np.ndarray, catalog: dict, rows=None) -> dict:
     """Per requirement judged and for all of them together (``all``): the runs that met
     it, with the Clopper-Pearson 95 % interval; every run counts (one that stopped or was
     not evaluated meets nothing), and the runs not met, not evaluated and stopped are
-    counted apart.  A requirement the variant does not judge has no pass rate."""
+    counted apart.  A requirement the variant does not judge has no pass rate, nor has
+    one judged over the whole campaign (an ensemble statistic: campaign.json's
+    ``ensemble``)."""
     rows = np.ones(len(array), bool) if rows is None else rows
-    names = [n for n, r in catalog.get("requirements", {}).items() if "not_judged" not in r]
+    names = [
+        n
+        for n, r in catalog.get("requirements", {}).items()
+        if "not_judged" not in r and r.get("judged_over") != "campaign"
+    ]
     rates = {}
     for name, verdicts in [(n, array[f"verdict_{n}"][rows]) for n in names] + (
         [("all", _all(array[rows], names))] if len(names) > 1 else []

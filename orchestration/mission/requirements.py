@@ -183,6 +183,12 @@ class Pointing(Requirement):
         columns += tuple(self.reference_signals) or _quaternion(self.reference)  # type: ignore[arg-type]
         object.__setattr__(self, "signals", columns)
 
+    @property
+    def over_campaign(self) -> bool:
+        """An ensemble or mixed statistic: a campaign judges it over all its runs, not
+        run by run (no pass rate)."""
+        return self.requirement.interpretation != "temporal"  # type: ignore[attr-defined]
+
     def statement(self, unit=None, display_unit=None) -> str:
         r = self.requirement
         from ..pointing import format_angle

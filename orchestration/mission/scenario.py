@@ -218,6 +218,7 @@ class Scenario:
                 **({"reason": verdict.reason} if verdict.reason else {}),
                 **({"text": verdict.text} if verdict.text else {}),
                 **({"details": verdict.details} if verdict.details else {}),
+                **({"judged_over": "campaign"} if getattr(r, "over_campaign", False) else {}),
             }
             if metric in entries and isinstance(r, Bound):
                 entries[metric]["requirement"] = r.limits(unit)

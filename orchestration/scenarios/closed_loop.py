@@ -21,8 +21,10 @@ import math
 
 import numpy as np
 
-from agilesat.orchestration.mission import System
+from agilesat.orchestration.mission import NotEvaluable, System
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.pointing import PointingRequirement, knowledge_error
+from agilesat.orchestration.scenarios.constants import POINTING_LEVEL
 
 ARCSEC = math.pi / 648_000
 #: figure units: (rad per unit, as printed)
@@ -106,8 +108,38 @@ def close_the_loop(
         system.connect("AttitudeEstimator.w_BI_B_est", target, replace=True)
 
 
+def knowledge_index(index: str, window: float | None = None) -> m.Metric:
+    """The ECSS knowledge index (AKE, RKE, ...) of the 3-axis knowledge error at 99.73 %
+    of the run's time (temporal interpretation; docs/pointing.md), from the first valid
+    estimate on."""
+    requirement = PointingRequirement(index, None, POINTING_LEVEL, "temporal", window=window)
+
+    def compute(results):
+        valid = results["AttitudeEstimator.valid"] > 0
+        error = knowledge_error(
+            results.vector("AttitudeEstimator.q_BI_est")[valid],
+            results.vector("SatelliteDynamics.q_BI")[valid],
+            results.time[valid],
+        )
+        result = requirement.evaluate(error)
+        if result.value is None:
+            raise NotEvaluable(result.reason)
+        return result.value
+
+    label = requirement.label()
+    return m.Metric(
+        f"knowledge_{index.lower()}" + ("" if window is None else f"_{window:g}s"),
+        compute,
+        "rad",
+        "arcsec",
+        f"{label} at 99.73 % of the time (knowledge, 3-axis)",
+    )
+
+
 #: the knowledge error, the star tracker's availability and the disturbances' size
 KNOWLEDGE_METRICS = [
+    knowledge_index("AKE"),
+    knowledge_index("RKE", window=1.0),
     m.pointing_error(
         "AttitudeEstimator.q_BI_est",
         "SatelliteDynamics.q_BI",
@@ -141,8 +173,6 @@ KNOWLEDGE_METRICS = [
 
 def knowledge_angles(results) -> np.ndarray:
     """The knowledge error (rad): rotation vector of the estimate from the truth, (N, 3)."""
-    from agilesat.orchestration.pointing import knowledge_error
-
     error = knowledge_error(
         results.vector("AttitudeEstimator.q_BI_est"),
         results.vector("SatelliteDynamics.q_BI"),

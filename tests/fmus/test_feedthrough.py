@@ -47,7 +47,7 @@ CONSERVATIVE = {
     "AttitudeEstimator": {
         (out, "meas_valid")
         for out in ("q_BI_est", "w_BI_B_est", "bias_est_B", "sigma_att", "sigma_bias")
-        + ("innovation", "nis")
+        + ("innovation", "nis", "q_BO_est", "w_BO_B_est")
     }
     | {(out, "w_meas_B") for out in ("bias_est_B", "sigma_bias", "innovation", "nis")},
 }

@@ -370,9 +370,9 @@ def test_keep_of_what_is_not_recorded_is_refused_before_the_campaign(tmp_path, k
         run_campaign(Spec("scan_pitch", keep=[keep], stop=1.0), tmp_path / "out")
     assert not (tmp_path / "out").exists()
     plan = Plan(Spec("scan_pitch", keep=["CmgCluster.h", "SatelliteDynamics.w_BI_B[2]"]))
-    assert plan.signals == [f"CmgCluster.h[{i}]" for i in (1, 2, 3)] + [
-        "SatelliteDynamics.w_BI_B[2]"
-    ]
+    kept = [f"CmgCluster.h[{i}]" for i in (1, 2, 3)] + ["SatelliteDynamics.w_BI_B[2]"]
+    assert plan.kept == kept and plan.signals[:4] == kept  # then the requirements' signals
+    assert "PitchManeuverController.pitch_ref" in plan.signals[4:]
 
 
 def test_choice_takes_the_names_of_a_named_choice_and_records_them():
@@ -393,3 +393,41 @@ def test_choice_takes_the_names_of_a_named_choice_and_records_them():
     ]
     index = drawn.index("SR_INVERSE")
     assert replay_arguments(named, index)[-2:] == ["--set", "CmgSteering.law=SR_INVERSE"]
+
+
+def test_integers_give_each_run_its_own_seed_within_the_bounds():
+    """A noise seed (an Integer parameter) takes integers(lo, hi): whole numbers, both
+    bounds reachable, uniform (χ² over the 5 values of 2000 draws), recorded as integers."""
+    plan = Plan(Spec("video_sar:sensed", 2000, 7, ["Gyro.seed=integers(3, 7)"]))
+    seeds = [plan.run_values(i)["Gyro.seed"] for i in range(2000)]
+    assert all(type(x) is int for x in seeds) and plan.kinds == {"Gyro.seed": "i"}
+    drawn = np.array(seeds)
+    counts = np.bincount(drawn, minlength=8)[3:]
+    assert counts.sum() == 2000 and counts.min() > 0
+    assert ((counts - 400) ** 2 / 400).sum() < 13.28  # χ²(4) at 99 %
+    with pytest.raises(ValueError, match=r"integers\(lo, hi\) takes whole numbers"):
+        dispersion.parse("Gyro.seed=integers(0, 2.5)")
+    with pytest.raises(ValueError, match="use choice\\(\\), values\\(\\) or integers\\(\\)"):
+        Plan(Spec("video_sar:sensed", 2, 0, ["Gyro.seed=normal(0, 1)"]))
+
+
+def test_the_sensed_variants_ship_their_sensor_dispersions_on_top_of_the_scenarios():
+    from agilesat.orchestration.campaign import shipped_files
+
+    for name in ("video_sar", "scan_pitch", "payload_sweep"):
+        files = shipped_files(f"{name}:sensed")
+        assert [f.name for f in files] == [f"{name}.toml", f"{name}.sensed.toml"]
+        vary = [d.text for f in files for d in dispersion.load(f)[0]]
+        plan = Plan(Spec(f"{name}:sensed", 1, vary=vary))
+        assert {"StarTracker.seed", "Gyro.seed"} <= set(plan.columns)
+        assert [f.name for f in shipped_files(name)] == [f"{name}.toml"]
+
+
+def test_a_requirement_judged_over_the_campaign_has_no_pass_rate_per_run():
+    plan = Plan(Spec("scan_pitch", runs=1, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
+    catalog = {
+        "metrics": CATALOG["metrics"],
+        "requirements": {"m": {"statement": "APE ≤ 1", "judged_over": "campaign"}},
+    }
+    array = report.table(plan, {0: _record(0, plan, 2.0, "not evaluated")}, catalog)
+    assert report.pass_rates(array, catalog) == {}
