@@ -9,7 +9,8 @@ USER_TESTS = """
 import math
 import pytest
 from agilesat.orchestration import (
-    assert_momentum_conserved, assert_requirements_met, assert_settles, assert_within)
+    assert_momentum_conserved, assert_pointing, assert_requirements_met, assert_settles,
+    assert_within)
 
 DEG = math.pi / 180
 
@@ -46,6 +47,10 @@ def test_too_tight_a_bound_fails(slew):
 
 def test_requirement_not_reached_fails(slew):
     assert_requirements_met(slew[1], "imaging_pitch_rate_mean")
+
+
+def test_pointing_index_of_the_slew_fails(slew):
+    assert_pointing(slew[0], "APE", bound=0.01 * DEG, reference="OrbitEnvironment.q_OI")
 """
 
 
@@ -54,11 +59,12 @@ def test_requirement_not_reached_fails(slew):
 def test_plugin_fixtures_and_assertions_in_a_user_suite(pytester, fmus):
     pytester.makepyfile(test_user=USER_TESTS)
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-q", timeout=600)
-    result.assert_outcomes(passed=4, failed=2)
+    result.assert_outcomes(passed=4, failed=3)
     result.stdout.fnmatch_lines(
         [
             "*SatelliteDynamics.w_BO_B[[]2[]] does not settle within ±1 °/s after t = 12 s*",
             "*requirement not met: imaging_pitch_rate_mean in [[]-0.82 °/s, -0.78 °/s[]]: "
             "not evaluated (imaging_pitch_rate_mean has no value: the run ends at 30 s*",
+            "*AssertionError: APE at 99.73 % (temporal): *° (requirement 0.01°): not met",
         ]
     )

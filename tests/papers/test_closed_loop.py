@@ -76,3 +76,38 @@ def test_perfect_sensors_reproduce_truth_feedback(fmus, tmp_path, scenario):
         differences.append(largest_angle(truth_results, sensed_results))
     print(f"{scenario}: {differences[0] / DEG:.3g}° at {STEP} s, {differences[1] / DEG:.3g}°")
     assert 1.6 < differences[0] / differences[1] < 2.8  # first order in the step
+
+
+def test_a_sensed_campaign_and_its_indices_after_the_fact(fmus, tmp_path):
+    """A small video_sar:sensed campaign with the shipped sensor dispersions: every run
+    draws its own seeds; `agilesat pointing` on its directory gives the verdict the
+    campaign gave, and the ensemble AKE equals the largest knowledge angle of any run at
+    any time (3 runs: the 99.73 % quantile of 3 is their largest), computed here from the
+    kept quaternions with plain NumPy."""
+    out = tmp_path / "campaign"
+    result = agilesat(
+        "campaign", "video_sar:sensed", "--runs", "3", "--stop", "20", "--workers", "1",
+        "--keep", "AttitudeEstimator.q_BI_est", "--no-progress", "--out", out,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stdout + result.stderr
+    summary = json.loads((out / "campaign.json").read_text())
+    verdict = summary["ensemble"]["pointing_ape"]
+    assert verdict["verdict"] == "not evaluated" and "it has 3" in verdict["text"]
+    assert "pointing_ape" not in summary["pass_rates"]  # judged over the campaign only
+    seeds = [r["values"]["Gyro.seed"] for r in map(json.loads, open(out / "runs.jsonl"))]
+    assert len(set(seeds)) == 3
+
+    again = agilesat("pointing", out)
+    assert again.returncode == 0 and f"pointing_ape: {verdict['text']}" in again.stdout
+    ake = agilesat("pointing", out, "--index", "AKE", "--unit", "arcsec", "--json", tmp_path / "a")
+    value = json.loads((tmp_path / "a").read_text())[0]["value"]
+    kept = summary["kept"]["signals"]
+    signals = np.load(out / "signals.npy")
+    q_est = signals[:, [kept.index(f"AttitudeEstimator.q_BI_est[{i}]") for i in range(1, 5)]]
+    q_true = signals[:, [kept.index(f"SatelliteDynamics.q_BI[{i}]") for i in range(1, 5)]]
+    e, t = q_est.transpose(0, 2, 1), q_true.transpose(0, 2, 1)  # (runs, points, 4)
+    scalar = np.einsum("rti,rti->rt", e, t)  # of q_true* ⊗ q_est
+    vector = t[..., :1] * e[..., 1:] - e[..., :1] * t[..., 1:] - np.cross(t[..., 1:], e[..., 1:])
+    angle = 2 * np.arctan2(np.linalg.norm(vector, axis=-1), np.abs(scalar))
+    assert value == pytest.approx(angle.max(), rel=1e-9)
+    assert ake.returncode == 0 and "AKE at 99.73 % (ensemble)" in ake.stdout
