@@ -11,6 +11,8 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
+
 from ..pointing import ANGLE_UNITS, INDICES, INTERPRETATIONS, PointingRequirement, format_angle
 
 _ANGLE = re.compile(r"^\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*([a-zµ]*)\s*$")
@@ -67,6 +69,12 @@ def add_parser(commands) -> None:
     p.add_argument("--stop", type=float, help="[s]")
     p.add_argument("--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout")
     p.add_argument("--json", type=Path, help="also write the records to this file")
+    p.add_argument(
+        "--figure",
+        type=Path,
+        help="also draw each index's profile (per time: ensemble; per run: temporal) with "
+        "its requirement into this .png",
+    )
 
 
 def main(args) -> int:
@@ -79,7 +87,7 @@ def main(args) -> int:
         f", {recorded.left_out} that stopped early left out" if recorded.left_out else ""
     )
     print(f"{args.directory}: {recorded.target or 'a run'}, {what}")
-    records = []
+    records, results = [], []
     if args.index:
         requirement = PointingRequirement(
             args.index,
@@ -104,6 +112,7 @@ def main(args) -> int:
         )
         print(f"  {_line(result, args.unit)}")
         records.append(result.to_dict())
+        results.append((requirement.label(), result))
     else:
         target = resolve(recorded.target) if recorded.target else None
         if target is None or target.scenario is None:
@@ -117,8 +126,11 @@ def main(args) -> int:
             result = r.requirement.evaluate(r.error(recorded.columns, recorded.t))  # type: ignore[attr-defined]
             print(f"  {r.name}: {_line(result, args.unit)}")
             records.append({"name": r.name, **result.to_dict()})
+            results.append((r.name, result))
     if args.json:
         args.json.write_text(json.dumps(records, indent=2) + "\n")
+    if args.figure:
+        print(figure(args.figure, str(args.directory), results, args.unit))
     return 3 if any(r["met"] is False for r in records) else 0
 
 
@@ -129,3 +141,27 @@ def _line(result, unit: str) -> str:
     if result.value is not None and result.requirement.confidence is not None:
         line += f" (empirical quantile {format_angle(result.estimate, unit)})"
     return line
+
+
+def figure(path: Path, title: str, results: list, unit: str) -> Path:
+    """One row per index with a profile: its value at the level against time (ensemble)
+    or run (temporal), with the requirement; mixed statistics have none (left out)."""
+    from . import plots
+
+    scale, rows, axes = ANGLE_UNITS[unit], [], set()
+    for name, result in results:
+        stat = result.statistic
+        if stat is None or stat.profile is None:
+            continue
+        per_time = stat.interpretation == "ensemble"
+        axes.add("time [s]" if per_time else "run")
+        x = result.t if per_time else np.arange(len(stat.profile))
+        bound = result.requirement.bound
+        marks = {} if bound is None else {"limit": ((bound / scale,), "requirement")}
+        label = f"{name} at {100 * stat.level:g} %" + (
+            " (estimate)" if result.value is None else ""
+        )
+        rows.append((x, {label: stat.profile / scale}, f"[{unit}]", marks))
+    if not rows:
+        raise ValueError("no index with a profile to draw (a mixed statistic has none)")
+    return plots.panels(path, title, rows, xlabel=" or ".join(sorted(axes, reverse=True)))

@@ -148,15 +148,18 @@ class PointingRequirement:
         try:
             stat = statistic(m, self.level, self.interpretation, self.confidence)
         except NotEvaluable as reason:  # too few runs for the confidence: say what they show
+            shown = statistic(m, self.level, self.interpretation)
             return PointingResult(
                 self,
                 "not evaluable",
                 error.runs,
                 needed,
-                estimate=statistic(m, self.level, self.interpretation).value,
+                estimate=shown.value,
                 confidence_achieved=achieved,
                 exceedances=exceedances,
                 reason=str(reason),
+                statistic=shown,
+                t=series.t,
             )
         return PointingResult(
             self,
@@ -184,7 +187,8 @@ class PointingResult:
     fewest runs the stated confidence takes.  ``statistic`` holds the profile (per run or
     per time ``t``), for figures.  Values that do not exist are None.  A campaign too
     small for the stated confidence is "not evaluable" with no ``value``, but its
-    ``estimate``, ``exceedances`` and ``confidence_achieved`` (what it does show).
+    ``estimate``, ``exceedances``, ``confidence_achieved`` and the estimate's ``statistic``
+    (what it does show).
     """
 
     requirement: PointingRequirement

@@ -67,7 +67,8 @@ def campaign_dir(tmp_path):
 def pointing(directory, *options, capsys):
     argv = ["pointing", str(directory), "--reference", "OrbitEnvironment.q_OI", *map(str, options)]
     code = main(argv)
-    return code, capsys.readouterr().out
+    captured = capsys.readouterr()
+    return code, captured.out + captured.err
 
 
 def test_indices_of_a_run_directory_against_their_closed_forms(run_dir, tmp_path, capsys):
@@ -135,6 +136,15 @@ def test_indices_of_a_campaign_directory(campaign_dir, capsys):
     )
     assert "needs at least 1109 runs (none above it); it has 30" in text
     assert "0 of 30 run(s) above it: 7.79 % confidence" in text  # 1 − 0.9973^30
+    code, text = pointing(
+        directory, "--index", "APE", "--figure", directory / "a.png", capsys=capsys
+    )
+    assert (directory / "a.png").stat().st_size > 10_000
+    code, text = pointing(
+        directory, "--index", "APE", "--interpretation", "mixed", "--figure", directory / "b",
+        capsys=capsys,
+    )  # fmt: skip
+    assert code == 1 and "a mixed statistic has none" in text
 
 
 def test_assert_pointing_on_runs_and_campaigns(run_dir, campaign_dir):
