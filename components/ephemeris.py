@@ -30,6 +30,8 @@ import datetime
 import math
 import re
 
+from .flat import fmod
+from .jit import jitable
 from .model import ModelError
 
 TWO_PI = 2.0 * math.pi
@@ -42,6 +44,7 @@ _CENTURY = 36525.0  # days
 _EPOCH_FORMAT = re.compile(r"(\d{4})-(\d{2})-(\d{2})T(\d{2}):(\d{2}):(\d{2})(?:\.(\d{1,6}))?Z?")
 
 
+@jitable
 def wrap_2pi(angle: float) -> float:
     """Angle wrapped to [0, 2π)."""
     wrapped = angle % TWO_PI
@@ -96,6 +99,7 @@ def sidereal_base(days: int, seconds: float) -> tuple[float, float]:
     return math.fmod(g, DAY) % DAY, T
 
 
+@jitable
 def sidereal_time(g0: float, T0: float, t: float) -> tuple[float, float]:
     """GMST (rad, [0, 2π)) and its rate (rad/s) ``t`` seconds after the base (g0, T0).
 
@@ -109,7 +113,7 @@ def sidereal_time(g0: float, T0: float, t: float) -> tuple[float, float]:
     rate = (
         TWO_PI / DAY * (1.0 + (_GMST1 + T * (2.0 * _GMST2 + 3.0 * _GMST3 * T)) / (_CENTURY * DAY))
     )
-    return wrap_2pi(math.fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
+    return wrap_2pi(fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
 
 
 def gmst(epoch, t: float = 0.0) -> float:

@@ -377,6 +377,7 @@ class OrbitEnvironment(Model):
         self.state[EARTH_ANGLE0] = self.earth_angle0
         self.state[R_T_E : R_T_E + 3] = self.r_T_E
         self.state[[GIVEN_ORBIT, GIVEN_EARTH]] = self._satrec is not None, self._gmst0 is not None
+        self.state[GMST0 : GMST0 + 2] = self._gmst0 or (0.0, 0.0)
         self.state[EPOCH : EPOCH + 2] = self._epoch or (0, 0.0)
         self.t = t0
         if self._satrec is not None:
@@ -461,9 +462,6 @@ class OrbitEnvironment(Model):
             r, v, w = self._sgp4_state(t)
             self.state[R_I : R_I + 9] = (*r, *v, *w)
             self.state[GIVEN_AT] = t
-        if self._gmst0 is not None:
-            self.state[THETA : THETA + 2] = sidereal_time(*self._gmst0, t)
-            self.state[GIVEN_AT] = t
         if orbit_output(self.values, self.state, t) == KEPLER_DIVERGED:
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
@@ -473,32 +471,30 @@ _AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.v
 Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
 Y_R_T, Y_V_T, Y_EARTH, Y_SUN = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"], _AT["sun_I"]
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
-#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, those given values and the time
-#: they are given at (output() computes them), and the epoch (whole days, seconds since
-#: J2000.0; 0 without one) for the Sun
+#: whether r, v, w are given (SGP4) and whether θ_E is GMST, the given values and the time
+#: they are given at (output() computes them), GMST's base (g0, T0: ephemeris.sidereal_base)
+#: and the epoch (whole days, seconds since J2000.0; 0 without one) for the Sun
 STATE = StateTable(
     a=1, e=1, b=1, M0=1, mean_motion=1, raan_rate=1, argp_rate=1, raan0=1, argp0=1, cos_i=1,
     sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1, given_earth=1, r_v_w_I=9,
-    theta=2, given_at=1, epoch=2,
+    given_at=1, gmst0=2, epoch=2,
 )  # fmt: skip
 A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0 = STATE.offsets[:9]
 COS_I, SIN_I, MU_KEPLER, EARTH_ANGLE0, R_T_E = STATE.offsets[9:14]
-GIVEN_ORBIT, GIVEN_EARTH, R_I, THETA, GIVEN_AT, EPOCH = STATE.offsets[14:]
+GIVEN_ORBIT, GIVEN_EARTH, R_I, GIVEN_AT, GMST0, EPOCH = STATE.offsets[14:]
 #: orbit_output's status: Kepler's equation did not converge (nothing written); the SGP4
-#: or GMST values are not those at t (output() computes them)
+#: values are not those at t (output() computes them)
 KEPLER_DIVERGED, NOT_GIVEN = 1, 2
-
-jitable(wrap_2pi)  # kernels may call it (components/ephemeris.py)
 
 
 @output_kernel(OrbitEnvironment)
 def orbit_output(values, state, t):
     """The outputs at time t (module docstring): the orbit (Kepler/J2 at t, or the given
     SGP4 r_I, v_I, w_OI_O), the orbit frame O, the Earth angle (earth_angle0 + ω_E t, or
-    the given GMST), the target and the Sun (components/sun.py).  Returns 0,
+    GMST), the target and the Sun (components/sun.py).  Returns 0,
     KEPLER_DIVERGED or NOT_GIVEN (nothing written)."""
     s = floats(state)
-    if (s[GIVEN_ORBIT] or s[GIVEN_EARTH]) and s[GIVEN_AT] != t:
+    if s[GIVEN_ORBIT] and s[GIVEN_AT] != t:
         return NOT_GIVEN
     if s[GIVEN_ORBIT]:
         r = s[R_I], s[R_I + 1], s[R_I + 2]
@@ -525,7 +521,7 @@ def orbit_output(values, state, t):
         values[Y_Q + k] = q[k]
 
     if s[GIVEN_EARTH]:
-        theta, rate = s[THETA], s[THETA + 1]
+        theta, rate = sidereal_time(s[GMST0], s[GMST0 + 1], t)
     else:
         theta, rate = s[EARTH_ANGLE0] + EARTH_RATE * t, EARTH_RATE
     cT, sT = math.cos(theta), math.sin(theta)

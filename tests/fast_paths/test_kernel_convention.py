@@ -81,8 +81,8 @@ def run(model, inputs, steps: int) -> dict:
 
 def test_the_models_with_kernels():
     assert DECLARING == [
-        "CmgCluster", "CmgSteering", "OrbitEnvironment", "PitchManeuverController",
-        "SatelliteDynamics",
+        "AttitudeController", "CmgCluster", "CmgSteering", "OrbitEnvironment",
+        "PitchManeuverController", "SatelliteDynamics", "StaringGuidance", "SweepPlanner",
     ]  # fmt: skip
 
 
