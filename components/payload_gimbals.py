@@ -81,14 +81,17 @@ import math
 
 import numpy as np
 
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
 _ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
 _NEAR_CRITICAL = 1e-6  # |λ² s²| below which C, S are taken from series
 
 
+@jitable
 def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     """(h_b, ḣ_b, boresight) of one payload, in B, as tuples (eqs 1–2 with transport).
 
@@ -114,6 +117,7 @@ def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     )
 
 
+@jitable
 def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
     """Angle and rate after ``dt`` of θ̈ = ωn² (θc + θ̇c s − θ) + 2ζωn (θ̇c − θ̇), exactly."""
     e0, de0 = angle - command, rate - rate_command
@@ -285,20 +289,17 @@ class PayloadGimbals(Model):
             raise ModelError(f"bandwidth must be >= 0 (0 = ideal tracking), got {p.bandwidth}")
         if not (math.isfinite(p.damping) and p.damping > 0):
             raise ModelError(f"damping must be > 0, got {p.damping}")
-        self.J = tuple(J)
-        self.omega, self.zeta = p.bandwidth, p.damping
-        self.ideal = p.bandwidth == 0.0
-        self.accel_inputs = p.accel_inputs
-        inputs, outputs = self.layout.range["input"], self.layout.range["output"]
-        self._inputs = slice(inputs.start, inputs.stop)  # angles, rates, accelerations
-        self._outputs = slice(outputs.start, outputs.stop)  # contiguous in table order
-        commands = self.values[self._inputs].tolist()
-        self.angles = commands[:4]  # roll 1, roll 2, pitch 1, pitch 2
-        self.rates = commands[4:8]
-        self.last_rate_cmd = None  # ideal tracking: rate commands at the last step
-        self.last_dt = 0.0
+        self.state = STATE.zeros()
+        self.state[J_PAYLOAD : J_PAYLOAD + 3] = J
+        self.state[[OMEGA, ZETA, IDEAL, ACCEL_INPUTS]] = (
+            p.bandwidth,
+            p.damping,
+            p.bandwidth == 0.0,
+            p.accel_inputs,
+        )
+        self.state[ANGLES : ANGLES + 8] = self.values[U_COMMANDS : U_COMMANDS + 8]
         self.t = t0
-        if not self.ideal:  # ideal tracking: the state is the commands, no initial state
+        if p.bandwidth != 0.0:  # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
 
     def initial_input_jumps(self, used, dt):
@@ -315,52 +316,74 @@ class PayloadGimbals(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        commands = self.values[self._inputs].tolist()
-        if self.ideal:
-            self.angles, self.rates = commands[:4], commands[4:8]
-            self.last_rate_cmd, self.last_dt = commands[4:8], dt
-        else:
-            omega, zeta, angles, rates = self.omega, self.zeta, self.angles, self.rates
-            for i in range(4):
-                angles[i], rates[i] = servo_step(
-                    angles[i], rates[i], commands[i], commands[4 + i], dt, omega, zeta
-                )
+        gimbals_step(self.values, self.state, dt)
         self.t = t + dt
 
     def output(self):
-        commands = self.values[self._inputs].tolist()
-        if self.ideal:
-            angles, rates = commands[:4], commands[4:8]
-            last = self.last_rate_cmd
-            if self.accel_inputs:
-                accels = commands[8:]
-            elif last is None:
-                accels = (0.0, 0.0, 0.0, 0.0)
-            else:
-                k = 1.0 / self.last_dt
-                accels = [(a - b) * k for a, b in zip(rates, last)]
+        gimbals_output(self.values, self.state, self.t)
+
+
+# -- kernels (components/jit.py) ------------------------------------------------------
+_LAYOUT = Layout(PayloadGimbals.VARIABLES)  # offsets in PayloadGimbals.values
+#: the inputs in table order: angle, rate and acceleration commands, each (roll 1, roll 2,
+#: pitch 1, pitch 2); the outputs in table order
+U_COMMANDS, Y_OUTPUTS = _LAYOUT.range["input"].start, _LAYOUT.range["output"].start
+#: the state array: the servo's angles and rates (as the commands), the rate commands at
+#: the last step and its length (ideal tracking; 1 once stepped), the payload inertia, ωn,
+#: ζ, 1 for ideal tracking, 1 with accel_inputs
+STATE = StateTable(
+    angles=4, rates=4, last_rate_cmd=4, last_dt=1, stepped=1, J_payload=3, omega=1, zeta=1,
+    ideal=1, accel_inputs=1,
+)  # fmt: skip
+ANGLES, RATES, LAST_RATE_CMD, LAST_DT, STEPPED, J_PAYLOAD = STATE.offsets[:6]
+OMEGA, ZETA, IDEAL, ACCEL_INPUTS = STATE.offsets[6:]
+
+
+@step_kernel(PayloadGimbals)
+def gimbals_step(values, state, dt):
+    """Ideal tracking: the state is the commands (and the rate commands are kept for the
+    accelerations); a servo: :func:`servo_step` of each axis over ``dt``."""
+    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 8]), floats(state)
+    if s[IDEAL] != 0.0:
+        for i in range(8):
+            state[ANGLES + i] = commands[i]
+        for i in range(4):
+            state[LAST_RATE_CMD + i] = commands[4 + i]
+        state[LAST_DT], state[STEPPED] = dt, 1.0
+    else:
+        for i in range(4):
+            state[ANGLES + i], state[RATES + i] = servo_step(
+                s[ANGLES + i], s[RATES + i], commands[i], commands[4 + i], dt, s[OMEGA], s[ZETA]
+            )
+    return 0
+
+
+@output_kernel(PayloadGimbals)
+def gimbals_output(values, state, t):
+    """Angles and rates, h, ḣ (eq. 3: the sums over the two payloads) and the boresights."""
+    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 12]), floats(state)
+    if s[IDEAL] != 0.0:
+        angles, rates = commands[:4], commands[4:8]
+        if s[ACCEL_INPUTS] != 0.0:
+            accels = [commands[8 + i] for i in range(4)]
+        elif s[STEPPED] == 0.0:
+            accels = [0.0, 0.0, 0.0, 0.0]
         else:
-            angles, rates = self.angles, self.rates
-            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
-            accels = [
-                w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
-            ]
-        J = self.J
-        h1, d1, l1 = payload_momentum(
-            J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2]
-        )
-        h2, d2, l2 = payload_momentum(
-            J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3]
-        )
-        self.values[self._outputs] = (
-            *angles,
-            *rates,
-            h1[0] + h2[0],
-            h1[1] + h2[1],
-            h1[2] + h2[2],
-            d1[0] + d2[0],
-            d1[1] + d2[1],
-            d1[2] + d2[2],
-            *l1,
-            *l2,
-        )
+            k = 1.0 / s[LAST_DT]
+            accels = [(rates[i] - s[LAST_RATE_CMD + i]) * k for i in range(4)]
+    else:
+        angles, rates = s[ANGLES : ANGLES + 4], s[RATES : RATES + 4]
+        w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
+        accels = [
+            w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
+        ]
+    J = (s[J_PAYLOAD], s[J_PAYLOAD + 1], s[J_PAYLOAD + 2])
+    h1, d1, l1 = payload_momentum(J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2])
+    h2, d2, l2 = payload_momentum(J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3])
+    for i in range(4):
+        values[Y_OUTPUTS + i], values[Y_OUTPUTS + 4 + i] = angles[i], rates[i]
+    for k in range(3):
+        values[Y_OUTPUTS + 8 + k] = h1[k] + h2[k]
+        values[Y_OUTPUTS + 11 + k] = d1[k] + d2[k]
+        values[Y_OUTPUTS + 14 + k], values[Y_OUTPUTS + 17 + k] = l1[k], l2[k]
+    return 0

@@ -81,8 +81,9 @@ def run(model, inputs, steps: int) -> dict:
 
 def test_the_models_with_kernels():
     assert DECLARING == [
-        "AttitudeController", "CmgCluster", "CmgSteering", "OrbitEnvironment",
-        "PitchManeuverController", "SatelliteDynamics", "StaringGuidance", "SweepPlanner",
+        "AttitudeController", "CmgCluster", "CmgSteering", "Flywheel", "OrbitEnvironment",
+        "PayloadGimbals", "PitchManeuverController", "SatelliteDynamics", "StaringGuidance",
+        "SweepPlanner",
     ]  # fmt: skip
 
 
@@ -109,6 +110,19 @@ def test_a_saturated_cluster_warns_once_and_its_kernel_steps_alone_after():
     cases = run(model, lambda k: {"delta_dot_cmd": [commands[k]] + [0.0] * 5}, 6)
     assert cases == {("step", True): 4, ("step", False): 2, ("output", True): 6}
     assert len(model.warnings) == 2
+
+
+def test_a_wheel_at_its_limit_warns_once_and_its_kernel_steps_alone_after():
+    """The wheels' step kernel asks for its method only when a wheel reaches a limit it
+    was not at (the warning names the wheel and the limit)."""
+    model = model_class("Flywheel")().start(0.0)
+    torques = [0.1, 0.5, 0.5, 0.5, 0.1, 0.5]  # x: within, beyond, ..., within, beyond
+    cases = run(model, lambda k: {"tau_cmd": [torques[k], 0.0, 0.0]}, 6)
+    assert cases == {("step", True): 4, ("step", False): 2, ("output", True): 6}
+    assert model.warnings == [
+        f"t={t:.3f} s: wheel 1 motor torque at the limit (the commanded torque is not delivered)"
+        for t in (STEP, 5 * STEP)
+    ]
 
 
 @pytest.mark.parametrize("law", ["PSEUDO_INVERSE", "SR_INVERSE"])

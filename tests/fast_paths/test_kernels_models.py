@@ -13,8 +13,10 @@ from agilesat.components import (
     cmg_cluster,
     cmg_steering,
     flat,
+    flywheel,
     jit,
     orbit_environment,
+    payload_gimbals,
     pitch_maneuver_controller,
     staring_guidance,
     sweep_planner,
@@ -22,8 +24,10 @@ from agilesat.components import (
 from agilesat.components.attitude_controller import AttitudeController
 from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
 from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
+from agilesat.components.flywheel import Flywheel
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment
+from agilesat.components.payload_gimbals import PayloadGimbals
 from agilesat.components.pitch_maneuver_controller import PitchManeuverController
 from agilesat.components.rotations import dcm, quat_of_rows
 from agilesat.components.satellite_dynamics import SatelliteDynamics
@@ -36,8 +40,8 @@ needs_numba = pytest.mark.skipif(
     jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
 )
 MODULES = (
-    attitude_controller, cmg_cluster, cmg_steering, orbit_environment,
-    pitch_maneuver_controller, staring_guidance, sweep_planner,
+    attitude_controller, cmg_cluster, cmg_steering, flywheel, orbit_environment,
+    payload_gimbals, pitch_maneuver_controller, staring_guidance, sweep_planner,
 )  # fmt: skip
 ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
 STEP = 0.05
@@ -172,6 +176,22 @@ CASES = {
     ),
     "guidance_tilted": (StaringGuidance, {"boresight_B": [0.0, 0.3, 1.0]}, video_sar_pass),
     "sweep": (SweepPlanner, {}),
+    "wheels": (Flywheel, {}),
+    "wheels_limited_skewed": (
+        Flywheel,
+        {
+            "torque_limit": 0.05,
+            "momentum_limit": 0.005,
+            "coulomb_friction": 0.01,
+            "axis": [[1, 0, 0], [0, 1, 0], [0, 0, 0], [0.6, 0.6, 0.5]],
+        },
+    ),
+    "wheels_coasting": (Flywheel, {"torque_limit": 0.0, "speed0": [5.0, -3.0, 0.0, 0.0]}),
+    "payloads": (PayloadGimbals, {}),
+    "payloads_accel_inputs": (PayloadGimbals, {"accel_inputs": True}),
+    "payloads_underdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 0.5}),
+    "payloads_critical": (PayloadGimbals, {"bandwidth": 3.0, "damping": 1.0}),
+    "payloads_overdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 4.0}),
     "sweep_triangle": (SweepPlanner, {"turnaround_time": 0.0, "symmetric": False}),
     "cluster": (CmgCluster, {}),
     "cluster_slow_gimbals": (CmgCluster, {"rate_limit": 0.05, "accel_limit": 0.02}),
@@ -217,7 +237,8 @@ def test_each_model_on_random_inputs_is_the_same_compiled_and_in_python(case, se
     varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
     # orbit: w_OI_O x, target z, v_z; the sweep over 120 s: no pitch reversal (pitch rate
     # and acceleration), the triangle wave no acceleration at all
-    constant = {"sweep": 4, "sweep_triangle": 6}.get(case, 3)
+    # and coasting wheels no motor torque, saturation, third wheel or z momentum
+    constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}.get(case, 3)
     assert np.count_nonzero(varying) >= varying.size - constant
 
 
@@ -303,7 +324,18 @@ def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(pat
 
 @needs_numba
 @pytest.mark.parametrize(
-    "case", ["cluster", "steering", "pitch", "orbit_j2_eccentric_epoch", "guidance", "controller"]
+    "case",
+    [
+        "cluster",
+        "steering",
+        "pitch",
+        "orbit_j2_eccentric_epoch",
+        "guidance",
+        "controller",
+        "wheels_limited_skewed",
+        "payloads",
+        "payloads_underdamped",
+    ],  # fmt: skip
 )
 def test_a_saved_state_restored_continues_bit_for_bit(case, path):
     cls, parameters, *inputs = CASES[case]
@@ -391,8 +423,9 @@ def test_quat_of_rows_compiled_is_the_python_bit_for_bit():
 def test_every_model_kernel_compiles():
     names = sorted(k.__name__ for k in ALL_KERNELS)
     assert names == [
-        "cluster_output", "cluster_step", "controller_output", "guidance_output",
-        "guidance_step", "orbit_output", "pitch_output", "steering_output", "sweep_output",
+        "cluster_output", "cluster_step", "controller_output", "flywheel_output",
+        "flywheel_step", "gimbals_output", "gimbals_step", "guidance_output", "guidance_step",
+        "orbit_output", "pitch_output", "steering_output", "sweep_output",
     ]  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
