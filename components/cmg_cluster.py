@@ -255,7 +255,7 @@ class CmgCluster(Model):
         self.t = t0
 
     def step(self, t, dt):
-        gimbal = cluster_step(self.values, self.state, dt)
+        gimbal = cluster_step(self.values, self.state, self.t, dt)
         if gimbal:
             command = float(self.values[Y_CMD + gimbal - 1])
             self.warnings.append(
@@ -283,7 +283,7 @@ DELTA, RATE, RATE_LIMIT, ACCEL_LIMIT, H_ROTOR, ST, SATURATED = STATE.offsets
 
 
 @step_kernel(CmgCluster)
-def cluster_step(values, state, dt):
+def cluster_step(values, state, t, dt):
     """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  The cluster is
     saturated while the largest |command| exceeds the rate limit (it cannot deliver the
     commanded torque): returns 1 + the gimbal with the largest |command| (the first of

@@ -233,7 +233,7 @@ class Flywheel(Model):
 
     def step(self, t, dt):
         before = self.state[LIMITED : LIMITED + 2 * N_WHEELS].copy()
-        if flywheel_step(self.values, self.state, dt) == NEW_LIMIT:
+        if flywheel_step(self.values, self.state, self.t, dt) == NEW_LIMIT:
             new = (self.state[LIMITED : LIMITED + 2 * N_WHEELS] != 0) & (before == 0)
             self.warnings.append(
                 f"t={t:.3f} s: "
@@ -357,7 +357,7 @@ def _wheel(w: float, n: float, cv: float, cc: float, tau_max: float, speed_max: 
 
 
 @step_kernel(Flywheel)
-def flywheel_step(values, state, dt):
+def flywheel_step(values, state, t, dt):
     """Each wheel over ``dt`` with its motor torque held (:func:`wheel_step`; a held wheel
     keeps its speed); returns NEW_LIMIT when a wheel reaches a limit it was not at."""
     v, s = floats(values), floats(state)

@@ -33,8 +33,9 @@ signature, the CPU and the bytecode.  An unwritable cache directory costs a comp
 process, nothing else (a warning says so).
 
 The kernel convention.  A model whose ``step`` or ``output`` is, but for ``t``, one kernel
-``(values, state, x) -> status`` on its value array and a float64 state array (x: the step
-size, or the time) declares it with ``@step_kernel(Model)`` / ``@output_kernel(Model)``;
+on its value array and a float64 state array, ``(values, state, t, dt) -> status`` (t: the
+model's time at the step's start) or ``(values, state, t) -> status``, declares it with
+``@step_kernel(Model)`` / ``@output_kernel(Model)``;
 a model whose step changes nothing but ``t`` says ``STATELESS = True``.  Status 0: the
 kernel did everything the method does; anything else: the method has more to do (raise
 or warn with the readable message, a case the Python handles), so a caller that ran the
@@ -185,7 +186,7 @@ _DECLARED: dict[type, dict[str, Kernel]] = {}
 
 
 def step_kernel(model: type):
-    """Decorator: the kernel ``(values, state, dt) -> status`` is ``model``'s step
+    """Decorator: the kernel ``(values, state, t, dt) -> status`` is ``model``'s step
     (module docstring, "The kernel convention")."""
     return lambda function: _declare(model, "step", function)
 

@@ -316,7 +316,7 @@ class PayloadGimbals(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        gimbals_step(self.values, self.state, dt)
+        gimbals_step(self.values, self.state, self.t, dt)
         self.t = t + dt
 
     def output(self):
@@ -340,7 +340,7 @@ OMEGA, ZETA, IDEAL, ACCEL_INPUTS = STATE.offsets[6:]
 
 
 @step_kernel(PayloadGimbals)
-def gimbals_step(values, state, dt):
+def gimbals_step(values, state, t, dt):
     """Ideal tracking: the state is the commands (and the rate commands are kept for the
     accelerations); a servo: :func:`servo_step` of each axis over ``dt``."""
     commands, s = floats(values[U_COMMANDS : U_COMMANDS + 8]), floats(state)

@@ -220,7 +220,7 @@ class SatelliteDynamics(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        status = _step(self.values, self.state, dt)
+        status = _step(self.values, self.state, self.t, dt)
         if status == NO_POSITION:
             raise ModelError(
                 "gravity_gradient is on but r_I is zero: connect r_I or set "
@@ -287,7 +287,7 @@ OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT = range(5)
 
 
 @step_kernel(SatelliteDynamics)
-def _step(values, state, dt):
+def _step(values, state, t, dt):
     """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values`` (held at
     the step's start, the devices' momentum extrapolated with its derivative): RK4 in
     n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉ sub-steps, q_BI normalised after.

@@ -444,7 +444,7 @@ class StaringGuidance(Model):
         self.t = t0
 
     def step(self, t, dt):
-        guidance_step(self.values, self.state, dt)
+        guidance_step(self.values, self.state, self.t, dt)
         self.t = t + dt
 
     def output(self):
@@ -501,7 +501,7 @@ LAST_Q, LAST_EULER, DETAIL = STATE.offsets[14:]
 
 
 @step_kernel(StaringGuidance)
-def guidance_step(values, state, dt):
+def guidance_step(values, state, t, dt):
     """The outputs at t become the anchors of the angle branches for t + dt."""
     for k in range(8):  # (set, q_ref, euler_ref_BO)
         state[ANCHORED + k] = state[LASTED + k]

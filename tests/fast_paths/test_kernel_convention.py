@@ -45,7 +45,7 @@ def check(model, t, cases: dict):
     stateless = c_entries.of(type(model)).stateless
     alone, method = twins(model)
     if step is not None:
-        status = step(alone.values, alone.state, STEP)
+        status = step(alone.values, alone.state, model.t, STEP)
         method.step(t, STEP)
         cases["step", status == 0] = cases.get(("step", status == 0), 0) + 1
         if status == 0:
@@ -81,9 +81,9 @@ def run(model, inputs, steps: int) -> dict:
 
 def test_the_models_with_kernels():
     assert DECLARING == [
-        "AttitudeController", "CmgCluster", "CmgSteering", "Flywheel", "OrbitEnvironment",
-        "PayloadGimbals", "PitchManeuverController", "SatelliteDynamics", "StaringGuidance",
-        "SweepPlanner",
+        "AttitudeController", "CmgCluster", "CmgSteering", "DisturbanceTorques", "Flywheel",
+        "OrbitEnvironment", "PayloadGimbals", "PitchManeuverController", "SatelliteDynamics",
+        "StaringGuidance", "SweepPlanner",
     ]  # fmt: skip
 
 

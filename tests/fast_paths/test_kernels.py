@@ -55,7 +55,7 @@ def _both(function, *arrays_and_args):
 def test_step_and_output_kernels_are_bit_identical_to_the_python(seed, spin, dt, gravity_gradient):
     model = _random_dynamics(seed, gravity_gradient, spin)
     (compiled, arrays), (readable, py_arrays) = _both(
-        satellite_dynamics._step, model.values, model.state, dt
+        satellite_dynamics._step, model.values, model.state, 0.0, dt
     )
     assert compiled == readable == satellite_dynamics.OK
     assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
@@ -324,9 +324,9 @@ def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function
     states = [m.state.copy() for m in models]
     results = []
     for k, model in enumerate(models):
-        results.append(tiered(model.values, model.state, 0.1))
+        results.append(tiered(model.values, model.state, 0.0, 0.1))
         assert (tiered._run is tiered.compiled) == (k >= 3)
-    expected = [tiered.py_func(m.values, state, 0.1) for m, state in zip(models, states)]
+    expected = [tiered.py_func(m.values, state, 0.0, 0.1) for m, state in zip(models, states)]
     assert results == expected
     assert all(np.array_equal(m.state, state) for m, state in zip(models, states))
 

@@ -12,6 +12,7 @@ from agilesat.components import (
     attitude_controller,
     cmg_cluster,
     cmg_steering,
+    disturbance_torques,
     flat,
     flywheel,
     jit,
@@ -24,6 +25,7 @@ from agilesat.components import (
 from agilesat.components.attitude_controller import AttitudeController
 from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
 from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
+from agilesat.components.disturbance_torques import DisturbanceTorques
 from agilesat.components.flywheel import Flywheel
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment
@@ -40,7 +42,8 @@ needs_numba = pytest.mark.skipif(
     jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
 )
 MODULES = (
-    attitude_controller, cmg_cluster, cmg_steering, flywheel, orbit_environment,
+    attitude_controller, cmg_cluster, cmg_steering, disturbance_torques, flywheel,
+    orbit_environment,
     payload_gimbals, pitch_maneuver_controller, staring_guidance, sweep_planner,
 )  # fmt: skip
 ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
@@ -143,6 +146,18 @@ def unit_quaternions(seed: int, scale: float):
     return inputs
 
 
+def in_orbit(seed: int, scale: float):
+    """:func:`unit_quaternions`, with r_I and v_I of a low orbit (any direction)."""
+    random = unit_quaternions(seed, scale)
+
+    def inputs(k, v):
+        x = random(k, v)
+        size = {"r_I": 7.0e6, "v_I": 7.5e3}.get(v.name)
+        return size * x / np.linalg.norm(x) if size else x
+
+    return inputs
+
+
 def video_sar_pass(seed: int, scale: float):
     """The video_sar pass (OrbitEnvironment) at each step's time, the target moved a few km
     in each run (the inputs StaringGuidance checks must be an orbit and its frame)."""
@@ -176,6 +191,12 @@ CASES = {
     ),
     "guidance_tilted": (StaringGuidance, {"boresight_B": [0.0, 0.3, 1.0]}, video_sar_pass),
     "sweep": (SweepPlanner, {}),
+    "torques": (DisturbanceTorques, {}, in_orbit),
+    "torques_exponential_no_srp": (
+        DisturbanceTorques,
+        {"atmosphere": "EXPONENTIAL", "srp": False, "facet_area": [1.0] * 8 + [0.0] * 2},
+        in_orbit,
+    ),
     "wheels": (Flywheel, {}),
     "wheels_limited_skewed": (
         Flywheel,
@@ -425,7 +446,7 @@ def test_every_model_kernel_compiles():
     assert names == [
         "cluster_output", "cluster_step", "controller_output", "flywheel_output",
         "flywheel_step", "gimbals_output", "gimbals_step", "guidance_output", "guidance_step",
-        "orbit_output", "pitch_output", "steering_output", "sweep_output",
+        "orbit_output", "pitch_output", "steering_output", "sweep_output", "torques_output",
     ]  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
