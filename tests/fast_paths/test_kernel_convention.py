@@ -81,9 +81,10 @@ def run(model, inputs, steps: int) -> dict:
 
 def test_the_models_with_kernels():
     assert DECLARING == [
-        "AttitudeController", "CmgCluster", "CmgSteering", "DisturbanceTorques", "Flywheel",
-        "OrbitEnvironment", "PayloadGimbals", "PitchManeuverController", "SatelliteDynamics",
-        "StaringGuidance", "SweepPlanner",
+        "AttitudeController", "AttitudeEstimator", "CmgCluster", "CmgSteering",
+        "DisturbanceTorques", "Flywheel", "Gyro", "OrbitEnvironment", "PayloadGimbals",
+        "PitchManeuverController", "SatelliteDynamics", "StarTracker", "StaringGuidance",
+        "SweepPlanner",
     ]  # fmt: skip
 
 

@@ -10,29 +10,36 @@ import pytest
 
 from agilesat.components import (
     attitude_controller,
+    attitude_estimator,
     cmg_cluster,
     cmg_steering,
     disturbance_torques,
     flat,
     flywheel,
+    gyro,
     jit,
     orbit_environment,
     payload_gimbals,
     pitch_maneuver_controller,
+    star_tracker,
     staring_guidance,
     sweep_planner,
 )
 from agilesat.components.attitude_controller import AttitudeController
+from agilesat.components.attitude_estimator import AttitudeEstimator
 from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
 from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
 from agilesat.components.disturbance_torques import DisturbanceTorques
 from agilesat.components.flywheel import Flywheel
+from agilesat.components.gyro import Gyro
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment
 from agilesat.components.payload_gimbals import PayloadGimbals
 from agilesat.components.pitch_maneuver_controller import PitchManeuverController
 from agilesat.components.rotations import dcm, quat_of_rows
 from agilesat.components.satellite_dynamics import SatelliteDynamics
+from agilesat.components.sensing import quat_exp
+from agilesat.components.star_tracker import StarTracker
 from agilesat.components.staring_guidance import StaringGuidance
 from agilesat.components.sweep_planner import SweepPlanner
 from agilesat.orchestration.scenarios import scan_pitch, video_sar
@@ -42,9 +49,9 @@ needs_numba = pytest.mark.skipif(
     jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
 )
 MODULES = (
-    attitude_controller, cmg_cluster, cmg_steering, disturbance_torques, flywheel,
-    orbit_environment,
-    payload_gimbals, pitch_maneuver_controller, staring_guidance, sweep_planner,
+    attitude_controller, attitude_estimator, cmg_cluster, cmg_steering, disturbance_torques,
+    flywheel, gyro, orbit_environment, payload_gimbals, pitch_maneuver_controller,
+    staring_guidance, star_tracker, sweep_planner,
 )  # fmt: skip
 ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
 STEP = 0.05
@@ -158,6 +165,26 @@ def in_orbit(seed: int, scale: float):
     return inputs
 
 
+def tracked(seed: int, scale: float):
+    """An estimator's inputs: a gyro reading of a body turning at a constant rate, and a
+    star tracker's samples at 4 Hz, 0.2 s late, slightly wrong (one in seven invalid)."""
+    rng = np.random.default_rng(seed)
+    rate, errors = rng.uniform(-scale, scale, 3) * 0.1, rng.normal(0.0, 1e-4, (2000, 3))
+
+    def inputs(k, v):
+        t = k * STEP
+        sample = max(0, int((t - 0.2) * 4.0))  # the latest released
+        t_meas = sample / 4.0
+        return {
+            "w_meas_B": rate + errors[k] * 10.0,
+            "q_BI_meas": quat_exp(tuple(rate * t_meas + errors[sample])),
+            "meas_valid": sample % 7 != 3,
+            "t_meas": t_meas,
+        }[v.name]
+
+    return inputs
+
+
 def video_sar_pass(seed: int, scale: float):
     """The video_sar pass (OrbitEnvironment) at each step's time, the target moved a few km
     in each run (the inputs StaringGuidance checks must be an orbit and its frame)."""
@@ -191,6 +218,15 @@ CASES = {
     ),
     "guidance_tilted": (StaringGuidance, {"boresight_B": [0.0, 0.3, 1.0]}, video_sar_pass),
     "sweep": (SweepPlanner, {}),
+    "gyro": (Gyro, {}),
+    "gyro_saturating_slow_no_quantisation": (
+        Gyro,
+        {"saturation": 0.3, "rate": 7.0, "quantization": 0.0},
+    ),
+    "tracker": (StarTracker, {}, unit_quaternions),
+    "tracker_late_fast": (StarTracker, {"latency": 0.6, "rate": 10.0}, unit_quaternions),
+    "estimator_random": (AttitudeEstimator, {}, unit_quaternions),
+    "estimator": (AttitudeEstimator, {"history": 0.5}, tracked),
     "torques": (DisturbanceTorques, {}, in_orbit),
     "torques_exponential_no_srp": (
         DisturbanceTorques,
@@ -258,9 +294,11 @@ def test_each_model_on_random_inputs_is_the_same_compiled_and_in_python(case, se
     varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
     # orbit: w_OI_O x, target z, v_z; the sweep over 120 s: no pitch reversal (pitch rate
     # and acceleration), the triangle wave no acceleration at all
-    # and coasting wheels no motor torque, saturation, third wheel or z momentum
-    constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}.get(case, 3)
-    assert np.count_nonzero(varying) >= varying.size - constant
+    # and coasting wheels no motor torque, saturation, third wheel or z momentum; the
+    # estimators valid, the random one's updates and NIS (each measurement is late)
+    constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}
+    constant.update(estimator=1, estimator_random=7)
+    assert np.count_nonzero(varying) >= varying.size - constant.get(case, 3)
 
 
 @needs_numba
@@ -356,6 +394,9 @@ def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(pat
         "wheels_limited_skewed",
         "payloads",
         "payloads_underdamped",
+        "gyro",
+        "tracker",
+        "estimator",
     ],  # fmt: skip
 )
 def test_a_saved_state_restored_continues_bit_for_bit(case, path):
@@ -444,9 +485,11 @@ def test_quat_of_rows_compiled_is_the_python_bit_for_bit():
 def test_every_model_kernel_compiles():
     names = sorted(k.__name__ for k in ALL_KERNELS)
     assert names == [
-        "cluster_output", "cluster_step", "controller_output", "flywheel_output",
-        "flywheel_step", "gimbals_output", "gimbals_step", "guidance_output", "guidance_step",
-        "orbit_output", "pitch_output", "steering_output", "sweep_output", "torques_output",
+        "cluster_output", "cluster_step", "controller_output", "estimator_output",
+        "estimator_step", "flywheel_output", "flywheel_step", "gimbals_output", "gimbals_step",
+        "guidance_output", "guidance_step", "gyro_output", "gyro_step", "orbit_output",
+        "pitch_output", "steering_output", "sweep_output", "torques_output", "tracker_output",
+        "tracker_step",
     ]  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
