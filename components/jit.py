@@ -62,6 +62,7 @@ ENABLED = value("AGILESAT_JIT")
 AFTER = value("AGILESAT_JIT_AFTER")
 _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
+_TWINS: list = []  # (function, the factory of its compiled twin)
 _REGISTERED: set = set()  # those of them numba was told about
 _SET_UP = False  # numba imported (then a function declared later is registered at once)
 #: a kernel has switched to its compiled tier in this process (a long run)
@@ -93,6 +94,21 @@ def jitable(function):
     if _SET_UP:  # a module imported after the first compile
         _set_up()
     return function
+
+
+def compiled_twin(factory):
+    """Decorator: a function kernels may call whose compiled form is not its Python but
+    ``factory(numba)``, a numba intrinsic of the same signature (a call through a C
+    function pointer, which no Python is); its Python is the decorated function, which
+    must compute the same bits."""
+
+    def register(function):
+        _TWINS.append((function, factory))
+        if _SET_UP:
+            _set_up()
+        return function
+
+    return register
 
 
 def register_floats(function) -> None:
@@ -246,6 +262,11 @@ def _set_up() -> None:
         if function not in _REGISTERED:
             _REGISTERED.add(function)
             register_jitable(function)
+    for function, factory in _TWINS:
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            twin = factory(numba)
+            overload(function, strict=False)(lambda *args, twin=twin: lambda *args: twin(*args))
 
 
 def content_cache(py_func):

@@ -81,7 +81,10 @@ def both(run):
 
 
 def snapshot(model):
-    return model.values.tobytes(), model.state.tobytes(), list(model.warnings)
+    state = model.state.copy()
+    if isinstance(model, OrbitEnvironment):  # the addresses of its own SGP4 record
+        state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = 0.0
+    return model.values.tobytes(), state.tobytes(), list(model.warnings)
 
 
 # -- scan_pitch in-process: the five models, Jacobi coupling --------------------------------
@@ -532,3 +535,46 @@ def test_fmod_is_math_fmod_bit_for_bit(function):
     for x, y in cases:
         assert same_float(fmod(float(x), float(y)), math.fmod(x, y)), (x, y)
     assert math.isnan(fmod(math.inf, 1.0)) and math.isnan(fmod(1.0, 0.0))
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_the_direct_sgp4_call_is_sgp4_tsince_bit_for_bit(function):
+    """ephemeris.sgp4_at calls the function satrec.sgp4_tsince calls (a near-Earth and a
+    resonant deep-space TLE), and reports an error where it does (a decayed orbit)."""
+    from agilesat.components.ephemeris import load_tle, sgp4_at, sgp4_entry
+
+    call = jit._numba().njit(lambda *a: sgp4_at(*a)) if function == "compiled" else sgp4_at
+    geostationary = (
+        "1 28626U 05008A   06176.46683397 -.00000205  00000-0  10000-3 0  2190",
+        "2 28626   0.0019 286.9433 0000335  13.7918  55.6504  1.00270176  4891",
+    )
+    for lines in (ISS_TLE, geostationary):
+        ours, theirs = load_tle(*lines), load_tle(*lines)
+        address, record = sgp4_entry(ours, load_tle(*lines))
+        assert address and record
+        out = np.zeros(8)
+        for tsince in np.linspace(-3000.0, 3000.0, 61):
+            assert call(float(address), float(record), float(tsince), out, 2)
+            error, r, v = theirs.sgp4_tsince(float(tsince))
+            assert (error, out[2:5].tolist(), out[5:].tolist()) == (0, list(r), list(v))
+    draggy = ISS_TLE[0][:53] + " 50000-1 0  999" + "4", ISS_TLE[1]  # B* 0.05, its checksum
+    decayed = load_tle(*draggy)
+    address, record = sgp4_entry(decayed, load_tle(*draggy))
+    assert not call(float(address), float(record), 3e4, np.zeros(6), 0)
+    assert decayed.error == load_tle(*draggy).sgp4_tsince(3e4)[0] == 1
+
+
+def test_a_restored_state_calls_sgp4_on_its_own_record():
+    """The addresses of the SGP4 call are never taken from a state (a host's bytes): after
+    set_state the model's own record is called."""
+    one = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
+    other = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
+    state = one.get_state()
+    state[0][:] = 0.0  # the value array
+    state[2]["state"][orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = (8.0, 16.0)
+    other.set_state(state)
+    assert tuple(other.state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2]) == tuple(
+        map(float, other._sgp4_entry)
+    )
+    assert "_sgp4_entry" not in state[2]
