@@ -50,6 +50,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import sys
 import warnings
 from pathlib import Path
 
@@ -60,6 +61,13 @@ from .switches import value
 ENABLED = value("AGILESAT_JIT")
 #: calls of a kernel before it is compiled (see the module docstring)
 AFTER = value("AGILESAT_JIT_AFTER")
+#: the runs this process expects to make of each model (a campaign worker's share)
+RUNS = value("AGILESAT_JIT_RUNS")
+#: the calls a process must be expected to make of kernels whose compiled code is cached
+#: for them to run compiled from a run's start: importing numba and loading the kernels
+#: costs about 0.75 s per process, a macro step in C saves 180-260 µs of a shipped
+#: scenario's (break-even at 2,900-4,200 steps; docs/performance-log.md)
+PAYS_AFTER = 3_500
 _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
 _TWINS: list = []  # (function, the factory of its compiled twin)
@@ -135,6 +143,7 @@ class Kernel:
         functools.update_wrapper(self, function)
         self.py_func = function
         self._left = after
+        self.calls = 0  # of its Python, counted (the compiled tier counts nothing)
         self._run = self._count if ENABLED else function
 
     def __call__(self, *args):
@@ -142,6 +151,7 @@ class Kernel:
 
     def _count(self, *args):
         self._left -= 1
+        self.calls += 1
         if self._left < 0:
             return self._switch(*args)
         return self.py_func(*args)
@@ -186,6 +196,35 @@ class Kernel:
                 stacklevel=2,
             )
         return dispatcher
+
+
+def expect(module, steps: float) -> None:
+    """A run of the model of ``module`` expects ``steps`` more steps (an FMU at its first
+    step: its stop time and step size).  With the calls its kernels made in this process
+    before (a notebook's earlier runs) and RUNS runs (a campaign worker's), the calls
+    expected of them; they switch to compiled now where that pays: from PAYS_AFTER calls
+    when their compiled code is cached, from AFTER otherwise (compiling costs seconds a
+    kernel).  Either way the results are the same bits."""
+    found = kernels(module).values()
+    if not ENABLED or not found:
+        return
+    expected = steps * max(RUNS, 1) + max(kernel.calls for kernel in found)
+    if expected < min(PAYS_AFTER, AFTER):
+        return
+    if expected >= AFTER or all(map(cached, found)):
+        for kernel in found:
+            kernel._left = min(kernel._left, 0)
+
+
+def cached(kernel: Kernel) -> bool:
+    """Is the kernel's compiled code in the compile cache (for this Python)?  Looked up by
+    the name numba gives its index (``<module>.<qualname>-<line>.pyXY.nbi``) in the
+    content-keyed folder, without importing numba."""
+    code = kernel.py_func.__code__
+    folder = cache_root() / "numba" / content_key(kernel.py_func.__module__, code.co_filename)
+    major, minor = sys.version_info[:2]
+    name = f"{kernel.py_func.__module__.rsplit('.', 1)[-1]}.{kernel.py_func.__qualname__}"
+    return (folder / f"{name}-{code.co_firstlineno}.py{major}{minor}.nbi").is_file()
 
 
 def runs_compiled(kernel: Kernel) -> bool:

@@ -34,6 +34,7 @@ from html import escape
 from importlib import metadata
 from pathlib import Path
 
+from ..components import jit
 from . import FMUS, model_class, protocol
 from .model_description import model_description
 from .source_facts import facts
@@ -93,7 +94,7 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     for path in sorted(_pythonfmu_dir().glob("*.py")):
         entries[f"resources/pythonfmu/{path.name}"] = path.read_bytes()
     write_archive(target, entries)
-    if any(b"@kernel\n" in path.read_bytes() for path in sources.values()):
+    if jit.kernels(sys.modules[model.__module__]):
         compile_kernels(target, name, package)
     return target
 
