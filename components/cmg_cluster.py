@@ -13,7 +13,14 @@ and the cluster exerts −hdot − w_BI_B × h on the body (DESIGN.md §2).
 
 Gimbal servo: each gimbal rate follows its command, clipped to ±``rate_limit``, as fast
 as ``accel_limit`` allows and exactly otherwise.  With the command held over a step the
-motion is piecewise parabolic and is integrated in closed form.
+motion is piecewise parabolic and is integrated in closed form (:func:`servo_step`); a
+command a host interpolates with its derivative ċ (FMI 2.0 input derivatives,
+components/model.py), c + ċ s, is followed in closed form too, piece by piece between the
+moments the rate reaches the target or the command crosses a limit (:func:`servo_ramp`).
+
+Output derivatives at the current time: δ̇; δ̈ (±accel_limit toward the target, or the
+target's own slope once on it); ḣ; ḧ = h_rotor Σ (a_i δ̈_i − σ_i δ̇_i²) (ȧ_i = −σ_i δ̇_i);
+Q̇ = tr(adj(A Aᵀ) d(A Aᵀ)/dt).
 
 Default geometry: the paper's five-pyramid cluster (α0 = 63.4°; gimbals 1–5 at azimuths
 90°, 162°, 234°, 306°, 18°; gimbal 6 along z, reference spin x) with the rotor spin
@@ -31,7 +38,7 @@ import numpy as np
 from .flat import StateTable
 from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
 
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
@@ -185,24 +192,95 @@ def _sum(vectors) -> tuple:
 
 @jitable
 def servo_step(delta, rate, command, dt, rate_limit, accel_limit) -> tuple[list, list]:
-    """Gimbal angles and rates after ``dt`` with the rate command held.
+    """Gimbal angles and rates after ``dt`` with the rate command held (:func:`servo1`)."""
+    angles, rates = [], []
+    for d, r, c in zip(delta, rate, command):
+        angle, speed = servo1(d, r, c, dt, rate_limit, accel_limit)
+        angles.append(angle)
+        rates.append(speed)
+    return angles, rates
 
-    The rate moves toward clip(command, ±rate_limit) at ±accel_limit and then holds it:
+
+@jitable
+def servo1(d, r, c, dt, rate_limit, accel_limit) -> tuple:
+    """One gimbal's angle and rate after ``dt`` with the rate command ``c`` held.
+
+    The rate moves toward clip(c, ±rate_limit) at ±accel_limit and then holds it:
     δ(dt) = δ + δ̇ dt + a τ (dt − τ/2), δ̇(dt) = δ̇ + a τ, with a = ±accel_limit and
     τ = min(|target − δ̇| / accel_limit, dt).
     """
-    angles, rates = [], []
-    for d, r, c in zip(delta, rate, command):
-        gap = min(max(c, -rate_limit), rate_limit) - r
-        tau = min(abs(gap) / accel_limit, dt)
-        a = accel_limit if gap > 0 else -accel_limit if gap < 0 else 0.0
-        angles.append(d + r * dt + a * tau * (dt - tau / 2))
-        rates.append(r + a * tau)
-    return angles, rates
+    gap = min(max(c, -rate_limit), rate_limit) - r
+    tau = min(abs(gap) / accel_limit, dt)
+    a = accel_limit if gap > 0 else -accel_limit if gap < 0 else 0.0
+    return d + r * dt + a * tau * (dt - tau / 2), r + a * tau
+
+
+@jitable
+def _target(c, m, s, rate_limit, dt) -> tuple:
+    """The servo's target clip(c + m s', ±rate_limit) on its current piece, from ``s``:
+    (value at s, slope, where the piece ends; at most dt)."""
+    cs, end = c + m * s, dt
+    if cs > rate_limit or (cs == rate_limit and m >= 0.0):
+        if m < 0.0:
+            end = (rate_limit - c) / m
+        return rate_limit, 0.0, min(end, dt)
+    if cs < -rate_limit or (cs == -rate_limit and m <= 0.0):
+        if m > 0.0:
+            end = (-rate_limit - c) / m
+        return -rate_limit, 0.0, min(end, dt)
+    if m > 0.0:
+        end = (rate_limit - c) / m
+    elif m < 0.0:
+        end = (-rate_limit - c) / m
+    return cs, m, min(end, dt)
+
+
+@jitable
+def servo_accel(r, c, m, rate_limit, accel_limit) -> float:
+    """δ̈ now, at rate ``r`` with the command c + m s: ±accel_limit toward the target, or
+    the target's slope (within ±accel_limit) once the rate is on it."""
+    target, slope, _ = _target(c, m, 0.0, rate_limit, 1.0)
+    if target != r:
+        return accel_limit if target > r else -accel_limit
+    return min(max(slope, -accel_limit), accel_limit)
+
+
+@jitable
+def servo_ramp(d, r, c, m, dt, rate_limit, accel_limit) -> tuple:
+    """One gimbal's angle and rate after ``dt`` with the rate command c + m s (s from the
+    step's start): on each piece of the clipped target (value g, slope k) the rate either
+    rides on it (|k| ≤ accel_limit) or moves at ±accel_limit toward it, until it reaches
+    it or the piece ends; every part is parabolic in δ and integrated exactly."""
+    s, on = 0.0, False  # on: the rate has reached the target and rides on it
+    for _ in range(16):  # at most 3 pieces of the target, 2 parts each
+        if not s < dt:
+            break
+        g, k, end = _target(c, m, s, rate_limit, dt)
+        span = max(end - s, 0.0)
+        if span == 0.0:  # the piece ends here (rounding): step past it
+            span = min(dt - s, 1e-12 * dt)
+        if on:
+            r = g  # the same value, up to the rounding of c + m s
+        gap = g - r
+        if gap == 0.0 and abs(k) <= accel_limit:
+            d += r * span + 0.5 * k * span * span
+            r, s, on = g + k * span, s + span, True
+            continue
+        a = accel_limit if gap > 0.0 or (gap == 0.0 and k > 0.0) else -accel_limit
+        tau, closing, on = span, k - a, False  # the gap changes at k − a
+        if gap != 0.0 and gap * closing < 0.0 and -gap / closing < span:
+            tau, on = -gap / closing, True
+        d += r * tau + 0.5 * a * tau * tau
+        r = g + k * tau if on else r + a * tau
+        s += tau
+    return d, r
 
 
 class CmgCluster(Model):
     """Six single-gimbal CMGs with rate- and acceleration-limited gimbals."""
+
+    INTERPOLATES_INPUTS = True
+    OUTPUT_DERIVATIVES = True
 
     VARIABLES = (
         parameter("h_rotor", 16.65, "N.m.s", "rotor angular momentum of each gyro"),
@@ -268,10 +346,36 @@ class CmgCluster(Model):
     def output(self):
         cluster_output(self.values, self.state, self.t)
 
+    def output_derivatives(self):
+        """See the module docstring: d/dt of δ, δ̇, h, ḣ and Q at ``self.t``."""
+        s, rates = self.state, self.state[RATE : RATE + N_GYROS].tolist()
+        limit, accel, h_rotor = float(s[RATE_LIMIT]), float(s[ACCEL_LIMIT]), float(s[H_ROTOR])
+        command, slope = self.u.delta_dot_cmd.tolist(), self.input_rate("delta_dot_cmd").tolist()
+        accels = [servo_accel(r, c, m, limit, accel) for r, c, m in zip(rates, command, slope)]
+        spins, columns = (np.array(x) for x in self.geometry.axes(s[DELTA : DELTA + N_GYROS]))
+        a_dot = -spins * np.array(rates)[:, None]  # ȧ_i = −σ_i δ̇_i
+        gram_ = columns.T @ columns
+        gram_dot = a_dot.T @ columns + columns.T @ a_dot
+        adjugate = np.array(
+            [[np.linalg.det(np.delete(np.delete(gram_, i, 0), j, 1)) * (-1) ** (i + j)
+              for i in range(3)] for j in range(3)]
+        )  # fmt: skip
+        return np.array(
+            [
+                *rates,
+                *accels,
+                *self.values[Y_HDOT : Y_HDOT + 3],
+                *(h_rotor * (columns.T @ accels + a_dot.T @ rates)),
+                float(np.trace(adjugate @ gram_dot)),
+            ]
+        )
+
 
 # -- kernels (components/jit.py) ------------------------------------------------------
-_AT = Layout(CmgCluster.VARIABLES).offset  # offsets in CmgCluster.values
+_LAYOUT = CmgCluster.table_layout()
+_AT = _LAYOUT.offset  # offsets in CmgCluster.values
 Y_CMD = _AT["delta_dot_cmd"]  # input
+D_CMD = _LAYOUT.derivative["delta_dot_cmd"]  # its derivative, as a host set it
 Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
 Y_Q = _AT["singularity"]
 #: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
@@ -284,13 +388,21 @@ DELTA, RATE, RATE_LIMIT, ACCEL_LIMIT, H_ROTOR, ST, SATURATED = STATE.offsets
 
 @step_kernel(CmgCluster)
 def cluster_step(values, state, t, dt):
-    """Each gimbal's :func:`servo_step` over ``dt`` with its command held.  The cluster is
-    saturated while the largest |command| exceeds the rate limit (it cannot deliver the
-    commanded torque): returns 1 + the gimbal with the largest |command| (the first of
-    equals) when it becomes saturated (step() warns), else 0."""
+    """Each gimbal's :func:`servo_step` over ``dt`` with its command held, or its
+    :func:`servo_ramp` where a host set the command's derivative.  The cluster is
+    saturated while the largest |command| at the step's start exceeds the rate limit (it
+    cannot deliver the commanded torque): returns 1 + the gimbal with the largest |command|
+    (the first of equals) when it becomes saturated (step() warns), else 0."""
     command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state[:ST])
+    slope = floats(values[D_CMD : D_CMD + N_GYROS])
     delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
-    angles, rates = servo_step(delta, rate, command, dt, s[RATE_LIMIT], s[ACCEL_LIMIT])
+    limit, accel = s[RATE_LIMIT], s[ACCEL_LIMIT]
+    angles, rates = servo_step(delta, rate, command, dt, limit, accel)
+    for i in range(N_GYROS):
+        if slope[i] != 0.0:
+            angles[i], rates[i] = servo_ramp(
+                delta[i], rate[i], command[i], slope[i], dt, limit, accel
+            )
     state[DELTA : DELTA + N_GYROS] = angles
     state[RATE : RATE + N_GYROS] = rates
     worst, largest = 0, abs(command[0])

@@ -39,6 +39,12 @@ restarts the other way.  A speed limiter in the drive clamps Ω at the momentum 
 (J_w |Ω| ≤ max(momentum_limit, J_w |Ω| at the step's start)) if it is reached within
 the step.
 
+Output derivatives at the current time, along the step's motion with the motor torque
+held: Ω̇_i = (J Ω̇_i) / J_w as the drive delivers it, ḣ, ḧ = −(c_v / J_w) ḣ (J_w Ω̈_i = −c_v Ω̇_i
+between zero crossings; zero for a wheel at rest or held), and zero for the motor torques
+(held over the step).  The inputs are sampled by the drive at communication points, not
+integrated: the model does not interpolate them (no canInterpolateInputs).
+
 Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
 of [Chang 2015]: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
 friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
@@ -55,7 +61,7 @@ import numpy as np
 from .flat import StateTable
 from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
 
 N_WHEELS = 4
 RPM = 2.0 * math.pi / 60.0
@@ -112,6 +118,8 @@ def wheel_step(
 
 class Flywheel(Model):
     """Reaction-wheel assembly: torque command to wheel motor torques, exact wheel dynamics."""
+
+    OUTPUT_DERIVATIVES = True
 
     VARIABLES = (
         parameter(
@@ -247,9 +255,20 @@ class Flywheel(Model):
     def output(self):
         flywheel_output(self.values, self.state, self.t)
 
+    def output_derivatives(self):
+        """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
+        s = self.state
+        _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist())
+        speed_rate = [0.0] * N_WHEELS
+        for k in range(int(s[N])):
+            speed_rate[int(s[WHEEL + k])] = accel_torques[k] / s[INERTIA]
+        hdot = self.y.hdot.tolist()
+        k = s[VISCOUS] / s[INERTIA]
+        return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
+
 
 # -- kernels (components/jit.py) ------------------------------------------------------
-_AT = Layout(Flywheel.VARIABLES).offset  # offsets in Flywheel.values
+_AT = Flywheel.table_layout().offset  # offsets in Flywheel.values
 U_TAU, U_W = _AT["tau_cmd"], _AT["w_BI_B"]
 Y_H, Y_HDOT, Y_SPEED, Y_MOTOR, Y_SATURATED = (
     _AT["h"], _AT["hdot"], _AT["speed"], _AT["motor_torque"], _AT["saturated"]

@@ -9,6 +9,11 @@ is taken linear, so the average is exact for a rate varying linearly over a step
 the noise of sample k is drawn from index k (components/noise.py): the record is the same
 for any master step (only the true-rate integral depends on it, through rounding).
 Before t0 the body rate and the bias are taken constant, so sample 0 at t0 is valid.
+A host that interpolates inputs (FMI 2.0 input derivatives, components/model.py) gives the
+rate's slope ẇ at the step's start: between communication points the true rate is then the
+parabola through w(t_c) with that slope and w(t_c + h), w_c + ẇ s + (w(t_c + h) − w_c − ẇ h)
+s²/h², whose average is exact for a rate quadratic over the step (per axis; the line where
+no slope was set).
 
 Error model (IEEE Std 952-1997, Annex C; [Farrenkopf 1978]; [Markley 2014] ch. 4).  For
 axis i, with the true average rate ω̄ over the interval::
@@ -66,7 +71,7 @@ from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key
 from .sensing import tick, tick_time
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
 
 DEG_PER_HOUR = math.pi / 180.0 / 3600.0  # rad/s
 STIM300_ARW = 0.15 * math.pi / 180.0 / 60.0  # 0.15 °/√h in rad/√s
@@ -99,6 +104,8 @@ FILTER_BIAS_WALK = filter_bias_walk(STIM300_RRW, STIM300_BIAS_INSTABILITY, BIAS_
 
 class Gyro(Model):
     """Three-axis rate-integrating gyro with noise, bias, scale factor and misalignment."""
+
+    INTERPOLATES_INPUTS = True
 
     VARIABLES = (
         parameter(
@@ -221,17 +228,22 @@ class Gyro(Model):
 
 
 # -- kernels (components/jit.py) ------------------------------------------------------
-_AT = Layout(Gyro.VARIABLES).offset  # offsets in Gyro.values
+_LAYOUT = Gyro.table_layout()
+_AT = _LAYOUT.offset  # offsets in Gyro.values
 P_QUANTUM, P_LIMIT = _AT["quantization"], _AT["saturation"]
 U_W, Y_W, Y_BIAS = _AT["w_BI_B"], _AT["w_meas_B"], _AT["bias_B"]
+#: the derivative a host set for w_BI_B and whether it set it (per axis)
+D_W, G_W = _LAYOUT.derivative["w_BI_B"], _LAYOUT.given["w_BI_B"]
 #: a sample's state (after :func:`advance`): the latest sample k, whether a communication
-#: point was seen and its time and true rate, the integral of the true rate since t_k, the
-#: bias terms, the quantiser's remainder, the axes saturated, the measured rate
+#: point was seen and its time and true rate, the rate's slope set for the step from it and
+#: 1 where one was set (per axis), the integral of the true rate since t_k, the bias terms,
+#: the quantiser's remainder, the axes saturated, the measured rate
 SAMPLED = StateTable(
-    k=1, seen=1, t_last=1, w_last=3, integral=3, b_rw=3, b_gm=3, residual=3, saturated=3,
-    w_meas=3,
+    k=1, seen=1, t_last=1, w_last=3, slope=3, sloped=3, integral=3, b_rw=3, b_gm=3,
+    residual=3, saturated=3, w_meas=3,
 )  # fmt: skip
-K, SEEN, T_LAST, W_LAST, INTEGRAL, B_RW, B_GM, RESIDUAL, SATURATED_AXES, W_MEAS = SAMPLED.offsets
+K, SEEN, T_LAST, W_LAST, SLOPE, SLOPED, INTEGRAL = SAMPLED.offsets[:7]
+B_RW, B_GM, RESIDUAL, SATURATED_AXES, W_MEAS = SAMPLED.offsets[7:]
 N_SAMPLED = SAMPLED.size
 #: the state array: t0, the rate and period, the error matrix I + diag(scale_factor) + M
 #: (row-major), the white-noise sigmas (of a sample, of sample 0), the random walk's step,
@@ -284,15 +296,18 @@ def commit(state) -> None:
 @jitable
 def advance(values, state, now: float, notes) -> None:
     """The committed state brought to ``now`` (the input w_BI_B of ``now``), into the
-    advanced one: every sample up to ``now`` taken, the true rate linear between the last
-    communication point and now (constant before t0); (sample, axis) of each axis becoming
-    saturated appended to ``notes``."""
+    advanced one: every sample up to ``now`` taken, the true rate linear (or the parabola
+    with the slope set, :func:`_add_rate`) between the last communication point and now
+    (constant before t0); (sample, axis) of each axis becoming saturated appended to
+    ``notes``."""
     s, v = floats(state), floats(values)
     t0, rate, T, c = s[T0], s[RATE], s[PERIOD], COMMITTED
     w_now = (v[U_W], v[U_W + 1], v[U_W + 2])
     k = int(s[c + K])
+    slope = (s[c + SLOPE], s[c + SLOPE + 1], s[c + SLOPE + 2])
+    sloped = (s[c + SLOPED] != 0.0, s[c + SLOPED + 1] != 0.0, s[c + SLOPED + 2] != 0.0)
     if s[c + SEEN] == 0.0:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
-        t_last, w_last = t0 - T, w_now
+        t_last, w_last, sloped = t0 - T, w_now, (False, False, False)
     else:
         t_last, w_last = s[c + T_LAST], (s[c + W_LAST], s[c + W_LAST + 1], s[c + W_LAST + 2])
     integral = (s[c + INTEGRAL], s[c + INTEGRAL + 1], s[c + INTEGRAL + 2])
@@ -302,14 +317,17 @@ def advance(values, state, now: float, notes) -> None:
     segment = t_last  # start of the part of (t_last, now] not yet integrated
     for j in range(k + 1, tick(now, t0, rate) + 1):
         end = min(tick_time(j, t0, rate), now)
-        integral = _add_linear(integral, segment, end, t_last, span, w_last, w_now)
+        integral = _add_rate(integral, segment, end, t_last, span, w_last, w_now, slope, sloped)
         _sample(values, state, j, (integral[0] / T, integral[1] / T, integral[2] / T), notes)
         integral, segment, k = (0.0, 0.0, 0.0), end, j
-    integral = _add_linear(integral, segment, now, t_last, span, w_last, w_now)
+    integral = _add_rate(integral, segment, now, t_last, span, w_last, w_now, slope, sloped)
     a = ADVANCED
     state[a + K], state[a + SEEN], state[a + T_LAST] = k, 1.0, now
     for i in range(3):
         state[a + W_LAST + i], state[a + INTEGRAL + i] = w_now[i], integral[i]
+        given = v[G_W + i] != 0.0  # the slope set for the step from now
+        state[a + SLOPE + i] = v[D_W + i] if given else 0.0
+        state[a + SLOPED + i] = 1.0 if given else 0.0
 
 
 @jitable
@@ -368,13 +386,19 @@ def _key(s, stream: int) -> int:
 
 
 @jitable
-def _add_linear(integral, a, b, t_last, span, w_last, w_now) -> tuple:
-    """integral + ∫_a^b w dt for w linear from w_last at t_last to w_now at t_last + span."""
+def _add_rate(integral, a, b, t_last, span, w_last, w_now, slope, sloped) -> tuple:
+    """integral + ∫_a^b w dt for w from w_last at t_last to w_now at t_last + span: per
+    axis linear, or where ``sloped`` the parabola with the slope ẇ = ``slope`` at t_last."""
     if b <= a:
         return integral
     s = (0.5 * (a + b) - t_last) / span  # the midpoint value integrates a line exactly
-    return (
-        integral[0] + (b - a) * (w_last[0] + s * (w_now[0] - w_last[0])),
-        integral[1] + (b - a) * (w_last[1] + s * (w_now[1] - w_last[1])),
-        integral[2] + (b - a) * (w_last[2] + s * (w_now[2] - w_last[2])),
-    )
+    out = [0.0, 0.0, 0.0]
+    for k in range(3):
+        i, wl, wn, d = integral[k], w_last[k], w_now[k], slope[k]
+        if not sloped[k]:
+            out[k] = i + (b - a) * (wl + s * (wn - wl))
+            continue
+        sa, sb = a - t_last, b - t_last  # ∫ (wl + d x + c x²) dx over [sa, sb] / (sb − sa)
+        c = (wn - wl - d * span) / (span * span)
+        out[k] = i + (b - a) * (wl + d * 0.5 * (sa + sb) + c * (sa * sa + sa * sb + sb * sb) / 3.0)
+    return out[0], out[1], out[2]

@@ -28,7 +28,9 @@ content instead: ``<root>/numba/<key>/``, key = SHA-256 of the module's name and
 root = :func:`cache_root` (the master's compiled loop is kept there too).  Inside
 an FMU the module is ``agilesat_<content hash>.components.<name>``, so a rebuilt FMU gets
 new entries and two extractions of one FMU share them; ``agilesat build`` fills the cache
-by loading each built FMU once (``fmus/build.py``).  numba's index key adds the
+by loading each built FMU once (``fmus/build.py``).  Every index and data file carries
+its SHA-256 (:mod:`.cache_files`): a damaged one is compiled again, with a warning,
+instead of being unpickled or loaded.  numba's index key adds the
 signature, the CPU and the bytecode.  An unwritable cache directory costs a compile per
 process, nothing else (a warning says so).
 
@@ -49,13 +51,16 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import os
+import pickle
 import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .cache_files import seal, unseal, warn
 from .switches import value
 
 ENABLED = value("AGILESAT_JIT")
@@ -342,7 +347,51 @@ def _content_cache_class():
     class ContentCacheImpl(caching.CompileResultCacheImpl):
         _locator_classes = [ContentLocator]
 
+    class SealedCacheFile(caching.IndexDataCacheFile):
+        """numba's index and data files, each sealed with its SHA-256 (cache_files): a
+        damaged one is compiled again with a warning, never unpickled or loaded."""
+
+        def _load_index(self):
+            try:
+                with open(self._index_path, "rb") as stream:
+                    body = unseal(stream.read())
+            except FileNotFoundError:
+                return {}
+            if body is None:
+                warn(self._index_path, "it does not match its SHA-256", "compiling again")
+                return {}
+            stream = io.BytesIO(body)
+            if pickle.load(stream) != self._version:
+                return {}
+            stamp, overloads = pickle.loads(stream.read())
+            return overloads if stamp == self._source_stamp else {}
+
+        def _save_index(self, overloads):
+            body = pickle.dumps(self._version, protocol=-1)
+            body += self._dump((self._source_stamp, overloads))
+            with self._open_for_write(self._index_path) as stream:
+                stream.write(seal(body))
+
+        def _load_data(self, name):
+            path = self._data_path(name)
+            with open(path, "rb") as stream:
+                body = unseal(stream.read())
+            if body is None:
+                warn(path, "it does not match its SHA-256", "compiling again")
+                raise OSError(f"{path} is damaged")  # numba's load: compile again
+            return pickle.loads(body)
+
+        def _save_data(self, name, data):
+            with self._open_for_write(self._data_path(name)) as stream:
+                stream.write(seal(self._dump(data)))
+
     class ContentCache(caching.FunctionCache):
         _impl_class = ContentCacheImpl
+
+        def __init__(self, py_func):
+            super().__init__(py_func)
+            self._cache_file = SealedCacheFile(
+                self._cache_path, self._impl.filename_base, self._impl.locator.get_source_stamp()
+            )
 
     return ContentCache

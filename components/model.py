@@ -15,8 +15,9 @@ A model owns one flat float64 array holding its parameters, inputs and outputs (
 
 Every model also has the parameter ``warnings_return_ok`` (:data:`COMMON_VARIABLES`,
 appended to each table): the FMU logs the model's warnings (limits, saturation,
-singularity) at category ``logStatusWarning`` in any case; with it set the call returns
-``fmi2OK`` instead of ``fmi2Warning``, for hosts that stop on a warning (OMSimulator).
+singularity) at category ``logStatusWarning`` in any case, as warnings; with it set the
+call returns ``fmi2OK`` instead of ``fmi2Warning``, for hosts that stop on a warning
+(OMSimulator).  Exported packages set it (orchestration/export.py).
 
 A model whose initial state depends on inputs (``INITIAL_STATE_DEPENDS``) calls
 :meth:`Model.remember_initial_inputs` at the end of ``initialize`` and
@@ -25,6 +26,19 @@ inputs only after initialisation would otherwise start the model from another st
 silently.  At the first step the inputs may have moved by what one step explains (a
 Gauss-Seidel host passes the values at the step's end); a larger jump is an error (the
 in-process :meth:`Model.start` leaves the inputs to its caller: no check).
+
+Input and output derivatives (FMI 2.0 section 4.2.1).  A model that integrates inputs
+across a step says ``INTERPOLATES_INPUTS`` (the FMU declares ``canInterpolateInputs``):
+a host may then set the first derivative u̇ of every continuous Real input, and the model
+takes u(t) = u + u̇ (t − t_c) over the step where it integrates u (:meth:`Model.input_rate`;
+never set, u̇ is zero: u held).  Where a table also has an input that *is* an input's rate
+(``hdot_cmg`` of ``h_cmg``), the slope of ``h_cmg`` over the step is the derivative set for
+it if one was set, else ``hdot_cmg`` (:meth:`Model.slope`); a non-zero ``hdot_cmg`` that
+differs from a set derivative is reported once as a warning (:meth:`Model.slope_conflicts`).
+A model that says ``OUTPUT_DERIVATIVES`` (``maxOutputDerivativeOrder="1"``) answers
+:meth:`Model.output_derivatives`: the first time derivative of every output at ``self.t``,
+along its own trajectory over the coming step with the inputs as it interpolates them
+(exact, or zero for an output held between communication points).
 
 The same object runs in-process (tests, references) and inside the FMU wrapper.
 """
@@ -62,6 +76,11 @@ class Model:
     VARIABLES: tuple[Var, ...] = ()
     #: inputs that the initial state depends on (beyond the parameters)
     INITIAL_STATE_DEPENDS: tuple[str, ...] = ()
+    #: the model interpolates its continuous Real inputs with the derivatives a host sets
+    #: (module docstring); the FMU declares canInterpolateInputs
+    INTERPOLATES_INPUTS = False
+    #: the model answers output_derivatives(); the FMU declares maxOutputDerivativeOrder 1
+    OUTPUT_DERIVATIVES = False
     _layouts: dict[type, Layout] = {}
 
     def __init_subclass__(cls, **kwargs):
@@ -69,11 +88,15 @@ class Model:
         names = {v.name for v in cls.VARIABLES}
         cls.VARIABLES = cls.VARIABLES + tuple(v for v in COMMON_VARIABLES if v.name not in names)
 
-    def __init__(self, **parameters):
-        cls = type(self)
+    @classmethod
+    def table_layout(cls) -> Layout:
+        """The layout of this model's value array (one per class)."""
         if cls not in Model._layouts:
-            Model._layouts[cls] = Layout(cls.VARIABLES)
-        self.layout = Model._layouts[cls]
+            Model._layouts[cls] = Layout(cls.VARIABLES, cls.INTERPOLATES_INPUTS)
+        return Model._layouts[cls]
+
+    def __init__(self, **parameters):
+        self.layout = type(self).table_layout()
         self.values = self.layout.start_values()
         self.strings = {v.name: str(v.start) for v in self.layout.variables if v.type == "String"}
         self.p = Bus(self.values, self.layout, "parameter", self.strings)
@@ -94,6 +117,54 @@ class Model:
 
     def output(self) -> None:
         raise NotImplementedError
+
+    def output_derivatives(self) -> np.ndarray:
+        """d/dt of the outputs (the output group of the value array, in order) at ``self.t``
+        after :meth:`output` (module docstring); only a model with OUTPUT_DERIVATIVES."""
+        raise NotImplementedError
+
+    # -- input derivatives (module docstring) -----------------------------------------
+    def input_rate(self, name: str) -> np.ndarray:
+        """The derivative a host set for input ``name`` (zero where none was set)."""
+        at = self.layout.derivative[name]
+        return self.values[at : at + self.layout.by_name[name].size]
+
+    def set_input_rate(self, name: str, rate) -> None:
+        """In-process: the derivative of input ``name`` (whole arrays), as a host sets it
+        with fmi2SetRealInputDerivatives."""
+        size = self.layout.by_name[name].size
+        self.input_rate(name)[:] = np.broadcast_to(np.asarray(rate, dtype=float).reshape(-1), size)
+        at = self.layout.given[name]
+        self.values[at : at + size] = 1.0
+
+    def _given(self, name: str) -> np.ndarray:
+        at = self.layout.given[name]
+        return self.values[at : at + self.layout.by_name[name].size] != 0.0
+
+    def slope(self, name: str, rate: str) -> np.ndarray:
+        """The slope of input ``name`` over the step: the derivative set for it where one
+        was set, else the input ``rate`` (``hdot_cmg`` for ``h_cmg``)."""
+        return np.where(
+            self._given(name), self.input_rate(name), self.values[self.layout.slice(rate)]
+        )
+
+    def slope_conflicts(self, name: str, rate: str) -> list[str]:
+        """The scalars of ``rate`` that are non-zero and differ from a derivative set for
+        ``name``, as "rate[i] = x, the derivative of name[i] = y" (empty: none)."""
+        given, derivative = self._given(name), self.input_rate(name)
+        stated = self.values[self.layout.slice(rate)]
+        v = self.layout.by_name[rate]
+        return [
+            f"{scalar} = {x!r}, the derivative of {base} = {d!r}"
+            for scalar, base, g, x, d in zip(
+                v.scalar_names(),
+                self.layout.by_name[name].scalar_names(),
+                given,
+                stated.tolist(),
+                derivative.tolist(),
+            )
+            if g and x != 0.0 and x != d
+        ]
 
     # -- inputs the initial state was computed from --------------------------------
     _initial_inputs: dict | None = None

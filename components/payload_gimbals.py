@@ -73,6 +73,21 @@ error e = θ − θ_cmd(s) then obeys ë + 2ζωn ė + ωn² e = 0, integrated i
 
 The accelerations in ḣ are the servo law evaluated with the current inputs.  The servo
 state starts at the commands at t0 (the payloads are parked at the sweep's start).
+
+Interpolated commands (FMI 2.0 input derivatives, components/model.py; servo mode, the
+only one that integrates its inputs): the angle command moves at its slope a (the
+derivative a host set for it, else the rate command: :meth:`Model.slope`) and the rate
+command at its derivative β, θ_cmd(s) = θ_cmd + a s, θ̇_cmd(s) = θ̇_cmd + β s.  The error
+e = θ − θ_cmd(s) then obeys ë + 2ζωn ė + ωn² e = 2ζωn ((θ̇_cmd − a) + β s), whose solution
+is the particular e_p = p0 + p1 s (p1 = 2ζβ/ωn, p0 = (2ζωn (θ̇_cmd − a) − 2ζωn p1)/ωn²) plus
+the homogeneous motion above from e0 − p0, ė0 − p1.  Ideal tracking takes the commands at
+the communication points (nothing to interpolate).
+
+Output derivatives at the current time (the model's own angles θ, rates θ̇, accelerations
+θ̈ and jerks θ⃛: in servo mode θ⃛ = ωn² (a − θ̇) + 2ζωn (β − θ̈); in ideal tracking the
+derivatives of the acceleration commands with ``accel_inputs``, else zero, the
+accelerations being held over the step): the angles' θ̇, the rates' θ̈, ḣ, ḧ_b = R_mbᵀ (J Ω̈
++ Ω̇ × J Ω + 2 Ω × J Ω̇ + Ω × (Ω × J Ω)) and the boresights' R_mbᵀ (Ω × ẑ).
 """
 
 from __future__ import annotations
@@ -84,7 +99,7 @@ import numpy as np
 from .flat import StateTable
 from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
 
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
 _ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
@@ -117,10 +132,55 @@ def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     )
 
 
+def payload_momentum_rate(J, angles, rates, accels, jerks):
+    """(ḧ_b, boresight rate) of one payload, in B (module docstring); each argument a
+    (roll, pitch) pair of the angles and their first three derivatives."""
+    (phi, theta), (pd, td), (pdd, tdd), (pddd, tddd) = angles, rates, accels, jerks
+    Jx, Jy, Jz = J
+    c, s = math.cos(theta), math.sin(theta)
+    w = np.array([pd * c, td, pd * s])  # Ω, Ω̇, Ω̈ (eq. 1 differentiated)
+    w_dot = np.array([pdd * c - pd * td * s, tdd, pdd * s + pd * td * c])
+    k = 2.0 * pdd * td + pd * tdd
+    w_ddot = np.array(
+        [pddd * c - k * s - pd * td * td * c, tddd, pddd * s + k * c - pd * td * td * s]
+    )
+    inertia = np.array([Jx, Jy, Jz])
+    h, h_dot = inertia * w, inertia * w_dot
+    v = inertia * w_ddot + np.cross(w_dot, h) + 2.0 * np.cross(w, h_dot)
+    v += np.cross(w, np.cross(w, h))
+    return _to_body(phi, theta, v), _to_body(phi, theta, (w[1], -w[0], 0.0))
+
+
+def _to_body(phi, theta, v):
+    """R_mbᵀ v = R_x(φ)ᵀ (R_y(θ)ᵀ v)."""
+    cf, sf, c, s = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+    x, y, z = c * v[0] + s * v[2], v[1], c * v[2] - s * v[0]
+    return (x, cf * y - sf * z, sf * y + cf * z)
+
+
+def servo_step(angle, rate, command, rate_command, dt, omega, zeta, slope=None, rate_slope=0.0):
+    """Angle and rate after ``dt`` of θ̈ = ωn² (θc + a s − θ) + 2ζωn (θ̇c + β s − θ̇),
+    exactly; a = ``slope`` (None: θ̇c), β = ``rate_slope`` (module docstring)."""
+    a = rate_command if slope is None else slope
+    return servo_move(angle, rate, command, rate_command, dt, omega, zeta, a, rate_slope)
+
+
 @jitable
-def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
-    """Angle and rate after ``dt`` of θ̈ = ωn² (θc + θ̇c s − θ) + 2ζωn (θ̇c − θ̇), exactly."""
-    e0, de0 = angle - command, rate - rate_command
+def servo_move(angle, rate, command, rate_command, dt, omega, zeta, a, rate_slope):
+    """:func:`servo_step` with the angle command's slope ``a`` given (θ̇c where none was
+    set: the command held along its rate, the particular solution zero)."""
+    if a == rate_command and rate_slope == 0.0:
+        e, de = _free(angle - command, rate - rate_command, dt, omega, zeta)
+        return command + rate_command * dt + e, rate_command + de
+    p1 = 2.0 * zeta * rate_slope / omega
+    p0 = (2.0 * zeta * omega * (rate_command - a) - 2.0 * zeta * omega * p1) / (omega * omega)
+    e, de = _free(angle - command - p0, rate - a - p1, dt, omega, zeta)
+    return command + a * dt + e + p0 + p1 * dt, a + de + p1
+
+
+@jitable
+def _free(e0, de0, dt, omega, zeta):
+    """e, ė after ``dt`` of ë + 2ζωn ė + ωn² e = 0 from e0, ė0."""
     sigma = zeta * omega
     omega2 = omega * omega
     lam2 = omega2 * (zeta * zeta - 1.0)
@@ -141,11 +201,14 @@ def servo_step(angle, rate, command, rate_command, dt, omega, zeta):
         S = 0.5 * (slow - fast) / lam
     e = C * e0 + S * (sigma * e0 + de0)
     de = C * de0 - S * (omega2 * e0 + sigma * de0)
-    return command + rate_command * dt + e, rate_command + de
+    return e, de
 
 
 class PayloadGimbals(Model):
     """Two payloads, each on a roll-then-pitch gimbal: momentum relative to the body."""
+
+    INTERPOLATES_INPUTS = True
+    OUTPUT_DERIVATIVES = True
 
     VARIABLES = (
         parameter(
@@ -316,52 +379,117 @@ class PayloadGimbals(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        gimbals_step(self.values, self.state, self.t, dt)
+        if gimbals_step(self.values, self.state, self.t, dt) == SLOPE_CONFLICT:
+            conflicts = [
+                text
+                for angle, rate in (("roll_cmd", "roll_rate_cmd"), ("pitch_cmd", "pitch_rate_cmd"))
+                for text in self.slope_conflicts(angle, rate)
+            ]
+            self.warnings.append(
+                f"t={t:.6g} s: {'; '.join(conflicts)}: the derivative a host sets for an "
+                "angle command (fmi2SetRealInputDerivatives) is its slope over the "
+                "step, the rate command only where none was set (reported once)"
+            )
         self.t = t + dt
+
+    def _command_rates(self) -> tuple[list, list]:
+        """Per axis (roll 1, roll 2, pitch 1, pitch 2): the angle command's slope (None:
+        the rate command, no derivative set) and the rate command's derivative."""
+        slopes = []
+        for angle in ("roll_cmd", "pitch_cmd"):
+            given = self._given(angle).tolist()
+            rate = self.input_rate(angle).tolist()
+            slopes += [x if g else None for g, x in zip(given, rate)]
+        rate_slopes = [*self.input_rate("roll_rate_cmd"), *self.input_rate("pitch_rate_cmd")]
+        return slopes, [float(x) for x in rate_slopes]
 
     def output(self):
         gimbals_output(self.values, self.state, self.t)
 
+    def output_derivatives(self):
+        """See the module docstring: d/dt of the outputs at ``self.t``."""
+        s = self.state
+        commands = self.values[U_COMMANDS : U_COMMANDS + 12].tolist()
+        angles, rates, accels = _motion(commands, s.tolist())
+        if s[IDEAL] != 0.0:
+            jerks = [0.0] * 4
+            if s[ACCEL_INPUTS] != 0.0:
+                jerks = [*self.input_rate("roll_accel_cmd"), *self.input_rate("pitch_accel_cmd")]
+        else:
+            slopes, rate_slopes = self._command_rates()
+            w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
+            jerks = [
+                w2 * ((commands[4 + i] if slopes[i] is None else slopes[i]) - rates[i])
+                + d * (rate_slopes[i] - accels[i])
+                for i in range(4)
+            ]
+        J = s[J_PAYLOAD : J_PAYLOAD + 3].tolist()
+        pair = [(k, k + 2) for k in (0, 1)]  # (roll, pitch) of payloads 1 and 2
+        moved = [
+            payload_momentum_rate(J, *([x[i], x[j]] for x in (angles, rates, accels, jerks)))
+            for i, j in pair
+        ]
+        hdot = self.values[Y_OUTPUTS + 11 : Y_OUTPUTS + 14]
+        return np.array(
+            [*rates, *accels, *hdot, *np.add(moved[0][0], moved[1][0]), *moved[0][1], *moved[1][1]]
+        )
+
 
 # -- kernels (components/jit.py) ------------------------------------------------------
-_LAYOUT = Layout(PayloadGimbals.VARIABLES)  # offsets in PayloadGimbals.values
+_LAYOUT = PayloadGimbals.table_layout()  # offsets in PayloadGimbals.values
 #: the inputs in table order: angle, rate and acceleration commands, each (roll 1, roll 2,
-#: pitch 1, pitch 2); the outputs in table order
+#: pitch 1, pitch 2); the outputs in table order; the derivatives a host set for the
+#: inputs (in the same order) and 1 where it set one
 U_COMMANDS, Y_OUTPUTS = _LAYOUT.range["input"].start, _LAYOUT.range["output"].start
+D_COMMANDS, G_COMMANDS = _LAYOUT.derivative["roll_cmd"], _LAYOUT.given["roll_cmd"]
 #: the state array: the servo's angles and rates (as the commands), the rate commands at
 #: the last step and its length (ideal tracking; 1 once stepped), the payload inertia, ωn,
-#: ζ, 1 for ideal tracking, 1 with accel_inputs
+#: ζ, 1 for ideal tracking, 1 with accel_inputs, 1 once a rate command differing from a
+#: derivative set for its angle command was reported
 STATE = StateTable(
     angles=4, rates=4, last_rate_cmd=4, last_dt=1, stepped=1, J_payload=3, omega=1, zeta=1,
-    ideal=1, accel_inputs=1,
+    ideal=1, accel_inputs=1, slope_reported=1,
 )  # fmt: skip
 ANGLES, RATES, LAST_RATE_CMD, LAST_DT, STEPPED, J_PAYLOAD = STATE.offsets[:6]
-OMEGA, ZETA, IDEAL, ACCEL_INPUTS = STATE.offsets[6:]
+OMEGA, ZETA, IDEAL, ACCEL_INPUTS, SLOPE_REPORTED = STATE.offsets[6:]
+#: gimbals_step's status: the step done, a slope conflict to report (step() warns)
+SLOPE_CONFLICT = 1
 
 
 @step_kernel(PayloadGimbals)
 def gimbals_step(values, state, t, dt):
     """Ideal tracking: the state is the commands (and the rate commands are kept for the
-    accelerations); a servo: :func:`servo_step` of each axis over ``dt``."""
-    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 8]), floats(state)
+    accelerations); a servo: :func:`servo_move` of each axis over ``dt``, the angle
+    command at the slope set for it (else its rate command), the rate command at its
+    derivative.  SLOPE_CONFLICT (the step done) the first time a non-zero rate command
+    differs from a derivative set for its angle command."""
+    v, s = floats(values), floats(state)
+    commands = v[U_COMMANDS : U_COMMANDS + 8]
     if s[IDEAL] != 0.0:
         for i in range(8):
             state[ANGLES + i] = commands[i]
         for i in range(4):
             state[LAST_RATE_CMD + i] = commands[4 + i]
         state[LAST_DT], state[STEPPED] = dt, 1.0
-    else:
-        for i in range(4):
-            state[ANGLES + i], state[RATES + i] = servo_step(
-                s[ANGLES + i], s[RATES + i], commands[i], commands[4 + i], dt, s[OMEGA], s[ZETA]
-            )
+        return 0
+    conflict = False
+    for i in range(4):
+        rate_command, given = commands[4 + i], v[G_COMMANDS + i] != 0.0
+        a = v[D_COMMANDS + i] if given else rate_command
+        conflict = conflict or given and rate_command != 0.0 and rate_command != a
+        state[ANGLES + i], state[RATES + i] = servo_move(
+            s[ANGLES + i], s[RATES + i], commands[i], rate_command, dt, s[OMEGA], s[ZETA], a,
+            v[D_COMMANDS + 4 + i],
+        )  # fmt: skip
+    if conflict and s[SLOPE_REPORTED] == 0.0:
+        state[SLOPE_REPORTED] = 1.0
+        return SLOPE_CONFLICT
     return 0
 
 
-@output_kernel(PayloadGimbals)
-def gimbals_output(values, state, t):
-    """Angles and rates, h, ḣ (eq. 3: the sums over the two payloads) and the boresights."""
-    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 12]), floats(state)
+@jitable
+def _motion(commands, s) -> tuple:
+    """(angles, rates, accelerations), each roll 1, roll 2, pitch 1, pitch 2, now."""
     if s[IDEAL] != 0.0:
         angles, rates = commands[:4], commands[4:8]
         if s[ACCEL_INPUTS] != 0.0:
@@ -377,6 +505,14 @@ def gimbals_output(values, state, t):
         accels = [
             w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
         ]
+    return angles, rates, accels
+
+
+@output_kernel(PayloadGimbals)
+def gimbals_output(values, state, t):
+    """Angles and rates, h, ḣ (eq. 3: the sums over the two payloads) and the boresights."""
+    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 12]), floats(state)
+    angles, rates, accels = _motion(commands, s)
     J = (s[J_PAYLOAD], s[J_PAYLOAD + 1], s[J_PAYLOAD + 2])
     h1, d1, l1 = payload_momentum(J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2])
     h2, d2, l2 = payload_momentum(J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3])

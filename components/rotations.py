@@ -255,6 +255,30 @@ def euler123_dot(euler, w) -> tuple:
     return (phi_dot, wx * sp + wy * cp, wz - phi_dot * st)
 
 
+def euler123_ddot(euler, euler_dot, w, w_dot) -> tuple:
+    """d/dt of :func:`euler123_dot`: (φ̈, θ̈, ψ̈) from the angles, their rates and the body
+    rates w and their derivative ẇ (differentiating φ̇ = u / cos θ with u = w_x cos ψ −
+    w_y sin ψ, θ̇ = w_x sin ψ + w_y cos ψ, ψ̇ = w_z − φ̇ sin θ)::
+
+        u̇ = ẇ_x cos ψ − ẇ_y sin ψ − ψ̇ θ̇
+        φ̈ = u̇ / cos θ + φ̇ θ̇ tan θ,   θ̈ = ẇ_x sin ψ + ẇ_y cos ψ + ψ̇ u,
+        ψ̈ = ẇ_z − φ̈ sin θ − φ̇ θ̇ cos θ
+
+    At gimbal lock (φ̇ = 0 there) φ̈ = 0."""
+    _, theta, psi = euler
+    phi_dot, theta_dot, psi_dot = euler_dot
+    cp, sp = math.cos(psi), math.sin(psi)
+    ct, st = math.cos(theta), math.sin(theta)
+    wx, wy, _ = w
+    ax, ay, az = w_dot
+    u = wx * cp - wy * sp
+    phi_ddot = 0.0
+    if abs(ct) > GIMBAL_LOCK_COS:
+        phi_ddot = (ax * cp - ay * sp - psi_dot * theta_dot) / ct + phi_dot * theta_dot * st / ct
+    theta_ddot = ax * sp + ay * cp + psi_dot * u
+    return (phi_ddot, theta_ddot, az - phi_ddot * st - phi_dot * theta_dot * ct)
+
+
 @jitable
 def wrap_pi(angle: float) -> float:
     """Angle wrapped to [−π, π)."""

@@ -10,16 +10,25 @@ axes).  With J the hub inertia, h the devices' momentum relative to the body (in
 
 which is the hub equation J ẇ = −w × (J w + h) − ḣ + τ (eq. 3 with all terms kept):
 H_I changes only by external torque, so total momentum is conserved exactly whatever the
-co-simulation step.  Across a step the devices' momentum is extrapolated with the
-derivative they report, h(t + s) = h + ḣ s, held at the communication point (FMI inputs
-are the values at the step's start).  Integration: classical RK4 with sub-steps of at
-most 0.02 rad of rotation.  The gravity-gradient torque is skipped when J ∝ 1, where it
-vanishes identically.
+co-simulation step.  Across a step the inputs the model integrates follow their
+derivatives (FMI 2.0 input interpolation, components/model.py): the devices' momentum
+h(t_c + s) = h + ḣ s + ½ ḧ s², with ḣ its slope (the derivative a host set for ``h_*``,
+else the input ``hdot_*``: :meth:`Model.slope`) and ḧ the derivative set for ``hdot_*``;
+τ_ext + τ̇ s and r_I + ṙ s likewise (never set: zero, the input held).  q_OI and w_OI_O
+enter only the outputs, at communication points.  Integration: classical RK4 with
+sub-steps of at most 0.02 rad of rotation.  The gravity-gradient torque is skipped when
+J ∝ 1, where it vanishes identically.
 
 Outputs relative to the orbit frame O (inputs q_OI, w_OI_O): q_BO = q_OI* ⊗ q_BI,
 w_BO_B = w_BI_B − C_BO w_OI_O and the 1-2-3 Euler angles of B relative to O on a branch
 continuous in time (pitch may pass through ±90°; see rotations.euler123), with their
 rates (video-SAR eq. 13).
+
+Output derivatives (``output_derivatives``), at the current time with the inputs as
+interpolated: q̇_BI and Ḣ_I from the equations above, ẇ_BI_B = J⁻¹ (−w × C_BI H_I + τ − ḣ),
+q̇_BO = ½ q_BO ⊗ (0, w_BO_B), ẇ_BO_B = ẇ_BI_B + w_BO_B × C_BO w_OI_O − C_BO ẇ_OI_O (ẇ_OI_O
+the derivative set for w_OI_O), the Euler angles' first and second derivatives
+(rotations.euler123_ddot).
 
 ``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
 runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
@@ -43,13 +52,14 @@ from .rotations import (
     dcm,
     dcm_from_euler123,
     euler123,
+    euler123_ddot,
     euler123_dot,
     qmul,
     quat_from_dcm,
     rotate,
     rotate_back,
 )
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
@@ -85,6 +95,9 @@ def _device_inputs():
 
 class SatelliteDynamics(Model):
     """Rigid-body attitude dynamics with internal momentum and gravity-gradient torque."""
+
+    INTERPOLATES_INPUTS = True
+    OUTPUT_DERIVATIVES = True
 
     _BO_DEPENDS = ("q_OI",)
     _RATE_DEPENDS = MOMENTUM_INPUTS + ("q_OI", "w_OI_O")
@@ -221,6 +234,16 @@ class SatelliteDynamics(Model):
     def step(self, t, dt):
         self.check_initial_inputs(dt)
         status = _step(self.values, self.state, self.t, dt)
+        if status == SLOPE_CONFLICT:
+            conflicts = [
+                text for h in MOMENTUM_INPUTS for text in self.slope_conflicts(h, "hdot" + h[1:])
+            ]
+            self.warnings.append(
+                f"t={t:.6g} s: {'; '.join(conflicts)}: the derivative a host sets for h_* "
+                "(fmi2SetRealInputDerivatives) is its slope over the step, hdot_* only "
+                "where none was set (reported once)"
+            )
+            status = OK
         if status == NO_POSITION:
             raise ModelError(
                 "gravity_gradient is on but r_I is zero: connect r_I or set "
@@ -241,6 +264,40 @@ class SatelliteDynamics(Model):
         if _output(self.values, self.state, self.t) == NOT_UNIT:
             _unit(self.u.q_OI, "q_OI")  # raises its ModelError
 
+    def output_derivatives(self):
+        """See the module docstring: d/dt of the outputs at ``self.t``."""
+        v, s, y = floats(self.values), floats(self.state), self.y
+        q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
+        J, J_inv = _matrix(s, S_J), _matrix(s, S_J_INV)
+        slope, _, _, r_rate, tau_rate = _rates(v)
+        torque = (_vector(v, TAU_EXT), _vector(v, R_I), tau_rate, r_rate)
+        q_dot_H_dot = _derivative(
+            q_BI + H_I, 0.0, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), slope, (0.0,) * 3,
+            torque, J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0, (False, False, False),
+        )  # fmt: skip
+        C_BI = dcm(q_BI)
+        w, H_B = y.w_BI_B.tolist(), rotate(C_BI, H_I)
+        tau_B = rotate(C_BI, q_dot_H_dot[4:])
+        w_dot = rotate(J_inv, np.subtract(tau_B, slope) - np.cross(w, H_B))
+        q_BO, w_BO = y.q_BO.tolist(), y.w_BO_B.tolist()
+        C_BO = dcm(q_BO)
+        w_OI_B = rotate(C_BO, self.u.w_OI_O.tolist())
+        w_BO_dot = (
+            np.add(w_dot, np.cross(w_BO, w_OI_B)) - rotate(C_BO, self.input_rate("w_OI_O"))
+        ).tolist()
+        euler, euler_dot = y.euler_BO.tolist(), y.euler_rate_BO.tolist()
+        return np.array(
+            [
+                *q_dot_H_dot[:4],
+                *w_dot,
+                *(0.5 * x for x in qmul(q_BO, (0.0, *w_BO))),
+                *euler_dot,
+                *euler123_ddot(euler, euler_dot, w_BO, w_BO_dot),
+                *w_BO_dot,
+                *q_dot_H_dot[4:],
+            ]
+        )
+
     def initial_input_jumps(self, used, dt):
         """Bounds of one step of dt (margin 4): the orbit frame turns by at most
         |w_OI_O| dt, its rate changes by a small fraction, each device's momentum by
@@ -259,42 +316,53 @@ class SatelliteDynamics(Model):
             jumps["w_OI_O"] = f"changed by {change:.3g} rad/s"
         for h in MOMENTUM_INPUTS:
             change = np.linalg.norm(getattr(u, h) - used[h])
-            hdot = getattr(u, "hdot" + h[1:])
+            hdot = self.slope(h, "hdot" + h[1:])
             if change > 4.0 * np.linalg.norm(hdot) * dt + 1e-9 * (1.0 + np.linalg.norm(used[h])):
                 jumps[h] = f"changed by {change:.4g} N.m.s"
         return jumps
 
 
 # -- step and output: kernels on the value array (compiled in long runs, components/jit.py) --
-_OFFSET = Layout(SatelliteDynamics.VARIABLES).offset  # offsets in SatelliteDynamics.values
+_LAYOUT = SatelliteDynamics.table_layout()
+_OFFSET = _LAYOUT.offset  # offsets in SatelliteDynamics.values
 H_CMG, H_WHEEL, H_PAYLOAD = (_OFFSET[f"h_{d}"] for d in DEVICES)
 HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD = (_OFFSET[f"hdot_{d}"] for d in DEVICES)
 TAU_EXT, R_I, Q_OI, W_OI_O = (_OFFSET[n] for n in ("tau_ext", "r_I", "q_OI", "w_OI_O"))
+#: the derivatives a host set (components/variables.py, Layout): of h_*, whether set, of
+#: hdot_*, of tau_ext and r_I
+D_H_CMG, D_H_WHEEL, D_H_PAYLOAD = (_LAYOUT.derivative[f"h_{d}"] for d in DEVICES)
+G_H_CMG, G_H_WHEEL, G_H_PAYLOAD = (_LAYOUT.given[f"h_{d}"] for d in DEVICES)
+D_HDOT_CMG, D_HDOT_WHEEL, D_HDOT_PAYLOAD = (_LAYOUT.derivative[f"hdot_{d}"] for d in DEVICES)
+D_TAU_EXT, D_R_I = _LAYOUT.derivative["tau_ext"], _LAYOUT.derivative["r_I"]
 Y_Q_BI, Y_W_BI_B, Y_Q_BO, Y_EULER_BO, Y_EULER_RATE_BO, Y_W_BO_B, Y_H_I = (
     _OFFSET[n] for n in ("q_BI", "w_BI_B", "q_BO", "euler_BO", "euler_rate_BO", "w_BO_B", "H_I")
 )
 #: SatelliteDynamics.state: the state (q_BI, H_I), the last output's q_BO and euler_BO
 #: (their sign and branch are kept continuous), and constants set by initialize: the hub
 #: inertia and its inverse (row-major), μ, whether to apply the gravity-gradient torque
-#: (gravity_gradient on and J not ∝ 1) and whether r_I must not be zero (gravity_gradient on)
+#: (gravity_gradient on and J not ∝ 1) and whether r_I must not be zero (gravity_gradient on);
+#: 1 once a conflict of hdot_* with a derivative set for h_* was reported
 STATE = StateTable(
-    q_BI=4, H_I=3, q_BO=4, euler=3, J=9, J_inv=9, mu=1, gravity_gradient=1, needs_position=1
-)
+    q_BI=4, H_I=3, q_BO=4, euler=3, J=9, J_inv=9, mu=1, gravity_gradient=1, needs_position=1,
+    slope_conflict=1,
+)  # fmt: skip
 S_Q_BI, S_H_I, S_Q_BO, S_EULER, S_J, S_J_INV, S_MU = STATE.offsets[:7]
-S_GRAVITY_GRADIENT, S_NEEDS_POSITION = STATE.offsets[7:]
-#: the kernels' status codes (the Python wrapper raises the message)
-OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT = range(5)
+S_GRAVITY_GRADIENT, S_NEEDS_POSITION, S_SLOPE_CONFLICT = STATE.offsets[7:]
+#: the kernels' status codes (the Python wrapper raises the message, or warns: a step
+#: returning SLOPE_CONFLICT is done)
+OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT, SLOPE_CONFLICT = range(6)
 
 
 @step_kernel(SatelliteDynamics)
 def _step(values, state, t, dt):
-    """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values`` (held at
-    the step's start, the devices' momentum extrapolated with its derivative): RK4 in
-    n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉ sub-steps, q_BI normalised after.
-    Returns the status; on an error nothing changes."""
+    """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values``, as
+    interpolated (module docstring): RK4 in n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉
+    sub-steps, q_BI normalised after.  Returns the status; on an error nothing changes;
+    SLOPE_CONFLICT (the step done) the first time an hdot_* input differs from a
+    derivative set for its h_*."""
     v, s = floats(values), floats(state)
     h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
-    hdot = _device_sum(v, HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD)
+    hdot, conflict, curvature, r_rate, tau_rate = _rates(v)
     tau, r_I = _vector(v, TAU_EXT), _vector(v, R_I)
     if s[S_NEEDS_POSITION] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
         return NO_POSITION
@@ -304,16 +372,50 @@ def _step(values, state, t, dt):
     if not needed <= MAX_SUBSTEPS:
         return TOO_MANY_SUBSTEPS
     n = max(1, int(math.ceil(needed)))
+    moving = (_nonzero(curvature), _nonzero(tau_rate), _nonzero(r_rate))
     x = _integrate(
-        q_BI + H_I, n, dt / n, h0, hdot, tau, r_I, J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0
-    )
+        q_BI + H_I, n, dt / n, h0, hdot, curvature, (tau, r_I, tau_rate, r_rate),
+        J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0, moving,
+    )  # fmt: skip
     for xi in x:
         if not math.isfinite(xi):
             return NON_FINITE
     norm = _norm(x)
     _put(state, S_Q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
     _put(state, S_H_I, x[4:])
+    if conflict and s[S_SLOPE_CONFLICT] == 0.0:
+        state[S_SLOPE_CONFLICT] = 1.0
+        return SLOPE_CONFLICT
     return OK
+
+
+@jitable
+def _rates(v):
+    """The inputs' rates over the step (module docstring): (ḣ summed over the devices as
+    _device_sum adds h, whether a non-zero hdot_* differs from a derivative set for its
+    h_*, ḧ summed, ṙ_I, τ̇_ext)."""
+    slope = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    conflict = False
+    for k, (d, g, stated) in enumerate(
+        ((D_H_CMG, G_H_CMG, HDOT_CMG), (D_H_WHEEL, G_H_WHEEL, HDOT_WHEEL),
+         (D_H_PAYLOAD, G_H_PAYLOAD, HDOT_PAYLOAD))
+    ):  # fmt: skip
+        for i in range(3):
+            slope[3 * k + i] = v[d + i] if v[g + i] != 0.0 else v[stated + i]
+            if v[g + i] != 0.0 and v[stated + i] != 0.0 and v[stated + i] != v[d + i]:
+                conflict = True
+    hdot = (
+        (slope[0] + slope[3]) + slope[6],
+        (slope[1] + slope[4]) + slope[7],
+        (slope[2] + slope[5]) + slope[8],
+    )
+    curvature = _device_sum(v, D_HDOT_CMG, D_HDOT_WHEEL, D_HDOT_PAYLOAD)
+    return hdot, conflict, curvature, _vector(v, D_R_I), _vector(v, D_TAU_EXT)
+
+
+@jitable
+def _nonzero(x):
+    return x[0] != 0.0 or x[1] != 0.0 or x[2] != 0.0
 
 
 @jitable
@@ -370,18 +472,20 @@ def _rate(q, H_I, h, J_inv):
 
 
 @jitable
-def _integrate(x, n, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+def _integrate(x, n, sub, h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradient, moving):
     """x = (q_BI, H_I) after n RK4 sub-steps of ``sub``."""
     for k in range(n):
-        x = _rk4(x, k * sub, sub, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient)
+        x = _rk4(
+            x, k * sub, sub, h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradient, moving
+        )
     return x
 
 
 @jitable
-def _rk4(x, s, ds, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
+def _rk4(x, s, ds, h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradient, moving):
     """One classical Runge-Kutta step of ``ds`` from ``s`` into the macro step."""
     f, half = _derivative, ds / 2
-    inputs = h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient
+    inputs = h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradient, moving
     k1 = f(x, s, *inputs)
     k2 = f(_shift(x, half, k1), s + half, *inputs)
     k3 = f(_shift(x, half, k2), s + half, *inputs)
@@ -411,21 +515,31 @@ def _weighted(k1, k2, k3, k4):
 
 
 @jitable
-def _derivative(x, s, h0, hdot, tau, r_I, J, J_inv, mu, gravity_gradient):
-    """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats)."""
+def _derivative(x, s, h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradient, moving):
+    """(q̇_BI, Ḣ_I) at time s into the step (the hot loop: plain floats).  ``torque`` is
+    (τ_ext, r_I, τ̇_ext, ṙ_I); ``moving`` says which of ḧ, τ̇_ext, ṙ_I are not zero (a
+    rate of zero leaves the arithmetic of a held input untouched, bit for bit)."""
+    tau, r_I, tau_rate, r_rate = torque
     q0, q1, q2, q3 = q = x[:4]
     k = 1.0 / (q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)  # C(q)/|q|² is a rotation for any q
     (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = dcm(q)
     C = (k * c00, k * c01, k * c02), (k * c10, k * c11, k * c12), (k * c20, k * c21, k * c22)
     H_B = rotate(C, x[4:])
-    wx, wy, wz = rotate(
-        J_inv,
-        (
+    if moving[0]:  # h + ḣ s + ½ ḧ s²
+        a = (hdot[0] + 0.5 * curvature[0] * s, hdot[1] + 0.5 * curvature[1] * s,
+             hdot[2] + 0.5 * curvature[2] * s)  # fmt: skip
+        relative = (H_B[0] - h0[0] - a[0] * s, H_B[1] - h0[1] - a[1] * s, H_B[2] - h0[2] - a[2] * s)
+    else:
+        relative = (
             H_B[0] - h0[0] - hdot[0] * s,
             H_B[1] - h0[1] - hdot[1] * s,
             H_B[2] - h0[2] - hdot[2] * s,
-        ),
-    )
+        )
+    if moving[1]:
+        tau = (tau[0] + tau_rate[0] * s, tau[1] + tau_rate[1] * s, tau[2] + tau_rate[2] * s)
+    if moving[2]:
+        r_I = (r_I[0] + r_rate[0] * s, r_I[1] + r_rate[1] * s, r_I[2] + r_rate[2] * s)
+    wx, wy, wz = rotate(J_inv, relative)
     q_dot = (
         0.5 * (-q1 * wx - q2 * wy - q3 * wz),
         0.5 * (q0 * wx + q2 * wz - q3 * wy),

@@ -47,8 +47,12 @@ def _test_signal(text: str) -> tuple[str, str, int]:
     """'SIGTERM@run:3' -> ('SIGTERM', 'run', 3)."""
     name, _, where = text.partition("@")
     point, _, count = where.partition(":")
-    if not (name.startswith("SIG") and point in ("step", "run", "worker") and count.isdigit()):
-        raise ValueError("SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K, SIGNAL as SIGTERM")
+    if not (
+        name.startswith("SIG") and point in ("step", "run", "worker", "figure") and count.isdigit()
+    ):
+        raise ValueError(
+            "SIGNAL@step:K, SIGNAL@run:K, SIGNAL@worker:K or SIGNAL@figure:K, SIGNAL as SIGTERM"
+        )
     return name, point, int(count)
 
 
@@ -148,12 +152,20 @@ SWITCHES = {
             "tests/tools/fault_cases_fmu.py",
         ),
         Switch(
+            "AGILESAT_OMSIMULATOR",
+            None,
+            _path,
+            "the OMSimulator executable the OMSimulator tests run (not on the package registries)",
+            "tests/interop/test_omsimulator.py",
+        ),
+        Switch(
             "AGILESAT_TEST_SIGNAL",
             None,
             _test_signal,
-            "a test's hook: SIGNAL@step:K, SIGNAL@run:K or SIGNAL@worker:K sends the signal "
-            "at macro step K of a run, once K runs of a campaign are journaled, or as a "
-            "campaign worker starts its K-th run",
+            "a test's hook: SIGNAL@step:K, SIGNAL@run:K, SIGNAL@worker:K or SIGNAL@figure:K "
+            "sends the signal at macro step K of a run, once K runs of a campaign are "
+            "journaled, as a campaign worker starts its K-th run, or as a run starts its "
+            "K-th figure",
             "orchestration/cosim/signals.py signal_at()",
         ),
     )

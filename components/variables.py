@@ -217,9 +217,17 @@ def output(name, unit, description, depends=(), **kw) -> Var:
 
 
 class Layout:
-    """Offsets of a table's variables in the flat value array (offset = value reference)."""
+    """Offsets of a table's variables in the flat value array (offset = value reference).
 
-    def __init__(self, variables: tuple[Var, ...]):
+    ``interpolated`` (a model that interpolates its inputs, ``Model.INTERPOLATES_INPUTS``):
+    after the numeric variables the array holds, per input scalar (value reference order),
+    the first time derivative a host set with ``fmi2SetRealInputDerivatives``
+    (``derivative[name]``: offset of the derivative of input ``name``), then 1.0 where one
+    was set, 0.0 where none was (``given[name]``).  No value reference reaches them: they
+    are state (FMU states save them), read by the model where it integrates its inputs.
+    ``n_values`` is the array's length, ``n_numeric`` that of the variables alone."""
+
+    def __init__(self, variables: tuple[Var, ...], interpolated: bool = False):
         names = [v.name for v in variables]
         duplicates = {n for n in names if names.count(n) > 1}
         if duplicates:
@@ -255,6 +263,16 @@ class Layout:
             )
             for c in CAUSALITIES
         }
+        input_range = self.range["input"]
+        self.derivative: dict[str, int] = {}
+        self.given: dict[str, int] = {}
+        if interpolated:
+            for v in numeric:
+                if v.causality == "input" and v.type == "Real":
+                    at = self.offset[v.name] - input_range.start
+                    self.derivative[v.name] = self.n_numeric + at
+                    self.given[v.name] = self.n_numeric + len(input_range) + at
+        self.n_values = self.n_numeric + (2 * len(input_range) if interpolated else 0)
         for v in strings:
             self.offset[v.name] = position
             position += 1
@@ -263,7 +281,7 @@ class Layout:
         self.scalars = [(v, s) for v in self.variables for s in v.scalar_names()]
 
     def start_values(self) -> np.ndarray:
-        values = np.zeros(self.n_numeric)
+        values = np.zeros(self.n_values)
         for v in self.variables:
             if v.type != "String" and v.causality != "output":
                 values[self.slice(v.name)] = v.start_array()

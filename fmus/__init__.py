@@ -17,7 +17,18 @@ import re
 from pathlib import Path
 
 _COMPONENTS = Path(__file__).resolve().parent.parent / "components"
+#: the file in an exported FMU's resources holding the defaults it was configured with
+#: (written by configure.py, applied by the slave)
+CONFIGURATION = "configuration.json"
 FMUS: dict[str, str]  # see __getattr__
+
+
+def configuration_key(data: bytes) -> str:
+    """The hash of a configuration file's bytes that the configured FMU's GUID carries
+    (fmus/protocol.py ``fmu_guid``)."""
+    import hashlib
+
+    return hashlib.sha256(data).hexdigest()[:12]
 
 
 def _camel(snake: str) -> str:

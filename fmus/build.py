@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import os
 import shutil
 import subprocess
@@ -47,9 +48,16 @@ SHIM_C_FILES = (SHIM_DIR / "agilesat_fmi2.c", SHIM_DIR / "fast_paths.c")
 #: the header generated from protocol.py (`agilesat generate`)
 PROTOCOL_HEADER = SHIM_DIR / "protocol.h"
 SHIM_SOURCES = (*SHIM_C_FILES, SHIM_DIR / "shim.h", SHIM_DIR / "fmi2_abi.h", PROTOCOL_HEADER)
+#: the shim's libraries, kept as dependencies whether or not a symbol binds there: a glibc
+#: older than 2.34 has dlopen and pthread_once there (shim/shim.h, symbol versions)
+SHIM_LIBRARIES = ("-Wl,--no-as-needed", "-l:libdl.so.2", "-l:libpthread.so.0")
 PLATFORM = "linux64"
+#: the newest symbol versions pythonfmu's binary (pythonfmu-export.so) needs of the system,
+#: as ``objdump -T`` lists them (tests/fmus/test_portability.py checks them on the binary):
+#: glibc 2.32 (__libc_single_threaded), libstdc++ of GCC 12 (GLIBCXX_3.4.30:
+#: std::condition_variable::wait).  The shim needs glibc 2.2.5 (shim/shim.h).
+PYTHONFMU_NEEDS = ("GLIBC_2.32", "GLIBCXX_3.4.30")
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
-_GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
 
 
 class BuildError(RuntimeError):
@@ -70,33 +78,37 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     sources, digest = _sources(name)
     if not force and is_current(target, name, digest):
         return target
-    model = model_class(name)
     package = f"agilesat_{digest}"
-    entry = f"{name}_{digest}"
-    description = (model.__doc__ or name).strip().splitlines()[0]
-    entries = {
-        "modelDescription.xml": model_description(
-            name,
-            model,
-            str(uuid.uuid5(_GUID_NAMESPACE, f"{name}:{digest}")),
-            description,
-            f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
-        ),
-        f"binaries/{PLATFORM}/{name}.so": _shim_library(out_dir).read_bytes(),
+    entry = _entry_module(name, package)
+    model = model_class(name)
+    write_archive(target, fmu_entries(name, model, digest, sources, entry, out_dir))
+    if jit.kernels(sys.modules[model.__module__]):
+        compile_kernels(target, name, package)
+    return target
+
+
+def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str, out_dir) -> dict:
+    """The files of the FMU ``name`` of ``model`` (see the module): ``sources`` our code
+    packed (:func:`_sources`), ``entry_module`` the module pythonfmu imports; the shim is
+    compiled once into ``out_dir``."""
+    package, entry = f"agilesat_{digest}", f"{name}_{digest}"
+    binaries = {
+        f"binaries/{PLATFORM}/{name}.so": _shim_library(Path(out_dir)).read_bytes(),
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
+    }
+    entries = {
+        "modelDescription.xml": description_xml(name, digest, model=model, binaries=binaries),
+        **binaries,
         "resources/slavemodule.txt": entry.encode(),
-        f"resources/{entry}.py": _entry_module(name, package).encode(),
+        f"resources/{entry}.py": entry_module.encode(),
         f"resources/{package}/__init__.py": b"",
-        "documentation/index.html": _documentation(name, model).encode(),
+        "documentation/index.html": documentation(name, model).encode(),
     }
     for relative, path in sources.items():
         entries[f"resources/{package}/{relative}"] = path.read_bytes()
     for path in sorted(_pythonfmu_dir().glob("*.py")):
         entries[f"resources/pythonfmu/{path.name}"] = path.read_bytes()
-    write_archive(target, entries)
-    if jit.kernels(sys.modules[model.__module__]):
-        compile_kernels(target, name, package)
-    return target
+    return entries
 
 
 _COMPILE_KERNELS = """
@@ -129,21 +141,52 @@ def compile_kernels(fmu: Path, name: str, package: str) -> None:
         raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
 
 
+def description_xml(
+    name: str,
+    digest: str,
+    starts: dict | None = None,
+    key: str = "",
+    model=None,
+    binaries: dict[str, bytes] | None = None,
+) -> bytes:
+    """The model description of FMU ``name`` (of ``model``, default ours of that name) built
+    from the sources of hash ``digest``, with the SHA-256 of its ``binaries``; ``starts``
+    ({scalar name: start text}) and ``key`` (their hash) for a configured FMU
+    (fmus/configure.py), whose GUID is its own (:func:`.protocol.fmu_guid`)."""
+    model = model or model_class(name)
+    return model_description(
+        name,
+        model,
+        protocol.fmu_guid(name, digest, key),
+        (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0],
+        f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
+        starts,
+        binaries,
+    )
+
+
 def write_archive(target: Path, entries: dict[str, bytes]) -> Path:
     """A deterministic zip (sorted entries, fixed timestamps), written atomically (under a
     name unique to this writer, then renamed: parallel builds never share a file)."""
     partial = _partial(target)
     try:
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
-            for arcname in sorted(entries):
-                info = zipfile.ZipInfo(arcname, _ZIP_TIME)
-                info.compress_type = zipfile.ZIP_DEFLATED
-                info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
-                archive.writestr(info, entries[arcname])
+        partial.write_bytes(archive_bytes(entries))
         os.replace(partial, target)
     finally:
         partial.unlink(missing_ok=True)
     return target
+
+
+def archive_bytes(entries: dict[str, bytes]) -> bytes:
+    """A deterministic zip of ``entries`` (sorted, fixed timestamps), in memory."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        for arcname in sorted(entries):
+            info = zipfile.ZipInfo(arcname, _ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = (0o755 if arcname.endswith(".so") else 0o644) << 16
+            archive.writestr(info, entries[arcname])
+    return buffer.getvalue()
 
 
 def _entry_module(name: str, package: str) -> str:
@@ -174,15 +217,17 @@ def is_current(path: Path, name: str, digest: str | None = None) -> bool:
         return False
 
 
-def _sources(name: str) -> tuple[dict[str, Path], str]:
+def _sources(name: str, modules=None) -> tuple[dict[str, Path], str]:
     """Files packed as our code (relative path -> file) and the content hash of the FMU.
 
     Our code is the FMU's model module, the generic slave and the registry that makes the
     slave class (``fmus/__init__.py``), and everything they import from our packages,
-    followed through relative imports (``from ..components.cmg_cluster import ...``).
+    followed through relative imports (``from ..components.cmg_cluster import ...``);
+    ``modules`` (paths like 'components/noise.py') instead of the model module: those a
+    model of a user's imports (:mod:`.user_models`).
     """
     files: dict[str, Path] = {}
-    pending = ["fmus/__init__.py", "fmus/slave.py", f"components/{FMUS[name]}.py"]
+    pending = ["fmus/__init__.py", "fmus/slave.py", *(modules or [f"components/{FMUS[name]}.py"])]
     while pending:
         relative = pending.pop()
         if relative in files:
@@ -245,8 +290,9 @@ def _pythonfmu_binary() -> Path:
     return path
 
 
-def python_runtime() -> tuple[str, str]:
-    """(shared libpython, python executable) the FMUs start in a host without Python.
+def python_runtime() -> tuple[str, str, str]:
+    """(shared libpython, python executable, "X.Y") the FMUs start in a host without
+    Python.
 
     The executable is this environment's own (``sys.executable``, not resolved: a virtual
     environment is recognised by the pyvenv.cfg beside its ``bin/``).  The library is ""
@@ -258,7 +304,7 @@ def python_runtime() -> tuple[str, str]:
             sysconfig.get_config_var("LIBDIR") or "", sysconfig.get_config_var("INSTSONAME") or ""
         )
         library = str(path) if path.is_file() else ""
-    return library, os.path.abspath(sys.executable)
+    return library, os.path.abspath(sys.executable), "{}.{}".format(*sys.version_info)
 
 
 def _shim_library(out_dir: Path) -> Path:
@@ -266,9 +312,9 @@ def _shim_library(out_dir: Path) -> Path:
     <out_dir>/.shim/)."""
     if PROTOCOL_HEADER.read_text() != protocol.header():
         raise BuildError(f"{PROTOCOL_HEADER} is out of date: run `agilesat generate`")
-    runtime = python_runtime()
+    flags = [*shim_flags(*python_runtime()), *map(str, SHIM_C_FILES), *SHIM_LIBRARIES]
     digest = hashlib.sha256(
-        b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(runtime).encode()
+        b"".join(p.read_bytes() for p in SHIM_SOURCES) + "\0".join(flags).encode()
     ).hexdigest()[:12]
     library = out_dir / ".shim" / f"agilesat_fmi2_{digest}.so"
     if library.exists():
@@ -280,8 +326,7 @@ def _shim_library(out_dir: Path) -> Path:
             "building FMUs needs a C compiler (cc or gcc, or set CC) for the FMI shim fmus/shim/"
         )
     partial = _partial(library)
-    command = [compiler, "-O2", *shim_flags(*runtime), *map(str, SHIM_C_FILES)]
-    command += ["-o", str(partial), "-ldl", "-lpthread"]
+    command = [compiler, "-O2", *flags, "-o", str(partial)]
     try:
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
@@ -294,14 +339,21 @@ def _shim_library(out_dir: Path) -> Path:
     return library
 
 
-def shim_flags(libpython: str, python: str) -> list[str]:
+def shim_flags(libpython: str, python: str, version: str) -> list[str]:
     """The compiler flags that make the shim's sources (SHIM_C_FILES) a shared library, for
-    a Python runtime (:func:`python_runtime`)."""
+    a Python runtime (:func:`python_runtime`).  ``-z nodelete``: a host that unloads the
+    library between two instances (ECOS loads and unloads an FMU's library per instance)
+    keeps its instance registry and pythonfmu's handles alive, as pythonfmu's own binary
+    is (its GNU-unique C++ symbols make it NODELETE)."""
     defines = [
         f"-DAGILESAT_{key}={_c_string(value)}"
-        for key, value in (("LIBPYTHON", libpython), ("PYTHON", python))
+        for key, value in (
+            ("LIBPYTHON", libpython),
+            ("PYTHON", python),
+            ("PYTHON_VERSION", version),
+        )
     ]
-    return ["-shared", "-fPIC", "-fvisibility=hidden", *defines]
+    return ["-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-z,nodelete", *defines]
 
 
 def generated_files() -> dict[Path, Callable[[], bytes]]:
@@ -369,18 +421,63 @@ def _short(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _documentation(name: str, model) -> str:
-    rows = "\n".join(
-        "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in row) + "</tr>"
-        for row in interface_rows(model)
+def requirements() -> tuple[str, list[str]]:
+    """What an FMU needs where it runs: (one line for the model description, the points of
+    its documentation/index.html), from the package's metadata, the Python building it and
+    what pythonfmu's binary needs (docs/hosts.md says the same)."""
+    _, python, version = python_runtime()
+    needed = {r.split(">")[0]: r for r in metadata.requires("agilesat") or []}
+    numpy, sgp4 = needed.get("numpy", "numpy"), needed.get("sgp4", "sgp4")
+    glibc, libstdcxx = (v.split("_")[1] for v in PYTHONFMU_NEEDS)
+    line = (
+        f"Needs Python {metadata.metadata('agilesat')['Requires-Python']} with {numpy}; in a "
+        f"host without Python, Python {version} (set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
+        f"Linux x86-64, glibc >= {glibc}, libstdc++ >= GLIBCXX_{libstdcxx} (see "
+        "documentation/index.html)."
     )
-    doc = escape(model.__doc__ or "")
-    return (
-        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>"
-        f"<body><h1>{name}</h1><pre>{doc}</pre><table border='1'>"
-        "<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th>"
-        f"<th>description</th></tr>\n{rows}</table></body></html>\n"
-    )
+    points = [
+        f"In a Python host (FMPy, libcosimpy, ecospy, agilesat's master) the FMU runs in the "
+        f"host's own interpreter: Python {metadata.metadata('agilesat')['Requires-Python']} "
+        f"with {numpy} ({sgp4} for an OrbitEnvironment given a TLE; numba, optional, "
+        "compiles the models' hot loops in long runs).",
+        f"In a host without Python (a C/C++ tool, OMSimulator, libcosim's or ECOS's command "
+        f"line) the FMU starts the Python it was built with, Python {version}: the shared "
+        f"libpython and the environment of {python}.  On another machine, make a Python "
+        f"{version} environment with numpy (and sgp4) and set AGILESAT_LIBPYTHON to its "
+        f"shared libpython (libpython{version}.so.1.0) and AGILESAT_PYTHON to its python; "
+        "anything missing is named by fmi2Instantiate through the host's logger.",
+        f"Linux x86-64 with glibc >= {glibc} and the libstdc++ of GCC 12 or later "
+        f"(GLIBCXX_{libstdcxx}): what pythonfmu's binary needs (Debian 12, Ubuntu 22.04 and "
+        "later; not Ubuntu 20.04, RHEL 8 or RHEL 9).  The FMU's own binary needs glibc 2.2.5.",
+    ]
+    return line, points
+
+
+def _table(header, rows) -> str:
+    cells = ["".join(f"<th>{escape(h)}</th>" for h in header)]
+    cells += ["".join(f"<td>{escape(str(c))}</td>" for c in row) for row in rows]
+    return "<table border='1'>" + "\n".join(f"<tr>{c}</tr>" for c in cells) + "</table>"
+
+
+def documentation(name: str, model, configured: dict | None = None) -> str:
+    """documentation/index.html: the model's docstring, what the FMU needs, the values it
+    was configured with (fmus/configure.py), its variables."""
+    points = "".join(f"<li>{escape(point)}</li>" for point in requirements()[1])
+    parts = [
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>",
+        f"<body><h1>{name}</h1><pre>{escape(model.__doc__ or '')}</pre>",
+        f"<h2>What this FMU needs</h2><ul>{points}</ul>",
+    ]
+    if configured:
+        parts.append(
+            "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
+            "defaults (the start values of its model description, and the model's values "
+            "at instantiation); the package's parameter set gives them too.</p>"
+            + _table(("name", "value"), sorted(configured.items()))
+        )
+    header = ("name", "causality", "type", "unit", "start", "description")
+    parts.append(f"<h2>Variables</h2>{_table(header, interface_rows(model))}</body></html>\n")
+    return "".join(parts)
 
 
 if __name__ == "__main__":

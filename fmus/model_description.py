@@ -6,20 +6,25 @@ display units), a description and start value for every variable, and the true
 dependencies: an output depends on the inputs its table row lists in ``depends``; at
 initialisation also on the inputs the initial state reads and on the parameters.
 
-Derivatives (a table row's ``derivative_of``): the derivative variable's ``<Real>`` carries
-FMI 2.0's ``derivative`` attribute (the index of the variable it is the derivative of:
-"if an input or an output is the derivative of another input or output", FMI 2.0.4
-section 2.2.7; such variables need not be states, so ``<Derivatives>`` stays empty);
-an FMU with such inputs declares ``canInterpolateInputs`` and one with such outputs
-``maxOutputDerivativeOrder="1"`` (first derivatives only).
+Derivatives.  A model that interpolates its inputs (``INTERPOLATES_INPUTS``) declares
+``canInterpolateInputs``, one that answers its outputs' derivatives (``OUTPUT_DERIVATIVES``)
+``maxOutputDerivativeOrder="1"`` (components/model.py).  A table row's ``derivative_of``
+gives the derivative variable's ``<Real>`` FMI 2.0's ``derivative`` attribute (the index of
+the variable it is the derivative of: "if an input or an output is the derivative of
+another input or output", FMI 2.0.4 section 2.2.7; such variables need not be states, so
+``<Derivatives>`` stays empty); a model declaring such an input (output) must have the
+capability.
 """
 
 from __future__ import annotations
 
+import hashlib
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from ..components.variables import UNITS, Layout
 
+#: the vendor annotation that lists the SHA-256 of the FMU's binaries
+BINARIES_TOOL = "agilesat.binaries"
 LOG_CATEGORIES = {
     "logStatusWarning": "Messages with status fmi2Warning",
     "logStatusError": "Messages with status fmi2Error",
@@ -28,9 +33,34 @@ LOG_CATEGORIES = {
 
 
 def model_description(
-    name: str, model_class, guid: str, description: str, generation_tool: str
+    name: str,
+    model_class,
+    guid: str,
+    description: str,
+    generation_tool: str,
+    starts: dict[str, str] | None = None,
+    binaries: dict[str, bytes] | None = None,
 ) -> bytes:
+    """The model description; ``starts`` ({scalar name: text}) replaces the table's start
+    values of those scalars (an FMU configured with them: fmus/configure.py); ``binaries``:
+    {path in the FMU: content} of its shared libraries, whose SHA-256 a master checks
+    before loading them (:func:`_binaries_annotation`)."""
     layout = Layout(model_class.VARIABLES)
+    for causality, capable in (
+        ("input", model_class.INTERPOLATES_INPUTS),
+        ("output", model_class.OUTPUT_DERIVATIVES),
+    ):
+        stated = [v.name for v in layout.group(causality) if v.derivative_of]
+        if stated and not capable:
+            raise ValueError(
+                f"{name}: {stated} are declared derivatives of {causality}s, but the model "
+                "does not "
+                + (
+                    "interpolate its inputs"
+                    if causality == "input"
+                    else "answer output derivatives"
+                )
+            )
     root = Element(
         "fmiModelDescription",
         {
@@ -50,8 +80,8 @@ def model_description(
             "modelIdentifier": name,
             "needsExecutionTool": "true",  # a Python 3 interpreter with numpy
             "canHandleVariableCommunicationStepSize": "true",
-            "canInterpolateInputs": _flag(layout, "input"),
-            "maxOutputDerivativeOrder": "1" if _flag(layout, "output") == "true" else "0",
+            "canInterpolateInputs": "true" if model_class.INTERPOLATES_INPUTS else "false",
+            "maxOutputDerivativeOrder": "1" if model_class.OUTPUT_DERIVATIVES else "0",
             "canBeInstantiatedOnlyOncePerProcess": "false",
             "canNotUseMemoryManagementFunctions": "true",
             "canGetAndSetFMUstate": "true",
@@ -62,16 +92,11 @@ def model_description(
     categories = SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": category, "description": text})
-    _input_annotation(root, layout)
-    _model_variables(root, layout)
+    _binaries_annotation(_input_annotation(root, layout), binaries or {})
+    _model_variables(root, layout, starts or {})
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
     return tostring(root, encoding="UTF-8", xml_declaration=True)
-
-
-def _flag(layout, causality: str) -> str:
-    """``"true"`` if a variable of that causality is declared the derivative of another."""
-    return "true" if any(v.derivative_of for v in layout.group(causality)) else "false"
 
 
 def _unit_definitions(root, layout):
@@ -92,7 +117,8 @@ def _input_annotation(root, layout):
     """Every input, for masters that read it (ours does): ``<Input name=.../>`` a system
     must connect, ``<Input name=... optional="what the default means"/>`` it may leave open
     (one element under Tool: the FMI 2.0 schema allows no more)."""
-    tool = SubElement(SubElement(root, "VendorAnnotations"), "Tool", {"name": "agilesat"})
+    annotations = SubElement(root, "VendorAnnotations")
+    tool = SubElement(annotations, "Tool", {"name": "agilesat"})
     inputs = SubElement(tool, "Inputs")
     for var in layout.group("input"):
         for name in var.scalar_names():
@@ -101,9 +127,20 @@ def _input_annotation(root, layout):
                 "Input",
                 {"name": name} if var.required else {"name": name, "optional": var.optional},
             )
+    return annotations
 
 
-def _model_variables(root, layout):
+def _binaries_annotation(annotations, binaries: dict[str, bytes]) -> None:
+    """``<Tool name="agilesat.binaries"><Files><File name=... sha256=.../>``: the SHA-256
+    of each shared library, which our master checks before loading it: a damaged binary
+    is refused with a message instead of crashing the host (``orchestration/cosim/fmu.py``)."""
+    if binaries:
+        files = SubElement(SubElement(annotations, "Tool", {"name": BINARIES_TOOL}), "Files")
+        for path, data in sorted(binaries.items()):
+            SubElement(files, "File", {"name": path, "sha256": hashlib.sha256(data).hexdigest()})
+
+
+def _model_variables(root, layout, starts: dict[str, str]):
     variables = SubElement(root, "ModelVariables")
     index = {name: i for i, (_, name) in enumerate(layout.scalars, start=1)}
     for vr, (var, scalar_name) in enumerate(layout.scalars):
@@ -131,17 +168,26 @@ def _model_variables(root, layout):
                 base = scalar_name.replace(var.name, var.derivative_of, 1)
                 type_attributes["derivative"] = str(index[base])
         if var.causality != "output":
-            type_attributes["start"] = _start_text(var, vr - layout.offset[var.name])
+            at = vr - layout.offset[var.name]
+            type_attributes["start"] = (
+                starts[scalar_name] if scalar_name in starts else _start_text(var, at)
+            )
         SubElement(element, var.type, type_attributes)
 
 
 def _start_text(var, element_index: int) -> str:
-    if var.type == "String":
-        return str(var.start)
-    value = var.start_array()[element_index]
-    if var.type == "Boolean":
+    return start_text(
+        var.type, var.start if var.type == "String" else var.start_array()[element_index]
+    )
+
+
+def start_text(type_name: str, value) -> str:
+    """A start value as modelDescription.xml writes a value of that type."""
+    if type_name == "String":
+        return str(value)
+    if type_name == "Boolean":
         return "true" if value else "false"
-    if var.type == "Integer":
+    if type_name == "Integer":
         return str(int(value))
     return repr(float(value))
 

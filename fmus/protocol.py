@@ -11,7 +11,8 @@ refuse a stale one).  Nothing here is written twice.
   pythonfmu, passing value references as C ints, hands the slave as -1) answers
   (``FAST_PATH_VERSION``, address of the model's value array, its length, addresses of
   ``kind``, ``control`` and ``block``); the shim uses the arrays only if the version is
-  its own.
+  its own.  A fmi2GetString of ``FAST_PATH_VR`` answers the FMU's GUID
+  (:func:`fmu_guid`), which the shim compares with the one the host passes.
 - ``kind``: per scalar (value reference), ``KIND_*``.
 - ``control`` (int32): the flags of the state machine and of the fast paths.
 - ``block`` (float64): the step's end and the C step path's addresses (exact doubles).
@@ -22,6 +23,7 @@ refuse a stale one).  Nothing here is written twice.
 from __future__ import annotations
 
 import math
+import uuid
 
 DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
 
@@ -71,6 +73,20 @@ SECTIONS = (
     ),
     ("time continuity (math.isclose)", ("TIME_REL_TOL", "TIME_ABS_TOL")),
 )
+
+
+#: an FMU's GUID is its name and the content hash of its code (fmus/build.py ``_sources``)
+GUID_NAMESPACE = uuid.UUID("6f1c4c1e-3d0e-4c55-9a4e-0a9e5a7f2b11")
+
+
+def fmu_guid(name: str, digest: str, key: str = "") -> str:
+    """The GUID of FMU ``name`` built from code of content hash ``digest`` (and configured
+    by ``agilesat export`` with values of hash ``key``: fmus/configure.py): the build
+    writes it into modelDescription.xml, the slave answers it (its package is
+    ``agilesat_<digest>``, its configuration in its resources), and the shim refuses an
+    fmi2Instantiate given another (FMI 2.0 section 2.1.5: the GUID ties
+    modelDescription.xml to the binary)."""
+    return str(uuid.uuid5(GUID_NAMESPACE, f"{name}:{digest}" + (f":{key}" if key else "")))
 
 
 def continuous(t: float, end: float) -> bool:

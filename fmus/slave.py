@@ -17,15 +17,19 @@ from the model.  FMU states are data (``fmu_state``), never pickles.
 Input and output derivatives (FMI 2.0 section 4.2.1).  pythonfmu 0.7 answers
 ``fmi2SetRealInputDerivatives`` and ``fmi2GetRealOutputDerivatives`` "not supported"; the
 shim passes them on as ``fmi2SetReal``/``fmi2GetReal`` of the value references
-``DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr`` (a range no variable has).  A table row
-with ``derivative_of`` makes the pair: the first derivative of input ``h_cmg`` *is* the
-input ``hdot_cmg`` (setting one sets the other; the last call before ``fmi2DoStep`` wins,
-and it stays until set again, like any input: FMI 2.0 puts the same restrictions on it as
-on ``fmi2SetReal``); never set, it is the start value, zero: the input held over the
-step.  The output derivative of ``h`` is the output ``hdot``, at the current time.  Refused
-with fmi2Error: a variable without a declared derivative, an order other than 1, a
-non-finite derivative, setting after ``fmi2Terminate``, getting before
-``fmi2ExitInitializationMode`` (FMI 2.0 section 4.2.4's state table).
+``DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr`` (a range no variable has).  An FMU whose
+model interpolates its inputs (``INTERPOLATES_INPUTS``: canInterpolateInputs) takes the
+first derivative of every continuous Real input into the model's derivative block
+(``components/variables.py``, ``Layout``): it stays until set again, like any input (FMI
+2.0 puts the same restrictions on it as on ``fmi2SetReal``), and the model uses it where
+it integrates the input (``components/model.py``; an input that *is* another's rate, as
+``hdot_cmg`` of ``h_cmg``, is never overwritten by it).  An FMU whose model has
+``OUTPUT_DERIVATIVES`` (maxOutputDerivativeOrder 1) answers the first derivative of every
+Real output at the current time: the value of its declared derivative output (``hdot`` of
+``h``), else ``Model.output_derivatives``.  Refused with fmi2Error, naming the variable: a
+variable that is not a continuous Real input (output) of an FMU declaring the capability,
+an order other than 1, a non-finite derivative, setting after ``fmi2Terminate``, getting
+before ``fmi2ExitInitializationMode`` (FMI 2.0 section 4.2.4's state table).
 
 The shim's fast paths (``fast_paths.py``, ``shim/fast_paths.c``) answer many calls in C
 from the arrays this slave shares with them; the state machine's own flags live there
@@ -37,7 +41,9 @@ and tell it what it may do after (``leave``).
 from __future__ import annotations
 
 import functools
+import json
 import math
+import os
 import sys
 import traceback
 
@@ -48,7 +54,7 @@ from pythonfmu.enums import Fmi2Status
 from ..components import jit
 from ..components.model import ModelError
 from ..components.switches import SwitchError
-from . import fmu_state
+from . import CONFIGURATION, configuration_key, fmu_state, state_layout
 from .fast_paths import FastPaths, kind
 from .protocol import (
     B_TIME,
@@ -56,9 +62,11 @@ from .protocol import (
     DERIVATIVE_BASE,
     FAST_PATH_N,
     FAST_PATH_VR,
+    KIND_OTHER,
     ORDER_SHIFT,
     OUTPUTS_VALID,
     continuous,
+    fmu_guid,
 )
 
 PARAMETER, INPUT, OUTPUT = 0, 1, 2
@@ -98,19 +106,6 @@ def _guarded(default):
     return decorate
 
 
-def _same_arrays(model, attributes: dict) -> None:
-    """A state's arrays must have the shape and dtype of the model's own (the compiled
-    kernels index them without bounds checks): else _CallRejected."""
-    for name, value in attributes.items():
-        mine = vars(model).get(name)
-        if type(mine) is np.ndarray and not (
-            type(value) is np.ndarray and value.dtype == mine.dtype and value.shape == mine.shape
-        ):
-            raise _CallRejected(
-                f"the state's {name} is not a {mine.dtype} array of shape {mine.shape}"
-            )
-
-
 def _zeros(vrs):
     return [0] * len(vrs)
 
@@ -136,6 +131,7 @@ def _rejection(state) -> str:
 
 class ModelSlave(Fmi2Slave):
     model_class = None  # set by each FMU wrapper
+    _configuration_key = ""  # of the values an exported FMU was configured with
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -143,17 +139,21 @@ class ModelSlave(Fmi2Slave):
         layout = self.model.layout
         self._layout = layout
         self._scalar_names = [name for _, name in layout.scalars]
+        self._configure(kwargs.get("resources"))
         self._causality = np.array([_CAUSALITY_CODE[v.causality] for v, _ in layout.scalars])
         self._type = np.array([_TYPE_CODE[v.type] for v, _ in layout.scalars])
         self._string_names = [v.name for v in layout.variables if v.type == "String"]
         self._outputs = slice(layout.range["output"].start, layout.range["output"].stop)
-        #: vr of a scalar with a declared derivative -> vr of its derivative
+        #: vr of an output with a declared derivative output -> vr of that output
         self._derivative = {
             layout.offset[v.derivative_of] + k: layout.offset[v.name] + k
-            for v in layout.variables
+            for v in layout.group("output")
             if v.derivative_of
             for k in range(v.size)
         }
+        #: input vr + _block: its derivative in the value array; + _n_inputs more: its flag
+        self._n_inputs = len(layout.range["input"])
+        self._block = layout.n_numeric - layout.range["input"].start
         #: inputs some output depends on directly (its table row's ``depends``)
         feeds = {
             vr
@@ -162,18 +162,32 @@ class ModelSlave(Fmi2Slave):
             for vr in range(layout.offset[name], layout.offset[name] + layout.by_name[name].size)
         }
         self._feeds = np.array([vr in feeds for vr in range(len(layout.scalars))], dtype=bool)
-        self._fast = FastPaths(
-            self,
-            np.array(
-                [kind(v.causality, v.type, f) for (v, _), f in zip(layout.scalars, self._feeds)],
-                dtype=np.uint8,
-            ),
-        )
+        kinds = [kind(v.causality, v.type, f) for (v, _), f in zip(layout.scalars, self._feeds)]
+        kinds += [KIND_OTHER] * (layout.n_values - len(kinds))  # the derivative block
+        self._fast = FastPaths(self, np.array(kinds, dtype=np.uint8))
         self._plans: dict = {}
         self._mode = "instantiated"
         self._start_time = 0.0
         self._stop_time = None  # setupExperiment's, when defined
         self._state_valid = False
+
+    def _configure(self, resources) -> None:
+        """The defaults of an FMU configured by ``agilesat export`` (fmus/configure.py):
+        the values in its resources' configuration.json, its model description's start
+        values."""
+        path = os.path.join(resources or "", CONFIGURATION)
+        if not resources or not os.path.isfile(path):
+            return
+        with open(path, "rb") as file:
+            data = file.read()
+        self._configuration_key = configuration_key(data)  # in the GUID (get_string)
+        values = json.loads(data)["values"]
+        for scalar, value in values.items():
+            vr = self._scalar_names.index(scalar)
+            if self._layout.scalars[vr][0].type == "String":
+                self.model.strings[scalar] = value
+            else:
+                self.model.values[vr] = float(value)
 
     # -- the state machine's flags that live in the arrays shared with the shim --------
     @property
@@ -260,6 +274,10 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(lambda vrs: [""] * len(vrs))
     def get_string(self, vrs):
+        if len(vrs) == 1 and vrs[0] in _HANDSHAKE:  # the shim asks for the binary's GUID
+            digest = _PACKAGE.partition("_")[2]  # "" outside an FMU: nothing to compare
+            guid = fmu_guid(type(self).__name__, digest, self._configuration_key)
+            return ["{" + guid + "}" if digest else ""]  # as modelDescription.xml has it
         self._plan(vrs, "String")
         return [self.model.strings[self._scalar_names[vr]] for vr in vrs]
 
@@ -271,63 +289,75 @@ class ModelSlave(Fmi2Slave):
 
     # -- input and output derivatives (see the module docstring) ---------------------
     @_guarded(_zeros)
-    def get_real_output_derivatives(self, vrs):
+    def get_real_output_derivatives(self, codes):
         if self._mode not in ("step", "terminated"):
             raise _CallRejected(
                 f"not allowed in mode '{self._mode}' (only after "
                 "fmi2ExitInitializationMode: FMI 2.0 section 4.2.4)"
             )
-        return self._read(self._derivative_vrs(vrs, OUTPUT), "Real").tolist()
+        vrs = self._derivative_plan(codes, OUTPUT)
+        declared = [self._derivative.get(vr) for vr in vrs]
+        if None not in declared:  # hdot of h: the output itself
+            return self._read(declared, "Real").tolist()
+        self._read(vrs, "Real")  # the outputs of the current state and inputs
+        rates = self.model.output_derivatives()[[vr - self._outputs.start for vr in vrs]]
+        if not np.all(np.isfinite(rates)):
+            bad = [self._scalar_names[vr] for vr, x in zip(vrs, rates) if not math.isfinite(x)]
+            raise _CallRejected(f"the model produced non-finite derivatives of {bad}")
+        return rates.tolist()
 
     @_guarded(None)
-    def set_real_input_derivatives(self, vrs, values):
-        targets = self._derivative_vrs(vrs, INPUT)
+    def set_real_input_derivatives(self, codes, values):
+        vrs = self._derivative_plan(codes, INPUT)
+        if self._mode == "terminated":
+            raise _CallRejected("variables cannot be set after fmi2Terminate")
         if not all(map(math.isfinite, values)):
             bad = [
                 f"{self._scalar_names[vr]}={x!r}"
-                for vr, x in zip(self._decoded(vrs), values)
+                for vr, x in zip(vrs, values)
                 if not math.isfinite(x)
             ]
             raise _CallRejected(f"non-finite derivatives rejected: {bad}")
-        self._write(targets, values, "Real")
+        at = [self._block + vr for vr in vrs]
+        self.model.values[at] = values
+        self.model.values[[k + self._n_inputs for k in at]] = 1.0
 
-    @staticmethod
-    def _decoded(vrs):
-        return [(vr - DERIVATIVE_BASE) & ((1 << ORDER_SHIFT) - 1) for vr in vrs]
-
-    def _derivative_vrs(self, vrs, causality: int) -> list:
-        """The value references of the derivatives the (order, vr) codes ask for."""
-        key = ("derivative", causality, tuple(vrs))
+    def _derivative_plan(self, codes, causality: int) -> list:
+        """The value references the (order, vr) codes ask the derivatives of; cached."""
+        key = ("derivative", causality, tuple(codes))
         plan = self._plans.get(key)
         if plan is None:
-            plan = self._make_derivative_plan(vrs, causality)
+            plan = self._make_derivative_plan(codes, causality)
             if len(self._plans) < _PLAN_CACHE_SIZE:
                 self._plans[key] = plan
         if isinstance(plan, str):
             raise _CallRejected(plan)
         return plan
 
-    def _make_derivative_plan(self, vrs, causality: int):
-        n, kind = len(self._scalar_names), ("input", "output")[causality - INPUT]
-        declared = [
-            self._scalar_names[vr] for vr in self._derivative if self._causality[vr] == causality
-        ]
-        targets = []
-        for code, vr in zip(vrs, self._decoded(vrs)):
-            order = (code - DERIVATIVE_BASE) >> ORDER_SHIFT
+    def _make_derivative_plan(self, codes, causality: int):
+        model, n = self.model_class, len(self._scalar_names)
+        kind = ("input", "output")[causality - INPUT]
+        if causality == INPUT and not model.INTERPOLATES_INPUTS:
+            return "this FMU does not interpolate its inputs (canInterpolateInputs is false)"
+        if causality == OUTPUT and not model.OUTPUT_DERIVATIVES:
+            return "this FMU has no output derivatives (maxOutputDerivativeOrder is 0)"
+        vrs = []
+        for code in codes:
+            order, vr = (code - DERIVATIVE_BASE) >> ORDER_SHIFT, code & ((1 << ORDER_SHIFT) - 1)
             if not 0 <= vr < n:
                 return f"unknown value reference {vr} (this FMU has 0..{n - 1})"
             name = self._scalar_names[vr]
-            if vr not in self._derivative or self._causality[vr] != causality:
-                return (
-                    f"{name} is not a Real continuous {kind} with a declared derivative "
-                    f"(those of this FMU: {declared or 'none'})"
-                )
+            if self._causality[vr] != causality or self._type[vr] != _TYPE_CODE["Real"]:
+                return f"{name} is not a continuous Real {kind}"
             if order != 1:
-                why = "maxOutputDerivativeOrder is 1" if kind == "output" else "linear inputs"
+                why = (
+                    "maxOutputDerivativeOrder is 1"
+                    if causality == OUTPUT
+                    else "this FMU interpolates its inputs linearly, u(t) = u + du/dt (t - t_c)"
+                )
                 return f"order {order} of {name}: only order 1, the first derivative ({why})"
-            targets.append(self._derivative[vr])
-        return targets
+            vrs.append(vr)
+        return vrs
 
     @_guarded(None)
     def set_integer(self, vrs, values):
@@ -368,7 +398,6 @@ class ModelSlave(Fmi2Slave):
         model_state, wrapper = self._check_state(
             fmu_state.decode(self._identity(), state, _PACKAGE)
         )
-        _same_arrays(self.model, model_state[2])
         self.model.set_state(model_state)
         (self._mode, self._start_time, self._next_time, self._state_valid, self._outputs_valid) = (
             wrapper
@@ -383,7 +412,7 @@ class ModelSlave(Fmi2Slave):
         """The structure a state of this FMU has (everything not depending on an instance)."""
         model = cls.model_class
         layout = model._layouts.get(model)  # set once a model was created
-        size = layout.n_numeric if layout else None
+        size = layout.n_values if layout else None
         names = {v.name for v in layout.variables if v.type == "String"} if layout else None
         try:
             (values, strings, attributes), wrapper = value
@@ -421,6 +450,7 @@ class ModelSlave(Fmi2Slave):
             and type(outputs_valid) is bool
         ):
             raise fmu_state.StateError("malformed FMI wrapper state")
+        state_layout.check(model, value[0], state_valid, outputs_valid)
         return value
 
     @classmethod
@@ -533,8 +563,8 @@ class ModelSlave(Fmi2Slave):
 
     def _flush_warnings(self):
         """The model's warnings, at category logStatusWarning; with the parameter
-        warnings_return_ok at status fmi2OK, which the shim forwards to the host (even
-        with debug logging off) without raising the call's status."""
+        warnings_return_ok at status fmi2OK, which the shim forwards to the host as a
+        warning message (even with debug logging off) without raising the call's status."""
         if self.model.warnings:
             self._warn(self.model.warnings)
             self.model.warnings.clear()

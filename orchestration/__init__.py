@@ -1,13 +1,16 @@
 """The co-simulation master, system files (SSP), results, scenarios and the CLI.
 
 The flow: :mod:`.system` reads and checks a system, :mod:`.cosim` runs it, :mod:`.output`
-records and shows what it did; :mod:`.scenarios`, :mod:`.campaign` and :mod:`.studies`
-are built on them, and :mod:`.runner` and :mod:`.cli` put them together.
+records and shows what it did; :mod:`.mission` describes a mission in Python (a
+:class:`~.mission.System`, its metrics, requirements, variants: the shipped
+:mod:`.scenarios` are written on it), :mod:`.campaign` and :mod:`.studies` are built on
+them, and :mod:`.runner` and :mod:`.cli` put them together.
 
 Python API::
 
     from agilesat.orchestration import run, simulate
     results, summary = run("scan_pitch", out_dir="out/scan_pitch")   # a shipped scenario
+    results, summary = run("path/to/mission.py:variant")            # a mission of yours
     results = simulate("my_system.ssd", step=0.05, stop=100.0)       # any SSP system
     results["SatelliteDynamics.w_BI_B[2]"], results.vector("CmgCluster.delta")
     assert_within(results, "SatelliteDynamics.w_BI_B[2]", -0.02, 0.02)  # and the other checks
@@ -29,6 +32,10 @@ _WHERE = {
     "assert_settles": "output.checks",
     "assert_momentum_conserved": "output.checks",
     "assert_requirements_met": "output.checks",
+    "System": "mission",
+    "Scenario": "mission",
+    "Variant": "mission",
+    "deg": "mission",
 }
 
 __all__ = list(_WHERE)

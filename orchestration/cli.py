@@ -2,56 +2,76 @@
 
 Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C)
-or SIGTERM (everything recorded so far is kept).
+as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
+by SIGTERM (everything recorded so far is kept, and the summary says what was not
+written; a second signal changes nothing).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+from contextlib import nullcontext
 from importlib import metadata
 from pathlib import Path
 
-from .scenarios import NAMES
+from .cosim.signals import interruptible
 from .studies import cli as study_cli
 
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
 #: master are imported only to run a campaign; a test checks it is the campaign's own)
 CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
+#: what TARGET may be (``mission.targets``)
+TARGETS = (
+    "a scenario[:variant] (`agilesat list`), a mission file path/to/mission.py[:variant], "
+    "a module of one, an .ssd/.ssp file, or an FMU (.fmu, or one of ours by name)"
+)
 
 
 def main(argv=None) -> int:
     """The command line.  Nothing heavy is imported here: each command imports what it
     uses (``agilesat --help`` and ``agilesat run --no-figures`` load no matplotlib)."""
+    program = argv is None  # the process ends with the command
     argv = sys.argv[1:] if argv is None else list(argv)
     campaign = bool(argv) and argv[0] == "campaign"
     if campaign:
         from .campaign import cli as campaign_cli
     args = _parser(campaign).parse_args(argv)
-    try:
-        return {
-            "list": _list,
-            "info": _info,
-            "build": _build,
-            "validate": _validate,
-            "run": _run,
-            "plot": _plot,
-            "export": _export,
-            "generate": _generate,
-            **study_cli.COMMANDS,
-            "campaign": campaign_cli.main if campaign else None,
-        }[args.command](args)
-    except KeyboardInterrupt as exc:
-        print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
-        return 130
-    except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
-        if _interrupted(exc):
-            print(f"agilesat {args.command}: {exc}", file=sys.stderr)
-            return 130
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
-        return 1
+    # a signal stops a command at once until a run writes, then is a flag (signals.py);
+    # a campaign handles its own (campaign/cli.py)
+    with nullcontext() if campaign else interruptible(restore=not program) as signals:
+        try:
+            code = {
+                "list": _list,
+                "info": _info,
+                "build": _build,
+                "validate": _validate,
+                "run": _run,
+                "plot": _plot,
+                "export": _export,
+                "generate": _generate,
+                **study_cli.COMMANDS,
+                "campaign": campaign_cli.main if campaign else None,
+            }[args.command](args)
+        except KeyboardInterrupt as exc:
+            print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
+            return 128 + getattr(exc, "signal", signal.SIGINT)
+        except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
+            if _interrupted(exc):
+                print(f"agilesat {args.command}: {exc}", file=sys.stderr)
+                return 128 + exc.signal
+            message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+            print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
+            return 1
+        if signals is not None and signals.signal is not None:  # at the very end
+            name = signal.Signals(signals.signal).name
+            print(
+                f"agilesat {args.command}: {name} at the end: everything was written",
+                file=sys.stderr,
+            )
+            return 128 + signals.signal
+        return code
 
 
 def _interrupted(exc: BaseException) -> bool:
@@ -99,11 +119,22 @@ def _system_commands(commands, quiet) -> None:
         help="components, connections and every settable "
         "parameter of a scenario, system file or FMU",
     )
-    info.add_argument("target", help="a scenario, an .ssd/.ssp file, an FMU name or .fmu file")
+    info.add_argument("target", help=TARGETS)
 
-    build = commands.add_parser("build", parents=[quiet], help="build FMUs into fmus/build/")
-    build.add_argument("names", nargs="*", help="FMU names (default: all)")
-    build.add_argument("--out", type=Path, help="output directory (default fmus/build)")
+    build = commands.add_parser(
+        "build",
+        parents=[quiet],
+        help="build FMUs into fmus/build/, or a model file of your own into its build/",
+    )
+    build.add_argument(
+        "names",
+        nargs="*",
+        help="FMU names (default: all), or model files path/to/model.py[:Class] "
+        "(built into build/ beside each, validated)",
+    )
+    build.add_argument(
+        "--out", type=Path, help="output directory (default fmus/build, or build/ beside a model)"
+    )
     build.add_argument("--force", action="store_true", help="rebuild even if up to date")
 
     validate = commands.add_parser("validate", help="validate FMUs with fmpy's validator")
@@ -112,14 +143,28 @@ def _system_commands(commands, quiet) -> None:
     )
 
     run = commands.add_parser(
-        "run", parents=[quiet], help="run a scenario[:variant] or an .ssd/.ssp file"
+        "run", parents=[quiet], help="run a scenario[:variant], a mission file, a system or an FMU"
     )
-    run.add_argument(
-        "target", help=f"one of {', '.join(NAMES)} (optionally :variant) or a system file"
-    )
+    run.add_argument("target", help=TARGETS)
     run.add_argument("--step", type=float, help="macro step [s]")
     run.add_argument("--stop", type=float, help="stop time [s]")
+    run.add_argument("--start", type=float, help="start time [s] (default the system's)")
     run.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
+    run.add_argument(
+        "--output-interval",
+        type=float,
+        metavar="SECONDS",
+        help="record every SECONDS (a multiple of the step; default every step)",
+    )
+    run.add_argument(
+        "--record",
+        action="extend",
+        nargs="+",
+        default=None,
+        metavar="VAR",
+        help="record only these outputs: columns, whole arrays by base name, or patterns "
+        "(SatelliteDynamics.*); default all",
+    )
     run.add_argument(
         "--no-derivatives",
         action="store_true",
@@ -132,8 +177,8 @@ def _system_commands(commands, quiet) -> None:
         default=[],
         metavar="INSTANCE.VAR=VALUE",
         help="override a parameter: an element (A.inertia[2,2]=900) or a whole "
-        "array (A.inertia=[[900,0,0],[0,900,0],[0,0,900]]); `agilesat info` "
-        "lists them",
+        "array (A.inertia=[[900,0,0],[0,900,0],[0,0,900]]); with a unit where it converts "
+        "(A.attitude0[2]='100 deg'); `agilesat info` lists them",
     )
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
     run.add_argument("--no-figures", action="store_true")
@@ -160,9 +205,18 @@ def _system_commands(commands, quiet) -> None:
     )
 
     export = commands.add_parser(
-        "export", help="write a scenario[:variant] as a self-contained SSP package (.ssd + FMUs)"
+        "export",
+        help="write a scenario[:variant], a mission file or a system file as a "
+        "self-contained SSP package (.ssd + FMUs)",
     )
-    export.add_argument("target", help=f"one of {', '.join(NAMES)} (optionally :variant)")
+    export.add_argument("target", help=TARGETS)
+    export.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR=VALUE",
+        help="a parameter value written into the package (as `run --set`)",
+    )
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
     generate = commands.add_parser(
@@ -194,6 +248,9 @@ def _build(args) -> int:
     from ..fmus.build import BUILD_DIR, build_fmu
     from .output.progress import Progress
 
+    models = [n for n in args.names if n.endswith(".py") or ".py:" in n]
+    if models:
+        return _build_models(models, args)
     names = args.names or list(FMUS)
     built = []
     with Progress("build", unit="FMU", quiet=args.quiet) as progress:
@@ -211,6 +268,21 @@ def _build(args) -> int:
             f"all {len(names)} FMUs up to date in {args.out or BUILD_DIR} (nothing to do; "
             "--force rebuilds)"
         )
+    return 0
+
+
+def _build_models(models: list[str], args) -> int:
+    """``agilesat build path/to/model.py[:Class] ...``: each model file's classes as FMUs,
+    validated (:mod:`..fmus.user_models`)."""
+    from ..fmus.user_models import build_model
+
+    others = [n for n in args.names if n not in models]
+    if others:
+        raise ValueError(f"build either FMU names or model files, not both (got {others})")
+    for model in models:
+        path, _, cls = model.rpartition(":") if ".py:" in model else (model, "", "")
+        for built in build_model(path or model, cls or None, args.out, args.force):
+            print(f"{built} (validated)")
     return 0
 
 
@@ -245,6 +317,7 @@ def _run(args) -> int:
             args.target,
             step=args.step,
             stop=args.stop,
+            start=args.start,
             algorithm=args.algorithm,
             parameters=overrides,
             out_dir=out,
@@ -252,7 +325,10 @@ def _run(args) -> int:
             svg=args.svg,
             echo=echo_to(out),
             progress=progress,
-            derivatives=not args.no_derivatives,
+            derivatives=False if args.no_derivatives else None,
+            record=args.record,
+            output_interval=args.output_interval,
+            notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
         )
     if args.mat:
         results.to_mat(out / "results.mat")
@@ -298,8 +374,9 @@ def report(summary) -> int:
 
 def _export(args) -> int:
     from .export import export_ssp
+    from .system.parameters import parse_set
 
-    print(export_ssp(args.target, args.out))
+    print(export_ssp(args.target, args.out, parse_set(args.set)))
     return 0
 
 
@@ -319,9 +396,9 @@ def echo_to(out: Path, limit: int = 5):
 
 def _generate(args) -> int:
     from ..fmus.build import generated_files
-    from . import scenarios
+    from .mission.targets import generated_systems
 
-    files = {scenarios.get(name).ssd: scenarios.get(name).render_ssd for name in NAMES}
+    files = generated_systems()
     files.update(generated_files())
     stale = []
     for path, render in files.items():

@@ -47,8 +47,14 @@ def test_no_scenario_constant_is_defined_in_components():
 
 
 #: what the generic master (orchestration/system/, cosim/) may take from outside the
-#: orchestration: the cache's root and the C compiler the FMU build uses
-MASTER_MAY_IMPORT = {"components.jit", "components.switches", "fmus.build"}
+#: orchestration: the cache's root and its checked entries, the switches, the C compiler
+#: the FMU build uses
+MASTER_MAY_IMPORT = {
+    "components.jit",
+    "components.cache_files",
+    "components.switches",
+    "fmus.build",
+}
 
 
 @pytest.mark.parametrize(

@@ -10,7 +10,8 @@
  *    The shim keeps pythonfmu's logging on and applies the host's wish itself: warnings
  *    and errors always reach the host, OK-level messages only with logging on (and the
  *    category enabled), except OK-level messages of category "logStatusWarning" (warnings
- *    a user asked not to fail the call with): those always reach the host, as OK.
+ *    a user asked not to fail the call with): those always reach the host, as warnings
+ *    (the message's status fmi2Warning; the call's status stays what it is).
  *
  *  - Exit.  At process exit pythonfmu's ELF destructor (onLibraryUnload, run by _dl_fini)
  *    calls finalizePythonInterpreter(), which resets a static std::shared_ptr that the exit
@@ -48,10 +49,10 @@
  *    segfaults on a location without its resources (a path with a comma, which fmpy
  *    encodes, or a wrong location); such a location gets fmi2Error and a message instead.
  *
- * It also checks the GUID against modelDescription.xml, as FMI 2.0 asks of an FMU.
+ * It also checks the GUID against modelDescription.xml and against the GUID the binary was
+ * built with (same_guid), as FMI 2.0 asks of an FMU.
  */
 #define _GNU_SOURCE
-#include <ctype.h>
 #include <dlfcn.h>
 #include <errno.h>
 #include <locale.h>
@@ -131,30 +132,42 @@ static int python_gone(void) {
 #ifndef AGILESAT_PYTHON
 #error "define AGILESAT_PYTHON: sys.executable of the building environment"
 #endif
+#ifndef AGILESAT_PYTHON_VERSION
+#error "define AGILESAT_PYTHON_VERSION: X.Y of the building Python"
+#endif
 
 static const char *setting(const char *variable, const char *recorded) {
     const char *value = getenv(variable);
     return value && *value ? value : recorded;
 }
 
+/* The one message of every failure to start Python: what failed, then what the FMU needs
+ * and both variables that point it at a Python (docs/hosts.md). */
+static int python_missing(char *err, size_t n, const char *problem) {
+    snprintf(err, n, "%s. This FMU runs Python " AGILESAT_PYTHON_VERSION " with numpy (it was "
+             "built with " AGILESAT_PYTHON "): in a host that does not run Python, set "
+             "AGILESAT_LIBPYTHON to the shared libpython of a Python " AGILESAT_PYTHON_VERSION
+             " and AGILESAT_PYTHON to the python of an environment of that version with numpy "
+             "(and sgp4)", problem);
+    return -1;
+}
+
 static int ensure_python(char *err, size_t n) {
+    char problem[4600];
     int (*is_initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
     python_initialized = is_initialized;
     if (is_initialized && is_initialized()) return 0;   /* the host runs Python */
     void *lib = RTLD_DEFAULT;
     if (!is_initialized) {
         const char *path = setting("AGILESAT_LIBPYTHON", AGILESAT_LIBPYTHON);
-        if (!*path) {
-            snprintf(err, n, "this FMU runs Python, and the Python it was built with has no "
-                     "shared libpython: load it in a Python host, or set AGILESAT_LIBPYTHON "
-                     "to a shared libpython of the same version");
-            return -1;
-        }
+        if (!*path)
+            return python_missing(err, n, "the Python this FMU was built with has no shared "
+                                  "libpython");
         lib = dlopen(path, RTLD_NOW | RTLD_GLOBAL);
         if (!lib) {
-            snprintf(err, n, "this FMU runs Python: cannot load %s (%s); install that "
-                     "shared libpython or set AGILESAT_LIBPYTHON", path, dlerror());
-            return -1;
+            snprintf(problem, sizeof problem, "cannot load the libpython %.2048s (%.2048s)",
+                     path, dlerror());
+            return python_missing(err, n, problem);
         }
         is_initialized = (int (*)(void))dlsym(lib, "Py_IsInitialized");
         python_initialized = is_initialized;
@@ -168,20 +181,19 @@ static int ensure_python(char *err, size_t n) {
     void (*initialize)(int) = (void (*)(int))dlsym(lib, "Py_InitializeEx");
     void *(*save_thread)(void) = (void *(*)(void))dlsym(lib, "PyEval_SaveThread");
     int *ignore_environment = (int *)dlsym(lib, "Py_IgnoreEnvironmentFlag");
-    if (!is_initialized || !decode || !set_program_name || !initialize || !save_thread) {
-        snprintf(err, n, "the loaded libpython lacks the embedding API (Py_DecodeLocale, "
-                 "Py_SetProgramName, Py_InitializeEx, PyEval_SaveThread)");
-        return -1;
-    }
+    if (!is_initialized || !decode || !set_program_name || !initialize || !save_thread)
+        return python_missing(err, n, "the loaded libpython lacks the embedding API "
+                              "(Py_DecodeLocale, Py_SetProgramName, Py_InitializeEx, "
+                              "PyEval_SaveThread)");
     if (access(python, X_OK) != 0) {
-        snprintf(err, n, "this FMU runs Python as %s, which does not exist here: recreate "
-                 "that environment (with numpy) or set AGILESAT_PYTHON", python);
-        return -1;
+        snprintf(problem, sizeof problem, "it runs Python as %.4096s, which does not exist "
+                 "here", python);
+        return python_missing(err, n, problem);
     }
     wchar_t *program = decode(python, NULL);   /* kept: must outlive the interpreter */
     if (!program) {
-        snprintf(err, n, "cannot decode the path %s", python);
-        return -1;
+        snprintf(problem, sizeof problem, "cannot decode the path %.4096s", python);
+        return python_missing(err, n, problem);
     }
     char *host_ctype = strdup(setlocale(LC_CTYPE, NULL));
     if (ignore_environment) *ignore_environment = 1;
@@ -300,16 +312,18 @@ static fmi2Status refuse(Shim *s, const char *call, const char *why) {
 
 /* The slave logs limit and saturation conditions at status OK with category
  * "logStatusWarning" when the user asks for warnings that do not fail the call (hosts that
- * treat fmi2Warning from fmi2DoStep as failure): those always reach the host, as OK. */
+ * treat fmi2Warning from fmi2DoStep as failure, OMSimulator): those always reach the host,
+ * as messages of status fmi2Warning (a host logs them as warnings), and leave the call's
+ * status OK. */
 static void shim_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     (void)instance;
     Shim *s = env;
     if (status > s->worst && status != fmi2Pending) s->worst = status;
-    int warning_as_ok = category && strcmp(category, "logStatusWarning") == 0;
+    int warning_as_ok = status == fmi2OK && category && !strcmp(category, "logStatusWarning");
     if (status == fmi2OK && !warning_as_ok && (!s->logging_on || !category_enabled(s, category)))
         return;
-    host_log(s, status, category, message ? message : "");
+    host_log(s, warning_as_ok ? fmi2Warning : status, category, message ? message : "");
 }
 
 static void free_categories(Shim *s) {
@@ -326,6 +340,10 @@ static void free_categories(Shim *s) {
  * takes the location as a path without decoding it, and dereferences NULL when its
  * resources are not there (it segfaults the host): the shim hands it the decoded path,
  * and only once it has checked that the resources are there (resources_ok). */
+static int hex_digit(char c) {
+    return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+}
+
 static int resource_path(const char *uri, char *path, size_t n) {
     const char *p = uri;
     int encoded = strncmp(p, "file:", 5) == 0;
@@ -341,8 +359,7 @@ static int resource_path(const char *uri, char *path, size_t n) {
     size_t k = 0;
     for (; *p; p++) {
         if (k + 1 >= n) return 0;
-        if (encoded && p[0] == '%' && isxdigit((unsigned char)p[1]) &&
-            isxdigit((unsigned char)p[2])) {
+        if (encoded && p[0] == '%' && hex_digit(p[1]) && hex_digit(p[2])) {
             char hex[3] = {p[1], p[2], 0};
             path[k++] = (char)strtol(hex, NULL, 16);
             p += 2;
@@ -423,6 +440,24 @@ static int ask_slave(void *shim, const fmi2ValueReference vr[], size_t n, fmi2Re
     return status == fmi2OK && worst == fmi2OK;
 }
 
+/* The GUID the slave says this binary was built with (fmus/protocol.py fmu_guid: its
+ * code's content hash), asked as fmi2GetString of FAST_PATH_VR, against the host's: FMI 2.0
+ * section 2.1.5 makes the GUID the tie between modelDescription.xml and the binary, and a
+ * modelDescription.xml edited or taken from another build names another.  1 if they are
+ * the same (or the slave does not say), else 0 and why. */
+static int same_guid(Shim *s, const char *guid, char *why, size_t n) {
+    typedef fmi2Status (*F)(fmi2Component, const fmi2ValueReference *, size_t, fmi2String *);
+    fmi2ValueReference vr = FAST_PATH_VR;
+    fmi2String own = NULL;
+    fmi2Status status = INNER(F, fmi2GetString)(s->inner, &vr, 1, &own);
+    s->worst = fmi2OK;
+    if (status != fmi2OK || !own || !*own || (guid && strcmp(own, guid) == 0)) return 1;
+    snprintf(why, n, "fmi2Instantiate: GUID %.100s is not this FMU's: its binary was built as "
+             "%.100s (its modelDescription.xml is not the one built with it; FMI 2.0 section "
+             "2.1.5)", guid ? guid : "(NULL)", own);
+    return 0;
+}
+
 /* ---- FMI 2.0 API -------------------------------------------------------------------- */
 EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
 EXPORT const char *fmi2GetVersion(void) { return "2.0"; }
@@ -476,7 +511,11 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
                                const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
     s->inner = INNER(F, fmi2Instantiate)(name, type, guid, location, &s->ours, visible,
                                          fmi2True);
-    if (!s->inner) {
+    if (!s->inner || !same_guid(s, guid, why, sizeof why)) {
+        if (s->inner) {
+            host_log(&probe, fmi2Error, "logStatusError", why);
+            INNER(void (*)(fmi2Component), fmi2FreeInstance)(s->inner);
+        }
         free(s->name);
         free(s);
         return NULL;

@@ -13,6 +13,21 @@
 
 #define EXPORT __attribute__((visibility("default")))
 
+/* The oldest glibc the toolchain can target: every glibc function the shim calls bound to
+ * its x86-64 baseline version GLIBC_2.2.5, not to the newest of the building machine (dl*
+ * and pthread_once moved into libc in 2.34 with new versions; memcpy got one in 2.14).
+ * Linked with libdl and libpthread kept (--no-as-needed), an older glibc resolves them
+ * there, a newer one in libc's compatibility symbols.  tests/fmus/test_portability.py
+ * checks the binary's symbol versions; pythonfmu's binary beside it needs more (docs/hosts.md). */
+#if defined(__x86_64__) && defined(__GLIBC__)
+__asm__(".symver dlopen,dlopen@GLIBC_2.2.5");
+__asm__(".symver dlsym,dlsym@GLIBC_2.2.5");
+__asm__(".symver dlerror,dlerror@GLIBC_2.2.5");
+__asm__(".symver dladdr,dladdr@GLIBC_2.2.5");
+__asm__(".symver pthread_once,pthread_once@GLIBC_2.2.5");
+__asm__(".symver memcpy,memcpy@GLIBC_2.2.5");
+#endif
+
 /* Largest array a call may pass (pythonfmu indexes with int and builds Python lists). */
 #define MAX_VALUES ((size_t)1 << 24)
 

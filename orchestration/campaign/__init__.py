@@ -23,6 +23,7 @@ import numpy as np
 
 from ..output.recorder import write_text
 from . import dispersion, engine, report
+from .files import CampaignFileError, read_object
 from .plan import Plan, Spec, time_axis
 
 SHIPPED_DIR = Path(__file__).resolve().parent / "shipped"
@@ -106,64 +107,97 @@ def campaign(
 
 
 def run_campaign(
-    spec: Spec, out_dir=None, resume=False, workers=None, scheduler=None, progress=True
+    spec: Spec,
+    out_dir=None,
+    resume=False,
+    workers=None,
+    scheduler=None,
+    progress=True,
+    *,
+    listen: str = "127.0.0.1",
+    dashboard: str | None = None,
 ) -> Campaign:
-    """:func:`campaign` returning a :class:`Campaign` (table, summary, directory)."""
+    """:func:`campaign` returning a :class:`Campaign` (table, summary, directory).
+    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`)."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
         spec.set = {**fixed, **spec.set}
-    plan = Plan(spec)
+    plan = Plan(spec)  # builds the FMUs the target needs: their content is recorded
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
     done = engine.open_directory(plan, out, resume)
-    metrics = {}
+    metrics: dict = {}
     if done and (out / "metrics.json").exists():
-        metrics = json.loads((out / "metrics.json").read_text())
+        metrics = read_object(out / "metrics.json", "an object of each metric's unit and text")
+        if not all(isinstance(m, dict) for m in metrics.values()):
+            raise CampaignFileError(f"{out / 'metrics.json'}: expected an object per metric")
     bar = report.Progress(plan.total, len(done), enabled=bool(progress))
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
-    lost = []
+    lost, lost_scheduler = [], None
     try:
-        if plan.scenario is not None:
-            from ...fmus.build import build_all
-
-            build_all(names=plan.scenario.components)
         if len(done) < plan.total:
             print(
                 f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
                 f"grid points), {len(done)} already made in {out}",
                 file=sys.stderr,
             )
-        with engine.cluster(workers, scheduler) as client:
+        with engine.cluster(workers, scheduler, listen, dashboard) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
             _, lost, _ = engine.execute(plan, out, client, done, bar, metrics)
     except KeyboardInterrupt:
         # Ctrl-C or SIGTERM outside the loop over the runs (``execute`` handles its own):
-        # while the FMUs build or the cluster starts or closes
+        # while the cluster starts or closes
         pass
+    except engine.SchedulerLost as exc:
+        lost_scheduler = exc
     finally:
         bar.close()
     # the summary is the journal's: a run written there just as a signal came is in it
-    records = {i: r for i, r in engine.read_journal(out / "runs.jsonl").items() if i < plan.total}
+    journal = engine.read_journal(out / "runs.jsonl")
+    records = {i: r for i, r in journal.items() if i < plan.total}
+    if len(journal) > len(records):
+        print(
+            f"campaign: {len(journal) - len(records)} runs made beyond --runs {spec.runs} are "
+            "kept in runs.jsonl and signals.npy, not in this summary",
+            file=sys.stderr,
+        )
     status = "complete" if len(records) == plan.total else "interrupted"
-    return finish(plan, out, records, metrics, lost, status, environment)
+    said = None if lost_scheduler is None else str(lost_scheduler)
+    result = finish(plan, out, records, metrics, lost, status, environment, said)
+    if lost_scheduler is not None:
+        raise engine.SchedulerLost(
+            f"{said}: {out / 'campaign.json'} says 'interrupted'; `--resume` continues it"
+        )
+    return result
 
 
 def finish(
-    plan: Plan, out: Path, records: dict, metrics: dict, lost: list, status: str, environment: dict
+    plan: Plan,
+    out: Path,
+    records: dict,
+    metrics: dict,
+    lost: list,
+    status: str,
+    environment: dict,
+    interruption: str | None = None,
 ) -> Campaign:
-    """runs.csv (+ Parquet), campaign.json and the figures, from the records so far."""
+    """runs.csv (+ Parquet), campaign.json and the figures, from the records so far.
+    ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`);
+    ``interruption``: what stopped the campaign, other than a signal."""
     table = report.table(plan, records, metrics)
     files = report.write_table(table, out)
     counts = {s: int(np.sum(table["status"] == s)) for s in report.STATUSES}
     previous = {}
     if (out / "campaign.json").exists():
-        previous = json.loads((out / "campaign.json").read_text())
+        previous = read_object(out / "campaign.json", "a campaign's summary")
     summary = {
         "status": status,
+        **({"interruption": interruption} if interruption else {}),
         "spec": plan.spec.to_dict(),
         "runs": {"planned": plan.total, "made": len(records), **counts},
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),
+        "system_sha256": previous.get("system_sha256"),
         "settings": {
             "start": plan.start,
             "stop": plan.stop,
@@ -174,8 +208,15 @@ def finish(
         "versions": versions(),
         "cluster": environment,
         "lost_workers": previous.get("lost_workers", []) + lost,
-        "statistics": report.statistics(table, metrics),
+        "requirements": metrics.get("requirements", {}),
+        "statistics": report.statistics(table, metrics, records),
         "pass_rates": report.pass_rates(table, metrics),
+        "not_judged": {
+            name: r["not_judged"]
+            for name, r in metrics.get("requirements", {}).items()
+            if "not_judged" in r
+        },
+        "ensemble": _ensemble(plan, out, len(records)),
         "grid_pass_rates": report.grid_pass_rates(plan, table, metrics),
         "failures": [
             {
@@ -198,13 +239,35 @@ def finish(
         "files": [p.name for p in files],
     }
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
-    figures = report.histograms(table, metrics, out)
-    if plan.signals and (out / "signals.npy").exists():  # none if no run was made
-        signals = np.load(out / "signals.npy", mmap_mode="r")
-        figures += report.envelopes(signals, plan.signals, plan.units, time_axis(plan), out)
+    figures = report.histograms(table, metrics, out) if plan.spec.runs > 1 else []
+    figures += report.sweeps(plan, table, metrics, out)
+    if plan.kept and (out / "signals.npy").exists():  # none if no run was made
+        signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
+        kept = signals[:, : len(plan.kept)]
+        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)
+
+
+def _ensemble(plan: Plan, out: Path, made: int) -> dict:
+    """The verdict of each requirement judged over the whole campaign (an ensemble or
+    mixed statistic of every run, :mod:`..mission.requirements`)."""
+    if not plan.ensemble or not made or not (out / "signals.npy").exists():
+        return {}
+    signals = np.load(out / "signals.npy", mmap_mode="r")
+    result = {}
+    for requirement in plan.ensemble:
+        index = [plan.signals.index(c) for c in requirement.signals]
+        verdict = requirement.evaluate_campaign(np.asarray(signals[:, index]), time_axis(plan))
+        result[requirement.name] = {
+            "statement": requirement.statement(),
+            "verdict": verdict.status,
+            "value": verdict.value,
+            **({"reason": verdict.reason} if verdict.reason else {}),
+            **({"text": verdict.text} if verdict.text else {}),
+        }
+    return result
 
 
 def replay_arguments(plan: Plan, index: int) -> list[str]:

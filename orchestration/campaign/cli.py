@@ -2,7 +2,7 @@
 
 Exit status: 0 every run met every requirement; 3 the campaign finished but some run
 failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
-130 interrupted (``--resume`` continues).
+130 interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
 """
 
 from __future__ import annotations
@@ -41,6 +41,19 @@ def add_parser(commands) -> argparse.ArgumentParser:
     where.add_argument("--workers", type=int, help="local worker processes (default: cores)")
     where.add_argument(
         "--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786"
+    )
+    p.add_argument(
+        "--listen",
+        default="127.0.0.1",
+        metavar="HOST",
+        help="the interface the LocalCluster's scheduler and workers listen on "
+        "(default 127.0.0.1: this machine only)",
+    )
+    p.add_argument(
+        "--dashboard",
+        metavar="HOST:PORT",
+        help="serve Dask's dashboard of the LocalCluster there, e.g. 127.0.0.1:8787 "
+        "(default: none)",
     )
     p.add_argument(
         "--keep",
@@ -93,23 +106,36 @@ def main(args) -> int:
     signal.signal(signal.SIGTERM, _interrupt)  # a batch system's stop: as Ctrl-C
     try:
         result = run_campaign(
-            spec, args.out, args.resume, args.workers, args.scheduler, progress=not args.no_progress
+            spec,
+            args.out,
+            args.resume,
+            args.workers,
+            args.scheduler,
+            progress=not args.no_progress,
+            listen=args.listen,
+            dashboard=args.dashboard,
         )
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
         print("interrupted: the runs made are in runs.jsonl; --resume continues")
-        return 130
+        return 128 + (_signals[0] if _signals else signal.SIGINT)
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if result.summary["status"] == "interrupted":
         print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
-        return 130
+        return 128 + (_signals[0] if _signals else signal.SIGINT)
     runs = result.summary["runs"]
-    unmet = any(r["met"] < r["runs"] for r in result.summary["pass_rates"].values())
+    unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
+        r["verdict"] == "not met" for r in result.summary["ensemble"].values()
+    )
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
 
 
+_signals: list[int] = []  # SIGTERM, once it came (Ctrl-C is Python's KeyboardInterrupt)
+
+
 def _interrupt(signum, frame):
+    _signals.append(signum)
     raise KeyboardInterrupt
 
 
@@ -129,30 +155,43 @@ def format_campaign(summary: dict) -> str:
         f"{'99 %':>11s}  unit"
     )
     for name, s in summary["statistics"].items():
-        if not s["count"]:
-            continue
-        scale, unit = display(s)
-        p = s["percentiles"]
-        lines.append(
-            f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
-            f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
-            f"  {unit}"
-        )
+        if s["count"]:
+            scale, unit = display(s)
+            p = s["percentiles"]
+            lines.append(
+                f"  {name:32s} {s['mean'] * scale:11.5g} {s['sd'] * scale:10.3g} "
+                f"{p['1'] * scale:11.5g} {p['50'] * scale:11.5g} {p['99'] * scale:11.5g}"
+                f"  {unit}"
+            )
+        if s.get("missing"):
+            why = "; ".join(f"{k} ({n})" for k, n in s.get("reasons", {}).items())
+            lines.append(
+                f"  {name if not s['count'] else '':32s} {s['missing']} of "
+                f"{s['count'] + s['missing']} runs without a value"
+                + (f": {why}" if why else "")
+                + (" (left out of the statistics)" if s["count"] else "")
+            )
+    statements = {n: r.get("statement", n) for n, r in summary.get("requirements", {}).items()}
     for name, r in summary["pass_rates"].items():
         low, high = r["ci95"]
-        bound = ""
-        if name != "all":
-            scale, unit = display(summary["statistics"][name])
-            req = summary["statistics"][name]["requirement"]
-            bound = " and ".join(
-                f"{'≥' if k == 'min' else '≤'} {v * scale:.4g} {unit}" for k, v in req.items()
-            )
+        what = "all requirements" if name == "all" else f"requirement {statements.get(name, name)}"
+        others = ", ".join(
+            f"{r[k]} {k.replace('_', ' ')}" for k in ("not_met", "not_evaluated", "stopped") if r[k]
+        )
         lines.append(
-            f"  requirement {name} {bound}: met in {r['met']}/{r['runs']} runs, "
+            f"  {what}: met in {r['met']}/{r['runs']} runs, "
             f"{100 * r['rate']:.2f} % (95 % CI {100 * low:.2f}–{100 * high:.2f} %, "
-            f"{r['method']})"
+            f"{r['method']})" + (f"; {others}" if others else "")
             if r["runs"]
-            else f"  requirement {name}: no runs"
+            else f"  {what}: no runs"
+        )
+    for name, why in summary.get("not_judged", {}).items():
+        lines.append(f"  requirement {statements.get(name, name)}: not judged ({why})")
+    for r in summary.get("ensemble", {}).values():
+        lines.append(
+            f"  over the campaign: {r.get('text') or r['statement']}"
+            + ("" if r.get("text") else f": {r['verdict']}")
+            + (f" ({r['reason']})" if r.get("reason") else "")
         )
     for point in summary["grid_pass_rates"]:
         rates = point["pass_rates"]

@@ -40,6 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
+#: the most runs a campaign may have (grid points × runs per point): its journal and table
+#: are held in memory, at about a kilobyte a run (a larger study: several campaigns)
+MAX_RUNS = 100_000
 RANDOM = {"normal": 2, "uniform": 2, "choice": None, "rotate": 1, "inertia": 2}
 GRIDS = {"linspace": 3, "values": None}
 _EXPR = re.compile(r"^\s*([+*]?)\s*([a-z_]+)\s*\((.*)\)\s*$", re.S)
@@ -67,6 +70,11 @@ class Dispersion:
     @property
     def variable(self) -> str:
         return self.key.partition(".")[2].partition("[")[0]
+
+    @property
+    def points(self) -> int:
+        """The number of values of a grid (without making them)."""
+        return int(self.args[2]) if self.kind == "linspace" else len(self.args)
 
     def grid(self) -> list[float]:
         if self.kind == "linspace":
@@ -137,6 +145,12 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
                 "(SI, or degrees with a 'deg' suffix)"
             )
         args.append(float(number.group(1)) * (math.pi / 180 if number.group(2) else 1.0))
+    infinite = [a for a in args if isinstance(a, float) and not math.isfinite(a)]
+    if infinite:
+        raise ValueError(
+            f"{origin} {key}={expression.strip()}: the parameters of {kind} must be finite "
+            f"numbers, got {infinite[0]!r}"
+        )
     wanted = {**RANDOM, **GRIDS}[kind]
     if wanted is not None and len(args) != wanted or not args:
         raise ValueError(
@@ -148,6 +162,11 @@ def expression_to_dispersion(key: str, expression: str, origin: str) -> Dispersi
         raise ValueError(f"{origin} {key}: uniform(lo, hi) needs lo <= hi, got {args}")
     if kind == "linspace" and (args[2] < 1 or args[2] != int(args[2])):
         raise ValueError(f"{origin} {key}: linspace's n must be a positive integer")
+    if kind == "linspace" and args[2] > MAX_RUNS:
+        raise ValueError(
+            f"{origin} {key}: linspace of {args[2]:.6g} points, more than the {MAX_RUNS} runs "
+            "a campaign may have"
+        )
     if kind in ("rotate", "inertia") and mode:
         raise ValueError(
             f"{origin} {key}: {kind} already acts on the nominal value; drop the {mode!r}"

@@ -13,7 +13,8 @@ Files in the output directory, written as runs finish:
 
 - ``runs.jsonl`` — the journal: one line per finished run (index, values, outcome,
   metrics), flushed as each batch is back; ``--resume`` and extensions skip the runs it holds.
-- ``metrics.json`` — each metric's unit, description and requirement (first run).
+- ``metrics.json`` — each metric's unit, description and bound, and each requirement's
+  statement (``{"metrics": ..., "requirements": ...}``, from the first run with them).
 - ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
   run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
 - at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
@@ -23,7 +24,9 @@ Files in the output directory, written as runs finish:
 from __future__ import annotations
 
 import json
+import math
 import os
+import shutil
 import sys
 import time
 import uuid
@@ -34,6 +37,7 @@ import numpy as np
 
 from ..cosim.signals import signal_at
 from ..output.recorder import write_text
+from .files import CampaignFileError, changed, journal_record, read_object, system_content
 from .plan import Plan, Spec
 from .worker import run_batch
 
@@ -67,40 +71,63 @@ class CampaignExistsError(ValueError):
     pass
 
 
+class SchedulerLost(RuntimeError):
+    """The client lost its Dask scheduler: the runs in flight were cancelled, not made."""
+
+
 def read_journal(path: Path) -> dict[int, dict]:
-    """Finished runs by index; a last line cut short by a kill is dropped."""
+    """Finished runs by index; a last line cut short by a kill is dropped, any other line
+    that is not a run record is an error naming it (:func:`.files.journal_record`)."""
     records = {}
     if path.exists():
-        for line in path.read_text().splitlines(keepends=True):
+        for number, line in enumerate(path.read_text().splitlines(keepends=True), start=1):
             if not line.endswith("\n"):
                 break
-            record = json.loads(line)
+            record = journal_record(path, number, line)
             records[record["index"]] = record
     return records
 
 
 def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
-    """Check ``out`` against the plan; the runs already finished there."""
+    """Check ``out`` against the plan (the spec, and the content of the system and its
+    FMUs, ``system_sha256``); the runs already finished there."""
     journal = out / "runs.jsonl"
+    content = system_content(plan)
     if not journal.exists():
         out.mkdir(parents=True, exist_ok=True)
         # the spec first: a campaign killed before it finishes can still be resumed
-        write_text(
-            out / "campaign.json",
-            json.dumps({"status": "running", "spec": plan.spec.to_dict()}, indent=2) + "\n",
-        )
+        first = {"status": "running", "spec": plan.spec.to_dict(), "system_sha256": content}
+        write_text(out / "campaign.json", json.dumps(first, indent=2) + "\n")
         return {}
     if not resume:
         raise CampaignExistsError(
             f"{out} already holds a campaign (runs.jsonl): --resume to "
             "finish or extend it, or choose another --out"
         )
-    saved = json.loads((out / "campaign.json").read_text())
-    differences = plan.spec.differences(Spec(**saved["spec"]))
+    saved = read_object(out / "campaign.json", "a campaign's summary", ("spec",))
+    try:
+        spec = Spec(**saved["spec"])
+    except TypeError as exc:
+        raise CampaignFileError(f"{out / 'campaign.json'}: its spec is not one: {exc}") from None
+    differences = plan.spec.differences(spec)
     if differences:
         raise CampaignExistsError(
             f"--resume {out}: the campaign there differs: " + "; ".join(differences)
         )
+    edited = changed(saved.get("system_sha256") or content, content)
+    if edited:
+        raise CampaignExistsError(
+            f"--resume {out}: {', '.join(edited)} changed since the campaign began (its "
+            "content hash is in campaign.json): its runs and new ones would mix two systems; "
+            "choose another --out"
+        )
+    if "system_sha256" not in saved:
+        print(
+            f"campaign: {out / 'campaign.json'} records no content hash of the system "
+            "(an older campaign): not checked",
+            file=sys.stderr,
+        )
+    saved["system_sha256"] = content
     # running again (the rest of the last summary, lost workers included, is kept)
     saved.update(status="running", spec=plan.spec.to_dict())
     write_text(out / "campaign.json", json.dumps(saved, indent=2) + "\n")
@@ -118,14 +145,20 @@ def signals_file(plan: Plan, out: Path):
     shape = (plan.total, len(plan.signals), plan.points)
     if path.exists():
         old = np.load(path, mmap_mode="r")
-        if old.shape == shape:
-            return np.load(path, mmap_mode="r+")
         if old.shape[1:] != shape[1:]:
             raise CampaignExistsError(f"{path}: shape {old.shape} does not fit {shape}")
-        data = np.array(old[: shape[0]])
+        if old.shape[0] >= shape[0]:  # never shrunk: runs beyond --runs keep their signals
+            return np.load(path, mmap_mode="r+")
+        data = np.array(old)
         del old
     else:
         data = None
+    need, free = 8 * math.prod(shape), shutil.disk_usage(out).free
+    if need - (0 if data is None else data.nbytes) > free:
+        raise CampaignExistsError(
+            f"{path} would take {need / 2**30:.3g} GiB, {free / 2**30:.3g} GiB are free "
+            "there: keep fewer signals, or make fewer runs"
+        )
     memory = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=shape)
     memory[:] = np.nan
     if data is not None:
@@ -134,9 +167,16 @@ def signals_file(plan: Plan, out: Path):
 
 
 @contextmanager
-def cluster(workers: int | None = None, scheduler: str | None = None):
+def cluster(
+    workers: int | None = None,
+    scheduler: str | None = None,
+    listen: str = "127.0.0.1",
+    dashboard: str | None = None,
+):
     """A ``distributed.Client``: on the cluster at ``scheduler``, or on a LocalCluster of
-    ``workers`` single-threaded processes (default: one per core)."""
+    ``workers`` single-threaded processes (default: one per core) listening on ``listen``
+    (the scheduler, the nannies and the workers; by default loopback only), with a
+    dashboard at ``dashboard`` ("host:port") only if asked."""
     import logging
 
     import dask
@@ -152,7 +192,8 @@ def cluster(workers: int | None = None, scheduler: str | None = None):
             n_workers=workers,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=":0",
+            host=listen,
+            dashboard_address=dashboard,
             silence_logs=logging.ERROR,
         ) as local,
         Client(local) as client,
@@ -180,9 +221,11 @@ def execute(
 ) -> tuple[dict, list, str]:
     """Run what is not in ``done`` on ``client``; returns (records by index, lost workers,
     "complete" or "interrupted").  Runs go in batches (:func:`batch_size`), each run its
-    own record; every run is in the journal as soon as its batch is back; ``metrics`` collects each
-    metric's unit, description and requirement."""
+    own record; every run is in the journal as soon as its batch is back; ``metrics``
+    ({"metrics": ..., "requirements": ...}) collects each metric's unit, description and
+    bound and each requirement's statement (:func:`catalog`)."""
     from distributed import as_completed
+    from distributed.client import FutureCancelledError
     from distributed.scheduler import KilledWorker
 
     records = dict(done)
@@ -206,7 +249,7 @@ def execute(
         future = client.submit(
             run_batch,
             [(index, {**plan.spec.set, **values[index]}) for index in batch],
-            plan.spec.target,
+            plan.target,
             plan.step,
             plan.stop,
             plan.spec.algorithm,
@@ -230,6 +273,11 @@ def execute(
                 batch = futures.pop(future)
                 try:
                     made = future.result()
+                except FutureCancelledError as exc:  # nothing is cancelled here but on a signal
+                    raise SchedulerLost(
+                        f"the Dask scheduler {client.scheduler.address} was lost "
+                        f"({exc.reason}) with {len(records)} runs made"
+                    ) from None
                 except KilledWorker as exc:
                     made = [
                         _failed(
@@ -256,16 +304,17 @@ def execute(
                         grid=index % len(plan.grid),
                         batch=batch[0],  # the first run of its Dask task
                     )
-                    if set(record["metrics"]) - set(metrics):
-                        for name, m in record["metrics"].items():
-                            metrics.setdefault(
-                                name,
-                                {k: v for k, v in m.items() if k not in ("value", "met", "paper")},
-                            )
+                    if catalog(metrics, record):
                         write_text(out / "metrics.json", json.dumps(metrics, indent=1) + "\n")
                     record["metrics"] = {
-                        k: {"value": m["value"], **({"met": m["met"]} if "met" in m else {})}
+                        k: {
+                            "value": m["value"],
+                            **({"reason": m["reason"]} if "reason" in m else {}),
+                        }
                         for k, m in record["metrics"].items()
+                    }
+                    record["requirements"] = {
+                        k: r["verdict"] for k, r in record.get("requirements", {}).items()
                     }
                     journal.write(json.dumps(record) + "\n")
                     records[index] = record
@@ -291,8 +340,30 @@ def execute(
     return records, watcher.lost, status
 
 
+def catalog(known: dict, record: dict) -> bool:
+    """Add what a run's summary says of its metrics (unit, display unit, description,
+    bound) and requirements (statement, and why not judged) to ``known``; True if any was
+    new."""
+    metrics = known.setdefault("metrics", {})
+    requirements = known.setdefault("requirements", {})
+    new = False
+    for name, m in record["metrics"].items():
+        if name not in metrics:
+            drop = ("value", "met", "verdict", "reason", "paper")
+            metrics[name] = {k: v for k, v in m.items() if k not in drop}
+            new = True
+    for name, r in record.get("requirements", {}).items():
+        if name not in requirements:
+            keep = ("statement", "unit", "display_unit")
+            requirements[name] = {k: r[k] for k in keep if k in r}
+            if r["verdict"] == "not judged":
+                requirements[name]["not_judged"] = r.get("reason", "")
+            new = True
+    return new
+
+
 def _failed(index: int, status: str, message: str) -> dict:
-    return {"index": index, "status": status, "metrics": {}, "message": message}
+    return {"index": index, "status": status, "metrics": {}, "requirements": {}, "message": message}
 
 
 class WorkerWatch:
@@ -313,7 +384,10 @@ class WorkerWatch:
         if now - self.last < 1.0 and not force:
             return
         self.last = now
-        workers = set(self.client.scheduler_info()["workers"])
+        info = self.client.scheduler_info()
+        if "workers" not in info:  # the client has no scheduler any more
+            raise SchedulerLost(f"the Dask scheduler {self.client.scheduler.address} was lost")
+        workers = set(info["workers"])
         keys = {f.key: batch for f, batch in futures.items()}
         for address in sorted(self.workers - workers):
             held = sorted(i for k in self.processing.get(address, ()) for i in keys.get(k, ()))

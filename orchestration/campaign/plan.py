@@ -3,22 +3,23 @@ values of every run.
 
 Run index i (0 ≤ i < runs × grid points) is grid point ``i % G`` and replicate ``i // G``
 (G: the number of grid points, 1 without grids), so extending ``--runs`` keeps every run
-already made.  Run i's values are the system's (its ``.ssd``, the variant, ``--set``) with
-the grid point's values and the draws of :meth:`Dispersion.draw` for index i on top.
+already made.  Run i's values are the system's (the target's, a variant's values in it),
+``--set``'s, and the grid point's values and the draws of :meth:`Dispersion.draw` for
+index i on top.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from ...fmus import FMUS, model_class
-from ..runner import parse_target
+from ..mission.targets import resolve
 from ..system.description import Description
-from ..system.ssp import read_system
 from . import dispersion as dispersions
 
 
@@ -57,19 +58,19 @@ class Plan:
         if not 0 <= spec.seed < 2**63:
             raise ValueError(f"--seed must be a non-negative integer, got {spec.seed}")
         self.spec = spec
-        self.scenario, variant = parse_target(spec.target)
-        ssd = self.scenario.ssd if self.scenario else Path(spec.target)
-        self.system = read_system(ssd)
+        found = resolve(spec.target)
+        self.scenario, self.variant = found.scenario, found.variant
+        #: the target as the workers take it (a mission file by its absolute path)
+        self.target = _absolute(spec.target) if found.scenario is not None else spec.target
+        self.system = found.system_file(build=True)  # the FMUs built once, here
         self.step = spec.step or self.system.step_size
         self.stop = self.system.stop_time if spec.stop is None else spec.stop
         self.start = self.system.start_time
         if not (self.step and self.stop and self.stop > self.start):
-            raise ValueError(f"{ssd}: give --step and --stop (the system sets none)")
+            raise ValueError(f"{self.system.path}: give --step and --stop (the system sets none)")
         self.points = int(round((self.stop - self.start) / self.step)) + 1
         self.fmus = {c.name: Path(c.source).stem for c in self.system.components}
         self.values = {f"{p.component}.{p.name}": p.value for p in self.system.parameters}
-        if self.scenario:
-            self.values.update(self.scenario.variant_parameters(variant))
         self.values.update(spec.set)
         self.dispersions = [dispersions.parse(text) for text in spec.vary]
         keys = [d.key for d in self.dispersions]
@@ -97,9 +98,29 @@ class Plan:
             raise ValueError(f"both --set and dispersed: {', '.join(sorted(overlap))}")
         grids = [d for d in self.dispersions if d.is_grid]
         self.grid_keys = [d.key for d in grids]
+        total = spec.runs * math.prod(d.points for d in grids)
+        if total > dispersions.MAX_RUNS:
+            raise ValueError(
+                f"{spec.runs} run(s) × {' × '.join(str(d.points) for d in grids) or 1} grid "
+                f"points = {total} runs, more than the {dispersions.MAX_RUNS} a campaign may "
+                "have (its journal and table are held in memory): split it"
+            )
         self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
         self.units = {}  # of the kept signals, where the variable table says
-        self.signals = [name for key in spec.keep for name in self._signal(key)]
+        #: the signals kept of every run: those asked for (``kept``), then those the
+        #: requirements judged over the campaign need
+        self.kept = [name for key in spec.keep for name in self._signal(key)]
+        self.signals = list(self.kept)
+        #: the requirements judged over the whole campaign (an ensemble statistic), and
+        #: the columns of every run they need, kept with the others
+        self.ensemble = [
+            r
+            for r in (self.scenario.requirements_for(self.variant) if self.scenario else [])
+            if hasattr(r, "evaluate_campaign")
+            and r.name not in self.scenario.variant(self.variant).exempt()  # type: ignore[union-attr]
+        ]
+        for requirement in self.ensemble:
+            self.signals += [c for c in requirement.signals if c not in self.signals]
 
     @property
     def total(self) -> int:
@@ -266,6 +287,16 @@ class Plan:
         if var is not None:
             self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
         return [f"{instance}.{n}" for n in columns]
+
+
+def _absolute(target: str) -> str:
+    """A mission file's target with its absolute path (the workers' working directory may
+    be another); any other target as it is."""
+    if ".py" not in target:
+        return target
+    name, _, variant = target.rpartition(":") if ".py:" in target else (target, "", "")
+    path = str(Path(name).resolve())
+    return f"{path}:{variant}" if variant else path
 
 
 def _scalar_names(key: str, shape) -> list[str]:

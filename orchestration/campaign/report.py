@@ -1,11 +1,12 @@
 """A campaign's table, statistics, pass rates, figures and progress.
 
-Pass rates: for each requirement the scenario declares (``"requirement"``/``"met"`` on a
-summary metric), the fraction of runs that meet it, with the two-sided 95 % Clopper-Pearson
-(exact binomial) interval: lower = B(α/2; k, n − k + 1), upper = B(1 − α/2; k + 1, n − k),
-B the beta quantile (scipy).  It never undercovers, and with k = n it gives the lower
-bound (α/2)^(1/n) engineers quote ("n passes out of n: p ≥ … at 97.5 % one-sided").  Every
-run counts in n: a run that stopped (``error``) or was ``lost`` meets nothing.
+Pass rates: for each requirement the scenario judges (each run's verdict, ``met``, ``not
+met``, ``not evaluated``; :mod:`..mission.requirements`), the fraction of runs that meet
+it, with the two-sided 95 % Clopper-Pearson (exact binomial) interval: lower = B(α/2; k,
+n − k + 1), upper = B(1 − α/2; k + 1, n − k), B the beta quantile (scipy).  It never
+undercovers, and with k = n it gives the lower bound (α/2)^(1/n) engineers quote ("n
+passes out of n: p ≥ … at 97.5 % one-sided").  Every run counts in n: a run that stopped
+(``error``), was ``lost`` or could not be evaluated meets nothing (each counted apart).
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...fmus.model_description import UNITS
+from ...components.variables import UNITS
+from ..system.units import display_factor, pretty
 
 PERCENTILES = (1, 5, 50, 95, 99)
 STATUSES = ("ok", "failed", "error", "lost")
@@ -35,21 +37,26 @@ def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
     return low, high
 
 
-def columns(plan, metrics: dict) -> list[tuple[str, str]]:
-    """(name, kind) of the table's columns; kind: i (int), f (float), b (bool), s (str)."""
+def columns(plan, catalog: dict) -> list[tuple[str, str]]:
+    """(name, kind) of the table's columns; kind: i (int), f (float), b (bool), s (str).
+    ``catalog``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`)."""
     cols = [("index", "i"), ("seed", "i"), ("grid", "i")]
     cols += [(name, plan.kinds[name]) for name in plan.columns]
     cols += [("status", "s"), ("message", "s")]
-    cols += [(name, "f") for name in metrics]
-    cols += [(f"met_{name}", "b") for name, m in metrics.items() if "requirement" in m]
+    cols += [(name, "f") for name in catalog.get("metrics", {})]
+    for name in catalog.get("requirements", {}):
+        cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
     return cols + [("worker", "s"), ("seconds", "f")]
 
 
 def _cell(record: dict, name: str, kind: str):
     if name in record.get("values", {}):
         return record["values"][name]
+    verdicts = record.get("requirements", {})
     if name.startswith("met_") and kind == "b":
-        return bool(record["metrics"].get(name[4:], {}).get("met", False))
+        return verdicts.get(name[4:]) == "met"
+    if name.startswith("verdict_") and kind == "s":
+        return verdicts.get(name[8:], "")
     if name in record.get("metrics", {}) and name not in ("index", "seed", "grid"):
         value = record["metrics"][name]["value"]
         return math.nan if value is None else value
@@ -57,9 +64,10 @@ def _cell(record: dict, name: str, kind: str):
     return (math.nan if kind == "f" else "") if value is None else value
 
 
-def table(plan, records: dict, metrics: dict):
-    """The runs as a NumPy structured array, in index order."""
-    cols = columns(plan, metrics)
+def table(plan, records: dict, catalog: dict):
+    """The runs as a NumPy structured array, in index order (a metric without a value:
+    NaN; runs.csv writes it as an empty cell)."""
+    cols = columns(plan, catalog)
     rows = [tuple(_cell(records[i], n, k) for n, k in cols) for i in sorted(records)]
     width = {
         n: max([1] + [len(str(r[j])) for r in rows]) for j, (n, k) in enumerate(cols) if k == "s"
@@ -69,13 +77,14 @@ def table(plan, records: dict, metrics: dict):
 
 
 def write_table(array: np.ndarray, out: Path) -> list[Path]:
-    """runs.csv (floats written exactly: repr round-trips), and runs.parquet with pyarrow."""
+    """runs.csv (floats written exactly: repr round-trips; no value: an empty cell), and
+    runs.parquet with pyarrow."""
     path = out / "runs.csv"
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(array.dtype.names)
         for row in array.tolist():
-            writer.writerow([repr(x) if isinstance(x, float) else x for x in row])
+            writer.writerow([_text(x) for x in row])
     written = [path]
     try:
         import pyarrow as pa
@@ -86,17 +95,33 @@ def write_table(array: np.ndarray, out: Path) -> list[Path]:
     return written + [out / "runs.parquet"]
 
 
-def statistics(array: np.ndarray, metrics: dict) -> dict:
-    """Per metric over the runs that reached it: count, mean, sd, min, max, percentiles."""
+def _text(x) -> object:
+    if isinstance(x, float):
+        return "" if math.isnan(x) else repr(x)
+    return x
+
+
+def statistics(array: np.ndarray, catalog: dict, records: dict | None = None) -> dict:
+    """Per metric over the runs that have a value: count, mean, sd, min, max, percentiles;
+    ``missing``: the runs without a value, and why (``reasons``: {reason: runs})."""
     stats = {}
-    for name, meta in metrics.items():
+    for name, meta in catalog.get("metrics", {}).items():
         values = array[name][np.isfinite(array[name])]
         entry = {
             "unit": meta["unit"],
             "display_unit": meta.get("display_unit"),
             "description": meta.get("description"),
             "count": int(len(values)),
+            "missing": int(len(array) - len(values)),
         }
+        reasons: dict[str, int] = {}
+        for record in (records or {}).values():
+            reason = record.get("metrics", {}).get(name, {}).get("reason")
+            if reason is not None:
+                key = _reason(reason)
+                reasons[key] = reasons.get(key, 0) + 1
+        if reasons:
+            entry["reasons"] = reasons
         if len(values):
             entry.update(
                 mean=float(values.mean()),
@@ -111,20 +136,30 @@ def statistics(array: np.ndarray, metrics: dict) -> dict:
     return stats
 
 
-def pass_rates(array: np.ndarray, metrics: dict, rows=None) -> dict:
-    """Clopper-Pearson 95 % pass rate per requirement and for all of them together."""
+def _reason(text: str) -> str:
+    """A reason without its run's numbers, so that the runs' reasons group: 'not settled:
+    |x| > 0.01 at the end of the run (t = 150 s)' -> 'not settled'."""
+    return text.split(":")[0].strip() if ":" in text else text
+
+
+def pass_rates(array: np.ndarray, catalog: dict, rows=None) -> dict:
+    """Per requirement judged and for all of them together (``all``): the runs that met
+    it, with the Clopper-Pearson 95 % interval; every run counts (one that stopped or was
+    not evaluated meets nothing), and the runs not met, not evaluated and stopped are
+    counted apart.  A requirement the variant does not judge has no pass rate."""
     rows = np.ones(len(array), bool) if rows is None else rows
-    names = [n for n, m in metrics.items() if "requirement" in m]
+    names = [n for n, r in catalog.get("requirements", {}).items() if "not_judged" not in r]
     rates = {}
-    for name, met in [(n, array[f"met_{n}"][rows]) for n in names] + (
-        [("all", np.all([array[f"met_{n}"][rows] for n in names], axis=0))]
-        if len(names) > 1
-        else []
+    for name, verdicts in [(n, array[f"verdict_{n}"][rows]) for n in names] + (
+        [("all", _all(array[rows], names))] if len(names) > 1 else []
     ):
-        k, n = int(np.sum(met)), int(len(met))
+        k, n = int(np.sum(verdicts == "met")), int(len(verdicts))
         low, high = clopper_pearson(k, n)
         rates[name] = {
             "met": k,
+            "not_met": int(np.sum(verdicts == "not met")),
+            "not_evaluated": int(np.sum(verdicts == "not evaluated")),
+            "stopped": int(np.sum(verdicts == "")),
             "runs": n,
             "rate": k / n if n else None,
             "ci95": [low, high],
@@ -133,7 +168,16 @@ def pass_rates(array: np.ndarray, metrics: dict, rows=None) -> dict:
     return rates
 
 
-def grid_pass_rates(plan, array: np.ndarray, metrics: dict) -> list[dict]:
+def _all(array: np.ndarray, names: list[str]) -> np.ndarray:
+    """Per run: "met" if every requirement is met, else the first other verdict."""
+    verdicts = np.full(len(array), "met", dtype=object)
+    for name in names:
+        column = array[f"verdict_{name}"]
+        verdicts = np.where((verdicts == "met") & (column != "met"), column, verdicts)
+    return verdicts.astype(str)
+
+
+def grid_pass_rates(plan, array: np.ndarray, catalog: dict) -> list[dict]:
     """For a sweep: each grid point's values and pass rates."""
     if not plan.grid_keys:
         return []
@@ -143,31 +187,34 @@ def grid_pass_rates(plan, array: np.ndarray, metrics: dict) -> list[dict]:
                 k: plan.choices[k][int(v)] if k in plan.choices else v
                 for k, v in zip(plan.grid_keys, point)
             },
-            "pass_rates": pass_rates(array, metrics, array["grid"] == g),
+            "pass_rates": pass_rates(array, catalog, array["grid"] == g),
         }
         for g, point in enumerate(plan.grid)
     ]
 
 
 def display(meta: dict) -> tuple[float, str]:
-    unit = meta.get("display_unit") or meta["unit"]
-    return UNITS.get(meta["unit"], ({}, {}))[1].get(meta.get("display_unit"), 1.0), unit
+    """(factor, unit as people write it) of a metric's display unit."""
+    unit, shown = meta["unit"], meta.get("display_unit") or meta["unit"]
+    factor = UNITS.get(unit, ({}, {}))[1].get(shown) or display_factor(unit, shown)
+    return (1.0, pretty(unit)) if factor is None else (factor, pretty(shown))
 
 
-def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
+def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
+    """A histogram of each metric that varies over the runs, with its requirement's
+    bounds (a constant metric has none: one value says it all)."""
     from ..output.plots import plt
 
     paths = []
-    for name, meta in metrics.items():
+    for name, meta in catalog.get("metrics", {}).items():
         values = array[name][np.isfinite(array[name])]
-        if not len(values):
+        if not len(values) or np.ptp(values) <= 1e-9 * max(np.abs(values).max(), 1e-300):
             continue
         scale, unit = display(meta)
         fig, ax = plt.subplots(figsize=(6, 3.6))
-        spread = np.ptp(values) > 1e-9 * max(np.abs(values).max(), 1e-300)
         ax.hist(
             values * scale,
-            bins=min(50, max(5, int(np.sqrt(len(values))))) if spread else 1,
+            bins=min(50, max(5, int(np.sqrt(len(values))))),
             color="tab:blue",
             alpha=0.75,
         )
@@ -177,16 +224,71 @@ def histograms(array: np.ndarray, metrics: dict, out: Path) -> list[Path]:
             )
         if "requirement" in meta:
             ax.legend(fontsize=8)
-        ax.set_xlabel(f"{name} [{unit}]")
+        ax.set_xlabel(f"{name} [{unit}]" if unit else name)
         ax.set_ylabel("runs")
-        ax.set_title(f"{name}: {len(values)} runs", fontsize=10)
-        ax.grid(True, alpha=0.3)
-        fig.tight_layout()
-        path = out / f"hist_{name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
+        missing = len(array) - len(values)
+        ax.set_title(
+            f"{name}: {len(values)} runs" + (f" ({missing} without a value)" if missing else ""),
+            fontsize=10,
+        )
+        paths.append(_save(fig, ax, out / f"hist_{name}.png"))
     return paths
+
+
+def sweeps(plan, array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
+    """For a sweep: each metric against each swept parameter (every run a point, the
+    median per grid value a line; one series per value of the other swept parameters),
+    with its requirement's bounds."""
+    from ..output.plots import plt
+
+    paths = []
+    for name, meta in catalog.get("metrics", {}).items():
+        if not np.isfinite(array[name]).any():
+            continue
+        scale, unit = display(meta)
+        for key in plan.grid_keys:
+            others = [k for k in plan.grid_keys if k != key]
+            fig, ax = plt.subplots(figsize=(7, 4))
+            groups = sorted({tuple(row[k] for k in others) for row in array}, key=str)
+            for group in groups:
+                chosen = np.ones(len(array), bool)
+                for k, v in zip(others, group):
+                    chosen &= array[k] == v
+                x, y = array[key][chosen], array[name][chosen] * scale
+                label = ", ".join(f"{k} = {_shown(v)}" for k, v in zip(others, group))
+                points = ax.plot(x, y, "o", markersize=3, alpha=0.5, label=label or None)[0]
+                grid = sorted(set(x.tolist()))
+                medians = [np.nanmedian(y[x == g]) for g in grid]
+                ax.plot(grid, medians, "-", color=points.get_color(), linewidth=1.4)
+            for bound, value in meta.get("requirement", {}).items():
+                label = f"requirement ({bound})"
+                ax.axhline(value * scale, color="tab:red", linestyle="--", label=label)
+            ax.set_xlabel(key)
+            ax.set_ylabel(f"{name} [{unit}]" if unit else name)
+            ax.set_title(f"{name} against {key}: {len(array)} runs", fontsize=10)
+            if ax.get_legend_handles_labels()[1]:
+                ax.legend(fontsize=8)
+            paths.append(_save(fig, ax, out / f"sweep_{name}_{_file_name(key)}.png"))
+    return paths
+
+
+def _save(fig, ax, path: Path) -> Path:
+    """A campaign figure written (grid, layout, the run figures' resolution) and closed."""
+    from ..output.plots import DPI, plt
+
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def _shown(value) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _file_name(name: str) -> str:
+    return name.replace("[", "_").replace("]", "").replace(",", "_")
 
 
 def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
@@ -208,12 +310,7 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
         ax.set_ylabel(f"{name} [{units.get(name, 'SI')}]")
         ax.set_title(f"{name}: {len(data)} runs", fontsize=10)
         ax.legend(fontsize=8)
-        ax.grid(True, alpha=0.3)
-        fig.tight_layout()
-        path = out / f"envelope_{name.replace('[', '_').replace(']', '').replace(',', '_')}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
+        paths.append(_save(fig, ax, out / f"envelope_{_file_name(name)}.png"))
     return paths
 
 

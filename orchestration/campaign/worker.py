@@ -42,6 +42,7 @@ def run_one(
         "status": "ok",
         "message": "",
         "metrics": {},
+        "requirements": {},
         "worker": _worker(),
         "pid": os.getpid(),
     }
@@ -57,6 +58,7 @@ def run_one(
             build=False,
         )
         record["metrics"] = summary.get("metrics", {})
+        record["requirements"] = summary.get("requirements", {})
         if summary.get("status") == "failed":
             record["status"] = "failed"
             record["message"] = "; ".join(summary["diagnostics"])

@@ -12,6 +12,40 @@ import numpy as np
 from .fmu import Instance
 
 
+def derivative_links(described: dict, sources: dict, every: dict, algorithm: str) -> dict:
+    """{consumer: [(input, source, output, interpolated?), ...]}: the inputs that get their
+    first derivative, from the model descriptions alone (``described``: {instance: its
+    :class:`..system.description.Description`}, in step order; ``sources``: {(B, input):
+    (A, output)}; ``every``: each instance's step in base steps)."""
+    order = list(described)  # the step order: in Gauss-Seidel, who steps first
+    links: dict[str, list] = {}
+    for (b, u), (a, y) in sorted(sources.items()):
+        consumer, source = described[b], described[a]
+        du, dy = consumer.derivatives.get(u), source.derivatives.get(y)
+        if (
+            consumer.can_interpolate_inputs
+            and source.max_output_derivative_order >= 1
+            and du is not None
+            and consumer.variables[du].causality == "input"
+            and dy is not None
+            and source.variables[dy].causality == "output"
+            and (b, du) not in sources  # an explicit derivative wire wins
+            and every.get(a, 1) == every.get(b, 1) == 1
+        ):
+            after = algorithm == "gauss-seidel" and order.index(a) < order.index(b)
+            links.setdefault(b, []).append((u, a, y, after))
+    return links
+
+
+def describe(links: dict) -> list[str]:
+    """'A.y -> B.u (extrapolated)' for each link of :func:`derivative_links`."""
+    return [
+        f"{a}.{y} -> {b}.{u} ({'interpolated' if after else 'extrapolated'})"
+        for b, entries in links.items()
+        for u, a, y, after in entries
+    ]
+
+
 class Derivatives:
     """The input-derivative links of a run (:mod:`.master`'s docstring, step 3): per source
     FMU the outputs whose derivatives are read, per consumer FMU the inputs whose
@@ -19,28 +53,13 @@ class Derivatives:
     derivatives of the last communication point."""
 
     def __init__(self, nodes: dict, sources: dict, layout: dict, algorithm: str):
-        order = list(nodes)  # the step order: in Gauss-Seidel, who steps first
-        links: dict[str, list] = {}
-        for (b, u), (a, y) in sorted(sources.items()):
-            consumer, source = nodes[b].instance, nodes[a].instance
-            du, dy = consumer.derivatives.get(u), source.derivatives.get(y)
-            if (
-                consumer.can_interpolate_inputs
-                and source.max_output_derivative_order >= 1
-                and du is not None
-                and consumer.variables[du].causality == "input"
-                and dy is not None
-                and source.variables[dy].causality == "output"
-                and (b, du) not in sources  # an explicit derivative wire wins
-                and nodes[a].every == nodes[b].every == 1
-            ):
-                after = algorithm == "gauss-seidel" and order.index(a) < order.index(b)
-                links.setdefault(b, []).append((u, a, y, after))
-        self.described = [
-            f"{a}.{y} -> {b}.{u} ({'interpolated' if after else 'extrapolated'})"
-            for b, entries in links.items()
-            for u, a, y, after in entries
-        ]
+        links = derivative_links(
+            {name: node.instance for name, node in nodes.items()},
+            sources,
+            {name: node.every for name, node in nodes.items()},
+            algorithm,
+        )
+        self.described = describe(links)
         self.consumers = {b: _InputSlopes(nodes[b].instance, e, layout) for b, e in links.items()}
         outputs: dict[str, list] = {}  # read for the extrapolated links only
         for entries in links.values():

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import atexit
 import compileall
+import contextlib
 import ctypes
 import os
 import shutil
@@ -45,6 +46,7 @@ from fmpy.fmi2 import (
     free,
 )
 
+from ...components.cache_files import damage_of_tree, digest, warn, write_manifest
 from ...components.jit import cache_root
 from ..system.description import Description, content_key
 
@@ -100,7 +102,9 @@ class Instance(Description):
         super().__init__(name, path)
         self.log = log
         self._key = content_key(self.path)
-        self.unzip_dir = _unpacked(self._key, str(path), self.md.coSimulation.modelIdentifier)
+        self.unzip_dir = _unpacked(
+            self._key, str(path), self.md.coSimulation.modelIdentifier, self.binaries
+        )
         self.slave = _take_slave(self._key, name, self.md, self.unzip_dir)
         dll = self.slave.dll
         self.fmi2DoStep = dll.fmi2DoStep
@@ -270,12 +274,13 @@ _temporary: list[str] = []  # extractions outside the cache, removed at exit
 _EXTRACTIONS_KEPT = 64  # in the cache, the most recently used
 
 
-def _unpacked(key: str, path: str, model_identifier: str) -> str:
-    """The extraction directory of the FMU with content ``key``; its binary stays loaded."""
+def _unpacked(key: str, path: str, model_identifier: str, binaries: dict) -> str:
+    """The extraction directory of the FMU with content ``key``; its binary stays loaded.
+    ``binaries``: {file: SHA-256} the FMU declares (:func:`_check_binaries`)."""
     with _lock:
         directory = _unpacked_dirs.get(key)
         if directory is None:
-            directory = _extraction(key, path)
+            directory = _extraction(key, path, binaries)
             library = Path(
                 directory, "binaries", platform, model_identifier + sharedLibraryExtension
             )
@@ -285,22 +290,34 @@ def _unpacked(key: str, path: str, model_identifier: str) -> str:
         return directory
 
 
-def _extraction(key: str, path: str) -> str:
+def _extraction(key: str, path: str, binaries: dict) -> str:
     """The FMU with content ``key`` unpacked in the cache: unpacked under a temporary name
     and renamed, so that a directory there is always complete (of two processes unpacking
-    at once, the second takes the first one's).  Where the cache cannot be written, a
-    temporary directory removed at exit, as fmpy unpacks."""
+    at once, the second takes the first one's), with a manifest of every file's SHA-256
+    (its binaries checked against the FMU's own list first, :func:`_check_binaries`).
+    A directory there is checked against its manifest before anything is loaded from it: a
+    damaged one (a binary cut short or zeroed, bytecode or a source changed) is unpacked
+    again, with a warning naming it.  Where the cache cannot be written, a temporary
+    directory removed at exit, as fmpy unpacks."""
     root = cache_root() / "fmus"
     target = root / key
     try:
+        if target.is_dir() and (what := damage_of_tree(target)):
+            warn(target, what, "unpacking the FMU again")
+            aside = root / f".{key}.damaged.{os.getpid()}"
+            with contextlib.suppress(FileNotFoundError):  # another process moved it first
+                os.rename(target, aside)
+            shutil.rmtree(aside, ignore_errors=True)
         if not target.is_dir():
             root.mkdir(parents=True, exist_ok=True)
             partial = tempfile.mkdtemp(prefix=f".{key}.", dir=root)
             try:
                 extract(path, partial)
+                _check_binaries(path, partial, binaries)
                 # compiled here, as Python would beside the sources at the first import
                 # (unless PYTHONDONTWRITEBYTECODE: this is our cache, not a source tree)
                 compileall.compile_dir(Path(partial, "resources"), quiet=2, workers=1)
+                write_manifest(Path(partial))
             except BaseException:
                 shutil.rmtree(partial, ignore_errors=True)
                 raise
@@ -313,10 +330,31 @@ def _extraction(key: str, path: str) -> str:
             _prune(root)
         os.utime(target)  # most recently used
         return str(target)
-    except OSError:
+    except OSError as exc:
+        if target.is_dir():
+            warn(target, str(exc), "unpacking the FMU in a temporary directory")
         directory = extract(path)
+        _check_binaries(path, directory, binaries)
         _temporary.append(str(directory))
         return str(directory)
+
+
+class DamagedFmuError(RuntimeError):
+    """A binary of an FMU is not what its modelDescription.xml says it is."""
+
+
+def _check_binaries(path: str, directory: str, binaries: dict) -> None:
+    """DamagedFmuError if a binary the FMU lists ({file: SHA-256}, our FMUs' vendor
+    annotation) does not have that content: loading a damaged shared library crashes
+    the process."""
+    for name, recorded in binaries.items():
+        file = Path(directory, name)
+        if not file.is_file() or digest(file) != recorded:
+            shutil.rmtree(directory, ignore_errors=True)
+            raise DamagedFmuError(
+                f"{name} in {path} does not match the SHA-256 its modelDescription.xml "
+                "records: the FMU is damaged (build or export it again); not loaded"
+            )
 
 
 def _prune(root: Path) -> None:

@@ -10,16 +10,17 @@ between chunks, and raises the same :class:`FmiCallError` as the Python loop (th
 Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
 
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
-(:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its
-flags, the machine and the Python version (in ``loop/`` of
-:func:`components.jit.cache_root`; written under a temporary name and renamed, so that
-processes may compile at once), and loaded with ``ctypes.PyDLL``, holding the GIL: the
-loop measured the same as through ``CDLL`` (tests/tools/benchmark_master_loop.py; pythonfmu
-takes the GIL at every call into a slave either way), and :func:`csv_text` needs it (it
-formats the CSV lines with CPython's own ``repr`` of a float, a third faster than in
+(:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its flags,
+the machine and the Python version (in ``loop/`` of :func:`components.jit.cache_root`;
+written under a temporary name and renamed, so that processes may compile at once, with its
+SHA-256 beside it, checked before it is loaded: a damaged one is compiled again with a
+warning, ``components/cache_files.py``), and loaded with ``ctypes.PyDLL``, holding the GIL:
+the loop measured the same as through ``CDLL`` (tests/tools/benchmark_master_loop.py;
+pythonfmu takes the GIL at every call into a slave either way), and :func:`csv_text` needs
+it (it formats the CSV lines with CPython's own ``repr`` of a float, a third faster than in
 Python).  Derivative links (:mod:`.derivatives`) are operations of the loop too.
-``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the Python loop with
-a note in the run's log when the compiled one is not available; ``"compiled"`` raises
+``loop="auto"`` (the default, or ``$AGILESAT_LOOP``) falls back to the Python loop with a
+note in the run's log when the compiled one is not available; ``"compiled"`` raises
 :class:`LoopUnavailable` naming why; ``"python"`` never compiles.
 """
 
@@ -36,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...components.cache_files import damage_of_file, warn, write_digest
 from ...components.jit import cache_root
 from ...components.switches import value as switch
 from .fmu import Log
@@ -113,13 +115,20 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
     code = source.read_bytes()
     key = hashlib.sha256(
         b"\0".join(
-            [code, compiler.encode(), " ".join(FLAGS).encode()]
+            [code, compiler.encode(), " ".join(FLAGS).encode(), b"with its SHA-256"]
             + [s.encode() for s in (sys.platform, platform.machine(), sys.implementation.cache_tag)]
         )
     ).hexdigest()[:16]
     path = cache_root() / "loop" / f"agilesat_loop_{key}.so"
     with _lock:
         if path not in _loaded:
+            if path.exists() and (what := damage_of_file(path)):
+                warn(path, what, "compiling it again")
+                try:
+                    path.unlink()
+                except OSError as exc:
+                    why = f"{path} is damaged and cannot be replaced: {exc}"
+                    raise LoopUnavailable(why) from None
             if not path.exists():
                 _compile(compiler, source, path)
             try:
@@ -151,6 +160,7 @@ def _compile(compiler: str, source: Path, path: Path) -> None:
             if result.returncode != 0:
                 said = (result.stderr.strip().splitlines() or ["no message"])[-1]
                 raise LoopUnavailable(f"compiling {source} with {compiler} failed: {said}")
+            write_digest(path, partial)  # checked before every load
             os.replace(partial, path)
         finally:
             partial.unlink(missing_ok=True)

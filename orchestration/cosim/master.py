@@ -32,7 +32,8 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
 4. Every FMI status is checked; Discard, Error or Fatal stop the run with the component,
    call, time and the FMU's own messages, and the rows recorded so far are kept (on disk,
    when an output directory is given: :mod:`..output.recorder`).  After fmi2Fatal nothing more is
-   called on that FMU.
+   called on that FMU.  The run holds its output directory (:mod:`..output.lock`): a
+   second run on it is refused before it writes anything.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes
    (:func:`.signals.stop_on_signals`):
    the run stops between two macro steps (the compiled loop: between two chunks of a few
@@ -52,12 +53,14 @@ be compiled; ``Results.meta["loop"]`` says which.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import dataclasses
 import signal
 
 import numpy as np
 
+from ..output.lock import holding
 from ..output.recorder import Recorder
 from ..output.results import Results
 from . import loop as compiled
@@ -192,8 +195,11 @@ def simulate(
     logging_on: bool = False,
     echo=None,
     progress=None,
-    derivatives: bool = True,
+    derivatives: bool | None = None,
     loop: str | None = None,
+    start: float | None = None,
+    record=None,
+    output_interval: float | None = None,
 ) -> Results:
     """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
 
@@ -203,10 +209,14 @@ def simulate(
     Results returned map their rows from disk (memory independent of the run length);
     without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
     hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
-    plain scheme, for comparison).  ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled"
-    or "python" (:mod:`.loop`).  Returns :class:`Results` (``meta`` holds the settings, the
-    units of the columns, the FMU log and the open inputs); raises :class:`SimulationError`
-    (:class:`Interrupted` on SIGINT/SIGTERM) with the rows so far.  The same as
+    plain scheme, for comparison; default: as the system says, else on).  ``start``: the
+    start time (default the system's); ``record``: the outputs recorded (columns, whole
+    arrays by base name or patterns such as ``"SatelliteDynamics.*"``; default all);
+    ``output_interval``: record every that many seconds (a multiple of the step).
+    ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled" or "python" (:mod:`.loop`).
+    Returns :class:`Results` (``meta`` holds the settings, the units of the columns, the
+    FMU log and the open inputs); raises :class:`SimulationError` (:class:`Interrupted` on
+    SIGINT/SIGTERM) with the rows so far.  The same as
     ``execute(plan_run(system, ...))`` (:mod:`.plan`).
     """
     return execute(
@@ -222,6 +232,9 @@ def simulate(
             progress=progress,
             echo=echo,
             logging_on=logging_on,
+            start=start,
+            record=record,
+            output_interval=output_interval,
         )
     )
 
@@ -232,7 +245,8 @@ def execute(plan: RunPlan) -> Results:
     hooked = at_step(plan.progress)  # $AGILESAT_TEST_SIGNAL (tests of interruptions)
     if hooked is not plan.progress:
         plan = dataclasses.replace(plan, progress=hooked)
-    with stop_on_signals() as signals:
+    held = holding(plan.out_dir) if plan.out_dir is not None else contextlib.nullcontext()
+    with held, stop_on_signals() as signals:
         log = compiled.ClockLog(echo=plan.echo)
         log.time = plan.start
         instances = {}
@@ -287,13 +301,21 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
         "log": log.entries,
         "order": wiring.steps.step_order,
         "unconnected_optional_inputs": wiring.open_inputs,
-        "units": {f"{name}.{y}": instances[name].variables[y].unit for name, y in layout},
+        "units": {
+            f"{name}.{y}": instances[name].variables[y].unit
+            for name, y in layout
+            if plan.record is None or f"{name}.{y}" in plan.record
+        },
     }
     if links is not None:
         meta["derivatives"] = links.described
     dll = compiled.select(plan.loop, log)
     meta["loop"] = "python" if dll is None else "compiled"
-    recorder = Recorder(columns, plan.out_dir)
+    chosen = None if plan.record is None else set(plan.record)
+    keep = None if chosen is None else [0] + [k for k, c in enumerate(columns) if c in chosen]
+    recorder = Recorder(columns, plan.out_dir, keep, plan.output_every)
+    if plan.output_every > 1:
+        meta["output_interval"] = plan.output_every * step
     progress = plan.progress
     failure, report_every = None, max(1, n_steps // 100)
     try:

@@ -1,6 +1,13 @@
 """SIGINT and SIGTERM while a run goes: a flag the master looks at between macro steps
 (:func:`stop_on_signals`), never an exception inside an FMU.
 
+A command (``agilesat run``) is :func:`interruptible` as a whole: a signal that comes
+before anything is written stops it at once (:class:`Interruption`, a KeyboardInterrupt);
+from the moment a run writes its output directory (its ``stop_on_signals``) every signal,
+the first and any later one, is a flag until the command ends, so that a second Ctrl-C
+while the results, summary or figures are written changes nothing but the status said.
+The command exits 128 + the first signal's number: 130 for SIGINT, 143 for SIGTERM.
+
 ``$AGILESAT_TEST_SIGNAL`` delivers a signal at a chosen point of a run or a campaign, for
 tests of interruptions that must not race the run on a loaded machine
 (:func:`signal_at`):
@@ -10,7 +17,9 @@ tests of interruptions that must not race the run on a loaded machine
 - ``SIGTERM@run:K``: a campaign sends its own process the signal once K runs of this
   invocation are in its journal (``campaign/engine.py``);
 - ``SIGKILL@worker:K``: a campaign worker process sends itself the signal as it starts its
-  K-th run (``campaign/worker.py``).
+  K-th run (``campaign/worker.py``);
+- ``SIGTERM@figure:K``: a run sends itself the signal as it starts drawing its K-th
+  figure (``runner.py``).
 """
 
 from __future__ import annotations
@@ -23,11 +32,23 @@ import threading
 from ...components.switches import SwitchError, value
 
 
+class Interruption(KeyboardInterrupt):
+    """A signal that stopped a command before it wrote anything (``signal`` says which)."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signal = signum
+
+
 class _Stop:
-    signal: int | None = None
+    signal: int | None = None  # the first signal
+    deferring = True  # a signal is a flag (else: Interruption, the first time)
 
     def handler(self, signum, _frame):
-        self.signal = signum
+        first = self.signal is None
+        self.signal = self.signal or signum
+        if first and not self.deferring:
+            raise Interruption(signum)
 
 
 _active: _Stop | None = None
@@ -37,19 +58,44 @@ _active: _Stop | None = None
 def stop_on_signals():
     """While inside: SIGINT and SIGTERM set ``.signal`` of the object yielded instead of
     raising or killing; the previous handlers come back on exit.  Only the main thread can
-    install handlers; elsewhere (and nested) the active object, if any, is shared."""
-    global _active
+    install handlers; elsewhere (and nested) the active object, if any, is shared (inside
+    :func:`interruptible`, signals stay flags from here to the end of the command)."""
     if _active is not None or threading.current_thread() is not threading.main_thread():
-        yield _active or _Stop()
+        stop = _active or _Stop()
+        stop.deferring = True
+        yield stop
         return
-    stop = _active = _Stop()
+    with _installed(_Stop()) as stop:
+        yield stop
+
+
+@contextlib.contextmanager
+def interruptible(restore: bool = True):
+    """A whole command (module docstring): a signal raises :class:`Interruption` until a
+    run starts writing, and is a flag after.  ``restore=False`` (a process that ends with
+    the command): an interrupted command leaves the handlers in place, so that a signal
+    while the process exits changes nothing either."""
+    stop = _Stop()
+    stop.deferring = False
+    with _installed(stop, lambda: restore or stop.signal is None):
+        yield stop
+
+
+@contextlib.contextmanager
+def _installed(stop: _Stop, restore=lambda: True):
+    global _active
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    _active = stop
     previous = {s: signal.signal(s, stop.handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield stop
     finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
         _active = None
+        if restore():
+            for s, handler in previous.items():
+                signal.signal(s, handler)
 
 
 def signal_at(point: str) -> tuple[int, int] | None:

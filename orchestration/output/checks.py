@@ -102,7 +102,39 @@ def requirement_met(metric: dict) -> bool:
 
 
 def assert_requirements_met(summary: dict, *names: str) -> None:
-    """The named metrics (default: every metric with a requirement) meet their requirement."""
+    """The named requirements (default: every requirement the run judges) are met: each
+    one's verdict (:mod:`..mission.requirements`) is "met".  A requirement not evaluated
+    (its metric has no value) fails the assertion too, saying why; one the variant does not
+    judge is left out, or fails if named.  A summary without verdicts: each metric with a
+    requirement against it."""
+    if "requirements" not in summary:
+        return _metrics_meet(summary, names)
+    verdicts = summary["requirements"]
+    unknown = [n for n in names if n not in verdicts]
+    if unknown:
+        raise AssertionError(
+            f"no requirement {unknown} in the summary; requirements: {', '.join(verdicts)}"
+        )
+    chosen = names or [n for n, r in verdicts.items() if r["verdict"] != "not judged"]
+    failed = []
+    for name in chosen:
+        r = verdicts[name]
+        if r["verdict"] == "met":
+            continue
+        shown = r.get("text") or r["statement"]
+        value = ""
+        if r.get("value") is not None and r.get("unit"):
+            from .summary import format_value
+
+            value = f" = {format_value(r['value'], r['unit'], r.get('display_unit'))}"
+        failed.append(
+            f"{shown}: {r['verdict']}{value}" + (f" ({r['reason']})" if r.get("reason") else "")
+        )
+    if failed:
+        raise AssertionError("requirement not met: " + "; ".join(failed))
+
+
+def _metrics_meet(summary: dict, names) -> None:
     metrics = summary["metrics"]
     unknown = [n for n in names if n not in metrics]
     if unknown:

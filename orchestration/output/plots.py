@@ -5,7 +5,8 @@ run`` writes the SVG only with ``--svg``), limits and requirements drawn where t
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
-(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there).
+(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there),
+``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 
@@ -44,6 +45,23 @@ def written_as(formats):
         yield
     finally:
         _written.reset(token)
+
+
+#: (figures written so far, called before each is drawn) while :func:`drawing` (per thread)
+_drawing: ContextVar[tuple[list, object] | None] = ContextVar("agilesat_drawing", default=None)
+
+
+@contextlib.contextmanager
+def drawing(before=None):
+    """Figures made inside (in this thread) are listed, as they are written, in the list
+    yielded; ``before()`` is called before each one is drawn (it may raise: a run stopped
+    by a signal then says which figures were written)."""
+    drawn: list[Path] = []
+    token = _drawing.set((drawn, before))
+    try:
+        yield drawn
+    finally:
+        _drawing.reset(token)
 
 
 def written() -> tuple[str, ...]:
@@ -90,7 +108,7 @@ def _width(k: int, n: int) -> float:
     return 2.2 - 1.3 * k / max(n - 1, 1)
 
 
-def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
+def _mark(ax, limit=None, band=None, paper=None, bottom=None, log=False) -> None:
     if band is not None:
         low, high, text = band
         ax.axhspan(low, high, color="tab:green", alpha=0.15, label=text)
@@ -108,6 +126,8 @@ def _mark(ax, limit=None, band=None, paper=None, bottom=None) -> None:
             )
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
+    if log:
+        ax.set_yscale("log")
 
 
 def requirement(path: Path, title: str, x, rows, met, xlabel: str) -> Path:
@@ -211,6 +231,9 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.image import imsave
 
+    watched = _drawing.get()
+    if watched is not None and watched[1] is not None:
+        watched[1]()
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title)
     figure_layout.fixed(fig, axes, title)
@@ -220,6 +243,8 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     imsave(png, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)  # as savefig
     for target in others:
         fig.savefig(target, dpi=DPI)
+    if watched is not None:
+        watched[0].extend([png, *others])
     return Path(path)
 
 

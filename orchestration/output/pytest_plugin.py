@@ -1,12 +1,13 @@
-"""The ``agilesat`` pytest plugin (entry point ``pytest11``; active after ``pip install
-agilesat``).
+"""The ``agilesat`` pytest plugin (entry point ``pytest11``, registered by ``pip install
+agilesat``; active where pytest is installed too: ``pip install agilesat pytest``).
 
 Fixtures:
 
-* ``agilesat_run`` (session): ``agilesat_run(target, **options)`` runs a scenario[:variant]
-  or an ``.ssd``/``.ssp`` file once per session for each distinct set of options (those of
-  :func:`agilesat.orchestration.run`: ``step``, ``stop``, ``parameters``, ``figures``, ...)
-  and returns ``(results, summary)``; the run's files are in ``summary["out_dir"]``.
+* ``agilesat_run`` (session): ``agilesat_run(target, **options)`` runs a scenario[:variant],
+  a mission file ``path/to/mission.py[:variant]`` or an ``.ssd``/``.ssp`` file once per
+  session for each distinct set of options (those of :func:`agilesat.orchestration.run`:
+  ``step``, ``stop``, ``parameters``, ``figures``, ...) and returns ``(results, summary)``;
+  the run's files are in ``summary["out_dir"]``.
 
 Assertions (:mod:`agilesat.orchestration.output.checks`, re-exported here): ``assert_within``,
 ``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``.

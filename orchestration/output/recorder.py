@@ -12,6 +12,10 @@ renamed when complete, and hands back :class:`Results` that map the raw rows fro
 (copy-on-write: the caller may modify them) instead of holding them in memory.
 
 Without an output directory the caller gets the rows in memory (a buffer grown by doubling).
+
+A run may record some of the columns (``keep``) at every ``every``-th communication point:
+the rows offered are numbered from 0, and row n is recorded when n is a multiple of
+``every``.
 """
 
 from __future__ import annotations
@@ -31,8 +35,10 @@ RAW = ".results.f64"
 class Recorder:
     """Rows of ``columns`` (time first) recorded one communication point at a time."""
 
-    def __init__(self, columns: list[str], out_dir=None):
-        self.columns, self.rows = list(columns), 0
+    def __init__(self, columns: list[str], out_dir=None, keep=None, every: int = 1):
+        self.keep = None if keep is None else np.asarray(keep, dtype=np.intp)
+        self.columns = [columns[k] for k in keep] if keep is not None else list(columns)
+        self.every, self.offered, self.rows = every, 0, 0
         self.out_dir = None if out_dir is None else Path(out_dir)
         self._memory = np.empty((64, len(columns)))
         self._files = []
@@ -44,6 +50,14 @@ class Recorder:
 
     def append(self, row: np.ndarray) -> None:
         """Record one row; an OSError (disk full) names the file and keeps every whole row."""
+        self.offered += 1
+        if (self.offered - 1) % self.every:
+            return
+        if self.keep is not None:
+            row = row[self.keep]
+        self._append(row)
+
+    def _append(self, row: np.ndarray) -> None:
         if not self._files:
             if self.rows == len(self._memory):
                 self._memory = np.concatenate([self._memory, np.empty_like(self._memory)])
@@ -63,6 +77,14 @@ class Recorder:
         """Record several rows at once, as :meth:`append` would one by one (a failed write
         is retried row by row: every whole row that fits is kept).  ``text``: their CSV
         lines as :meth:`append` writes them, if the caller has them already."""
+        offered = len(rows)
+        if self.keep is not None or self.every > 1:
+            rows = rows[(self.offered + np.arange(offered)) % self.every == 0]
+            rows = rows if self.keep is None else rows[:, self.keep]
+            text = None
+        self.offered += offered
+        if not len(rows):
+            return
         if not self._files:
             while self.rows + len(rows) > len(self._memory):
                 self._memory = np.concatenate([self._memory, np.empty_like(self._memory)])
@@ -80,7 +102,7 @@ class Recorder:
                 raise
         except OSError:
             for row in rows:
-                self.append(row)
+                self._append(row)
             return
         self.raw.commit()
         self.csv.commit()

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ...components.variables import UNITS
-from ..system.units import pretty
+from ..system.units import display_factor, pretty
 from .recorder import write_text
 from .results import Results, units_path
 
@@ -89,9 +89,19 @@ def _join(number: str, unit: str) -> str:
 
 
 def _display(value, unit, display_unit):
-    """(value in the display unit, the display unit as people write it)."""
-    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit, 1.0)
+    """(value in the display unit, the display unit as people write it); in ``unit`` when
+    the display unit does not convert (never a value under another unit's name)."""
+    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit) or display_factor(unit, display_unit)
+    if scale is None:
+        return value, pretty(unit)
     return value * scale, pretty(display_unit or unit)
+
+
+def format_value(value: float, unit: str | None, display_unit: str | None = None) -> str:
+    """A value (SI, in ``unit``) as people read it, in ``display_unit``: '0.032°',
+    '0.006 °/s', '5 N·m' (four significant digits)."""
+    shown, text = _display(value, unit, display_unit)
+    return _join(f"{shown:.4g}", text)
 
 
 def _requirement(requirement, unit, display_unit) -> str:
@@ -115,12 +125,14 @@ def _requirement(requirement, unit, display_unit) -> str:
 
 def format_summary(summary: dict) -> str:
     """The headline numbers beside the paper's and the requirement, in each metric's display
-    unit; for a system without a scenario, min/max/final of every output."""
+    unit, with each requirement's verdict (a metric without a value says why); for a system
+    without a scenario, min/max/final of every output."""
     lines = []
+    verdicts = {"met": "PASS", "not met": "FAIL"}
     for name, m in summary.get("metrics", {}).items():
         unit, display = m["unit"], m.get("display_unit")
         value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
-        text = "not reached" if value is None else _join(f"{value:.6g}", u)
+        text = "no value" if value is None else _join(f"{value:.6g}", u)
         paper = (
             "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
             if "paper" in m
@@ -131,8 +143,20 @@ def format_summary(summary: dict) -> str:
             if "requirement" in m
             else ""
         )
-        verdict = {True: "PASS", False: "FAIL"}.get(m.get("met"), "")
+        verdict = verdicts.get(m.get("verdict", ""), m.get("verdict", ""))
+        if verdict == "" and "met" in m:  # a summary written before verdicts
+            verdict = {True: "PASS", False: "FAIL"}.get(m["met"], "")
         lines.append(f"  {name:34s} {text:>18s}   {paper:22s} {required:28s} {verdict}".rstrip())
+        if m["value"] is None and m.get("reason"):
+            lines.append(f"  {'':34s} ({m['reason']})")
+    metrics = summary.get("metrics", {})
+    for name, r in summary.get("requirements", {}).items():
+        if name in metrics and "requirement" in metrics[name]:
+            if r["verdict"] == "not judged":
+                lines.append(f"  {'':34s} not judged: {r.get('reason', '')}")
+            continue
+        shown = r.get("text") or f"{r['statement']}: {r['verdict']}"
+        lines.append(f"  requirement {shown}" + (f" ({r['reason']})" if r.get("reason") else ""))
     outputs = summary.get("outputs", {})
     if outputs:
         lines.append(f"  {'output':40s} {'min':>12s} {'max':>12s} {'final':>12s}  unit")

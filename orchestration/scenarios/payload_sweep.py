@@ -16,88 +16,33 @@ the roll amplitude allows: a 10 s ramp every stroke).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
-from ...components.orbit_environment import WGS84_A
-from ..output import plots
-from ..output.summary import relative_drift
-from . import Scenario, inertial_momentum, summarize
-from .constants import PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY
+from agilesat.components.orbit_environment import WGS84_A
+from agilesat.components.rotations import dcm, rotate_back
+from agilesat.orchestration.mission import Metric, Scenario, System, Variant, at_most, panels
+from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.scenarios.constants import (
+    PAYLOAD_SWEEP_ACCURACY,
+    PAYLOAD_SWEEP_STABILITY,
+)
 
 DEG = math.pi / 180
 ALTITUDE, INCLINATION = 500e3, 97.40 * DEG
 ORBIT_RATE = math.sqrt(3.986004418e14 / (WGS84_A + ALTITUDE) ** 3)
 INERTIA = 150.0 * np.eye(3)  # kg·m², payloads included
 ACCURACY, STABILITY = PAYLOAD_SWEEP_ACCURACY, PAYLOAD_SWEEP_STABILITY
-
-CONNECTIONS = (
-    ("OrbitEnvironment.r_I", "SatelliteDynamics.r_I"),
-    ("OrbitEnvironment.q_OI", "SatelliteDynamics.q_OI"),
-    ("OrbitEnvironment.w_OI_O", "SatelliteDynamics.w_OI_O"),
-    ("OrbitEnvironment.q_OI", "AttitudeController.q_ref"),
-    ("OrbitEnvironment.w_OI_O", "AttitudeController.w_ref"),
-    *(
-        (f"SweepPlanner.{name}", f"PayloadGimbals.{name}")
-        for name in (
-            "roll_cmd",
-            "pitch_cmd",
-            "roll_rate_cmd",
-            "pitch_rate_cmd",
-            "roll_accel_cmd",
-            "pitch_accel_cmd",
-        )
-    ),
-    ("PayloadGimbals.h", "SatelliteDynamics.h_payload"),
-    ("PayloadGimbals.hdot", "SatelliteDynamics.hdot_payload"),
-    ("PayloadGimbals.h", "AttitudeController.h_ff"),
-    ("PayloadGimbals.hdot", "AttitudeController.hdot_ff"),
-    ("SatelliteDynamics.q_BI", "AttitudeController.q_BI"),
-    ("SatelliteDynamics.w_BI_B", "AttitudeController.w_BI_B"),
-    ("AttitudeController.tau_cmd", "Flywheel.tau_cmd"),
-    ("SatelliteDynamics.w_BI_B", "Flywheel.w_BI_B"),
-    ("Flywheel.h", "SatelliteDynamics.h_wheel"),
-    ("Flywheel.hdot", "SatelliteDynamics.hdot_wheel"),
-)
-
-PARAMETERS = {
-    "OrbitEnvironment.semi_major_axis": WGS84_A + ALTITUDE,
-    "OrbitEnvironment.inclination": INCLINATION,
-    "SatelliteDynamics.inertia": INERTIA,
-    "SatelliteDynamics.attitude0": [0.0, 0.0, 0.0],
-    "SatelliteDynamics.rate0": [0.0, 0.0, 0.0],
-    "PayloadGimbals.J_payload": [45.5, 35.8, 36.7],
-    "PayloadGimbals.bandwidth": 0.0,
-    "PayloadGimbals.accel_inputs": True,
-    "SweepPlanner.roll_amplitude": 15 * DEG,
-    "SweepPlanner.roll_rate": 6 * DEG,
-    "SweepPlanner.pitch_amplitude": 45 * DEG,
-    "SweepPlanner.pitch_rate": 0.6 * DEG,
-    "SweepPlanner.turnaround_time": 1.0,
-    "SweepPlanner.symmetric": True,
-    "Flywheel.torque_limit": 0.2,
+#: the sweep of both payloads ([Chang 2015])
+SWEEP = {
+    "roll_amplitude": 15 * DEG,
+    "roll_rate": 6 * DEG,
+    "pitch_amplitude": 45 * DEG,
+    "pitch_rate": 0.6 * DEG,
+    "turnaround_time": 1.0,
+    "symmetric": True,
 }
-
-_AT_REST_INERTIAL = {"SatelliteDynamics.rate0": [0.0, ORBIT_RATE, 0.0]}  # w_BI = 0 at t = 0
-VARIANTS = {
-    "no_control": (
-        "wheel motors off: the payloads' momentum goes into the satellite",
-        {"Flywheel.torque_limit": 0.0},
-    ),
-    "inertial": (
-        "starts at rest in inertial space (the controller takes up the orbit rate)",
-        _AT_REST_INERTIAL,
-    ),
-    "no_control_inertial": (
-        "at rest in inertial space, wheel motors off",
-        {**_AT_REST_INERTIAL, "Flywheel.torque_limit": 0.0},
-    ),
-    "turnaround_10s": (
-        "the slowest reversal the roll sweep allows (10 s)",
-        {"SweepPlanner.turnaround_time": 10.0},
-    ),
-}
-
 PAPER = {
     "payload_torque_yaw_max": 0.2,  # "< 0.2 N·m" (§3)
     "pointing_accuracy": ACCURACY,  # with the 0.2 N·m wheel (Fig. 8)
@@ -106,102 +51,163 @@ PAPER = {
     "yaw_period_ripple": 10.0,
 }
 
+SYSTEM = System("payload_sweep", step=0.05, stop=600.0)
+SYSTEM.add("OrbitEnvironment", semi_major_axis=WGS84_A + ALTITUDE, inclination=INCLINATION)
+SYSTEM.add("SweepPlanner", **SWEEP)
+SYSTEM.add("PayloadGimbals", J_payload=[45.5, 35.8, 36.7], bandwidth=0.0, accel_inputs=True)
+SYSTEM.add("Flywheel", torque_limit=0.2)
+SYSTEM.add("SatelliteDynamics", inertia=INERTIA, attitude0=[0.0, 0.0, 0.0], rate0=[0.0, 0.0, 0.0])
+SYSTEM.add("AttitudeController")
+SYSTEM.connect("OrbitEnvironment.r_I", "SatelliteDynamics.r_I")
+SYSTEM.connect("OrbitEnvironment.q_OI", "SatelliteDynamics.q_OI")
+SYSTEM.connect("OrbitEnvironment.w_OI_O", "SatelliteDynamics.w_OI_O")
+SYSTEM.connect("OrbitEnvironment.q_OI", "AttitudeController.q_ref")
+SYSTEM.connect("OrbitEnvironment.w_OI_O", "AttitudeController.w_ref")
+for command in ("roll", "pitch", "roll_rate", "pitch_rate", "roll_accel", "pitch_accel"):
+    SYSTEM.connect(f"SweepPlanner.{command}_cmd", f"PayloadGimbals.{command}_cmd")
+SYSTEM.connect("PayloadGimbals.h", "SatelliteDynamics.h_payload")
+SYSTEM.connect("PayloadGimbals.hdot", "SatelliteDynamics.hdot_payload")
+SYSTEM.connect("PayloadGimbals.h", "AttitudeController.h_ff")
+SYSTEM.connect("PayloadGimbals.hdot", "AttitudeController.hdot_ff")
+SYSTEM.connect("SatelliteDynamics.q_BI", "AttitudeController.q_BI")
+SYSTEM.connect("SatelliteDynamics.w_BI_B", "AttitudeController.w_BI_B")
+SYSTEM.connect("AttitudeController.tau_cmd", "Flywheel.tau_cmd")
+SYSTEM.connect("SatelliteDynamics.w_BI_B", "Flywheel.w_BI_B")
+SYSTEM.connect("Flywheel.h", "SatelliteDynamics.h_wheel")
+SYSTEM.connect("Flywheel.hdot", "SatelliteDynamics.hdot_wheel")
 
-#: the paper's pointing accuracy and stability ([Chang 2015])
-REQUIREMENTS = {"pointing_accuracy": {"max": ACCURACY}, "pointing_stability": {"max": STABILITY}}
+_AT_REST_INERTIAL = {"SatelliteDynamics.rate0": [0.0, ORBIT_RATE, 0.0]}  # w_BI = 0 at t = 0
+#: nothing is asked of an uncontrolled satellite
+_UNCONTROLLED = {
+    "pointing_accuracy": "the wheel motors are off: the pointing requirement is for control",
+    "pointing_stability": "the wheel motors are off: the pointing requirement is for control",
+}
+VARIANTS = {
+    "no_control": Variant(
+        "wheel motors off: the payloads' momentum goes into the satellite",
+        parameters={"Flywheel.torque_limit": 0.0},
+        not_judged=_UNCONTROLLED,
+    ),
+    "inertial": Variant(
+        "starts at rest in inertial space (the controller takes up the orbit rate)",
+        parameters=_AT_REST_INERTIAL,
+    ),
+    "no_control_inertial": Variant(
+        "at rest in inertial space, wheel motors off",
+        parameters={**_AT_REST_INERTIAL, "Flywheel.torque_limit": 0.0},
+        not_judged=_UNCONTROLLED,
+    ),
+    "turnaround_10s": Variant(
+        "the slowest reversal the roll sweep allows (10 s)",
+        parameters={"SweepPlanner.turnaround_time": 10.0},
+    ),
+}
 
 
-def metrics(results) -> dict:
-    h = results.vector("PayloadGimbals.h")
-    hdot = results.vector("PayloadGimbals.hdot")
-    error = results.vector("AttitudeController.att_error")
-    rate_error = results.vector("AttitudeController.rate_error")
-    euler = results.vector("SatelliteDynamics.euler_BO")
-    euler_rate = results.vector("SatelliteDynamics.euler_rate_BO")
-    motor = results.vector("Flywheel.motor_torque")
-    wheel_h = results.vector("Flywheel.h")
-    saturated = results["Flywheel.saturated"]
-    slow, ripple = yaw_periods(results)
-    m = {  # name: (value, unit, display unit, description)
-        "payload_momentum_xy_max": (
-            np.abs(h[:, :2]).max(),
-            "N.m.s",
-            "N.m.s",
-            "max |h_x|, |h_y| of the payload pair (cancel)",
+def inertial_momentum(results, inertia, *devices: str) -> np.ndarray:
+    """C_BIᵀ (J w + Σ h) per row (N, 3), from the recorded SatelliteDynamics attitude and
+    rate and the named devices' momentum columns."""
+    w = results.vector("SatelliteDynamics.w_BI_B")
+    body = w @ np.asarray(inertia).T + sum(results.vector(d) for d in devices)
+    C = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
+    return np.array(rotate_back(C, tuple(body.T))).T
+
+
+def _yaw_period(k: int):
+    return lambda results: yaw_periods(results)[k]
+
+
+#: the headline numbers (SI), beside the paper's; its pointing accuracy and stability as
+#: requirements ([Chang 2015])
+METRICS = [
+    m.max_abs(
+        lambda results: results.vector("PayloadGimbals.h")[:, :2],
+        name="payload_momentum_xy_max",
+        unit="N.m.s",
+        description="max |h_x|, |h_y| of the payload pair (cancel)",
+    ),
+    m.max_abs(
+        lambda results: results.vector("PayloadGimbals.hdot")[:, :2],
+        name="payload_torque_xy_max",
+        unit="N.m",
+        description="max |ḣ_x|, |ḣ_y| of the payload pair (cancel)",
+    ),
+    m.max_abs(
+        "PayloadGimbals.h[3]",
+        name="payload_momentum_yaw_max",
+        description="max |h_z| of the payload pair",
+    ),
+    m.max_abs(
+        "PayloadGimbals.hdot[3]",
+        name="payload_torque_yaw_max",
+        description="max |ḣ_z| of the payload pair (the yaw torque)",
+        paper=PAPER["payload_torque_yaw_max"],
+    ),
+    Metric(
+        "yaw_period_slow",
+        _yaw_period(0),
+        "s",
+        "s",
+        "period of h_z's slow envelope (demodulated)",
+        paper=PAPER["yaw_period_slow"],
+    ),
+    Metric(
+        "yaw_period_ripple",
+        _yaw_period(1),
+        "s",
+        "s",
+        "period of h_z's ripple (the roll stroke)",
+        paper=PAPER["yaw_period_ripple"],
+    ),
+    m.max_abs(
+        "AttitudeController.att_error",
+        name="pointing_accuracy",
+        display_unit="deg",
+        description="max |attitude error| about any body axis (reference: the orbit frame)",
+        require=at_most(ACCURACY),
+        paper=PAPER["pointing_accuracy"],
+    ),
+    m.max_abs(
+        "AttitudeController.rate_error",
+        name="pointing_stability",
+        display_unit="deg/s",
+        description="max |rate error| about any body axis",
+        require=at_most(STABILITY),
+        paper=PAPER["pointing_stability"],
+    ),
+    m.max_abs(
+        "SatelliteDynamics.euler_BO",
+        name="euler_max",
+        display_unit="deg",
+        description="max |roll|, |pitch|, |yaw| relative to the orbit frame",
+    ),
+    m.max_abs(
+        "SatelliteDynamics.euler_rate_BO",
+        name="euler_rate_max",
+        display_unit="deg/s",
+        description="max |Euler angle rate| relative to the orbit frame",
+    ),
+    m.max_abs("Flywheel.motor_torque", name="wheel_torque_max", description="max |motor torque|"),
+    m.max_abs(
+        "Flywheel.h",
+        name="wheel_momentum_max",
+        description="max |wheel momentum| along any body axis",
+    ),
+    m.saturation_fraction(
+        "Flywheel.saturated",
+        name="wheel_saturated_fraction",
+        description="fraction of the run with a wheel limit active",
+    ),
+    m.momentum_drift(
+        lambda results: inertial_momentum(results, INERTIA, "Flywheel.h", "PayloadGimbals.h"),
+        scale=lambda results: max(
+            np.linalg.norm(results.vector(part), axis=1).max()
+            for part in ("Flywheel.h", "PayloadGimbals.h")
         ),
-        "payload_torque_xy_max": (
-            np.abs(hdot[:, :2]).max(),
-            "N.m",
-            "N.m",
-            "max |ḣ_x|, |ḣ_y| of the payload pair (cancel)",
-        ),
-        "payload_momentum_yaw_max": (
-            np.abs(h[:, 2]).max(),
-            "N.m.s",
-            "N.m.s",
-            "max |h_z| of the payload pair",
-        ),
-        "payload_torque_yaw_max": (
-            np.abs(hdot[:, 2]).max(),
-            "N.m",
-            "N.m",
-            "max |ḣ_z| of the payload pair (the yaw torque)",
-        ),
-        "yaw_period_slow": (slow, "s", "s", "period of h_z's slow envelope (demodulated)"),
-        "yaw_period_ripple": (ripple, "s", "s", "period of h_z's ripple (the roll stroke)"),
-        "pointing_accuracy": (
-            np.abs(error).max(),
-            "rad",
-            "deg",
-            "max |attitude error| about any body axis (reference: the orbit frame)",
-        ),
-        "pointing_stability": (
-            np.abs(rate_error).max(),
-            "rad/s",
-            "deg/s",
-            "max |rate error| about any body axis",
-        ),
-        "euler_max": (
-            np.abs(euler).max(),
-            "rad",
-            "deg",
-            "max |roll|, |pitch|, |yaw| relative to the orbit frame",
-        ),
-        "euler_rate_max": (
-            np.abs(euler_rate).max(),
-            "rad/s",
-            "deg/s",
-            "max |Euler angle rate| relative to the orbit frame",
-        ),
-        "wheel_torque_max": (np.abs(motor).max(), "N.m", "N.m", "max |motor torque|"),
-        "wheel_momentum_max": (
-            np.abs(wheel_h).max(),
-            "N.m.s",
-            "N.m.s",
-            "max |wheel momentum| along any body axis",
-        ),
-        "wheel_saturated_fraction": (
-            saturated.mean(),
-            "1",
-            "1",
-            "fraction of the run with a wheel limit active",
-        ),
-        "momentum_drift": (
-            relative_drift(
-                inertial_momentum(results, INERTIA, "Flywheel.h", "PayloadGimbals.h"),
-                scale=max(
-                    np.linalg.norm(results.vector(part), axis=1).max()
-                    for part in ("Flywheel.h", "PayloadGimbals.h")
-                ),
-            ),
-            "1",
-            "1",
-            "max change of C_BIᵀ(J w + h_wheel + h_payload), recomputed from the recorded "
-            "outputs, relative to |H(0)| or the largest device momentum if larger",
-        ),
-    }
-    summary = summarize(m, PAPER, REQUIREMENTS)
-    return {"metrics": summary, "diagnostics": diagnose(results, summary)}
+        description="max change of C_BIᵀ(J w + h_wheel + h_payload), recomputed from the "
+        "recorded outputs, relative to |H(0)| or the largest device momentum if larger",
+    ),
+]
 
 
 def controlled(results) -> bool:
@@ -209,28 +215,20 @@ def controlled(results) -> bool:
     return bool(np.abs(results.vector("Flywheel.motor_torque")).max() > 0.0)
 
 
-def diagnose(results, summary) -> list[str]:
-    if not controlled(results):
-        return []  # nothing is asked of an uncontrolled satellite
-    problems = []
-    accuracy, stability = (summary[k]["value"] for k in ("pointing_accuracy", "pointing_stability"))
-    if accuracy > ACCURACY or stability > STABILITY:
-        text = (
-            f"pointing accuracy {accuracy / DEG:.3g}° and stability "
-            f"{stability / DEG:.3g} °/s against the required {ACCURACY / DEG}° and "
-            f"{STABILITY / DEG} °/s"
-        )
-        if summary["wheel_saturated_fraction"]["value"] > 0:
-            text += (
-                f": the wheels saturate at "
-                f"{summary['wheel_torque_max']['value']:.2g} N·m "
-                f"({100 * summary['wheel_saturated_fraction']['value']:.1f} % of the time); "
-                f"the payloads' yaw torque peaks at "
-                f"{summary['payload_torque_yaw_max']['value']:.2f} N·m (run "
-                "`agilesat size-flywheel` for the wheel that meets the requirement)"
-            )
-        problems.append(text)
-    return problems
+def diagnose(results, metrics) -> list[str]:
+    """Why the pointing requirements were missed, where the wheels are the cause."""
+    accuracy, stability = (metrics[k]["value"] for k in ("pointing_accuracy", "pointing_stability"))
+    if not controlled(results) or (accuracy <= ACCURACY and stability <= STABILITY):
+        return []
+    if metrics["wheel_saturated_fraction"]["value"] == 0:
+        return []
+    return [
+        f"the wheels saturate at {metrics['wheel_torque_max']['value']:.2g} N·m "
+        f"({100 * metrics['wheel_saturated_fraction']['value']:.1f} % of the time); "
+        f"the payloads' yaw torque peaks at "
+        f"{metrics['payload_torque_yaw_max']['value']:.2f} N·m (run "
+        "`agilesat size-flywheel` for the wheel that meets the requirement)"
+    ]
 
 
 def yaw_periods(results) -> tuple[float, float]:
@@ -273,7 +271,7 @@ def figures(results, out_dir) -> list:
     label = "Fig. 8 compensated" if controlled(results) else "Fig. 7 uncompensated"
     yaw_torque = PAPER["payload_torque_yaw_max"]
     return [
-        plots.panels(
+        panels(
             out_dir / "fig04_payload_angles.png",
             "Fig. 4 payload angles",
             [
@@ -285,7 +283,7 @@ def figures(results, out_dir) -> list:
                 ),
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig05_payload_momentum.png",
             "Fig. 5 payload pair momentum h, in B",
             [
@@ -293,7 +291,7 @@ def figures(results, out_dir) -> list:
                 (t[zoom], {"z (B)": h[zoom, 2]}, "h_z, first 30 s [N·m·s]"),
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig06_payload_torque.png",
             "Fig. 6 payload pair torque ḣ, in B",
             [
@@ -306,7 +304,7 @@ def figures(results, out_dir) -> list:
                 (t[zoom], {"z (B)": hdot[zoom, 2]}, "ḣ_z, first 30 s [N·m]"),
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig07_08_attitude.png",
             f"{label}: attitude of B relative to the orbit frame O",
             [
@@ -322,7 +320,7 @@ def figures(results, out_dir) -> list:
                 ),
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig08_pointing.png",
             "Pointing error (controller, in B) against the requirement",
             [
@@ -340,7 +338,7 @@ def figures(results, out_dir) -> list:
                 ),
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig09_wheel.png",
             "Reaction wheels (axes in B)",
             [
@@ -356,21 +354,12 @@ def figures(results, out_dir) -> list:
 
 
 SCENARIO = Scenario(
-    name="payload_sweep",
-    title="Two symmetric swinging payloads compensated by a reaction wheel",
-    components=(
-        "OrbitEnvironment",
-        "SweepPlanner",
-        "PayloadGimbals",
-        "Flywheel",
-        "SatelliteDynamics",
-        "AttitudeController",
-    ),
-    connections=CONNECTIONS,
-    parameters=PARAMETERS,
-    stop=600.0,
-    step=0.05,
-    metrics=metrics,
-    figures=figures,
+    "payload_sweep",
+    "Two symmetric swinging payloads compensated by a reaction wheel",
+    SYSTEM,
+    metrics=METRICS,
     variants=VARIANTS,
+    figures=figures,
+    diagnose=diagnose,
+    systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
 )

@@ -29,22 +29,26 @@ Other passes, of a real satellite: ``agilesat stare`` (:mod:`..studies.stare`).
 
 from __future__ import annotations
 
+import functools
 import math
+from pathlib import Path
 
 import numpy as np
 
-from ...components.cmg_steering import PSEUDO_INVERSE
-from ...components.ephemeris import J2000, parse_epoch
-from ...components.orbit_environment import OrbitEnvironment
-from ...components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
-from ...components.staring_guidance import StaringGuidance, footprint_azimuth
-from ..output import plots
-from ..output.summary import relative_drift
-from ..studies.passes import look_geometry
-from . import Scenario, summarize
-from .common import cmg_hardware, hub_inertia
-from .constants import VIDEO_SAR_STARE, VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON
-from .scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
+from agilesat.components.cmg_steering import PSEUDO_INVERSE
+from agilesat.components.ephemeris import J2000, parse_epoch
+from agilesat.components.orbit_environment import OrbitEnvironment
+from agilesat.components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
+from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuth
+from agilesat.orchestration.mission import Metric, Scenario, System, Variant, at_most, lines, panels
+from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.scenarios.constants import (
+    VIDEO_SAR_STARE,
+    VIDEO_SAR_TARGET_LAT,
+    VIDEO_SAR_TARGET_LON,
+)
+from agilesat.orchestration.scenarios.scan_pitch import H_ROTOR, INERTIA, RATE_LIMIT
+from agilesat.orchestration.studies.passes import look_geometry
 
 DEG = math.pi / 180
 TARGET = (VIDEO_SAR_TARGET_LAT, VIDEO_SAR_TARGET_LON, 0.0)
@@ -125,63 +129,67 @@ ON_REFERENCE_YAW_0 = (
     [-0.000684611902, -0.004466724288, -0.000711599654],
 )
 
-CONNECTIONS = (
-    *((f"OrbitEnvironment.{name}", f"StaringGuidance.{name}") for name in _GUIDANCE_INPUTS),
-    ("OrbitEnvironment.r_I", "SatelliteDynamics.r_I"),
-    ("OrbitEnvironment.q_OI", "SatelliteDynamics.q_OI"),
-    ("OrbitEnvironment.w_OI_O", "SatelliteDynamics.w_OI_O"),
-    ("StaringGuidance.q_ref", "AttitudeController.q_ref"),
-    ("StaringGuidance.w_ref", "AttitudeController.w_ref"),
-    ("StaringGuidance.dw_ref", "AttitudeController.dw_ref"),
-    ("SatelliteDynamics.q_BI", "AttitudeController.q_BI"),
-    ("SatelliteDynamics.w_BI_B", "AttitudeController.w_BI_B"),
-    ("AttitudeController.tau_cmd", "CmgSteering.tau_cmd"),
-    ("CmgCluster.delta", "CmgSteering.delta"),
-    ("CmgCluster.h", "CmgSteering.h"),
-    ("SatelliteDynamics.w_BI_B", "CmgSteering.w_BI_B"),
-    ("CmgSteering.delta_dot_cmd", "CmgCluster.delta_dot_cmd"),
-    ("CmgCluster.h", "SatelliteDynamics.h_cmg"),
-    ("CmgCluster.hdot", "SatelliteDynamics.hdot_cmg"),
-)
 
-
-def parameters(orbit: dict, guidance: dict, on_reference: tuple | None = None) -> dict:
-    """The system's parameter values for a pass (``orbit``: OrbitEnvironment parameters,
-    t = 0 at the start of the stare) and guidance settings; the body starts on the
-    reference (``on_reference`` = (attitude0, rate0), default: computed)."""
+def make_system(
+    orbit: dict, guidance: dict, on_reference: tuple | None = None, name: str = "video_sar"
+) -> System:
+    """The system for a pass (``orbit``: OrbitEnvironment parameters, t = 0 at the start
+    of the stare) and guidance settings; the body starts on the reference
+    (``on_reference`` = (attitude0, rate0), default: computed)."""
     attitude0, rate0 = on_reference or initial_state(orbit, guidance)
-    return {
-        **{f"OrbitEnvironment.{key}": value for key, value in orbit.items()},
-        **{f"StaringGuidance.{key}": value for key, value in guidance.items()},
-        "AttitudeController.kp": [INERTIA * BANDWIDTH**2] * 3,
-        "AttitudeController.kd": [2 * DAMPING * BANDWIDTH * INERTIA] * 3,
-        **hub_inertia(INERTIA * np.eye(3), "AttitudeController"),
-        "AttitudeController.acceleration_feedforward": True,
-        "SatelliteDynamics.attitude0": attitude0,
-        "SatelliteDynamics.rate0": rate0,
-        "SatelliteDynamics.gravity_gradient": True,
-        **cmg_hardware(h_rotor=H_ROTOR),
-        "CmgCluster.delta0": DELTA0,
-        "CmgCluster.rate_limit": RATE_LIMIT,
-        "CmgSteering.law": PSEUDO_INVERSE,
-    }
+    system = System(name, step=0.05, stop=2 * HALF_STARE)
+    system.add("OrbitEnvironment", **orbit)
+    system.add("StaringGuidance", **guidance)
+    system.add(  # quaternion PD at ω_n, ζ, and the feedforward J ẇ_ref + ω × J ω
+        "AttitudeController",
+        kp=[INERTIA * BANDWIDTH**2] * 3,
+        kd=[2 * DAMPING * BANDWIDTH * INERTIA] * 3,
+        inertia=INERTIA * np.eye(3),  # the feedforward uses the hub inertia
+        acceleration_feedforward=True,
+    )
+    system.add("CmgSteering", h_rotor=H_ROTOR, law=PSEUDO_INVERSE)
+    system.add("CmgCluster", h_rotor=H_ROTOR, delta0=DELTA0, rate_limit=RATE_LIMIT)
+    system.add(
+        "SatelliteDynamics",
+        inertia=INERTIA * np.eye(3),
+        attitude0=attitude0,
+        rate0=rate0,
+        gravity_gradient=True,
+    )
+    for signal in _GUIDANCE_INPUTS:
+        system.connect(f"OrbitEnvironment.{signal}", f"StaringGuidance.{signal}")
+    system.connect("OrbitEnvironment.r_I", "SatelliteDynamics.r_I")
+    system.connect("OrbitEnvironment.q_OI", "SatelliteDynamics.q_OI")
+    system.connect("OrbitEnvironment.w_OI_O", "SatelliteDynamics.w_OI_O")
+    system.connect("StaringGuidance.q_ref", "AttitudeController.q_ref")
+    system.connect("StaringGuidance.w_ref", "AttitudeController.w_ref")
+    system.connect("StaringGuidance.dw_ref", "AttitudeController.dw_ref")
+    system.connect("SatelliteDynamics.q_BI", "AttitudeController.q_BI")
+    system.connect("SatelliteDynamics.w_BI_B", "AttitudeController.w_BI_B")
+    system.connect("AttitudeController.tau_cmd", "CmgSteering.tau_cmd")
+    system.connect("CmgCluster.delta", "CmgSteering.delta")
+    system.connect("CmgCluster.h", "CmgSteering.h")
+    system.connect("SatelliteDynamics.w_BI_B", "CmgSteering.w_BI_B")
+    system.connect("CmgSteering.delta_dot_cmd", "CmgCluster.delta_dot_cmd")
+    system.connect("CmgCluster.h", "SatelliteDynamics.h_cmg")
+    system.connect("CmgCluster.hdot", "SatelliteDynamics.hdot_cmg")
+    return system
 
 
-PARAMETERS = parameters(ORBIT, GUIDANCE, ON_REFERENCE)
+SYSTEM = make_system(ORBIT, GUIDANCE, ON_REFERENCE)
 
 VARIANTS = {
-    "no_yaw_compensation": (
+    "no_yaw_compensation": Variant(
         "yaw 0 (eq 11 only): the footprint turns on the ground",
-        {
+        parameters={
             "StaringGuidance.yaw_compensation": False,
-            **dict(
-                zip(("SatelliteDynamics.attitude0", "SatelliteDynamics.rate0"), ON_REFERENCE_YAW_0)
-            ),
+            "SatelliteDynamics.attitude0": ON_REFERENCE_YAW_0[0],
+            "SatelliteDynamics.rate0": ON_REFERENCE_YAW_0[1],
         },
     ),
-    "no_feedforward": (
+    "no_feedforward": Variant(
         "PD attitude law alone, no feedforward of the reference acceleration",
-        {"AttitudeController.acceleration_feedforward": False},
+        parameters={"AttitudeController.acceleration_feedforward": False},
     ),
 }
 
@@ -193,6 +201,7 @@ def boresight_B(results) -> np.ndarray:
     return dcm_from_quat(results.vector("StaringGuidance.q_ref")[0]) @ (los / np.linalg.norm(los))
 
 
+@functools.lru_cache(maxsize=2)  # metrics, figures
 def boresight_error(results) -> np.ndarray:
     """Angle (rad) between the body boresight and the line of sight to the target."""
     C_BI = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
@@ -201,6 +210,7 @@ def boresight_error(results) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1), np.einsum("ij,ij->i", beam, los))
 
 
+@functools.lru_cache(maxsize=2)
 def footprint_rotation(results) -> np.ndarray:
     """Turn (rad) of the achieved footprint on the ground since t = 0 (the definition of
     StaringGuidance.footprint_rotation applied to SatelliteDynamics.q_BI)."""
@@ -218,98 +228,105 @@ def _geometry(results, k):
     )
 
 
-def metrics(results) -> dict:
-    t = results.time
-    error = boresight_error(results)
-    rotation = footprint_rotation(results)
+@functools.lru_cache(maxsize=2)
+def zero_doppler(results):
+    """(index of the communication point nearest zero Doppler, its look geometry)."""
     rel = results.vector("OrbitEnvironment.r_T_I") - results.vector("OrbitEnvironment.r_I")
     rel_v = results.vector("OrbitEnvironment.v_T_I") - results.vector("OrbitEnvironment.v_I")
     closest = int(np.argmin(np.abs(np.einsum("ij,ij->i", rel, rel_v))))
-    geometry = _geometry(results, closest)
-    euler = results.vector("SatelliteDynamics.euler_BO")
-    euler_rate = results.vector("SatelliteDynamics.euler_rate_BO")
-    m = {  # name: (value, unit, display unit, description)
-        "zero_doppler_time": (
-            t[closest],
-            "s",
-            "s",
-            "communication point nearest zero Doppler (designed: 100 s, 08:09:43 UTC)",
-        ),
-        "look_angle_zero_doppler": (
-            geometry.look_angle,
-            "rad",
-            "deg",
-            "off-nadir look angle there (designed: 30°)",
-        ),
-        "slant_range_zero_doppler": (geometry.slant_range, "m", "km", "slant range there"),
-        "pointing_error_max": (error.max(), "rad", "deg", "max angle boresight to target"),
-        "pointing_error_rms": (
-            math.sqrt(np.mean(error**2)),
-            "rad",
-            "deg",
-            "RMS angle boresight to target",
-        ),
-        "footprint_rotation_max": (
-            np.abs(rotation).max(),
-            "rad",
-            "deg",
-            "max turn of the achieved footprint on the ground",
-        ),
-        "footprint_rotation_end": (
-            rotation[-1],
-            "rad",
-            "deg",
-            "turn of the achieved footprint at the end of the stare",
-        ),
-        "roll_range": (np.ptp(euler[:, 0]), "rad", "deg", "max − min roll (B rel. O)"),
-        "pitch_range": (np.ptp(euler[:, 1]), "rad", "deg", "max − min pitch"),
-        "yaw_range": (np.ptp(euler[:, 2]), "rad", "deg", "max − min yaw"),
-        "max_abs_euler_rate": (
-            np.abs(euler_rate).max(),
-            "rad/s",
-            "deg/s",
-            "max |Euler angle rate| (any axis)",
-        ),
-        "max_gimbal_rate": (
-            np.abs(results.vector("CmgCluster.delta_dot")).max(),
-            "rad/s",
-            "rad/s",
-            "max |gimbal rate|",
-        ),
-        "max_cmg_momentum": (
-            np.linalg.norm(results.vector("CmgCluster.h"), axis=1).max(),
-            "N.m.s",
-            "N.m.s",
-            "max |cluster momentum|",
-        ),
-        "min_singularity": (
-            results["CmgCluster.singularity"].min(),
-            "1",
-            "1",
-            "min det(A Aᵀ) of the cluster",
-        ),
-        "momentum_drift": (
-            relative_drift(results.vector("SatelliteDynamics.H_I")),
-            "1",
-            "1",
-            "max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external torque)",
-        ),
-    }
-    summary = summarize(m, requirements={"pointing_error_max": {"max": POINTING_REQUIREMENT}})
-    problems = []
-    if error.max() > POINTING_REQUIREMENT:
-        worst = int(np.argmax(error))
-        problems.append(
-            f"pointing error {error.max() / DEG:.4f}° at t = {t[worst]:.2f} s "
-            f"exceeds the {POINTING_REQUIREMENT / DEG}° assumed requirement"
-        )
+    return closest, _geometry(results, closest)
+
+
+def _euler_range(axis: int, name: str) -> Metric:
+    return Metric(
+        f"{name}_range",
+        lambda results: np.ptp(results.vector("SatelliteDynamics.euler_BO")[:, axis]),
+        "rad",
+        "deg",
+        f"max − min {name}" + (" (B rel. O)" if axis == 0 else ""),
+    )
+
+
+METRICS = [
+    Metric(
+        "zero_doppler_time",
+        lambda results: results.time[zero_doppler(results)[0]],
+        "s",
+        "s",
+        "communication point nearest zero Doppler (designed: 100 s, 08:09:43 UTC)",
+    ),
+    Metric(
+        "look_angle_zero_doppler",
+        lambda results: zero_doppler(results)[1].look_angle,
+        "rad",
+        "deg",
+        "off-nadir look angle there (designed: 30°)",
+    ),
+    Metric(
+        "slant_range_zero_doppler",
+        lambda results: zero_doppler(results)[1].slant_range,
+        "m",
+        "km",
+        "slant range there",
+    ),
+    m.max_abs(
+        boresight_error,
+        name="pointing_error_max",
+        unit="rad",
+        display_unit="deg",
+        description="max angle boresight to target",
+        require=at_most(POINTING_REQUIREMENT),
+    ),
+    m.rms(
+        boresight_error,
+        norm=False,
+        name="pointing_error_rms",
+        unit="rad",
+        display_unit="deg",
+        description="RMS angle boresight to target",
+    ),
+    m.max_abs(
+        footprint_rotation,
+        name="footprint_rotation_max",
+        unit="rad",
+        display_unit="deg",
+        description="max turn of the achieved footprint on the ground",
+    ),
+    Metric(
+        "footprint_rotation_end",
+        lambda results: footprint_rotation(results)[-1],
+        "rad",
+        "deg",
+        "turn of the achieved footprint at the end of the stare",
+    ),
+    _euler_range(0, "roll"),
+    _euler_range(1, "pitch"),
+    _euler_range(2, "yaw"),
+    m.max_abs(
+        "SatelliteDynamics.euler_rate_BO",
+        name="max_abs_euler_rate",
+        display_unit="deg/s",
+        description="max |Euler angle rate| (any axis)",
+    ),
+    m.max_abs("CmgCluster.delta_dot", name="max_gimbal_rate", description="max |gimbal rate|"),
+    m.max_abs(
+        "CmgCluster.h", norm=True, name="max_cmg_momentum", description="max |cluster momentum|"
+    ),
+    m.singularity_measure(),
+    m.momentum_drift(
+        description="max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external torque)"
+    ),
+]
+
+
+def diagnose(results, metrics) -> list[str]:
     commands = np.abs(results.vector("CmgSteering.delta_dot_cmd")).max()
-    if commands > RATE_LIMIT:
-        problems.append(
-            f"gimbal rate commands reached {commands:.2f} rad/s, above the "
-            f"cluster's {RATE_LIMIT} rad/s limit"
-        )
-    return {"metrics": summary, "diagnostics": problems}
+    if commands <= RATE_LIMIT:
+        return []
+    return [
+        f"gimbal rate commands reached {commands:.2f} rad/s, above the "
+        f"cluster's {RATE_LIMIT} rad/s limit"
+    ]
 
 
 def figures(results, out_dir) -> list:
@@ -323,7 +340,7 @@ def figures(results, out_dir) -> list:
     ref_rate = np.gradient(ref, t, axis=0)
     axes = ("roll", "pitch", "yaw")
     return [
-        plots.panels(
+        panels(
             out_dir / "fig07_euler_angles.png",
             "Fig. 7 Euler angles (B rel. O)",
             [
@@ -331,7 +348,7 @@ def figures(results, out_dir) -> list:
                 for i, name in enumerate(axes)
             ],
         ),
-        plots.panels(
+        panels(
             out_dir / "fig07_euler_rates.png",
             "Fig. 7 Euler angle rates (B rel. O)",
             [
@@ -339,7 +356,7 @@ def figures(results, out_dir) -> list:
                 for i, name in enumerate(axes)
             ],
         ),
-        plots.lines(
+        lines(
             out_dir / "pointing_error.png",
             "Boresight to target",
             t,
@@ -351,7 +368,7 @@ def figures(results, out_dir) -> list:
             ),
             bottom=0.0,
         ),
-        plots.lines(
+        lines(
             out_dir / "footprint_rotation.png",
             "Footprint rotation on the ground",
             t,
@@ -361,7 +378,7 @@ def figures(results, out_dir) -> list:
             },
             "rotation [deg]",
         ),
-        plots.panels(
+        panels(
             out_dir / "look_geometry.png",
             "Look geometry",
             [
@@ -369,7 +386,7 @@ def figures(results, out_dir) -> list:
                 (t, {"slant range": results["StaringGuidance.slant_range"] / 1e3}, "range [km]"),
             ],
         ),
-        plots.lines(
+        lines(
             out_dir / "gimbal_rates.png",
             "Gimbal rates",
             t,
@@ -381,21 +398,12 @@ def figures(results, out_dir) -> list:
 
 
 SCENARIO = Scenario(
-    name="video_sar",
-    title="200-s stare at Sasebo from a 567 km sun-synchronous orbit, yaw-compensated",
-    components=(
-        "OrbitEnvironment",
-        "StaringGuidance",
-        "AttitudeController",
-        "CmgSteering",
-        "CmgCluster",
-        "SatelliteDynamics",
-    ),
-    connections=CONNECTIONS,
-    parameters=PARAMETERS,
-    stop=2 * HALF_STARE,
-    step=0.05,
-    metrics=metrics,
-    figures=figures,
+    "video_sar",
+    "200-s stare at Sasebo from a 567 km sun-synchronous orbit, yaw-compensated",
+    SYSTEM,
+    metrics=METRICS,
     variants=VARIANTS,
+    figures=figures,
+    diagnose=diagnose,
+    systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
 )

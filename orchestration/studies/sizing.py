@@ -19,7 +19,6 @@ import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from ...fmus.build import build_all
 from ..campaign.engine import cluster
 from ..campaign.worker import run_one
 from ..output import plots
@@ -105,14 +104,10 @@ def size_flywheel(
     scheduler: str | None = None,
 ) -> Sizing:
     """The smallest wheel torque meeting both requirements (angles in rad, SI)."""
-    sweep = payload_sweep.PARAMETERS
+    sweep = payload_sweep.SWEEP
     # one pitch sweep (4 amplitudes at the pitch rate, plus a reversal) and a margin
-    stop = stop or (
-        4 * sweep["SweepPlanner.pitch_amplitude"] / sweep["SweepPlanner.pitch_rate"]
-        + turnaround
-        + 10.0
-    )
-    build_all(names=payload_sweep.SCENARIO.components)
+    stop = stop or (4 * sweep["pitch_amplitude"] / sweep["pitch_rate"] + turnaround + 10.0)
+    payload_sweep.SCENARIO.system_file()  # its FMUs built, for the workers
     points = []
     with cluster(workers, scheduler) as client:
         k = max(2, len(client.scheduler_info()["workers"]))

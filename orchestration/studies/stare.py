@@ -8,14 +8,13 @@ satellite starting on the reference.
 
 from __future__ import annotations
 
-import dataclasses
 import datetime
 import math
 from pathlib import Path
 
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
-from ..scenarios import Scenario
-from ..scenarios.video_sar import GUIDANCE, HALF_STARE, SCENARIO, TARGET, parameters
+from ..mission import Scenario
+from ..scenarios.video_sar import GUIDANCE, HALF_STARE, SCENARIO, TARGET, make_system
 from .passes import find_passes
 
 DEG = math.pi / 180
@@ -71,19 +70,18 @@ def tle_pass(
 
 def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> Scenario:
     """This scenario for another pass (``orbit``: OrbitEnvironment parameters, t = 0 at the
-    start of the stare), its system written to ``out_dir/video_sar_pass.ssd`` with the FMUs
-    of fmus/build."""
-    from ...fmus.build import BUILD_DIR
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    scenario = dataclasses.replace(
-        SCENARIO,
-        parameters=parameters(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation)),
-        variants={},
-        system=out_dir / "video_sar_pass.ssd",
+    start of the stare), its system also written to ``out_dir/video_sar.ssd`` (its
+    ``ssd``; the FMUs of fmus/build)."""
+    system = make_system(orbit, dict(GUIDANCE, yaw_compensation=yaw_compensation))
+    scenario = Scenario(
+        SCENARIO.name,
+        SCENARIO.title,
+        system,
+        metrics=SCENARIO.metrics,
+        requirements=SCENARIO.requirements,
+        figures=SCENARIO.figures,
+        diagnose=SCENARIO.diagnose,
+        systems_dir=out_dir,
     )
-    scenario.system.write_bytes(
-        scenario.render_ssd({name: str(BUILD_DIR / f"{name}.fmu") for name in scenario.components})
-    )
+    system.write(scenario.ssd)
     return scenario

@@ -1,16 +1,15 @@
 """What the model description of an FMU in a system says, read without loading the FMU.
 
 :class:`Description`: the variables by name, the output dependencies (at a step and at
-initialisation), the derivative declarations and the optional inputs our FMUs declare in
-their VendorAnnotations.  The model description of each FMU file is read once per process
-and content (SHA-256 of the file: a rebuilt FMU is a new one, a copy of the same file is
-the same one).
+initialisation), the derivative declarations, and what our FMUs declare in their
+VendorAnnotations: the optional inputs and the SHA-256 of the binaries.  The model
+description of each FMU file is read once per process and content (SHA-256 of the file: a
+rebuilt FMU is a new one, a copy of the same file is the same one).
 """
 
 from __future__ import annotations
 
 import functools
-import hashlib
 import os
 import threading
 import zipfile
@@ -19,10 +18,14 @@ from pathlib import Path
 from fmpy import read_model_description
 from lxml import etree
 
+from ...components.cache_files import digest
+
 AGILESAT_TOOL = "agilesat"
+BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it
 _KEYS_KEPT = 1024
 _lock = threading.Lock()
-_descriptions: dict[str, tuple] = {}  # content key -> (model description, optional inputs)
+#: content key -> (model description, optional inputs, base units, binaries)
+_descriptions: dict[str, tuple] = {}
 
 
 class Description:
@@ -32,8 +35,11 @@ class Description:
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
         #: optional input -> what its default means, as our FMUs declare them
-        #: (VendorAnnotations; every other input is required); None: not our FMU
-        self.md, self.optional_inputs = _described(content_key(self.path), str(path))
+        #: (VendorAnnotations; every other input is required); None: not our FMU.
+        #: ``binaries``: {file in the FMU: SHA-256} as our FMUs declare them (or {})
+        self.md, self.optional_inputs, self.base_units, self.binaries = _described(
+            content_key(self.path), str(path)
+        )
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -56,11 +62,7 @@ class Description:
 
 @functools.lru_cache(maxsize=_KEYS_KEPT)
 def _file_digest(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
+    return digest(path)
 
 
 def content_key(path: Path) -> str:
@@ -71,11 +73,19 @@ def content_key(path: Path) -> str:
 
 
 def _described(key: str, path: str):
-    """(model description, optional inputs) of the FMU with content ``key``."""
+    """(model description, optional inputs, base units, binaries) of the FMU with content
+    ``key``."""
     with _lock:
         described = _descriptions.get(key)
     if described is None:
-        described = (read_model_description(path), _optional_inputs(Path(path)))
+        with zipfile.ZipFile(path) as archive:
+            root = etree.fromstring(archive.read("modelDescription.xml"))
+        described = (
+            read_model_description(path),
+            _optional_inputs(root),
+            _base_units(root),
+            _binaries(root),
+        )
         with _lock:
             if len(_descriptions) >= _KEYS_KEPT:
                 _descriptions.pop(next(iter(_descriptions)))
@@ -92,11 +102,9 @@ def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
     return result
 
 
-def _optional_inputs(path: Path) -> dict[str, str] | None:
+def _optional_inputs(root) -> dict[str, str] | None:
     """{optional input: what its default means} an agilesat FMU declares (VendorAnnotations);
     None: nothing declared."""
-    with zipfile.ZipFile(path) as archive:
-        root = etree.fromstring(archive.read("modelDescription.xml"))
     tool = root.find(f"VendorAnnotations/Tool[@name='{AGILESAT_TOOL}']")
     if tool is None:
         return None
@@ -104,4 +112,22 @@ def _optional_inputs(path: Path) -> dict[str, str] | None:
         e.get("name"): e.get("optional")
         for e in tool.findall("Inputs/Input")
         if e.get("optional") is not None
+    }
+
+
+def _base_units(root) -> dict[str, dict[str, str]]:
+    """{unit: the attributes of its BaseUnit, in the order written} of the FMU's
+    UnitDefinitions (an SSD's unit definitions copy them)."""
+    return {
+        unit.get("name"): dict(unit.find("BaseUnit").attrib)
+        for unit in root.iterfind("UnitDefinitions/Unit")
+        if unit.find("BaseUnit") is not None
+    }
+
+
+def _binaries(root) -> dict[str, str]:
+    """{binary: its SHA-256} an agilesat FMU declares (VendorAnnotations), or {}."""
+    return {
+        e.get("name"): e.get("sha256")
+        for e in root.findall(f"VendorAnnotations/Tool[@name='{BINARIES_TOOL}']/Files/File")
     }

@@ -12,11 +12,16 @@ A bare number for an array is refused, never broadcast: ``inertia=900`` could me
 every element or 900 times the identity, and an attitude engineer means the second as often
 as the first.  The error says which elements there are and shows both forms.
 
-Types: each scalar value takes the type of the FMU's variable (a Real from ``"0.01"`` or
-``1``, a Boolean from ``true``/``yes``/``1``).  Named choices: an Integer parameter whose
-model-description ``description`` lists its values as ``0 = NAME (meaning), 1 = NAME
-(meaning), …`` (as every choice of our variable tables says it, ``components/variables.py``
-:func:`choice`) takes a name in any case, or the number: ``CmgSteering.law=SR_INVERSE``.
+Types: each scalar value takes the type of the FMU's variable, and must be one: a Real a
+finite number (``"0.01"``, ``1``, ``1e-3``; not ``1_000``, ``inf`` or ``nan``), an Integer
+whole digits within fmi2Integer's 32 bits, a Boolean ``true``, ``false``, ``1`` or ``0``
+(any case); anything else is an error naming the parameter.  A Real also takes a value
+with a unit that converts to its own (``"120 deg"``, ``deg(120)``, ``"[0, 120, 0] deg"``;
+:mod:`.units`): a unit that does not convert is an error naming both.  Named choices: an
+Integer parameter whose model-description ``description`` lists its values as ``0 = NAME
+(meaning), 1 = NAME (meaning), …`` (as every choice of our variable tables says it,
+``components/variables.py`` :func:`choice`) takes a name in any case, or the number:
+``CmgSteering.law=SR_INVERSE``.
 Only the model description is read: any FMU that lists its values so has named choices.
 """
 
@@ -24,12 +29,14 @@ from __future__ import annotations
 
 import ast
 import difflib
+import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from .ssp import ParameterValue, SystemFileError
+from .units import Quantity, is_unit, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
 #: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
@@ -78,9 +85,16 @@ def variables(description) -> dict[str, ArrayVariable]:
 
 
 def parse_value(text):
-    """A command-line value: a bracketed list (``[[1,0],[0,1]]``) becomes nested lists;
-    anything else stays text for the FMU's variable type to read."""
+    """A command-line value: a bracketed list (``[[1,0],[0,1]]``) becomes nested lists, one
+    with a unit (``[0, 120, 0] deg``) a :class:`.units.Quantity`; anything else stays text
+    for the FMU's variable type to read (``120 deg`` included)."""
     if isinstance(text, str) and text.strip().startswith("["):
+        try:
+            with_unit = quantity(text)
+        except ValueError as exc:
+            raise SystemFileError(str(exc)) from None
+        if with_unit is not None:
+            return with_unit
         try:
             return ast.literal_eval(text.strip())
         except (ValueError, SyntaxError):
@@ -90,66 +104,143 @@ def parse_value(text):
     return text
 
 
-def typed_parameters(descriptions: dict, parameters: dict) -> dict[str, ParameterValue]:
+def typed_parameters(
+    descriptions: dict, parameters: dict, origins: dict | None = None
+) -> dict[str, ParameterValue]:
     """{"A.x": value} -> {"A.x" or "A.x[i,j]": ParameterValue}: each value parsed
     (:func:`parse_value`), whole arrays split into their elements, each element typed by
     the FMU's variable (:func:`typed_value`); unknown instances and variables answered
     with the closest names.  ``descriptions``: {instance: its
-    :class:`.description.Description`}."""
+    :class:`.description.Description`}; ``origins``: {"A.x": where it was given}, for the
+    messages and each value's ``origin`` (default ``--set A.x``)."""
     result, tables = {}, {}
     for key, value in parameters.items():
+        at = (origins or {}).get(key) or f"--set {key}"
         name, _, variable = key.partition(".")
         if name not in descriptions or not variable:
             raise SystemFileError(
-                f"--set {key}: expected Instance.variable with an instance "
+                f"{at}: expected Instance.variable with an instance "
                 f"of {', '.join(descriptions)}" + did_you_mean(name, descriptions)
             )
         description = descriptions[name]
         table = tables.get(name) or tables.setdefault(name, variables(description))
         value = parse_value(value)
         if variable in description.variables:
-            if np.ndim(value):
-                raise SystemFileError(
-                    f"--set {key}: {name}.{variable} is a scalar, got an array {value}"
-                )
-            result[key] = typed_value(description, key, value)
+            if np.ndim(_number(value)):
+                raise SystemFileError(f"{at}: {name}.{variable} is a scalar, got an array {value}")
+            result[key] = typed_value(description, key, value, at)
             continue
         if variable not in table:
             raise SystemFileError(
-                f"--set {key}: {name} ({description.path.name}) has "
+                f"{at}: {name} ({description.path.name}) has "
                 f"no variable {variable!r}" + did_you_mean(variable, table)
             )
         array = table[variable]
-        if np.shape(value) != array.shape:
+        if np.shape(_number(value)) != array.shape:
             raise SystemFileError(
-                f"--set {key}: {name}.{variable} is an array of shape "
+                f"{at}: {name}.{variable} is an array of shape "
                 f"{'×'.join(map(str, array.shape))} [{array.first.unit or '1'}]; give it "
                 f"whole, e.g. {variable}={_literal(array.start())}, or one element, e.g. "
                 f"{array.first.name}={_typed(array.first, array.first.start)} (got "
                 f"{value!r}; a single number is not spread over the elements)"
             )
-        for scalar, element in zip(array.scalars, np.asarray(value, dtype=object).ravel()):
+        unit = value.unit if isinstance(value, Quantity) else None
+        for scalar, element in zip(array.scalars, np.asarray(_number(value), dtype=object).ravel()):
             element_key = f"{name}.{scalar.name}"
-            result[element_key] = typed_value(description, element_key, element)
+            element = element if unit is None else Quantity(element, unit)
+            origin = (origins or {}).get(key)  # else --set of the element
+            result[element_key] = typed_value(description, element_key, element, origin)
     return result
 
 
-def typed_value(description, key: str, value) -> ParameterValue:
+def _number(value):
+    """The number(s) of a value that may carry a unit (:func:`.units.quantity`)."""
+    found = quantity(value)
+    return value if found is None else found.value
+
+
+def typed_value(description, key: str, value, origin: str | None = None) -> ParameterValue:
     """The value of the scalar variable ``key`` ("Instance.variable") of the FMU described
-    by ``description``, in that variable's type; a named choice by its name or number."""
+    by ``description``, in that variable's type; a named choice by its name or number; a
+    Real with a unit converted to the variable's (:func:`.units.to_si`).  ``origin``: where
+    it was given (default ``--set key``)."""
+    origin = origin or f"--set {key}"
     name, _, variable = key.partition(".")
-    kind = description.variables[variable].type
-    names = choice_names(description.variables[variable])
+    declared = description.variables[variable]
+    kind = declared.type
+    names = choice_names(declared)
+    with_unit = quantity(value) if kind == "Real" else None
     if names is not None:
-        value = choice_value(variable, names, value, f"--set {key}={value}")
-    elif kind == "Boolean" and isinstance(value, str):
-        value = value.lower() in ("1", "true", "yes")
-    elif kind in ("Real", "Integer"):
+        value = choice_value(variable, names, value, f"{origin}={value}")
+    elif with_unit is not None:
+        display = _display_units(description, declared)
+        if with_unit.unit != declared.unit and not is_unit(with_unit.unit, display):
+            raise SystemFileError(
+                f"{origin}={value}: expected a finite Real number (like 0.01 or 1e-3), or one "
+                f"with a unit: {with_unit.unit!r} is no unit"
+            )
         try:
-            value = float(value) if kind == "Real" else int(value)
-        except ValueError:
-            raise SystemFileError(f"--set {key}={value}: expected a {kind}") from None
-    return ParameterValue(name, variable, kind, value, f"--set {key}")
+            value = float(to_si(with_unit, declared.unit, display))
+        except ValueError as exc:
+            raise SystemFileError(f"{origin}: {name}.{variable}: {exc}") from None
+    elif kind in _READERS:
+        if isinstance(value, Quantity):
+            raise SystemFileError(f"{origin}: {name}.{variable} is an {kind}, not {value}")
+        value = _READERS[kind](value, f"{origin}={value}")
+    return ParameterValue(name, variable, kind, value, origin)
+
+
+def _display_units(description, variable) -> list[tuple[str, float, float]]:
+    """(name, factor, offset) of the display units the model description defines for the
+    variable's unit."""
+    for unit in getattr(description.md, "unitDefinitions", None) or ():
+        if unit.name == variable.unit:
+            return [(d.name, d.factor, d.offset) for d in unit.displayUnits]
+    return []
+
+
+#: a number as a user writes it: no "1_000" (Python's int() and float() take it), no
+#: "inf" or "nan", no hexadecimal
+_REAL = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+_INTEGER = re.compile(r"^[+-]?\d+$")
+_BOOLEANS = {"true": True, "false": False, "1": True, "0": False}
+#: fmi2Integer is a 32-bit int (FMI 2.0 section 2.1.2)
+INTEGER_RANGE = (-(2**31), 2**31 - 1)
+
+
+def _real(value, where: str) -> float:
+    text = str(value).strip()
+    if isinstance(value, (int, float, np.number)) and not isinstance(value, (bool, np.bool_)):
+        number = float(value)
+    else:
+        number = float(text) if _REAL.match(text) else math.nan
+    if not math.isfinite(number):
+        raise SystemFileError(f"{where}: expected a finite Real number, like 0.01 or 1e-3")
+    return number
+
+
+def _integer(value, where: str) -> int:
+    text = str(value).strip()
+    if isinstance(value, (float, np.floating)) and float(value).is_integer():
+        text = str(int(value))
+    if not _INTEGER.match(text) or not INTEGER_RANGE[0] <= int(text) <= INTEGER_RANGE[1]:
+        raise SystemFileError(
+            f"{where}: expected an Integer from {INTEGER_RANGE[0]} to {INTEGER_RANGE[1]} "
+            "(fmi2Integer is 32 bits), written as digits"
+        )
+    return int(text)
+
+
+def _boolean(value, where: str) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    text = str(value).strip().lower()
+    if text not in _BOOLEANS:
+        raise SystemFileError(f"{where}: expected a Boolean: true, false, 1 or 0")
+    return _BOOLEANS[text]
+
+
+_READERS = {"Real": _real, "Integer": _integer, "Boolean": _boolean}
 
 
 def choice_names(variable) -> tuple[str, ...] | None:

@@ -9,12 +9,15 @@ The check against the FMUs themselves (variables, causality, type, unit, also of
 declared connectors) is :func:`validation.check_system`, which needs the model descriptions.
 
 An ``.ssp`` package is unpacked into a temporary directory, refusing members with absolute
-paths or ``..`` and more than ``max_unpacked`` bytes in total (default
-:data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable ``AGILESAT_SSP_MAX_BYTES``);
-its component and parameter-binding sources must resolve inside the package.
+paths or ``..`` and more than ``max_unpacked`` bytes in total, counting what its FMUs unpack
+to when they run (default :data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable
+``AGILESAT_SSP_MAX_BYTES``); its component and parameter-binding sources must resolve
+inside the package.  A parameter bound twice in one parameter set is refused.
 
-Write: :func:`render_ssd` expands a compact vector-level system description (see
-``scenarios/``) into scalar SSD connectors and connections, with SSP unit definitions.
+Write: :func:`render_ssd` writes a :class:`SystemFile` (read from a file, or made in Python
+by :class:`..mission.System`) as an SSD: each component's connectors, types and units as its
+FMU's model description declares them, the parameter values, the connections, the SSP unit
+definitions (copied from the FMUs') and the settings.
 """
 
 from __future__ import annotations
@@ -103,6 +106,7 @@ class SystemFile:
     stop_time: float | None = None
     step_size: float | None = None
     algorithm: str | None = None
+    derivatives: bool | None = None  # couple through input/output derivatives (None: yes)
     _tempdir: object = field(default=None, repr=False)
 
     def component(self, name: str) -> ComponentRef:
@@ -173,6 +177,26 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
                         sink.write(chunk)
     except (zipfile.BadZipFile, EOFError) as exc:
         raise SystemFileError(f"{path}: not an SSP package (zip): {exc}") from None
+    _nested_fmus(path, root, total, limit)
+
+
+def _nested_fmus(path: Path, root: Path, total: int, limit: int) -> None:
+    """The bound covers what the package's FMUs unpack to when they are run (each one is
+    unpacked by the master: ``cosim/fmu.py``), by their declared sizes, which unpacking
+    holds them to (zipfile stops at a member's declared size: its CRC then fails)."""
+    for fmu in sorted(root.rglob("*.fmu")):
+        try:
+            with zipfile.ZipFile(fmu) as archive:
+                size = sum(info.file_size for info in archive.infolist())
+        except (zipfile.BadZipFile, OSError):
+            continue  # not a zip: the run says so when it reads it
+        total += size
+        if total > limit:
+            raise SystemFileError(
+                f"{path}: unpacks, with its FMUs, to more than the limit of {limit} bytes "
+                f"({fmu.relative_to(root)} alone unpacks to {size} bytes; raise the limit "
+                "with AGILESAT_SSP_MAX_BYTES or max_unpacked=)"
+            )
 
 
 def _inside(source: Path, package: Path | None, where: str, what: str) -> None:
@@ -192,7 +216,7 @@ def _read_ssd(path: Path, display: str, package: Path | None = None) -> SystemFi
         parameters += _read_binding(binding, None, path, display, package)
     connections = _read_connections(system, display)
     result = SystemFile(path, root.get("name"), components, connections, parameters)
-    _read_experiment(root, result)
+    _read_experiment(root, result, display)
     return result
 
 
@@ -262,7 +286,7 @@ def _read_connections(system, display: str) -> list[ConnectionRef]:
     return connections
 
 
-def _read_experiment(root, result: SystemFile) -> None:
+def _read_experiment(root, result: SystemFile, display: str) -> None:
     """Start and stop time from ``ssd:DefaultExperiment``; step size and algorithm from
     its ``org.agilesat.master`` annotation (other hosts' annotations are ignored)."""
     experiment = root.find("ssd:DefaultExperiment", NS)
@@ -274,9 +298,18 @@ def _read_experiment(root, result: SystemFile) -> None:
     for annotation in experiment.findall("ssd:Annotations/ssc:Annotation", NS):
         if annotation.get("type") == MASTER_ANNOTATION and len(annotation):
             settings = annotation[0]
-            if settings.get("stepSize") is not None:
-                result.step_size = float(settings.get("stepSize"))
+            text = settings.get("stepSize")
+            if text is not None:
+                try:
+                    result.step_size = float(text)
+                except ValueError:
+                    raise SystemFileError(
+                        f"{display}:{settings.sourceline}: the {MASTER_ANNOTATION} annotation's "
+                        f"stepSize is {text!r}: expected the macro step in seconds, like 0.05"
+                    ) from None
             result.algorithm = settings.get("algorithm")
+            if settings.get("derivatives") is not None:
+                result.derivatives = settings.get("derivatives") == "true"
 
 
 def _read_connectors(element) -> list[ConnectorRef]:
@@ -299,9 +332,16 @@ def _read_binding(
     prefix = binding.get("prefix", "")
     parameter_set, ssv_display = _parameter_set(binding, ssd_path, display, package)
     values = []
+    lines: dict[str, int] = {}  # name -> the line it is bound at
     for parameter in parameter_set.findall("ssv:Parameters/ssv:Parameter", NS):
         name = prefix + parameter.get("name")
         origin = f"{ssv_display}:{parameter.sourceline}"
+        if name in lines:
+            raise SystemFileError(
+                f"{origin}: parameter '{name}' is bound twice in one parameter set "
+                f"(first at line {lines[name]}): which value holds would be a guess"
+            )
+        lines[name] = parameter.sourceline
         owner = component
         if owner is None:  # system-level binding: "Component.variable"
             owner, _, name = name.partition(".")
@@ -397,67 +437,74 @@ def _schema(name: str) -> etree.XMLSchema:
 # writing
 
 
-def render_ssd(
-    name: str,
-    components: dict[str, str],
-    tables: dict[str, tuple],
-    connections,
-    parameters: dict,
-    units: dict,
-    start: float,
-    stop: float,
-    step: float,
-    algorithm: str = "gauss-seidel",
-    steps: dict | None = None,
-) -> bytes:
-    """An SSD (schema-checked bytes) from a vector-level description.
+def render_ssd(system: SystemFile, descriptions: dict, sources: dict | None = None) -> bytes:
+    """An SSD (schema-checked bytes) of ``system``.
 
-    ``components`` maps instance name to FMU source (relative to the SSD), ``tables`` maps
-    instance name to its variable table, ``connections`` are ("A.x", "B.y") pairs of whole
-    variables (arrays are expanded element by element), ``parameters`` maps "A.p" to a
-    value (scalar or array), ``units`` is the unit table (``components.variables.UNITS``).
+    ``descriptions`` maps each component to its :class:`.description.Description` (its
+    connectors, their types and units, and the unit definitions come from there);
+    ``sources`` maps a component to its FMU source as written in the SSD (a URI relative to
+    the SSD; default: the component's absolute path).
 
-    For third-party hosts: every component's parameter set is named ``name`` (ECOS applies
-    only the one set named at its init); String connectors without a bound value are left
-    out (hosts that cannot set Strings); the step is also written in the annotations
-    that libcosim (Open Simulation Platform, on the default experiment) and OMSimulator
-    (OpenModelica, on the system; it refuses a system without one) read.  ``steps`` maps
-    an instance to its own communication step (:mod:`.steps`).
+    For third-party hosts: every component's parameter set is named after the system (ECOS
+    applies only the one set named at its init); String connectors without a bound value
+    are left out (hosts that cannot set Strings); the step is also written in the
+    annotations that libcosim (Open Simulation Platform, on the default experiment) and
+    OMSimulator (OpenModelica, on the system; it refuses a system without one) read.  A
+    component's own communication step is written as :mod:`.steps` says.
     """
     E = _Maker()
+    name = system.name
     root = E("ssd:SystemStructureDescription", version="1.0", name=name, generationTool="agilesat")
-    system = E.sub(root, "ssd:System", name=name)
-    elements = E.sub(system, "ssd:Elements")
-    bound = _expand_parameters(parameters, tables)
-    used_units: set[str] = set()
-    for instance, source in components.items():
-        used_units |= _write_component(
+    element = E.sub(root, "ssd:System", name=name)
+    elements = E.sub(element, "ssd:Elements")
+    bound: dict[str, dict] = {}
+    for value in system.parameters:
+        bound.setdefault(value.component, {})[value.name] = (value.type, _text(value))
+    used_units: dict[str, dict] = {}
+    for ref in system.components:
+        source = (sources or {}).get(ref.name) or str(ref.source)
+        _write_component(
             E,
             elements,
-            instance,
+            ref.name,
             source,
-            tables[instance],
-            bound.get(instance, {}),
+            descriptions[ref.name],
+            bound.get(ref.name, {}),
             name,
-            (steps or {}).get(instance),
+            ref.step_size,
+            used_units,
         )
-    wires = E.sub(system, "ssd:Connections")
-    _oms_annotation(E, system, step)
-    _write_connections(E, wires, connections, {i: tables[i] for i in components})
-    _write_units(E, root, used_units, units)
-    _write_experiment(E, root, start, stop, step, algorithm)
+    if system.connections:  # the schema wants a Connections element to hold one or more
+        wires = E.sub(element, "ssd:Connections")
+    if system.step_size is not None:
+        _oms_annotation(E, element, system.step_size)
+    for c in system.connections:
+        E.sub(
+            wires,
+            "ssd:Connection",
+            startElement=c.start_element,
+            startConnector=c.start_connector,
+            endElement=c.end_element,
+            endConnector=c.end_connector,
+        )
+    _write_units(E, root, used_units)
+    _write_experiment(E, root, system)
     tree = etree.ElementTree(root)
     _validate_schema(tree, "SystemStructureDescription.xsd", f"generated {name}.ssd")
     return etree.tostring(tree, pretty_print=True, xml_declaration=True, encoding="UTF-8")
 
 
+_KINDS = ("parameter", "calculatedParameter", "input", "output")
+
+
 def _write_component(
-    E, elements, instance, source, table, values: dict, set_name, step: float | None
-) -> set[str]:
-    """One ``ssd:Component``: a scalar connector per element of every variable (a Real with
-    its unit; a String only when it is given a value), then its bound parameter values in
-    one inline ``ssv:ParameterSet`` named ``set_name``, then its own communication step, if
-    it has one (:func:`.steps.write_step`).  Returns the units it used."""
+    E, elements, instance, source, described, values: dict, set_name, step, used_units
+) -> None:
+    """One ``ssd:Component``: a scalar connector per parameter, input and output of its
+    model description (a Real with its unit where the FMU defines that unit; a String
+    only when it is given a value), then its bound values in one inline
+    ``ssv:ParameterSet`` named ``set_name``, then its own communication step, if it has
+    one (:func:`.steps.write_step`).  Adds the units it uses to ``used_units``."""
     component = E.sub(
         elements,
         "ssd:Component",
@@ -466,16 +513,16 @@ def _write_component(
         type="application/x-fmu-sharedlibrary",
     )
     connectors = E.sub(component, "ssd:Connectors")
-    used_units = set()
-    for v in table:
+    for v in described.md.modelVariables:
+        if v.causality not in _KINDS or v.type not in _TYPES:
+            continue
         if v.type == "String" and v.name not in values:
             continue
-        for scalar in v.scalar_names():
-            connector = E.sub(connectors, "ssd:Connector", name=scalar, kind=v.causality)
-            attributes = {"unit": v.unit} if v.type == "Real" else {}
-            if v.type == "Real":
-                used_units.add(v.unit)
-            E.sub(connector, f"ssc:{v.type}", **attributes)
+        connector = E.sub(connectors, "ssd:Connector", name=v.name, kind=v.causality)
+        unit = v.unit if v.type == "Real" and v.unit in described.base_units else None
+        if unit is not None:
+            used_units.setdefault(unit, described.base_units[unit])
+        E.sub(connector, f"ssc:{v.type}", **({"unit": unit} if unit is not None else {}))
     if values:
         bindings = E.sub(component, "ssd:ParameterBindings")
         binding = E.sub(bindings, "ssd:ParameterBinding")
@@ -486,59 +533,61 @@ def _write_component(
             parameter = E.sub(listing, "ssv:Parameter", name=scalar)
             E.sub(parameter, f"ssv:{kind}", value=text)
     write_step(component, step)
-    return used_units
 
 
-def _write_connections(E, wires, connections, tables: dict) -> None:
-    """("A.x", "B.y") pairs of whole variables, expanded to one ``ssd:Connection`` per
-    element; the rule: both sides have the same shape."""
-    by_instance = {instance: {v.name: v for v in table} for instance, table in tables.items()}
-    for source, target in connections:
-        (a, x), (b, y) = source.split(".", 1), target.split(".", 1)
-        va, vb = by_instance[a][x], by_instance[b][y]
-        if va.shape != vb.shape:
-            raise SystemFileError(f"{source} {va.shape} and {target} {vb.shape} differ in shape")
-        for sa, sb in zip(va.scalar_names(), vb.scalar_names()):
-            E.sub(
-                wires,
-                "ssd:Connection",
-                startElement=a,
-                startConnector=sa,
-                endElement=b,
-                endConnector=sb,
-            )
+def _text(value: ParameterValue) -> str:
+    """A typed parameter value as SSV writes it (a Real by ``repr``: it reads back the
+    same)."""
+    if value.type == "Real":
+        return repr(float(value.value))  # type: ignore[arg-type]
+    if value.type == "Integer":
+        return str(int(value.value))  # type: ignore[call-overload]
+    if value.type == "Boolean":
+        return "true" if value.value else "false"
+    return str(value.value)
 
 
-def _write_units(E, root, used_units: set[str], units: dict) -> None:
-    """``ssd:Units``: each unit used by a connector, sorted by name, with its SI exponents."""
+def _write_units(E, root, used_units: dict[str, dict]) -> None:
+    """``ssd:Units``: each unit used by a connector, sorted by name, with the base-unit
+    attributes of the FMU's unit definition."""
     unit_list = E.sub(root, "ssd:Units")
     for unit in sorted(used_units):
-        exponents, _ = units[unit]
         element = E.sub(unit_list, "ssc:Unit", name=unit)
-        E.sub(element, "ssc:BaseUnit", **{k: str(e) for k, e in exponents.items()})
+        E.sub(element, "ssc:BaseUnit", **used_units[unit])
 
 
-def _write_experiment(E, root, start: float, stop: float, step: float, algorithm: str) -> None:
+def _write_experiment(E, root, system: SystemFile) -> None:
     """``ssd:DefaultExperiment`` with our master's settings and libcosim's step annotation.
 
     libcosim's SSP loader reads the step from the Open Simulation Platform's annotation.
     Its parser (libcosim 0.10, boost property_tree) matches the literal prefix "osp:" and
     takes any attribute of <osp:Algorithm>, xmlns included, for an unknown algorithm: so
     the namespace is declared on the annotation."""
-    experiment = E.sub(
-        root, "ssd:DefaultExperiment", startTime=repr(float(start)), stopTime=repr(float(stop))
-    )
+    times = {"startTime": repr(float(system.start_time))}
+    if system.stop_time is not None:
+        times["stopTime"] = repr(float(system.stop_time))
+    experiment = E.sub(root, "ssd:DefaultExperiment", **times)
+    settings = {}
+    if system.step_size is not None:
+        settings["stepSize"] = repr(float(system.step_size))
+    if system.algorithm is not None:
+        settings["algorithm"] = system.algorithm
+    if system.derivatives is False:
+        settings["derivatives"] = "false"
+    if not settings:
+        return
     annotations = E.sub(experiment, "ssd:Annotations")
     annotation = E.sub(annotations, "ssc:Annotation", type=MASTER_ANNOTATION)
-    E.sub(
-        annotation,
-        "agilesat:Master",
-        nsmap={"agilesat": MASTER_NAMESPACE},
-        stepSize=repr(float(step)),
-        algorithm=algorithm,
-    )
-    osp = E.sub(annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE}, type=OSP_ANNOTATION)
-    E.sub(E.sub(osp, "osp:Algorithm"), "osp:FixedStepAlgorithm", baseStepSize=repr(float(step)))
+    E.sub(annotation, "agilesat:Master", nsmap={"agilesat": MASTER_NAMESPACE}, **settings)
+    if system.step_size is not None:
+        osp = E.sub(
+            annotations, "ssc:Annotation", nsmap={"osp": OSP_NAMESPACE}, type=OSP_ANNOTATION
+        )
+        E.sub(
+            E.sub(osp, "osp:Algorithm"),
+            "osp:FixedStepAlgorithm",
+            baseStepSize=repr(float(system.step_size)),
+        )
 
 
 def _oms_annotation(E, system, step: float) -> None:
@@ -554,29 +603,6 @@ def _oms_annotation(E, system, step: float) -> None:
     )
     information = E.sub(E.sub(annotation, "oms:Annotations"), "oms:SimulationInformation")
     E.sub(information, "oms:FixedStepMaster", description="oms-ma", stepSize=repr(float(step)))
-
-
-def _expand_parameters(parameters: dict, tables: dict) -> dict:
-    """{"A.p": value} -> {instance: {scalar name: (SSV type, text)}}, checked against tables."""
-    import numpy as np
-
-    result: dict[str, dict] = {}
-    for key, value in parameters.items():
-        instance, name = key.split(".", 1)
-        variable = next((v for v in tables[instance] if v.name == name), None)
-        if variable is None or variable.causality != "parameter":
-            raise SystemFileError(f"{key} is not a parameter of {instance}")
-        if variable.type == "String":
-            result.setdefault(instance, {})[name] = ("String", str(value))
-            continue
-        array = np.broadcast_to(np.asarray(value, dtype=float), variable.shape).reshape(-1)
-        for scalar, x in zip(variable.scalar_names(), array):
-            text = {
-                "Boolean": lambda v: "true" if v else "false",
-                "Integer": lambda v: str(int(v)),
-            }.get(variable.type, repr)(float(x))
-            result.setdefault(instance, {})[scalar] = (variable.type, text)
-    return result
 
 
 class _Maker:

@@ -4,7 +4,8 @@
 component or variable, causality, type and unit mismatch (of a connection, and of an SSD
 connector against the FMU's variable), an input driven twice, an input left open that may
 not be, a parameter value for something that is not a parameter, an algebraic loop (found
-while computing the schedules, :mod:`.schedule`).
+while computing the schedules, :mod:`.schedule`); the first :data:`MAX_PROBLEMS_SHOWN`,
+then how many more.
 
 Open inputs, the rule: every input of every component is connected, or given a value in
 the system's parameter values, or declared optional by its FMU (our FMUs' VendorAnnotations
@@ -23,6 +24,10 @@ from .agreement import disagreements
 from .description import Description
 from .schedule import Schedule, schedule
 from .ssp import ParameterValue, SystemFile, SystemFileError
+
+#: problems a check prints at most (then how many more): 600,000 duplicated connections
+#: must not print 600,000 lines
+MAX_PROBLEMS_SHOWN = 20
 
 
 @dataclass
@@ -51,7 +56,13 @@ def check_system(
     open_inputs = _open_inputs(system, instances, sources, bindings, problems)
     problems += disagreements(instances, bindings, sources)
     if problems:
-        raise SystemFileError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
+        shown = problems[:MAX_PROBLEMS_SHOWN]
+        more = len(problems) - len(shown)
+        raise SystemFileError(
+            f"{where}: {len(problems)} problem(s):\n  "
+            + "\n  ".join(shown)
+            + (f"\n  ... and {more} more of these kinds" if more else "")
+        )
     return Wiring(
         schedule(instances, sources, "feedthrough", where),
         schedule(instances, sources, "initial_feedthrough", where),
@@ -82,7 +93,7 @@ def _connections(system, instances, problems) -> dict[tuple[str, str], tuple[str
             problems.append(f"{at}: {b.name} ({b.path.name}) has no variable '{c.end_connector}'")
         if va is None or vb is None:
             continue
-        problems += _variable_pair_problems(at, a, va, b, vb)
+        problems += variable_pair_problems(at, a, va, b, vb)
         key = (b.name, vb.name)
         if key in sources:
             problems.append(
@@ -92,7 +103,7 @@ def _connections(system, instances, problems) -> dict[tuple[str, str], tuple[str
     return sources
 
 
-def _variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
+def variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
     """One connection's ends: an output of ``a`` to an input of ``b``, same type and unit."""
     problems = []
     if va.causality != "output":

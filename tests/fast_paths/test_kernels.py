@@ -171,17 +171,7 @@ def test_a_saved_state_restores_the_run_bit_for_bit(dynamics_kernels):
 
 def _spin_up(model: SatelliteDynamics, steps: int) -> np.ndarray:
     """A tumbling body (several sub-steps per step) with moving device momentum."""
-    model.set("inertia", [[900.0, 12.0, -4.0], [12.0, 950.0, 7.0], [-4.0, 7.0, 1010.0]])
-    model.set("rate0", [0.05, -0.4, 0.2])
-    model.set("h_cmg", [3.0, -2.0, 1.0])
-    model.start(0.0)
-    rows = []
-    for k in range(steps):
-        model.set("hdot_cmg", [0.3 * math.sin(0.1 * k), 0.2, -0.1 * math.cos(0.05 * k)])
-        model.set("tau_ext", [1e-3 * k, 0.0, -2e-3])
-        model.advance(k * 0.05, 0.05)
-        rows.append(model.values.copy())
-    return np.array(rows)
+    return _spin_up_run(model, steps, interpolated=False)
 
 
 def _gimbals(model: Model, steps: int) -> np.ndarray:
@@ -197,10 +187,57 @@ def _gimbals(model: Model, steps: int) -> np.ndarray:
     return np.array(rows)
 
 
+def _spin_up_interpolated(model: SatelliteDynamics, steps: int) -> np.ndarray:
+    """:func:`_spin_up` with input derivatives a host sets: the slope of h_cmg (over
+    hdot_cmg, which disagrees: the slope conflict), ḧ, τ̇ and ṙ (gravity gradient on a
+    non-isotropic body)."""
+    model.set("r_I", [7.0e6, 1.0e5, -2.0e5])
+    rows = _spin_up_run(model, steps, interpolated=True)
+    assert model.state[satellite_dynamics.S_SLOPE_CONFLICT] == 1.0
+    return rows
+
+
+def _spin_up_run(model, steps, interpolated):
+    model.set("inertia", [[900.0, 12.0, -4.0], [12.0, 950.0, 7.0], [-4.0, 7.0, 1010.0]])
+    model.set("rate0", [0.05, -0.4, 0.2])
+    model.set("h_cmg", [3.0, -2.0, 1.0])
+    model.start(0.0)
+    rows = []
+    for k in range(steps):
+        model.set("hdot_cmg", [0.3 * math.sin(0.1 * k), 0.2, -0.1 * math.cos(0.05 * k)])
+        model.set("tau_ext", [1e-3 * k, 0.0, -2e-3])
+        if interpolated:
+            model.set_input_rate("h_cmg", [0.25 * math.cos(0.1 * k), 0.2, 0.0])
+            model.set_input_rate("hdot_cmg", [0.01, -0.02 * math.sin(0.2 * k), 0.0])
+            model.set_input_rate("tau_ext", [1e-3, 0.0, 1e-4])
+            model.set_input_rate("r_I", [10.0, 7000.0, 300.0])
+        model.advance(k * 0.05, 0.05)
+        rows.append(model.values.copy())
+    return np.array(rows)
+
+
+def _gimbals_interpolated(model: CmgCluster, steps: int) -> np.ndarray:
+    """:func:`_gimbals` with the commands' derivatives set (ramps across the limits)."""
+    rng = np.random.default_rng(8)
+    model.start(0.0)
+    rows = []
+    for k in range(steps):
+        model.set("delta_dot_cmd", rng.uniform(-0.8, 0.8, size=6))
+        model.set_input_rate("delta_dot_cmd", rng.uniform(-20.0, 20.0, size=6))
+        model.advance(k * 0.05, 0.05)
+        rows.append(model.values.copy())
+    return np.array(rows)
+
+
 _RUNS = {
     SatelliteDynamics: (satellite_dynamics, _spin_up),
     CmgCluster: (cmg_cluster, _gimbals),
     CmgSteering: (cmg_steering, _gimbals),
+}
+#: the same kernels with input derivatives (a host interpolating the inputs)
+_INTERPOLATED = {
+    SatelliteDynamics: (satellite_dynamics, _spin_up_interpolated),
+    CmgCluster: (cmg_cluster, _gimbals_interpolated),
 }
 
 
@@ -209,9 +246,13 @@ def _runs() -> str:
 
 
 @needs_numba
-@pytest.mark.parametrize("model", list(_RUNS), ids=lambda m: m.__name__)
-def test_compiled_and_readable_model_runs_are_identical(model, monkeypatch):
-    module, run = _RUNS[model]
+@pytest.mark.parametrize(
+    "model, module, run",
+    [(model, *how) for model, how in _RUNS.items()]
+    + [(model, *how) for model, how in _INTERPOLATED.items()],
+    ids=lambda x: getattr(x, "__name__", ""),
+)
+def test_compiled_and_readable_model_runs_are_identical(model, module, run, monkeypatch):
     kernels = jit.kernels(module).values()
     assert kernels
     for kernel in kernels:
@@ -221,7 +262,8 @@ def test_compiled_and_readable_model_runs_are_identical(model, monkeypatch):
         monkeypatch.setattr(kernel, "_run", kernel.py_func)
     readable = run(model(), 300)
     assert np.array_equal(compiled, readable)
-    assert np.all(np.ptp(compiled, axis=0)[model().layout.range["output"].start :] > 0)
+    outputs = model().layout.range["output"]
+    assert np.all(np.ptp(compiled, axis=0)[outputs.start : outputs.stop] > 0)
 
 
 _RUN_AS_TEXT = """

@@ -101,12 +101,12 @@ def scan_pitch_run(steps: int):
             ("PitchManeuverController", PitchManeuverController),
         )
     }
-    for key, value in scan_pitch.PARAMETERS.items():
+    for key, value in scan_pitch.SYSTEM.parameters.items():
         name, variable = key.split(".")
         models[name].set(variable, value)
     connections = [
         (models[a.split(".")[0]], a.split(".")[1], models[b.split(".")[0]], b.split(".")[1])
-        for a, b in scan_pitch.CONNECTIONS
+        for a, b in scan_pitch.SYSTEM.connections
     ]
     for model in models.values():
         model.start(0.0)

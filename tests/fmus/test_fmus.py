@@ -137,9 +137,12 @@ def test_many_live_instances_exit_the_host_cleanly(fmus):
 def doubled(fmu, out, rename: bool):
     """A copy of the CmgCluster FMU whose code doubles the singularity output.
 
-    With ``rename`` its package gets a new name, as our build gives changed code; without,
-    it keeps the original's module names, as pythonfmu's own build would.
+    With ``rename`` its package gets a new name and the FMU the GUID that goes with it, as
+    our build gives changed code; without, it keeps the original's module names, as
+    pythonfmu's own build would.
     """
+    from agilesat.fmus.protocol import fmu_guid
+
     with zipfile.ZipFile(fmu) as archive:
         entries = {i.filename: archive.read(i) for i in archive.infolist()}
     package = next(n.split("/")[1] for n in entries if n.startswith("resources/agilesat_"))
@@ -150,6 +153,9 @@ def doubled(fmu, out, rename: bool):
     )
     assert b"2.0 * det3" in entries[cmg]
     if rename:
+        old, new = (fmu_guid("CmgCluster", d).encode() for d in (digest, digest + "x"))
+        assert old in entries["modelDescription.xml"]
+        entries["modelDescription.xml"] = entries["modelDescription.xml"].replace(old, new)
         entries = {
             name.replace(digest, digest + "x"): data.replace(
                 digest.encode(), (digest + "x").encode()

@@ -130,3 +130,41 @@ def test_fmu_state_round_trips_through_bytes_bit_identically(name):
     assert fmu.do_step(STEP, STEP)  # the clock came back with the state
     assert fmu.get_real(outputs) == after
     assert logged(fmu) == []
+
+
+def _codes(vrs, order=1):
+    """The value references the shim passes the derivative calls on as (fmus/protocol.py)."""
+    from agilesat.fmus.protocol import DERIVATIVE_BASE, ORDER_SHIFT
+
+    return [DERIVATIVE_BASE + (order << ORDER_SHIFT) + vr for vr in vrs]
+
+
+@pytest.mark.parametrize("name", FMUS)
+def test_every_continuous_input_and_output_takes_its_derivative_or_none_does(name):
+    """FMI 2.0 section 4.2.1: an FMU that declares canInterpolateInputs takes the first
+    derivative of every continuous Real input (order 2 refused, naming the variable), one
+    that declares maxOutputDerivativeOrder 1 answers every Real output; one that declares
+    neither refuses both, saying why."""
+    model = model_class(name)
+    fmu = slave(name)
+    for variable, value in operating_point(name, np.random.default_rng(3)).items():
+        at = model.table_layout().offset[variable]
+        fmu.set_real(list(range(at, at + len(np.atleast_1d(value)))), np.ravel(value).tolist())
+    fmu.exit_initialization_mode()
+    inputs, outputs = scalars(model(), "input"), scalars(model(), "output")
+    if inputs:  # (OrbitEnvironment and SweepPlanner have none)
+        fmu.set_real(_codes([vr for vr, _ in inputs]), [0.0] * len(inputs))
+        fmu.set_real(_codes([inputs[0][0]], order=2), [0.0])
+    rates = fmu.get_real(_codes([vr for vr, _ in outputs]))
+    errors = logged(fmu)
+    assert fmu.do_step(0.0, STEP)
+    if model.INTERPOLATES_INPUTS:
+        assert f"order 2 of {inputs[0][1]}: only order 1" in errors.pop(0)
+    elif inputs:
+        assert "does not interpolate its inputs (canInterpolateInputs is false)" in errors.pop(0)
+        assert "does not interpolate its inputs" in errors.pop(0)
+    if model.OUTPUT_DERIVATIVES:
+        assert all(map(math.isfinite, rates)) and len(rates) == len(outputs)
+    else:
+        assert "no output derivatives (maxOutputDerivativeOrder is 0)" in errors.pop(0)
+    assert errors == []

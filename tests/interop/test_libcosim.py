@@ -141,10 +141,12 @@ def test_a_variant_is_written_into_the_package(tmp_path):
     "target, message",
     [
         ("scan_pitch:nope", "no variant 'nope'"),
-        ("orchestration/systems/scan_pitch.ssd", "export takes a scenario"),
+        ("orchestration/systems/nowhere.ssd", "nowhere.ssd: no such file"),
+        ("scan_pitch", "an SSP package is a .ssp file"),
     ],
 )
 def test_export_errors_are_named(target, message, tmp_path):
-    run = agilesat("export", target, "--out", tmp_path / "x.ssp")
+    out = tmp_path / ("x.ssd" if "package" in message else "x.ssp")
+    run = agilesat("export", target, "--out", out)
     assert run.returncode == 1
     assert message in run.stderr

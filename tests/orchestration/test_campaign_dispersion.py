@@ -1,5 +1,5 @@
 """Campaign building blocks that need no FMU run: the dispersion language, run indexing,
-pass-rate intervals, the table and requirements in scenario summaries."""
+pass-rate intervals, the table, absent values and the requirements' verdicts."""
 
 import json
 import math
@@ -10,7 +10,6 @@ import pytest
 
 from agilesat.orchestration.campaign import dispersion, report
 from agilesat.orchestration.campaign.plan import Plan, Spec
-from agilesat.orchestration.scenarios import summarize
 
 DEG = math.pi / 180
 
@@ -132,10 +131,10 @@ def test_plan_whole_variables_start_from_the_system_values():
         )
     )
     values = plan.run_values(0)
-    from agilesat.orchestration.scenarios.scan_pitch import PARAMETERS
+    from agilesat.orchestration.scenarios.scan_pitch import PAPER_DELTA0
 
     assert [values[f"CmgCluster.delta0[{i}]"] for i in range(1, 7)] == pytest.approx(
-        PARAMETERS["CmgCluster.delta0"], abs=1e-15
+        PAPER_DELTA0, abs=1e-15
     )
     assert values["SatelliteDynamics.inertia[2,2]"] == pytest.approx(956.0, rel=1e-14)
     assert values["SatelliteDynamics.inertia[1,2]"] == pytest.approx(0.0, abs=1e-12)
@@ -159,11 +158,42 @@ def test_plan_whole_variables_start_from_the_system_values():
         ),
         ("CmgCluster.h_rotor=choice(A, B)", "CmgCluster.h_rotor has none: give numbers"),
         ("CmgSteering.law=+choice(0, 1)", "a named choice cannot be added or multiplied"),
+        ("CmgCluster.h_rotor=normal(1e999, 1)", "normal must be finite numbers, got inf"),
+        ("CmgCluster.h_rotor=*uniform(1, 1e400)", "uniform must be finite numbers"),
+        ("CmgCluster.h_rotor=linspace(0, 1, 1e9)", "1e\\+09 points, more than the 100000 runs"),
     ],
 )
 def test_plan_rejects_dispersions_that_do_not_fit(vary, match):
     with pytest.raises(ValueError, match=match):
         Plan(Spec("scan_pitch", vary=[vary]))
+
+
+@pytest.mark.parametrize(
+    "runs, vary, total",
+    [
+        (10**9, ["CmgCluster.h_rotor=normal(16.65, 0.1)"], "1000000000 runs"),
+        (
+            1,
+            ["CmgCluster.h_rotor=linspace(1, 2, 1000)", "CmgCluster.rate_limit=values(0.5, 0.6)"],
+            None,
+        ),
+        (
+            1,
+            [
+                "CmgCluster.h_rotor=linspace(1, 2, 1000)",
+                "CmgCluster.rate_limit=linspace(0, 1, 1000)",
+            ],
+            "1 run\\(s\\) × 1000 × 1000 grid points = 1000000 runs",
+        ),
+    ],
+)
+def test_a_campaign_of_more_than_max_runs_is_refused_before_anything_is_made(runs, vary, total):
+    """At once, from the counts alone: the grid is not built, no run index listed."""
+    if total is None:
+        assert Plan(Spec("scan_pitch", runs=runs, vary=vary)).total == 2000
+        return
+    with pytest.raises(ValueError, match=f"{total}, more than the {dispersion.MAX_RUNS}"):
+        Plan(Spec("scan_pitch", runs=runs, vary=vary))
 
 
 def test_dispersion_files_toml_and_json_agree(tmp_path):
@@ -190,45 +220,61 @@ def test_clopper_pearson_against_closed_forms_and_a_table():
     assert report.clopper_pearson(5, 10) == pytest.approx((0.1871, 0.8129), abs=1e-4)
 
 
-def test_summarize_declares_requirements_and_met():
-    entries = summarize(
-        {"a": (1.0, "rad", "deg", ""), "b": (None, "s", "s", ""), "c": (-0.5, "1", "1", "")},
-        requirements={"a": {"max": 2.0}, "b": {"min": 0.0}, "c": {"min": -1.0, "max": -0.6}},
-    )
-    assert entries["a"]["requirement"] == {"max": 2.0} and entries["a"]["met"] is True
-    assert entries["b"]["met"] is False  # not reached: not met
-    assert entries["c"]["met"] is False
-    with pytest.raises(ValueError, match="expected 'min' and/or 'max'"):
-        summarize({"a": (1.0, "1", "1", "")}, requirements={"a": {"below": 1}})
-
-
-def test_table_round_trips_floats_exactly_through_csv(tmp_path):
-    plan = Plan(Spec("scan_pitch", runs=2, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
-    metrics = {"m": {"unit": "rad", "display_unit": "deg", "requirement": {"max": 1.0}}}
-    records = {
-        i: {
-            "index": i,
-            "seed": 0,
-            "grid": 0,
-            "values": plan.run_values(i),
-            "status": "ok",
-            "message": "",
-            "worker": "w",
-            "seconds": 0.1,
-            "metrics": {"m": {"value": 1 / 3 + i, "met": i == 0}},
-        }
-        for i in (1, 0)
+def _record(i: int, plan, value, verdict: str, reason: str | None = None) -> dict:
+    metric = {"value": value, **({"reason": reason} if reason else {})}
+    return {
+        "index": i,
+        "seed": 0,
+        "grid": 0,
+        "values": plan.run_values(i),
+        "status": "ok",
+        "message": "",
+        "worker": "w",
+        "seconds": 0.1,
+        "metrics": {"m": metric},
+        "requirements": {"m": verdict},
     }
-    array = report.table(plan, records, metrics)
-    assert list(array["index"]) == [0, 1] and list(array["met_m"]) == [True, False]
+
+
+CATALOG = {
+    "metrics": {"m": {"unit": "rad", "display_unit": "deg", "requirement": {"max": 1.0}}},
+    "requirements": {"m": {"statement": "m ≤ 57.3°", "unit": "rad", "display_unit": "deg"}},
+}
+
+
+def test_table_round_trips_floats_exactly_through_csv_and_absent_values_are_empty(tmp_path):
+    plan = Plan(Spec("scan_pitch", runs=3, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
+    records = {
+        1: _record(1, plan, 1 / 3 + 1, "not met"),
+        0: _record(0, plan, 1 / 3, "met"),
+        2: _record(2, plan, None, "not evaluated", "not settled: |x| > 1 at the end"),
+    }
+    array = report.table(plan, records, CATALOG)
+    assert list(array["index"]) == [0, 1, 2] and list(array["met_m"]) == [True, False, False]
+    assert list(array["verdict_m"]) == ["met", "not met", "not evaluated"]
     report.write_table(array, tmp_path)
     import csv
 
     rows = list(csv.DictReader((tmp_path / "runs.csv").open()))
     assert float(rows[1]["m"]) == 1 / 3 + 1
+    assert rows[2]["m"] == ""  # no value: an empty cell, never a number
     assert float(rows[0]["CmgCluster.h_rotor"]) == plan.run_values(0)["CmgCluster.h_rotor"]
-    rates = report.pass_rates(array, metrics)
-    assert rates["m"]["met"] == 1 and rates["m"]["runs"] == 2
+    rates = report.pass_rates(array, CATALOG)["m"]
+    assert (rates["met"], rates["not_met"], rates["not_evaluated"], rates["runs"]) == (1, 1, 1, 3)
+    stats = report.statistics(array, CATALOG, records)["m"]
+    assert (stats["count"], stats["missing"]) == (2, 1)
+    assert stats["mean"] == pytest.approx(1 / 3 + 0.5, rel=1e-15)  # the absent run left out
+    assert stats["reasons"] == {"not settled": 1}
+
+
+def test_a_requirement_a_variant_does_not_judge_has_no_pass_rate():
+    plan = Plan(Spec("scan_pitch", runs=1, vary=["CmgCluster.h_rotor=normal(16.65, 0.1)"]))
+    catalog = {
+        "metrics": CATALOG["metrics"],
+        "requirements": {"m": {"statement": "m ≤ 1", "not_judged": "motors off"}},
+    }
+    array = report.table(plan, {0: _record(0, plan, 2.0, "not judged")}, catalog)
+    assert report.pass_rates(array, catalog) == {}
 
 
 def test_progress_prints_plain_lines_off_a_terminal(capsys):

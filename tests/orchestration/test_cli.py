@@ -37,7 +37,7 @@ def test_a_whole_array_splits_into_its_elements_each_typed_by_its_variable(descr
             "SatelliteDynamics.inertia": IDENTITY_900,
             "SatelliteDynamics.rate0[2]": "0.01",
             "Flywheel.speed0": [1, 2, 3, 4],
-            "SatelliteDynamics.gravity_gradient": "yes",
+            "SatelliteDynamics.gravity_gradient": "TRUE",
         },
     )
     values = {key: (p.component, p.name, p.type, p.value) for key, p in typed.items()}
@@ -66,6 +66,14 @@ def test_a_whole_array_splits_into_its_elements_each_typed_by_its_variable(descr
         ("SateliteDynamics.inertia", "1", "did you mean SatelliteDynamics"),
         ("SatelliteDynamics.mu", "[1, 2]", "is a scalar"),
         ("SatelliteDynamics.inertia", "[[1,0", "cannot read"),
+        ("SatelliteDynamics.gravity_gradient", "flase", "=flase: expected a Boolean: true, false"),
+        ("SatelliteDynamics.gravity_gradient", "2", "expected a Boolean"),
+        ("SatelliteDynamics.gravity_gradient", "on", "expected a Boolean"),
+        ("SatelliteDynamics.gravity_gradient", "yes", "expected a Boolean"),
+        ("SatelliteDynamics.rate0[2]", "1_000", "rate0\\[2\\]=1_000: expected a finite Real"),
+        ("SatelliteDynamics.mu", "inf", "expected a finite Real"),
+        ("SatelliteDynamics.mu", "nan", "expected a finite Real"),
+        ("SatelliteDynamics.mu", "0x10", "expected a finite Real"),
     ],
 )
 def test_a_wrong_override_says_what_is_expected(described, key, value, message):
@@ -144,6 +152,7 @@ def test_misspelt_scenario_variant_and_usage_errors(fmus):
             "2 a usage error",
             "3 a scenario",
             "130 interrupted",
+            "143",
         )
     )
 
@@ -196,7 +205,7 @@ def test_set_a_whole_array_and_record_it_typed(short_run):
     assert parameters["SatelliteDynamics.inertia[1,2]"] == {"value": 0.0, "type": "Real"}
     assert parameters["SatelliteDynamics.gravity_gradient"] == {"value": False, "type": "Boolean"}
     # the dynamics FMU got the matrix: its H_I = C_BIᵀ (J w + h) with J = 900 I
-    from agilesat.orchestration.scenarios import inertial_momentum
+    from agilesat.orchestration.scenarios.payload_sweep import inertial_momentum
 
     results = Results.load(out)
     H = results["SatelliteDynamics.H_I"]
@@ -320,3 +329,14 @@ def test_no_derivatives_reaches_the_master(fmus, tmp_path, monkeypatch):
     for flag in (["--no-derivatives"], []):
         assert cli.main(["run", str(ssd), "--out", str(tmp_path), "--quiet", *flag]) != 0
     assert seen == [False, True]
+
+
+def test_integers_are_whole_digits_in_fmi2integers_range(fmus):
+    """fmi2Integer is 32 bits: 2^32 would wrap to 0 in the FMU."""
+    described = {"Gyro": Description("Gyro", fmus["Gyro"])}
+    for good, value in (("7", 7), ("-2147483648", -(2**31)), ("2147483647", 2**31 - 1), (3.0, 3)):
+        [typed] = typed_parameters(described, {"Gyro.seed": good}).values()
+        assert (typed.type, typed.value) == ("Integer", value)
+    for bad in ("2147483648", "4294967296", "-2147483649", "1_000", "1.5", "1e3", 2.5):
+        with pytest.raises(SystemFileError, match=r"Gyro.seed=.*: expected an Integer from "):
+            typed_parameters(described, {"Gyro.seed": bad})

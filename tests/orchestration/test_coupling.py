@@ -124,7 +124,7 @@ def test_payload_sweep_reference_is_the_scenario():
     """The reference's copies of the scenario's values (and of the FMU defaults it keeps)."""
     from agilesat.components import attitude_controller, flywheel
 
-    p = payload_sweep_scenario.PARAMETERS
+    p = payload_sweep_scenario.SYSTEM.parameters
     assert payload_sweep.A_ORBIT == p["OrbitEnvironment.semi_major_axis"]
     assert payload_sweep.INCLINATION == pytest.approx(p["OrbitEnvironment.inclination"], rel=1e-15)
     assert np.array_equal(p["SatelliteDynamics.inertia"], payload_sweep.J_HUB * np.eye(3))
@@ -153,7 +153,7 @@ def test_video_sar_reference_is_the_scenario():
     def default(model, name):
         return next(v.start for v in model.VARIABLES if v.name == name)
 
-    p = video_sar_scenario.PARAMETERS
+    p = video_sar_scenario.SYSTEM.parameters
     # isotropic hub: the gravity-gradient torque the FMU has switched on vanishes identically
     assert np.array_equal(p["SatelliteDynamics.inertia"], video_sar.J_HUB * np.eye(3))
     assert p["CmgCluster.h_rotor"] == p["CmgSteering.h_rotor"] == video_sar.H_ROTOR

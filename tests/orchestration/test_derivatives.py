@@ -13,7 +13,6 @@ P = 0.05 s, the plant FMUs at H (multi-rate), so a smaller H changes the couplin
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import sys
@@ -46,11 +45,12 @@ def twist(q):
 def system(directory: Path, fmus: dict, wired: bool, step: float):
     """scan_pitch with controller and steering at P and the plant at ``step``; without the
     ḣ wires unless ``wired``."""
-    scenario = get("scan_pitch")
+    scenario = get("scan_pitch").system.copy()
     if step != P:
-        scenario = dataclasses.replace(scenario, steps=dict.fromkeys(CONTROLLERS, P))
+        for name in CONTROLLERS:
+            scenario.set_step(name, P)
     path = directory / f"scan_pitch_{step}.ssd"
-    path.write_bytes(scenario.render_ssd({n: str(fmus[n]) for n in scenario.components}))
+    path.write_bytes(scenario.ssd({n: str(fmus[n]) for n in scenario.components}))
     result = read_system(path)
     if not wired:
         result.connections = [
@@ -126,7 +126,7 @@ def test_a_declared_derivative_reaches_the_model_description():
     assert variables[int(derivative["hdot_wheel[2]"]) - 1].get("name") == "h_wheel[2]"
     assert derivative["h_wheel[2]"] is None and derivative["tau_ext[1]"] is None
     assert root.find("CoSimulation").get("canInterpolateInputs") == "true"
-    assert root.find("CoSimulation").get("maxOutputDerivativeOrder") == "0"
+    assert root.find("CoSimulation").get("maxOutputDerivativeOrder") == "1"
 
 
 @pytest.fixture(scope="module")
@@ -157,8 +157,9 @@ def order(errors, label) -> float:
 @pytest.mark.integration
 def test_without_the_wires_jacobi_with_derivatives_is_the_wired_run_bit_for_bit(fmus, tmp_path):
     """Tolerance zero, by construction: fmi2GetRealOutputDerivatives of the cluster's h is
-    its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg stores it in
-    the hub's input hdot_cmg: the same number the wire passes, at the same time."""
+    its output hdot at t_n, and fmi2SetRealInputDerivatives of the hub's h_cmg makes it the
+    slope of h_cmg over the step, where the wired run has hdot_cmg: the same number the wire
+    passes, at the same time."""
     wired = run(tmp_path, fmus, P, "jacobi", wired=True, stop=20.0)
     derived = run(tmp_path, fmus, P, "jacobi", stop=20.0)
     assert wired.names == derived.names
@@ -240,6 +241,49 @@ def test_fmpy_as_host_sets_input_derivatives_in_a_clean_process(fmus):
     assert found["derived"] == 0.0 and found["held"] > 1e-6, found
 
 
+FMPY_PAYLOAD = """
+import json, sys
+import numpy as np
+from fmpy import simulate_fmu
+path = sys.argv[1]
+# 9 continuous inputs (FMPy keeps 9 input derivatives): both payloads' angle and rate
+# commands, payload 1's roll acceleration command; the angles ramp at 0.1 rad/s while the
+# rate commands ramp from 0.05 rad/s at 0.01 rad/s2 (a table of one segment: FMPy gives a
+# table's left segment's slope at a breakpoint, and 0 at its first time)
+names = ["roll_cmd[1]", "roll_cmd[2]", "pitch_cmd[1]", "pitch_cmd[2]", "roll_rate_cmd[1]",
+         "roll_rate_cmd[2]", "pitch_rate_cmd[1]", "pitch_rate_cmd[2]", "roll_accel_cmd[1]"]
+def row(t):
+    angle, rate = 0.2 + 0.1 * t, 0.05 + 0.01 * t
+    return (t, angle, -angle, 0.5 * angle, -0.5 * angle, rate, -rate, 0.5 * rate, -0.5 * rate, 0.0)
+table = np.array([row(-20.0), row(40.0)], dtype=[(n, np.double) for n in ["time", *names]])
+def run(step, derivatives):
+    return simulate_fmu(path, stop_time=10.0, step_size=step, output_interval=step, input=table,
+                        set_input_derivatives=derivatives,
+                        start_values={"bandwidth": 3.0, "damping": 0.7},
+                        output=["roll[1]", "pitch[2]", "roll_rate[1]", "h[3]"])
+def diff(a, fine):
+    every = round((a["time"][1] - a["time"][0]) / (fine["time"][1] - fine["time"][0]))
+    return max(float(np.abs(a[n] - fine[n][::every]).max()) for n in a.dtype.names[1:])
+fine = run(0.005, True)
+print(json.dumps({"derived": diff(run(0.5, True), fine), "held": diff(run(0.5, False), fine)}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_fmpy_drives_the_payload_servo_with_interpolated_commands(fmus):
+    """FMPy's simulate_fmu(set_input_derivatives=True) on the payload servo with commands
+    ramping (angles at one slope, rate commands at another): the servo follows linearly
+    interpolated commands in closed form, so steps of 0.5 s are 100 times finer steps to
+    rounding; held, the commands are 0.3 rad off.  (The servo's states only: FMPy reads the
+    outputs of t_{n+1} before it sets that time's inputs, which the accelerations in ḣ
+    depend on.)"""
+    run = run_python(FMPY_PAYLOAD, fmus["PayloadGimbals"])
+    assert run.returncode == 0, run.stderr
+    found = json.loads(run.stdout.strip().splitlines()[-1])
+    assert found["derived"] < 1e-11 and found["held"] > 0.1, found
+
+
 @pytest.mark.slow
 @pytest.mark.integration
 def test_model_descriptions_declare_the_derivatives(fmus):
@@ -252,10 +296,11 @@ def test_model_descriptions_declare_the_derivatives(fmus):
         cs = md.coSimulation
         declared[name] = (cs.canInterpolateInputs, cs.maxOutputDerivativeOrder, pairs)
     device = {f"hdot[{i}]": f"h[{i}]" for i in (1, 2, 3)}
-    for name in ("CmgCluster", "Flywheel", "PayloadGimbals"):
-        assert declared[name] == (False, 1, device), name
+    for name in ("CmgCluster", "PayloadGimbals"):
+        assert declared[name] == (True, 1, device), name
+    assert declared["Flywheel"] == (False, 1, device)  # its drive samples its inputs
     hub = {f"hdot_{d}[{i}]": f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)}
-    assert declared["SatelliteDynamics"] == (True, 0, hub)
+    assert declared["SatelliteDynamics"] == (True, 1, hub)
     assert declared["CmgSteering"] == (False, 0, {})
 
 

@@ -154,7 +154,7 @@ def test_signals_set_a_flag_while_inside_and_the_old_handlers_come_back():
             assert inner is stop  # nested: one flag
         os.kill(os.getpid(), signal.SIGTERM)  # would end this process otherwise
         os.kill(os.getpid(), signal.SIGINT)  # would raise KeyboardInterrupt
-        assert stop.signal == signal.SIGINT
+        assert stop.signal == signal.SIGTERM  # the first: what stopped the run
     assert {s: signal.getsignal(s) for s in before} == before
 
 
@@ -302,3 +302,17 @@ def test_a_text_file_as_ssp_is_a_message(tmp_path):
     (tmp_path / "p.ssp").write_text("hello")
     with pytest.raises(SystemFileError, match="not an SSP package"):
         read_system(tmp_path / "p.ssp")
+
+
+def test_a_long_problem_report_is_bounded(fmus):
+    """30 copies of one connection: 30 problems counted, 20 printed, then how many more."""
+    from agilesat.orchestration.system.validation import MAX_PROBLEMS_SHOWN
+
+    system = read_system(ROOT / "orchestration" / "systems" / "scan_pitch.ssd")
+    system.connections += [system.connections[0]] * 30
+    descriptions = {c.name: Description(c.name, c.source) for c in system.components}
+    with pytest.raises(SystemFileError) as error:
+        check_system(system, descriptions, system.parameters)
+    text = str(error.value)
+    assert "30 problem(s)" in text and text.count("is already driven by") == MAX_PROBLEMS_SHOWN
+    assert text.endswith(f"... and {30 - MAX_PROBLEMS_SHOWN} more of these kinds")

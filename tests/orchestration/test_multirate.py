@@ -2,7 +2,6 @@
 SSD annotation, its checks and the master's schedule (controller and steering at their flight
 rate, the plant finer)."""
 
-import dataclasses
 import math
 
 import numpy as np
@@ -21,10 +20,12 @@ CONTROL = ("PitchManeuverController", "CmgSteering")
 
 def write_system(fmus, tmp_path, steps, name="multirate.ssd"):
     """scan_pitch with its own steps for some components, FMUs from the build."""
-    scenario = dataclasses.replace(get("scan_pitch"), steps=steps)
+    scenario = get("scan_pitch").system.copy()
+    for component, step in steps.items():
+        scenario.set_step(component, step)
     path = tmp_path / name
     sources = {n: str(fmus[n]) for n in scenario.components}
-    path.write_bytes(scenario.render_ssd(sources))
+    path.write_bytes(scenario.ssd(sources))
     return path
 
 
@@ -115,9 +116,9 @@ def test_libcosim_reads_its_own_equivalent_of_the_step(fmus, tmp_path):
     from agilesat.fmus.build import write_archive
     from helpers import TOOLS
 
-    scenario = dataclasses.replace(get("scan_pitch"), steps={"PitchManeuverController": 0.1})
+    scenario = get("scan_pitch").system.copy().set_step("PitchManeuverController", 0.1)
     entries = {f"resources/{n}.fmu": fmus[n].read_bytes() for n in scenario.components}
-    entries["SystemStructure.ssd"] = scenario.render_ssd(
+    entries["SystemStructure.ssd"] = scenario.ssd(
         {n: f"resources/{n}.fmu" for n in scenario.components}
     )
     package = write_archive(tmp_path / "multirate.ssp", entries)

@@ -61,7 +61,9 @@ def test_a_run_parses_and_types_each_value_once(fmus, tmp_path, monkeypatch):
     monkeypatch.setattr(
         parameters,
         "typed_value",
-        lambda d, key, value, real=parameters.typed_value: typed.append(key) or real(d, key, value),
+        lambda d, key, value, origin=None, real=parameters.typed_value: (
+            typed.append(key) or real(d, key, value, origin)
+        ),
     )
     monkeypatch.setattr(
         parameters,

@@ -120,3 +120,55 @@ def test_a_bad_binding_names_the_file_and_what_is_wrong(
         path = package
     with pytest.raises(SystemFileError, match=message):
         read_system(path)
+
+
+def test_a_parameter_bound_twice_in_one_set_is_refused_naming_both_lines(tmp_path):
+    path = system(
+        tmp_path,
+        "<ssd:ParameterBinding>"
+        + inline(
+            '<ssv:Parameter name="g">\n<ssv:Real value="1"/></ssv:Parameter>\n'
+            '<ssv:Parameter name="g">\n<ssv:Real value="2"/></ssv:Parameter>'
+        )
+        + "</ssd:ParameterBinding>",
+    )
+    with pytest.raises(
+        SystemFileError,
+        match=rf"{path}:\d+: parameter 'g' is bound twice in one parameter set \(first at "
+        r"line \d+\)",
+    ):
+        read_system(path)
+
+
+def test_a_step_size_that_is_not_a_number_names_file_and_line(tmp_path):
+    path = system(
+        tmp_path,
+        '<ssd:ParameterBinding source="set.ssv"/>',
+        experiment='<ssd:DefaultExperiment><ssd:Annotations><ssc:Annotation type="org.agilesat.'
+        'master">\n<m:Master xmlns:m="http://agilesat.org/ssp/master" stepSize="abc"/>'
+        "</ssc:Annotation></ssd:Annotations></ssd:DefaultExperiment>",
+    )
+    with pytest.raises(
+        SystemFileError,
+        match=rf"{path}:\d+: the org.agilesat.master annotation's stepSize is 'abc'",
+    ):
+        read_system(path)
+
+
+def test_the_package_bound_counts_what_its_fmus_unpack_to(tmp_path):
+    """A 2 MiB member of an FMU inside the package (a few kB packed) passes a 1 MiB limit
+    on the package's own members, not on what the FMU unpacks to when it runs."""
+    import zipfile
+
+    system(tmp_path, '<ssd:ParameterBinding source="set.ssv"/>')
+    with zipfile.ZipFile(tmp_path / "A.fmu", "w", zipfile.ZIP_DEFLATED) as fmu:
+        fmu.writestr("resources/zeros", bytes(2 << 20))
+    package = tmp_path / "toy.ssp"
+    with zipfile.ZipFile(package, "w") as archive:
+        for name in ("toy.ssd", "A.fmu", "set.ssv"):
+            archive.write(tmp_path / name, "SystemStructure.ssd" if name == "toy.ssd" else name)
+    assert read_system(package, max_unpacked=4 << 20).components[0].name == "A"
+    with pytest.raises(
+        SystemFileError, match=r"with its FMUs, to more than the limit of 1048576 bytes \(A.fmu"
+    ):
+        read_system(package, max_unpacked=1 << 20)

@@ -31,9 +31,7 @@ def runs():
 
 
 def run(scenario, variant, stop):
-    results = simulate(
-        scenario.ssd, stop=stop or scenario.stop, parameters=scenario.variant_parameters(variant)
-    )
+    results = simulate(scenario.system_file(variant), stop=stop or scenario.stop)
     return np.asarray(results.names), np.asarray(results.data)
 
 

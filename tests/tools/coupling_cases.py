@@ -20,7 +20,6 @@ and, for every scenario, max |Δ w_BI_B| (scan_pitch: w_BO_B).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -55,9 +54,11 @@ def attitude_difference(q_a, q_b):
 
 def system_file(scenario: str, control: float, fmus: dict, where: Path) -> Path:
     """The scenario with its digital components at their own step ``control``."""
-    spec = dataclasses.replace(get(scenario), steps=dict.fromkeys(CONTROL[scenario], control))
+    spec = get(scenario).system.copy()
+    for name in CONTROL[scenario]:
+        spec.set_step(name, control)
     path = Path(where) / f"{scenario}_P{control}.ssd"
-    path.write_bytes(spec.render_ssd({n: str(fmus[n]) for n in spec.components}))
+    path.write_bytes(spec.ssd({n: str(fmus[n]) for n in spec.components}))
     return path
 
 

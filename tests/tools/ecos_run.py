@@ -4,7 +4,8 @@
 
 Run as a script in a fresh process (tests/interop/test_ecos.py).  ECOS reads the package itself
 (its SSP loader) and applies, at init, only the one parameter set named PARAMETER_SET: our
-exports give every component's set the system's name.  COLUMN is "<instance>.<name>",
+exports give every component's set the system's name; "-" passes no name (ECOS's default),
+and the FMUs' own defaults, which our exports configure, apply.  COLUMN is "<instance>.<name>",
 read through ECOS's identifier "<instance>::<name>".  Columns "time", then COLUMN...,
 rows after each step (as libcosim_run.py).  Exit status 2 with ECOS's message if a call
 fails; the rows recorded so far are saved all the same.
@@ -21,7 +22,7 @@ def main(path, stop, step, parameter_set, out, *columns):
     rows = []
     sim = EcosSimulation(ssp_path=path, step_size=step)
     try:
-        if not sim.init(parameter_set=parameter_set):
+        if not sim.init(parameter_set=None if parameter_set == "-" else parameter_set):
             raise RuntimeError(f"ECOS: init with parameter set {parameter_set!r} failed")
         identifiers = [c.replace(".", "::", 1) for c in columns]
         for k in range(1, round(stop / step) + 1):

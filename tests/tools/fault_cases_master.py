@@ -279,7 +279,7 @@ def _interrupt(signum: int, tries: int) -> dict:
             except (OSError, ValueError, KeyError):
                 npz_rows = None
             good = (
-                process.returncode == 130
+                process.returncode == 128 + signum
                 and whole
                 and rows == at + 1
                 and npz_rows == rows
@@ -295,7 +295,7 @@ def _interrupt(signum: int, tries: int) -> dict:
             )
     return _case(
         f"{name} to `agilesat run scan_pitch` mid-run ({tries} tries)",
-        "exit 130; results.csv (whole rows, up to the step of the signal), results.npz "
+        f"exit {128 + signum}; results.csv (whole rows, up to the step of the signal), results.npz "
         "with the same rows, log.txt, summary.json status 'interrupted'; no traceback or "
         "segfault",
         "; ".join(observed),

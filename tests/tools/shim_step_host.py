@@ -196,10 +196,62 @@ def unphysical(fmu):
     return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
 
 
+def set_derivatives(fmu, names, values):
+    n = len(names)
+    return fmu.dll.fmi2SetRealInputDerivatives(
+        fmu.c,
+        (ctypes.c_uint * n)(*(fmu.vr[name] for name in names)),
+        n,
+        (ctypes.c_int * n)(*[1] * n),
+        (ctypes.c_double * n)(*values),
+    )
+
+
+def interpolated(names, rates):
+    """A host interpolating inputs: the derivatives of ``names`` set before every step
+    (``rates(k)``), every step served by the C step path but where the kernel leaves it
+    (a slope conflict's warning)."""
+
+    def program(fmu):
+        fmu.initialize()
+        record = []
+        for k in range(20):
+            row = [set_derivatives(fmu, names, rates(k)), fmu.step(k * H)]
+            record.append(row + [fmu.get_real(fmu.outputs)])
+        return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
+
+    return program
+
+
+def _momentum_rates(k):
+    """h_cmg's slope (0.1, as hdot_cmg says, until step 12, then 0.2: a conflict), ḧ, τ̇,
+    ṙ."""
+    return [0.0, 0.2 if k >= 12 else 0.1, 0.1, 1e-3, 0.02, 0.0, 0.0, 1e-4, 0.0, 10.0, 7e3, 3e2]
+
+
+def hub_interpolated(fmu):
+    """SatelliteDynamics with its momentum, torque and position interpolated."""
+    names = [f"{v}[{i}]" for v in ("h_cmg", "hdot_cmg", "tau_ext", "r_I") for i in (1, 2, 3)]
+    fmu.initialize()
+    fmu.set_real([fmu.vr[f"hdot_cmg[{i}]"] for i in (1, 2, 3)], [0.0, 0.1, 0.0])
+    fmu.set_real([fmu.vr[f"r_I[{i}]"] for i in (1, 2, 3)], [7e6, 1e5, -2e5])
+    record = []
+    for k in range(20):
+        row = [set_derivatives(fmu, names, _momentum_rates(k)), fmu.step(k * H)]
+        record.append(row + [fmu.get_real(fmu.outputs)])
+    return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
+
+
 PROGRAMS = {"run": run, "states": states, "faults": faults, "reset": reset}
 SPECIAL = {
-    "CmgCluster": {"saturation": saturation},
-    "SatelliteDynamics": {"unphysical": unphysical},
+    "CmgCluster": {
+        "saturation": saturation,
+        "interpolated": interpolated(
+            [f"delta_dot_cmd[{i}]" for i in range(1, 7)],
+            lambda k: [0.5 * math.sin(0.3 * k), 20.0, -3.0, 0.0, 1.0, -0.2],
+        ),
+    },
+    "SatelliteDynamics": {"unphysical": unphysical, "interpolated": hub_interpolated},
 }
 
 results = {}

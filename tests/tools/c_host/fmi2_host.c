@@ -2,7 +2,11 @@
  * FMU: dlopen() the binary of each extracted FMU and call the FMI 2.0 C API.  No Python
  * is involved on the host side.
  *
- *     fmi2_host SCRIPT RESULTS.csv
+ *     fmi2_host SCRIPT RESULTS.csv [--reload-per-instance]
+ *
+ * --reload-per-instance: before each fmi2Instantiate, the host closes the binary of that
+ * FMU (every handle it holds on it: the library is unloaded unless it cannot be) and loads
+ * it again, as ECOS's loader does, while the instances made before live on.
  *
  * SCRIPT is a list of calls, one per line (tests/tools/c_host/script.py writes it from a system;
  * paths without spaces):
@@ -41,7 +45,7 @@
 typedef fmi2Status (*ArrayCall)(fmi2Component, const fmi2ValueReference *, size_t, void *);
 
 typedef struct {
-    char name[1024];
+    char name[1024], path[PATH_MAX + 300];
     void *library;
     fmi2Component component;
     char guid[128], resources[PATH_MAX + 32];
@@ -63,6 +67,7 @@ static int n_slots, *columns, n_columns;
 static char **column_names;
 static FILE *results;
 static double now, reached;   /* time of the current step, time it reaches */
+static int reload_per_instance;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                    fmi2String category, fmi2String message, ...) {
@@ -100,18 +105,10 @@ static void *symbol(Fmu *f, const char *name) {
     return s;
 }
 
-static void load(int id, const char *dir, const char *model_identifier, const char *guid,
-                 const char *instance) {
-    if (id != n_fmus || id >= MAX_FMUS) die(1, "fmu ids must count 0, 1, ... < %d", MAX_FMUS);
-    Fmu *f = &fmus[n_fmus++];
-    char path[PATH_MAX + 300], absolute[PATH_MAX];
-    snprintf(f->name, sizeof f->name, "%s", instance);
-    snprintf(f->guid, sizeof f->guid, "%s", guid);
-    if (!realpath(dir, absolute)) die(1, "%s: no directory %s", instance, dir);
-    snprintf(f->resources, sizeof f->resources, "file://%s/resources", absolute);
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", absolute, model_identifier);
-    f->library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!f->library) die(1, "%s: cannot load %s: %s", instance, path, dlerror());
+/* dlopen the FMU's binary and resolve its functions. */
+static void open_library(Fmu *f) {
+    f->library = dlopen(f->path, RTLD_NOW | RTLD_LOCAL);
+    if (!f->library) die(1, "%s: cannot load %s: %s", f->name, f->path, dlerror());
     f->instantiate = symbol(f, "fmi2Instantiate");
     f->setup = symbol(f, "fmi2SetupExperiment");
     f->enter = symbol(f, "fmi2EnterInitializationMode");
@@ -128,6 +125,29 @@ static void load(int id, const char *dir, const char *model_identifier, const ch
         f->set[k] = (ArrayCall)symbol(f, name);
     }
     f->set_string = symbol(f, "fmi2SetString");
+}
+
+static void load(int id, const char *dir, const char *model_identifier, const char *guid,
+                 const char *instance) {
+    if (id != n_fmus || id >= MAX_FMUS) die(1, "fmu ids must count 0, 1, ... < %d", MAX_FMUS);
+    Fmu *f = &fmus[n_fmus++];
+    char absolute[PATH_MAX];
+    snprintf(f->name, sizeof f->name, "%s", instance);
+    snprintf(f->guid, sizeof f->guid, "%s", guid);
+    if (!realpath(dir, absolute)) die(1, "%s: no directory %s", instance, dir);
+    snprintf(f->resources, sizeof f->resources, "file://%s/resources", absolute);
+    snprintf(f->path, sizeof f->path, "%s/binaries/linux64/%s.so", absolute, model_identifier);
+    open_library(f);
+}
+
+/* --reload-per-instance: every handle on f's binary closed (unloaded, unless it cannot
+ * be), then opened again, functions resolved anew for every FMU of that binary. */
+static void reload(Fmu *f) {
+    for (int i = 0; i < n_fmus; i++)
+        if (!strcmp(fmus[i].path, f->path) && dlclose(fmus[i].library))
+            die(1, "%s: dlclose: %s", fmus[i].name, dlerror());
+    for (int i = 0; i < n_fmus; i++)
+        if (!strcmp(fmus[i].path, f->path)) open_library(&fmus[i]);
 }
 
 static Fmu *fmu(int id) {
@@ -222,6 +242,7 @@ static void run(char **lines, int first, int last, double t, double h) {
         } else if (!strcmp(op, "instantiate")) {
             if (sscanf(line, "instantiate %d", &id) != 1) die(1, "bad line: %s", line);
             Fmu *f = fmu(id);
+            if (reload_per_instance) reload(f);
             f->component = f->instantiate(f->name, fmi2CoSimulation, f->guid, f->resources,
                                           &callbacks, fmi2False, fmi2False);
             if (!f->component) die(2, "%s: fmi2Instantiate returned NULL", f->name);
@@ -265,7 +286,9 @@ static void run(char **lines, int first, int last, double t, double h) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 3) die(1, "usage: fmi2_host SCRIPT RESULTS.csv");
+    reload_per_instance = argc == 4 && !strcmp(argv[3], "--reload-per-instance");
+    if (argc != 3 && !reload_per_instance)
+        die(1, "usage: fmi2_host SCRIPT RESULTS.csv [--reload-per-instance]");
     FILE *script = fopen(argv[1], "r");
     if (!script) die(1, "cannot read %s", argv[1]);
     results = fopen(argv[2], "w");

@@ -40,9 +40,13 @@ def compile_host(directory: Path) -> Path:
     return binary
 
 
-def run_host(host, script, results, env=CLEAN_ENV):
+def run_host(host, script, results, env=CLEAN_ENV, *options):
     return subprocess.run(
-        [str(host), str(script), str(results)], capture_output=True, text=True, timeout=600, env=env
+        [str(host), str(script), str(results), *options],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
     )
 
 

@@ -33,12 +33,13 @@ def write_script(system_path, script: Path, unzip_root: Path, stop: float | None
     n_steps = round((stop - start) / step)
     ids = {name: k for k, name in enumerate(plan.steps.step_order)}
     slots = value_layout(descriptions, plan.steps.step_order)
-    lines = []
+    lines, directories = [], {}  # each FMU file extracted once: its components share it
     for name, k in ids.items():
         d = descriptions[name]
-        directory = unzip_root / name
-        with zipfile.ZipFile(d.path) as archive:
-            archive.extractall(directory)
+        directory = directories.setdefault(Path(d.path).resolve(), unzip_root / name)
+        if not directory.exists():
+            with zipfile.ZipFile(d.path) as archive:
+                archive.extractall(directory)
         lines.append(f"fmu {k} {directory} {d.md.coSimulation.modelIdentifier} {d.md.guid} {name}")
     lines.append(f"slots {len(slots)}")
     lines += [f"column {k} {name}.{output}" for (name, output), k in slots.items()]

@@ -1,0 +1,217 @@
+"""Requirements on a run, and their verdicts.
+
+A requirement is an object with a ``name`` and one method, ``evaluate(results, metrics)``
+-> :class:`Verdict` (``metrics``: the run's {name: :class:`.metrics.MetricValue`}), and a
+``statement()`` for people.  Its verdict is one of
+
+- ``met``, ``not met``;
+- ``not evaluated``: the run cannot answer (the metric has no value, the run ended before
+  the window); never counted as met, never as a failure of the run;
+- ``not judged``: the variant run is not meant to meet it (:class:`.scenario.Variant`'s
+  ``not_judged``), and says why.
+
+:class:`Bound` bounds a metric (``at_most``, ``at_least``, ``within`` make one, as a
+metric's ``require=``).  :class:`Pointing` states an ECSS pointing requirement
+(:class:`..pointing.PointingRequirement`) on a run's attitude quaternions.  Anything with
+the same ``name``/``evaluate``/``statement`` is a requirement: ``agilesat run`` exits 3
+when one is not met, campaigns give each one's pass rate, ``assert_requirements_met``
+checks them from pytest.
+
+A requirement may also judge a whole campaign (an ensemble statistic): it then has
+``signals`` (the recorded columns it needs of every run, kept by the campaign) and
+``evaluate_campaign(signals, t)`` -> :class:`Verdict` (``signals`` (runs, len(signals),
+points)); :class:`Pointing` does, for its ensemble and mixed interpretations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..output.summary import format_value
+from ..system.units import quantity, to_si
+
+MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED = "met", "not met", "not evaluated", "not judged"
+VERDICTS = (MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``status`` (one of :data:`VERDICTS`), the ``value`` compared (SI; None if none) and
+    the ``reason`` where not evaluated or not judged."""
+
+    status: str
+    value: float | None = None
+    reason: str = ""
+    text: str = ""  # the verdict in a line, where the requirement words it itself
+
+    def __post_init__(self):
+        if self.status not in VERDICTS:
+            raise ValueError(f"verdict {self.status!r}: expected one of {VERDICTS}")
+
+    @property
+    def met(self) -> bool | None:
+        """True, False, or None (not evaluated, not judged)."""
+        return {MET: True, NOT_MET: False}.get(self.status)
+
+
+class Requirement:
+    """The protocol (see the module); subclasses set ``name``."""
+
+    name: str
+
+    def statement(self, unit: str | None = None, display_unit: str | None = None) -> str:
+        """The requirement for people (``unit``, ``display_unit``: of its metric, if any)."""
+        return self.name
+
+    def evaluate(self, results, metrics: dict) -> Verdict:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Bound(Requirement):
+    """``min`` ≤ the metric ``metric`` ≤ ``max`` (either may be None; SI numbers, or with a
+    unit: ``deg(0.032)``, ``"0.006 deg/s"``).  ``name``: default the metric's."""
+
+    min: object = None
+    max: object = None
+    metric: str | None = None
+    name: str = ""  # type: ignore[assignment]
+
+    def __post_init__(self):
+        if self.min is None and self.max is None:
+            raise ValueError("a bound needs min, max or both")
+        if not self.name and self.metric:
+            object.__setattr__(self, "name", self.metric)
+
+    def on(self, metric: str) -> Bound:
+        """This bound on ``metric`` (a metric's ``require=``)."""
+        return Bound(self.min, self.max, metric, self.name or metric)
+
+    def limits(self, unit: str | None) -> dict[str, float]:
+        """{"min": ..., "max": ...} (those given) in ``unit`` (SI)."""
+        result = {}
+        for key in ("min", "max"):
+            value = getattr(self, key)
+            if value is not None:
+                given = quantity(value)
+                result[key] = float(value if given is None else to_si(given, unit))
+        return result
+
+    def statement(self, unit: str | None = None, display_unit: str | None = None) -> str:
+        """'pointing_accuracy ≤ 0.032°' (without the metric's unit: as the bound is given)."""
+        if unit is None:
+            limits = {k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None}
+            show = lambda x: str(x) if quantity(x) is not None else f"{x:g} (SI)"  # noqa: E731
+        else:
+            limits = self.limits(unit)
+            show = lambda x: format_value(x, unit, display_unit)  # noqa: E731
+        if "min" in limits and "max" in limits:
+            return f"{self.metric} in [{show(limits['min'])}, {show(limits['max'])}]"
+        if "max" in limits:
+            return f"{self.metric} ≤ {show(limits['max'])}"
+        return f"{self.metric} ≥ {show(limits['min'])}"
+
+    def evaluate(self, results, metrics: dict) -> Verdict:
+        if self.metric not in metrics:
+            raise KeyError(f"requirement {self.name}: no metric {self.metric!r}")
+        m = metrics[self.metric]
+        if m.value is None:
+            return Verdict(NOT_EVALUATED, None, f"{self.metric} has no value: {m.reason}")
+        limits = self.limits(m.unit)
+        ok = limits.get("min", -math.inf) <= m.value <= limits.get("max", math.inf)
+        return Verdict(MET if ok else NOT_MET, m.value)
+
+
+def at_most(value) -> Bound:
+    """A metric's requirement: ≤ ``value`` (SI, or with a unit)."""
+    return Bound(max=value)
+
+
+def at_least(value) -> Bound:
+    """A metric's requirement: ≥ ``value``."""
+    return Bound(min=value)
+
+
+def within(low, high) -> Bound:
+    """A metric's requirement: in [``low``, ``high``]."""
+    return Bound(min=low, max=high)
+
+
+@dataclass(frozen=True)
+class Pointing(Requirement):
+    """An ECSS-E-ST-60-10C pointing requirement (:class:`..pointing.PointingRequirement`,
+    docs/pointing.md) on a run's attitude: the performance error of ``attitude`` (q_BI)
+    against ``reference`` (q_RI), or with ``kind="knowledge"`` the knowledge error of the
+    estimate ``attitude`` against the truth ``reference``; over [``start``, ``stop``] (s).
+
+    In a run it is evaluated on that run (the temporal interpretation needs no more; an
+    ensemble or mixed one over a single run is as the requirement states it).  In a
+    campaign, :meth:`evaluate_campaign` evaluates it over every run's error history."""
+
+    name: str  # type: ignore[misc]
+    requirement: object
+    attitude: str = "SatelliteDynamics.q_BI"
+    reference: str = "StaringGuidance.q_ref"
+    kind: str = "performance"
+    start: float | None = None
+    stop: float | None = None
+    signals: tuple = field(init=False, default=())
+
+    def __post_init__(self):
+        if self.kind not in ("performance", "knowledge"):
+            raise ValueError(f"kind must be 'performance' or 'knowledge', got {self.kind!r}")
+        columns = tuple(f"{q}[{i}]" for q in (self.attitude, self.reference) for i in range(1, 5))
+        object.__setattr__(self, "signals", columns)
+
+    def statement(self, unit=None, display_unit=None) -> str:
+        r = self.requirement
+        from ..pointing import format_angle
+
+        return f"{r.label()} {r.probability()} ≤ {format_angle(r.bound)}"  # type: ignore[attr-defined]
+
+    def _verdict(self, q_x, q_y, t) -> Verdict:
+        from ..pointing import knowledge_error, performance_error
+
+        rows = np.ones(len(t), bool)
+        if self.start is not None:
+            rows &= t >= self.start - 1e-12
+        if self.stop is not None:
+            rows &= t <= self.stop + 1e-12
+        if rows.sum() < 2:
+            return Verdict(
+                NOT_EVALUATED, None, f"fewer than 2 samples in [{self.start}, {self.stop}] s"
+            )
+        error = (performance_error if self.kind == "performance" else knowledge_error)(
+            q_x[..., rows, :], q_y[..., rows, :], t[rows]
+        )
+        result = self.requirement.evaluate(error)  # type: ignore[attr-defined]
+        status = {"met": MET, "not met": NOT_MET}.get(result.status, NOT_EVALUATED)
+        return Verdict(status, result.value, result.reason or "", result.line())
+
+    def evaluate(self, results, metrics: dict) -> Verdict:
+        return self._verdict(
+            results.vector(self.attitude), results.vector(self.reference), results.time
+        )
+
+    def evaluate_campaign(self, signals: np.ndarray, t: np.ndarray) -> Verdict:
+        """Over every run: ``signals`` (runs, 8, points) holds :attr:`signals` (NaN where a
+        run stopped early: those runs are left out, and said)."""
+        complete = np.isfinite(signals).all(axis=(1, 2))
+        if not complete.any():
+            return Verdict(NOT_EVALUATED, None, "no run reached the end")
+        verdict = self._verdict(
+            signals[complete, :4].transpose(0, 2, 1), signals[complete, 4:].transpose(0, 2, 1), t
+        )
+        left = int((~complete).sum())
+        if left:
+            note = f"{left} run(s) that stopped early left out"
+            return Verdict(
+                verdict.status,
+                verdict.value,
+                "; ".join(filter(None, (verdict.reason, note))),
+                verdict.text,
+            )
+        return verdict

@@ -1,0 +1,242 @@
+"""Fault cases of what a run is given: ``--set`` values, system files and packages, each
+measured in fresh processes (``CASES``, as in ``fault_cases_master``)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import tempfile
+import zipfile
+from pathlib import Path
+
+from fault_cases_master import CLI, SCAN_PITCH, _case, _stderr_line, system_copy
+
+from helpers import ROOT
+
+#: a system of one Gyro, its input bound to a constant: an Integer parameter (seed) to set
+_GYRO_SSD = """<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+    xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+    xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="gyro">
+  <ssd:System name="gyro">
+    <ssd:Elements>
+      <ssd:Component name="Gyro" source="{source}" type="application/x-fmu-sharedlibrary">
+        <ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues>
+          <ssv:ParameterSet version="1.0" name="gyro"><ssv:Parameters>
+            <ssv:Parameter name="w_BI_B[1]"><ssv:Real value="0.01"/></ssv:Parameter>
+            <ssv:Parameter name="w_BI_B[2]"><ssv:Real value="0.0"/></ssv:Parameter>
+            <ssv:Parameter name="w_BI_B[3]"><ssv:Real value="0.0"/></ssv:Parameter>{extra}
+          </ssv:Parameters></ssv:ParameterSet>
+        </ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings>
+      </ssd:Component>
+    </ssd:Elements>
+  </ssd:System>
+  <ssd:DefaultExperiment startTime="0.0" stopTime="0.5">
+    <ssd:Annotations><ssc:Annotation type="org.agilesat.master">
+      <agilesat:Master xmlns:agilesat="http://agilesat.org/ssp/master" stepSize="0.05"/>
+    </ssc:Annotation></ssd:Annotations>
+  </ssd:DefaultExperiment>
+</ssd:SystemStructureDescription>
+"""
+
+
+def gyro_system(directory: Path, extra: str = "") -> Path:
+    path = Path(directory) / "gyro.ssd"
+    source = (ROOT / "fmus" / "build" / "Gyro.fmu").resolve()
+    path.write_text(_GYRO_SSD.format(source=source, extra=extra))
+    return path
+
+
+def _run(path, *extra, env=None, out=None):
+    with tempfile.TemporaryDirectory() as tmp:
+        return subprocess.run(
+            [*CLI, "run", str(path), "--stop", "0.5", "--no-figures"]
+            + ["--out", str(out or Path(tmp) / "out"), *map(str, extra)],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            env={**os.environ, **(env or {})},
+        )
+
+
+def set_values():
+    """Each value in a fresh `agilesat run`: exit 1, the message naming the parameter and
+    what it takes, nothing run."""
+    with tempfile.TemporaryDirectory() as tmp:
+        scan, gyro = system_copy(tmp), gyro_system(tmp)
+        trials = [
+            (scan, "SatelliteDynamics.gravity_gradient=flase", "expected a Boolean"),
+            (scan, "SatelliteDynamics.gravity_gradient=2", "expected a Boolean"),
+            (scan, "SatelliteDynamics.gravity_gradient=on", "expected a Boolean"),
+            (scan, "OrbitEnvironment.j2=maybe", "expected a Boolean"),
+            (scan, "SatelliteDynamics.rate0[1]=1_000", "expected a finite Real"),
+            (scan, "SatelliteDynamics.mu=inf", "expected a finite Real"),
+            (gyro, "Gyro.seed=4294967296", "expected an Integer from -2147483648"),
+            (gyro, "Gyro.seed=-2147483649", "expected an Integer from -2147483648"),
+            (gyro, "Gyro.seed=1_000", "expected an Integer"),
+        ]
+        observed, ok = [], True
+        for system, setting, message in trials:
+            result = _run(system, "--set", setting, out=Path(tmp) / "out")
+            key = setting.partition("=")[0]
+            good = (
+                result.returncode == 1
+                and message in result.stderr
+                and key in result.stderr
+                and "Traceback" not in result.stderr
+                and not (Path(tmp) / "out" / "results.csv").exists()
+            )
+            ok &= good
+            observed.append(f"{setting}: exit {result.returncode}" + ("" if good else " (!)"))
+        return _case(
+            "--set SatelliteDynamics.gravity_gradient=flase, =2, =on, OrbitEnvironment.j2=maybe, "
+            "SatelliteDynamics.rate0[1]=1_000, SatelliteDynamics.mu=inf; a Gyro's "
+            "seed=4294967296, =-2147483649, =1_000",
+            "exit 1 each, naming the parameter and what it takes (true/false/1/0; a finite "
+            "Real; an Integer of fmi2Integer's 32 bits); nothing run",
+            "; ".join(observed),
+            ok,
+        )
+
+
+def bound_twice():
+    with tempfile.TemporaryDirectory() as tmp:
+        path = gyro_system(
+            tmp,
+            '\n            <ssv:Parameter name="seed"><ssv:Integer value="3"/></ssv:Parameter>'
+            '\n            <ssv:Parameter name="seed"><ssv:Integer value="4"/></ssv:Parameter>',
+        )
+        result = _run(path)
+        ok = result.returncode == 1 and re.search(
+            r"gyro.ssd:\d+: parameter 'seed' is bound twice in one parameter set \(first at "
+            r"line \d+\)",
+            result.stderr,
+        )
+        return _case(
+            "a parameter set binding Gyro.seed twice (3, then 4)",
+            "exit 1 naming the file, the line of each binding and the parameter",
+            f"exit {result.returncode}: {_stderr_line(result, 'seed')}",
+            ok,
+        )
+
+
+def annotation_step():
+    with tempfile.TemporaryDirectory() as tmp:
+        path = system_copy(
+            tmp, lambda s: re.sub(r'(<agilesat:Master[^>]*stepSize=)"[^"]*"', r'\1"abc"', s)
+        )
+        result = _run(path)
+        ok = (
+            result.returncode == 1
+            and re.search(
+                r"scan_pitch.ssd:\d+: the org.agilesat.master annotation's stepSize "
+                "is 'abc'",
+                result.stderr,
+            )
+            and "Traceback" not in result.stderr
+        )
+        return _case(
+            'the master annotation of scan_pitch.ssd with stepSize="abc"',
+            "exit 1 naming the file, the line, stepSize and what it takes; no traceback",
+            f"exit {result.returncode}: {_stderr_line(result, 'stepSize')}",
+            ok,
+        )
+
+
+def switch_value():
+    result = _run(SCAN_PITCH, env={"AGILESAT_JIT_AFTER": "soon"})
+    lines = result.stderr.strip().splitlines()
+    ok = (
+        result.returncode == 1
+        and len(lines) == 1
+        and "AGILESAT_JIT_AFTER='soon': expected a whole number" in lines[0]
+    )
+    return _case(
+        "AGILESAT_JIT_AFTER=soon",
+        "exit 1 with one line naming the variable and what it takes",
+        f"exit {result.returncode}: {_stderr_line(result)}",
+        ok,
+    )
+
+
+def duplicate_connections(copies: int = 50_000):
+    """``copies`` more of one connection (the issue's 600,000 printed 106 MB)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        line = re.search(r"\n(\s*<ssd:Connection [^\n]*/>)", SCAN_PITCH.read_text()).group(1)
+        path = system_copy(tmp, lambda s: s.replace(line, line * (copies + 1), 1))
+        result = _run(path)
+        ok = (
+            result.returncode == 1
+            and len(result.stderr) < 20_000
+            and f"... and {copies - 20} more" in result.stderr
+            and "is already driven by" in result.stderr
+        )
+        return _case(
+            f"scan_pitch.ssd with {copies:,} copies of one connection",
+            "exit 1, the first problems and how many more: a bounded report",
+            f"exit {result.returncode}, {len(result.stderr):,} bytes of stderr in "
+            f"{result.stderr.count(chr(10)):,} lines",
+            ok,
+        )
+
+
+def ssp_nested_fmu(padding: int = 64 << 20, limit: int = 32 << 20):
+    """An exported scan_pitch package whose CmgCluster.fmu carries ``padding`` zero bytes
+    (a few kB packed), run with a limit of ``limit`` bytes on a fresh cache."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        export = subprocess.run(
+            [*CLI, "export", "scan_pitch", "--out", str(tmp / "clean.ssp")],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert export.returncode == 0, export.stderr
+        with zipfile.ZipFile(tmp / "clean.ssp") as package:
+            members = {i.filename: package.read(i) for i in package.infolist()}
+        name = next(n for n in members if n.endswith("CmgCluster.fmu"))
+        with zipfile.ZipFile(tmp / "CmgCluster.fmu", "w", zipfile.ZIP_DEFLATED) as fmu:
+            with zipfile.ZipFile(tmp / "clean.ssp") as package, package.open(name) as inner:
+                with zipfile.ZipFile(inner) as original:
+                    for info in original.infolist():
+                        fmu.writestr(info, original.read(info))
+            fmu.writestr("resources/padding.bin", bytes(padding))
+        members[name] = (tmp / "CmgCluster.fmu").read_bytes()
+        with zipfile.ZipFile(tmp / "bomb.ssp", "w", zipfile.ZIP_DEFLATED) as package:
+            for member, data in members.items():
+                package.writestr(member, data)
+        cache = tmp / "cache"
+        result = _run(
+            tmp / "bomb.ssp",
+            env={"AGILESAT_SSP_MAX_BYTES": str(limit), "AGILESAT_CACHE_DIR": str(cache)},
+        )
+        grown = sum(p.stat().st_size for p in cache.rglob("*") if p.is_file())
+        ok = (
+            result.returncode == 1
+            and f"more than the limit of {limit} bytes" in result.stderr
+            and "CmgCluster.fmu" in result.stderr
+            and grown < 1 << 20
+        )
+        return _case(
+            f"an exported scan_pitch .ssp ({(tmp / 'bomb.ssp').stat().st_size >> 10} KiB) whose "
+            f"CmgCluster.fmu unpacks to {padding >> 20} MiB more, under a limit of "
+            f"{limit >> 20} MiB",
+            "exit 1: the limit covers what the FMUs inside unpack to, naming the FMU; "
+            "nothing unpacked into the cache",
+            f"exit {result.returncode}: {_stderr_line(result, 'limit')}; the cache grew by "
+            f"{grown >> 10} KiB",
+            ok,
+        )
+
+
+CASES = [
+    set_values,
+    bound_twice,
+    annotation_step,
+    switch_value,
+    duplicate_connections,
+    ssp_nested_fmu,
+]
