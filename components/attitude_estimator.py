@@ -206,7 +206,10 @@ class AttitudeEstimator(Model):
 
     def step(self, t, dt):
         # at the model's clock, as output() (components/gyro.py, step)
-        if estimator_step(self.values, self.state, self.t, dt) == LATE:
+        status = estimator_step(self.values, self.state, self.t, dt)
+        if status == FULL:
+            raise ModelError(_FULL)
+        if status == LATE:
             t_j, t_m = self.state[SECTIONS + NOTE : SECTIONS + NOTE + 2]
             self.warnings.append(
                 f"t={t_j:.6g} s: a measurement valid at t_meas={t_m:.6g} s is older than "
@@ -216,7 +219,22 @@ class AttitudeEstimator(Model):
         self.t = t + dt
 
     def output(self):
-        estimator_output(self.values, self.state, self.t)
+        if estimator_output(self.values, self.state, self.t) == FULL:
+            raise ModelError(_FULL)
+
+    @classmethod
+    def state_problem(cls, attributes, reference):
+        """The kernels index the state with its constants and each section's count of
+        records: the constants are those the parameters make, the counts whole numbers
+        leaving room for a cycle's record and a measurement's (capacity − 2 at most)."""
+        state, constants = attributes["state"], reference["state"][:SECTIONS]
+        if not np.array_equal(state[:SECTIONS], constants):
+            return "constants (capacity, section length, R) are not its parameters'"
+        for at in (SECTIONS, SECTIONS + int(constants[SECTION])):
+            n = float(state[at + N_RECORDS])
+            if not (n == int(n) and 0 <= n <= constants[CAPACITY] - 2):
+                return f"count of records {n!r} is not a whole number in [0, capacity - 2]"
+        return ""
 
     @property
     def records(self) -> list:
@@ -275,25 +293,30 @@ RECORD = StateTable(t=1, w=3, initialised=1, q=4, b=3, P=36)
 T, W, INITIALISED, Q, B, P = RECORD.offsets
 N_RECORD = RECORD.size
 RECORDS = FILTER.size  # where the records of a section start
-#: estimator_step's status: a late measurement was ignored (step() warns, once)
-LATE = 1
+#: the kernels' statuses: a late measurement was ignored (step() warns, once); no room for
+#: a cycle's records (a state the model was never in: nothing committed, step() raises)
+LATE, FULL = 1, 2
+_FULL = "internal error: more records than the history holds"
 
 
 @step_kernel(AttitudeEstimator)
 def estimator_step(values, state, t, dt):
     """Every cycle up to the model's time t run and committed; LATE when a measurement
     older than ``history`` was ignored for the first time."""
-    late = advance(values, state, t)
+    status = advance(values, state, t)
+    if status == FULL:
+        return FULL
     size = int(state[SECTION])
     for i in range(size):
         state[SECTIONS + i] = state[SECTIONS + size + i]
-    return LATE if late else 0
+    return status
 
 
 @output_kernel(AttitudeEstimator)
 def estimator_output(values, state, t):
     """The latest cycle's estimate at t (the committed state advanced to t, not committed)."""
-    advance(values, state, t)
+    if advance(values, state, t) == FULL:
+        return FULL
     a = SECTIONS + int(state[SECTION])
     last = _record(a, int(state[a + N_RECORDS]) - 1)
     s = floats(state)
@@ -317,10 +340,11 @@ def estimator_output(values, state, t):
 
 
 @jitable
-def advance(values, state, now: float) -> bool:
+def advance(values, state, now: float) -> int:
     """The committed section with every cycle up to ``now`` run (the last call's inputs
     held for cycles before ``now``, the current ones at ``now``), into the advanced one;
-    whether a late measurement was ignored for the first time (its times in ``note``)."""
+    LATE when a late measurement was ignored for the first time (its times in ``note``),
+    FULL when a cycle's records would not fit (a state the model was never in), else 0."""
     v = floats(values)
     c, a = SECTIONS, SECTIONS + int(state[SECTION])
     size = int(state[SECTION])
@@ -339,8 +363,10 @@ def advance(values, state, now: float) -> bool:
     )  # fmt: skip
     newest = tick(now, t0, rate)
     first = newest if state[c + CYCLED] == 0.0 else int(state[c + J]) + 1
-    late = False
+    late, capacity = False, int(state[CAPACITY])
     for j in range(first, newest + 1):
+        if int(state[a + N_RECORDS]) + 2 > capacity:  # a cycle's record and a measurement's
+            return FULL
         t_j = tick_time(j, t0, rate)
         at_now = abs(t_j - now) <= TICK_TOLERANCE / rate or state[c + CALLED] == 0.0
         late = _cycle(values, state, a, t_j, inputs if at_now else last) or late
@@ -349,7 +375,7 @@ def advance(values, state, now: float) -> bool:
     state[a + CALLED] = 1.0
     for i in range(9):
         state[a + LAST_INPUTS + i] = inputs[i]
-    return late
+    return LATE if late else 0
 
 
 @jitable

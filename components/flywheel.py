@@ -255,6 +255,14 @@ class Flywheel(Model):
     def output(self):
         flywheel_output(self.values, self.state, self.t)
 
+    @classmethod
+    def state_problem(cls, attributes, reference):
+        """The kernels index the value array with the wheels' places: the rows before the
+        speeds are those the parameters make."""
+        if not np.array_equal(attributes["state"][:OMEGA], reference["state"][:OMEGA]):
+            return "wheel constants (places, axes, distribution) are not its parameters'"
+        return ""
+
     def output_derivatives(self):
         """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
         s = self.state

@@ -211,6 +211,20 @@ class StarTracker(Model):
         if tracker_output(self.values, self.state, self.t) == FULL:
             raise ModelError(_FULL)
 
+    @classmethod
+    def state_problem(cls, attributes, reference):
+        """The kernels index the state with its constants and each section's count of
+        samples waiting: the constants are those the parameters make, the counts whole
+        numbers up to the capacity."""
+        state, constants = attributes["state"], reference["state"][:SECTIONS]
+        if not np.array_equal(state[:SECTIONS], constants):
+            return "constants (capacity, section length, mounting, keys) are not its parameters'"
+        for at in (SECTIONS, SECTIONS + int(constants[SECTION])):
+            n = float(state[at + N])
+            if not (n == int(n) and 0 <= n <= constants[CAPACITY]):
+                return f"count of samples waiting {n!r} is not a whole number in [0, capacity]"
+        return ""
+
 
 _FULL = "internal error: more samples wait for their release than the state holds"
 
