@@ -160,7 +160,7 @@ class AttitudeController(Model):
                 "acceleration_feedforward is on but inertia is zero: set the hub inertia it needs"
             )
         self.state = STATE.zeros()
-        self.state[KP : KP + 3], self.state[KD : KD + 3] = self.p.kp, self.p.kd
+        self.state[S_KP : S_KP + 3], self.state[S_KD : S_KD + 3] = self.p.kp, self.p.kd
         self.state[INERTIA : INERTIA + 9] = J.reshape(-1)
         self.state[FEEDFORWARD] = self.p.acceleration_feedforward
         self.t = t0
@@ -185,7 +185,7 @@ Y_TAU, Y_ATT, Y_RATE = _AT["tau_cmd"], _AT["att_error"], _AT["rate_error"]
 #: the state array: the gains, the hub inertia (row-major) and 1 with the acceleration
 #: feedforward on
 STATE = StateTable(kp=3, kd=3, inertia=9, feedforward=1)
-KP, KD, INERTIA, FEEDFORWARD = STATE.offsets
+S_KP, S_KD, INERTIA, FEEDFORWARD = STATE.offsets
 #: controller_output's status: q_BI or q_ref is not a unit quaternion (nothing written)
 NOT_UNIT = 1
 
@@ -211,9 +211,9 @@ def controller_output(values, state, t):
     rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
     hx, hy, hz = v[U_H_FF], v[U_H_FF + 1], v[U_H_FF + 2]
     dx, dy, dz = v[U_HDOT_FF], v[U_HDOT_FF + 1], v[U_HDOT_FF + 2]
-    tx = -s[KP] * ex - s[KD] * rx + dx + (wy * hz - wz * hy)
-    ty = -s[KP + 1] * ey - s[KD + 1] * ry + dy + (wz * hx - wx * hz)
-    tz = -s[KP + 2] * ez - s[KD + 2] * rz + dz + (wx * hy - wy * hx)
+    tx = -s[S_KP] * ex - s[S_KD] * rx + dx + (wy * hz - wz * hy)
+    ty = -s[S_KP + 1] * ey - s[S_KD + 1] * ry + dy + (wz * hx - wx * hz)
+    tz = -s[S_KP + 2] * ez - s[S_KD + 2] * rz + dz + (wx * hy - wy * hx)
     if s[FEEDFORWARD] != 0.0:
         J = s[INERTIA : INERTIA + 9]
         ax, ay, az = rotate(C_BR, v[U_DW_REF : U_DW_REF + 3])

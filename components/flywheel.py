@@ -232,7 +232,7 @@ class Flywheel(Model):
         self.state[N], self.state[WHEEL : WHEEL + n] = n, self.wheels
         self.state[AXES : AXES + 3 * n] = A.T.reshape(-1)
         self.state[DISTRIBUTION : DISTRIBUTION + 3 * n] = distribution.reshape(-1)
-        self.state[INERTIA : SPEED_LIMIT + 1] = (
+        self.state[S_INERTIA : SPEED_LIMIT + 1] = (
             p.J_wheel, p.viscous_friction, p.coulomb_friction, p.torque_limit,
             p.momentum_limit / p.J_wheel,
         )  # fmt: skip
@@ -269,9 +269,9 @@ class Flywheel(Model):
         _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist())
         speed_rate = [0.0] * N_WHEELS
         for k in range(int(s[N])):
-            speed_rate[int(s[WHEEL + k])] = accel_torques[k] / s[INERTIA]
+            speed_rate[int(s[WHEEL + k])] = accel_torques[k] / s[S_INERTIA]
         hdot = self.y.hdot.tolist()
-        k = s[VISCOUS] / s[INERTIA]
+        k = s[S_VISCOUS] / s[S_INERTIA]
         return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
 
 
@@ -290,7 +290,7 @@ STATE = StateTable(
     n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS, inertia=1, viscous=1,
     coulomb=1, torque_limit=1, speed_limit=1, omega=N_WHEELS, limited=2 * N_WHEELS,
 )  # fmt: skip
-N, WHEEL, AXES, DISTRIBUTION, INERTIA, VISCOUS, COULOMB = STATE.offsets[:7]
+N, WHEEL, AXES, DISTRIBUTION, S_INERTIA, S_VISCOUS, S_COULOMB = STATE.offsets[:7]
 TORQUE_LIMIT, SPEED_LIMIT, OMEGA, LIMITED = STATE.offsets[7:]
 _LIMITS = ("held at the momentum limit", "motor torque at the limit")
 #: flywheel_step's status: a wheel reached a limit (step() warns)
@@ -313,7 +313,7 @@ def _along_axes(s, values) -> tuple:
 def _momentum(s) -> tuple:
     """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
     hx, hy, hz = _along_axes(s, s[OMEGA : OMEGA + N_WHEELS])
-    J = s[INERTIA]
+    J = s[S_INERTIA]
     return J * hx, J * hy, J * hz
 
 
@@ -340,7 +340,7 @@ def _drive(v, s):
             s[DISTRIBUTION + 3 * k + 2],
         )
         torques[k], net[k], held[k], momentum[k], torque[k] = _wheel(
-            s[OMEGA + k], px * rx + py * ry + pz * rz, s[VISCOUS], s[COULOMB], s[TORQUE_LIMIT],
+            s[OMEGA + k], px * rx + py * ry + pz * rz, s[S_VISCOUS], s[S_COULOMB], s[TORQUE_LIMIT],
             s[SPEED_LIMIT],
         )  # fmt: skip
     return torques, net, held, momentum, torque
@@ -397,8 +397,9 @@ def flywheel_step(values, state, t, dt):
             state[LIMITED + 2 * k + j] = 1.0 if limited else 0.0
         if not held[k]:
             state[OMEGA + k] = wheel_step(
-                s[OMEGA + k], torques[k], dt, s[INERTIA], s[VISCOUS], s[COULOMB], s[SPEED_LIMIT]
-            )
+                s[OMEGA + k], torques[k], dt, s[S_INERTIA], s[S_VISCOUS], s[S_COULOMB],
+                s[SPEED_LIMIT],
+            )  # fmt: skip
     return status
 
 
