@@ -10,15 +10,14 @@ point at (the estimator told so).
 - ``video_sar:sensed``: the attitude controller tracks the estimated attitude and rate.
 
     from sensed import sensed
-    scenario = sensed("video_sar", out_dir)   # a Scenario whose .ssd is written there
+    scenario = sensed("video_sar", out_dir)   # .ssd (written there), .components, .step, .stop
 """
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
+from types import SimpleNamespace
 
-from agilesat.fmus.build import BUILD_DIR
 from agilesat.orchestration.scenarios import get
 
 SENSING = ("StarTracker", "Gyro", "AttitudeEstimator", "DisturbanceTorques")
@@ -56,24 +55,18 @@ ESTIMATED = {
 
 
 def sensed(name: str, out_dir: Path):
-    """Scenario ``name`` with the sensing FMUs in its loop, its SSD written to ``out_dir``."""
-    base = get(name)
-    estimated = ESTIMATED[name]
-    connections = (
-        tuple((estimated.get(target, source), target) for source, target in base.connections)
-        + SENSORS
+    """Scenario ``name``'s system with the sensing FMUs in its loop (the mission API's
+    System), its SSD written to ``out_dir``: a namespace with ``ssd``, ``components``,
+    ``step`` and ``stop``."""
+    system = get(name).system.copy(f"{name}_sensed")
+    for component in SENSING:
+        system.add(component)
+    for target, source in ESTIMATED[name].items():
+        system.connect(source, target, replace=True)
+    for source, target in SENSORS:
+        system.connect(source, target)
+    system.set(MOUNTING)
+    ssd = system.write(Path(out_dir) / f"{name}_sensed.ssd")
+    return SimpleNamespace(
+        ssd=ssd, components=system.components, step=system.step, stop=system.stop
     )
-    components = base.components + SENSING
-    scenario = dataclasses.replace(
-        base,
-        name=f"{name}_sensed",
-        components=components,
-        connections=connections,
-        parameters={**base.parameters, **MOUNTING},
-        variants={},
-        system=Path(out_dir) / f"{name}_sensed.ssd",
-    )
-    sources = {c: str(BUILD_DIR / f"{c}.fmu") for c in components}
-    Path(out_dir).mkdir(parents=True, exist_ok=True)
-    scenario.ssd.write_bytes(scenario.render_ssd(sources))
-    return scenario
