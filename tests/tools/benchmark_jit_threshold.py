@@ -6,9 +6,10 @@ run).
 
 Per scenario, each in fresh processes of this environment with the compile cache warm
 (``agilesat build`` filled it), medians of N, the cases interleaved:
-- load: the wall time of a 2-step run with the kernels compiled from the first call
-  (AGILESAT_JIT_AFTER=0) minus the same with their Python (AGILESAT_JIT=0): importing numba
-  and loading the scenario's cached kernels and C entries;
+- load: the wall time of a 2-step run in a fresh process (no set-up run before it) with
+  the kernels compiled from the first call (AGILESAT_JIT_AFTER=0) minus the same with
+  their Python (AGILESAT_JIT=0): importing numba and loading the scenario's cached kernels
+  and C entries;
 - one whole run at the scenario's length, simulate() only (imports and FMU set-up before
   the timing): compiled (AGILESAT_JIT_AFTER=0), Python (AGILESAT_JIT=0) and the default
   (the tier decided from the run's length); the gain per macro step and the break-even
@@ -32,7 +33,8 @@ from agilesat.orchestration import simulate
 from agilesat.orchestration.scenarios import get
 scenario = get(sys.argv[1])
 stop = float(sys.argv[2]) if len(sys.argv) > 2 else scenario.stop
-simulate(scenario.ssd, stop=scenario.step)  # set-up: FMUs loaded, imports
+if len(sys.argv) <= 2:  # set-up: FMUs loaded, imports (a short run times its load)
+    simulate(scenario.ssd, stop=scenario.step)
 began = time.perf_counter()
 simulate(scenario.ssd, stop=stop)
 print(time.perf_counter() - began, "numba" in sys.modules)
@@ -74,7 +76,7 @@ def main() -> None:
                 whole[case].append(fresh(env, name))
         load = statistics.median(short["compiled"]) - statistics.median(short["python"])
         m = {k: statistics.median(v) for k, v in whole.items()}
-        gain = (m["python"] - (m["compiled"] - load)) / steps
+        gain = (m["python"] - m["compiled"]) / steps  # the whole runs follow a set-up run
         print(
             f"{name:>14} {steps:>6} {load:6.2f} | {m['compiled']:8.2f} {m['python']:8.2f} "
             f"{m['default']:8.2f} | {gain * 1e6:7.0f} us {load / gain:10,.0f}"
