@@ -30,7 +30,9 @@ kd = 2 ζ ω_n J = 42.4 N·m·s/rad.  A 0.2 N·m wheel then stays linear up to a
 of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) ≈ 28 s is
 short against the 300 s pitch envelope of the payload sweep.
 
-Stateless: outputs are a function of the inputs at the communication point.
+Stateless: outputs are a function of the inputs at the communication point.  ``output`` is
+one kernel (components/jit.py) on the value array and a state array of the gains and the
+inertia (``STATE``).
 """
 
 from __future__ import annotations
@@ -39,9 +41,11 @@ import math
 
 import numpy as np
 
+from .flat import StateTable
+from .jit import floats, output_kernel
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 DESIGN_INERTIA = 150.0  # kg·m² ([Chang 2015] satellite, each axis)
 DESIGN_BANDWIDTH = 0.2  # rad/s
@@ -144,9 +148,10 @@ class AttitudeController(Model):
         ),
     )
 
+    #: step() only advances t (the outputs are functions of the inputs)
+    STATELESS = True
+
     def initialize(self, t0):
-        self.kp = tuple(self.p.kp.tolist())
-        self.kd = tuple(self.p.kd.tolist())
         J = self.p.inertia
         if not np.all(np.isfinite(J)) or not np.allclose(J, J.T, rtol=1e-9, atol=0.0):
             raise ModelError(f"inertia must be a finite symmetric matrix, got {J.tolist()}")
@@ -154,53 +159,75 @@ class AttitudeController(Model):
             raise ModelError(
                 "acceleration_feedforward is on but inertia is zero: set the hub inertia it needs"
             )
-        self.inertia = tuple(map(tuple, J.tolist())) if self.p.acceleration_feedforward else None
+        self.state = STATE.zeros()
+        self.state[S_KP : S_KP + 3], self.state[S_KD : S_KD + 3] = self.p.kp, self.p.kd
+        self.state[INERTIA : INERTIA + 9] = J.reshape(-1)
+        self.state[FEEDFORWARD] = self.p.acceleration_feedforward
         self.t = t0
 
     def step(self, t, dt):
         self.t = t + dt  # stateless between communication points
 
     def output(self):
-        u, y = self.u, self.y
-        r0, r1, r2, r3 = u.q_ref.tolist()
-        q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), u.q_BI.tolist())
-        norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
-        if not 0.25 < norm2 < 4.0:
+        if controller_output(self.values, self.state, self.t) == NOT_UNIT:
+            q_ref = self.u.q_ref.tolist()
             raise ModelError(
                 f"t={self.t:.6g} s: q_BI and q_ref must be unit quaternions, got "
-                f"{u.q_BI.tolist()} and {[r0, r1, r2, r3]}"
+                f"{self.u.q_BI.tolist()} and {q_ref}"
             )
-        if q0 < 0.0:
-            q0, q1, q2, q3 = -q0, -q1, -q2, -q3
-        s = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
-        f = 2.0 * math.atan2(s, q0) / s if s > 0.0 else 0.0  # angle / |q_v|, scale-free
-        ex, ey, ez = f * q1, f * q2, f * q3
-        k = 1.0 / norm2
-        C_BR = dcm((q0, q1, q2, q3))
-        wrx, wry, wrz = rotate(C_BR, u.w_ref.tolist())
-        wx, wy, wz = u.w_BI_B.tolist()
-        rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
-        hx, hy, hz = u.h_ff.tolist()
-        dx, dy, dz = u.hdot_ff.tolist()
-        kp, kd = self.kp, self.kd
-        tau = [
-            -kp[0] * ex - kd[0] * rx + dx + (wy * hz - wz * hy),
-            -kp[1] * ey - kd[1] * ry + dy + (wz * hx - wx * hz),
-            -kp[2] * ez - kd[2] * rz + dz + (wx * hy - wy * hx),
-        ]
-        if self.inertia is not None:
-            J = self.inertia
-            ax, ay, az = rotate(C_BR, u.dw_ref.tolist())
-            wrx, wry, wrz = k * wrx, k * wry, k * wrz  # C_BR w_ref
-            wdot = (
-                k * ax - (ry * wrz - rz * wry),
-                k * ay - (rz * wrx - rx * wrz),
-                k * az - (rx * wry - ry * wrx),
-            )
-            jx, jy, jz = (Ji[0] * wx + Ji[1] * wy + Ji[2] * wz for Ji in J)  # J w
-            gyro = (wy * jz - wz * jy, wz * jx - wx * jz, wx * jy - wy * jx)
-            for i, Ji in enumerate(J):
-                tau[i] += Ji[0] * wdot[0] + Ji[1] * wdot[1] + Ji[2] * wdot[2] + gyro[i]
-        y.tau_cmd[:] = tau
-        y.att_error[:] = (ex, ey, ez)
-        y.rate_error[:] = (rx, ry, rz)
+
+
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(AttitudeController.VARIABLES).offset  # offsets in AttitudeController.values
+U_Q_BI, U_W, U_Q_REF, U_W_REF = _AT["q_BI"], _AT["w_BI_B"], _AT["q_ref"], _AT["w_ref"]
+U_H_FF, U_HDOT_FF, U_DW_REF = _AT["h_ff"], _AT["hdot_ff"], _AT["dw_ref"]
+Y_TAU, Y_ATT, Y_RATE = _AT["tau_cmd"], _AT["att_error"], _AT["rate_error"]
+#: the state array: the gains, the hub inertia (row-major) and 1 with the acceleration
+#: feedforward on
+STATE = StateTable(kp=3, kd=3, inertia=9, feedforward=1)
+S_KP, S_KD, INERTIA, FEEDFORWARD = STATE.offsets
+#: controller_output's status: q_BI or q_ref is not a unit quaternion (nothing written)
+NOT_UNIT = 1
+
+
+@output_kernel(AttitudeController)
+def controller_output(values, state, t):
+    """tau_cmd, att_error and rate_error (module docstring); 0, or NOT_UNIT."""
+    v, s = floats(values), floats(state)
+    r0, r1, r2, r3 = v[U_Q_REF], v[U_Q_REF + 1], v[U_Q_REF + 2], v[U_Q_REF + 3]
+    q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), v[U_Q_BI : U_Q_BI + 4])
+    norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
+    if not 0.25 < norm2 < 4.0:
+        return NOT_UNIT
+    if q0 < 0.0:
+        q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+    n = math.sqrt(q1 * q1 + q2 * q2 + q3 * q3)
+    f = 2.0 * math.atan2(n, q0) / n if n > 0.0 else 0.0  # angle / |q_v|, scale-free
+    ex, ey, ez = f * q1, f * q2, f * q3
+    k = 1.0 / norm2
+    C_BR = dcm((q0, q1, q2, q3))
+    wrx, wry, wrz = rotate(C_BR, v[U_W_REF : U_W_REF + 3])
+    wx, wy, wz = v[U_W], v[U_W + 1], v[U_W + 2]
+    rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
+    hx, hy, hz = v[U_H_FF], v[U_H_FF + 1], v[U_H_FF + 2]
+    dx, dy, dz = v[U_HDOT_FF], v[U_HDOT_FF + 1], v[U_HDOT_FF + 2]
+    tx = -s[S_KP] * ex - s[S_KD] * rx + dx + (wy * hz - wz * hy)
+    ty = -s[S_KP + 1] * ey - s[S_KD + 1] * ry + dy + (wz * hx - wx * hz)
+    tz = -s[S_KP + 2] * ez - s[S_KD + 2] * rz + dz + (wx * hy - wy * hx)
+    if s[FEEDFORWARD] != 0.0:
+        J = s[INERTIA : INERTIA + 9]
+        ax, ay, az = rotate(C_BR, v[U_DW_REF : U_DW_REF + 3])
+        wrx, wry, wrz = k * wrx, k * wry, k * wrz  # C_BR w_ref
+        ux = k * ax - (ry * wrz - rz * wry)  # d/dt (C_BR w_ref), seen in B
+        uy = k * ay - (rz * wrx - rx * wrz)
+        uz = k * az - (rx * wry - ry * wrx)
+        jx = J[0] * wx + J[1] * wy + J[2] * wz  # J w
+        jy = J[3] * wx + J[4] * wy + J[5] * wz
+        jz = J[6] * wx + J[7] * wy + J[8] * wz
+        tx += J[0] * ux + J[1] * uy + J[2] * uz + (wy * jz - wz * jy)
+        ty += J[3] * ux + J[4] * uy + J[5] * uz + (wz * jx - wx * jz)
+        tz += J[6] * ux + J[7] * uy + J[8] * uz + (wx * jy - wy * jx)
+    values[Y_TAU], values[Y_TAU + 1], values[Y_TAU + 2] = tx, ty, tz
+    values[Y_ATT], values[Y_ATT + 1], values[Y_ATT + 2] = ex, ey, ez
+    values[Y_RATE], values[Y_RATE + 1], values[Y_RATE + 2] = rx, ry, rz
+    return 0

@@ -333,7 +333,7 @@ class CmgCluster(Model):
         self.t = t0
 
     def step(self, t, dt):
-        gimbal = cluster_step(self.values, self.state, dt)
+        gimbal = cluster_step(self.values, self.state, self.t, dt)
         if gimbal:
             command = float(self.values[Y_CMD + gimbal - 1])
             self.warnings.append(
@@ -387,7 +387,7 @@ DELTA, RATE, RATE_LIMIT, ACCEL_LIMIT, H_ROTOR, ST, SATURATED = STATE.offsets
 
 
 @step_kernel(CmgCluster)
-def cluster_step(values, state, dt):
+def cluster_step(values, state, t, dt):
     """Each gimbal's :func:`servo_step` over ``dt`` with its command held, or its
     :func:`servo_ramp` where a host set the command's derivative.  The cluster is
     saturated while the largest |command| at the step's start exceeds the rate limit (it

@@ -2,7 +2,8 @@
 
 The surface is a table of flat facets i (unused rows: zero area): area A_i, outward unit
 normal n_i and centre of pressure c_i (from the centre of mass), in B.  Facets do not
-shadow each other.  Stateless: the outputs are functions of the inputs at each time.
+shadow each other.  Stateless: the outputs are functions of the inputs at each time, by one
+kernel (components/jit.py) reading the parameters and inputs from the value array.
 
 Aerodynamics ([Vallado 2013] ch. 8, [Wertz 1978] ch. 17; free-molecular flat plates).  The
 atmosphere co-rotates with the Earth; the flow seen by facet i, in B::
@@ -52,10 +53,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, rotate
 from .sensing import EARTH_RADIUS, EARTH_RATE, norm
-from .variables import choice, input_, output, parameter
+from .variables import Layout, choice, input_, output, parameter
 
 N_FACETS = 10
 #: [Vallado 2013] Table 8-4: base height (km), density at it (kg/m³), scale height (km)
@@ -214,7 +218,6 @@ class DisturbanceTorques(Model):
 
     def initialize(self, t0):
         p = self.p
-        facets = []
         for i in range(N_FACETS):
             area, normal = float(p.facet_area[i]), tuple(p.facet_normal_B[i].tolist())
             specular, diffuse = float(p.facet_specular[i]), float(p.facet_diffuse[i])
@@ -229,8 +232,6 @@ class DisturbanceTorques(Model):
                     f"facet {i + 1}: facet_specular and facet_diffuse must be >= 0 with a "
                     f"sum <= 1, got {specular} and {diffuse}"
                 )
-            facets.append((area, normal, tuple(p.facet_cp_B[i].tolist()), specular, diffuse))
-        self.facets = tuple(facets)
         if p.atmosphere == 1 and not (p.rho0 >= 0.0 and p.scale_height > 0.0):
             raise ModelError(
                 f"rho0 must be >= 0 and scale_height > 0, got {p.rho0} and {p.scale_height}"
@@ -239,118 +240,193 @@ class DisturbanceTorques(Model):
             raise ModelError(self.layout.by_name["atmosphere"].choice_error(p.atmosphere))
         if not (p.cd >= 0.0 and p.solar_pressure >= 0.0):
             raise ModelError(f"cd and solar_pressure must be >= 0, got {p.cd}, {p.solar_pressure}")
+        self.state = np.zeros(1)  # none: the kernel reads the parameters from the values
         self.t = t0
+
+    #: step() only advances t (the outputs are functions of the inputs)
+    STATELESS = True
 
     def step(self, t, dt):
         self.t = t + dt  # stateless between communication points
 
     def output(self):
-        p, u, y = self.p, self.u, self.y
-        r = tuple(u.r_I.tolist())
-        radius = norm(r)
-        if radius == 0.0:
+        status = torques_output(self.values, self.state, self.t)
+        if status == NO_POSITION:
             raise ModelError("r_I is zero: the satellite position is needed")
-        k = 1.0 / float(u.q_BI @ u.q_BI)  # C(q) of a non-unit q scales by |q|²
-        C_BI = tuple(tuple(k * x for x in row) for row in dcm(u.q_BI.tolist()))
-        zero = (0.0, 0.0, 0.0)
-        rho = self.density(radius - EARTH_RADIUS)
-        aero = self._aero(C_BI, r, rho) if p.aero else zero
-        sun = tuple(u.sun_I.tolist())
-        eclipse = in_shadow(r, sun)
-        srp = self._srp(rotate(C_BI, sun)) if p.srp and not eclipse else zero
-        field = rotate(C_BI, self.field_I(r, u.earth_angle))
-        m = tuple(p.dipole_B.tolist())
-        mag = cross(m, field) if p.magnetic else zero
-        y.tau_aero_B[:] = aero
-        y.tau_srp_B[:] = srp
-        y.tau_mag_B[:] = mag
-        y.tau_ext_B[:] = tuple(a + b + c for a, b, c in zip(aero, srp, mag))
-        y.in_eclipse = eclipse
-        y.density = rho
-        y.mag_field_B[:] = field
-
-    # -- the three models ----------------------------------------------------------------
-    def density(self, height: float) -> float:
-        """Atmospheric density (kg/m³) at ``height`` (m) above the sphere (below 0 m: the
-        density at 0 m)."""
-        p = self.p
-        height = max(height, 0.0)
-        if p.atmosphere == 1:
-            return p.rho0 * math.exp(-(height - p.h0) / p.scale_height)
-        km = height / 1000.0
-        row = ATMOSPHERE_TABLE[0]
-        for candidate in ATMOSPHERE_TABLE:
-            if candidate[0] <= km:
-                row = candidate
-        h0, rho0, scale = row
-        return rho0 * math.exp(-(km - h0) / scale)
-
-    def field_I(self, r: tuple, earth_angle: float) -> tuple:
-        """Tilted-dipole geomagnetic field (T) at r_I, in I (module docstring)."""
-        p = self.p
-        c, s = math.cos(earth_angle), math.sin(earth_angle)
-        r_E = (c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])  # R3(θ) r_I
-        radius = norm(r_E)
-        x, y_, z = (v / radius for v in r_E)
-        g = (p.igrf_g11, p.igrf_h11, p.igrf_g10)
-        k = (IGRF_RADIUS / radius) ** 3
-        gr = g[0] * x + g[1] * y_ + g[2] * z
-        bx, by, bz = (k * (3.0 * gr * v - gv) for v, gv in zip((x, y_, z), g))
-        return (c * bx - s * by, s * bx + c * by, bz)  # R3(θ)ᵀ B_E
-
-    def _aero(self, C_BI, r, rho: float) -> tuple:
-        u, cd = self.u, self.p.cd
-        vx, vy, vz = u.v_I.tolist()
-        flow_I = (vx + EARTH_RATE * r[1], vy - EARTH_RATE * r[0], vz)  # v − ω_E ẑ × r
-        flow = rotate(C_BI, flow_I)
-        w = tuple(u.w_BI_B.tolist())
-        torque = [0.0, 0.0, 0.0]
-        for area, normal, cp, _, _ in self.facets:
-            v = tuple(a + b for a, b in zip(flow, cross(w, cp)))
-            speed = norm(v)
-            if speed == 0.0:
-                continue
-            cos = sum(n * x for n, x in zip(normal, v)) / speed
-            if cos > 0.0:
-                f = -0.5 * rho * cd * area * speed * cos  # times v = speed v̂
-                _accumulate(torque, cp, tuple(f * x for x in v))
-        return tuple(torque)
-
-    def _srp(self, sun_B: tuple) -> tuple:
-        size = norm(sun_B)
-        if size == 0.0:
+        if status == NO_SUN:
             raise ModelError("sun_I is zero: the Sun direction is needed for the srp torque")
-        s = tuple(x / size for x in sun_B)
-        pressure = self.p.solar_pressure
-        torque = [0.0, 0.0, 0.0]
-        for area, normal, cp, specular, diffuse in self.facets:
-            cos = sum(n * x for n, x in zip(normal, s))
-            if cos > 0.0:
-                a = -pressure * area * cos
-                along_s, along_n = a * (1.0 - specular), a * 2.0 * (specular * cos + diffuse / 3.0)
-                force = tuple(along_s * si + along_n * ni for si, ni in zip(s, normal))
-                _accumulate(torque, cp, force)
-        return tuple(torque)
 
 
-def in_shadow(r: tuple, sun: tuple) -> bool:
+# -- kernel (components/jit.py) -------------------------------------------------------
+_AT = Layout(DisturbanceTorques.VARIABLES).offset  # offsets in DisturbanceTorques.values
+P_AERO, P_SRP, P_MAGNETIC = _AT["aero"], _AT["srp"], _AT["magnetic"]
+P_AREA, P_NORMAL, P_CP = _AT["facet_area"], _AT["facet_normal_B"], _AT["facet_cp_B"]
+P_SPECULAR, P_DIFFUSE, P_CD = _AT["facet_specular"], _AT["facet_diffuse"], _AT["cd"]
+P_ATMOSPHERE, P_RHO0, P_H0, P_SCALE = (
+    _AT["atmosphere"], _AT["rho0"], _AT["h0"], _AT["scale_height"]
+)  # fmt: skip
+P_PRESSURE, P_DIPOLE = _AT["solar_pressure"], _AT["dipole_B"]
+P_G10, P_G11, P_H11 = _AT["igrf_g10"], _AT["igrf_g11"], _AT["igrf_h11"]
+U_Q, U_W, U_R, U_V, U_SUN, U_EARTH = (
+    _AT["q_BI"], _AT["w_BI_B"], _AT["r_I"], _AT["v_I"], _AT["sun_I"], _AT["earth_angle"]
+)  # fmt: skip
+Y_EXT, Y_AERO, Y_SRP, Y_MAG = (_AT[name] for name in ("tau_ext_B",) + _TORQUES)
+Y_ECLIPSE, Y_DENSITY, Y_FIELD = _AT["in_eclipse"], _AT["density"], _AT["mag_field_B"]
+#: torques_output's statuses: r_I is zero; sun_I is zero while the srp torque is on
+NO_POSITION, NO_SUN = 1, 2
+_TABLE = np.array(ATMOSPHERE_TABLE)
+
+
+@output_kernel(DisturbanceTorques)
+def torques_output(values, state, t):
+    """The three torques, their sum, the eclipse flag, the density and the field."""
+    v = floats(values)
+    r = (v[U_R], v[U_R + 1], v[U_R + 2])
+    radius = _norm(r)
+    if radius == 0.0:
+        return NO_POSITION
+    q = v[U_Q : U_Q + 4]
+    k = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])  # C(q) scales by |q|²
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = dcm(q)
+    C_BI = (
+        (k * c00, k * c01, k * c02), (k * c10, k * c11, k * c12), (k * c20, k * c21, k * c22)
+    )  # fmt: skip
+    zero = (0.0, 0.0, 0.0)
+    rho = density(v, radius - EARTH_RADIUS)
+    aero = _aero(v, C_BI, r, rho) if v[P_AERO] != 0.0 else zero
+    sun = (v[U_SUN], v[U_SUN + 1], v[U_SUN + 2])
+    eclipse = in_shadow(r, sun)
+    srp = zero
+    if v[P_SRP] != 0.0 and not eclipse:
+        sun_B = rotate(C_BI, sun)
+        if _norm(sun_B) == 0.0:
+            return NO_SUN
+        srp = _srp(v, sun_B)
+    field = rotate(C_BI, field_I(v, r, v[U_EARTH]))
+    mag = cross(v[P_DIPOLE : P_DIPOLE + 3], field) if v[P_MAGNETIC] != 0.0 else zero
+    for i in range(3):
+        values[Y_AERO + i], values[Y_SRP + i], values[Y_MAG + i] = aero[i], srp[i], mag[i]
+        values[Y_EXT + i] = aero[i] + srp[i] + mag[i]
+        values[Y_FIELD + i] = field[i]
+    values[Y_ECLIPSE] = 1.0 if eclipse else 0.0
+    values[Y_DENSITY] = rho
+    return 0
+
+
+# -- the three models ----------------------------------------------------------------------
+@jitable
+def _norm(v) -> float:
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@jitable
+def _dot(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@jitable
+def density(v, height: float) -> float:
+    """Atmospheric density (kg/m³) at ``height`` (m) above the sphere (below 0 m: the
+    density at 0 m), with the parameters in the value array ``v``."""
+    height = max(height, 0.0)
+    if v[P_ATMOSPHERE] == 1:
+        return v[P_RHO0] * math.exp(-(height - v[P_H0]) / v[P_SCALE])
+    km = height / 1000.0
+    row = 0
+    for i in range(len(ATMOSPHERE_TABLE)):
+        if _TABLE[i, 0] <= km:
+            row = i
+    return _TABLE[row, 1] * math.exp(-(km - _TABLE[row, 0]) / _TABLE[row, 2])
+
+
+@jitable
+def field_I(v, r, earth_angle: float) -> tuple:
+    """Tilted-dipole geomagnetic field (T) at r_I, in I (module docstring)."""
+    c, s = math.cos(earth_angle), math.sin(earth_angle)
+    r_E = (c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])  # R3(θ) r_I
+    radius = _norm(r_E)
+    x, y_, z = r_E[0] / radius, r_E[1] / radius, r_E[2] / radius
+    g = (v[P_G11], v[P_H11], v[P_G10])
+    k = math.pow(IGRF_RADIUS / radius, 3.0)
+    gr = g[0] * x + g[1] * y_ + g[2] * z
+    bx = k * (3.0 * gr * x - g[0])
+    by = k * (3.0 * gr * y_ - g[1])
+    bz = k * (3.0 * gr * z - g[2])
+    return (c * bx - s * by, s * bx + c * by, bz)  # R3(θ)ᵀ B_E
+
+
+@jitable
+def _facet(v, i: int) -> tuple:
+    """(area, normal, centre of pressure, specular, diffuse) of facet i."""
+    normal = (v[P_NORMAL + 3 * i], v[P_NORMAL + 3 * i + 1], v[P_NORMAL + 3 * i + 2])
+    cp = (v[P_CP + 3 * i], v[P_CP + 3 * i + 1], v[P_CP + 3 * i + 2])
+    return v[P_AREA + i], normal, cp, v[P_SPECULAR + i], v[P_DIFFUSE + i]
+
+
+@jitable
+def _aero(v, C_BI, r, rho: float) -> tuple:
+    flow_I = (
+        v[U_V] + EARTH_RATE * r[1],
+        v[U_V + 1] - EARTH_RATE * r[0],
+        v[U_V + 2],
+    )  # v − ω_E ẑ × r
+    flow = rotate(C_BI, flow_I)
+    w = (v[U_W], v[U_W + 1], v[U_W + 2])
+    tx = ty = tz = 0.0
+    for i in range(N_FACETS):
+        area, normal, cp, _, _ = _facet(v, i)
+        if area == 0.0:
+            continue
+        arm = cross(w, cp)
+        relative = (flow[0] + arm[0], flow[1] + arm[1], flow[2] + arm[2])
+        speed = _norm(relative)
+        if speed == 0.0:
+            continue
+        cos = _dot(normal, relative) / speed
+        if cos > 0.0:
+            f = -0.5 * rho * v[P_CD] * area * speed * cos  # times v = speed v̂
+            t = cross(cp, (f * relative[0], f * relative[1], f * relative[2]))
+            tx, ty, tz = tx + t[0], ty + t[1], tz + t[2]
+    return tx, ty, tz
+
+
+@jitable
+def _srp(v, sun_B) -> tuple:
+    size = _norm(sun_B)
+    s = (sun_B[0] / size, sun_B[1] / size, sun_B[2] / size)
+    pressure = v[P_PRESSURE]
+    tx = ty = tz = 0.0
+    for i in range(N_FACETS):
+        area, normal, cp, specular, diffuse = _facet(v, i)
+        if area == 0.0:
+            continue
+        cos = _dot(normal, s)
+        if cos > 0.0:
+            a = -pressure * area * cos
+            along_s, along_n = a * (1.0 - specular), a * 2.0 * (specular * cos + diffuse / 3.0)
+            force = (
+                along_s * s[0] + along_n * normal[0],
+                along_s * s[1] + along_n * normal[1],
+                along_s * s[2] + along_n * normal[2],
+            )
+            t = cross(cp, force)
+            tx, ty, tz = tx + t[0], ty + t[1], tz + t[2]
+    return tx, ty, tz
+
+
+@jitable
+def in_shadow(r, sun) -> bool:
     """In the cylindrical shadow of a sphere of radius EARTH_RADIUS (sun: any length > 0)."""
-    size = norm(sun)
+    size = _norm(sun)
     if size == 0.0:
         return False
-    s = tuple(x / size for x in sun)
-    along = sum(a * b for a, b in zip(r, s))
+    s = (sun[0] / size, sun[1] / size, sun[2] / size)
+    along = _dot(r, s)
     if along >= 0.0:
         return False
-    perpendicular = norm(tuple(a - along * b for a, b in zip(r, s)))
-    return perpendicular < EARTH_RADIUS
+    return _norm((r[0] - along * s[0], r[1] - along * s[1], r[2] - along * s[2])) < EARTH_RADIUS
 
 
+@jitable
 def cross(a, b) -> tuple:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _accumulate(torque: list, arm: tuple, force: tuple) -> None:
-    t = cross(arm, force)
-    for k in range(3):
-        torque[k] += t[k]

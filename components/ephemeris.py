@@ -26,10 +26,15 @@ reported with what is wrong.
 
 from __future__ import annotations
 
+import ctypes
 import datetime
 import math
 import re
 
+import numpy as np
+
+from .flat import fmod
+from .jit import compiled_twin, jitable
 from .model import ModelError
 
 TWO_PI = 2.0 * math.pi
@@ -42,6 +47,7 @@ _CENTURY = 36525.0  # days
 _EPOCH_FORMAT = re.compile(r"(\d{4})-(\d{2})-(\d{2})T(\d{2}):(\d{2}):(\d{2})(?:\.(\d{1,6}))?Z?")
 
 
+@jitable
 def wrap_2pi(angle: float) -> float:
     """Angle wrapped to [0, 2π)."""
     wrapped = angle % TWO_PI
@@ -96,6 +102,7 @@ def sidereal_base(days: int, seconds: float) -> tuple[float, float]:
     return math.fmod(g, DAY) % DAY, T
 
 
+@jitable
 def sidereal_time(g0: float, T0: float, t: float) -> tuple[float, float]:
     """GMST (rad, [0, 2π)) and its rate (rad/s) ``t`` seconds after the base (g0, T0).
 
@@ -109,7 +116,7 @@ def sidereal_time(g0: float, T0: float, t: float) -> tuple[float, float]:
     rate = (
         TWO_PI / DAY * (1.0 + (_GMST1 + T * (2.0 * _GMST2 + 3.0 * _GMST3 * T)) / (_CENTURY * DAY))
     )
-    return wrap_2pi(math.fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
+    return wrap_2pi(fmod(g0 + dg, DAY) * (TWO_PI / DAY)), rate
 
 
 def gmst(epoch, t: float = 0.0) -> float:
@@ -192,6 +199,87 @@ def load_tle(line1: str, line2: str):
             f"{SGP4_ERRORS.get(satrec.error, 'unknown error')}"
         )
     return satrec
+
+
+#: the C++ function the sgp4 package computes SGP4 with: ``bool SGP4Funcs::sgp4(elsetrec &,
+#: double tsince, double r[3], double v[3])`` (its extension exports it; Vallado's code)
+_SGP4_SYMBOL = "_ZN9SGP4Funcs4sgp4ER8elsetrecdPdS2_"
+_SGP4_CALL = ctypes.CFUNCTYPE(
+    ctypes.c_bool, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p
+)
+_CHECK_TSINCE = 123.456  # min: the time sgp4_entry checks the direct call at
+
+
+def sgp4_entry(satrec, probe) -> tuple[int, int]:
+    """(address of SGP4Funcs::sgp4, address of ``satrec``'s elsetrec) for :func:`sgp4_at`,
+    which the compiled kernels call directly: the same function ``satrec.sgp4_tsince``
+    calls, so the same bits.  The record is the C++ struct inside the Python object, after
+    its header; checked on ``probe``, another record of the same TLE (a call changes the
+    deep-space integrator's state): a call at a test time must give sgp4_tsince's results
+    and leave that time in the record (``probe.t``).  (0, 0) where any of it fails (the
+    sgp4 package without its extension, another layout): the kernels then leave SGP4 to
+    the Python."""
+    try:
+        from sgp4 import vallado_cpp
+
+        function = ctypes.cast(
+            getattr(ctypes.CDLL(vallado_cpp.__file__), _SGP4_SYMBOL), ctypes.c_void_p
+        ).value
+        if not function:
+            return 0, 0
+        expected = probe.sgp4_tsince(_CHECK_TSINCE)
+        got = np.full(6, np.nan)
+        at = id(probe) + object.__basicsize__  # after PyObject_HEAD
+        ok = _SGP4_CALL(function)(at, _CHECK_TSINCE, got.ctypes.data, got.ctypes.data + 24)
+        same = (int(not ok), *got.tolist()) == (expected[0], *expected[1], *expected[2])
+        if same and probe.t == _CHECK_TSINCE:
+            return function, id(satrec) + object.__basicsize__
+    except (ImportError, OSError, AttributeError, TypeError, ValueError):
+        pass
+    return 0, 0
+
+
+def _sgp4_intrinsic(numba):
+    """sgp4_at compiled: an indirect call through the function's address."""
+    from llvmlite import ir
+    from numba.core import types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def call(typingctx, function, record, tsince, out, at):
+        def codegen(context, builder, signature, args):
+            function, record, tsince, out, at = args
+            data = context.make_array(signature.args[3])(context, builder, out).data
+            double_p, byte_p, i64 = (
+                ir.DoubleType().as_pointer(),
+                ir.IntType(8).as_pointer(),
+                ir.IntType(64),
+            )
+            kind = ir.FunctionType(ir.IntType(8), (byte_p, ir.DoubleType(), double_p, double_p))
+            callee = builder.inttoptr(builder.fptoui(function, i64), kind.as_pointer())
+            result = builder.call(
+                callee,
+                (
+                    builder.inttoptr(builder.fptoui(record, i64), byte_p),
+                    tsince,
+                    builder.gep(data, [at]),
+                    builder.gep(data, [builder.add(at, ir.Constant(at.type, 3))]),
+                ),
+            )
+            return builder.icmp_unsigned("!=", result, ir.Constant(ir.IntType(8), 0))
+
+        return types.boolean(types.float64, types.float64, types.float64, out, types.intp), codegen
+
+    return call
+
+
+@compiled_twin(_sgp4_intrinsic)
+def sgp4_at(function: float, record: float, tsince: float, out, at: int) -> bool:
+    """SGP4 of the record (addresses from :func:`sgp4_entry`) at ``tsince`` minutes: r
+    (km) and v (km/s) into out[at : at + 6]; False on an SGP4 error (its code then in the
+    record: ``satrec.error``)."""
+    base = out.ctypes.data + 8 * at
+    return _SGP4_CALL(int(function))(int(record), tsince, base, base + 24)
 
 
 def tle_epoch(satrec) -> tuple[int, float]:

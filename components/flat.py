@@ -1,6 +1,7 @@
 """The flat arrays of the models' step/output kernels (components/jit.py), and compilable
 equivalents of CPython functions numba lacks or computes otherwise, bit for bit
-(tests/test_kernels_models.py).
+(tests/fast_paths/test_kernels_models.py): ``math.remainder``, ``math.fmod``,
+``math.hypot``.
 
 Those kernels are one function each on the model's value array (:mod:`.variables`:
 parameters, inputs, outputs at the offsets of its table, named by module constants) and a
@@ -62,3 +63,82 @@ def remainder(x: float, y: float) -> float:
     if math.isinf(x):
         return math.nan
     return x
+
+
+@jitable
+def fmod(x: float, y: float) -> float:
+    """C's ``fmod`` (``math.fmod``), which numba does not provide: x − n y with n = x / y
+    truncated, exact; |x| % |y| of non-negative numbers is fmod, the sign is x's.  NaN
+    where ``math.fmod`` raises (x infinite, y zero)."""
+    if math.isnan(x) or math.isnan(y) or math.isinf(x) or y == 0.0:
+        return math.nan
+    if math.isinf(y):
+        return x
+    return math.copysign(abs(x) % abs(y), x)
+
+
+@jitable
+def hypot(x: float, y: float) -> float:
+    """CPython's ``math.hypot(x, y)`` (Modules/mathmodule.c, vector_norm: lossless scaling
+    by a power of two, exact squares, compensated sum, one differential correction of the
+    square root) step for step, which numba computes with the C library's hypot instead
+    (1 ulp apart at times).  The exact squares are Dekker's product (``_two_product``),
+    which gives the error term CPython takes from ``fma``."""
+    x, y = abs(x), abs(y)
+    biggest = 0.0
+    for v in (x, y):
+        if v > biggest:
+            biggest = v
+    if math.isinf(biggest):
+        return biggest
+    if math.isnan(x) or math.isnan(y):
+        return math.nan
+    if biggest == 0.0:
+        return biggest
+    if math.frexp(biggest)[1] < -1023:  # 2**-e would overflow: divided by the largest
+        csum, frac = 1.0, 0.0
+        for v in (x, y):
+            v /= biggest
+            v *= v
+            total = csum + v
+            frac += (csum - total) + v
+            csum = total
+        return biggest * math.sqrt(csum - 1.0 + frac)
+    return _vector_norm(x, y, biggest)
+
+
+_SPLITTER = 134217729.0  # 2**27 + 1: Veltkamp's split of a double into two halves
+
+
+@jitable
+def _two_product(a: float, b: float) -> tuple[float, float]:
+    """(a b rounded, its exact error) by Dekker's product (no fma)."""
+    p = a * b
+    c = _SPLITTER * a
+    a_hi = c - (c - a)
+    a_lo = a - a_hi
+    c = _SPLITTER * b
+    b_hi = c - (c - b)
+    b_lo = b - b_hi
+    return p, ((a_hi * b_hi - p) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo
+
+
+@jitable
+def _vector_norm(x: float, y: float, biggest: float) -> float:
+    scale = math.ldexp(1.0, -math.frexp(biggest)[1])
+    csum, frac1, frac2 = 1.0, 0.0, 0.0
+    for v in (x, y):
+        v *= scale  # lossless
+        hi, lo = _two_product(v, v)  # lossless squaring
+        total = csum + hi  # lossless addition (|csum| >= |hi|)
+        frac2 += (csum - total) + hi
+        csum = total
+        frac1 += lo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    hi, lo = _two_product(-h, h)
+    total = csum + hi
+    frac2 += (csum - total) + hi
+    csum = total
+    frac1 += lo
+    h += (csum - 1.0 + (frac1 + frac2)) / (2.0 * h)  # differential correction
+    return h / scale

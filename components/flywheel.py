@@ -58,6 +58,8 @@ import math
 
 import numpy as np
 
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
@@ -74,6 +76,7 @@ _AXIS_TOLERANCE = 1e-9
 _INPUTS = ("tau_cmd", "w_BI_B")
 
 
+@jitable
 def wheel_step(
     speed: float,
     torque: float,
@@ -214,8 +217,7 @@ class Flywheel(Model):
         if not self.wheels:
             raise ModelError("no wheel: every row of axis is zero")
         A = (axes[self.wheels] / norms[self.wheels, None]).T  # 3 × n
-        self.axes = [tuple(a) for a in A.T.tolist()]
-        self.distribution = [tuple(row) for row in np.linalg.pinv(A, rcond=1e-9).tolist()]
+        distribution = np.linalg.pinv(A, rcond=1e-9)
         rank = np.linalg.matrix_rank(A, tol=1e-9)
         if rank < 3:
             self.warnings.append(
@@ -225,126 +227,198 @@ class Flywheel(Model):
         for i in range(N_WHEELS):
             if i not in self.wheels and p.speed0[i] != 0.0:
                 self.warnings.append(f"speed0[{i + 1}] ignored: wheel {i + 1} has no axis")
-        self.inertia = p.J_wheel
-        self.viscous, self.coulomb = p.viscous_friction, p.coulomb_friction
-        self.torque_limit = p.torque_limit
-        self.speed_limit = p.momentum_limit / p.J_wheel
-        self.omega = [float(p.speed0[i]) for i in self.wheels]
-        self.limited = frozenset()
+        self.state = STATE.zeros()
+        n = len(self.wheels)
+        self.state[N], self.state[WHEEL : WHEEL + n] = n, self.wheels
+        self.state[AXES : AXES + 3 * n] = A.T.reshape(-1)
+        self.state[DISTRIBUTION : DISTRIBUTION + 3 * n] = distribution.reshape(-1)
+        self.state[S_INERTIA : SPEED_LIMIT + 1] = (
+            p.J_wheel, p.viscous_friction, p.coulomb_friction, p.torque_limit,
+            p.momentum_limit / p.J_wheel,
+        )  # fmt: skip
+        self.state[OMEGA : OMEGA + n] = [p.speed0[i] for i in self.wheels]
         self.t = t0
 
     def step(self, t, dt):
-        torques, _, limited, held = self._drive()
-        new = limited - self.limited
-        if new:
+        before = self.state[LIMITED : LIMITED + 2 * N_WHEELS].copy()
+        if flywheel_step(self.values, self.state, self.t, dt) == NEW_LIMIT:
+            new = (self.state[LIMITED : LIMITED + 2 * N_WHEELS] != 0) & (before == 0)
             self.warnings.append(
                 f"t={t:.3f} s: "
-                + "; ".join(f"wheel {self.wheels[i] + 1} {what}" for i, what in sorted(new))
+                + "; ".join(
+                    f"wheel {self.wheels[k // 2] + 1} {_LIMITS[k % 2]}" for k in np.flatnonzero(new)
+                )
                 + " (the commanded torque is not delivered)"
             )
-        self.limited = limited
-        J, cv, cc, limit = self.inertia, self.viscous, self.coulomb, self.speed_limit
-        self.omega = [
-            w if k in held else wheel_step(w, m, dt, J, cv, cc, limit)
-            for k, (w, m) in enumerate(zip(self.omega, torques))
-        ]
         self.t = t + dt
 
     def output(self):
-        torques, accel_torques, limited, _ = self._drive()
-        y = self.y
-        speed, motor = [0.0] * N_WHEELS, [0.0] * N_WHEELS
-        for i, w, m in zip(self.wheels, self.omega, torques):
-            speed[i], motor[i] = w, m
-        y.h[:] = self._momentum()
-        y.hdot[:] = self._along_axes(accel_torques)
-        y.speed[:] = speed
-        y.motor_torque[:] = motor
-        y.saturated = bool(limited)
+        flywheel_output(self.values, self.state, self.t)
+
+    @classmethod
+    def state_problem(cls, attributes, reference):
+        """The kernels index the value array with the wheels' places: the rows before the
+        speeds are those the parameters make."""
+        if not np.array_equal(attributes["state"][:OMEGA], reference["state"][:OMEGA]):
+            return "wheel constants (places, axes, distribution) are not its parameters'"
+        return ""
 
     def output_derivatives(self):
         """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
-        _, accel_torques, _, _ = self._drive()
+        s = self.state
+        _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist())
         speed_rate = [0.0] * N_WHEELS
-        for i, a in zip(self.wheels, accel_torques):
-            speed_rate[i] = a / self.inertia
+        for k in range(int(s[N])):
+            speed_rate[int(s[WHEEL + k])] = accel_torques[k] / s[S_INERTIA]
         hdot = self.y.hdot.tolist()
-        k = self.viscous / self.inertia
+        k = s[S_VISCOUS] / s[S_INERTIA]
         return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
 
-    # -- internals -----------------------------------------------------------------
-    def _momentum(self) -> tuple[float, float, float]:
-        """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
-        hx, hy, hz = self._along_axes(self.omega)
-        J = self.inertia
-        return J * hx, J * hy, J * hz
 
-    def _along_axes(self, values) -> tuple[float, float, float]:
-        """Σ a_i v_i over the wheels, in B (v_i: speeds for h, J Ω̇_i for ḣ)."""
-        x = y = z = 0.0
-        for (ax, ay, az), v in zip(self.axes, values):
-            x += ax * v
-            y += ay * v
-            z += az * v
-        return x, y, z
+# -- kernels (components/jit.py) ------------------------------------------------------
+_AT = Flywheel.table_layout().offset  # offsets in Flywheel.values
+U_TAU, U_W = _AT["tau_cmd"], _AT["w_BI_B"]
+Y_H, Y_HDOT, Y_SPEED, Y_MOTOR, Y_SATURATED = (
+    _AT["h"], _AT["hdot"], _AT["speed"], _AT["motor_torque"], _AT["saturated"]
+)  # fmt: skip
+#: the state array: the number n of wheels, their places (rows of ``axis``), their unit axes
+#: and the rows of the pseudo-inverse distributing ḣ among them (the first n of each), the
+#: wheels' constants,
+#: their speeds Ω and, per wheel, 1 while it is held at the momentum limit and 1 while its
+#: motor torque is at the limit (_LIMITS)
+STATE = StateTable(
+    n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS, inertia=1, viscous=1,
+    coulomb=1, torque_limit=1, speed_limit=1, omega=N_WHEELS, limited=2 * N_WHEELS,
+)  # fmt: skip
+N, WHEEL, AXES, DISTRIBUTION, S_INERTIA, S_VISCOUS, S_COULOMB = STATE.offsets[:7]
+TORQUE_LIMIT, SPEED_LIMIT, OMEGA, LIMITED = STATE.offsets[7:]
+_LIMITS = ("held at the momentum limit", "motor torque at the limit")
+#: flywheel_step's status: a wheel reached a limit (step() warns)
+NEW_LIMIT = 1
 
-    def _drive(self):
-        """(motor torques m_i, J Ω̇_i at the communication point, active limits, held wheels).
 
-        Each wheel is asked for its share (least squares over the axes) of
-        ḣ_req = −τ_cmd − w × h; :meth:`_wheel` applies its friction and limits.
-        """
-        u = self.u
-        tx, ty, tz = u.tau_cmd.tolist()
-        wx, wy, wz = u.w_BI_B.tolist()
-        hx, hy, hz = self._momentum()
-        rx = -tx - (wy * hz - wz * hy)  # hdot_req = −τ_cmd − w × h
-        ry = -ty - (wz * hx - wx * hz)
-        rz = -tz - (wx * hy - wy * hx)
-        torques, net, limited, held = [], [], set(), set()
-        for k, ((px, py, pz), w) in enumerate(zip(self.distribution, self.omega)):
-            m, accel_torque, is_held, limits = self._wheel(w, px * rx + py * ry + pz * rz)
-            torques.append(m)
-            net.append(accel_torque)
-            limited.update((k, what) for what in limits)
-            if is_held:
-                held.add(k)
-        return torques, net, frozenset(limited), held
+@jitable
+def _along_axes(s, values) -> tuple:
+    """Σ a_i v_i over the wheels, in B (v_i: speeds for h, J Ω̇_i for ḣ)."""
+    x = y = z = 0.0
+    for i in range(int(s[N])):
+        ax, ay, az = s[AXES + 3 * i], s[AXES + 3 * i + 1], s[AXES + 3 * i + 2]
+        x += ax * values[i]
+        y += ay * values[i]
+        z += az * values[i]
+    return x, y, z
 
-    def _wheel(self, w: float, n: float) -> tuple[float, float, bool, list[str]]:
-        """One wheel at speed Ω = ``w`` asked for J Ω̇ = ``n``: (motor torque m, delivered
-        J Ω̇, held, limits reached).
 
-        m = n plus the friction cv Ω + cc sign(Ω) (at rest: the breakaway cc in the sense
-        of n), clipped to ±torque_limit; J Ω̇ = m − friction (at rest: 0 while |m| ≤ cc).
-        A held wheel (at the momentum limit, friction compensated within the torque limit)
-        keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
-        limit does not toggle from one step to the next.
-        """
-        cv, cc, tau_max, speed_max = self.viscous, self.coulomb, self.torque_limit, self.speed_limit
-        limits, held = [], False
-        if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
-            n = 0.0
-            limits.append("held at the momentum limit")
-            held = True
-        if w > 0.0:
-            m = n + cv * w + cc
-        elif w < 0.0:
-            m = n + cv * w - cc
-        else:
-            m = n + cc if n > 0.0 else n - cc if n < 0.0 else 0.0
-        if m > tau_max or m < -tau_max:
-            m = tau_max if m > tau_max else -tau_max
-            limits.append("motor torque at the limit")
-            held = False
-        if held:
-            return m, 0.0, True, limits
-        if w > 0.0:
-            net = m - cv * w - cc
-        elif w < 0.0:
-            net = m - cv * w + cc
-        elif abs(m) <= cc:
-            net = 0.0
-        else:
-            net = m - cc if m > 0.0 else m + cc
-        return m, net, False, limits
+@jitable
+def _momentum(s) -> tuple:
+    """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
+    hx, hy, hz = _along_axes(s, s[OMEGA : OMEGA + N_WHEELS])
+    J = s[S_INERTIA]
+    return J * hx, J * hy, J * hz
+
+
+@jitable
+def _drive(v, s):
+    """(motor torques m_i, J Ω̇_i at the communication point, held, at the momentum limit,
+    at the torque limit), per wheel.
+
+    Each wheel is asked for its share (least squares over the axes) of
+    ḣ_req = −τ_cmd − w × h; :func:`_wheel` applies its friction and limits.
+    """
+    tx, ty, tz = v[U_TAU], v[U_TAU + 1], v[U_TAU + 2]
+    wx, wy, wz = v[U_W], v[U_W + 1], v[U_W + 2]
+    hx, hy, hz = _momentum(s)
+    rx = -tx - (wy * hz - wz * hy)  # hdot_req = −τ_cmd − w × h
+    ry = -ty - (wz * hx - wx * hz)
+    rz = -tz - (wx * hy - wy * hx)
+    torques, net = [0.0] * N_WHEELS, [0.0] * N_WHEELS
+    held, momentum, torque = [False] * N_WHEELS, [False] * N_WHEELS, [False] * N_WHEELS
+    for k in range(int(s[N])):
+        px, py, pz = (
+            s[DISTRIBUTION + 3 * k],
+            s[DISTRIBUTION + 3 * k + 1],
+            s[DISTRIBUTION + 3 * k + 2],
+        )
+        torques[k], net[k], held[k], momentum[k], torque[k] = _wheel(
+            s[OMEGA + k], px * rx + py * ry + pz * rz, s[S_VISCOUS], s[S_COULOMB], s[TORQUE_LIMIT],
+            s[SPEED_LIMIT],
+        )  # fmt: skip
+    return torques, net, held, momentum, torque
+
+
+@jitable
+def _wheel(w: float, n: float, cv: float, cc: float, tau_max: float, speed_max: float) -> tuple:
+    """One wheel at speed Ω = ``w`` asked for J Ω̇ = ``n``: (motor torque m, delivered
+    J Ω̇, held, at the momentum limit, at the torque limit).
+
+    m = n plus the friction cv Ω + cc sign(Ω) (at rest: the breakaway cc in the sense
+    of n), clipped to ±torque_limit; J Ω̇ = m − friction (at rest: 0 while |m| ≤ cc).
+    A held wheel (at the momentum limit, friction compensated within the torque limit)
+    keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
+    limit does not toggle from one step to the next.
+    """
+    at_momentum = at_torque = held = False
+    if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
+        n = 0.0
+        at_momentum = held = True
+    if w > 0.0:
+        m = n + cv * w + cc
+    elif w < 0.0:
+        m = n + cv * w - cc
+    else:
+        m = n + cc if n > 0.0 else n - cc if n < 0.0 else 0.0
+    if m > tau_max or m < -tau_max:
+        m = tau_max if m > tau_max else -tau_max
+        at_torque, held = True, False
+    if held:
+        return m, 0.0, True, at_momentum, at_torque
+    if w > 0.0:
+        net = m - cv * w - cc
+    elif w < 0.0:
+        net = m - cv * w + cc
+    elif abs(m) <= cc:
+        net = 0.0
+    else:
+        net = m - cc if m > 0.0 else m + cc
+    return m, net, False, at_momentum, at_torque
+
+
+@step_kernel(Flywheel)
+def flywheel_step(values, state, t, dt):
+    """Each wheel over ``dt`` with its motor torque held (:func:`wheel_step`; a held wheel
+    keeps its speed); returns NEW_LIMIT when a wheel reaches a limit it was not at."""
+    v, s = floats(values), floats(state)
+    torques, _, held, momentum, torque = _drive(v, s)
+    status = 0
+    for k in range(int(s[N])):
+        for j, limited in ((0, momentum[k]), (1, torque[k])):
+            if limited and s[LIMITED + 2 * k + j] == 0.0:
+                status = NEW_LIMIT
+            state[LIMITED + 2 * k + j] = 1.0 if limited else 0.0
+        if not held[k]:
+            state[OMEGA + k] = wheel_step(
+                s[OMEGA + k], torques[k], dt, s[S_INERTIA], s[S_VISCOUS], s[S_COULOMB],
+                s[SPEED_LIMIT],
+            )  # fmt: skip
+    return status
+
+
+@output_kernel(Flywheel)
+def flywheel_output(values, state, t):
+    """h, ḣ, the speeds and motor torques (at the wheels' places) and whether saturated."""
+    v, s = floats(values), floats(state)
+    torques, net, _, momentum, torque = _drive(v, s)
+    h = _momentum(s)
+    hdot = _along_axes(s, net)
+    saturated = False
+    for k in range(N_WHEELS):
+        values[Y_SPEED + k] = 0.0
+        values[Y_MOTOR + k] = 0.0
+    for k in range(int(s[N])):
+        wheel = int(s[WHEEL + k])
+        values[Y_SPEED + wheel], values[Y_MOTOR + wheel] = s[OMEGA + k], torques[k]
+        saturated = saturated or momentum[k] or torque[k]
+    for k in range(3):
+        values[Y_H + k], values[Y_HDOT + k] = h[k], hdot[k]
+    values[Y_SATURATED] = 1.0 if saturated else 0.0
+    return 0

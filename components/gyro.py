@@ -66,8 +66,10 @@ from __future__ import annotations
 
 import math
 
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .noise import normal, stream_key
+from .noise import joined_key, key_halves, normal, stream_key
 from .sensing import tick, tick_time
 from .variables import input_, output, parameter
 
@@ -189,133 +191,214 @@ class Gyro(Model):
                 raise ModelError(f"{name} must be > 0, got {getattr(p, name)}")
         T = 1.0 / p.rate
         phi = math.exp(-T / p.bias_correlation_time)
-        self.t0, self.rate, self.period = t0, p.rate, T
-        self.matrix = tuple(
-            tuple((i == j) + (p.scale_factor[i] if i == j else 0.0) + p.misalignment[i, j]
-                  for j in range(3))
+        sigma_gm = p.bias_instability / GAUSS_MARKOV_ALLAN_PEAK
+        matrix = [
+            (i == j) + (p.scale_factor[i] if i == j else 0.0) + p.misalignment[i, j]
             for i in range(3)
+            for j in range(3)
+        ]
+        keys = [half for s in range(9) for half in key_halves(stream_key(p.seed, s))]
+        self.state = STATE.zeros()
+        self.state[:COMMITTED] = (
+            t0, p.rate, T, *matrix, math.sqrt(p.arw**2 / T + p.rrw**2 * T / 12.0),
+            p.arw / math.sqrt(T), p.rrw * math.sqrt(T), sigma_gm, phi,
+            sigma_gm * math.sqrt(1.0 - phi * phi), *keys,
         )  # fmt: skip
-        self.white = math.sqrt(p.arw**2 / T + p.rrw**2 * T / 12.0)
-        self.white0 = p.arw / math.sqrt(T)  # sample 0: bias constant before t0
-        self.walk = p.rrw * math.sqrt(T)
-        self.sigma_gm = p.bias_instability / GAUSS_MARKOV_ALLAN_PEAK
-        self.phi, self.drive = phi, self.sigma_gm * math.sqrt(1.0 - phi * phi)
-        self.keys = tuple(stream_key(p.seed, s) for s in range(9))
-        # committed state: the latest sample k and what sample k + 1 needs
-        self.k = -1
-        self.t_last = None  # last communication point seen (None: none yet)
-        self.w_last = (0.0, 0.0, 0.0)
-        self.slope_last = (None, None, None)  # ẇ set for the step from t_last (None: none)
-        self.integral = (0.0, 0.0, 0.0)  # of the true rate since t_k
-        self.b_rw = tuple(p.bias0.tolist())
-        self.b_gm = (0.0, 0.0, 0.0)
-        self.residual = (0.0, 0.0, 0.0)  # quantiser remainder (rad/s)
-        self.saturated = (False, False, False)
-        self.w_meas = (0.0, 0.0, 0.0)
+        # committed state: the latest sample k (none yet) and what sample k + 1 needs
+        self.state[COMMITTED + K] = -1
+        self.state[COMMITTED + B_RW : COMMITTED + B_RW + 3] = p.bias0
         self.t = t0
 
     def step(self, t, dt):
         # commit at the model's clock, where output() evaluated (the host's t may differ
         # from it by rounding: the samples must not)
-        state = self._advance(self.t, tuple(self.u.w_BI_B.tolist()))
-        self.warnings.extend(state.pop("notes"))
-        vars(self).update(state)
+        if gyro_step(self.values, self.state, self.t, dt) == SATURATED:  # nothing committed
+            notes: list = []
+            advance(self.values, self.state, self.t, notes)
+            commit(self.state)
+            self.warnings.extend(
+                f"t={tick_time(j, self.state[T0], self.state[RATE]):.6g} s: axis {i + 1} "
+                f"saturated at +-{self.p.saturation} rad/s (the measurement is clipped)"
+                for j, i in notes
+            )
         self.t = t + dt
 
     def output(self):
-        state = self._advance(self.t, tuple(self.u.w_BI_B.tolist()))
-        self.y.w_meas_B[:] = state["w_meas"]
-        b_rw, b_gm = state["b_rw"], state["b_gm"]
-        self.y.bias_B[:] = (b_rw[0] + b_gm[0], b_rw[1] + b_gm[1], b_rw[2] + b_gm[2])
+        gyro_output(self.values, self.state, self.t)
 
-    # -- internals -------------------------------------------------------------------
-    def _advance(self, now: float, w_now: tuple) -> dict:
-        """The committed state brought to ``now`` (input ``w_now``): every sample up to
-        ``now`` taken, the true rate linear between the last communication point and now
-        (constant before t0).  Pure: returns the new state."""
-        t0, rate, T = self.t0, self.rate, self.period
-        k, t_last, w_last, integral = self.k, self.t_last, self.w_last, self.integral
-        slope = self.slope_last
-        if t_last is None:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
-            t_last, w_last, slope = t0 - T, w_now, (None, None, None)
-        span = now - t_last
-        state = {"b_rw": self.b_rw, "b_gm": self.b_gm, "residual": self.residual}
-        state.update(w_meas=self.w_meas, saturated=self.saturated, notes=[])
-        segment = t_last  # start of the part of (t_last, now] not yet integrated
-        for j in range(k + 1, tick(now, t0, rate) + 1):
-            end = min(tick_time(j, t0, rate), now)
-            integral = _add_rate(integral, segment, end, t_last, span, w_last, w_now, slope)
-            self._sample(j, tuple(x / T for x in integral), state)
-            integral, segment, k = (0.0, 0.0, 0.0), end, j
-        integral = _add_rate(integral, segment, now, t_last, span, w_last, w_now, slope)
-        given = self._given("w_BI_B").tolist()
-        now_slope = tuple(
-            x if g else None for g, x in zip(given, self.input_rate("w_BI_B").tolist())
+
+# -- kernels (components/jit.py) ------------------------------------------------------
+_LAYOUT = Gyro.table_layout()
+_AT = _LAYOUT.offset  # offsets in Gyro.values
+P_QUANTUM, P_LIMIT = _AT["quantization"], _AT["saturation"]
+U_W, Y_W, Y_BIAS = _AT["w_BI_B"], _AT["w_meas_B"], _AT["bias_B"]
+#: the derivative a host set for w_BI_B and whether it set it (per axis)
+D_W, G_W = _LAYOUT.derivative["w_BI_B"], _LAYOUT.given["w_BI_B"]
+#: a sample's state (after :func:`advance`): the latest sample k, whether a communication
+#: point was seen and its time and true rate, the rate's slope set for the step from it and
+#: 1 where one was set (per axis), the integral of the true rate since t_k, the bias terms,
+#: the quantiser's remainder, the axes saturated, the measured rate
+SAMPLED = StateTable(
+    k=1, seen=1, t_last=1, w_last=3, slope=3, sloped=3, integral=3, b_rw=3, b_gm=3,
+    residual=3, saturated=3, w_meas=3,
+)  # fmt: skip
+K, SEEN, T_LAST, W_LAST, SLOPE, SLOPED, INTEGRAL = SAMPLED.offsets[:7]
+B_RW, B_GM, RESIDUAL, SATURATED_AXES, W_MEAS = SAMPLED.offsets[7:]
+N_SAMPLED = SAMPLED.size
+#: the state array: t0, the rate and period, the error matrix I + diag(scale_factor) + M
+#: (row-major), the white-noise sigmas (of a sample, of sample 0), the random walk's step,
+#: the Gauss-Markov sigma, φ and drive, the 9 stream keys (key_halves), then the committed
+#: sample state and the one advanced to the output's time (SAMPLED each)
+STATE = StateTable(
+    t0=1, rate=1, period=1, matrix=9, white=1, white0=1, walk=1, sigma_gm=1, phi=1, drive=1,
+    keys=18, committed=SAMPLED.size, advanced=SAMPLED.size,
+)  # fmt: skip
+T0, RATE, PERIOD, MATRIX, WHITE, WHITE0, WALK, SIGMA_GM, PHI, DRIVE, KEYS = STATE.offsets[:11]
+COMMITTED, ADVANCED = STATE.offsets[11:]
+#: gyro_step's status: an axis became saturated (nothing committed: step() warns)
+SATURATED = 1
+
+
+@step_kernel(Gyro)
+def gyro_step(values, state, t, dt):
+    """Every sample up to the model's time t taken and committed (:func:`advance`);
+    SATURATED (nothing committed) when an axis becomes saturated."""
+    notes = [(0, 0)]
+    notes.pop()
+    advance(values, state, t, notes)
+    if len(notes) > 0:
+        return SATURATED
+    commit(state)
+    return 0
+
+
+@output_kernel(Gyro)
+def gyro_output(values, state, t):
+    """The latest sample at t (the committed state advanced to t, not committed) and the
+    true bias of it."""
+    notes = [(0, 0)]
+    notes.pop()
+    advance(values, state, t, notes)
+    a = ADVANCED
+    for i in range(3):
+        values[Y_W + i] = state[a + W_MEAS + i]
+        values[Y_BIAS + i] = state[a + B_RW + i] + state[a + B_GM + i]
+    return 0
+
+
+@jitable
+def commit(state) -> None:
+    """The advanced sample state becomes the committed one."""
+    for i in range(N_SAMPLED):
+        state[COMMITTED + i] = state[ADVANCED + i]
+
+
+@jitable
+def advance(values, state, now: float, notes) -> None:
+    """The committed state brought to ``now`` (the input w_BI_B of ``now``), into the
+    advanced one: every sample up to ``now`` taken, the true rate linear (or the parabola
+    with the slope set, :func:`_add_rate`) between the last communication point and now
+    (constant before t0); (sample, axis) of each axis becoming saturated appended to
+    ``notes``."""
+    s, v = floats(state), floats(values)
+    t0, rate, T, c = s[T0], s[RATE], s[PERIOD], COMMITTED
+    w_now = (v[U_W], v[U_W + 1], v[U_W + 2])
+    k = int(s[c + K])
+    slope = (s[c + SLOPE], s[c + SLOPE + 1], s[c + SLOPE + 2])
+    sloped = (s[c + SLOPED] != 0.0, s[c + SLOPED + 1] != 0.0, s[c + SLOPED + 2] != 0.0)
+    if s[c + SEEN] == 0.0:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
+        t_last, w_last, sloped = t0 - T, w_now, (False, False, False)
+    else:
+        t_last, w_last = s[c + T_LAST], (s[c + W_LAST], s[c + W_LAST + 1], s[c + W_LAST + 2])
+    integral = (s[c + INTEGRAL], s[c + INTEGRAL + 1], s[c + INTEGRAL + 2])
+    for i in range(c + B_RW, c + N_SAMPLED):  # the bias terms and what follows
+        state[ADVANCED + i - c] = s[i]
+    span = now - t_last
+    segment = t_last  # start of the part of (t_last, now] not yet integrated
+    for j in range(k + 1, tick(now, t0, rate) + 1):
+        end = min(tick_time(j, t0, rate), now)
+        integral = _add_rate(integral, segment, end, t_last, span, w_last, w_now, slope, sloped)
+        _sample(values, state, j, (integral[0] / T, integral[1] / T, integral[2] / T), notes)
+        integral, segment, k = (0.0, 0.0, 0.0), end, j
+    integral = _add_rate(integral, segment, now, t_last, span, w_last, w_now, slope, sloped)
+    a = ADVANCED
+    state[a + K], state[a + SEEN], state[a + T_LAST] = k, 1.0, now
+    for i in range(3):
+        state[a + W_LAST + i], state[a + INTEGRAL + i] = w_now[i], integral[i]
+        given = v[G_W + i] != 0.0  # the slope set for the step from now
+        state[a + SLOPE + i] = v[D_W + i] if given else 0.0
+        state[a + SLOPED + i] = 1.0 if given else 0.0
+
+
+@jitable
+def _sample(values, state, j: int, w_true, notes) -> None:
+    """Sample j from the true average rate over its interval, on the advanced state."""
+    s, a = floats(state), ADVANCED
+    b_rw = (s[a + B_RW], s[a + B_RW + 1], s[a + B_RW + 2])
+    b_gm = (s[a + B_GM], s[a + B_GM + 1], s[a + B_GM + 2])
+    if j == 0:
+        gm = (
+            s[SIGMA_GM] * normal(_key(s, GM), 0),
+            s[SIGMA_GM] * normal(_key(s, GM + 1), 0),
+            s[SIGMA_GM] * normal(_key(s, GM + 2), 0),
         )
-        state.update(k=k, t_last=now, w_last=w_now, integral=integral, slope_last=now_slope)
-        return state
-
-    def _sample(self, j: int, w_true: tuple, state: dict) -> None:
-        """Sample j from the true average rate over its interval: updates ``state``."""
-        keys, p = self.keys, self.p
-        if j == 0:
-            b_rw = state["b_rw"]
-            b_gm = tuple(self.sigma_gm * normal(keys[GM + i], 0) for i in range(3))
-            bias_mean, white = b_rw, self.white0
-            b_gm_mean = b_gm
+        bias_mean, gm_mean, white, b_gm = b_rw, gm, s[WHITE0], gm
+    else:
+        rw = (
+            b_rw[0] + s[WALK] * normal(_key(s, RRW), j),
+            b_rw[1] + s[WALK] * normal(_key(s, RRW + 1), j),
+            b_rw[2] + s[WALK] * normal(_key(s, RRW + 2), j),
+        )
+        gm = (
+            s[PHI] * b_gm[0] + s[DRIVE] * normal(_key(s, GM), j),
+            s[PHI] * b_gm[1] + s[DRIVE] * normal(_key(s, GM + 1), j),
+            s[PHI] * b_gm[2] + s[DRIVE] * normal(_key(s, GM + 2), j),
+        )
+        bias_mean = (0.5 * (b_rw[0] + rw[0]), 0.5 * (b_rw[1] + rw[1]), 0.5 * (b_rw[2] + rw[2]))
+        gm_mean = (0.5 * (b_gm[0] + gm[0]), 0.5 * (b_gm[1] + gm[1]), 0.5 * (b_gm[2] + gm[2]))
+        white, b_rw, b_gm = s[WHITE], rw, gm
+    quantum, limit = values[P_QUANTUM], values[P_LIMIT]
+    for i in range(3):
+        m = MATRIX + 3 * i
+        raw = (
+            s[m] * w_true[0] + s[m + 1] * w_true[1] + s[m + 2] * w_true[2]
+            + bias_mean[i] + gm_mean[i] + white * normal(_key(s, ARW + i), j)
+        )  # fmt: skip
+        saturated = raw >= limit or raw <= -limit
+        if saturated:
+            measured, residual = limit if raw > 0.0 else -limit, 0.0
+            if s[a + SATURATED_AXES + i] == 0.0:
+                notes.append((j, i))
+        elif quantum > 0.0:
+            carried = s[a + RESIDUAL + i] + raw
+            measured = math.floor(carried / quantum + 0.5) * quantum
+            residual = carried - measured
         else:
-            b_rw = tuple(
-                b + self.walk * normal(keys[RRW + i], j) for i, b in enumerate(state["b_rw"])
-            )
-            b_gm = tuple(
-                self.phi * b + self.drive * normal(keys[GM + i], j)
-                for i, b in enumerate(state["b_gm"])
-            )
-            bias_mean = tuple(0.5 * (a + b) for a, b in zip(state["b_rw"], b_rw))
-            b_gm_mean = tuple(0.5 * (a + b) for a, b in zip(state["b_gm"], b_gm))
-            white = self.white
-        quantum, limit = p.quantization, p.saturation
-        measured, residual, saturated = [], [], []
-        for i, row in enumerate(self.matrix):
-            raw = (
-                row[0] * w_true[0] + row[1] * w_true[1] + row[2] * w_true[2]
-                + bias_mean[i] + b_gm_mean[i] + white * normal(keys[ARW + i], j)
-            )  # fmt: skip
-            saturated.append(raw >= limit or raw <= -limit)
-            if saturated[i]:
-                measured.append(limit if raw > 0.0 else -limit)
-                residual.append(0.0)
-                if not state["saturated"][i]:
-                    state["notes"].append(
-                        f"t={tick_time(j, self.t0, self.rate):.6g} s: axis {i + 1} saturated "
-                        f"at +-{limit} rad/s (the measurement is clipped)"
-                    )
-            elif quantum > 0.0:
-                carried = state["residual"][i] + raw
-                value = math.floor(carried / quantum + 0.5) * quantum
-                measured.append(value)
-                residual.append(carried - value)
-            else:
-                measured.append(raw)
-                residual.append(0.0)
-        state.update(b_rw=b_rw, b_gm=b_gm, residual=tuple(residual), w_meas=tuple(measured))
-        state["saturated"] = tuple(saturated)
+            measured, residual = raw, 0.0
+        state[a + W_MEAS + i], state[a + RESIDUAL + i] = measured, residual
+        state[a + SATURATED_AXES + i] = 1.0 if saturated else 0.0
+        state[a + B_RW + i], state[a + B_GM + i] = b_rw[i], b_gm[i]
 
 
-def _add_rate(integral, a, b, t_last, span, w_last, w_now, slope) -> tuple:
+@jitable
+def _key(s, stream: int) -> int:
+    return joined_key(s[KEYS + 2 * stream], s[KEYS + 2 * stream + 1])
+
+
+@jitable
+def _add_rate(integral, a, b, t_last, span, w_last, w_now, slope, sloped) -> tuple:
     """integral + ∫_a^b w dt for w from w_last at t_last to w_now at t_last + span: per
-    axis linear, or where ``slope`` gives ẇ at t_last the parabola with that slope."""
+    axis linear, or where ``sloped`` the parabola with the slope ẇ = ``slope`` at t_last."""
     if b <= a:
         return integral
     s = (0.5 * (a + b) - t_last) / span  # the midpoint value integrates a line exactly
-    out = []
-    for i, wl, wn, d in zip(integral, w_last, w_now, slope):
-        if d is None:
-            out.append(i + (b - a) * (wl + s * (wn - wl)))
+    out = [0.0, 0.0, 0.0]
+    for k in range(3):
+        i, wl, wn, d = integral[k], w_last[k], w_now[k], slope[k]
+        if not sloped[k]:
+            out[k] = i + (b - a) * (wl + s * (wn - wl))
             continue
         sa, sb = a - t_last, b - t_last  # ∫ (wl + d x + c x²) dx over [sa, sb] / (sb − sa)
         c = (wn - wl - d * span) / (span * span)
-        out.append(
-            i + (b - a) * (wl + d * 0.5 * (sa + sb) + c * (sa * sa + sa * sb + sb * sb) / 3.0)
-        )
-    return tuple(out)
+        out[k] = i + (b - a) * (wl + d * 0.5 * (sa + sb) + c * (sa * sa + sa * sb + sb * sb) / 3.0)
+    return out[0], out[1], out[2]

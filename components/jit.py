@@ -35,8 +35,9 @@ signature, the CPU and the bytecode.  An unwritable cache directory costs a comp
 process, nothing else (a warning says so).
 
 The kernel convention.  A model whose ``step`` or ``output`` is, but for ``t``, one kernel
-``(values, state, x) -> status`` on its value array and a float64 state array (x: the step
-size, or the time) declares it with ``@step_kernel(Model)`` / ``@output_kernel(Model)``;
+on its value array and a float64 state array, ``(values, state, t, dt) -> status`` (t: the
+model's time at the step's start) or ``(values, state, t) -> status``, declares it with
+``@step_kernel(Model)`` / ``@output_kernel(Model)``;
 a model whose step changes nothing but ``t`` says ``STATELESS = True``.  Status 0: the
 kernel did everything the method does; anything else: the method has more to do (raise
 or warn with the readable message, a case the Python handles), so a caller that ran the
@@ -53,6 +54,7 @@ import hashlib
 import io
 import os
 import pickle
+import sys
 import warnings
 from pathlib import Path
 
@@ -64,8 +66,16 @@ from .switches import value
 ENABLED = value("AGILESAT_JIT")
 #: calls of a kernel before it is compiled (see the module docstring)
 AFTER = value("AGILESAT_JIT_AFTER")
+#: the runs this process expects to make of each model (a campaign worker's share)
+RUNS = value("AGILESAT_JIT_RUNS")
+#: the calls a process must be expected to make of kernels whose compiled code is cached
+#: for them to run compiled from a run's start: importing numba and loading the kernels
+#: costs about 0.75 s per process, a macro step in C saves 180-260 µs of a shipped
+#: scenario's (break-even at 2,900-4,200 steps; docs/performance-log.md)
+PAYS_AFTER = 3_500
 _JITABLE: list = []  # functions kernels may call
 _FLOATS: list = []  # to-floats converters, the identity on tuples in a kernel
+_TWINS: list = []  # (function, the factory of its compiled twin)
 _REGISTERED: set = set()  # those of them numba was told about
 _SET_UP = False  # numba imported (then a function declared later is registered at once)
 #: a kernel has switched to its compiled tier in this process (a long run)
@@ -99,6 +109,21 @@ def jitable(function):
     return function
 
 
+def compiled_twin(factory):
+    """Decorator: a function kernels may call whose compiled form is not its Python but
+    ``factory(numba)``, a numba intrinsic of the same signature (a call through a C
+    function pointer, which no Python is); its Python is the decorated function, which
+    must compute the same bits."""
+
+    def register(function):
+        _TWINS.append((function, factory))
+        if _SET_UP:
+            _set_up()
+        return function
+
+    return register
+
+
 def register_floats(function) -> None:
     """Let kernels call ``function`` (a to-floats converter) on tuples and arrays, as the
     identity."""
@@ -123,6 +148,7 @@ class Kernel:
         functools.update_wrapper(self, function)
         self.py_func = function
         self._left = after
+        self.calls = 0  # of its Python, counted (the compiled tier counts nothing)
         self._run = self._count if ENABLED else function
 
     def __call__(self, *args):
@@ -130,6 +156,7 @@ class Kernel:
 
     def _count(self, *args):
         self._left -= 1
+        self.calls += 1
         if self._left < 0:
             return self._switch(*args)
         return self.py_func(*args)
@@ -176,6 +203,35 @@ class Kernel:
         return dispatcher
 
 
+def expect(module, steps: float) -> None:
+    """A run of the model of ``module`` expects ``steps`` more steps (an FMU at its first
+    step: its stop time and step size).  With the calls its kernels made in this process
+    before (a notebook's earlier runs) and RUNS runs (a campaign worker's), the calls
+    expected of them; they switch to compiled now where that pays: from PAYS_AFTER calls
+    when their compiled code is cached, from AFTER otherwise (compiling costs seconds a
+    kernel).  Either way the results are the same bits."""
+    found = kernels(module).values()
+    if not ENABLED or not found:
+        return
+    expected = steps * max(RUNS, 1) + max(kernel.calls for kernel in found)
+    if expected < min(PAYS_AFTER, AFTER):
+        return
+    if expected >= AFTER or all(map(cached, found)):
+        for kernel in found:
+            kernel._left = min(kernel._left, 0)
+
+
+def cached(kernel: Kernel) -> bool:
+    """Is the kernel's compiled code in the compile cache (for this Python)?  Looked up by
+    the name numba gives its index (``<module>.<qualname>-<line>.pyXY.nbi``) in the
+    content-keyed folder, without importing numba."""
+    code = kernel.py_func.__code__
+    folder = cache_root() / "numba" / content_key(kernel.py_func.__module__, code.co_filename)
+    major, minor = sys.version_info[:2]
+    name = f"{kernel.py_func.__module__.rsplit('.', 1)[-1]}.{kernel.py_func.__qualname__}"
+    return (folder / f"{name}-{code.co_firstlineno}.py{major}{minor}.nbi").is_file()
+
+
 def runs_compiled(kernel: Kernel) -> bool:
     """Has ``kernel`` switched to its compiled tier (with numba)?"""
     compiled = kernel.__dict__.get("compiled")
@@ -190,7 +246,7 @@ _DECLARED: dict[type, dict[str, Kernel]] = {}
 
 
 def step_kernel(model: type):
-    """Decorator: the kernel ``(values, state, dt) -> status`` is ``model``'s step
+    """Decorator: the kernel ``(values, state, t, dt) -> status`` is ``model``'s step
     (module docstring, "The kernel convention")."""
     return lambda function: _declare(model, "step", function)
 
@@ -250,6 +306,11 @@ def _set_up() -> None:
         if function not in _REGISTERED:
             _REGISTERED.add(function)
             register_jitable(function)
+    for function, factory in _TWINS:
+        if function not in _REGISTERED:
+            _REGISTERED.add(function)
+            twin = factory(numba)
+            overload(function, strict=False)(lambda *args, twin=twin: lambda *args: twin(*args))
 
 
 def content_cache(py_func):

@@ -259,6 +259,14 @@ class Model:
         attributes = {k: v for k, v in vars(self).items() if k not in self._NOT_STATE}
         return self.values.copy(), dict(self.strings), copy.deepcopy(attributes)
 
+    @classmethod
+    def state_problem(cls, attributes: dict, reference: dict) -> str:
+        """What in a restored state's ``attributes`` (checked for names, kinds and shapes)
+        a model of this class could never hold, given ``reference``, the attributes of the
+        model initialised with the state's parameters: the rows of a kernel's state array
+        that it indexes with (counts, places, section lengths).  '' if nothing."""
+        return ""
+
     def set_state(self, state) -> None:
         values, strings, attributes = state
         self.values[:] = values

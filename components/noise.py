@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import math
 
+from .jit import jitable
+
 MASK = 0xFFFFFFFFFFFFFFFF
 _SIGNED = 1 << 64  # the constants below are the signed (two's complement) forms, so that
 #: int64 arithmetic (numba) wraps to the same bits as Python's masked integers
@@ -47,6 +49,7 @@ _SCALE = 2.0**-53
 TWO_PI = 2.0 * math.pi
 
 
+@jitable
 def mix(z: int) -> int:
     """SplitMix64's finaliser: a bijection of 64-bit integers (z ≫ k written as a masked
     arithmetic shift, so that signed 64-bit integers give the same bits)."""
@@ -62,16 +65,31 @@ def stream_key(seed: int, stream: int) -> int:
     return key - _SIGNED if key >> 63 else key
 
 
+def key_halves(key: int) -> tuple[float, float]:
+    """A signed 64-bit key as two floats, each exact (high half signed, low half
+    unsigned), for a kernel's state array (:func:`joined_key`)."""
+    return float(key >> 32), float(key & 0xFFFFFFFF)
+
+
+@jitable
+def joined_key(high: float, low: float) -> int:
+    """The key :func:`key_halves` split."""
+    return (int(high) << 32) | int(low)
+
+
+@jitable
 def bits(key: int, n: int) -> int:
     """The n-th 64-bit output of the stream ``key`` (mod 2⁶⁴: signed or not)."""
     return mix((key + (n + 1) * GAMMA) & MASK)
 
 
+@jitable
 def uniform(key: int, n: int) -> float:
     """The n-th uniform number of the stream ``key``, in the open interval (0, 1)."""
     return (((bits(key, n) >> 11) & _LOW53) + 0.5) * _SCALE
 
 
+@jitable
 def normal(key: int, n: int) -> float:
     """The n-th standard normal number of the stream ``key`` (Box–Muller)."""
     u1 = uniform(key, 2 * n)

@@ -91,7 +91,8 @@ w_OI_O is the exact angular velocity of *that* frame.  With ė_k = w × e_k for 
 (the Kepler formulas above when ṙ = v and ḣ = r × a).  ṙ and ḣ are fourth-order
 central differences of SGP4's r and r × v over ±SGP4_STEP and ±2 SGP4_STEP (truncation
 ≈ δ⁴ n⁴ / 30 ≈ 6e-13 relative for δ = 2 s; SGP4's round-off gives ≈ 1e-14 rad/s).  Cost:
-five SGP4 calls per output.
+five SGP4 calls per output, which the compiled kernel makes itself, to the sgp4 package's
+own compiled SGP4 (ephemeris.sgp4_entry: the same function, the same bits).
 
 Errors of SGP4 (its error codes: eccentricity out of range, decayed, ...) raise
 ModelError naming the code and the time; a TLE is checked for length, line numbers,
@@ -102,11 +103,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .ephemeris import (
     DAY,
     TWO_PI,
     j2000_parts,
     load_tle,
+    sgp4_at,
+    sgp4_entry,
     sidereal_base,
     sidereal_time,
     tle_epoch,
@@ -317,8 +322,9 @@ class OrbitEnvironment(Model):
             shape=(3,),
         ),
     )
-    # the SGP4 record cannot be deep-copied and does not evolve: not part of the FMU state
-    _NOT_STATE = Model._NOT_STATE | {"_satrec"}
+    # the SGP4 record cannot be deep-copied and does not evolve, the addresses its kernel
+    # calls SGP4 at are this process's: not part of the FMU state
+    _NOT_STATE = Model._NOT_STATE | {"_satrec", "_sgp4_entry"}
     #: step() only advances t (the outputs are functions of t)
     STATELESS = True
 
@@ -344,9 +350,10 @@ class OrbitEnvironment(Model):
         self._epoch = (
             j2000_parts(epoch) if epoch else _day_parts(p.epoch_j2000) if p.epoch_j2000 else None
         )
-        self._satrec = None
+        self._satrec, self._sgp4_entry = None, (0, 0)
         if line1:
             self._satrec = load_tle(line1, line2)
+            self._sgp4_entry = sgp4_entry(self._satrec, load_tle(line1, line2))
             days, seconds = tle_epoch(self._satrec)
             if self._epoch is None:
                 self._epoch = (days, seconds)
@@ -368,7 +375,7 @@ class OrbitEnvironment(Model):
         self.earth_angle0 = p.earth_angle0
         self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
         self.state = STATE.zeros()
-        self.state[GIVEN_AT] = math.nan  # no SGP4 or GMST values yet
+        self.state[GIVEN_AT] = math.nan  # no SGP4 samples yet
         if self._satrec is None:
             self.state[A : MU_KEPLER + 1] = (
                 self.a, self.e, self.b, self.M0, self.mean_motion, self.raan_rate,
@@ -377,10 +384,23 @@ class OrbitEnvironment(Model):
         self.state[EARTH_ANGLE0] = self.earth_angle0
         self.state[R_T_E : R_T_E + 3] = self.r_T_E
         self.state[[GIVEN_ORBIT, GIVEN_EARTH]] = self._satrec is not None, self._gmst0 is not None
+        self.state[GMST0 : GMST0 + 2] = self._gmst0 or (0.0, 0.0)
         self.state[EPOCH : EPOCH + 2] = self._epoch or (0, 0.0)
         self.t = t0
         if self._satrec is not None:
+            self.state[TSINCE0] = self._tsince0
+            self._point_at_sgp4()
             self._sgp4(t0)  # SGP4 errors at the start: fail here
+
+    def _point_at_sgp4(self) -> None:
+        """The addresses the kernel calls SGP4 at: this instance's record, never a saved
+        state's (set_state)."""
+        self.state[SGP4 : SGP4 + 2] = getattr(self, "_sgp4_entry", (0, 0))
+
+    def set_state(self, state) -> None:
+        super().set_state(state)
+        if isinstance(getattr(self, "state", None), np.ndarray):
+            self._point_at_sgp4()
 
     def _init_kepler(self):
         p = self.p
@@ -426,45 +446,16 @@ class OrbitEnvironment(Model):
             )
         return r, v
 
-    def _sgp4_state(self, t):
-        """r_I, v_I (SGP4, m and m/s) and w_OI_O of the frame built from them at t."""
-        (rx, ry, rz), (vx, vy, vz) = self._sgp4(t)
-        d = SGP4_STEP
-        # 4th-order central differences of r and h = r × v (km, km2/s)
-        rd = [0.0, 0.0, 0.0]
-        hd = [0.0, 0.0, 0.0]
-        for dt, weight in ((d, 8.0), (-d, -8.0), (2 * d, -1.0), (-2 * d, 1.0)):
-            (x, y, z), (u, v, w) = self._sgp4(t + dt)
-            rd[0] += weight * x
-            rd[1] += weight * y
-            rd[2] += weight * z
-            hd[0] += weight * (y * w - z * v)
-            hd[1] += weight * (z * u - x * w)
-            hd[2] += weight * (x * v - y * u)
-        scale = 1.0 / (12.0 * d)
-        hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
-        h = math.sqrt(hx * hx + hy * hy + hz * hz)
-        r = math.sqrt(rx * rx + ry * ry + rz * rz)
-        ux, uy, uz = rx / r, ry / r, rz / r
-        nx, ny, nz = hx / h, hy / h, hz / h
-        xx, xy, xz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux  # x_O = ĥ × r̂
-        w = (
-            scale * (hd[0] * ux + hd[1] * uy + hd[2] * uz) / h,
-            -scale * (rd[0] * xx + rd[1] * xy + rd[2] * xz) / r,
-            scale * (hd[0] * xx + hd[1] * xy + hd[2] * xz) / h,
-        )
-        return ((1e3 * rx, 1e3 * ry, 1e3 * rz), (1e3 * vx, 1e3 * vy, 1e3 * vz), w)
-
     def output(self):
         t = self.t
-        if self._satrec is not None:
-            r, v, w = self._sgp4_state(t)
-            self.state[R_I : R_I + 9] = (*r, *v, *w)
+        status = orbit_output(self.values, self.state, t)
+        if status == NOT_GIVEN:  # SGP4 the kernel does not call, or an SGP4 error
+            for k, offset in enumerate(SAMPLE_OFFSETS):
+                r, v = self._sgp4(t + offset)  # raises its ModelError
+                self.state[SAMPLES + 6 * k : SAMPLES + 6 * k + 6] = (*r, *v)
             self.state[GIVEN_AT] = t
-        if self._gmst0 is not None:
-            self.state[THETA : THETA + 2] = sidereal_time(*self._gmst0, t)
-            self.state[GIVEN_AT] = t
-        if orbit_output(self.values, self.state, t) == KEPLER_DIVERGED:
+            status = orbit_output(self.values, self.state, t)
+        if status == KEPLER_DIVERGED:
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
 
@@ -473,37 +464,44 @@ _AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.v
 Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
 Y_R_T, Y_V_T, Y_EARTH, Y_SUN = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"], _AT["sun_I"]
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
-#: whether r, v, w (SGP4) and θ_E, θ̇_E (GMST) are given, those given values and the time
-#: they are given at (output() computes them), and the epoch (whole days, seconds since
-#: J2000.0; 0 without one) for the Sun
+#: whether the orbit is SGP4's (a TLE) and whether θ_E is GMST, SGP4's r, v (km, km/s) at
+#: t + SAMPLE_OFFSETS and the t they are of, the addresses of the SGP4 call
+#: (ephemeris.sgp4_entry; 0: output() samples it), the TLE's minutes to t = 0, GMST's base
+#: (g0, T0: ephemeris.sidereal_base) and the epoch (whole days, seconds since J2000.0; 0
+#: without one) for the Sun
 STATE = StateTable(
     a=1, e=1, b=1, M0=1, mean_motion=1, raan_rate=1, argp_rate=1, raan0=1, argp0=1, cos_i=1,
-    sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1, given_earth=1, r_v_w_I=9,
-    theta=2, given_at=1, epoch=2,
+    sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1, given_earth=1, samples=30,
+    given_at=1, sgp4=2, tsince0=1, gmst0=2, epoch=2,
 )  # fmt: skip
 A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0 = STATE.offsets[:9]
 COS_I, SIN_I, MU_KEPLER, EARTH_ANGLE0, R_T_E = STATE.offsets[9:14]
-GIVEN_ORBIT, GIVEN_EARTH, R_I, THETA, GIVEN_AT, EPOCH = STATE.offsets[14:]
-#: orbit_output's status: Kepler's equation did not converge (nothing written); the SGP4
-#: or GMST values are not those at t (output() computes them)
+GIVEN_ORBIT, GIVEN_EARTH, SAMPLES, GIVEN_AT, SGP4, TSINCE0, GMST0, EPOCH = STATE.offsets[14:]
+#: the times of SGP4's samples relative to t: t and the central differences' (module doc)
+SAMPLE_OFFSETS = (0.0, SGP4_STEP, -SGP4_STEP, 2 * SGP4_STEP, -2 * SGP4_STEP)
+#: orbit_output's status: Kepler's equation did not converge (nothing written); SGP4's
+#: samples at t are not there (output() takes them: without the direct call, or after an
+#: SGP4 error)
 KEPLER_DIVERGED, NOT_GIVEN = 1, 2
-
-jitable(wrap_2pi)  # kernels may call it (components/ephemeris.py)
 
 
 @output_kernel(OrbitEnvironment)
 def orbit_output(values, state, t):
     """The outputs at time t (module docstring): the orbit (Kepler/J2 at t, or the given
     SGP4 r_I, v_I, w_OI_O), the orbit frame O, the Earth angle (earth_angle0 + ω_E t, or
-    the given GMST), the target and the Sun (components/sun.py).  Returns 0,
+    GMST), the target and the Sun (components/sun.py).  Returns 0,
     KEPLER_DIVERGED or NOT_GIVEN (nothing written)."""
     s = floats(state)
-    if (s[GIVEN_ORBIT] or s[GIVEN_EARTH]) and s[GIVEN_AT] != t:
-        return NOT_GIVEN
     if s[GIVEN_ORBIT]:
-        r = s[R_I], s[R_I + 1], s[R_I + 2]
-        v = s[R_I + 3], s[R_I + 4], s[R_I + 5]
-        w = s[R_I + 6], s[R_I + 7], s[R_I + 8]
+        if s[GIVEN_AT] != t:
+            if s[SGP4] == 0.0:
+                return NOT_GIVEN
+            for k in range(5):  # in this order: the deep-space integrator keeps its state
+                tsince = s[TSINCE0] + (t + SAMPLE_OFFSETS[k]) / 60.0
+                if not sgp4_at(s[SGP4], s[SGP4 + 1], tsince, state, SAMPLES + 6 * k):
+                    return NOT_GIVEN
+            state[GIVEN_AT] = t
+        r, v, w = sgp4_frame(state[SAMPLES : SAMPLES + 30])
     else:
         r, v, w, converged = kepler_state(s, t)
         if not converged:
@@ -525,7 +523,7 @@ def orbit_output(values, state, t):
         values[Y_Q + k] = q[k]
 
     if s[GIVEN_EARTH]:
-        theta, rate = s[THETA], s[THETA + 1]
+        theta, rate = sidereal_time(s[GMST0], s[GMST0 + 1], t)
     else:
         theta, rate = s[EARTH_ANGLE0] + EARTH_RATE * t, EARTH_RATE
     cT, sT = math.cos(theta), math.sin(theta)
@@ -538,6 +536,41 @@ def orbit_output(values, state, t):
     for k in range(3):
         values[Y_SUN + k] = sun[k]
     return 0
+
+
+@jitable
+def sgp4_frame(samples) -> tuple:
+    """r_I, v_I (m, m/s) and w_OI_O of the frame built from them (module docstring) from
+    SGP4's r, v (km, km/s) at t + SAMPLE_OFFSETS."""
+    rx, ry, rz, vx, vy, vz = samples[0], samples[1], samples[2], samples[3], samples[4], samples[5]
+    # 4th-order central differences of r and h = r × v (km, km2/s)
+    rd = [0.0, 0.0, 0.0]
+    hd = [0.0, 0.0, 0.0]
+    for k, weight in ((1, 8.0), (2, -8.0), (3, -1.0), (4, 1.0)):
+        x, y, z = samples[6 * k], samples[6 * k + 1], samples[6 * k + 2]
+        u, v, w = samples[6 * k + 3], samples[6 * k + 4], samples[6 * k + 5]
+        rd[0] += weight * x
+        rd[1] += weight * y
+        rd[2] += weight * z
+        hd[0] += weight * (y * w - z * v)
+        hd[1] += weight * (z * u - x * w)
+        hd[2] += weight * (x * v - y * u)
+    scale = 1.0 / (12.0 * SGP4_STEP)
+    hx, hy, hz = ry * vz - rz * vy, rz * vx - rx * vz, rx * vy - ry * vx
+    h = math.sqrt(hx * hx + hy * hy + hz * hz)
+    r = math.sqrt(rx * rx + ry * ry + rz * rz)
+    ux, uy, uz = rx / r, ry / r, rz / r
+    nx, ny, nz = hx / h, hy / h, hz / h
+    xx, xy, xz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux  # x_O = ĥ × r̂
+    return (
+        (1e3 * rx, 1e3 * ry, 1e3 * rz),
+        (1e3 * vx, 1e3 * vy, 1e3 * vz),
+        (
+            scale * (hd[0] * ux + hd[1] * uy + hd[2] * uz) / h,
+            -scale * (rd[0] * xx + rd[1] * xy + rd[2] * xz) / r,
+            scale * (hd[0] * xx + hd[1] * xy + hd[2] * xz) / h,
+        ),
+    )
 
 
 @jitable

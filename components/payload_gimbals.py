@@ -96,6 +96,8 @@ import math
 
 import numpy as np
 
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .variables import input_, output, parameter
 
@@ -104,6 +106,7 @@ _ACCELERATIONS = ("roll_accel_cmd", "pitch_accel_cmd")
 _NEAR_CRITICAL = 1e-6  # |λ² s²| below which C, S are taken from series
 
 
+@jitable
 def payload_momentum(J, phi, theta, phi_dot, theta_dot, phi_ddot, theta_ddot):
     """(h_b, ḣ_b, boresight) of one payload, in B, as tuples (eqs 1–2 with transport).
 
@@ -158,16 +161,24 @@ def _to_body(phi, theta, v):
 def servo_step(angle, rate, command, rate_command, dt, omega, zeta, slope=None, rate_slope=0.0):
     """Angle and rate after ``dt`` of θ̈ = ωn² (θc + a s − θ) + 2ζωn (θ̇c + β s − θ̇),
     exactly; a = ``slope`` (None: θ̇c), β = ``rate_slope`` (module docstring)."""
-    if slope is None and rate_slope == 0.0:
+    a = rate_command if slope is None else slope
+    return servo_move(angle, rate, command, rate_command, dt, omega, zeta, a, rate_slope)
+
+
+@jitable
+def servo_move(angle, rate, command, rate_command, dt, omega, zeta, a, rate_slope):
+    """:func:`servo_step` with the angle command's slope ``a`` given (θ̇c where none was
+    set: the command held along its rate, the particular solution zero)."""
+    if a == rate_command and rate_slope == 0.0:
         e, de = _free(angle - command, rate - rate_command, dt, omega, zeta)
         return command + rate_command * dt + e, rate_command + de
-    a = rate_command if slope is None else slope
     p1 = 2.0 * zeta * rate_slope / omega
     p0 = (2.0 * zeta * omega * (rate_command - a) - 2.0 * zeta * omega * p1) / (omega * omega)
     e, de = _free(angle - command - p0, rate - a - p1, dt, omega, zeta)
     return command + a * dt + e + p0 + p1 * dt, a + de + p1
 
 
+@jitable
 def _free(e0, de0, dt, omega, zeta):
     """e, ė after ``dt`` of ë + 2ζωn ė + ωn² e = 0 from e0, ė0."""
     sigma = zeta * omega
@@ -341,21 +352,17 @@ class PayloadGimbals(Model):
             raise ModelError(f"bandwidth must be >= 0 (0 = ideal tracking), got {p.bandwidth}")
         if not (math.isfinite(p.damping) and p.damping > 0):
             raise ModelError(f"damping must be > 0, got {p.damping}")
-        self.J = tuple(J)
-        self.omega, self.zeta = p.bandwidth, p.damping
-        self.ideal = p.bandwidth == 0.0
-        self.accel_inputs = p.accel_inputs
-        inputs, outputs = self.layout.range["input"], self.layout.range["output"]
-        self._inputs = slice(inputs.start, inputs.stop)  # angles, rates, accelerations
-        self._outputs = slice(outputs.start, outputs.stop)  # contiguous in table order
-        commands = self.values[self._inputs].tolist()
-        self.angles = commands[:4]  # roll 1, roll 2, pitch 1, pitch 2
-        self.rates = commands[4:8]
-        self.last_rate_cmd = None  # ideal tracking: rate commands at the last step
-        self.last_dt = 0.0
-        self.slope_reported = False  # a rate command differing from a set derivative
+        self.state = STATE.zeros()
+        self.state[J_PAYLOAD : J_PAYLOAD + 3] = J
+        self.state[[OMEGA, ZETA, IDEAL, ACCEL_INPUTS]] = (
+            p.bandwidth,
+            p.damping,
+            p.bandwidth == 0.0,
+            p.accel_inputs,
+        )
+        self.state[ANGLES : ANGLES + 8] = self.values[U_COMMANDS : U_COMMANDS + 8]
         self.t = t0
-        if not self.ideal:  # ideal tracking: the state is the commands, no initial state
+        if p.bandwidth != 0.0:  # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
 
     def initial_input_jumps(self, used, dt):
@@ -372,30 +379,17 @@ class PayloadGimbals(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        commands = self.values[self._inputs].tolist()
-        if self.ideal:
-            self.angles, self.rates = commands[:4], commands[4:8]
-            self.last_rate_cmd, self.last_dt = commands[4:8], dt
-        else:
-            omega, zeta, angles, rates = self.omega, self.zeta, self.angles, self.rates
-            slopes, rate_slopes = self._command_rates()
-            for i in range(4):
-                angles[i], rates[i] = servo_step(
-                    angles[i], rates[i], commands[i], commands[4 + i], dt, omega, zeta,
-                    slopes[i], rate_slopes[i],
-                )  # fmt: skip
+        if gimbals_step(self.values, self.state, self.t, dt) == SLOPE_CONFLICT:
             conflicts = [
                 text
                 for angle, rate in (("roll_cmd", "roll_rate_cmd"), ("pitch_cmd", "pitch_rate_cmd"))
                 for text in self.slope_conflicts(angle, rate)
             ]
-            if conflicts and not self.slope_reported:
-                self.slope_reported = True
-                self.warnings.append(
-                    f"t={t:.6g} s: {'; '.join(conflicts)}: the derivative a host sets for an "
-                    "angle command (fmi2SetRealInputDerivatives) is its slope over the "
-                    "step, the rate command only where none was set (reported once)"
-                )
+            self.warnings.append(
+                f"t={t:.6g} s: {'; '.join(conflicts)}: the derivative a host sets for an "
+                "angle command (fmi2SetRealInputDerivatives) is its slope over the "
+                "step, the rate command only where none was set (reported once)"
+            )
         self.t = t + dt
 
     def _command_rates(self) -> tuple[list, list]:
@@ -410,76 +404,122 @@ class PayloadGimbals(Model):
         return slopes, [float(x) for x in rate_slopes]
 
     def output(self):
-        angles, rates, accels = self._motion()
-        J = self.J
-        h1, d1, l1 = payload_momentum(
-            J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2]
-        )
-        h2, d2, l2 = payload_momentum(
-            J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3]
-        )
-        self.values[self._outputs] = (
-            *angles,
-            *rates,
-            h1[0] + h2[0],
-            h1[1] + h2[1],
-            h1[2] + h2[2],
-            d1[0] + d2[0],
-            d1[1] + d2[1],
-            d1[2] + d2[2],
-            *l1,
-            *l2,
-        )
+        gimbals_output(self.values, self.state, self.t)
 
     def output_derivatives(self):
         """See the module docstring: d/dt of the outputs at ``self.t``."""
-        angles, rates, accels = self._motion()
-        if self.ideal:
+        s = self.state
+        commands = self.values[U_COMMANDS : U_COMMANDS + 12].tolist()
+        angles, rates, accels = _motion(commands, s.tolist())
+        if s[IDEAL] != 0.0:
             jerks = [0.0] * 4
-            if self.accel_inputs:
+            if s[ACCEL_INPUTS] != 0.0:
                 jerks = [*self.input_rate("roll_accel_cmd"), *self.input_rate("pitch_accel_cmd")]
         else:
             slopes, rate_slopes = self._command_rates()
-            commands = self.values[self._inputs].tolist()
-            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
+            w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
             jerks = [
                 w2 * ((commands[4 + i] if slopes[i] is None else slopes[i]) - rates[i])
                 + d * (rate_slopes[i] - accels[i])
                 for i in range(4)
             ]
+        J = s[J_PAYLOAD : J_PAYLOAD + 3].tolist()
         pair = [(k, k + 2) for k in (0, 1)]  # (roll, pitch) of payloads 1 and 2
         moved = [
-            payload_momentum_rate(self.J, *([x[i], x[j]] for x in (angles, rates, accels, jerks)))
+            payload_momentum_rate(J, *([x[i], x[j]] for x in (angles, rates, accels, jerks)))
             for i, j in pair
         ]
+        hdot = self.values[Y_OUTPUTS + 11 : Y_OUTPUTS + 14]
         return np.array(
-            [
-                *rates,
-                *accels,
-                *self.values[self._outputs][11:14],  # hdot
-                *np.add(moved[0][0], moved[1][0]),
-                *moved[0][1],
-                *moved[1][1],
-            ]
+            [*rates, *accels, *hdot, *np.add(moved[0][0], moved[1][0]), *moved[0][1], *moved[1][1]]
         )
 
-    def _motion(self) -> tuple[list, list, list]:
-        """(angles, rates, accelerations), each roll 1, roll 2, pitch 1, pitch 2, now."""
-        commands = self.values[self._inputs].tolist()
-        if self.ideal:
-            angles, rates = commands[:4], commands[4:8]
-            last = self.last_rate_cmd
-            if self.accel_inputs:
-                accels = commands[8:]
-            elif last is None:
-                accels = (0.0, 0.0, 0.0, 0.0)
-            else:
-                k = 1.0 / self.last_dt
-                accels = [(a - b) * k for a, b in zip(rates, last)]
+
+# -- kernels (components/jit.py) ------------------------------------------------------
+_LAYOUT = PayloadGimbals.table_layout()  # offsets in PayloadGimbals.values
+#: the inputs in table order: angle, rate and acceleration commands, each (roll 1, roll 2,
+#: pitch 1, pitch 2); the outputs in table order; the derivatives a host set for the
+#: inputs (in the same order) and 1 where it set one
+U_COMMANDS, Y_OUTPUTS = _LAYOUT.range["input"].start, _LAYOUT.range["output"].start
+D_COMMANDS, G_COMMANDS = _LAYOUT.derivative["roll_cmd"], _LAYOUT.given["roll_cmd"]
+#: the state array: the servo's angles and rates (as the commands), the rate commands at
+#: the last step and its length (ideal tracking; 1 once stepped), the payload inertia, ωn,
+#: ζ, 1 for ideal tracking, 1 with accel_inputs, 1 once a rate command differing from a
+#: derivative set for its angle command was reported
+STATE = StateTable(
+    angles=4, rates=4, last_rate_cmd=4, last_dt=1, stepped=1, J_payload=3, omega=1, zeta=1,
+    ideal=1, accel_inputs=1, slope_reported=1,
+)  # fmt: skip
+ANGLES, RATES, LAST_RATE_CMD, LAST_DT, STEPPED, J_PAYLOAD = STATE.offsets[:6]
+OMEGA, ZETA, IDEAL, ACCEL_INPUTS, SLOPE_REPORTED = STATE.offsets[6:]
+#: gimbals_step's status: the step done, a slope conflict to report (step() warns)
+SLOPE_CONFLICT = 1
+
+
+@step_kernel(PayloadGimbals)
+def gimbals_step(values, state, t, dt):
+    """Ideal tracking: the state is the commands (and the rate commands are kept for the
+    accelerations); a servo: :func:`servo_move` of each axis over ``dt``, the angle
+    command at the slope set for it (else its rate command), the rate command at its
+    derivative.  SLOPE_CONFLICT (the step done) the first time a non-zero rate command
+    differs from a derivative set for its angle command."""
+    v, s = floats(values), floats(state)
+    commands = v[U_COMMANDS : U_COMMANDS + 8]
+    if s[IDEAL] != 0.0:
+        for i in range(8):
+            state[ANGLES + i] = commands[i]
+        for i in range(4):
+            state[LAST_RATE_CMD + i] = commands[4 + i]
+        state[LAST_DT], state[STEPPED] = dt, 1.0
+        return 0
+    conflict = False
+    for i in range(4):
+        rate_command, given = commands[4 + i], v[G_COMMANDS + i] != 0.0
+        a = v[D_COMMANDS + i] if given else rate_command
+        conflict = conflict or given and rate_command != 0.0 and rate_command != a
+        state[ANGLES + i], state[RATES + i] = servo_move(
+            s[ANGLES + i], s[RATES + i], commands[i], rate_command, dt, s[OMEGA], s[ZETA], a,
+            v[D_COMMANDS + 4 + i],
+        )  # fmt: skip
+    if conflict and s[SLOPE_REPORTED] == 0.0:
+        state[SLOPE_REPORTED] = 1.0
+        return SLOPE_CONFLICT
+    return 0
+
+
+@jitable
+def _motion(commands, s) -> tuple:
+    """(angles, rates, accelerations), each roll 1, roll 2, pitch 1, pitch 2, now."""
+    if s[IDEAL] != 0.0:
+        angles, rates = commands[:4], commands[4:8]
+        if s[ACCEL_INPUTS] != 0.0:
+            accels = [commands[8 + i] for i in range(4)]
+        elif s[STEPPED] == 0.0:
+            accels = [0.0, 0.0, 0.0, 0.0]
         else:
-            angles, rates = self.angles, self.rates
-            w2, d = self.omega * self.omega, 2.0 * self.zeta * self.omega
-            accels = [
-                w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
-            ]
-        return angles, rates, accels
+            k = 1.0 / s[LAST_DT]
+            accels = [(rates[i] - s[LAST_RATE_CMD + i]) * k for i in range(4)]
+    else:
+        angles, rates = s[ANGLES : ANGLES + 4], s[RATES : RATES + 4]
+        w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
+        accels = [
+            w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
+        ]
+    return angles, rates, accels
+
+
+@output_kernel(PayloadGimbals)
+def gimbals_output(values, state, t):
+    """Angles and rates, h, ḣ (eq. 3: the sums over the two payloads) and the boresights."""
+    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 12]), floats(state)
+    angles, rates, accels = _motion(commands, s)
+    J = (s[J_PAYLOAD], s[J_PAYLOAD + 1], s[J_PAYLOAD + 2])
+    h1, d1, l1 = payload_momentum(J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2])
+    h2, d2, l2 = payload_momentum(J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3])
+    for i in range(4):
+        values[Y_OUTPUTS + i], values[Y_OUTPUTS + 4 + i] = angles[i], rates[i]
+    for k in range(3):
+        values[Y_OUTPUTS + 8 + k] = h1[k] + h2[k]
+        values[Y_OUTPUTS + 11 + k] = d1[k] + d2[k]
+        values[Y_OUTPUTS + 14 + k], values[Y_OUTPUTS + 17 + k] = l1[k], l2[k]
+    return 0

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, kernel
+from .flat import StateTable, hypot
+from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .variables import Layout, input_, output, parameter
 
@@ -167,9 +167,7 @@ class PitchManeuverController(Model):
         self.t = t + dt
 
     def output(self):
-        # CPython's math.hypot is its own algorithm, numba's libm's (1 ulp apart at times)
-        n = math.hypot(self.values[U_Q], self.values[U_Q + 2])
-        pitch_output(self.values, self.state, self.t, n)
+        pitch_output(self.values, self.state, self.t)
 
 
 # -- kernel (components/jit.py) -------------------------------------------------------
@@ -187,14 +185,15 @@ TIMES, ACCEL, RATE_MAX, SCAN_RATE, THETA0, THETA_F = STATE.offsets[:6]
 INERTIA, KP, KD, KP_ROLL, KD_ROLL, KP_YAW, KD_YAW = STATE.offsets[6:]
 
 
-@kernel
-def pitch_output(values, state, t, n):
+@output_kernel(PitchManeuverController)
+def pitch_output(values, state, t):
     """τ_cmd (eq. 11 corrected, roll/yaw hold), phase and the planned pitch and rate at
-    time t, with n = hypot(q0, q2) of q_BO (module docstring)."""
+    time t (module docstring)."""
     s = floats(state)
     q0, q1, q2, q3 = floats(values[U_Q : U_Q + 4])
     if not q0 >= 0:
         q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+    n = hypot(q0, q2)  # CPython's math.hypot, bit for bit (components/flat.py)
     wx, wy, wz = floats(values[U_W : U_W + 3])
     c, sn = q0 / n, q2 / n
     pitch = 2.0 * math.atan2(q2, q0)
@@ -213,3 +212,4 @@ def pitch_output(values, state, t, n):
     values[Y_PITCH], values[Y_PITCH_RATE] = reference_at(
         s[THETA0], s[THETA_F], times, s[ACCEL], s[RATE_MAX], s[SCAN_RATE], t
     )
+    return 0

@@ -233,7 +233,7 @@ class SatelliteDynamics(Model):
 
     def step(self, t, dt):
         self.check_initial_inputs(dt)
-        status = _step(self.values, self.state, dt)
+        status = _step(self.values, self.state, self.t, dt)
         if status == SLOPE_CONFLICT:
             conflicts = [
                 text for h in MOMENTUM_INPUTS for text in self.slope_conflicts(h, "hdot" + h[1:])
@@ -354,7 +354,7 @@ OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT, SLOPE_CONFLICT = range
 
 
 @step_kernel(SatelliteDynamics)
-def _step(values, state, dt):
+def _step(values, state, t, dt):
     """Advance (q_BI, H_I) in ``state`` by ``dt`` with the inputs in ``values``, as
     interpolated (module docstring): RK4 in n = ⌈max|w_BI_B| dt / MAX_ROTATION_PER_SUBSTEP⌉
     sub-steps, q_BI normalised after.  Returns the status; on an error nothing changes;

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 
+from .jit import jitable
 from .rotations import qmul
 
 #: fraction of a sample period by which a time may fall short of a tick and still be it
@@ -39,20 +40,24 @@ EARTH_RADIUS = 6378137.0
 EARTH_RATE = 7.2921150e-5
 
 
+@jitable
 def tick(t: float, t0: float, rate: float) -> int:
     """Index k of the latest tick t_k = t0 + k / rate at or before t."""
     return math.floor((t - t0) * rate + TICK_TOLERANCE)
 
 
+@jitable
 def tick_time(k: int, t0: float, rate: float) -> float:
     return t0 + k / rate
 
 
+@jitable
 def lerp(a, b, s: float) -> tuple:
-    """a + s (b − a), element by element."""
-    return tuple(x + s * (y - x) for x, y in zip(a, b))
+    """a + s (b − a), element by element, of 3-vectors."""
+    return (a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2]))
 
 
+@jitable
 def quat_exp(v) -> tuple:
     """Quaternion of the rotation vector v."""
     vx, vy, vz = v
@@ -64,6 +69,7 @@ def quat_exp(v) -> tuple:
     return (c, f * vx, f * vy, f * vz)
 
 
+@jitable
 def rotation_vector(q) -> tuple:
     """Rotation vector (angle ≤ π) of the unit quaternion q (either sign)."""
     q0, q1, q2, q3 = q
@@ -74,16 +80,19 @@ def rotation_vector(q) -> tuple:
     return (f * q1, f * q2, f * q3)
 
 
+@jitable
 def normalized(q) -> tuple:
     q0, q1, q2, q3 = q
     n = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
     return (q0 / n, q1 / n, q2 / n, q3 / n)
 
 
+@jitable
 def conj(q) -> tuple:
     return (q[0], -q[1], -q[2], -q[3])
 
 
+@jitable
 def slerp(qa, qb, s: float) -> tuple:
     """The attitude a fraction s of the way from qa to qb (body-frame rotation
     qa* ⊗ qb taken the short way), with the sign of qa: qa ⊗ exp(s log(qa* ⊗ qb))."""
@@ -91,6 +100,7 @@ def slerp(qa, qb, s: float) -> tuple:
     return qmul(qa, quat_exp((s * v[0], s * v[1], s * v[2])))
 
 
+@jitable
 def angle_between(a, b) -> float:
     """Angle between two non-zero vectors, accurate at every angle (atan2 form)."""
     ax, ay, az = a
@@ -99,5 +109,9 @@ def angle_between(a, b) -> float:
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
 
 
+@jitable
 def norm(v) -> float:
-    return math.sqrt(sum(x * x for x in v))
+    total = 0.0
+    for x in v:
+        total += x * x
+    return math.sqrt(total)

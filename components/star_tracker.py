@@ -43,11 +43,16 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
-from .noise import normal, stream_key, uniform
+from .noise import joined_key, key_halves, normal, stream_key, uniform
 from .rotations import IDENTITY_Q, dcm, qmul, rotate_back
 from .sensing import (
     EARTH_RADIUS,
+    TICK_TOLERANCE,
     angle_between,
     lerp,
     norm,
@@ -57,7 +62,7 @@ from .sensing import (
     tick,
     tick_time,
 )
-from .variables import input_, output, parameter
+from .variables import Layout, input_, output, parameter
 
 ARCSEC = math.pi / 180.0 / 3600.0
 RIGEL_NEA_CROSS = 3.0 * ARCSEC
@@ -183,95 +188,197 @@ class StarTracker(Model):
                 raise ModelError(f"{name} must be > 0, got {getattr(p, name)}")
         if abs(norm(p.q_SB) - 1.0) > 1e-6:
             raise ModelError(f"q_SB must be a unit quaternion, got {p.q_SB.tolist()}")
-        self.C_SB = dcm(normalized(p.q_SB.tolist()))
-        self.keys = tuple(stream_key(p.seed, NOISE + i) for i in range(3))
-        phase = tuple(2.0 * math.pi * uniform(stream_key(p.seed, PHASE + i), 0) for i in range(3))
-        self.phase = phase
-        self.t0 = t0
-        # committed state: the inputs at the last communication point, the last sample
-        # taken and the samples not yet superseded (k, t_k, q_meas, error_B, valid)
-        self.last = None
-        self.k = 0
-        self.pipeline = ()
+        keys = [half for i in range(3) for half in key_halves(stream_key(p.seed, NOISE + i))]
+        phase = [2.0 * math.pi * uniform(stream_key(p.seed, PHASE + i), 0) for i in range(3)]
+        # at most floor(latency rate) + 2 samples wait for their release (ticks in
+        # [t − latency, t]); one more for the rounding of the ticks
+        capacity = math.floor(p.latency * p.rate + TICK_TOLERANCE) + 3
+        rows = dcm(normalized(p.q_SB.tolist()))
+        self.state = np.zeros(SECTIONS + 2 * (WAITING.size + capacity * ROW))
+        self.state[:SECTIONS] = (
+            t0, capacity, WAITING.size + capacity * ROW, *rows[0], *rows[1], *rows[2], *keys,
+            *phase,
+        )  # fmt: skip
         self.t = t0
 
     def step(self, t, dt):
         # at the model's clock, as output() (components/gyro.py, step)
-        self.last, self.k, self.pipeline = self._advance(self.t, self._inputs())
+        if tracker_step(self.values, self.state, self.t, dt) == FULL:
+            raise ModelError(_FULL)
         self.t = t + dt
 
     def output(self):
-        _, _, pipeline = self._advance(self.t, self._inputs())
-        k, t_k, q_meas, error, valid = pipeline[0]
-        y = self.y
-        y.q_BI_meas[:] = q_meas
-        y.error_B[:] = error
-        y.valid = valid
-        y.t_meas = t_k
+        if tracker_output(self.values, self.state, self.t) == FULL:
+            raise ModelError(_FULL)
 
-    # -- internals -------------------------------------------------------------------
-    def _inputs(self) -> tuple:
-        u = self.u
-        return (
-            normalized(u.q_BI.tolist()),
-            tuple(u.w_BI_B.tolist()),
-            tuple(u.sun_I.tolist()),
-            tuple(u.r_I.tolist()),
-        )
+    @classmethod
+    def state_problem(cls, attributes, reference):
+        """The kernels index the state with its constants and each section's count of
+        samples waiting: the constants are those the parameters make, the counts whole
+        numbers up to the capacity."""
+        state, constants = attributes["state"], reference["state"][:SECTIONS]
+        if not np.array_equal(state[:SECTIONS], constants):
+            return "constants (capacity, section length, mounting, keys) are not its parameters'"
+        for at in (SECTIONS, SECTIONS + int(constants[SECTION])):
+            n = float(state[at + N])
+            if not (n == int(n) and 0 <= n <= constants[CAPACITY]):
+                return f"count of samples waiting {n!r} is not a whole number in [0, capacity]"
+        return ""
 
-    def _advance(self, now: float, inputs: tuple):
-        """(inputs, last sample index, pipeline) brought to ``now``: the samples up to
-        ``now`` taken, those older than the one released at ``now`` dropped.  Pure."""
-        p, t0 = self.p, self.t0
-        released = tick(now - p.latency, t0, p.rate)
-        newest = tick(now, t0, p.rate)
-        samples = list(self.pipeline)
-        q_now, w_now, sun_now, r_now = inputs
-        if self.last is None:  # the start: the attitude turned at w_now before
-            for j in range(min(released, newest), newest + 1):
-                dt = tick_time(j, t0, p.rate) - now
-                q = qmul(q_now, quat_exp((w_now[0] * dt, w_now[1] * dt, w_now[2] * dt)))
-                samples.append(self._sample(j, (q, w_now, sun_now, r_now)))
+
+_FULL = "internal error: more samples wait for their release than the state holds"
+
+# -- kernels (components/jit.py) ------------------------------------------------------
+_AT = Layout(StarTracker.VARIABLES).offset  # offsets in StarTracker.values
+P_NEA_CROSS, P_NEA_BORESIGHT, P_BIAS_LF = _AT["nea_cross"], _AT["nea_boresight"], _AT["bias_lf"]
+P_LF_PERIOD, P_RATE, P_LATENCY, P_SUN = (
+    _AT["lf_period"], _AT["rate"], _AT["latency"], _AT["sun_exclusion"]
+)  # fmt: skip
+P_EARTH, P_MAX_RATE = _AT["earth_exclusion"], _AT["max_rate"]
+U_Q, U_W, U_SUN, U_R = (_AT[name] for name in _INPUTS)
+Y_Q, Y_VALID, Y_ERROR, Y_T = _AT["q_BI_meas"], _AT["valid"], _AT["error_B"], _AT["t_meas"]
+#: the state array: t0, the capacity of the pipeline, the length of a section, C_SB
+#: (row-major), the noise keys (key_halves) and the low-frequency phases; then two sections
+#: (WAITING and the pipeline): the committed one, and the one advanced to the output's time
+CONSTANTS = StateTable(t0=1, capacity=1, section=1, C_SB=9, keys=6, phase=3)
+T0, CAPACITY, SECTION, MOUNT, KEYS, PHASE_ = CONSTANTS.offsets
+SECTIONS = CONSTANTS.size  # where the committed section starts
+#: a section: whether a communication point was seen, its time and inputs (q_BI, w_BI_B,
+#: sun_I, r_I), the last sample taken and the number of samples waiting, then those (ROW
+#: each: j, t_j, q_BI_meas, error_B, valid), oldest first
+WAITING = StateTable(seen=1, t_last=1, inputs=13, k=1, n=1)
+SEEN, T_LAST, INPUTS, K, N = WAITING.offsets
+ROW = 10
+#: the statuses: more samples wait than the pipeline holds (an internal error)
+FULL = 1
+
+
+@step_kernel(StarTracker)
+def tracker_step(values, state, t, dt):
+    """Every sample up to the model's time t taken, those released kept: committed."""
+    status = advance(values, state, t)
+    if status == 0:
+        size = int(state[SECTION])
+        for i in range(size):
+            state[SECTIONS + i] = state[SECTIONS + size + i]
+    return status
+
+
+@output_kernel(StarTracker)
+def tracker_output(values, state, t):
+    """The sample released at t (the committed state advanced to t, not committed)."""
+    status = advance(values, state, t)
+    if status == 0:
+        row = SECTIONS + int(state[SECTION]) + N + 1  # the oldest sample waiting
+        for i in range(4):
+            values[Y_Q + i] = state[row + 2 + i]
+        for i in range(3):
+            values[Y_ERROR + i] = state[row + 6 + i]
+        values[Y_VALID], values[Y_T] = state[row + 9], state[row + 1]
+    return status
+
+
+@jitable
+def advance(values, state, now: float) -> int:
+    """The committed section brought to ``now`` (the inputs of ``now``) into the advanced
+    one: the samples up to ``now`` taken, those released at ``now`` or later kept.  Between
+    communication points the truth is interpolated (slerp, lerp), before the first the
+    attitude turned at its rate."""
+    v, s = floats(values), floats(state)
+    c, a = SECTIONS, SECTIONS + int(s[SECTION])
+    t0, rate = s[T0], v[P_RATE]
+    released, newest = tick(now - v[P_LATENCY], t0, rate), tick(now, t0, rate)
+    q_now = normalized(v[U_Q : U_Q + 4])
+    w_now, sun_now = (v[U_W], v[U_W + 1], v[U_W + 2]), (v[U_SUN], v[U_SUN + 1], v[U_SUN + 2])
+    r_now = (v[U_R], v[U_R + 1], v[U_R + 2])
+    n = 0
+    for i in range(int(s[c + N])):  # the samples still waiting
+        row = c + N + 1 + ROW * i
+        if s[row] >= released:
+            for x in range(ROW):
+                state[a + N + 1 + ROW * n + x] = s[row + x]
+            n += 1
+    k = int(s[c + K])
+    if s[c + SEEN] == 0.0:  # the start: the attitude turned at w_now before
+        first = min(released, newest)
+    else:
+        first = max(k + 1, released)  # those before are not kept
+        t_last, last = s[c + T_LAST], s[c + INPUTS : c + INPUTS + 13]
+        q_last = (last[0], last[1], last[2], last[3])
+        w_last, sun_last = (last[4], last[5], last[6]), (last[7], last[8], last[9])
+        r_last = (last[10], last[11], last[12])
+    for j in range(first, newest + 1):
+        if n == int(s[CAPACITY]):
+            return FULL
+        t_j = tick_time(j, t0, rate)
+        if s[c + SEEN] == 0.0:
+            dt = t_j - now
+            q = qmul(q_now, quat_exp((w_now[0] * dt, w_now[1] * dt, w_now[2] * dt)))
+            truth = (q, w_now, sun_now, r_now)
         else:
-            t_last, (q_last, w_last, sun_last, r_last) = self.last
-            for j in range(self.k + 1, newest + 1):
-                s = min(1.0, (tick_time(j, t0, p.rate) - t_last) / (now - t_last))
-                truth = (
-                    slerp(q_last, q_now, s),
-                    lerp(w_last, w_now, s),
-                    lerp(sun_last, sun_now, s),
-                    lerp(r_last, r_now, s),
-                )
-                samples.append(self._sample(j, truth))
-        kept = tuple(sample for sample in samples if sample[0] >= released)
-        return (now, inputs), max(newest, self.k), kept
+            f = min(1.0, (t_j - t_last) / (now - t_last))
+            truth = (
+                slerp(q_last, q_now, f),
+                lerp(w_last, w_now, f),
+                lerp(sun_last, sun_now, f),
+                lerp(r_last, r_now, f),
+            )
+        _sample(values, state, j, t_j, truth, a + N + 1 + ROW * n)
+        n += 1
+    state[a + SEEN], state[a + T_LAST], state[a + K], state[a + N] = 1.0, now, max(newest, k), n
+    inputs = (*q_now, *w_now, *sun_now, *r_now)
+    for i in range(13):
+        state[a + INPUTS + i] = inputs[i]
+    return 0
 
-    def _sample(self, j: int, truth: tuple) -> tuple:
-        """(j, t_j, q_BI_meas, error_B, valid) of sample j of the true state ``truth``."""
-        p, keys, phase = self.p, self.keys, self.phase
-        q, w, sun, r = truth
-        t_j = tick_time(j, self.t0, p.rate)
-        sigma = (p.nea_cross, p.nea_cross, p.nea_boresight)
-        omega = 2.0 * math.pi / p.lf_period
-        error_S = tuple(
-            sigma[i] * normal(keys[NOISE + i], j) + p.bias_lf[i] * math.sin(omega * t_j + phase[i])
-            for i in range(3)
-        )
-        error_B = rotate_back(self.C_SB, error_S)
-        q_meas = normalized(qmul(q, quat_exp(error_B)))
-        return (j, t_j, q_meas, error_B, self._valid(q, w, sun, r))
 
-    def _valid(self, q, w, sun, r) -> bool:
-        p = self.p
-        boresight = rotate_back(dcm(q), self.C_SB[2])  # C_BIᵀ C_SBᵀ ẑ
-        if norm(w) > p.max_rate:
+@jitable
+def _sample(values, state, j: int, t_j: float, truth, row: int) -> None:
+    """Sample j (time t_j) of the true state ``truth`` into state[row : row + ROW]."""
+    v, s = floats(values), floats(state)
+    q, w, sun, r = truth
+    sigma = (v[P_NEA_CROSS], v[P_NEA_CROSS], v[P_NEA_BORESIGHT])
+    omega = 2.0 * math.pi / v[P_LF_PERIOD]
+    error_S = (
+        sigma[0] * normal(_key(s, 0), j) + v[P_BIAS_LF] * math.sin(omega * t_j + s[PHASE_]),
+        sigma[1] * normal(_key(s, 1), j) + v[P_BIAS_LF + 1] * math.sin(omega * t_j + s[PHASE_ + 1]),
+        sigma[2] * normal(_key(s, 2), j) + v[P_BIAS_LF + 2] * math.sin(omega * t_j + s[PHASE_ + 2]),
+    )
+    C_SB = _rows(s, MOUNT)
+    error_B = rotate_back(C_SB, error_S)
+    q_meas = normalized(qmul(q, quat_exp(error_B)))
+    valid = _valid(v, C_SB, q, w, sun, r)
+    state[row], state[row + 1], state[row + 9] = j, t_j, 1.0 if valid else 0.0
+    for i in range(4):
+        state[row + 2 + i] = q_meas[i]
+    for i in range(3):
+        state[row + 6 + i] = error_B[i]
+
+
+@jitable
+def _rows(s, at: int) -> tuple:
+    return (
+        (s[at], s[at + 1], s[at + 2]), (s[at + 3], s[at + 4], s[at + 5]),
+        (s[at + 6], s[at + 7], s[at + 8]),
+    )  # fmt: skip
+
+
+@jitable
+def _key(s, stream: int) -> int:
+    return joined_key(s[KEYS + 2 * stream], s[KEYS + 2 * stream + 1])
+
+
+@jitable
+def _valid(v, C_SB, q, w, sun, r) -> bool:
+    boresight = rotate_back(dcm(q), C_SB[2])  # C_BIᵀ C_SBᵀ ẑ
+    if norm(w) > v[P_MAX_RATE]:
+        return False
+    if norm(sun) > 0.0 and angle_between(boresight, sun) < v[P_SUN]:
+        return False
+    radius = norm(r)
+    if radius > 0.0:
+        limb = math.asin(min(1.0, EARTH_RADIUS / radius))
+        nadir = (-r[0], -r[1], -r[2])
+        if angle_between(boresight, nadir) < limb + v[P_EARTH]:
             return False
-        if norm(sun) > 0.0 and angle_between(boresight, sun) < p.sun_exclusion:
-            return False
-        radius = norm(r)
-        if radius > 0.0:
-            limb = math.asin(min(1.0, EARTH_RADIUS / radius))
-            nadir = (-r[0], -r[1], -r[2])
-            if angle_between(boresight, nadir) < limb + p.earth_exclusion:
-                return False
-        return True
+    return True

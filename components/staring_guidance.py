@@ -79,8 +79,13 @@ errs by ≈ 2e-8 rad/s², 3e-4 of the peak 7.7e-5 rad/s² of the video-SAR stare
 Assumptions: target fixed on the Earth, which turns at ω_E = EARTH_RATE about ẑ_I (the
 I and E z axes coincide; :mod:`.orbit`; with an epoch the orbit model turns the Earth at
 the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH;
-q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad); the state (captured
-g, anchors of the angle branches) lives in plain attributes, so :meth:`Model.get_state` covers it.
+q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad).
+
+``step`` and ``output`` are each one kernel (components/jit.py) on the value array and the
+state array ``STATE`` (the mount, the captured g, the anchors of the angle branches), on
+tuples of floats; the sums of products are taken in the order written (the NumPy version
+before them summed the dot products as the CPU's BLAS kernel does, with fused
+multiply-adds on some CPUs and not on others).
 """
 
 from __future__ import annotations
@@ -89,10 +94,12 @@ import math
 
 import numpy as np
 
+from .flat import StateTable, hypot
+from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import cross, dcm_from_quat, euler123_from_quat, quat_from_dcm, unwrap_near, wrap_pi
-from .variables import input_, output, parameter
+from .rotations import _unwrap3, cross, dcm, euler123, quat_from_dcm, quat_of_rows, wrap_pi
+from .variables import Layout, input_, output, parameter
 
 CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"
 Q_OI_TOLERANCE = 1e-6  # rad (max element of C_OI error): q_OI vs r_I, v_I
@@ -110,106 +117,147 @@ _START_Q_OI = tuple(
     quat_from_dcm(((0.0, 1.0, 0.0), (0.0, 0.0, -1.0), (-1.0, 0.0, 0.0))).tolist()
 )  # rows x_O, y_O, z_O
 _GEOMETRY = ("r_I", "r_T_I")
-_Z = np.array([0.0, 0.0, 1.0])
+_Z = (0.0, 0.0, 1.0)
+
+#: the kernels' statuses: done, and each condition the model cannot continue from
+#: (StaringGuidance.output raises its ModelError)
+(
+    OK, NOT_FINITE, NO_ORBIT_FRAME, Q_OI_MISMATCH, NO_LINE_OF_SIGHT, ALONG_X_O, ALONG_G, AT_POLE,
+    GRAZING,
+) = range(9)  # fmt: skip
 
 
-def _norm(v) -> float:
-    return math.sqrt(float(v @ v))
+# -- tuple vectors -------------------------------------------------------------------------
+@jitable
+def _dot(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _orbit_axes(r, v, C_OI, t):
-    """(|r|, |h|, r̂, x_O) of the two-body orbit frame of r, v; ModelError if r, v do not
-    define one or q_OI (as C_OI) is not it (to Q_OI_TOLERANCE)."""
-    r_norm = _norm(r)
-    h_vec = cross(r, v)
-    h = _norm(h_vec)
-    if not h > 1e-12 * r_norm * max(_norm(v), 1.0):
-        raise ModelError(
-            f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit frame is undefined"
-        )
-    r_hat, h_hat = r / r_norm, h_vec / h
-    mismatch = float(np.max(np.abs(C_OI - (cross(h_hat, r_hat), -h_hat, -r_hat))))
-    if mismatch > Q_OI_TOLERANCE:
-        raise ModelError(
-            f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
-            f"(z = -r/|r|, y = -(r x v)/|r x v|) by {mismatch:.3g} > "
-            f"{Q_OI_TOLERANCE:g}: connect q_OI from the same orbit as r_I"
-        )
-    return r_norm, h, r_hat, C_OI[0]
+@jitable
+def _cross(a, b) -> tuple:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
+@jitable
+def _norm(a) -> float:
+    return math.sqrt(_dot(a, a))
+
+
+@jitable
+def _scaled(k: float, a) -> tuple:
+    return (k * a[0], k * a[1], k * a[2])
+
+
+@jitable
+def _sum(a, b) -> tuple:
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@jitable
+def _difference(a, b) -> tuple:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@jitable
+def _divided(a, k: float) -> tuple:
+    return (a[0] / k, a[1] / k, a[2] / k)
+
+
+@jitable
+def _combination(a, x, b, y) -> tuple:
+    """a x + b y."""
+    return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2])
+
+
+@jitable
+def _rows_times(M, v) -> tuple:
+    """M v for M given as rows."""
+    return (_dot(M[0], v), _dot(M[1], v), _dot(M[2], v))
+
+
+@jitable
+def _rows_product(A, B) -> tuple:
+    """A B for 3×3 matrices given as rows."""
+    columns = (
+        (B[0][0], B[1][0], B[2][0]),
+        (B[0][1], B[1][1], B[2][1]),
+        (B[0][2], B[1][2], B[2][2]),
+    )
+    return (_rows_times(columns, A[0]), _rows_times(columns, A[1]), _rows_times(columns, A[2]))
+
+
+# -- geometry (module docstring) -----------------------------------------------------------
 def footprint_axis(boresight_B) -> np.ndarray:
     """Unit body axis ⊥ the boresight whose ground line is the footprint direction: body x
     made perpendicular to the boresight (body y if the boresight is along ±x)."""
     b = np.asarray(boresight_B, dtype=float)
-    norm = _norm(b) if np.all(np.isfinite(b)) else 0.0
+    norm = math.sqrt(float(b @ b)) if np.all(np.isfinite(b)) else 0.0
     if not norm > 0.0:
         raise ModelError(f"boresight_B must be a finite non-zero vector, got {b.tolist()}")
     b = b / norm
     for axis in np.eye(3)[:2]:
         a = axis - (axis @ b) * b
-        if _norm(a) > PARALLEL_TOLERANCE:
-            return a / _norm(a)
+        if math.sqrt(float(a @ a)) > PARALLEL_TOLERANCE:
+            return a / math.sqrt(float(a @ a))
     raise AssertionError("unreachable: b cannot be along both x and y")
 
 
-def _polar_distance(r_T) -> tuple[float, float, float, float]:
-    """(x, y, z, p = distance from the polar axis); ModelError at a pole."""
-    x, y, z = (float(c) for c in r_T)
-    p = math.hypot(x, y)
+@jitable
+def _latitude(r_T) -> tuple:
+    """(off the polar axis, WGS-84 geodetic latitude) of a point (I or E axes), by the
+    fixed-point iteration tan φ = (z + e² N sin φ)/p (~4 iterations near the ground)."""
+    x, y, z = r_T
+    p = hypot(x, y)
     if not p > 1e-9 * max(1.0, abs(z)):
-        raise ModelError(
-            f"r_T_I = {[x, y, z]} is on the Earth's axis: north (hence the "
-            "footprint azimuth) is undefined at a pole"
-        )
-    return x, y, z, p
-
-
-def geodetic_latitude(r_T) -> float:
-    """WGS-84 geodetic latitude of a point (I or E axes), by the fixed-point iteration
-    tan φ = (z + e² N sin φ)/p (~4 iterations near the ground)."""
-    _, _, z, p = _polar_distance(r_T)
+        return False, 0.0
     lat = math.atan2(z, p * (1.0 - WGS84_E2))
     for _ in range(20):
         s = math.sin(lat)
-        lat, previous = (
-            math.atan2(z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s), p),
-            lat,
-        )
+        previous = lat
+        lat = math.atan2(z + WGS84_E2 * WGS84_A * s / math.sqrt(1.0 - WGS84_E2 * s * s), p)
         if abs(lat - previous) <= 1e-15:
             break
-    return lat
+    return True, lat
 
 
-def local_tangent_frame(
-    r_T, latitude: float | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(up, east, north) unit vectors at a point, in the axes of r_T (I or E: both share
-    the polar axis ẑ).  up = WGS-84 ellipsoid normal at the geodetic latitude (computed
-    unless given: an Earth-fixed point keeps it)."""
-    x, y, _, p = _polar_distance(r_T)
-    lat = geodetic_latitude(r_T) if latitude is None else latitude
-    cl, sl, cx, sx = math.cos(lat), math.sin(lat), x / p, y / p
+@jitable
+def _tangent_frame(r_T, latitude: float) -> tuple:
+    """(up, east, north) unit vectors at a point off the polar axis, in the axes of r_T (I
+    or E: both share the polar axis ẑ); up = the WGS-84 ellipsoid normal at ``latitude``."""
+    x, y, _ = r_T
+    p = hypot(x, y)
+    cl, sl, cx, sx = math.cos(latitude), math.sin(latitude), x / p, y / p
+    return (cl * cx, cl * sx, sl), (-sx, cx, 0.0), (-sl * cx, -sl * sx, cl)
+
+
+def _off_axis(r_T) -> float:
+    """The geodetic latitude of a point off the polar axis; ModelError at a pole."""
+    ok, latitude = _latitude(r_T)
+    if not ok:
+        raise ModelError(_at_pole(r_T))
+    return latitude
+
+
+def _at_pole(r_T) -> str:
     return (
-        np.array([cl * cx, cl * sx, sl]),
-        np.array([-sx, cx, 0.0]),
-        np.array([-sl * cx, -sl * sx, cl]),
+        f"r_T_I = {list(r_T)} is on the Earth's axis: north (hence the "
+        "footprint azimuth) is undefined at a pole"
     )
 
 
-def ground_line(beam, axis, up) -> np.ndarray:
+@jitable
+def ground_line(beam, axis, up) -> tuple:
     """Direction of the line in which the plane of ``beam`` and ``axis`` meets the plane
     ⊥ ``up``, oriented along ``axis``: d = beam (axis·up) − axis (beam·up) (not normalised)."""
-    return beam * float(axis @ up) - axis * float(beam @ up)
+    return _combination(_dot(axis, up), beam, -_dot(beam, up), axis)
 
 
-def _azimuth(d, east, north) -> float:
+@jitable
+def _azimuth(d, east, north) -> tuple:
+    """(defined, azimuth of d from north toward east): undefined for a vertical d."""
     if not _norm(d) > 1e-12:
-        raise ModelError(
-            "the footprint plane is parallel to the target's tangent plane "
-            "(grazing view): footprint direction undefined"
-        )
-    return math.atan2(float(d @ east), float(d @ north))
+        return False, 0.0
+    return True, math.atan2(_dot(d, east), _dot(d, north))
 
 
 def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
@@ -217,59 +265,72 @@ def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
     of attitude q_BI at the target r_T_I: the ground line of the plane of the body
     boresight and :func:`footprint_axis`, in the target's WGS-84 tangent plane."""
     b = np.asarray(boresight_B, dtype=float)
-    a_B = footprint_axis(b)
+    a_B = tuple(footprint_axis(b).tolist())
     q = np.asarray(q_BI, dtype=float)
-    C_BI = dcm_from_quat(q / _norm(q))
-    up, east, north = local_tangent_frame(r_T_I)
-    return _azimuth(ground_line(C_BI.T @ (b / _norm(b)), C_BI.T @ a_B, up), east, north)
+    C_BI = dcm(tuple((q / math.sqrt(float(q @ q))).tolist()))
+    r_T = tuple(np.asarray(r_T_I, dtype=float).tolist())
+    up, east, north = _tangent_frame(r_T, _off_axis(r_T))
+    beam = _rows_times(_transposed(C_BI), tuple((b / math.sqrt(float(b @ b))).tolist()))
+    ok, azimuth = _azimuth(ground_line(beam, _rows_times(_transposed(C_BI), a_B), up), east, north)
+    if not ok:
+        raise ModelError(_GRAZING)
+    return azimuth
 
 
-def _line_of_sight(r, v, r_T, v_T, t):
-    """(s, û, u̇, ü) in I: Earth-fixed target, two-body satellite (module docstring)."""
-    rho, drho = r_T - r, v_T - v
-    s = _norm(rho)
-    if not s > MIN_SLANT_RANGE:
-        raise ModelError(
-            f"t={t:.6g} s: zero-length line of sight: r_T_I - r_I has length {s:.3g} m"
-        )
-    ddrho = EARTH_RATE * cross(_Z, v_T) + (MU_EARTH / _norm(r) ** 3) * r
-    u = rho / s
-    ds = float(drho @ u)
-    du = (drho - ds * u) / s
-    dds = float(ddrho @ u) + float(drho @ du)
-    return s, u, du, (ddrho - dds * u - 2.0 * ds * du) / s
+@jitable
+def _transposed(M) -> tuple:
+    return ((M[0][0], M[1][0], M[2][0]), (M[0][1], M[1][1], M[2][1]), (M[0][2], M[1][2], M[2][2]))
 
 
-def _aligned_axes(u, a, what: str):
-    """Axes x, y of F(û, a) in I, n = û × a and |n| (module docstring)."""
-    n = cross(u, a)
+@jitable
+def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
+    """(û, u̇, ü) in I for the slant range s = |r_T − r| > 0: Earth-fixed target,
+    two-body satellite (module docstring)."""
+    rho, drho = _difference(r_T, r), _difference(v_T, v)
+    r_norm = _norm(r)
+    ddrho = _combination(EARTH_RATE, _cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
+    u = _divided(rho, s)
+    ds = _dot(drho, u)
+    du = _divided(_combination(1.0, drho, -ds, u), s)
+    dds = _dot(ddrho, u) + _dot(drho, du)
+    ddu = (
+        (ddrho[0] - dds * u[0] - 2.0 * ds * du[0]) / s,
+        (ddrho[1] - dds * u[1] - 2.0 * ds * du[1]) / s,
+        (ddrho[2] - dds * u[2] - 2.0 * ds * du[2]) / s,
+    )
+    return u, du, ddu
+
+
+@jitable
+def _aligned_axes(u, a) -> tuple:
+    """(defined, x, y, n = û × a, |n|) of F(û, a) (module docstring); undefined for a
+    reference direction within PARALLEL_TOLERANCE of û."""
+    n = _cross(u, a)
     m = _norm(n)
     if not m > PARALLEL_TOLERANCE:
-        raise ModelError(
-            f"the line of sight (r_T_I - r_I) is parallel to {what}: the "
-            "reference frame is undefined"
-        )
-    y = n / m
-    return cross(y, u), y, n, m
+        return False, n, n, n, m
+    y = _divided(n, m)
+    return True, _cross(y, u), y, n, m
 
 
-def _aligned_frame(u, du, ddu, a, da, dda, what: str):
-    """F(û, a): axes (x, y, z) in I as rows, ω and ω̇ in its own axes (module docstring)."""
-    x, y, n, m = _aligned_axes(u, a, what)
-    dn = cross(du, a) + cross(u, da)
-    ddn = cross(ddu, a) + 2.0 * cross(du, da) + cross(u, dda)
-    dnx = float(dn @ x)
-    w = np.array([-float(y @ du), float(x @ du), -dnx / m])
-    w_I = w[0] * x + w[1] * y + w[2] * u
-    dx, dy = cross(w_I, x), cross(w_I, y)
-    dw = np.array(
-        [
-            -float(dy @ du) - float(y @ ddu),
-            float(dx @ du) + float(x @ ddu),
-            -(float(ddn @ x) + float(dn @ dx)) / m + dnx * float(dn @ y) / (m * m),
-        ]
+@jitable
+def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
+    """(defined, F(û, a) as rows (x, y, z), ω and ω̇ in its own axes) (module docstring)."""
+    ok, x, y, n, m = _aligned_axes(u, a)
+    if not ok:
+        return False, (n, n, n), n, n
+    dn = _sum(_cross(du, a), _cross(u, da))
+    ddn = _sum(_sum(_cross(ddu, a), _scaled(2.0, _cross(du, da))), _cross(u, dda))
+    dnx = _dot(dn, x)
+    w = (-_dot(y, du), _dot(x, du), -dnx / m)
+    w_I = _sum(_combination(w[0], x, w[1], y), _scaled(w[2], u))
+    dx, dy = _cross(w_I, x), _cross(w_I, y)
+    dw = (
+        -_dot(dy, du) - _dot(y, ddu),
+        _dot(dx, du) + _dot(x, ddu),
+        -(_dot(ddn, x) + _dot(dn, dx)) / m + dnx * _dot(dn, y) / (m * m),
     )
-    return np.array([x, y, u]), w, dw
+    return ok, (x, y, u), w, dw
 
 
 class StaringGuidance(Model):
@@ -372,113 +433,204 @@ class StaringGuidance(Model):
             raise ModelError(f"reference_time must be finite, got {p.reference_time}")
         b = np.array(p.boresight_B)
         a_B = footprint_axis(b)
-        b = b / _norm(b)
+        b = b / math.sqrt(float(b @ b))
         C_RP = np.column_stack((a_B, cross(b, a_B), b))
-        self.C_RP = None if np.array_equal(C_RP, np.eye(3)) else C_RP  # None: R = P
-        self.compensate = p.yaw_compensation
-        self.tolerance = CAPTURE_TOLERANCE * max(1.0, abs(p.reference_time))
-        self.capture_time = None  # t_cap, then the captured g (I, at t_cap)
-        self.g_ref_I = None  # and the footprint azimuth at t_cap
-        self.azimuth_ref = 0.0
-        self.latitude = None  # the target's geodetic latitude, fixed at t_cap
-        self.anchor = self.last = None  # (q_ref, euler) at the previous / last point
-        inputs = self.layout.range["input"]
-        self._inputs = slice(inputs.start, inputs.stop)
+        self.state = STATE.zeros()
+        self.state[MOUNTED] = not np.array_equal(C_RP, np.eye(3))  # else R = P
+        self.state[C_RP_ : C_RP_ + 9] = C_RP.reshape(-1)
+        self.state[COMPENSATE] = p.yaw_compensation
+        self.state[REFERENCE_TIME] = p.reference_time
+        self.state[TOLERANCE] = CAPTURE_TOLERANCE * max(1.0, abs(p.reference_time))
         self.t = t0
 
     def step(self, t, dt):
-        self.anchor = self.last  # outputs at t are the branch anchors for t + dt
+        guidance_step(self.values, self.state, self.t, dt)
         self.t = t + dt
 
     def output(self):
-        y, t = self.y, self.t
-        r, v, r_T, v_T, C_OI = self._checked_inputs(t)
-        r_norm, h, r_hat, x_O = _orbit_axes(r, v, C_OI, t)
-        s, u, du, ddu = _line_of_sight(r, v, r_T, v_T, t)
-        compensating, (x0, y0), (C_PI, w_P, dw_P) = self._pointing_frame(
-            t, r_T, u, du, ddu, (r_norm, h, r_hat, x_O), float(v @ r_hat)
-        )
-        C_RI, w, dw = C_PI, w_P, dw_P
-        if self.C_RP is not None:
-            C_RI, w, dw = self.C_RP @ C_PI, self.C_RP @ w_P, self.C_RP @ dw_P
-        q, euler = self._attitude(C_RI, C_PI, C_OI, u, x0, y0, compensating)
-        rotation = 0.0
-        if self.capture_time is not None:
-            up, east, north = local_tangent_frame(r_T, self.latitude)
-            rotation = wrap_pi(
-                _azimuth(ground_line(u, C_PI[0], up), east, north) - self.azimuth_ref
-            )
-        y.q_ref[:] = q
-        y.w_ref[:] = w
-        y.dw_ref[:] = dw
-        y.euler_ref_BO[:] = euler
-        y.look_angle = math.atan2(_norm(cross(u, r_hat)), -float(u @ r_hat))
-        y.slant_range = s
-        y.footprint_rotation = rotation
-        self.last = (q, euler)
+        status = guidance_output(self.values, self.state, self.t)
+        if status != OK:
+            raise ModelError(self._why(status))
 
-    # -- internals -----------------------------------------------------------------
-    def _checked_inputs(self, t):
-        """(r, v, r_T, v_T, C_OI); ModelError if an input is not finite."""
-        u_in = self.u
-        if not np.all(np.isfinite(self.values[self._inputs])):
+    def _why(self, status: int) -> str:
+        """The message of a kernel's status (the condition at time t)."""
+        t, u_in, detail = self.t, self.u, float(self.state[DETAIL])
+        if status == NOT_FINITE:
             bad = [name for name in _INPUTS if not np.all(np.isfinite(getattr(u_in, name)))]
-            raise ModelError(f"t={t:.6g} s: inputs {bad} are not finite")
-        r, v, r_T, v_T = (np.array(getattr(u_in, n)) for n in _INPUTS[:4])
-        return r, v, r_T, v_T, dcm_from_quat(u_in.q_OI)
+            return f"t={t:.6g} s: inputs {bad} are not finite"
+        if status == AT_POLE:
+            return _at_pole(u_in.r_T_I.tolist())
+        return {
+            NO_ORBIT_FRAME: f"t={t:.6g} s: r_I and v_I are parallel or zero: the orbit frame "
+            "is undefined",
+            Q_OI_MISMATCH: f"t={t:.6g} s: q_OI does not match the orbit frame of r_I, v_I "
+            f"(z = -r/|r|, y = -(r x v)/|r x v|) by {detail:.3g} > {Q_OI_TOLERANCE:g}: "
+            "connect q_OI from the same orbit as r_I",
+            NO_LINE_OF_SIGHT: f"t={t:.6g} s: zero-length line of sight: r_T_I - r_I has "
+            f"length {detail:.3g} m",
+            ALONG_X_O: _PARALLEL.format("the orbit frame's x axis (pitch +-90 deg)"),
+            ALONG_G: _PARALLEL.format("the captured footprint direction g (grazing view)"),
+            GRAZING: _GRAZING,
+        }[status]
 
-    def _pointing_frame(self, t, r_T, u, du, ddu, orbit, r_dot):
-        """(compensating, (x0, y0) axes of the yaw-0 frame P0, (C_PI, ω_P, ω̇_P)): P0 =
-        F(û, x_O), or with yaw compensation F(û, g) after the capture (made here at t_cap)."""
-        r_norm, h, r_hat, x_O = orbit
-        capturing = (
-            self.capture_time is None and t >= self.p.reference_time - self.tolerance
-        ) or self.capture_time == t  # capture, or recapture at t_cap
-        compensating = self.compensate and (capturing or self.capture_time is not None)
-        what = "the orbit frame's x axis (pitch +-90 deg)"
-        y0 = None
-        if compensating:  # only the axes of the yaw-0 frame P0
-            x0, y0, _, _ = _aligned_axes(u, x_O, what)
-        else:  # P0 = F(û, x_O) is the reference
-            dx_O = -(h / r_norm**2) * r_hat
-            ddx_O = (2.0 * h * r_dot / r_norm**3) * r_hat - (h / r_norm**2) ** 2 * x_O
-            P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O, what)
-            x0 = P[0][0]
-        if capturing:
-            self.latitude = geodetic_latitude(r_T)
-            up, east, north = local_tangent_frame(r_T, self.latitude)
-            d = ground_line(u, x0, up)
-            self.azimuth_ref = _azimuth(d, east, north)
-            self.capture_time, self.g_ref_I = t, tuple((d / _norm(d)).tolist())
-        if compensating:
-            angle = EARTH_RATE * (t - self.capture_time)
-            c, sn = math.cos(angle), math.sin(angle)
-            gx, gy, gz = self.g_ref_I
-            g = np.array([c * gx - sn * gy, sn * gx + c * gy, gz])
-            dg = EARTH_RATE * cross(_Z, g)
-            P = _aligned_frame(
-                u,
-                du,
-                ddu,
-                g,
-                dg,
-                EARTH_RATE * cross(_Z, dg),
-                "the captured footprint direction g (grazing view)",
-            )
-        return compensating, (x0, y0), P
 
-    def _attitude(self, C_RI, C_PI, C_OI, u, x0, y0, compensating):
-        """(q_RI with its sign continued, 1-2-3 angles of R relative to O on the branch of
-        the previous communication point)."""
-        q = quat_from_dcm(C_RI)
-        anchor_q, anchor_euler = self.anchor if self.anchor is not None else (None, None)
-        if anchor_q is not None and float(q @ anchor_q) < 0.0:
-            q = -q
-        if self.C_RP is None:  # eq (11) and the yaw of eq (12), continued from the anchor
-            x, y_, z = (C_OI @ u).tolist()
-            psi = math.atan2(float(C_PI[0] @ y0), float(C_PI[0] @ x0)) if compensating else 0.0
-            euler = (-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi)
-            euler = np.array(euler if anchor_euler is None else unwrap_near(euler, anchor_euler))
-        else:
-            euler = euler123_from_quat(quat_from_dcm(C_RI @ C_OI.T), anchor_euler)
-        return q, euler
+_PARALLEL = "the line of sight (r_T_I - r_I) is parallel to {}: the reference frame is undefined"
+_GRAZING = (
+    "the footprint plane is parallel to the target's tangent plane "
+    "(grazing view): footprint direction undefined"
+)
+
+# -- kernels (components/jit.py) --------------------------------------------------------
+_AT = Layout(StaringGuidance.VARIABLES).offset  # offsets in StaringGuidance.values
+U_R, U_V, U_R_T, U_V_T, U_Q_OI = (_AT[name] for name in _INPUTS)
+Y_Q, Y_W, Y_DW, Y_EULER = _AT["q_ref"], _AT["w_ref"], _AT["dw_ref"], _AT["euler_ref_BO"]
+Y_LOOK, Y_RANGE, Y_ROTATION = _AT["look_angle"], _AT["slant_range"], _AT["footprint_rotation"]
+#: the state array: 1 when the boresight mount C_RP is not the identity, C_RP (row-major),
+#: 1 with yaw compensation, reference_time and its capture tolerance; 1 once captured, t_cap,
+#: g (I, at t_cap), the azimuth and the target's latitude at t_cap; (1 when set, q_ref,
+#: euler_ref_BO) at the previous communication point (the anchor) and at the last output;
+#: the number a failing status reports
+STATE = StateTable(
+    mounted=1, C_RP=9, compensate=1, reference_time=1, tolerance=1, captured=1, capture_time=1,
+    g_ref=3, azimuth_ref=1, latitude=1, anchored=1, anchor_q=4, anchor_euler=3, lasted=1,
+    last_q=4, last_euler=3, detail=1,
+)  # fmt: skip
+MOUNTED, C_RP_, COMPENSATE, REFERENCE_TIME, TOLERANCE, CAPTURED, CAPTURE_TIME = STATE.offsets[:7]
+G_REF, AZIMUTH_REF, LATITUDE, ANCHORED, ANCHOR_Q, ANCHOR_EULER, LASTED = STATE.offsets[7:14]
+LAST_Q, LAST_EULER, DETAIL = STATE.offsets[14:]
+
+
+@step_kernel(StaringGuidance)
+def guidance_step(values, state, t, dt):
+    """The outputs at t become the anchors of the angle branches for t + dt."""
+    for k in range(8):  # (set, q_ref, euler_ref_BO)
+        state[ANCHORED + k] = state[LASTED + k]
+    return OK
+
+
+@output_kernel(StaringGuidance)
+def guidance_output(values, state, t):
+    """Every output at time t (module docstring); OK, or the status of the condition the
+    model cannot continue from (then :meth:`StaringGuidance.output` raises)."""
+    v, s = floats(values), floats(state)
+    for k in range(U_R, U_Q_OI + 4):
+        if not math.isfinite(v[k]):
+            return NOT_FINITE
+    r, vel = (v[U_R], v[U_R + 1], v[U_R + 2]), (v[U_V], v[U_V + 1], v[U_V + 2])
+    r_T, v_T = (v[U_R_T], v[U_R_T + 1], v[U_R_T + 2]), (v[U_V_T], v[U_V_T + 1], v[U_V_T + 2])
+    C_OI = dcm(v[U_Q_OI : U_Q_OI + 4])
+
+    # the two-body orbit frame of r, v, checked against q_OI
+    r_norm = _norm(r)
+    h_vec = _cross(r, vel)
+    h = _norm(h_vec)
+    if not h > 1e-12 * r_norm * max(_norm(vel), 1.0):
+        return NO_ORBIT_FRAME
+    r_hat, h_hat = _divided(r, r_norm), _divided(h_vec, h)
+    expected = (_cross(h_hat, r_hat), _scaled(-1.0, h_hat), _scaled(-1.0, r_hat))
+    mismatch = 0.0
+    for i in range(3):
+        for j in range(3):
+            mismatch = max(mismatch, abs(C_OI[i][j] - expected[i][j]))
+    if mismatch > Q_OI_TOLERANCE:
+        state[DETAIL] = mismatch
+        return Q_OI_MISMATCH
+    x_O = C_OI[0]
+
+    s_range = _norm(_difference(r_T, r))
+    if not s_range > MIN_SLANT_RANGE:
+        state[DETAIL] = s_range
+        return NO_LINE_OF_SIGHT
+    u, du, ddu = _line_of_sight(r, vel, r_T, v_T, s_range)
+
+    # the pointing frame P: P0 = F(û, x_O), or with yaw compensation F(û, g) after the
+    # capture (made here at t_cap; re-made when evaluated at t_cap again)
+    captured = s[CAPTURED] != 0.0
+    capturing = (not captured and t >= s[REFERENCE_TIME] - s[TOLERANCE]) or (
+        captured and s[CAPTURE_TIME] == t
+    )
+    compensating = s[COMPENSATE] != 0.0 and (capturing or captured)
+    if compensating:  # only the axes of the yaw-0 frame P0
+        ok, x0, y0, _, _ = _aligned_axes(u, x_O)
+        C_PI, w_P, dw_P = (x0, y0, u), x0, y0  # P: after the capture below
+    else:  # P0 = F(û, x_O) is the reference
+        r2 = r_norm * r_norm
+        dx_O = _scaled(-(h / r2), r_hat)
+        ddx_O = _combination(
+            2.0 * h * _dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
+        )
+        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
+        x0, y0 = C_PI[0], C_PI[1]
+    if not ok:
+        return ALONG_X_O
+    if capturing:
+        found, latitude = _latitude(r_T)
+        if not found:
+            return AT_POLE
+        up, east, north = _tangent_frame(r_T, latitude)
+        d = ground_line(u, x0, up)
+        defined, azimuth = _azimuth(d, east, north)
+        if not defined:
+            return GRAZING
+        g = _divided(d, _norm(d))
+        state[CAPTURED], state[CAPTURE_TIME], state[AZIMUTH_REF] = 1.0, t, azimuth
+        state[LATITUDE] = latitude
+        for k in range(3):
+            state[G_REF + k] = g[k]
+    if compensating:
+        angle = EARTH_RATE * (t - state[CAPTURE_TIME])
+        c, sn = math.cos(angle), math.sin(angle)
+        gx, gy, gz = state[G_REF], state[G_REF + 1], state[G_REF + 2]
+        g = (c * gx - sn * gy, sn * gx + c * gy, gz)
+        dg = _scaled(EARTH_RATE, _cross(_Z, g))
+        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, _scaled(EARTH_RATE, _cross(_Z, dg)))
+        if not ok:
+            return ALONG_G
+    C_RI, w, dw = C_PI, w_P, dw_P
+    mounted = s[MOUNTED] != 0.0
+    if mounted:
+        C_RP = s[C_RP_ : C_RP_ + 9]
+        M = ((C_RP[0], C_RP[1], C_RP[2]), (C_RP[3], C_RP[4], C_RP[5]), (C_RP[6], C_RP[7], C_RP[8]))
+        C_RI, w, dw = _rows_product(M, C_PI), _rows_times(M, w_P), _rows_times(M, dw_P)
+
+    # q_RI with its sign continued; the 1-2-3 angles relative to O on the anchor's branch
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C_RI
+    q = quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+    anchored = s[ANCHORED] != 0.0
+    anchor_euler = (s[ANCHOR_EULER], s[ANCHOR_EULER + 1], s[ANCHOR_EULER + 2])
+    if anchored and _dot4(q, s[ANCHOR_Q : ANCHOR_Q + 4]) < 0.0:
+        q = (-q[0], -q[1], -q[2], -q[3])
+    if not mounted:  # eq (11) and the yaw of eq (12), continued from the anchor
+        x, y_, z = _rows_times(C_OI, u)
+        psi = math.atan2(_dot(C_PI[0], y0), _dot(C_PI[0], x0)) if compensating else 0.0
+        euler = (-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi)
+        if anchored:
+            euler = _unwrap3(euler, anchor_euler)
+    else:
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _rows_product(C_RI, _transposed(C_OI))
+        q_RO = quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        euler = euler123(q_RO, dcm(q_RO), anchor_euler, anchored)
+
+    rotation = 0.0
+    if state[CAPTURED] != 0.0:
+        up, east, north = _tangent_frame(r_T, state[LATITUDE])
+        defined, azimuth = _azimuth(ground_line(u, C_PI[0], up), east, north)
+        if not defined:
+            return GRAZING
+        rotation = wrap_pi(azimuth - state[AZIMUTH_REF])
+    for k in range(3):
+        values[Y_W + k], values[Y_DW + k], values[Y_EULER + k] = w[k], dw[k], euler[k]
+        state[LAST_EULER + k] = euler[k]
+    for k in range(4):
+        values[Y_Q + k] = q[k]
+        state[LAST_Q + k] = q[k]
+    state[LASTED] = 1.0
+    values[Y_LOOK] = math.atan2(_norm(_cross(u, r_hat)), -_dot(u, r_hat))
+    values[Y_RANGE] = s_range
+    values[Y_ROTATION] = rotation
+    return OK
+
+
+@jitable
+def _dot4(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]

@@ -49,8 +49,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
+from .flat import StateTable
+from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .variables import output, parameter
+from .variables import Layout, output, parameter
 
 DEG = math.pi / 180.0
 DEFAULT_TURNAROUND = 1.0  # s; see the module docstring
@@ -91,30 +95,36 @@ class SweepAxis:
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         """(angle, rate, acceleration) at time t (t = 0: at +A, starting toward −A)."""
-        A, r, tau = self.amplitude, self.rate, self.turnaround
-        if A == 0:
-            return 0.0, 0.0, 0.0
-        half = 0.5 * self.period
-        s = t % self.period
-        sign = 1.0
-        if s >= half:
-            s -= half
-            sign = -1.0
-        ramp = 0.5 * tau
-        if s < ramp - SNAP:  # leaving the upper turning point
-            return (
-                sign * (A - r * s * s / tau),
-                sign * (-2.0 * r * s / tau),
-                sign * (-2.0 * r / tau),
-            )
-        w = half - s
-        if tau > 0 and w <= ramp + SNAP:  # arriving at the lower turning point
-            return (
-                sign * (-A + r * w * w / tau),
-                sign * (-2.0 * r * w / tau),
-                sign * (2.0 * r / tau),
-            )
-        return sign * (A + 0.25 * r * tau - r * s), -sign * r, 0.0
+        return sweep_at(self.amplitude, self.rate, self.turnaround, self.period, t)
+
+
+@jitable
+def sweep_at(A: float, r: float, tau: float, period: float, t: float) -> tuple:
+    """(angle, rate, acceleration) at time t of the sweep of amplitude A, rate r,
+    turnaround τ and period P (module docstring; A = 0: parked at zero)."""
+    if A == 0:
+        return 0.0, 0.0, 0.0
+    half = 0.5 * period
+    s = t % period
+    sign = 1.0
+    if s >= half:
+        s -= half
+        sign = -1.0
+    ramp = 0.5 * tau
+    if s < ramp - SNAP:  # leaving the upper turning point
+        return (
+            sign * (A - r * s * s / tau),
+            sign * (-2.0 * r * s / tau),
+            sign * (-2.0 * r / tau),
+        )
+    w = half - s
+    if tau > 0 and w <= ramp + SNAP:  # arriving at the lower turning point
+        return (
+            sign * (-A + r * w * w / tau),
+            sign * (-2.0 * r * w / tau),
+            sign * (2.0 * r / tau),
+        )
+    return sign * (A + 0.25 * r * tau - r * s), -sign * r, 0.0
 
 
 class SweepPlanner(Model):
@@ -203,34 +213,43 @@ class SweepPlanner(Model):
         ),
     )
 
+    #: step() only advances t (the commands are functions of time only)
+    STATELESS = True
+
     def initialize(self, t0):
         p = self.p
-        self.roll = SweepAxis(p.roll_amplitude, p.roll_rate, p.turnaround_time, "roll")
-        self.pitch = SweepAxis(p.pitch_amplitude, p.pitch_rate, p.turnaround_time, "pitch")
-        self.sign2 = -1.0 if p.symmetric else 1.0
-        outputs = self.layout.range["output"]
-        self._outputs = slice(outputs.start, outputs.stop)
+        self.roll = roll = SweepAxis(p.roll_amplitude, p.roll_rate, p.turnaround_time, "roll")
+        self.pitch = pitch = SweepAxis(p.pitch_amplitude, p.pitch_rate, p.turnaround_time, "pitch")
+        self.state = np.array(
+            [roll.amplitude, roll.rate, roll.turnaround, roll.period]
+            + [pitch.amplitude, pitch.rate, pitch.turnaround, pitch.period]
+            + [-1.0 if p.symmetric else 1.0]
+        )
         self.t = t0
 
     def step(self, t, dt):
-        self.t = t + dt  # the commands are functions of time only
+        self.t = t + dt
 
     def output(self):
-        roll, roll_rate, roll_accel = self.roll(self.t)
-        pitch, pitch_rate, pitch_accel = self.pitch(self.t)
-        k = self.sign2
-        # the outputs are contiguous in table order: one write instead of six
-        self.values[self._outputs] = (
-            roll,
-            k * roll,
-            pitch,
-            k * pitch,
-            roll_rate,
-            k * roll_rate,
-            pitch_rate,
-            k * pitch_rate,
-            roll_accel,
-            k * roll_accel,
-            pitch_accel,
-            k * pitch_accel,
-        )
+        sweep_output(self.values, self.state, self.t)
+
+
+# -- kernel (components/jit.py) -------------------------------------------------------
+Y_OUTPUTS = Layout(SweepPlanner.VARIABLES).range["output"].start  # the outputs, in order
+#: the state array: each axis's (A, r, τ, P), and the sign of payload 2 (−1: symmetric)
+STATE = StateTable(roll=4, pitch=4, sign2=1)
+ROLL, PITCH, SIGN2 = STATE.offsets
+
+
+@output_kernel(SweepPlanner)
+def sweep_output(values, state, t):
+    """Both payloads' commands at time t: payload 2 = sign2 × payload 1."""
+    s = floats(state)
+    roll, roll_rate, roll_accel = sweep_at(s[ROLL], s[ROLL + 1], s[ROLL + 2], s[ROLL + 3], t)
+    pitch, pitch_rate, pitch_accel = sweep_at(s[PITCH], s[PITCH + 1], s[PITCH + 2], s[PITCH + 3], t)
+    k = s[SIGN2]
+    commands = (roll, pitch, roll_rate, pitch_rate, roll_accel, pitch_accel)
+    for i in range(6):  # the outputs in table order: (payload 1, payload 2) of each
+        values[Y_OUTPUTS + 2 * i] = commands[i]
+        values[Y_OUTPUTS + 2 * i + 1] = k * commands[i]
+    return 0

@@ -72,14 +72,24 @@ SWITCHES = {
             "AGILESAT_JIT",
             True,
             _flag,
-            "1: the model kernels run compiled after AGILESAT_JIT_AFTER calls; 0: their Python",
+            "1: the model kernels run compiled when a run pays for it (components/jit.py); "
+            "0: their Python",
             "components/jit.py, at import",
         ),
         Switch(
             "AGILESAT_JIT_AFTER",
             50_000,
             _count,
-            "the calls of a kernel before it runs compiled; 0: from the first call",
+            "the calls of a kernel before it runs compiled, fewer where a run's length says "
+            "it pays; 0: from the first call",
+            "components/jit.py, at import",
+        ),
+        Switch(
+            "AGILESAT_JIT_RUNS",
+            1,
+            _count,
+            "the runs a process expects to make of each model (a campaign worker's share): "
+            "with a run's steps, it decides whether the kernels run compiled from the start",
             "components/jit.py, at import",
         ),
         Switch(

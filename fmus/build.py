@@ -35,6 +35,7 @@ from html import escape
 from importlib import metadata
 from pathlib import Path
 
+from ..components import jit
 from . import FMUS, model_class, protocol
 from .model_description import model_description
 from .source_facts import facts
@@ -79,9 +80,9 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
         return target
     package = f"agilesat_{digest}"
     entry = _entry_module(name, package)
-    entries = fmu_entries(name, model_class(name), digest, sources, entry, out_dir)
-    write_archive(target, entries)
-    if any(b"@kernel\n" in path.read_bytes() for path in sources.values()):
+    model = model_class(name)
+    write_archive(target, fmu_entries(name, model, digest, sources, entry, out_dir))
+    if jit.kernels(sys.modules[model.__module__]):
         compile_kernels(target, name, package)
     return target
 

@@ -1,9 +1,10 @@
 """A model's C entries: its step and output kernels (components/jit.py, "The kernel
 convention") as C functions, for the shim's C step path (``fast_paths.py``).
 
-An entry is ``int32 (double *values, int64 n_values, double *state, int64 n_state,
-double x)``: a numba ``cfunc`` that calls the kernel's compiled function on the two arrays
-(x: the step size, or the time) and returns its status: 0 when it did everything the
+A step entry is ``int32 (double *values, int64 n_values, double *state, int64 n_state,
+double t, double dt)``, an output entry the same without ``dt``: a numba ``cfunc`` that
+calls the kernel's compiled function on the two arrays (t: the model's time) and returns
+its status: 0 when it did everything the
 method does but advance ``t``, anything else to leave the call to the method (which then
 raises or warns with the readable message).  The same machine code as the compiled kernel,
 no second copy of the physics.  An entry exists once its kernel has switched to its
@@ -26,8 +27,9 @@ from ..components import jit
 class CEntry:
     """A step or output kernel as a C function (module docstring)."""
 
-    def __init__(self, kernel: jit.Kernel):
+    def __init__(self, kernel: jit.Kernel, role: str):
         self.kernel = kernel
+        self.role = role  # "step" or "output"
         self._address: int | None = None
 
     @property
@@ -43,19 +45,20 @@ class CEntry:
         from numba.core.ccallback import CFunc
 
         py_func, name = self.kernel.py_func, self.kernel.__name__ + "_c"
+        template = _step_template if self.role == "step" else _output_template
         names = {"co_name": name}
-        if hasattr(_c_template.__code__, "co_qualname"):  # Python 3.11 on
+        if hasattr(template.__code__, "co_qualname"):  # Python 3.11 on
             names["co_qualname"] = self.kernel.__qualname__ + "_c"
-        code = _c_template.__code__.replace(
+        code = template.__code__.replace(
             co_filename=py_func.__code__.co_filename,
             co_firstlineno=py_func.__code__.co_firstlineno,
             **names,
         )
         namespace = {"__name__": py_func.__module__, "carray": numba.carray}
         namespace["kernel"] = self.kernel.compiled
-        entry = type(_c_template)(code, namespace, name)
+        entry = type(template)(code, namespace, name)
         entry.__module__ = py_func.__module__
-        cfunc = CFunc(entry, _signature(numba), locals={}, options={})
+        cfunc = CFunc(entry, signature(numba, self.role), locals={}, options={})
         try:
             cfunc._cache = jit.content_cache(entry)
         except (OSError, RuntimeError, AttributeError) as exc:
@@ -67,18 +70,28 @@ class CEntry:
         return cfunc
 
 
-def _c_template(values, n_values, state, n_state, x):
-    """The body of every C entry (``kernel`` and ``carray`` are its globals)."""
+def _step_template(values, n_values, state, n_state, t, dt):
+    """The body of every step entry (``kernel`` and ``carray`` are its globals)."""
     try:
-        return kernel(carray(values, n_values), carray(state, n_state), x)  # noqa: F821
+        return kernel(carray(values, n_values), carray(state, n_state), t, dt)  # noqa: F821
     except Exception:  # noqa: BLE001 - the caller runs the Python, which raises it
         return -1
 
 
-def _signature(numba):
-    double_p = numba.types.CPointer(numba.types.float64)
+def _output_template(values, n_values, state, n_state, t):
+    """The body of every output entry (``kernel`` and ``carray`` are its globals)."""
+    try:
+        return kernel(carray(values, n_values), carray(state, n_state), t)  # noqa: F821
+    except Exception:  # noqa: BLE001 - the caller runs the Python, which raises it
+        return -1
+
+
+def signature(numba, role: str) -> tuple:
+    """(argument types, return type) of a C entry of ``role`` ("step" or "output")."""
+    double, double_p = numba.types.float64, numba.types.CPointer(numba.types.float64)
     i64 = numba.types.int64
-    return (double_p, i64, double_p, i64, numba.types.float64), numba.types.int32
+    times = (double, double) if role == "step" else (double,)
+    return (double_p, i64, double_p, i64, *times), numba.types.int32
 
 
 class Entries(NamedTuple):
@@ -99,7 +112,7 @@ def of(model_class) -> Entries:
     """The C entries of ``model_class`` (one per kernel and process)."""
     step, output = jit.declared(model_class)
     return Entries(
-        CEntry(step) if step else None,
-        CEntry(output) if output else None,
+        CEntry(step, "step") if step else None,
+        CEntry(output, "output") if output else None,
         bool(getattr(model_class, "STATELESS", False)),
     )

@@ -27,7 +27,7 @@ import uuid
 
 DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
 
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 3.0
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 4.0
 
 #: per scalar: a String (or anything the shim leaves alone), a Real parameter, output,
 #: input, input some output depends on directly (feedthrough), an Integer, a Boolean

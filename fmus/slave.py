@@ -44,12 +44,14 @@ import functools
 import json
 import math
 import os
+import sys
 import traceback
 
 import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
+from ..components import jit
 from ..components.model import ModelError
 from ..components.switches import SwitchError
 from . import CONFIGURATION, configuration_key, fmu_state, state_layout
@@ -166,6 +168,7 @@ class ModelSlave(Fmi2Slave):
         self._plans: dict = {}
         self._mode = "instantiated"
         self._start_time = 0.0
+        self._stop_time = None  # setupExperiment's, when defined
         self._state_valid = False
 
     def _configure(self, resources) -> None:
@@ -211,6 +214,8 @@ class ModelSlave(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._require_mode("instantiated")
         self._start_time = float(start_time)
+        stop = None if stop_time is None else float(stop_time)
+        self._stop_time = stop if stop is not None and math.isfinite(stop) else None
 
     @_guarded(None)
     def enter_initialization_mode(self):
@@ -234,6 +239,9 @@ class ModelSlave(Fmi2Slave):
                 f"time discontinuity: the last step ended at "
                 f"t={self._next_time!r}, doStep starts at t={current_time!r}"
             )
+        if self._stop_time is not None:  # the first step: the run's length decides the tier
+            steps, self._stop_time = (self._stop_time - current_time) / step_size, None
+            jit.expect(sys.modules[type(self.model).__module__], steps)
         self.model.step(current_time, step_size)
         self._flush_warnings()
         self._next_time = current_time + step_size

@@ -22,6 +22,13 @@ values.  Refused, with the attribute and what was expected:
 
 Where the reference holds None (a value set only once the model has run, a
 parameter-dependent one), anything the format can hold is accepted.
+
+The reference of an initialised state is the model initialised with the state's own
+values (its parameters), so that an array sized from the parameters (a star tracker's
+pipeline, an estimator's history) is checked against what they make; a model's kernels
+also index its state array with rows of it (counts, places, section lengths), which
+:meth:`Model.state_problem` checks against that reference.  Values that do not initialise
+the model fall back to the class's reference.
 """
 
 from __future__ import annotations
@@ -40,7 +47,22 @@ _INT32 = (-(2**31), 2**31 - 1)
 def reference(model_class) -> dict | None:
     """The attributes of a ``model_class`` initialised at its defaults (None: it cannot
     be, then only names are checked, against the class)."""
+    return _initialised(model_class, None, None)
+
+
+@functools.lru_cache(maxsize=32)
+def _reference_of(model_class, parameters: bytes, strings: tuple) -> dict | None:
+    """The attributes of a ``model_class`` initialised with these parameter values (the
+    parameter group of its value array) and strings (None: it cannot be)."""
+    return _initialised(model_class, np.frombuffer(parameters), dict(strings))
+
+
+def _initialised(model_class, parameters, strings) -> dict | None:
     model = model_class()
+    if parameters is not None:
+        group = model.layout.range["parameter"]
+        model.values[group.start : group.stop] = parameters
+        model.strings.update(strings)
     try:
         model.initialize(0.0)
     except Exception:  # noqa: BLE001 - a model that needs inputs to initialise
@@ -51,9 +73,14 @@ def reference(model_class) -> dict | None:
 def check(model_class, model_state, initialized: bool, outputs_valid: bool) -> None:
     """StateError naming the first thing in ``model_state`` (values, strings,
     attributes) that does not fit ``model_class``'s layout (module docstring)."""
-    values, _, attributes = model_state
+    values, strings, attributes = model_state
     _check_values(model_class, values, outputs_valid)
-    ref = reference(model_class)
+    ref = None
+    if initialized:  # the reference of the state's own parameters
+        group = model_class.table_layout().range["parameter"]
+        parameters = values[group.start : group.stop].tobytes()
+        ref = _reference_of(model_class, parameters, tuple(sorted(strings.items())))
+    ref = ref or reference(model_class)
     model = model_class.__name__
     for name, value in attributes.items():
         if (ref is None or name not in ref) and getattr(model_class, name, 0) is not None:
@@ -70,6 +97,9 @@ def check(model_class, model_state, initialized: bool, outputs_valid: bool) -> N
         missing = sorted(n for n in ref if n not in attributes and not hasattr(model_class, n))
         if missing:
             raise StateError(f"the state of an initialised {model} lacks {missing}")
+        problem = model_class.state_problem(attributes, ref)
+        if problem:
+            raise StateError(f"the state's {problem}")
 
 
 def _class_member(model_class, name: str) -> str:

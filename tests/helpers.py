@@ -63,7 +63,8 @@ def logged(instance, status: str = "error") -> list[str]:
 def operating_point(name: str, rng) -> dict:
     """Real input values (by variable) away from zero: quaternions unit, the staring
     guidance fed a real orbit and target and the disturbance torques a real orbit (from
-    OrbitEnvironment's defaults); Boolean and Integer inputs keep their start values."""
+    OrbitEnvironment's defaults), the wheels' torque within their limit; Boolean and
+    Integer inputs keep their start values."""
     import numpy as np
 
     from agilesat.fmus import model_class as _model_class
@@ -76,6 +77,8 @@ def operating_point(name: str, rng) -> dict:
         if v.causality == "input" and v.type == "Real":
             x = rng.uniform(-0.3, 0.3, v.size)
             values[v.name] = x / np.linalg.norm(x) if v.name.startswith("q_") else x
+    if name == "Flywheel":  # within the wheels' torque limit (else a warning at the start)
+        values["tau_cmd"] *= 0.5
     if name == "DisturbanceTorques":  # the atmosphere and the field need a real height
         values.update(r_I=orbit.get("r_I"), v_I=orbit.get("v_I"))
     return values

@@ -72,11 +72,16 @@ void fast_paths_connect(FastPaths *f, Ask ask, void *shim) {
 }
 
 /* ---- the C step path ------------------------------------------------------------------ */
-typedef int32_t (*Entry)(double *values, int64_t n_values, double *state, int64_t n_state,
-                         double x);
+/* fmus/c_entries.py: the step entry gets the model's time and the step size, the output
+ * entry the time */
+typedef int32_t (*StepEntry)(double *values, int64_t n_values, double *state, int64_t n_state,
+                             double t, double dt);
+typedef int32_t (*OutputEntry)(double *values, int64_t n_values, double *state,
+                               int64_t n_state, double t);
 
 typedef struct {
-    Entry step, output;
+    StepEntry step;
+    OutputEntry output;
     double *state, *saved;
     size_t n_state, start, stop;   /* outputs: values[start:stop] */
 } Armed;
@@ -84,8 +89,8 @@ typedef struct {
 /* The block's addresses and sizes, checked; 0 when they do not fit together. */
 static int armed(const FastPaths *f, Armed *a) {
     const double *b = f->block;
-    a->step = (Entry)address(b[B_STEP]);
-    a->output = (Entry)address(b[B_OUTPUT]);
+    a->step = (StepEntry)address(b[B_STEP]);
+    a->output = (OutputEntry)address(b[B_OUTPUT]);
     a->state = address(b[B_STATE]);
     a->saved = address(b[B_SAVED]);
     if (!a->state || !a->saved || !(b[B_N_STATE] >= 0 && b[B_N_STATE] < (double)MAX_VALUES) ||
@@ -140,7 +145,8 @@ int fast_do_step(FastPaths *f, double t, double h) {
     if (control[C_STEP] == C_STEP_ENTRY) {
         if (!a.step) return 0;
         snapshot(f, &a);
-        if (a.step(f->values, (int64_t)f->n_values, a.state, (int64_t)a.n_state, h) != 0) {
+        if (a.step(f->values, (int64_t)f->n_values, a.state, (int64_t)a.n_state,
+                   f->block[B_TIME], h) != 0) {
             restore(f, &a);
             f->c_fallbacks++;
             return 0;

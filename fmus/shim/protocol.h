@@ -10,7 +10,7 @@
 /* the handshake */
 #define FAST_PATH_VR 4294967295u
 #define FAST_PATH_N 6
-#define FAST_PATH_VERSION 3.0
+#define FAST_PATH_VERSION 4.0
 
 /* kind[]: per scalar */
 #define KIND_OTHER 0

@@ -255,6 +255,7 @@ def execute(
             plan.spec.algorithm,
             plan.signals,
             plan.points,
+            -(-plan.total // max(1, workers)),  # the runs each worker makes
             key=f"agilesat-runs-{batch[0]}-{len(batch)}-{token}",
             pure=False,
         )

@@ -73,10 +73,22 @@ def run_one(
 
 
 def run_batch(
-    runs: list[tuple[int, dict]], target: str, step, stop, algorithm, signals, points
+    runs: list[tuple[int, dict]],
+    target: str,
+    step,
+    stop,
+    algorithm,
+    signals,
+    points,
+    share: int = 1,
 ) -> list[dict]:
     """Several runs in one Dask task (one round trip through the scheduler for all), each
-    with its own record: ``runs`` is [(index, parameters), ...]."""
+    with its own record: ``runs`` is [(index, parameters), ...].  ``share``: the runs this
+    worker is expected to make, which, from its first run, lets the models' kernels run
+    compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs load,
+    unless set)."""
+    if not _started:
+        os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))
     return [
         run_one(index, target, parameters, step, stop, algorithm, signals, points)
         for index, parameters in runs

@@ -26,9 +26,9 @@ def twins(model):
 
 def _copy(model):
     other = type(model)()
-    other.set_state(model.get_state())
     for name in type(model)._NOT_STATE - Model._NOT_STATE:  # what does not evolve: shared
         setattr(other, name, getattr(model, name))
+    other.set_state(model.get_state())
     other.warnings[:] = model.warnings
     return other
 
@@ -45,7 +45,7 @@ def check(model, t, cases: dict):
     stateless = c_entries.of(type(model)).stateless
     alone, method = twins(model)
     if step is not None:
-        status = step(alone.values, alone.state, STEP)
+        status = step(alone.values, alone.state, model.t, STEP)
         method.step(t, STEP)
         cases["step", status == 0] = cases.get(("step", status == 0), 0) + 1
         if status == 0:
@@ -81,8 +81,10 @@ def run(model, inputs, steps: int) -> dict:
 
 def test_the_models_with_kernels():
     assert DECLARING == [
-        "CmgCluster", "CmgSteering", "OrbitEnvironment", "PitchManeuverController",
-        "SatelliteDynamics",
+        "AttitudeController", "AttitudeEstimator", "CmgCluster", "CmgSteering",
+        "DisturbanceTorques", "Flywheel", "Gyro", "OrbitEnvironment", "PayloadGimbals",
+        "PitchManeuverController", "SatelliteDynamics", "StarTracker", "StaringGuidance",
+        "SweepPlanner",
     ]  # fmt: skip
 
 
@@ -111,6 +113,19 @@ def test_a_saturated_cluster_warns_once_and_its_kernel_steps_alone_after():
     assert len(model.warnings) == 2
 
 
+def test_a_wheel_at_its_limit_warns_once_and_its_kernel_steps_alone_after():
+    """The wheels' step kernel asks for its method only when a wheel reaches a limit it
+    was not at (the warning names the wheel and the limit)."""
+    model = model_class("Flywheel")().start(0.0)
+    torques = [0.1, 0.5, 0.5, 0.5, 0.1, 0.5]  # x: within, beyond, ..., within, beyond
+    cases = run(model, lambda k: {"tau_cmd": [torques[k], 0.0, 0.0]}, 6)
+    assert cases == {("step", True): 4, ("step", False): 2, ("output", True): 6}
+    assert model.warnings == [
+        f"t={t:.3f} s: wheel 1 motor torque at the limit (the commanded torque is not delivered)"
+        for t in (STEP, 5 * STEP)
+    ]
+
+
 @pytest.mark.parametrize("law", ["PSEUDO_INVERSE", "SR_INVERSE"])
 def test_a_singular_steering_warns_once(law):
     """At a singular configuration (all gimbals at zero: every spin along its reference,
@@ -126,15 +141,9 @@ def test_a_singular_steering_warns_once(law):
     assert len(model.warnings) == 1 and "singular gimbal configuration" in model.warnings[0]
 
 
-def test_a_given_orbit_is_the_methods_at_every_new_time():
-    """SGP4 (a TLE) is the Python's: the output kernel asks for its method whenever the
-    given orbit is not that of the time asked for."""
+def test_sgp4_is_the_kernels_own():
+    """SGP4 (a TLE): the output kernel calls the sgp4 package's compiled SGP4 itself
+    (components/ephemeris.py, sgp4_entry), at every new time."""
     model = model_class("OrbitEnvironment")(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1])
     model.start(0.0)
-    cases = run(model, lambda k: {}, 3)
-    assert cases == {("output", False): 3}
-    alone, method = twins(model)
-    _, output = jit.declared(type(model))
-    assert output(alone.values, alone.state, model.t) == 0  # given at this very time
-    method.output()
-    same(alone, method)
+    assert run(model, lambda k: {}, 3) == {("output", True): 3}

@@ -55,7 +55,7 @@ def _both(function, *arrays_and_args):
 def test_step_and_output_kernels_are_bit_identical_to_the_python(seed, spin, dt, gravity_gradient):
     model = _random_dynamics(seed, gravity_gradient, spin)
     (compiled, arrays), (readable, py_arrays) = _both(
-        satellite_dynamics._step, model.values, model.state, dt
+        satellite_dynamics._step, model.values, model.state, 0.0, dt
     )
     assert compiled == readable == satellite_dynamics.OK
     assert all(np.array_equal(a, b) for a, b in zip(arrays, py_arrays))
@@ -366,9 +366,9 @@ def test_a_kernel_runs_its_python_until_the_threshold_then_the_compiled_function
     states = [m.state.copy() for m in models]
     results = []
     for k, model in enumerate(models):
-        results.append(tiered(model.values, model.state, 0.1))
+        results.append(tiered(model.values, model.state, 0.0, 0.1))
         assert (tiered._run is tiered.compiled) == (k >= 3)
-    expected = [tiered.py_func(m.values, state, 0.1) for m, state in zip(models, states)]
+    expected = [tiered.py_func(m.values, state, 0.0, 0.1) for m, state in zip(models, states)]
     assert results == expected
     assert all(np.array_equal(m.state, state) for m, state in zip(models, states))
 
@@ -447,3 +447,49 @@ def test_the_c_host_with_compiled_kernels_matches_the_master(fmus, c_host, tmp_p
     names, data = c.read_csv(tmp_path / "c.csv")
     m_names, m_data = c.master_results(ssd, c.STOP, tmp_path / "master.npz")
     assert np.array_equal(data, m_data[:, [m_names.index(n) for n in names]])
+
+
+_TIER = """
+import os, sys
+os.environ["AGILESAT_CACHE_DIR"] = sys.argv[1]
+if len(sys.argv) > 3:
+    os.environ["AGILESAT_JIT_RUNS"] = sys.argv[3]
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+for stop in sys.argv[2].split(","):
+    simulate(get("scan_pitch").ssd, stop=float(stop))
+    # the most calls a kernel of the FMUs made of its Python; -1: numba not imported
+    modules = [m for n, m in list(sys.modules.items()) if n.startswith("agilesat_")]
+    jits = {m.__name__.split(".")[0]: m for m in modules if m.__name__.endswith(".jit")}
+    calls = [k.calls for m in modules if ".components." in m.__name__
+             for k in jits[m.__name__.split(".")[0]].kernels(m).values()]
+    print(max(calls) if "numba" in sys.modules else -1)
+"""
+
+
+def _tier(cache, stops: str, runs: str = "") -> list[int]:
+    result = run_python(_TIER, cache, stops, *([runs] if runs else []))
+    assert result.returncode == 0, result.stderr
+    return [int(x) for x in result.stdout.split()]
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@needs_numba
+def test_the_tier_is_decided_at_the_first_step_from_the_runs_length(fmus, tmp_path):
+    """With the compiled code cached, a run expected to take PAYS_AFTER steps or more runs
+    compiled from its first step; a shorter one runs the Python (no numba import), unless
+    the process made runs before (a notebook) or expects several (AGILESAT_JIT_RUNS, a
+    campaign worker); with nothing cached, only from AFTER steps."""
+    cache = str(tmp_path / "cache")
+    seconds = jit.PAYS_AFTER * 0.05  # of scan_pitch at its step
+    short, long = round(0.6 * seconds), round(1.1 * seconds)
+    assert _tier(cache, f"{long}") == [-1]  # nothing cached: the Python
+    fill = "import os\nos.environ['AGILESAT_JIT_AFTER'] = '0'\n" + _TIER
+    assert run_python(fill, cache, "1").returncode == 0  # compiles, and caches
+    assert _tier(cache, f"{short}") == [-1]  # too short to pay: the Python
+    first_outputs = 3  # outputs evaluated in initialisation, before the first step
+    assert _tier(cache, f"{long}") == [first_outputs]  # compiled from the first step
+    steps = round(short / 0.05)
+    assert _tier(cache, f"{short},{short}")[1] <= steps + 2 * first_outputs  # from its start
+    assert _tier(cache, f"{short}", "2") == [first_outputs]  # a worker of two runs

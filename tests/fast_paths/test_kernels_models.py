@@ -9,34 +9,57 @@ import numpy as np
 import pytest
 
 from agilesat.components import (
+    attitude_controller,
+    attitude_estimator,
     cmg_cluster,
     cmg_steering,
+    disturbance_torques,
     flat,
+    flywheel,
+    gyro,
     jit,
     orbit_environment,
+    payload_gimbals,
     pitch_maneuver_controller,
+    star_tracker,
+    staring_guidance,
+    sweep_planner,
 )
+from agilesat.components.attitude_controller import AttitudeController
+from agilesat.components.attitude_estimator import AttitudeEstimator
 from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
 from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
+from agilesat.components.disturbance_torques import DisturbanceTorques
+from agilesat.components.flywheel import Flywheel
+from agilesat.components.gyro import Gyro
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment
+from agilesat.components.payload_gimbals import PayloadGimbals
 from agilesat.components.pitch_maneuver_controller import PitchManeuverController
 from agilesat.components.rotations import dcm, quat_of_rows
 from agilesat.components.satellite_dynamics import SatelliteDynamics
-from agilesat.orchestration.scenarios import scan_pitch
+from agilesat.components.sensing import quat_exp
+from agilesat.components.star_tracker import StarTracker
+from agilesat.components.staring_guidance import StaringGuidance
+from agilesat.components.sweep_planner import SweepPlanner
+from agilesat.orchestration.scenarios import scan_pitch, video_sar
 from helpers import ISS_TLE
 
 needs_numba = pytest.mark.skipif(
     jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
 )
-MODULES = (cmg_cluster, cmg_steering, orbit_environment, pitch_maneuver_controller)
+MODULES = (
+    attitude_controller, attitude_estimator, cmg_cluster, cmg_steering, disturbance_torques,
+    flywheel, gyro, orbit_environment, payload_gimbals, pitch_maneuver_controller,
+    staring_guidance, star_tracker, sweep_planner,
+)  # fmt: skip
 ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
 STEP = 0.05
 
 
 @pytest.fixture(params=["compiled", "py_func"])
 def path(request, monkeypatch):
-    """Every kernel of the four models running its compiled function or its Python."""
+    """Every kernel of the models running its compiled function or its Python."""
     for kernel in ALL_KERNELS:
         monkeypatch.setattr(kernel, "_run", getattr(kernel, request.param))
     return request.param
@@ -58,7 +81,10 @@ def both(run):
 
 
 def snapshot(model):
-    return model.values.tobytes(), model.state.tobytes(), list(model.warnings)
+    state = model.state.copy()
+    if isinstance(model, OrbitEnvironment):  # the addresses of its own SGP4 record
+        state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = 0.0
+    return model.values.tobytes(), state.tobytes(), list(model.warnings)
 
 
 # -- scan_pitch in-process: the five models, Jacobi coupling --------------------------------
@@ -119,7 +145,118 @@ def random_run(model, steps: int, seed: int, scale: float, inputs=None):
     return record
 
 
+def unit_quaternions(seed: int, scale: float):
+    """Random inputs in (−scale, scale), the quaternions made unit (a function of k)."""
+
+    def inputs(k, v):
+        rng = np.random.default_rng([seed, k, sum(map(ord, v.name))])
+        x = rng.uniform(-scale, scale, size=v.size)
+        return x / np.linalg.norm(x) if v.name.startswith("q_") else x
+
+    return inputs
+
+
+def in_orbit(seed: int, scale: float):
+    """:func:`unit_quaternions`, with r_I and v_I of a low orbit (any direction)."""
+    random = unit_quaternions(seed, scale)
+
+    def inputs(k, v):
+        x = random(k, v)
+        size = {"r_I": 7.0e6, "v_I": 7.5e3}.get(v.name)
+        return size * x / np.linalg.norm(x) if size else x
+
+    return inputs
+
+
+def tracked(seed: int, scale: float):
+    """An estimator's inputs: a gyro reading of a body turning at a constant rate, and a
+    star tracker's samples at 4 Hz, 0.2 s late, slightly wrong (one in seven invalid); the
+    orbit frame turning at a constant rate."""
+    rng = np.random.default_rng(seed)
+    rate, errors = rng.uniform(-scale, scale, 3) * 0.1, rng.normal(0.0, 1e-4, (2000, 3))
+    orbit_rate = 1.1e-3 * scale
+
+    def inputs(k, v):
+        t = k * STEP
+        sample = max(0, int((t - 0.2) * 4.0))  # the latest released
+        t_meas = sample / 4.0
+        return {
+            "w_meas_B": rate + errors[k] * 10.0,
+            "q_BI_meas": quat_exp(tuple(rate * t_meas + errors[sample])),
+            "meas_valid": sample % 7 != 3,
+            "t_meas": t_meas,
+            "q_OI": quat_exp((0.0, orbit_rate * t, 0.0)),  # an orbit frame turning about y
+            "w_OI_O": (0.0, -orbit_rate, 0.0),
+        }[v.name]
+
+    return inputs
+
+
+def video_sar_pass(seed: int, scale: float):
+    """The video_sar pass (OrbitEnvironment) at each step's time, the target moved a few km
+    in each run (the inputs StaringGuidance checks must be an orbit and its frame)."""
+    orbit = OrbitEnvironment(**video_sar.ORBIT)
+    orbit.set("target_lat", video_sar.ORBIT["target_lat"] + 1e-3 * scale)
+    orbit.start(0.0)
+    at = {}
+
+    def inputs(k, v):
+        if k not in at:
+            orbit.t = k * STEP  # the outputs are functions of time
+            orbit.output()
+            at[k] = {name: orbit.get(name) for name in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}
+        return at[k][v.name]
+
+    return inputs
+
+
 CASES = {
+    "controller": (AttitudeController, {}, unit_quaternions),
+    "controller_feedforward": (
+        AttitudeController,
+        {"acceleration_feedforward": True, "inertia": [[950, 3, -2], [3, 900, 1], [-2, 1, 800]]},
+        unit_quaternions,
+    ),
+    "guidance": (StaringGuidance, {"reference_time": 2.0}, video_sar_pass),
+    "guidance_yaw_0_tilted": (
+        StaringGuidance,
+        {"yaw_compensation": False, "boresight_B": [0.2, -0.1, 1.0]},
+        video_sar_pass,
+    ),
+    "guidance_tilted": (StaringGuidance, {"boresight_B": [0.0, 0.3, 1.0]}, video_sar_pass),
+    "sweep": (SweepPlanner, {}),
+    "gyro": (Gyro, {}),
+    "gyro_saturating_slow_no_quantisation": (
+        Gyro,
+        {"saturation": 0.3, "rate": 7.0, "quantization": 0.0},
+    ),
+    "tracker": (StarTracker, {}, unit_quaternions),
+    "tracker_late_fast": (StarTracker, {"latency": 0.6, "rate": 10.0}, unit_quaternions),
+    "estimator_random": (AttitudeEstimator, {}, unit_quaternions),
+    "estimator": (AttitudeEstimator, {"history": 0.5}, tracked),
+    "torques": (DisturbanceTorques, {}, in_orbit),
+    "torques_exponential_no_srp": (
+        DisturbanceTorques,
+        {"atmosphere": "EXPONENTIAL", "srp": False, "facet_area": [1.0] * 8 + [0.0] * 2},
+        in_orbit,
+    ),
+    "wheels": (Flywheel, {}),
+    "wheels_limited_skewed": (
+        Flywheel,
+        {
+            "torque_limit": 0.05,
+            "momentum_limit": 0.005,
+            "coulomb_friction": 0.01,
+            "axis": [[1, 0, 0], [0, 1, 0], [0, 0, 0], [0.6, 0.6, 0.5]],
+        },
+    ),
+    "wheels_coasting": (Flywheel, {"torque_limit": 0.0, "speed0": [5.0, -3.0, 0.0, 0.0]}),
+    "payloads": (PayloadGimbals, {}),
+    "payloads_accel_inputs": (PayloadGimbals, {"accel_inputs": True}),
+    "payloads_underdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 0.5}),
+    "payloads_critical": (PayloadGimbals, {"bandwidth": 3.0, "damping": 1.0}),
+    "payloads_overdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 4.0}),
+    "sweep_triangle": (SweepPlanner, {"turnaround_time": 0.0, "symmetric": False}),
     "cluster": (CmgCluster, {}),
     "cluster_slow_gimbals": (CmgCluster, {"rate_limit": 0.05, "accel_limit": 0.02}),
     "steering": (CmgSteering, {}),
@@ -151,13 +288,24 @@ CASES = {
 @pytest.mark.parametrize("case", list(CASES))
 @pytest.mark.parametrize("seed, scale", [(1, 0.8), (2, 3.0)])
 def test_each_model_on_random_inputs_is_the_same_compiled_and_in_python(case, seed, scale):
-    cls, parameters = CASES[case]
-    steps = 2400 if cls is PitchManeuverController else 300  # 120 s: every phase
-    compiled, readable = both(lambda: random_run(cls(**parameters), steps, seed, scale))
+    cls, parameters, *inputs = CASES[case]
+    steps = 2400 if cls in (PitchManeuverController, SweepPlanner) else 300  # every phase
+
+    def run():
+        feed = inputs[0](seed, scale) if inputs else None  # the same inputs in each run
+        return random_run(cls(**parameters), steps, seed, scale, feed)
+
+    compiled, readable = both(run)
     assert compiled == readable
     outputs = np.array([np.frombuffer(values) for values, _, _ in compiled])
     varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
-    assert np.count_nonzero(varying) >= varying.size - 3  # orbit: w_OI_O x, target z, v_z
+    # orbit: w_OI_O x, target z, v_z; the sweep over 120 s: no pitch reversal (pitch rate
+    # and acceleration), the triangle wave no acceleration at all
+    # and coasting wheels no motor torque, saturation, third wheel or z momentum; the
+    # estimators valid, the random one's updates and NIS (each measurement is late)
+    constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}
+    constant.update(estimator=1, estimator_random=7)
+    assert np.count_nonzero(varying) >= varying.size - constant.get(case, 3)
 
 
 @needs_numba
@@ -241,14 +389,28 @@ def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(pat
 
 
 @needs_numba
-@pytest.mark.parametrize("case", ["cluster", "steering", "pitch", "orbit_j2_eccentric_epoch"])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "cluster",
+        "steering",
+        "pitch",
+        "orbit_j2_eccentric_epoch",
+        "guidance",
+        "controller",
+        "wheels_limited_skewed",
+        "payloads",
+        "payloads_underdamped",
+        "gyro",
+        "tracker",
+        "estimator",
+    ],  # fmt: skip
+)
 def test_a_saved_state_restored_continues_bit_for_bit(case, path):
-    cls, parameters = CASES[case]
+    cls, parameters, *inputs = CASES[case]
     rng = np.random.default_rng(5)
-    inputs = {k: rng.uniform(-0.8, 0.8, size=32) for k in range(60)}
-
-    def feed(k, v):
-        return inputs[k][: v.size]
+    values = {k: rng.uniform(-0.8, 0.8, size=32) for k in range(60)}
+    feed = inputs[0](5, 0.8) if inputs else lambda k, v: values[k][: v.size]
 
     model = cls(**parameters)
     random_run(model, 30, 0, 0.0, inputs=feed)
@@ -275,7 +437,7 @@ def test_a_saved_state_restored_continues_bit_for_bit(case, path):
 @needs_numba
 @pytest.mark.parametrize("case", list(CASES))
 def test_step_and_output_are_at_most_one_kernel_call_each(case, path, monkeypatch):
-    cls, parameters = CASES[case]
+    cls, parameters, *_ = CASES[case]
     model = cls(**parameters).start(0.0)
     calls = []
     for kernel in ALL_KERNELS:
@@ -330,8 +492,93 @@ def test_quat_of_rows_compiled_is_the_python_bit_for_bit():
 def test_every_model_kernel_compiles():
     names = sorted(k.__name__ for k in ALL_KERNELS)
     assert names == [
-        "cluster_output", "cluster_step", "orbit_output", "pitch_output", "steering_output"
+        "cluster_output", "cluster_step", "controller_output", "estimator_output",
+        "estimator_step", "flywheel_output", "flywheel_step", "gimbals_output", "gimbals_step",
+        "guidance_output", "guidance_step", "gyro_output", "gyro_step", "orbit_output",
+        "pitch_output", "steering_output", "sweep_output", "torques_output", "tracker_output",
+        "tracker_step",
     ]  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
         assert type(kernel.compiled).__module__.startswith("numba")
+
+
+def hypot_cases():
+    rng = np.random.default_rng(6)
+    cases = list(zip(rng.normal(size=20000), rng.normal(size=20000)))
+    scales = 10.0 ** rng.integers(-20, 20, 5000)
+    cases += list(zip(rng.uniform(-1, 1, 5000), rng.uniform(-1, 1, 5000) * scales))
+    cases += [(x * 1e-310, y * 1e-310) for x, y in cases[:2000]]  # subnormal
+    cases += [(x * 1e300, y * 1e300) for x, y in cases[:200]]  # near overflow
+    cases += [(0.0, 0.0), (-0.0, 1.0), (3.0, -4.0), (5e-324, 5e-324), (1.7e308, 1.7e308)]
+    cases += [(math.inf, math.nan), (math.nan, 1.0), (-math.inf, 0.0)]
+    return [(float(x), float(y)) for x, y in cases]
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_hypot_is_math_hypot_bit_for_bit(function):
+    hypot = jit._numba().njit(flat.hypot) if function == "compiled" else flat.hypot
+    differs_in_libm = 0  # numba's own math.hypot is the C library's
+    for x, y in hypot_cases():
+        assert same_float(hypot(x, y), math.hypot(x, y)), (x, y)
+        with np.errstate(over="ignore"):
+            libm = float(np.hypot(x, y))
+        differs_in_libm += not same_float(libm, math.hypot(x, y))
+    assert differs_in_libm > 0  # the reason for the twin
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_fmod_is_math_fmod_bit_for_bit(function):
+    fmod = jit._numba().njit(flat.fmod) if function == "compiled" else flat.fmod
+    rng = np.random.default_rng(7)
+    xs = rng.normal(size=5000) * 10.0 ** rng.integers(-5, 15, 5000)
+    ys = np.abs(rng.normal(size=5000)) * 10.0 ** rng.integers(-3, 6, 5000)
+    cases = [*zip(xs, ys), *zip(xs, -ys), (-0.0, 86400.0), (0.0, 1.0), (5.0, math.inf)]
+    for x, y in cases:
+        assert same_float(fmod(float(x), float(y)), math.fmod(x, y)), (x, y)
+    assert math.isnan(fmod(math.inf, 1.0)) and math.isnan(fmod(1.0, 0.0))
+
+
+@needs_numba
+@pytest.mark.parametrize("function", ["compiled", "python"])
+def test_the_direct_sgp4_call_is_sgp4_tsince_bit_for_bit(function):
+    """ephemeris.sgp4_at calls the function satrec.sgp4_tsince calls (a near-Earth and a
+    resonant deep-space TLE), and reports an error where it does (a decayed orbit)."""
+    from agilesat.components.ephemeris import load_tle, sgp4_at, sgp4_entry
+
+    call = jit._numba().njit(lambda *a: sgp4_at(*a)) if function == "compiled" else sgp4_at
+    geostationary = (
+        "1 28626U 05008A   06176.46683397 -.00000205  00000-0  10000-3 0  2190",
+        "2 28626   0.0019 286.9433 0000335  13.7918  55.6504  1.00270176  4891",
+    )
+    for lines in (ISS_TLE, geostationary):
+        ours, theirs = load_tle(*lines), load_tle(*lines)
+        address, record = sgp4_entry(ours, load_tle(*lines))
+        assert address and record
+        out = np.zeros(8)
+        for tsince in np.linspace(-3000.0, 3000.0, 61):
+            assert call(float(address), float(record), float(tsince), out, 2)
+            error, r, v = theirs.sgp4_tsince(float(tsince))
+            assert (error, out[2:5].tolist(), out[5:].tolist()) == (0, list(r), list(v))
+    draggy = ISS_TLE[0][:53] + " 50000-1 0  999" + "4", ISS_TLE[1]  # B* 0.05, its checksum
+    decayed = load_tle(*draggy)
+    address, record = sgp4_entry(decayed, load_tle(*draggy))
+    assert not call(float(address), float(record), 3e4, np.zeros(6), 0)
+    assert decayed.error == load_tle(*draggy).sgp4_tsince(3e4)[0] == 1
+
+
+def test_a_restored_state_calls_sgp4_on_its_own_record():
+    """The addresses of the SGP4 call are never taken from a state (a host's bytes): after
+    set_state the model's own record is called."""
+    one = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
+    other = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
+    state = one.get_state()
+    state[0][:] = 0.0  # the value array
+    state[2]["state"][orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = (8.0, 16.0)
+    other.set_state(state)
+    assert tuple(other.state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2]) == tuple(
+        map(float, other._sgp4_entry)
+    )
+    assert "_sgp4_entry" not in state[2]

@@ -58,10 +58,7 @@ def test_steps_are_served_in_c_and_give_the_same_answers(hosts, name):
     # that changes only the time is C's once the output kernel has run (the first get)
     first_in_python = name in ("SatelliteDynamics", "CmgCluster")
     assert (enabled, steps, fallbacks) == (1, 30 - first_in_python, 0)
-    if name == "PitchManeuverController":
-        assert outputs == 0  # CPython's math.hypot: the output stays Python
-    else:
-        assert outputs >= 29
+    assert outputs >= 29
     assert off["counts"] == [-1, 0, 0, 0]
 
 
@@ -171,15 +168,15 @@ def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
     so the shim falls back to the Python, which raises it with its message."""
     monkeypatch.setenv("AGILESAT_CACHE_DIR", str(tmp_path))
 
-    def divide(values, state, dt):
+    def divide(values, state, t, dt):
         state[0] = values[0] / dt
         return 0
 
     inner = jit.Kernel(divide, 0)
-    entry = c_entries.CEntry(inner)
+    entry = c_entries.CEntry(inner, "step")
     assert entry.address is None  # not compiled yet
     values, state = np.array([3.0]), np.zeros(1)
-    inner(values, state, 2.0)  # the tier switch
+    inner(values, state, 0.0, 2.0)  # the tier switch
     assert entry.address is not None
     call = ctypes.CFUNCTYPE(
         ctypes.c_int32,
@@ -188,24 +185,25 @@ def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
         ctypes.c_void_p,
         ctypes.c_int64,
         ctypes.c_double,
+        ctypes.c_double,
     )(entry.address)
-    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 4.0) == 0 and state[0] == 0.75
-    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 0.0) == -1 and state[0] == 0.75
+    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 0.0, 4.0) == 0 and state[0] == 0.75
+    assert call(values.ctypes.data, 1, state.ctypes.data, 1, 0.0, 0.0) == -1 and state[0] == 0.75
     with pytest.raises(ZeroDivisionError):
-        inner(values, state, 0.0)
+        inner(values, state, 0.0, 0.0)
     assert math.isfinite(state[0])
 
 
-def test_scan_pitch_enters_python_once_per_macro_step(monkeypatch):
+def test_scan_pitch_never_enters_python_in_a_macro_step(monkeypatch):
     """With the kernels compiled, a macro step of scan_pitch (five FMUs, the master's Jacobi
-    passes) enters Python once: the pitch controller's output (CPython's math.hypot); its
-    phase (an Integer) is then served by the shim too."""
+    passes) does not enter Python: every step and output is a C entry (the pitch
+    controller's CPython math.hypot too: components/flat.py), every get and set the shim's."""
     from count_python_entries import count
 
     monkeypatch.setenv("AGILESAT_JIT_AFTER", "0")
     short, long = count("1", 0.05, 1.0), count("1", 0.05, 2.0)
     per_step = {name: (long[name] - short.get(name, 0)) / 20 for name in long}
-    assert {name: n for name, n in per_step.items() if n} == {"get_real": 1.0}
+    assert {name: n for name, n in per_step.items() if n} == {}
 
 
 SCAN_PITCH = r"""

@@ -87,8 +87,8 @@ def test_the_command_line_says_it_in_one_line():
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [
         "agilesat run: error: AGILESAT_JIT_AFTER='soon': expected a whole number >= 0 "
-        "(AGILESAT_JIT_AFTER: the calls of a kernel before it runs compiled; 0: from the "
-        "first call)"
+        "(AGILESAT_JIT_AFTER: the calls of a kernel before it runs compiled, fewer where a "
+        "run's length says it pays; 0: from the first call)"
     ]
 
 

@@ -8,6 +8,8 @@ import re
 import numpy as np
 import pytest
 
+from agilesat.components import attitude_estimator as ae
+from agilesat.components import star_tracker as st
 from agilesat.fmus import FMUS, model_class, slave_class
 from agilesat.fmus.fmu_state import StateError
 from agilesat.fmus.state_layout import check, reference
@@ -82,6 +84,68 @@ def test_what_does_not_fit_is_refused_naming_it(tamper, message):
     tamper(attributes)
     with pytest.raises(StateError, match=re.escape(message)):
         check(cls, (values, strings, attributes), initialized=True, outputs_valid=True)
+
+
+@pytest.mark.parametrize(
+    "name, parameters",
+    [("StarTracker", {"latency": 0.7, "rate": 8.0}), ("AttitudeEstimator", {"history": 3.0})],
+)
+def test_an_array_sized_from_the_parameters_is_checked_against_them(name, parameters):
+    """A state of a non-default pipeline or history fits (the reference is the model of
+    the state's parameters, not the defaults); the same arrays with the default
+    parameters' values do not."""
+    cls = model_class(name)
+    model = cls(**parameters).start(0.0)
+    model.advance(0.0, 0.5)
+    values, strings, attributes = model.get_state()
+    check(cls, (values, strings, attributes), initialized=True, outputs_valid=True)
+    defaults = cls().values
+    group = cls.table_layout().range["parameter"]
+    values[group.start : group.stop] = defaults[group.start : group.stop]
+    with pytest.raises(StateError, match="state is a float64 array of shape"):
+        check(cls, (values, strings, attributes), initialized=True, outputs_valid=True)
+
+
+def _set(at: int, x: float):
+    return lambda a: a["state"].__setitem__(at, x)
+
+
+@pytest.mark.parametrize(
+    "name, tamper, message",
+    [
+        ("Flywheel", _set(1, 40.0), "wheel constants (places, axes, distribution) are not"),
+        ("Flywheel", _set(0, 4.0), "wheel constants"),
+        ("StarTracker", _set(st.SECTION, 1e6), "constants (capacity, section length"),
+        ("StarTracker", _set(st.SECTIONS + st.N, 1e6), "count of samples waiting 1000000.0"),
+        ("StarTracker", _set(st.SECTIONS + st.N, -1.0), "count of samples waiting -1.0"),
+        ("AttitudeEstimator", _set(ae.CAPACITY, 1e6), "constants (capacity, section length, R)"),
+        ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 2.5), "count of records 2.5"),
+        ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 1e6), "count of records 1000000.0"),
+    ],
+)
+def test_the_rows_the_kernels_index_with_are_those_the_model_could_hold(name, tamper, message):
+    """The compiled kernels index with a state's counts and places: a state whose counts
+    exceed what its arrays hold, or whose constants are not its parameters', is refused."""
+    cls, (values, strings, attributes) = _stepped(name)
+    tamper(attributes)
+    with pytest.raises(StateError, match=re.escape(message)):
+        check(cls, (values, strings, attributes), initialized=True, outputs_valid=True)
+
+
+def test_an_estimator_whose_records_would_overflow_raises_instead_of_writing_past_them():
+    """Records crowded after the horizon (never made by the model; the counts still in
+    range) would grow past the capacity: the kernel stops with an error, nothing written."""
+    model = model_class("AttitudeEstimator")().start(0.0)
+    model.advance(0.0, 0.1)
+    state, c = model.state, ae.SECTIONS
+    capacity = int(state[ae.CAPACITY])
+    state[c + ae.N_RECORDS] = capacity - 1  # one over what the state check lets through
+    before = state.copy()
+    with pytest.raises(Exception, match="more records than the history holds"):
+        model.advance(0.1, 0.1)
+    assert np.array_equal(
+        state[: c + int(state[ae.SECTION])], before[: c + int(before[ae.SECTION])]
+    )
 
 
 @pytest.mark.parametrize(

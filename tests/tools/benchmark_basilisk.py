@@ -6,6 +6,10 @@ Basilisk's own dynamics loop alone.  Optional: ``pip install -e '.[basilisk]'`` 
 older sgp4, tqdm, pandas, matplotlib; a separate environment keeps ours intact).
 
     python tests/tools/benchmark_basilisk.py      # 150 s at 0.05 s, both hubs
+    python tests/tools/benchmark_basilisk.py --monte-carlo 40 --stop 200
+        # a Monte Carlo of the VSCMG hub (inertia dispersed 3 %): runs per core-second,
+        # each run set up and run as Basilisk's MonteCarlo executes one (tests/tools/
+        # benchmark_campaign_scale.py prints it beside a video_sar campaign)
 """
 
 from __future__ import annotations
@@ -25,14 +29,16 @@ from Basilisk.utilities import SimulationBaseClass, macros, simIncludeRW
 KINDS = ("vscmg", "rw")
 
 
-def hub_time(kind: str, step: float, stop: float) -> float:
+def hub_time(kind: str, step: float, stop: float, inertia=None) -> float:
     """Wall time of Basilisk's ExecuteSimulation for the hub ``kind`` (vscmg or rw)."""
     sim = SimulationBaseClass.SimBaseClass()
     proc = sim.CreateNewProcess("p")
     proc.addTask(sim.CreateNewTask("t", macros.sec2nano(step)))
     sc = spacecraft.Spacecraft()
     sc.hub.mHub = 750.0
-    sc.hub.IHubPntBc_B = [[956.0, 0, 0], [0, 956.0, 0], [0, 0, 956.0]]
+    sc.hub.IHubPntBc_B = (
+        [[956.0, 0, 0], [0, 956.0, 0], [0, 0, 956.0]] if inertia is None else inertia.tolist()
+    )
     sc.hub.omega_BN_BInit = [[0.001], [0.002], [0.003]]
     sc.setIntegrator(svIntegrators.svIntegratorRK4(sc))
     keep = []
@@ -84,6 +90,27 @@ def hub_time(kind: str, step: float, stop: float) -> float:
     return elapsed
 
 
+def monte_carlo(runs: int, step: float, stop: float, seed: int = 1) -> tuple[float, float]:
+    """(CPU seconds per run, of it in ExecuteSimulation) of ``runs`` VSCMG-hub runs, each
+    built, initialised and run in this process with the hub inertia dispersed by 3 %."""
+    rng = np.random.default_rng(seed)
+    began, inside = time.process_time(), 0.0
+    for _ in range(runs):
+        inertia = np.diag(956.0 * (1.0 + 0.03 * rng.normal(size=3)))
+        inside += hub_time("vscmg", step, stop, inertia)
+    return (time.process_time() - began) / runs, inside / runs
+
+
 if __name__ == "__main__":
-    for kind in KINDS:
-        print(kind, f"{hub_time(kind, 0.05, 150.0):.3f} s")
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--monte-carlo", type=int, default=0)
+    parser.add_argument("--stop", type=float, default=150.0)
+    args = parser.parse_args()
+    if args.monte_carlo:
+        per_run, inside = monte_carlo(args.monte_carlo, 0.05, args.stop)
+        print(f"{per_run} {inside}")
+    else:
+        for kind in KINDS:
+            print(kind, f"{hub_time(kind, 0.05, args.stop):.3f} s")

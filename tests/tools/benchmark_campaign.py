@@ -3,7 +3,7 @@ machinery against bare loops and where it goes, memory per worker over many runs
 reused-vs-fresh identity.
 
     python tests/tools/benchmark_campaign.py [--runs 40] [--stop 30] [--rounds 3] \
-        [--memory-runs 2000]
+        [--memory-runs 2000]     # --rounds 0: the memory alone
 
 The machine may be shared: every measurement is made once per round, the rounds
 interleaved (bare loops in a fresh interpreter, the campaign with 1 and with 2 workers, two
@@ -302,6 +302,8 @@ def main() -> int:
         f"{VARY}; {len(KEEP)} kept signals; {args.rounds} rounds; load average "
         f"{os.getloadavg()[0]:.2f} at the start"
     )
+    if args.rounds == 0:  # the memory alone
+        return memory_report(args)
     rounds = []
     for r in range(args.rounds):
         bare = bare_loops(args.runs, args.stop, 1)
@@ -411,6 +413,10 @@ def main() -> int:
         f"{ms(two['cpu'].get('nanny', 0.0))}: taken from the workers' 2 cores"
     )
     print(f"load average at the end of the timings {os.getloadavg()[0]:.2f}")
+    return memory_report(args)
+
+
+def memory_report(args: argparse.Namespace) -> int:
     if args.memory_runs:
         print(f"memory: one worker, {args.memory_runs} runs of {args.memory_stop:g} s")
         samples = memory(args.memory_runs, args.memory_stop, max(1, args.memory_runs // 20))

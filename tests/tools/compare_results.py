@@ -46,8 +46,11 @@ def main(argv=None) -> int:
     worst = 0.0
     failed = False
     for label, scenario, variant in runs():
-        names, data = run(scenario, variant, args.stop)
         path = args.dir / f"{label.replace(':', '__')}.npz"
+        if args.mode == "compare" and not path.exists():
+            print(f"{label:32s} not in the baseline (a variant newer than it): not compared")
+            continue
+        names, data = run(scenario, variant, args.stop)
         if args.mode == "save":
             np.savez(path, names=names, data=data)
             print(f"{label:32s} saved {data.shape}")

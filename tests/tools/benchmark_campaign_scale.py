@@ -1,0 +1,145 @@
+"""A video_sar campaign at verification scale, from cold workers: prints a report (not a
+test; timings on a shared machine vary, compare the ratios within one run).
+
+    python tests/tools/benchmark_campaign_scale.py [--runs 1109] [--workers 2] \
+        [--basilisk-python PATH]
+
+- bare: simulate() of video_sar (its shipped dispersions' nominal run) in a fresh process,
+  compiled (AGILESAT_JIT_AFTER=0), after a warm-up run: CPU and wall per run, best of 5;
+  and run(), what a campaign worker makes of each run (metrics, no files);
+- the campaign, as a user starts it: ``agilesat campaign video_sar --runs N`` on local
+  workers (its shipped dispersions), timed from the command's start to its end (cluster
+  start-up, every FMU load, the report); the runs' own times from its journal: each
+  worker's first run and the mean, against the bare run();
+- core-seconds per run (wall × workers / runs) and runs per core-second, beside
+  Basilisk's Monte Carlo of its VSCMG hub over the same 200 s at 0.05 s (dynamics only, no
+  flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given.
+Targets (issue 29): N = 1,109 on 2 workers within 5 minutes; a run costs at most 1.2× the
+compiled bare simulate() from each worker's first run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+BARE = """
+import json, sys, time
+from agilesat.orchestration import run, simulate
+from agilesat.orchestration.scenarios import get
+scenario = get("video_sar")
+simulate(scenario.ssd)  # warm-up: imports, FMU loads, numba's
+best = {}
+for name, once in (
+    ("simulate", lambda: simulate(scenario.ssd)),
+    ("run", lambda: run("video_sar", figures=False, build=False)),
+):
+    for _ in range(5):
+        wall, cpu = time.perf_counter(), time.process_time()
+        once()
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        best[name] = min(best.get(name, (wall, cpu)), (wall, cpu))
+print(json.dumps(best))
+"""
+TOOLS = Path(__file__).resolve().parent
+
+
+def bare() -> dict:
+    out = subprocess.run(
+        [sys.executable, "-c", BARE],
+        env={**os.environ, "AGILESAT_JIT_AFTER": "0"},
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    return json.loads(out.splitlines()[-1])
+
+
+def campaign(runs: int, workers: int, out: Path) -> tuple[float, list[dict]]:
+    began = time.perf_counter()
+    subprocess.run(
+        [sys.executable, "-m", "agilesat.orchestration", "campaign", "video_sar"]
+        + ["--runs", str(runs), "--workers", str(workers), "--out", str(out), "--no-progress"],
+        check=True,
+        capture_output=True,
+    )
+    wall = time.perf_counter() - began
+    records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    return wall, records
+
+
+def basilisk(python: str, runs: int) -> tuple[float, float] | None:
+    result = subprocess.run(
+        [python, str(TOOLS / "benchmark_basilisk.py"), "--monte-carlo", str(runs), "--stop", "200"],
+        capture_output=True,
+        text=True,
+    )
+    if result.returncode != 0:
+        print(f"Basilisk: {result.stderr.strip().splitlines()[-1:]}")
+        return None
+    per_run, inside = map(float, result.stdout.split())
+    return per_run, inside
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=1109)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--basilisk-python", help="a python with bsk installed")
+    parser.add_argument("--basilisk-runs", type=int, default=40)
+    args = parser.parse_args()
+    print(f"load average {os.getloadavg()[0]:.2f} at the start")
+    b = bare()
+    print(
+        f"bare, compiled, best of 5: simulate() {b['simulate'][1]:.3f} s CPU "
+        f"({b['simulate'][0]:.3f} s wall), run() {b['run'][1]:.3f} s CPU "
+        f"({b['run'][0]:.3f} s wall) per 200-s run"
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        wall, records = campaign(args.runs, args.workers, Path(tmp) / "c")
+    statuses = {}
+    for r in records:
+        statuses[r["status"]] = statuses.get(r["status"], 0) + 1
+    by_pid: dict[int, list[float]] = {}
+    for r in sorted(records, key=lambda r: r["index"]):
+        by_pid.setdefault(r["pid"], []).append(r["seconds"])
+    mean = sum(r["seconds"] for r in records) / len(records)
+    firsts = [seconds[0] for seconds in by_pid.values()]
+    core = wall * args.workers / args.runs
+    print(
+        f"campaign: {args.runs} runs on {args.workers} workers in {wall:.1f} s "
+        f"({wall / 60:.2f} min; target <= 5 min: {'met' if wall <= 300 else 'NOT met'}); "
+        f"outcomes {statuses}"
+    )
+    print(
+        f"  run_one's wall per run: mean {mean:.3f} s = {mean / b['simulate'][0]:.2f}x the bare "
+        f"simulate(), {mean / b['run'][0]:.2f}x the bare run(); each worker's first run "
+        + ", ".join(f"{s:.3f} s ({s / b['simulate'][0]:.2f}x)" for s in firsts)
+        + " (target <= 1.2x from the first run)"
+    )
+    print(
+        f"  everything (start-up, FMU loads, Dask, report): {core:.3f} core-s per run, "
+        f"{1 / core:.1f} runs per core-second; {b['simulate'][1] / core:.2f} of it the bare "
+        "simulate()'s CPU"
+    )
+    if args.basilisk_python:
+        result = basilisk(args.basilisk_python, args.basilisk_runs)
+        if result:
+            per_run, inside = result
+            print(
+                f"Basilisk Monte Carlo, VSCMG hub, 200 s at 0.05 s, {args.basilisk_runs} runs in "
+                f"one process: {per_run:.3f} core-s per run ({inside:.3f} s in its "
+                f"dynamics), {1 / per_run:.1f} runs per core-second; this campaign / "
+                f"Basilisk: {per_run / core:.2f}x the runs per core-second"
+            )
+    print(f"load average {os.getloadavg()[0]:.2f} at the end")
+
+
+if __name__ == "__main__":
+    main()
