@@ -139,7 +139,9 @@ def _system_commands(commands, quiet) -> None:
 
     validate = commands.add_parser("validate", help="validate FMUs with fmpy's validator")
     validate.add_argument(
-        "fmus", nargs="*", type=Path, help="FMU files (default: every FMU in fmus/build)"
+        "fmus",
+        nargs="*",
+        help="FMU files, or our FMUs by name (built if stale; default: every FMU in fmus/build)",
     )
 
     run = commands.add_parser(
@@ -289,9 +291,22 @@ def _build_models(models: list[str], args) -> int:
 def _validate(args) -> int:
     from fmpy.validation import validate_fmu
 
-    from ..fmus.build import BUILD_DIR
+    from ..fmus import FMUS
+    from ..fmus.build import BUILD_DIR, build_fmu
+    from .system.parameters import did_you_mean
 
-    paths = args.fmus or sorted(BUILD_DIR.glob("*.fmu"))
+    paths = []
+    for given in args.fmus:
+        if Path(given).is_file():
+            paths.append(Path(given))
+        elif given in FMUS:
+            paths.append(build_fmu(given))
+        else:
+            raise ValueError(
+                f"no such FMU file {given!r}, nor one of ours by name ({', '.join(FMUS)})"
+                + did_you_mean(given, FMUS)
+            )
+    paths = paths or sorted(BUILD_DIR.glob("*.fmu"))
     if not paths:
         print("no FMUs to validate: run `agilesat build` first", file=sys.stderr)
         return 1

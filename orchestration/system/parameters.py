@@ -130,6 +130,14 @@ def typed_parameters(
                 raise SystemFileError(f"{at}: {name}.{variable} is a scalar, got an array {value}")
             result[key] = typed_value(description, key, value, at)
             continue
+        base = variable.partition("[")[0]
+        if base != variable and base in table:
+            shape = table[base].shape
+            raise SystemFileError(
+                f"{at}: {name}.{variable}: index out of range "
+                f"({'×'.join(map(str, shape)) or 'a scalar'}); the elements are "
+                f"{table[base].first.name} .. {table[base].scalars[-1].name}"
+            )
         if variable not in table:
             raise SystemFileError(
                 f"{at}: {name} ({description.path.name}) has "

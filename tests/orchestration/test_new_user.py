@@ -1,0 +1,37 @@
+"""What a new user tripped over (issue #28): `info` of a variant, `validate` by name, and
+the other places where the command line was wrong or misleading."""
+
+import pytest
+
+from agilesat.orchestration import cli
+from agilesat.orchestration.info import info
+
+
+def test_info_of_a_variant_shows_its_values_marked_with_degrees_and_the_outputs(fmus):
+    text = info("video_sar:no_yaw_compensation")
+    header = text.split("metrics (")[0]
+    # 0.446370651122 rad = 25.5752°, 0.804885764925 rad = 46.1166°
+    assert "SatelliteDynamics.attitude0 = [-0.446371,0.804886,0] rad ([-25.5752,46.1166,0] °)" in (
+        header
+    )
+    assert "StaringGuidance.yaw_compensation = false" in header
+    rows = [line for line in text.splitlines() if line.startswith(" !")]
+    assert [row.split()[0] for row in rows] == [
+        "!StaringGuidance.yaw_compensation",
+        "!SatelliteDynamics.attitude0[3]",
+        "!SatelliteDynamics.rate0[3]",
+    ]
+    assert "outputs (recorded" in text and "SatelliteDynamics.q_BI[4]" in text
+    assert "array(" not in info("scan_pitch:literal_spin")
+
+
+def test_info_refuses_a_misspelt_variant_with_the_closest_name(fmus):
+    with pytest.raises(KeyError, match="no variant 'literal'; did you mean literal_spin"):
+        info("scan_pitch:literal")
+
+
+def test_validate_takes_our_fmus_by_name(fmus, capsys):
+    assert cli.main(["validate", "CmgCluster"]) == 0
+    assert capsys.readouterr().out.strip() == f"{fmus['CmgCluster']}: OK"
+    assert cli.main(["validate", "CmgClustr"]) == 1
+    assert "did you mean CmgCluster" in capsys.readouterr().err
