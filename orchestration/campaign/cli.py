@@ -139,6 +139,10 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
+#: the failed runs the campaign's report lists (campaign.json has the first 100)
+SHOWN = 5
+
+
 def format_campaign(summary: dict) -> str:
     runs = summary["runs"]
     lines = [
@@ -202,8 +206,11 @@ def format_campaign(summary: dict) -> str:
                 for k, v in point["values"].items()
             )
             lines.append(f"  {values}: {met['met']}/{met['runs']} met")
-    for failure in summary["failures"][:5]:
+    for failure in summary["failures"][:SHOWN]:
         lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")
+    failed = runs["made"] - runs["ok"]
+    if failed > SHOWN:
+        lines.append(f"  and {failed - SHOWN} more (runs.csv: the status and message of every run)")
     if summary["failures"]:
         lines.append('  (campaign.json "failures" has the `agilesat run` command replaying each)')
     return "\n".join(lines)

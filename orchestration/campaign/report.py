@@ -316,14 +316,22 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
 
 class Progress:
     """Runs done / failed, rate and ETA: a tqdm bar on a terminal, plain lines every
-    ``period`` seconds otherwise (logs, CI)."""
+    ``period`` seconds otherwise (logs, CI).  ``before``: {status: count} of the ``done``
+    runs an earlier session made (a resumed campaign counts its failures too)."""
 
     def __init__(
-        self, total: int, done: int, enabled: bool = True, period: float = 10.0, stream=None
+        self,
+        total: int,
+        done: int,
+        enabled: bool = True,
+        period: float = 10.0,
+        stream=None,
+        before: dict | None = None,
     ):
         self.stream = stream or sys.stderr
         self.total, self.done, self.todo = total, done, total - done
-        self.counts = dict.fromkeys(STATUSES, 0)
+        self.counts = {s: (before or {}).get(s, 0) for s in STATUSES}
+        self.made = 0  # by this session: the rate
         self.began = self.last = time.monotonic()
         self.period, self.enabled = period, enabled
         self.bar = None
@@ -337,6 +345,7 @@ class Progress:
     def update(self, status: str) -> None:
         self.counts[status] = self.counts.get(status, 0) + 1
         self.done += 1
+        self.made += 1
         if self.bar is not None:
             self.bar.set_postfix_str(self._outcomes(), refresh=False)
             self.bar.update(1)
@@ -354,8 +363,7 @@ class Progress:
 
     def line(self) -> str:
         elapsed = time.monotonic() - self.began
-        made = sum(self.counts.values())
-        rate = made / elapsed if elapsed > 0 else 0.0
+        rate = self.made / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else math.inf
         return (
             f"campaign: {self.done}/{self.total} runs done ({self._outcomes()}), "

@@ -393,3 +393,30 @@ def test_choice_takes_the_names_of_a_named_choice_and_records_them():
     ]
     index = drawn.index("SR_INVERSE")
     assert replay_arguments(named, index)[-2:] == ["--set", "CmgSteering.law=SR_INVERSE"]
+
+
+def test_progress_of_a_resumed_campaign_counts_the_earlier_failures(capsys):
+    import sys
+
+    progress = report.Progress(6, 3, period=0.0, stream=sys.stdout, before={"ok": 1, "failed": 2})
+    progress.update("error")
+    assert "4/6 runs done (2 failed, 1 error)" in capsys.readouterr().out
+
+
+def test_the_failure_list_says_how_many_more_there_are():
+    from agilesat.orchestration.campaign.cli import format_campaign
+
+    failures = [
+        {"index": i, "status": "failed", "message": f"m{i}", "replay": ""} for i in range(8)
+    ]
+    summary = {
+        "runs": {"planned": 10, "made": 10, "ok": 2, "failed": 8, "error": 0, "lost": 0},
+        "lost_workers": [],
+        "statistics": {},
+        "pass_rates": {},
+        "grid_pass_rates": [],
+        "failures": failures,
+    }
+    lines = format_campaign(summary).splitlines()
+    assert [line.split(":")[0] for line in lines[2:7]] == [f"  run {i} failed" for i in range(5)]
+    assert lines[7].startswith("  and 3 more")
