@@ -146,6 +146,12 @@ def test_plan_whole_variables_start_from_the_system_values():
     [
         ("Nobody.x=normal(0,1)", "no component 'Nobody'"),
         ("CmgCluster.nothing=normal(0,1)", "CmgCluster has no variable 'nothing'"),
+        ("CmgCluster.h_rotr=normal(0,1)", "no variable 'h_rotr'; did you mean h_rotor"),
+        ("CmgClustr.h_rotor=normal(0,1)", "no component 'CmgClustr'.*did you mean CmgCluster"),
+        (
+            "SatelliteDynamics.attitude0=rotate(1deg)",
+            "rotate\\(\\) turns unit vectors; SatelliteDynamics.attitude0 has norm",
+        ),
         ("CmgCluster.delta0[7]=normal(0,1)", "has shape \\(6,\\)"),
         ("CmgCluster.delta=normal(0,1)", "only numeric parameters"),
         ("CmgSteering.law=normal(0,1)", "Integer parameter: use choice"),
