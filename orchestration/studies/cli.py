@@ -4,6 +4,8 @@ parsers): each command imports what it uses."""
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 from pathlib import Path
 
@@ -72,7 +74,13 @@ def add_parsers(commands, quiet) -> None:
         f"{constants.VIDEO_SAR_LOOK_ANGLE / DEG:g}) or largest angle β "
         f"(walker, default {constants.VIDEO_SAR_MAX_INCIDENCE / DEG:g})",
     )
-    analysis.add_argument("--out", type=Path, default=Path("out/mission"))
+    analysis.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/mission"),
+        help="directory of the figure (overlap) or the sizing in JSON (walker), each named "
+        "by its altitude and angle (default out/mission)",
+    )
 
     size = commands.add_parser(
         "size-flywheel",
@@ -167,12 +175,15 @@ def _overlap(args, altitude: float) -> None:
         )
     rates = np.linspace(1.0, 30.0, 146)
     overlap = 100 * mission.overlap_ratio(rates, **case).overlap
-    gaps = rates[overlap < 0]  # frames leave gaps: no overlap to plot
+    gap = mission.gap_frame_rate(rates[0], rates[-1], **case)
     title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
-        f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else ""
+        f"\nh = {args.altitude:g} km, look {look / DEG:g}°"
+        + (f"; below {gap:.3g} Hz the frames leave gaps" if gap is not None else "")
     )
+    if gap is not None:
+        print(f"  overlap 0 at {gap:.4g} Hz: below it the frames leave gaps")
     path = plots.lines(
-        args.out / "overlap_vs_frame_rate.png",
+        args.out / f"overlap_vs_frame_rate_h{args.altitude:g}km_look{look / DEG:g}deg.png",
         title,
         rates,
         {"overlap": np.where(overlap >= 0, overlap, np.nan)},
@@ -189,16 +200,21 @@ def _walker(args, altitude: float) -> None:
 
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
+    sizings = {}
     for kind, reading in (
         ("incidence", "β = incidence at the ground (eq 14, the paper's words)"),
         ("look", "β = look angle at the satellite"),
     ):
-        w = mission.walker_sizing(altitude, beta, beta_kind=kind)
+        w = sizings[kind] = mission.walker_sizing(altitude, beta, beta_kind=kind)
         print(
             f"  {reading}: α = {w.central_angle / DEG:.2f}°, T = {w.period / 3600:.3f} h, "
             f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
             f"P = {w.planes}, N = {w.satellites}"
         )
+    path = args.out / f"walker_h{args.altitude:g}km_beta{beta / DEG:g}deg.json"
+    text = {kind: dataclasses.asdict(w) for kind, w in sizings.items()}
+    path.write_text(json.dumps(text, indent=2) + "\n", encoding="utf-8")
+    print(f"sizing (SI, rad): {path}")
 
 
 def _size_flywheel(args) -> int:

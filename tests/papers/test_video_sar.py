@@ -254,7 +254,7 @@ def test_mission_analysis_commands_print_the_functions_results(tmp_path):
     assert result.returncode == 0, result.stderr
     for rate, overlap in zip((5, 25), overlap_ratio([5.0, 25.0], **c.VIDEO_SAR_OVERLAP).overlap):
         assert f"{rate:.2f} Hz   overlap {100 * overlap:6.2f} %" in result.stdout
-    assert (tmp_path / "overlap_vs_frame_rate.png").stat().st_size > 0
+    assert (tmp_path / "overlap_vs_frame_rate_h567km_look30deg.png").stat().st_size > 0
     result = agilesat("mission", "walker", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
     for kind in ("incidence", "look"):
