@@ -5,6 +5,7 @@ parsers): each command imports what it uses."""
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import json
 import math
 from pathlib import Path
@@ -37,7 +38,9 @@ def add_parsers(commands, quiet) -> None:
         help="geodetic target [deg] (default Sasebo)",
     )
     stare.add_argument(
-        "--epoch", help="start of the search, ISO 8601 UTC (default: the TLE's epoch)"
+        "--epoch",
+        help="start of the search, ISO 8601 UTC: 2030-01-01T06:00:00, or a date alone for "
+        "its 00:00 (default: the TLE's epoch)",
     )
     stare.add_argument("--hours", type=float, default=24.0, help="search window [h]")
     stare.add_argument(
@@ -111,7 +114,7 @@ def _stare(args) -> int:
     from ..cli import echo_to, report
     from ..output.progress import Progress
     from ..runner import run
-    from .stare import pass_scenario, tle_pass
+    from .stare import pass_scenario, search_start, tle_pass
 
     lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
     if len(lines) not in (2, 3):
@@ -119,6 +122,15 @@ def _stare(args) -> int:
             f"{args.tle}: expected two TLE lines (and an optional name line), "
             f"found {len(lines)} lines"
         )
+    for option, value, low, high in (
+        ("--target LAT", args.target[0], -90.0, 90.0),
+        ("--target LON", args.target[1], -360.0, 360.0),
+        ("--max-look", args.max_look, 0.0, 90.0),
+        ("--look", args.look, 0.0, 90.0),
+    ):
+        if value is not None and not low <= value <= high:
+            raise ValueError(f"{option} must be in [{low:g}°, {high:g}°], got {value:g}°")
+    start = search_start(*lines[-2:], args.epoch)
     orbit, chosen, passes = tle_pass(
         *lines[-2:],
         target=(args.target[0] * DEG, args.target[1] * DEG, 0.0),
@@ -129,8 +141,9 @@ def _stare(args) -> int:
     )
     print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
     for g in passes:
+        when = start + datetime.timedelta(seconds=g.time)
         print(
-            f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  "
+            f"  {'→' if g is chosen else ' '} {when.isoformat(sep=' ', timespec='seconds')} UTC  "
             f"look {g.look_angle / DEG:6.2f}°"
             f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
             f"{'ascending' if g.ascending else 'descending'}"

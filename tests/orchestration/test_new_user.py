@@ -35,3 +35,16 @@ def test_validate_takes_our_fmus_by_name(fmus, capsys):
     assert capsys.readouterr().out.strip() == f"{fmus['CmgCluster']}: OK"
     assert cli.main(["validate", "CmgClustr"]) == 1
     assert "did you mean CmgCluster" in capsys.readouterr().err
+
+
+def test_stare_takes_a_date_alone_and_reports_degree_inputs_in_degrees(tmp_path, capsys):
+    import datetime
+
+    from agilesat.orchestration.studies.stare import search_start
+    from helpers import ISS_TLE
+
+    assert search_start(*ISS_TLE, "2030-01-01") == datetime.datetime(2030, 1, 1)
+    (tmp_path / "iss.tle").write_text("\n".join(ISS_TLE) + "\n")
+    tle = str(tmp_path / "iss.tle")
+    assert cli.main(["stare", "--tle", tle, "--target", "100", "0"]) == 1
+    assert "--target LAT must be in [-90°, 90°], got 100°" in capsys.readouterr().err
