@@ -48,3 +48,20 @@ def test_stare_takes_a_date_alone_and_reports_degree_inputs_in_degrees(tmp_path,
     tle = str(tmp_path / "iss.tle")
     assert cli.main(["stare", "--tle", tle, "--target", "100", "0"]) == 1
     assert "--target LAT must be in [-90°, 90°], got 100°" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_a_reused_out_drops_the_previous_runs_figures_only(fmus, tmp_path):
+    import json
+
+    from helpers import agilesat
+
+    (tmp_path / "overview_Other.png").write_bytes(b"an earlier run's figure")
+    (tmp_path / "notes.txt").write_text("the user's own file")
+    earlier = {"status": "ok", "figures": [str(tmp_path / "overview_Other.png")]}
+    (tmp_path / "summary.json").write_text(json.dumps(earlier))
+    result = agilesat("run", "Flywheel", "--stop", 1, "--step", 0.1, "-q", "--out", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["overview_Flywheel.png"]
+    assert (tmp_path / "notes.txt").exists()
