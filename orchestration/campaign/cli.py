@@ -11,7 +11,7 @@ import argparse
 import signal
 from pathlib import Path
 
-from . import Spec, run_campaign, shipped
+from . import Spec, engine, run_campaign, shipped
 from .report import display
 
 
@@ -103,7 +103,9 @@ def main(args) -> int:
         args.stop,
         args.algorithm,
     )
-    signal.signal(signal.SIGTERM, _interrupt)  # a batch system's stop: as Ctrl-C
+    engine.INTERRUPTS.signals.clear()
+    for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
+        signal.signal(signum, engine.INTERRUPTS)
     try:
         result = run_campaign(
             spec,
@@ -117,13 +119,20 @@ def main(args) -> int:
         )
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
-        print("interrupted: the runs made are in runs.jsonl; --resume continues")
-        return 128 + (_signals[0] if _signals else signal.SIGINT)
+        print(f"interrupted by {_first().name}: the runs made are in runs.jsonl; {RESUME}")
+        return 128 + _first()
+    if result.summary["status"] == "interrupted":
+        runs = result.summary["runs"]
+        print(
+            f"interrupted by {_first().name}: {runs['made']} of {runs['planned']} runs kept in "
+            f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
+        )
+        return 128 + _first()
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
-    if result.summary["status"] == "interrupted":
-        print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
-        return 128 + (_signals[0] if _signals else signal.SIGINT)
+    if engine.INTERRUPTS.signals:  # as the cluster closed
+        print(f"{_first().name} as the cluster closed: every run was made and written")
+        return 128 + _first()
     runs = result.summary["runs"]
     unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
         r["verdict"] == "not met" for r in result.summary["ensemble"].values()
@@ -131,12 +140,11 @@ def main(args) -> int:
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
 
 
-_signals: list[int] = []  # SIGTERM, once it came (Ctrl-C is Python's KeyboardInterrupt)
+RESUME = "the same command with --resume continues it"
 
 
-def _interrupt(signum, frame):
-    _signals.append(signum)
-    raise KeyboardInterrupt
+def _first() -> signal.Signals:
+    return signal.Signals((engine.INTERRUPTS.signals or [signal.SIGINT])[0])
 
 
 #: the failed runs the campaign's report lists (campaign.json has the first 100)
