@@ -23,6 +23,7 @@ from .output.lock import holding
 from .output.recorder import write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
+from .provenance import provenance
 
 #: a run that will write more than this says so before it starts
 LARGE_OUTPUT = 2**30
@@ -91,6 +92,7 @@ def run(
         out_dir.mkdir(parents=True, exist_ok=True)
         _say_size(plan, out_dir, notice)
     summary = {
+        **provenance(),
         "scenario": scenario.name if scenario else None,
         "variant": variant,
         "system": str(system.path),

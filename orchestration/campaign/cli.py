@@ -28,7 +28,13 @@ def add_parser(commands) -> argparse.ArgumentParser:
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
     p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
     p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
-    p.add_argument("--vary", action="append", default=[], metavar="INSTANCE.VAR=DIST")
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR=DIST",
+        help="disperse a parameter (DIST above); repeat for more",
+    )
     p.add_argument(
         "--dispersions",
         action="append",
@@ -71,9 +77,26 @@ def add_parser(commands) -> argparse.ArgumentParser:
     )
     p.add_argument("--step", type=float, help="macro step [s]")
     p.add_argument("--stop", type=float, help="stop time [s]")
-    p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VAR=VALUE")
-    p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR=VALUE",
+        help="a parameter value of every run (as `agilesat run --set`)",
+    )
+    p.add_argument(
+        "--algorithm",
+        choices=("gauss-seidel", "jacobi"),
+        help="coupling algorithm (default the system's; gauss-seidel if it names none)",
+    )
+    p.add_argument(
+        "-q",
+        "--quiet",
+        "--no-progress",
+        dest="quiet",
+        action="store_true",
+        help="no progress bar or progress lines (--no-progress: the same)",
+    )
     return p
 
 
@@ -113,7 +136,7 @@ def main(args) -> int:
             args.resume,
             args.workers,
             args.scheduler,
-            progress=not args.no_progress,
+            progress=not args.quiet,
             listen=args.listen,
             dashboard=args.dashboard,
         )

@@ -42,33 +42,50 @@ def add_parsers(commands, quiet) -> None:
         help="start of the search, ISO 8601 UTC: 2030-01-01T06:00:00, or a date alone for "
         "its 00:00 (default: the TLE's epoch)",
     )
-    stare.add_argument("--hours", type=float, default=24.0, help="search window [h]")
+    stare.add_argument("--hours", type=float, default=24.0, help="search window [h] (default 24)")
     stare.add_argument(
         "--look",
         type=float,
         help="wanted look angle [deg]: the pass closest to it (default: the first pass)",
     )
     stare.add_argument(
-        "--max-look", type=float, default=60.0, help="largest look angle [deg] of a usable pass"
+        "--max-look",
+        type=float,
+        default=60.0,
+        help="largest look angle [deg] of a usable pass (default 60)",
     )
-    stare.add_argument("--no-yaw-compensation", action="store_true")
-    stare.add_argument("--out", type=Path, default=Path("out/stare"))
+    stare.add_argument(
+        "--no-yaw-compensation",
+        action="store_true",
+        help="yaw 0 (eq 11 only): the footprint turns on the ground",
+    )
+    stare.add_argument(
+        "--out", type=Path, default=Path("out/stare"), help="output directory (default out/stare)"
+    )
 
     analysis = commands.add_parser(
         "mission",
         help="video-SAR mission analysis ([Liang 2019]): "
         "frame overlap vs frame rate, Walker constellation size",
     )
-    analysis.add_argument("analysis", choices=("overlap", "walker"))
+    analysis.add_argument(
+        "analysis",
+        choices=("overlap", "walker"),
+        help="overlap: frame overlap vs frame rate (eqs 1-5); walker: constellation size "
+        "(eqs 14-20)",
+    )
     analysis.add_argument(
         "--frame-rates",
         type=float,
         nargs="+",
         default=(5.0, 25.0),
-        help="frame rates to tabulate [Hz]",
+        help="frame rates to tabulate [Hz] (default 5 25)",
     )
     analysis.add_argument(
-        "--altitude", type=float, default=constants.VIDEO_SAR_ALTITUDE / 1e3, help="[km]"
+        "--altitude",
+        type=float,
+        default=constants.VIDEO_SAR_ALTITUDE / 1e3,
+        help=f"orbit altitude [km] (default {constants.VIDEO_SAR_ALTITUDE / 1e3:g})",
     )
     analysis.add_argument(
         "--angle",
@@ -92,22 +109,31 @@ def add_parsers(commands, quiet) -> None:
         "wheel that meets the payload_sweep pointing requirements "
         "(co-simulation sweep)",
     )
-    size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
+    size.add_argument(
+        "--turnaround", type=float, default=1.0, help="payload reversal time [s] (default 1)"
+    )
     size.add_argument(
         "--accuracy",
         type=float,
         default=constants.PAYLOAD_SWEEP_ACCURACY / DEG,
-        help="pointing accuracy [deg]",
+        help="pointing accuracy [deg] (default "
+        f"{constants.PAYLOAD_SWEEP_ACCURACY / DEG:g}, the paper's)",
     )
     size.add_argument(
         "--stability",
         type=float,
         default=constants.PAYLOAD_SWEEP_STABILITY / DEG,
-        help="pointing stability [deg/s]",
+        help="pointing stability [deg/s] (default "
+        f"{constants.PAYLOAD_SWEEP_STABILITY / DEG:g}, the paper's)",
     )
-    size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
+    size.add_argument("--step", type=float, default=0.05, help="macro step [s] (default 0.05)")
     size.add_argument("--stop", type=float, help="run length [s] (default: one pitch sweep)")
-    size.add_argument("--out", type=Path, default=Path("out/size-flywheel"))
+    size.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/size-flywheel"),
+        help="output directory (default out/size-flywheel)",
+    )
 
 
 def _stare(args) -> int:

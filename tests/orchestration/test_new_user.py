@@ -1,6 +1,8 @@
 """What a new user tripped over (issue #28): `info` of a variant, `validate` by name, and
 the other places where the command line was wrong or misleading."""
 
+import re
+
 import pytest
 
 from agilesat.orchestration import cli
@@ -53,6 +55,7 @@ def test_stare_takes_a_date_alone_and_reports_degree_inputs_in_degrees(tmp_path,
 @pytest.mark.slow
 @pytest.mark.integration
 def test_a_reused_out_drops_the_previous_runs_figures_only(fmus, tmp_path):
+    import datetime
     import json
 
     from helpers import agilesat
@@ -65,3 +68,81 @@ def test_a_reused_out_drops_the_previous_runs_figures_only(fmus, tmp_path):
     assert result.returncode == 0, result.stderr
     assert sorted(p.name for p in tmp_path.glob("*.png")) == ["overview_Flywheel.png"]
     assert (tmp_path / "notes.txt").exists()
+    # what made it, and when: summary.json and the head of log.txt
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["version"].startswith("agilesat ") and "fmpy" in summary["version"]
+    assert summary["command"].endswith(f"run Flywheel --stop 1 --step 0.1 -q --out {tmp_path}")
+    made = datetime.datetime.fromisoformat(summary["date"])
+    assert abs((datetime.datetime.now(datetime.timezone.utc) - made).total_seconds()) < 600
+    head = (tmp_path / "log.txt").read_text().splitlines()[:3]
+    assert head == [f"# {k}: {summary[k]}" for k in ("version", "command", "date")]
+
+
+def _options(parser, path=()):
+    """(command path, action) of every argument of the command line, and each command's
+    (path, parser)."""
+    import argparse
+
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield (*path, name), sub
+                yield from _options(sub, (*path, name))
+        elif not isinstance(action, (argparse._HelpAction, argparse._VersionAction)):
+            yield path, action
+
+
+def test_every_command_and_option_says_what_it_does_and_its_default():
+    import argparse
+
+    problems = []
+    for path, item in _options(cli._parser(campaign=True)):
+        if isinstance(item, argparse.ArgumentParser):
+            if not item.description:
+                problems.append(f"{' '.join(path)}: no description in its --help")
+            continue
+        name = f"{' '.join(path)} {'/'.join(item.option_strings) or item.dest}"
+        trivial = item.default in (None, False, [], ())
+        if not item.help:
+            problems.append(f"{name}: no help")
+        elif not trivial and "default" not in item.help:
+            problems.append(f"{name}: default {item.default!r} not said")
+    assert problems == []
+
+
+def test_generate_is_a_developers_command_and_version_names_what_results_depend_on(capsys):
+    helptext = cli._parser().format_help()
+    assert "generate" not in helptext and "campaign" in helptext
+    with pytest.raises(SystemExit):
+        cli.main(["--version"])
+    version = capsys.readouterr().out
+    assert all(re.search(rf"\b{name} \d", version) for name in ("fmpy", "pythonfmu", "numpy"))
+    assert "FMI 2.0" in version
+
+
+def test_generate_check_in_an_installed_package_checks_what_it_ships(tmp_path, monkeypatch):
+    """An installed (non-editable) package has no fmus/INTERFACES.md: not out of date."""
+    from agilesat.fmus import build
+
+    monkeypatch.setattr(build, "generated_files", lambda: {tmp_path / "INTERFACES.md": bytes})
+    assert cli.main(["generate", "--check"]) == 1  # a source checkout: missing is stale
+    monkeypatch.setattr(cli, "source_checkout", lambda: False)
+    assert cli.main(["generate", "--check"]) == 0
+    assert cli.main(["generate"]) == 1  # writes into a checkout only
+
+
+def test_plot_usage_errors_exit_2_and_a_missing_directory_or_variable_is_named(tmp_path, capsys):
+    assert cli.main(["plot", str(tmp_path)]) == 2
+    assert "expected RESULTS_DIR... VARIABLE..." in capsys.readouterr().err
+    assert cli.main(["plot", str(tmp_path / "gone"), "A.x"]) == 1
+    assert f"no such run directory: {tmp_path / 'gone'}" in capsys.readouterr().err
+
+
+def test_one_quiet_flag_everywhere():
+    parser = cli._parser(campaign=True)
+    for command in ("run", "build", "stare", "size-flywheel", "campaign"):
+        assert parser.parse_args([command, "-q", *ARGS.get(command, [])]).quiet is True
+    assert parser.parse_args(["campaign", "x", "--no-progress"]).quiet is True
+
+
+ARGS = {"run": ["x"], "stare": ["--tle", "f"], "campaign": ["x"]}
