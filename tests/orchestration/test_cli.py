@@ -58,7 +58,7 @@ def test_a_whole_array_splits_into_its_elements_each_typed_by_its_variable(descr
         (
             "SatelliteDynamics.inertia",
             "900",
-            r"array of shape 3×3 \[kg.m2\]; give it whole, e.g. "
+            r"array of shape 3×3 \[kg·m²\]; give it whole, e.g. "
             r"inertia=\[\[956.0,0.0,0.0\],.*or one element, e.g. inertia\[1,1\]=956.0 .*not spread",
         ),
         ("SatelliteDynamics.inertia", "[900, 900, 900]", "array of shape 3×3"),
