@@ -118,3 +118,47 @@ def test_a_figure_laid_out_tight_stays_as_drawn_whatever_rcparams_say(rc):
         assert not figure_layout.draw(fig, axes, canvas)
         engine = fig.get_layout_engine()  # none, or matplotlib's place holder, a no-op
         assert engine is None or isinstance(engine, PlaceHolderLayoutEngine)
+
+
+def _panel(values, **marks):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig, axes = plots._subplots(1)
+    ax = axes[0, 0]
+    t = np.linspace(0.0, 10.0, 200)
+    for k, v in enumerate(values):
+        ax.plot(t, v, label=f"series {k + 1}")
+    plots._mark(ax, plots._span(values), **marks)
+    plots._legend(ax)
+    FigureCanvasAgg(fig).draw()
+    return ax
+
+
+def test_a_limit_far_above_an_error_makes_the_axis_logarithmic_and_shows_both():
+    """video_sar's pointing error (1.5e-5°) under its 0.05° line was a flat line."""
+    error = 1e-5 * (1.5 + np.sin(np.linspace(0, 3, 200)))
+    ax = _panel([error], limit=((0.05,), "required"), bottom=0.0)
+    assert ax.get_yscale() == "log"
+    low, high = ax.get_ylim()
+    assert low <= error.min() and high > 0.05
+    assert [line.get_ydata()[0] for line in ax.lines[1:]] == [0.05]
+
+
+def test_a_limit_far_outside_signed_data_is_said_not_drawn():
+    """video_sar's gimbal rates (0.002 rad/s) against ±0.6 rad/s were flat lines."""
+    rates = [0.002 * np.sin(np.linspace(0, 3, 200) + k) for k in range(6)]
+    ax = _panel(rates, limit=(0.6, "limit ±0.6 rad/s"))
+    assert ax.get_ylim()[1] < 0.01  # the data fill the axes
+    assert "limit ±0.6 rad/s (off scale)" in ax.get_legend_handles_labels()[1]
+
+
+def test_the_legend_covers_no_data_and_no_series_has_the_limits_red():
+    rates = [np.sin(np.linspace(0, 6, 200) + k) for k in range(6)]
+    ax = _panel(rates, limit=(1.0, "limit"))
+    colours = [line.get_color() for line in ax.lines[:6]]
+    assert "tab:red" not in colours and len(set(colours)) == 6
+    box = ax.get_legend().get_window_extent()
+    for line in ax.lines:
+        points = ax.transData.transform(np.column_stack(line.get_data()))
+        inside = (box.x0 < points[:, 0]) & (points[:, 0] < box.x1)
+        assert not (inside & (box.y0 < points[:, 1]) & (points[:, 1] < box.y1)).any()
