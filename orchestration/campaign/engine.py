@@ -393,7 +393,7 @@ def catalog(known: dict, record: dict) -> bool:
     new = False
     for name, m in record["metrics"].items():
         if name not in metrics:
-            drop = ("value", "met", "verdict", "reason", "paper")
+            drop = ("value", "met", "verdict", "reason")
             metrics[name] = {k: v for k, v in m.items() if k not in drop}
             new = True
     for name, r in record.get("requirements", {}).items():

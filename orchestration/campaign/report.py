@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 import math
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -201,8 +202,9 @@ def display(meta: dict) -> tuple[float, str]:
 
 
 def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
-    """A histogram of each metric that varies over the runs, with its requirement's
-    bounds (a constant metric has none: one value says it all)."""
+    """A histogram of each metric that varies over the runs, titled by its description,
+    with its requirement's bounds and the paper's value (a constant metric has none: one
+    value says it all)."""
     from ..output.plots import plt
 
     paths = []
@@ -222,13 +224,17 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             ax.axvline(
                 value * scale, color="tab:red", linestyle="--", label=f"requirement ({bound})"
             )
-        if "requirement" in meta:
+        if meta.get("paper") is not None:
+            ax.axvline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
+        if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=8)
         ax.set_xlabel(f"{name} [{unit}]" if unit else name)
         ax.set_ylabel("runs")
         missing = len(array) - len(values)
         ax.set_title(
-            f"{name}: {len(values)} runs" + (f" ({missing} without a value)" if missing else ""),
+            _described(meta)
+            + f"{len(values)} runs"
+            + (f" ({missing} without a value)" if missing else ""),
             fontsize=10,
         )
         paths.append(_save(fig, ax, out / f"hist_{name}.png"))
@@ -263,13 +269,21 @@ def sweeps(plan, array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             for bound, value in meta.get("requirement", {}).items():
                 label = f"requirement ({bound})"
                 ax.axhline(value * scale, color="tab:red", linestyle="--", label=label)
+            if meta.get("paper") is not None:
+                ax.axhline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
             ax.set_xlabel(key)
             ax.set_ylabel(f"{name} [{unit}]" if unit else name)
-            ax.set_title(f"{name} against {key}: {len(array)} runs", fontsize=10)
+            ax.set_title(_described(meta) + f"against {key}: {len(array)} runs", fontsize=10)
             if ax.get_legend_handles_labels()[1]:
                 ax.legend(fontsize=8)
             paths.append(_save(fig, ax, out / f"sweep_{name}_{_file_name(key)}.png"))
     return paths
+
+
+def _described(meta: dict) -> str:
+    """A metric's description as a title's first line(s), or nothing."""
+    text = meta.get("description")
+    return textwrap.fill(text, 80) + "\n" if text else ""
 
 
 def _save(fig, ax, path: Path) -> Path:

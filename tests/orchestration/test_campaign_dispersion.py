@@ -426,3 +426,26 @@ def test_the_failure_list_says_how_many_more_there_are():
     lines = format_campaign(summary).splitlines()
     assert [line.split(":")[0] for line in lines[2:7]] == [f"  run {i} failed" for i in range(5)]
     assert lines[7].startswith("  and 3 more")
+
+
+def test_a_histogram_says_what_the_metric_is_and_marks_the_requirement_and_the_paper(
+    tmp_path, monkeypatch
+):
+    import math
+
+    drawn = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: drawn.append(ax) or path)
+    meta = {
+        "unit": "rad",
+        "display_unit": "deg",
+        "description": "max tilt of the pitch axis",
+        "requirement": {"max": math.radians(2.0)},
+        "paper": math.radians(1.5),
+    }
+    array = np.array([(math.radians(x),) for x in (0.5, 1.0, 1.2)], dtype=[("m", float)])
+    [path] = report.histograms(array, {"metrics": {"m": meta}}, tmp_path)
+    [ax] = drawn
+    assert path.name == "hist_m.png" and ax.get_xlabel() == "m [°]"
+    assert ax.get_title().startswith("max tilt of the pitch axis\n3 runs")
+    marks = {line.get_label(): line.get_xdata()[0] for line in ax.lines}
+    assert marks == pytest.approx({"requirement (max)": 2.0, "paper": 1.5})
