@@ -221,14 +221,18 @@ def signals(
 ) -> Path:
     """Recorded variables (scalar columns or whole arrays by base name), one panel each,
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
-    the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
-    one), it is the title and the axes name the variables alone."""
+    the results, angles in degrees with ``deg``; a Boolean's axis says false and true.
+    With ``instance`` (all variables of that one), it is the title and the axes name the
+    variables alone."""
+    import numpy as np
+
     fig, axes = _subplots(len(variables), sharex=True)
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
-            for column, v in zip(results.columns(name), values.T):
-                element = column[len(name) :] or name.split(".")[-1]
+            columns = results.columns(name)
+            for column, v in zip(columns, values.T):
+                element = _element(name, column, len(columns))
                 ax.plot(
                     results.time,
                     v,
@@ -237,6 +241,9 @@ def signals(
                     label=f"{run} {element}".strip(),
                 )
         unit = results.unit(name)
+        if unit is None and all(set(np.unique(line.get_ydata())) <= {0, 1} for line in ax.lines):
+            ax.set_yticks([0, 1], ["false", "true"])  # a Boolean (or a 0/1 flag)
+            ax.set_ylim(-0.15, 1.15)
         ax.set_ylabel(
             unit_label(
                 name.split(".", 1)[1] if instance else name, to_degrees(unit)[1] if deg else unit
@@ -245,6 +252,16 @@ def signals(
         ax.grid(True, alpha=0.3)
         _legend(ax)
     return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
+
+
+def _element(name: str, column: str, n: int) -> str:
+    """A line's label: x, y, z for a 3-vector's elements, w, x, y, z for a quaternion's
+    (scalar first), else the element's index ([2,3]); a scalar's name."""
+    index = column[len(name) :]
+    if not index:
+        return name.split(".")[-1]
+    axes = "wxyz" if n == 4 and name.split(".")[-1].startswith("q_") else "xyz" if n == 3 else ""
+    return axes[int(index[1:-1]) - 1] if axes else index
 
 
 def overview(results, out_dir) -> list[Path]:
@@ -262,6 +279,7 @@ def overview(results, out_dir) -> list[Path]:
                 Path(out_dir) / f"overview_{instance}.png",
                 {"": results},
                 variables,
+                deg=True,  # angles in degrees, as people read them
                 instance=instance,
             )
         )

@@ -162,3 +162,24 @@ def test_the_legend_covers_no_data_and_no_series_has_the_limits_red():
         points = ax.transData.transform(np.column_stack(line.get_data()))
         inside = (box.x0 < points[:, 0]) & (points[:, 0] < box.x1)
         assert not (inside & (box.y0 < points[:, 1]) & (points[:, 1] < box.y1)).any()
+
+
+def test_overview_names_vector_elements_by_axis_angles_in_degrees_booleans_false_true(
+    tmp_path, monkeypatch
+):
+    from agilesat.orchestration.output.results import Results
+
+    t = np.linspace(0.0, 1.0, 5)
+    names = ["time", "A.w[1]", "A.w[2]", "A.w[3]", "A.q_BI[1]", "A.q_BI[2]", "A.q_BI[3]"]
+    names += ["A.q_BI[4]", "A.on"]
+    data = np.column_stack([t, t, t, t, t, t, t, t, t > 0.5])
+    units = {n: "rad" for n in names[1:4]} | {n: "1" for n in names[4:8]}
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda fig, axes, *rest: drawn.append(axes) or rest[0])
+    plots.overview(Results(names, data, {"units": units}), tmp_path)
+    [axes] = drawn
+    w, q, on = axes[:, 0]
+    assert [line.get_label() for line in w.lines] == ["x", "y", "z"]
+    assert w.get_ylabel() == "w [°]" and w.lines[0].get_ydata()[-1] == pytest.approx(180 / np.pi)
+    assert [line.get_label() for line in q.lines] == ["w", "x", "y", "z"]
+    assert [tick.get_text() for tick in on.get_yticklabels()] == ["false", "true"]
