@@ -23,6 +23,11 @@ from .studies import cli as study_cli
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
 #: master are imported only to run a campaign; a test checks it is the campaign's own)
 CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
+#: the --algorithm option of `run` and `campaign`
+ALGORITHM = {
+    "choices": ("gauss-seidel", "jacobi"),
+    "help": "coupling algorithm (default the system's; gauss-seidel if it names none)",
+}
 #: what TARGET may be (``mission.targets``)
 TARGETS = (
     "a scenario[:variant] (`agilesat list`), a mission file path/to/mission.py[:variant], "
@@ -160,11 +165,7 @@ def _system_commands(commands, quiet) -> None:
     run.add_argument("--step", type=float, help="macro step [s]")
     run.add_argument("--stop", type=float, help="stop time [s]")
     run.add_argument("--start", type=float, help="start time [s] (default the system's)")
-    run.add_argument(
-        "--algorithm",
-        choices=("gauss-seidel", "jacobi"),
-        help="coupling algorithm (default the system's; gauss-seidel if it names none)",
-    )
+    run.add_argument("--algorithm", **ALGORITHM)
     run.add_argument(
         "--output-interval",
         type=float,

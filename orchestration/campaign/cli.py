@@ -11,6 +11,7 @@ import argparse
 import signal
 from pathlib import Path
 
+from ..cli import ALGORITHM
 from . import Spec, engine, run_campaign, shipped
 from .report import display
 
@@ -84,11 +85,7 @@ def add_parser(commands) -> argparse.ArgumentParser:
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value of every run (as `agilesat run --set`)",
     )
-    p.add_argument(
-        "--algorithm",
-        choices=("gauss-seidel", "jacobi"),
-        help="coupling algorithm (default the system's; gauss-seidel if it names none)",
-    )
+    p.add_argument("--algorithm", **ALGORITHM)
     p.add_argument(
         "-q",
         "--quiet",
