@@ -10,18 +10,24 @@ written; a second signal changes nothing).
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from contextlib import nullcontext
-from importlib import metadata
 from pathlib import Path
 
 from .cosim.signals import interruptible
+from .provenance import version
 from .studies import cli as study_cli
 
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
 #: master are imported only to run a campaign; a test checks it is the campaign's own)
 CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
+#: the --algorithm option of `run` and `campaign`
+ALGORITHM = {
+    "choices": ("gauss-seidel", "jacobi"),
+    "help": "coupling algorithm (default the system's; gauss-seidel if it names none)",
+}
 #: what TARGET may be (``mission.targets``)
 TARGETS = (
     "a scenario[:variant] (`agilesat list`), a mission file path/to/mission.py[:variant], "
@@ -58,6 +64,9 @@ def main(argv=None) -> int:
         except KeyboardInterrupt as exc:
             print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
             return 128 + getattr(exc, "signal", signal.SIGINT)
+        except UsageError as exc:
+            print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
+            return 2
         except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
             if _interrupted(exc):
                 print(f"agilesat {args.command}: {exc}", file=sys.stderr)
@@ -75,6 +84,10 @@ def main(argv=None) -> int:
         return code
 
 
+class UsageError(ValueError):
+    """A command line argparse cannot judge wrong (exit 2, as argparse's own)."""
+
+
 def _interrupted(exc: BaseException) -> bool:
     """A run stopped by SIGINT/SIGTERM (master.Interrupted; only a command that imported
     the master can raise one)."""
@@ -89,18 +102,16 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
     doc = __doc__.split("\n\n")
     parser = argparse.ArgumentParser(
         prog="agilesat",
-        description=doc[0],
+        description=doc[0].replace("``", ""),
         epilog=doc[1].strip(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument(
-        "--version", action="version", version=f"agilesat {metadata.version('agilesat')}"
-    )
+    parser.add_argument("--version", action="version", version=version())
     quiet = argparse.ArgumentParser(add_help=False)
     quiet.add_argument(
         "-q", "--quiet", action="store_true", help="no progress bar or progress lines"
     )
-    commands = parser.add_subparsers(dest="command", required=True)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _system_commands(commands, quiet)
     study_cli.add_parsers(commands, quiet)
     from .output import recorded_cli
@@ -112,6 +123,9 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
         campaign_cli.add_parser(commands)
     else:
         commands.add_parser("campaign", help=CAMPAIGN_HELP)
+    listed = {c.dest: c.help for c in commands._choices_actions}
+    for name, command in commands.choices.items():  # each command's --help says what it does
+        command.description = command.description or listed.get(name)
     return parser
 
 
@@ -143,7 +157,9 @@ def _system_commands(commands, quiet) -> None:
 
     validate = commands.add_parser("validate", help="validate FMUs with fmpy's validator")
     validate.add_argument(
-        "fmus", nargs="*", type=Path, help="FMU files (default: every FMU in fmus/build)"
+        "fmus",
+        nargs="*",
+        help="FMU files, or our FMUs by name (built if stale; default: every FMU in fmus/build)",
     )
 
     run = commands.add_parser(
@@ -153,7 +169,7 @@ def _system_commands(commands, quiet) -> None:
     run.add_argument("--step", type=float, help="macro step [s]")
     run.add_argument("--stop", type=float, help="stop time [s]")
     run.add_argument("--start", type=float, help="start time [s] (default the system's)")
-    run.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
+    run.add_argument("--algorithm", **ALGORITHM)
     run.add_argument(
         "--output-interval",
         type=float,
@@ -185,7 +201,7 @@ def _system_commands(commands, quiet) -> None:
         "(A.attitude0[2]='100 deg'); `agilesat info` lists them",
     )
     run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
-    run.add_argument("--no-figures", action="store_true")
+    run.add_argument("--no-figures", action="store_true", help="draw no figures")
     run.add_argument(
         "--svg",
         action="store_true",
@@ -224,9 +240,9 @@ def _system_commands(commands, quiet) -> None:
     export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
 
     generate = commands.add_parser(
-        "generate",
-        help="write the files generated from the "
-        "variable tables and scenarios (.ssd, fmus/INTERFACES.md)",
+        "generate",  # a developer's command: not in `agilesat --help`
+        description="(for developers of agilesat, in a source checkout) write the files "
+        "generated from the variable tables and scenarios (.ssd, fmus/INTERFACES.md)",
     )
     generate.add_argument(
         "--check", action="store_true", help="only check that the committed files are up to date"
@@ -293,9 +309,22 @@ def _build_models(models: list[str], args) -> int:
 def _validate(args) -> int:
     from fmpy.validation import validate_fmu
 
-    from ..fmus.build import BUILD_DIR
+    from ..fmus import FMUS
+    from ..fmus.build import BUILD_DIR, build_fmu
+    from .system.parameters import did_you_mean
 
-    paths = args.fmus or sorted(BUILD_DIR.glob("*.fmu"))
+    paths = []
+    for given in args.fmus:
+        if Path(given).is_file():
+            paths.append(Path(given))
+        elif given in FMUS:
+            paths.append(build_fmu(given))
+        else:
+            raise ValueError(
+                f"no such FMU file {given!r}, nor one of ours by name ({', '.join(FMUS)})"
+                + did_you_mean(given, FMUS)
+            )
+    paths = paths or sorted(BUILD_DIR.glob("*.fmu"))
     if not paths:
         print("no FMUs to validate: run `agilesat build` first", file=sys.stderr)
         return 1
@@ -352,20 +381,30 @@ def _pointing(args) -> int:
 
 def _plot(args) -> int:
     from .output import plots
-    from .output.results import Results
+    from .output.results import ColumnError, Results
 
     runs = [Path(item) for item in args.items if Path(item).is_dir()]
     variables = [item for item in args.items if not Path(item).is_dir()]
+    for item in variables:  # a variable is Instance.name; anything else is a directory
+        if "/" in item or os.sep in item or "." not in item:
+            raise ValueError(f"no such run directory: {item}")
     if not runs or not variables:
-        raise ValueError(
+        raise UsageError(
             "expected RESULTS_DIR... VARIABLE...: one or more run directories, "
             f"then the variables to plot (got directories {list(map(str, runs))}"
             f", variables {variables})"
         )
     loaded = {run.name or str(run): Results.load(run) for run in runs}
-    for results in loaded.values():
+    for run, results in zip(runs, loaded.values()):
         for name in variables:
-            results.columns(name)  # a wrong name: did you mean ...
+            try:
+                results.columns(name)
+            except ColumnError as exc:  # a wrong name: did you mean ...; what there is
+                recorded = dict.fromkeys(n.partition("[")[0] for n in results.names[1:])
+                raise ColumnError(
+                    f"{run}: {exc}; it recorded {', '.join(recorded)} "
+                    "(whole arrays by base name, or elements like X.w_BI_B[2])"
+                ) from None
     out = args.out or runs[0] / "plot.png"
     if len(loaded) == 1:
         loaded = {"": next(iter(loaded.values()))}  # one run: label the lines by element
@@ -410,8 +449,16 @@ def _generate(args) -> int:
 
     files = generated_systems()
     files.update(generated_files())
+    checkout = source_checkout()
+    if not checkout and not args.check:
+        raise ValueError(
+            "generate writes the generated files of a source checkout of agilesat; "
+            f"this one is installed ({Path(__file__).parent}): `generate --check` checks it"
+        )
     stale = []
     for path, render in files.items():
+        if not checkout and not path.exists():
+            continue  # not installed with the package (fmus/INTERFACES.md)
         content = render()
         if args.check:
             if not path.exists() or path.read_bytes() != content:
@@ -423,3 +470,9 @@ def _generate(args) -> int:
         print(f"out of date (run `agilesat generate`): {', '.join(stale)}", file=sys.stderr)
         return 1
     return 0
+
+
+def source_checkout() -> bool:
+    """Whether agilesat runs from a source checkout (an editable install), where the
+    generated files all are; an installed package has only those it ships."""
+    return (Path(__file__).resolve().parent.parent / "pyproject.toml").is_file()

@@ -54,14 +54,17 @@ def scenario_info(scenario, variant: str | None) -> str:
     for name, v in scenario.variants.items():
         lines.append(f"  {'>' if name == variant else ' '} variant :{name} — {v.description}")
     chosen = scenario.variant(variant)
+    system = scenario.system_for(variant)
+    described = system.descriptions()
     if variant:
         lines.append(f"variant :{variant} (marked '!' below where it changes the system):")
-        lines += [f"  {key} = {value!r}" for key, value in chosen.parameters.items()]
+        lines += [
+            f"  {key} = {_given(value, _unit(key, described))}"
+            for key, value in chosen.parameters.items()
+        ]
         if chosen.system is not None:
             lines.append(f"  and its system edited by {chosen.system.__name__}()")
         lines += [f"  not judged: {n} ({why})" for n, why in chosen.exempt().items()]
-    system = scenario.system_for(variant)
-    described = system.descriptions()
     units = {m.name: m.unit or _unit_of(m.signal, described) for m in scenario.metrics_for(variant)}
     lines.append("metrics (summary.json; [display unit]):")
     for m in scenario.metrics_for(variant):
@@ -194,6 +197,27 @@ def _row(name: str, var, values, mark: str = " ") -> str:
         value += " (" + _format([_scaled(v, factor) for v in values], var.shape) + ")"
         unit = f"{unit} ({pretty(degrees)})"
     return f" {mark}{name + shape:44s} {unit:13s} {value:30s} {var.first.description or ''}"
+
+
+def _unit(key: str, described: dict) -> str | None:
+    """The unit of parameter ``key`` ("A.x" or "A.x[i]") in its FMU's model description."""
+    component, _, name = key.partition(".")
+    found = variables(described[component]).get(name.partition("[")[0])
+    return None if found is None else found.first.unit
+
+
+def _given(value, unit: str | None) -> str:
+    """A variant's value as it gave it: numbers (arrays too) to 6 digits with their unit,
+    in degrees too where it is an angle; text (a value with its unit) as it is."""
+    if isinstance(value, str):
+        return value
+    array = np.asarray(value, dtype=object)
+    text = _format(list(array.ravel()), array.shape)
+    factor, degrees = to_degrees(unit)
+    if degrees != unit and array.dtype != bool and not isinstance(value, bool):
+        scaled = [_scaled(v, factor) for v in array.ravel()]
+        return f"{text} {pretty(unit)} ({_format(scaled, array.shape)} {pretty(degrees)})"
+    return f"{text} {pretty(unit)}".rstrip() if unit else text
 
 
 def _scaled(value, factor):

@@ -6,6 +6,7 @@ layer on this.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -22,6 +23,7 @@ from .output.lock import holding
 from .output.recorder import write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
+from .provenance import provenance
 
 #: a run that will write more than this says so before it starts
 LARGE_OUTPUT = 2**30
@@ -90,6 +92,7 @@ def run(
         out_dir.mkdir(parents=True, exist_ok=True)
         _say_size(plan, out_dir, notice)
     summary = {
+        **provenance(),
         "scenario": scenario.name if scenario else None,
         "variant": variant,
         "system": str(system.path),
@@ -97,6 +100,8 @@ def run(
     }
     figures = figures and out_dir is not None
     with stop_on_signals() as signals, holding(out_dir) if out_dir else nullcontext():
+        if out_dir is not None:
+            _drop_previous_figures(out_dir)
         try:
             results = execute(plan)
         except SimulationError as failure:
@@ -141,6 +146,17 @@ def run(
                 signals.signal,
             )
     return results, summary
+
+
+def _drop_previous_figures(out_dir: Path) -> None:
+    """Remove the figures an earlier run in ``out_dir`` drew (its summary.json lists
+    them; nothing else is touched): a reused ``--out`` shows this run's figures only."""
+    try:
+        listed = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))["figures"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return
+    for name in listed if isinstance(listed, list) else ():
+        (out_dir / Path(str(name)).name).unlink(missing_ok=True)
 
 
 class _Stopped(Exception):

@@ -12,6 +12,7 @@ and files in :mod:`.engine`, statistics, pass rates and figures in :mod:`.report
 
 from __future__ import annotations
 
+import collections
 import json
 import platform
 import shlex
@@ -140,7 +141,8 @@ def run_campaign(
         metrics = read_object(out / "metrics.json", "an object of each metric's unit and text")
         if not all(isinstance(m, dict) for m in metrics.values()):
             raise CampaignFileError(f"{out / 'metrics.json'}: expected an object per metric")
-    bar = report.Progress(plan.total, len(done), enabled=bool(progress))
+    before = collections.Counter(str(r.get("status")) for r in done.values())
+    bar = report.Progress(plan.total, len(done), enabled=bool(progress), before=before)
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
     lost, lost_scheduler = [], None
     try:

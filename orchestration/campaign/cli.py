@@ -11,7 +11,8 @@ import argparse
 import signal
 from pathlib import Path
 
-from . import Spec, run_campaign, shipped_files
+from ..cli import ALGORITHM
+from . import Spec, engine, run_campaign, shipped_files
 from .report import display
 
 
@@ -29,7 +30,13 @@ def add_parser(commands) -> argparse.ArgumentParser:
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
     p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
     p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
-    p.add_argument("--vary", action="append", default=[], metavar="INSTANCE.VAR=DIST")
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR=DIST",
+        help="disperse a parameter (DIST above); repeat for more",
+    )
     p.add_argument(
         "--dispersions",
         action="append",
@@ -72,9 +79,22 @@ def add_parser(commands) -> argparse.ArgumentParser:
     )
     p.add_argument("--step", type=float, help="macro step [s]")
     p.add_argument("--stop", type=float, help="stop time [s]")
-    p.add_argument("--set", action="append", default=[], metavar="INSTANCE.VAR=VALUE")
-    p.add_argument("--algorithm", choices=("gauss-seidel", "jacobi"))
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR=VALUE",
+        help="a parameter value of every run (as `agilesat run --set`)",
+    )
+    p.add_argument("--algorithm", **ALGORITHM)
+    p.add_argument(
+        "-q",
+        "--quiet",
+        "--no-progress",
+        dest="quiet",
+        action="store_true",
+        help="no progress bar or progress lines (--no-progress: the same)",
+    )
     return p
 
 
@@ -103,7 +123,9 @@ def main(args) -> int:
         args.stop,
         args.algorithm,
     )
-    signal.signal(signal.SIGTERM, _interrupt)  # a batch system's stop: as Ctrl-C
+    engine.INTERRUPTS.signals.clear()
+    for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
+        signal.signal(signum, engine.INTERRUPTS)
     try:
         result = run_campaign(
             spec,
@@ -111,19 +133,26 @@ def main(args) -> int:
             args.resume,
             args.workers,
             args.scheduler,
-            progress=not args.no_progress,
+            progress=not args.quiet,
             listen=args.listen,
             dashboard=args.dashboard,
         )
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
-        print("interrupted: the runs made are in runs.jsonl; --resume continues")
-        return 128 + (_signals[0] if _signals else signal.SIGINT)
+        print(f"interrupted by {_first().name}: the runs made are in runs.jsonl; {RESUME}")
+        return 128 + _first()
+    if result.summary["status"] == "interrupted":
+        runs = result.summary["runs"]
+        print(
+            f"interrupted by {_first().name}: {runs['made']} of {runs['planned']} runs kept in "
+            f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
+        )
+        return 128 + _first()
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
-    if result.summary["status"] == "interrupted":
-        print(f"interrupted: `agilesat campaign ... --resume --out {result.out_dir}` continues it")
-        return 128 + (_signals[0] if _signals else signal.SIGINT)
+    if engine.INTERRUPTS.signals:  # as the cluster closed
+        print(f"{_first().name} as the cluster closed: every run was made and written")
+        return 128 + _first()
     runs = result.summary["runs"]
     unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
         r["verdict"] == "not met" for r in result.summary["ensemble"].values()
@@ -131,12 +160,15 @@ def main(args) -> int:
     return 3 if runs["planned"] != runs["ok"] or unmet else 0
 
 
-_signals: list[int] = []  # SIGTERM, once it came (Ctrl-C is Python's KeyboardInterrupt)
+RESUME = "the same command with --resume continues it"
 
 
-def _interrupt(signum, frame):
-    _signals.append(signum)
-    raise KeyboardInterrupt
+def _first() -> signal.Signals:
+    return signal.Signals((engine.INTERRUPTS.signals or [signal.SIGINT])[0])
+
+
+#: the failed runs the campaign's report lists (campaign.json has the first 100)
+SHOWN = 5
 
 
 def format_campaign(summary: dict) -> str:
@@ -202,8 +234,11 @@ def format_campaign(summary: dict) -> str:
                 for k, v in point["values"].items()
             )
             lines.append(f"  {values}: {met['met']}/{met['runs']} met")
-    for failure in summary["failures"][:5]:
+    for failure in summary["failures"][:SHOWN]:
         lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")
+    failed = runs["made"] - runs["ok"]
+    if failed > SHOWN:
+        lines.append(f"  and {failed - SHOWN} more (runs.csv: the status and message of every run)")
     if summary["failures"]:
         lines.append('  (campaign.json "failures" has the `agilesat run` command replaying each)')
     return "\n".join(lines)

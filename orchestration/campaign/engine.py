@@ -30,6 +30,7 @@ import shutil
 import sys
 import time
 import uuid
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from ..cosim.signals import signal_at
 from ..output.recorder import write_text
 from .files import CampaignFileError, changed, journal_record, read_object, system_content
 from .plan import Plan, Spec
-from .worker import run_batch
+from .worker import quiet_closed_connections, run_batch
 
 IN_FLIGHT_PER_WORKER = 2  # batches queued per worker: the next is there when one ends
 BATCH_SECONDS = 2.0
@@ -64,7 +65,31 @@ LOCAL_CLUSTER_CONFIG = {
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    # Ctrl-C in a terminal signals the whole process group: the workers ignore it (no
+    # tracebacks), the campaign process stops the campaign and closes the cluster
+    "distributed.worker.preload": [f"{__package__}.worker"],
 }
+
+
+class Interrupts:
+    """``agilesat campaign``'s handler of SIGINT and SIGTERM (:data:`INTERRUPTS`): each
+    signal recorded in ``signals``; a KeyboardInterrupt before the cluster starts, a flag
+    while it is up (:func:`cluster`), which the loop over the runs looks at every 50 ms.
+    (An exception raised in a signal handler lands wherever the main thread is; in a
+    finaliser or a garbage-collector callback, of which Dask has some, Python prints it
+    and drops it.)"""
+
+    def __init__(self):
+        self.signals: list[int] = []
+        self.deferred = False
+
+    def __call__(self, signum, frame):
+        self.signals.append(signum)
+        if not self.deferred:
+            raise KeyboardInterrupt
+
+
+INTERRUPTS = Interrupts()
 
 
 class CampaignExistsError(ValueError):
@@ -182,23 +207,31 @@ def cluster(
     import dask
     from distributed import Client, LocalCluster
 
-    if scheduler:
-        with Client(scheduler, timeout="30s") as client:
+    # the scheduler's HTTP server (health, metrics; no dashboard unless asked) takes
+    # another port when Dask's default is taken, and need not say so
+    warnings.filterwarnings("ignore", r"Port \d+ is already in use", UserWarning, "distributed")
+    quiet_closed_connections()
+    INTERRUPTS.deferred = True
+    try:
+        if scheduler:
+            with Client(scheduler, timeout="30s") as client:
+                yield client
+            return
+        with (
+            dask.config.set(LOCAL_CLUSTER_CONFIG),
+            LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host=listen,
+                dashboard_address=dashboard,
+                silence_logs=logging.ERROR,
+            ) as local,
+            Client(local) as client,
+        ):
             yield client
-        return
-    with (
-        dask.config.set(LOCAL_CLUSTER_CONFIG),
-        LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            host=listen,
-            dashboard_address=dashboard,
-            silence_logs=logging.ERROR,
-        ) as local,
-        Client(local) as client,
-    ):
-        yield client
+    finally:
+        INTERRUPTS.deferred = False
 
 
 def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:
@@ -269,7 +302,7 @@ def execute(
     status = "complete"
     try:
         with (out / "runs.jsonl").open("a") as journal:
-            for future in pending:
+            for future in _completed(pending):
                 batch = futures.pop(future)
                 try:
                     made = future.result()
@@ -340,6 +373,18 @@ def execute(
     return records, watcher.lost, status
 
 
+def _completed(pending):
+    """The futures of ``pending`` (an ``as_completed``) as they complete, until none is
+    left; a KeyboardInterrupt within 50 ms of a signal :data:`INTERRUPTS` recorded."""
+    while not pending.is_empty():
+        if INTERRUPTS.signals:
+            raise KeyboardInterrupt
+        if pending.has_ready():
+            yield next(pending)
+        else:
+            time.sleep(0.05)
+
+
 def catalog(known: dict, record: dict) -> bool:
     """Add what a run's summary says of its metrics (unit, display unit, description,
     bound) and requirements (statement, and why not judged) to ``known``; True if any was
@@ -349,7 +394,7 @@ def catalog(known: dict, record: dict) -> bool:
     new = False
     for name, m in record["metrics"].items():
         if name not in metrics:
-            drop = ("value", "met", "verdict", "reason", "paper")
+            drop = ("value", "met", "verdict", "reason")
             metrics[name] = {k: v for k, v in m.items() if k not in drop}
             new = True
     for name, r in record.get("requirements", {}).items():

@@ -20,6 +20,7 @@ import numpy as np
 from ...fmus import FMUS, model_class
 from ..mission.targets import resolve
 from ..system.description import Description
+from ..system.parameters import did_you_mean
 from . import dispersion as dispersions
 
 
@@ -154,7 +155,7 @@ class Plan:
         if instance not in self.fmus:
             raise ValueError(
                 f"{what} {key}: no component {instance!r} in {self.system.path}; "
-                f"components: {', '.join(self.fmus)}"
+                f"components: {', '.join(self.fmus)}" + did_you_mean(instance, self.fmus)
             )
         if self.fmus[instance] not in FMUS:
             return None  # not one of ours: the master checks the name when it runs
@@ -167,7 +168,11 @@ class Plan:
                         f"{var.scalar_names()[-1]}"
                     )
                 return var
-        raise ValueError(f"{what} {key}: {self.fmus[instance]} has no variable {name!r}")
+        known = [v.name for v in model_class(self.fmus[instance]).VARIABLES]
+        raise ValueError(
+            f"{what} {key}: {self.fmus[instance]} has no variable {name!r}"
+            + did_you_mean(name, known)
+        )
 
     def _check(self, d) -> tuple:
         """(the dispersion, named choices resolved to their values; the nominal value of
@@ -222,6 +227,12 @@ class Plan:
             raise ValueError(
                 f"--vary {d.text}: rotate() turns a 3-vector or the rows of an "
                 f"n×3 matrix; {d.instance}.{var.name} has shape {shape}"
+            )
+        norms = np.linalg.norm(flat.reshape(shape), axis=-1) if d.kind == "rotate" else None
+        if norms is not None and not np.allclose(norms, 1.0, atol=1e-6):
+            raise ValueError(
+                f"--vary {d.text}: rotate() turns unit vectors; {d.instance}.{var.name} "
+                f"has norm(s) {np.round(norms, 6).tolist()}, not 1"
             )
         if d.kind == "inertia" and shape != (3, 3):
             raise ValueError(

@@ -14,6 +14,7 @@ from __future__ import annotations
 import csv
 import math
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -207,8 +208,9 @@ def display(meta: dict) -> tuple[float, str]:
 
 
 def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
-    """A histogram of each metric that varies over the runs, with its requirement's
-    bounds (a constant metric has none: one value says it all)."""
+    """A histogram of each metric that varies over the runs, titled by its description,
+    with its requirement's bounds and the paper's value (a constant metric has none: one
+    value says it all)."""
     from ..output.plots import plt
 
     paths = []
@@ -228,13 +230,17 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             ax.axvline(
                 value * scale, color="tab:red", linestyle="--", label=f"requirement ({bound})"
             )
-        if "requirement" in meta:
+        if meta.get("paper") is not None:
+            ax.axvline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
+        if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=8)
         ax.set_xlabel(f"{name} [{unit}]" if unit else name)
         ax.set_ylabel("runs")
         missing = len(array) - len(values)
         ax.set_title(
-            f"{name}: {len(values)} runs" + (f" ({missing} without a value)" if missing else ""),
+            _described(meta)
+            + f"{len(values)} runs"
+            + (f" ({missing} without a value)" if missing else ""),
             fontsize=10,
         )
         paths.append(_save(fig, ax, out / f"hist_{name}.png"))
@@ -269,13 +275,21 @@ def sweeps(plan, array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             for bound, value in meta.get("requirement", {}).items():
                 label = f"requirement ({bound})"
                 ax.axhline(value * scale, color="tab:red", linestyle="--", label=label)
+            if meta.get("paper") is not None:
+                ax.axhline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
             ax.set_xlabel(key)
             ax.set_ylabel(f"{name} [{unit}]" if unit else name)
-            ax.set_title(f"{name} against {key}: {len(array)} runs", fontsize=10)
+            ax.set_title(_described(meta) + f"against {key}: {len(array)} runs", fontsize=10)
             if ax.get_legend_handles_labels()[1]:
                 ax.legend(fontsize=8)
             paths.append(_save(fig, ax, out / f"sweep_{name}_{_file_name(key)}.png"))
     return paths
+
+
+def _described(meta: dict) -> str:
+    """A metric's description as a title's first line(s), or nothing."""
+    text = meta.get("description")
+    return textwrap.fill(text, 80) + "\n" if text else ""
 
 
 def _save(fig, ax, path: Path) -> Path:
@@ -313,7 +327,7 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
         ax.fill_between(t, p[1], p[3], color="tab:blue", alpha=0.4, label="5–95 %")
         ax.plot(t, p[2], color="tab:blue", linewidth=1.2, label="median")
         ax.set_xlabel("time [s]")
-        ax.set_ylabel(f"{name} [{units.get(name, 'SI')}]")
+        ax.set_ylabel(f"{name} [{pretty(units.get(name)) or 'SI'}]")
         ax.set_title(f"{name}: {len(data)} runs", fontsize=10)
         ax.legend(fontsize=8)
         paths.append(_save(fig, ax, out / f"envelope_{_file_name(name)}.png"))
@@ -322,14 +336,22 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
 
 class Progress:
     """Runs done / failed, rate and ETA: a tqdm bar on a terminal, plain lines every
-    ``period`` seconds otherwise (logs, CI)."""
+    ``period`` seconds otherwise (logs, CI).  ``before``: {status: count} of the ``done``
+    runs an earlier session made (a resumed campaign counts its failures too)."""
 
     def __init__(
-        self, total: int, done: int, enabled: bool = True, period: float = 10.0, stream=None
+        self,
+        total: int,
+        done: int,
+        enabled: bool = True,
+        period: float = 10.0,
+        stream=None,
+        before: dict | None = None,
     ):
         self.stream = stream or sys.stderr
         self.total, self.done, self.todo = total, done, total - done
-        self.counts = dict.fromkeys(STATUSES, 0)
+        self.counts = {s: (before or {}).get(s, 0) for s in STATUSES}
+        self.made = 0  # by this session: the rate
         self.began = self.last = time.monotonic()
         self.period, self.enabled = period, enabled
         self.bar = None
@@ -343,6 +365,7 @@ class Progress:
     def update(self, status: str) -> None:
         self.counts[status] = self.counts.get(status, 0) + 1
         self.done += 1
+        self.made += 1
         if self.bar is not None:
             self.bar.set_postfix_str(self._outcomes(), refresh=False)
             self.bar.update(1)
@@ -360,8 +383,7 @@ class Progress:
 
     def line(self) -> str:
         elapsed = time.monotonic() - self.began
-        made = sum(self.counts.values())
-        rate = made / elapsed if elapsed > 0 else 0.0
+        rate = self.made / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else math.inf
         return (
             f"campaign: {self.done}/{self.total} runs done ({self._outcomes()}), "

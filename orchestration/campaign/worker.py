@@ -8,7 +8,9 @@ process keeps its loaded FMUs between runs (``orchestration.cosim.fmu``).
 
 from __future__ import annotations
 
+import logging
 import os
+import signal
 import time
 
 import numpy as np
@@ -16,6 +18,33 @@ import numpy as np
 from ..cosim.signals import signal_at
 
 _started = 0  # runs this process started
+
+
+def dask_setup(worker) -> None:
+    """Run in each worker process of a LocalCluster as it starts (the cluster's
+    ``distributed.worker.preload``): SIGINT ignored.  Ctrl-C in a terminal signals the
+    whole process group; the campaign process takes it, keeps what was made and closes
+    the cluster, and the workers print no tracebacks.  And their log says nothing of the
+    connections the closing cluster closes (:func:`quiet_closed_connections`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    quiet_closed_connections()
+
+
+class _ClosedConnection(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        from distributed.comm.core import CommClosedError
+
+        error = record.exc_info[1] if record.exc_info else None
+        return not isinstance(error, CommClosedError)
+
+
+def quiet_closed_connections() -> None:
+    """Dask logs a traceback of every connection a closing cluster cuts while a worker,
+    nanny or client still used it (a heartbeat, CommClosedError): those log records are
+    dropped by Dask's log handlers in this process (any other is printed)."""
+    for handler in logging.getLogger("distributed").handlers:
+        if not any(isinstance(f, _ClosedConnection) for f in handler.filters):
+            handler.addFilter(_ClosedConnection())
 
 
 def run_one(

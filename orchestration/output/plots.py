@@ -31,6 +31,18 @@ FORMATS = (".png", ".svg")
 #: those figures are written in now: all, or as :func:`written_as` sets them (per thread)
 _written: ContextVar[tuple[str, ...]] = ContextVar("agilesat_figure_formats", default=FORMATS)
 _STYLES = ("-", "--", "-.", ":")
+#: the series' colours: matplotlib's tab10 without its red, which is the limits'
+SERIES_COLOURS = (
+    "tab:blue",
+    "tab:orange",
+    "tab:green",
+    "tab:purple",
+    "tab:brown",
+    "tab:pink",
+    "tab:gray",
+    "tab:olive",
+    "tab:cyan",
+)
 
 
 @contextlib.contextmanager
@@ -94,12 +106,27 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
                 linewidth=_width(k, len(series)),
                 linestyle="--" if name.startswith(("planned", "reference")) else "-",
             )
-        _mark(ax, **(row[3] if len(row) > 3 else {}))
+        _mark(ax, _span(series.values()), **(row[3] if len(row) > 3 else {}))
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        if len(ax.get_legend_handles_labels()[1]) > 1:
-            ax.legend(fontsize=8, ncol=3)
+        _legend(ax)
     return _save(fig, axes, path, title, xlabel)
+
+
+def _legend(ax) -> None:
+    """The legend (of two entries or more) in headroom of its own above the data and the
+    limits, so that it covers neither."""
+    labels = ax.get_legend_handles_labels()[1]
+    if len(labels) < 2:
+        return
+    columns = min(3, len(labels))
+    share = 0.09 * -(-len(labels) // columns) + 0.05  # of the axes' height
+    low, high = ax.get_ylim()
+    if ax.get_yscale() == "log":
+        ax.set_ylim(low, high * (high / low) ** (share / (1 - share)))
+    else:
+        ax.set_ylim(low, high + (high - low) * share / (1 - share))
+    ax.legend(fontsize=8, ncol=columns, loc="upper right")
 
 
 def _width(k: int, n: int) -> float:
@@ -108,13 +135,39 @@ def _width(k: int, n: int) -> float:
     return 2.2 - 1.3 * k / max(n - 1, 1)
 
 
-def _mark(ax, limit=None, band=None, paper=None, bottom=None, log=False) -> None:
+def _span(series) -> float:
+    """The largest |value| of the series (0 if none is finite)."""
+    import numpy as np
+
+    finite = [np.abs(v)[np.isfinite(v)] for v in map(np.asarray, series)]
+    return max((float(v.max()) for v in finite if v.size), default=0.0)
+
+
+#: a limit this many times the data's largest |value| would flatten it into a line
+FAR = 20.0
+
+
+def _mark(ax, span: float, limit=None, band=None, paper=None, bottom=None, log=False) -> None:
+    """The marks of a panel (module docstring) whose series reach ``span`` at most.  A
+    limit far above the data (:data:`FAR` times) would flatten it: on a non-negative
+    quantity (``bottom=0``, an error) the axis turns logarithmic and shows both; a signed
+    one keeps its scale, and the legend says the limit, off scale."""
     if band is not None:
         low, high, text = band
         ax.axhspan(low, high, color="tab:green", alpha=0.15, label=text)
     if limit is not None:
         value, text = limit
-        for k, y in enumerate(value if isinstance(value, (tuple, list)) else (-value, value)):
+        values = value if isinstance(value, (tuple, list)) else (-value, value)
+        far = 0 < span and min(abs(y) for y in values if y) > FAR * span
+        if far and bottom == 0.0:  # three decades below the data's peak, and the limit
+            log, bottom = True, span / 1e3
+            values = [y for y in values if y > 0]
+        elif far:
+            ax.plot(
+                [], [], color="tab:red", linestyle="--", linewidth=1, label=f"{text} (off scale)"
+            )
+            values = []
+        for k, y in enumerate(values):
             ax.axhline(
                 y, color="tab:red", linestyle="--", linewidth=1, label=text if k == 0 else None
             )
@@ -168,14 +221,18 @@ def signals(
 ) -> Path:
     """Recorded variables (scalar columns or whole arrays by base name), one panel each,
     every run in ``runs`` ({label: Results}) overlaid (one line style per run); units from
-    the results, angles in degrees with ``deg``.  With ``instance`` (all variables of that
-    one), it is the title and the axes name the variables alone."""
+    the results, angles in degrees with ``deg``; a Boolean's axis says false and true.
+    With ``instance`` (all variables of that one), it is the title and the axes name the
+    variables alone."""
+    import numpy as np
+
     fig, axes = _subplots(len(variables), sharex=True)
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
-            for column, v in zip(results.columns(name), values.T):
-                element = column[len(name) :] or name.split(".")[-1]
+            columns = results.columns(name)
+            for column, v in zip(columns, values.T):
+                element = _element(name, column, len(columns))
                 ax.plot(
                     results.time,
                     v,
@@ -184,15 +241,27 @@ def signals(
                     label=f"{run} {element}".strip(),
                 )
         unit = results.unit(name)
+        if unit is None and all(set(np.unique(line.get_ydata())) <= {0, 1} for line in ax.lines):
+            ax.set_yticks([0, 1], ["false", "true"])  # a Boolean (or a 0/1 flag)
+            ax.set_ylim(-0.15, 1.15)
         ax.set_ylabel(
             unit_label(
                 name.split(".", 1)[1] if instance else name, to_degrees(unit)[1] if deg else unit
             )
         )
         ax.grid(True, alpha=0.3)
-        if len(ax.get_lines()) > 1:
-            ax.legend(fontsize=8, ncol=3)
+        _legend(ax)
     return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
+
+
+def _element(name: str, column: str, n: int) -> str:
+    """A line's label: x, y, z for a 3-vector's elements, w, x, y, z for a quaternion's
+    (scalar first), else the element's index ([2,3]); a scalar's name."""
+    index = column[len(name) :]
+    if not index:
+        return name.split(".")[-1]
+    axes = "wxyz" if n == 4 and name.split(".")[-1].startswith("q_") else "xyz" if n == 3 else ""
+    return axes[int(index[1:-1]) - 1] if axes else index
 
 
 def overview(results, out_dir) -> list[Path]:
@@ -210,6 +279,7 @@ def overview(results, out_dir) -> list[Path]:
                 Path(out_dir) / f"overview_{instance}.png",
                 {"": results},
                 variables,
+                deg=True,  # angles in degrees, as people read them
                 instance=instance,
             )
         )
@@ -219,10 +289,14 @@ def overview(results, out_dir) -> list[Path]:
 def _subplots(n: int, sharex: bool = False):
     """A figure (no pyplot: no global state) of ``n`` stacked axes, 8 in wide, at the
     PNG's resolution."""
+    from cycler import cycler
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(8, 1.2 + 2.6 * n), dpi=DPI, layout="none")  # whatever rcParams say
-    return fig, fig.subplots(n, 1, squeeze=False, sharex=sharex)
+    axes = fig.subplots(n, 1, squeeze=False, sharex=sharex)
+    for ax in axes[:, 0]:
+        ax.set_prop_cycle(cycler(color=SERIES_COLOURS))
+    return fig, axes
 
 
 def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ...components.variables import UNITS
+from ..provenance import header
 from ..system.units import display_factor, pretty
 from .recorder import write_text
 from .results import Results, units_path
@@ -48,7 +49,11 @@ def write_records(results: Results, summary: dict, out_dir: Path) -> None:
             units_path(out_dir / "results.csv"),
             json.dumps(results.units, indent=1, ensure_ascii=False) + "\n",
         ),
-        (out_dir / "log.txt", "".join(f"{e}\n" for e in results.meta["log"])),
+        (
+            out_dir / "log.txt",
+            header({k: summary[k] for k in ("version", "command", "date") if k in summary})
+            + "".join(f"{e}\n" for e in results.meta["log"]),
+        ),
         (out_dir / "summary.json", summary_text(summary)),
     ):
         try:

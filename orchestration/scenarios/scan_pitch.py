@@ -398,7 +398,8 @@ METRICS = [
         description="max tilt of the pitch axis from the orbit's y axis",
     ),
     m.momentum_drift(
-        description="max |H_I(t) − H_I(0)| / |H_I(0)| (no external torque on an isotropic hub)"
+        description="max |H_I(t) − H_I(0)| / |H_I(0)|: 0 on the isotropic hub (a conservation "
+        "check); with an anisotropic inertia (a campaign's), the gravity-gradient torque's effect"
     ),
 ]
 

@@ -376,7 +376,8 @@ METRICS = [
     ),
     m.singularity_measure(),
     m.momentum_drift(
-        description="max |H_I(t) − H_I(0)| / |H_I(0)| (isotropic hub: no external torque)"
+        description="max |H_I(t) − H_I(0)| / |H_I(0)|: 0 on the isotropic hub (a conservation "
+        "check); with an anisotropic inertia (a campaign's), the gravity-gradient torque's effect"
     ),
 ]
 

@@ -4,6 +4,9 @@ parsers): each command imports what it uses."""
 
 from __future__ import annotations
 
+import dataclasses
+import datetime
+import json
 import math
 from pathlib import Path
 
@@ -35,35 +38,54 @@ def add_parsers(commands, quiet) -> None:
         help="geodetic target [deg] (default Sasebo)",
     )
     stare.add_argument(
-        "--epoch", help="start of the search, ISO 8601 UTC (default: the TLE's epoch)"
+        "--epoch",
+        help="start of the search, ISO 8601 UTC: 2030-01-01T06:00:00, or a date alone for "
+        "its 00:00 (default: the TLE's epoch)",
     )
-    stare.add_argument("--hours", type=float, default=24.0, help="search window [h]")
+    stare.add_argument("--hours", type=float, default=24.0, help="search window [h] (default 24)")
     stare.add_argument(
         "--look",
         type=float,
         help="wanted look angle [deg]: the pass closest to it (default: the first pass)",
     )
     stare.add_argument(
-        "--max-look", type=float, default=60.0, help="largest look angle [deg] of a usable pass"
+        "--max-look",
+        type=float,
+        default=60.0,
+        help="largest look angle [deg] of a usable pass (default 60)",
     )
-    stare.add_argument("--no-yaw-compensation", action="store_true")
-    stare.add_argument("--out", type=Path, default=Path("out/stare"))
+    stare.add_argument(
+        "--no-yaw-compensation",
+        action="store_true",
+        help="yaw 0 (eq 11 only): the footprint turns on the ground",
+    )
+    stare.add_argument(
+        "--out", type=Path, default=Path("out/stare"), help="output directory (default out/stare)"
+    )
 
     analysis = commands.add_parser(
         "mission",
         help="video-SAR mission analysis ([Liang 2019]): "
         "frame overlap vs frame rate, Walker constellation size",
     )
-    analysis.add_argument("analysis", choices=("overlap", "walker"))
+    analysis.add_argument(
+        "analysis",
+        choices=("overlap", "walker"),
+        help="overlap: frame overlap vs frame rate (eqs 1-5); walker: constellation size "
+        "(eqs 14-20)",
+    )
     analysis.add_argument(
         "--frame-rates",
         type=float,
         nargs="+",
         default=(5.0, 25.0),
-        help="frame rates to tabulate [Hz]",
+        help="frame rates to tabulate [Hz] (default 5 25)",
     )
     analysis.add_argument(
-        "--altitude", type=float, default=constants.VIDEO_SAR_ALTITUDE / 1e3, help="[km]"
+        "--altitude",
+        type=float,
+        default=constants.VIDEO_SAR_ALTITUDE / 1e3,
+        help=f"orbit altitude [km] (default {constants.VIDEO_SAR_ALTITUDE / 1e3:g})",
     )
     analysis.add_argument(
         "--angle",
@@ -72,7 +94,13 @@ def add_parsers(commands, quiet) -> None:
         f"{constants.VIDEO_SAR_LOOK_ANGLE / DEG:g}) or largest angle β "
         f"(walker, default {constants.VIDEO_SAR_MAX_INCIDENCE / DEG:g})",
     )
-    analysis.add_argument("--out", type=Path, default=Path("out/mission"))
+    analysis.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/mission"),
+        help="directory of the figure (overlap) or the sizing in JSON (walker), each named "
+        "by its altitude and angle (default out/mission)",
+    )
 
     size = commands.add_parser(
         "size-flywheel",
@@ -81,29 +109,38 @@ def add_parsers(commands, quiet) -> None:
         "wheel that meets the payload_sweep pointing requirements "
         "(co-simulation sweep)",
     )
-    size.add_argument("--turnaround", type=float, default=1.0, help="payload reversal time [s]")
+    size.add_argument(
+        "--turnaround", type=float, default=1.0, help="payload reversal time [s] (default 1)"
+    )
     size.add_argument(
         "--accuracy",
         type=float,
         default=constants.PAYLOAD_SWEEP_ACCURACY / DEG,
-        help="pointing accuracy [deg]",
+        help="pointing accuracy [deg] (default "
+        f"{constants.PAYLOAD_SWEEP_ACCURACY / DEG:g}, the paper's)",
     )
     size.add_argument(
         "--stability",
         type=float,
         default=constants.PAYLOAD_SWEEP_STABILITY / DEG,
-        help="pointing stability [deg/s]",
+        help="pointing stability [deg/s] (default "
+        f"{constants.PAYLOAD_SWEEP_STABILITY / DEG:g}, the paper's)",
     )
-    size.add_argument("--step", type=float, default=0.05, help="macro step [s]")
+    size.add_argument("--step", type=float, default=0.05, help="macro step [s] (default 0.05)")
     size.add_argument("--stop", type=float, help="run length [s] (default: one pitch sweep)")
-    size.add_argument("--out", type=Path, default=Path("out/size-flywheel"))
+    size.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/size-flywheel"),
+        help="output directory (default out/size-flywheel)",
+    )
 
 
 def _stare(args) -> int:
     from ..cli import echo_to, report
     from ..output.progress import Progress
     from ..runner import run
-    from .stare import pass_scenario, tle_pass
+    from .stare import pass_scenario, search_start, tle_pass
 
     lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
     if len(lines) not in (2, 3):
@@ -111,6 +148,15 @@ def _stare(args) -> int:
             f"{args.tle}: expected two TLE lines (and an optional name line), "
             f"found {len(lines)} lines"
         )
+    for option, value, low, high in (
+        ("--target LAT", args.target[0], -90.0, 90.0),
+        ("--target LON", args.target[1], -360.0, 360.0),
+        ("--max-look", args.max_look, 0.0, 90.0),
+        ("--look", args.look, 0.0, 90.0),
+    ):
+        if value is not None and not low <= value <= high:
+            raise ValueError(f"{option} must be in [{low:g}°, {high:g}°], got {value:g}°")
+    start = search_start(*lines[-2:], args.epoch)
     orbit, chosen, passes = tle_pass(
         *lines[-2:],
         target=(args.target[0] * DEG, args.target[1] * DEG, 0.0),
@@ -121,8 +167,9 @@ def _stare(args) -> int:
     )
     print(f"passes over ({args.target[0]}°, {args.target[1]}°) with look ≤ {args.max_look}°:")
     for g in passes:
+        when = start + datetime.timedelta(seconds=g.time)
         print(
-            f"  {'→' if g is chosen else ' '} t = {g.time:10.1f} s  "
+            f"  {'→' if g is chosen else ' '} {when.isoformat(sep=' ', timespec='seconds')} UTC  "
             f"look {g.look_angle / DEG:6.2f}°"
             f"  range {g.slant_range / 1e3:7.1f} km  {g.side:5s}  "
             f"{'ascending' if g.ascending else 'descending'}"
@@ -167,12 +214,15 @@ def _overlap(args, altitude: float) -> None:
         )
     rates = np.linspace(1.0, 30.0, 146)
     overlap = 100 * mission.overlap_ratio(rates, **case).overlap
-    gaps = rates[overlap < 0]  # frames leave gaps: no overlap to plot
+    gap = mission.gap_frame_rate(rates[0], rates[-1], **case)
     title = "Frame overlap vs frame rate ([Liang 2019], Fig. 3)" + (
-        f"\nbelow {gaps.max():.3g} Hz the frames leave gaps" if len(gaps) else ""
+        f"\nh = {args.altitude:g} km, look {look / DEG:g}°"
+        + (f"; below {gap:.3g} Hz the frames leave gaps" if gap is not None else "")
     )
+    if gap is not None:
+        print(f"  overlap 0 at {gap:.4g} Hz: below it the frames leave gaps")
     path = plots.lines(
-        args.out / "overlap_vs_frame_rate.png",
+        args.out / f"overlap_vs_frame_rate_h{args.altitude:g}km_look{look / DEG:g}deg.png",
         title,
         rates,
         {"overlap": np.where(overlap >= 0, overlap, np.nan)},
@@ -189,16 +239,21 @@ def _walker(args, altitude: float) -> None:
 
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
+    sizings = {}
     for kind, reading in (
         ("incidence", "β = incidence at the ground (eq 14, the paper's words)"),
         ("look", "β = look angle at the satellite"),
     ):
-        w = mission.walker_sizing(altitude, beta, beta_kind=kind)
+        w = sizings[kind] = mission.walker_sizing(altitude, beta, beta_kind=kind)
         print(
             f"  {reading}: α = {w.central_angle / DEG:.2f}°, T = {w.period / 3600:.3f} h, "
             f"T_v = {w.visibility_time / 60:.2f} min, S = {w.satellites_per_plane}, "
             f"P = {w.planes}, N = {w.satellites}"
         )
+    path = args.out / f"walker_h{args.altitude:g}km_beta{beta / DEG:g}deg.json"
+    text = {kind: dataclasses.asdict(w) for kind, w in sizings.items()}
+    path.write_text(json.dumps(text, indent=2) + "\n", encoding="utf-8")
+    print(f"sizing (SI, rad): {path}")
 
 
 def _size_flywheel(args) -> int:

@@ -497,6 +497,20 @@ def overlap_ratio(
 
 # --------------------------------------------------------------------------------------
 # Walker sizing, eqs 14–20
+def gap_frame_rate(low: float, high: float, **case) -> float | None:
+    """The frame rate at which consecutive frames just touch (α = 0 in eq 5, found by
+    Brent's method): below it they leave gaps.  ``case``: :func:`overlap_ratio`'s
+    keywords; None when α does not change sign between ``low`` and ``high`` Hz."""
+    from scipy.optimize import brentq  # type: ignore[import-untyped]
+
+    def alpha(rate: float) -> float:
+        return float(overlap_ratio([rate], **case).overlap[0])
+
+    if alpha(low) * alpha(high) > 0:
+        return None
+    return float(brentq(alpha, low, high, xtol=1e-9))
+
+
 # --------------------------------------------------------------------------------------
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import re
 from pathlib import Path
 
 from ...components.ephemeris import J2000, format_epoch, load_tle, parse_epoch, tle_epoch
@@ -39,14 +40,10 @@ def tle_pass(
     search = {
         "tle_line1": line1,
         "tle_line2": line2,
-        "epoch": "" if epoch is None else format_epoch(epoch),
+        "epoch": "" if epoch is None else format_epoch(search_start(line1, line2, epoch)),
         **dict(zip(("target_lat", "target_lon", "target_alt"), target)),
     }
-    if epoch is None:
-        days, seconds = tle_epoch(load_tle(line1, line2))
-        start = J2000 + datetime.timedelta(days=days, seconds=seconds)
-    else:
-        start = parse_epoch(epoch)
+    start = search_start(line1, line2, epoch)
     passes = [
         g
         for g in find_passes(search, 0.0, hours * 3600.0)
@@ -66,6 +63,17 @@ def tle_pass(
         search, epoch=format_epoch(start + datetime.timedelta(seconds=chosen.time - HALF_STARE))
     )
     return orbit, chosen, passes
+
+
+def search_start(line1: str, line2: str, epoch=None) -> datetime.datetime:
+    """The UTC start of a pass search: ``epoch`` (ISO 8601; a date alone is its 00:00),
+    else the TLE's epoch.  A pass's ``time`` counts seconds from it."""
+    if epoch is None:
+        days, seconds = tle_epoch(load_tle(line1, line2))
+        return J2000 + datetime.timedelta(days=days, seconds=seconds)
+    if isinstance(epoch, str) and re.fullmatch(r"\d{4}-\d{2}-\d{2}", epoch.strip()):
+        epoch = epoch.strip() + "T00:00:00"
+    return parse_epoch(epoch)
 
 
 def pass_scenario(orbit: dict, out_dir: Path, yaw_compensation: bool = True) -> Scenario:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .ssp import ParameterValue, SystemFileError
-from .units import Quantity, is_unit, quantity, to_si
+from .units import Quantity, is_unit, pretty, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
 #: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
@@ -130,6 +130,14 @@ def typed_parameters(
                 raise SystemFileError(f"{at}: {name}.{variable} is a scalar, got an array {value}")
             result[key] = typed_value(description, key, value, at)
             continue
+        base = variable.partition("[")[0]
+        if base != variable and base in table:
+            shape = table[base].shape
+            raise SystemFileError(
+                f"{at}: {name}.{variable}: index out of range "
+                f"({'×'.join(map(str, shape)) or 'a scalar'}); the elements are "
+                f"{table[base].first.name} .. {table[base].scalars[-1].name}"
+            )
         if variable not in table:
             raise SystemFileError(
                 f"{at}: {name} ({description.path.name}) has "
@@ -139,7 +147,7 @@ def typed_parameters(
         if np.shape(_number(value)) != array.shape:
             raise SystemFileError(
                 f"{at}: {name}.{variable} is an array of shape "
-                f"{'×'.join(map(str, array.shape))} [{array.first.unit or '1'}]; give it "
+                f"{'×'.join(map(str, array.shape))} [{pretty(array.first.unit) or '1'}]; give it "
                 f"whole, e.g. {variable}={_literal(array.start())}, or one element, e.g. "
                 f"{array.first.name}={_typed(array.first, array.first.start)} (got "
                 f"{value!r}; a single number is not spread over the elements)"

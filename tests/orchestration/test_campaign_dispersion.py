@@ -146,6 +146,12 @@ def test_plan_whole_variables_start_from_the_system_values():
     [
         ("Nobody.x=normal(0,1)", "no component 'Nobody'"),
         ("CmgCluster.nothing=normal(0,1)", "CmgCluster has no variable 'nothing'"),
+        ("CmgCluster.h_rotr=normal(0,1)", "no variable 'h_rotr'; did you mean h_rotor"),
+        ("CmgClustr.h_rotor=normal(0,1)", "no component 'CmgClustr'.*did you mean CmgCluster"),
+        (
+            "SatelliteDynamics.attitude0=rotate(1deg)",
+            "rotate\\(\\) turns unit vectors; SatelliteDynamics.attitude0 has norm",
+        ),
         ("CmgCluster.delta0[7]=normal(0,1)", "has shape \\(6,\\)"),
         ("CmgCluster.delta=normal(0,1)", "only numeric parameters"),
         ("CmgSteering.law=normal(0,1)", "Integer parameter: use choice"),
@@ -431,3 +437,53 @@ def test_a_requirement_judged_over_the_campaign_has_no_pass_rate_per_run():
     }
     array = report.table(plan, {0: _record(0, plan, 2.0, "not evaluated")}, catalog)
     assert report.pass_rates(array, catalog) == {}
+
+
+def test_progress_of_a_resumed_campaign_counts_the_earlier_failures(capsys):
+    import sys
+
+    progress = report.Progress(6, 3, period=0.0, stream=sys.stdout, before={"ok": 1, "failed": 2})
+    progress.update("error")
+    assert "4/6 runs done (2 failed, 1 error)" in capsys.readouterr().out
+
+
+def test_the_failure_list_says_how_many_more_there_are():
+    from agilesat.orchestration.campaign.cli import format_campaign
+
+    failures = [
+        {"index": i, "status": "failed", "message": f"m{i}", "replay": ""} for i in range(8)
+    ]
+    summary = {
+        "runs": {"planned": 10, "made": 10, "ok": 2, "failed": 8, "error": 0, "lost": 0},
+        "lost_workers": [],
+        "statistics": {},
+        "pass_rates": {},
+        "grid_pass_rates": [],
+        "failures": failures,
+    }
+    lines = format_campaign(summary).splitlines()
+    assert [line.split(":")[0] for line in lines[2:7]] == [f"  run {i} failed" for i in range(5)]
+    assert lines[7].startswith("  and 3 more")
+
+
+def test_a_histogram_says_what_the_metric_is_and_marks_the_requirement_and_the_paper(
+    tmp_path, monkeypatch
+):
+    import math
+
+    drawn = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: drawn.append(ax) or path)
+    meta = {
+        "unit": "rad",
+        "display_unit": "deg",
+        "description": "max tilt of the pitch axis",
+        "requirement": {"max": math.radians(2.0)},
+        "paper": math.radians(1.5),
+    }
+    array = np.array([(math.radians(x),) for x in (0.5, 1.0, 1.2)], dtype=[("m", float)])
+    [path] = report.histograms(array, {"metrics": {"m": meta}}, tmp_path)
+    [ax] = drawn
+    assert path.name == "hist_m.png" and ax.get_xlabel() == "m [°]"
+    assert ax.get_title().startswith("max tilt of the pitch axis\n3 runs")
+    marks = {line.get_label(): line.get_xdata()[0] for line in ax.lines}
+    assert marks == pytest.approx({"requirement (max)": 2.0, "paper": 1.5})

@@ -118,3 +118,68 @@ def test_a_figure_laid_out_tight_stays_as_drawn_whatever_rcparams_say(rc):
         assert not figure_layout.draw(fig, axes, canvas)
         engine = fig.get_layout_engine()  # none, or matplotlib's place holder, a no-op
         assert engine is None or isinstance(engine, PlaceHolderLayoutEngine)
+
+
+def _panel(values, **marks):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig, axes = plots._subplots(1)
+    ax = axes[0, 0]
+    t = np.linspace(0.0, 10.0, 200)
+    for k, v in enumerate(values):
+        ax.plot(t, v, label=f"series {k + 1}")
+    plots._mark(ax, plots._span(values), **marks)
+    plots._legend(ax)
+    FigureCanvasAgg(fig).draw()
+    return ax
+
+
+def test_a_limit_far_above_an_error_makes_the_axis_logarithmic_and_shows_both():
+    """video_sar's pointing error (1.5e-5°) under its 0.05° line was a flat line."""
+    error = 1e-5 * (1.5 + np.sin(np.linspace(0, 3, 200)))
+    ax = _panel([error], limit=((0.05,), "required"), bottom=0.0)
+    assert ax.get_yscale() == "log"
+    low, high = ax.get_ylim()
+    assert low <= error.min() and high > 0.05
+    assert [line.get_ydata()[0] for line in ax.lines[1:]] == [0.05]
+
+
+def test_a_limit_far_outside_signed_data_is_said_not_drawn():
+    """video_sar's gimbal rates (0.002 rad/s) against ±0.6 rad/s were flat lines."""
+    rates = [0.002 * np.sin(np.linspace(0, 3, 200) + k) for k in range(6)]
+    ax = _panel(rates, limit=(0.6, "limit ±0.6 rad/s"))
+    assert ax.get_ylim()[1] < 0.01  # the data fill the axes
+    assert "limit ±0.6 rad/s (off scale)" in ax.get_legend_handles_labels()[1]
+
+
+def test_the_legend_covers_no_data_and_no_series_has_the_limits_red():
+    rates = [np.sin(np.linspace(0, 6, 200) + k) for k in range(6)]
+    ax = _panel(rates, limit=(1.0, "limit"))
+    colours = [line.get_color() for line in ax.lines[:6]]
+    assert "tab:red" not in colours and len(set(colours)) == 6
+    box = ax.get_legend().get_window_extent()
+    for line in ax.lines:
+        points = ax.transData.transform(np.column_stack(line.get_data()))
+        inside = (box.x0 < points[:, 0]) & (points[:, 0] < box.x1)
+        assert not (inside & (box.y0 < points[:, 1]) & (points[:, 1] < box.y1)).any()
+
+
+def test_overview_names_vector_elements_by_axis_angles_in_degrees_booleans_false_true(
+    tmp_path, monkeypatch
+):
+    from agilesat.orchestration.output.results import Results
+
+    t = np.linspace(0.0, 1.0, 5)
+    names = ["time", "A.w[1]", "A.w[2]", "A.w[3]", "A.q_BI[1]", "A.q_BI[2]", "A.q_BI[3]"]
+    names += ["A.q_BI[4]", "A.on"]
+    data = np.column_stack([t, t, t, t, t, t, t, t, t > 0.5])
+    units = {n: "rad" for n in names[1:4]} | {n: "1" for n in names[4:8]}
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda fig, axes, *rest: drawn.append(axes) or rest[0])
+    plots.overview(Results(names, data, {"units": units}), tmp_path)
+    [axes] = drawn
+    w, q, on = axes[:, 0]
+    assert [line.get_label() for line in w.lines] == ["x", "y", "z"]
+    assert w.get_ylabel() == "w [°]" and w.lines[0].get_ydata()[-1] == pytest.approx(180 / np.pi)
+    assert [line.get_label() for line in q.lines] == ["w", "x", "y", "z"]
+    assert [tick.get_text() for tick in on.get_yticklabels()] == ["false", "true"]

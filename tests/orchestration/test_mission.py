@@ -381,3 +381,32 @@ def test_bad_inputs_raise():
         m.platform_velocity(H, "earth_fixed")
     with pytest.raises(ValueError, match="'ellipsoid' slant range needs"):
         m.overlap_ratio(5.0, **dict(CASE, latitude=None))
+
+
+def test_the_gap_threshold_is_where_eq5_as_printed_crosses_zero():
+    """Issue #28: the figure said the largest grid point below zero (1.2 Hz), not the
+    crossing."""
+    rate = m.gap_frame_rate(1.0, 30.0, **CASE)
+    res = m.overlap_ratio(rate, **CASE)
+    rc, v, tf = res.slant_range, res.velocity, 1.0 / rate
+    printed = 0.5 + (LAM * (rc**2 + v**2 * tf**2) ** 1.5 - 4 * tf * v * rc**2 * RHO) / (
+        2 * LAM * rc**3
+    )
+    assert abs(printed) < 1e-9
+    # near 1/T_a, where the linear broadside reading 1 − T_f/T_a crosses zero
+    assert rate == pytest.approx(2 * RHO * v / (LAM * rc), rel=0.05)
+    assert m.gap_frame_rate(5.0, 30.0, **CASE) is None
+
+
+def test_mission_commands_write_into_out_named_by_their_case(tmp_path):
+    from agilesat.orchestration import cli
+
+    assert cli.main(["mission", "walker", "--out", str(tmp_path), "--altitude", "600"]) == 0
+    assert cli.main(["mission", "overlap", "--out", str(tmp_path), "--angle", "20"]) == 0
+    assert cli.main(["mission", "overlap", "--out", str(tmp_path), "--angle", "40"]) == 0
+    names = sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".svg")
+    assert names == [
+        "overlap_vs_frame_rate_h567km_look20deg.png",
+        "overlap_vs_frame_rate_h567km_look40deg.png",
+        "walker_h600km_beta65deg.json",
+    ]
