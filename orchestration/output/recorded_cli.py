@@ -41,7 +41,13 @@ def add_parser(commands) -> None:
     p.add_argument("--index", choices=list(INDICES), help="default: the scenario's requirements")
     p.add_argument("--window", type=float, help="Δt [s] (all but APE/AKE)")
     p.add_argument("--separation", type=float, help="Δt_s [s] (PDE/PRE/KDE/KRE)")
-    p.add_argument("--t-in-window", choices=("end", "random"), default="end")
+    p.add_argument(
+        "--t-in-window",
+        choices=("end", "random"),
+        default="end",
+        help="the time in the window the index is taken at (ECSS-E-ST-60-10C: end or random; "
+        "default end)",
+    )
     p.add_argument("--level", type=float, default=0.9973, help="probability (default 0.9973)")
     p.add_argument(
         "--interpretation",
@@ -67,7 +73,9 @@ def add_parser(commands) -> None:
     )
     p.add_argument("--start", type=float, help="[s]")
     p.add_argument("--stop", type=float, help="[s]")
-    p.add_argument("--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout")
+    p.add_argument(
+        "--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout (default deg)"
+    )
     p.add_argument("--json", type=Path, help="also write the records to this file")
     p.add_argument(
         "--figure",
