@@ -127,18 +127,24 @@ class PointingRequirement:
             return error.line_of_sight(self.boresight)
         return error
 
+    def magnitudes(self, error: ErrorHistory, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """(t, m): the index's magnitude ``m[run, time]`` on ``error`` at times ``t`` (what
+        the statistic is taken of; ``seed``: the draw of t in the window, if random);
+        :class:`NotEvaluable` if the history is too short for the index."""
+        rng = np.random.default_rng(seed)
+        parts = []
+        for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once
+            block = self.signal(error.runs_between(start, start + BLOCK))
+            args = (self.index, self.window, self.separation, self.t_in_window, rng)
+            series = index_series(block, *args)
+            parts.append(magnitude(series))
+        return series.t, np.concatenate(parts)
+
     def evaluate(self, error: ErrorHistory, seed: int = 0) -> PointingResult:
         """The verdict on ``error`` (``seed``: the draw of t in the window, if random)."""
         needed = self.runs_needed()
-        rng = np.random.default_rng(seed)
         try:
-            parts = []
-            for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once
-                block = self.signal(error.runs_between(start, start + BLOCK))
-                args = (self.index, self.window, self.separation, self.t_in_window, rng)
-                series = index_series(block, *args)
-                parts.append(magnitude(series))
-            m = np.concatenate(parts)
+            t, m = self.magnitudes(error, seed)
         except NotEvaluable as reason:
             return PointingResult(self, "not evaluable", error.runs, needed, reason=str(reason))
         exceedances = achieved = None
@@ -159,7 +165,7 @@ class PointingRequirement:
                 exceedances=exceedances,
                 reason=str(reason),
                 statistic=shown,
-                t=series.t,
+                t=t,
             )
         return PointingResult(
             self,
@@ -171,7 +177,7 @@ class PointingRequirement:
             confidence_achieved=achieved,
             exceedances=exceedances,
             statistic=stat,
-            t=series.t,
+            t=t,
         )
 
 
