@@ -71,7 +71,7 @@ def distribution(path: Path, title: str, result, x: np.ndarray, what: str) -> Pa
     above = (n - 1 - np.arange(n)) / n  # on [x_i, x_i+1): of the sorted x
     ax.step(np.sort(x) / scale, above, where="post", color="tab:blue", label=f"{n} values")
     ax.set_yscale("log", nonpositive="mask")  # the largest value: where the curve ends
-    ax.set_ylim(0.5 / n, 1.5)
+    ax.set_ylim(0.5 * min(1 / n, 1 - stat.level), 1.5)  # the level shown with few runs
     tail = 1 - stat.level
     ax.axhline(tail, color="0.35", linestyle=":", label=f"1 − level ({tail:.3g})")
     marks = [

@@ -44,8 +44,9 @@ def profile(path: Path, name: str, result, t, m, unit: str = "deg") -> Path:
     if r.bound is not None:
         marks["limit"] = ((r.bound / scale,), f"requirement {format_angle(r.bound, unit)}")
     if stat is not None:
-        shown = f"{100 * stat.level:g} % ({stat.interpretation}): {format_angle(stat.value, unit)}"
-        marks["statistic"] = (stat.value / scale, shown + (" estimate" * (result.value is None)))
+        shown = f"at {100 * stat.level:g} % ({stat.interpretation})"
+        shown += f"{' estimate' * (result.value is None)}: {format_angle(stat.value, unit)}"
+        marks["statistic"] = (stat.value / scale, shown)
     title = textwrap.fill(f"{name}: {result.line(unit)}", 90)
     series = {r.label(): np.asarray(m) / scale}
     return plots.lines(path, title, t, series, f"{r.index} [{unit}]", **marks)

@@ -2,7 +2,9 @@
 (the closed-form error of a synthetic run), a campaign's values with their quantile (the
 order statistic of synthetic runs)."""
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -94,8 +96,8 @@ def test_a_campaign_draws_the_runs_at_the_worst_time_with_their_quantile(
     campaign, tmp_path, monkeypatch
 ):
     """Ensemble at 90 %: at each time the 27th smallest of the 30 runs' |angle|, worst over
-    time; the figure's curve is the 30 runs' values at that time, the fraction above
-    above each, and its value line is that order statistic: where the curve first reaches 10 %."""
+    time; the figure's curve is the 30 runs' values at that time, the fraction above each,
+    and its value line is that order statistic: where the curve first reaches 10 %."""
     signals, magnitude = campaign
     r = requirement("ape", 3e-5, 0.9, "ensemble")
     text = {"ape": {"text": "the verdict as campaign.json says it"}}
@@ -136,3 +138,25 @@ def test_a_campaign_too_small_for_the_confidence_shows_its_estimate(campaign, tm
     assert labels[2].startswith("requirement") and labels[3].startswith("empirical quantile")
     assert len(labels) == 4 and "not evaluable" in ax.get_title()
     assert ax.lines[3].get_xdata()[0] == pytest.approx(math.degrees(magnitude.max()))
+
+
+@pytest.mark.slow
+def test_run_and_campaign_of_a_scenario_draw_its_pointing_requirements(tmp_path, fmus):
+    """payload_sweep states APE and PDE requirements: a run and a campaign list a figure
+    of each among theirs."""
+    from helpers import agilesat
+
+    names = {"pointing_pointing_ape.png", "pointing_stability_pde.png"}
+    run = agilesat("run", "payload_sweep", "--stop", "3", "--out", tmp_path / "run")
+    assert run.returncode == 3, run.stdout + run.stderr  # its requirements are not met
+    figures = json.loads((tmp_path / "run" / "summary.json").read_text())["figures"]
+    assert names <= {Path(f).name for f in figures}
+    out = tmp_path / "campaign"
+    result = agilesat(
+        "campaign", "payload_sweep", "--stop", "3", "--runs", "2", "--workers", "1",
+        "--vary", "SatelliteDynamics.rate0[3]=+normal(0, 0.01deg)", "--no-progress",
+        "--out", out,
+    )  # fmt: skip
+    assert result.returncode in (0, 3), result.stdout + result.stderr
+    summary = json.loads((out / "campaign.json").read_text())
+    assert names <= set(summary["figures"]) and all((out / n).exists() for n in names)
