@@ -51,9 +51,7 @@ def campaign_figures(
             times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
         except NotEvaluable:
             continue  # no run reached the end, or too short a history: the verdict says
-        result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
-        if result.statistic is None:
-            continue
+        result = r.requirement.judge(times, m)  # type: ignore[attr-defined]
         text = ensemble.get(r.name, {}).get("text") or result.line()
         path = out / f"pointing_{r.name}.png"
         paths.append(distribution(path, f"{r.name}: {text}", result, *values(result, times, m)))

@@ -5,8 +5,8 @@ run`` writes the SVG only with ``--svg``), limits and requirements drawn where t
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
-(a dotted line: the paper's value beside ours), ``statistic=(value, label)`` (a
-dash-dotted black line: the statistic a requirement compares), ``bottom=y`` (the axis starts there),
+(a dotted line: the paper's value beside ours), ``statistic=(value, label)`` (a dash-dotted
+black line: the statistic a requirement compares), ``bottom=y`` (the axis starts there),
 ``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.

@@ -1,7 +1,7 @@
 """A run's pointing figures (docs/pointing.md): for each ECSS pointing requirement the
 scenario or variant judges, ``pointing_<name>.png``, the index's magnitude against time
 with the requirement's bound and the statistic compared to it (the level's quantile
-under the requirement's interpretation).  A campaign's are in :mod:`..campaign.report`."""
+under the requirement's interpretation).  A campaign's are in :mod:`..campaign.pointing_figures`."""
 
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ def run_figures(scenario, variant, results, out_dir) -> list[Path]:
             t, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
         except (ColumnError, NotEvaluable):
             continue
-        result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
+        result = r.requirement.judge(t, m)  # type: ignore[attr-defined]
         paths.append(profile(Path(out_dir) / f"pointing_{r.name}.png", r.name, result, t, m[0]))
     return paths
 
@@ -43,10 +43,9 @@ def profile(path: Path, name: str, result, t, m, unit: str = "deg") -> Path:
     marks: dict = {"bottom": 0.0}
     if r.bound is not None:
         marks["limit"] = ((r.bound / scale,), f"requirement {format_angle(r.bound, unit)}")
-    if stat is not None:
-        shown = f"at {100 * stat.level:g} % ({stat.interpretation})"
-        shown += f"{' estimate' * (result.value is None)}: {format_angle(stat.value, unit)}"
-        marks["statistic"] = (stat.value / scale, shown)
+    shown = f"at {100 * stat.level:g} % ({stat.interpretation})"
+    shown += f"{' estimate' * (result.value is None)}: {format_angle(stat.value, unit)}"
+    marks["statistic"] = (stat.value / scale, shown)
     title = textwrap.fill(f"{name}: {result.line(unit)}", 90)
     series = {r.label(): np.asarray(m) / scale}
     return plots.lines(path, title, t, series, f"{r.index} [{unit}]", **marks)

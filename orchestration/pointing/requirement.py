@@ -142,15 +142,21 @@ class PointingRequirement:
 
     def evaluate(self, error: ErrorHistory, seed: int = 0) -> PointingResult:
         """The verdict on ``error`` (``seed``: the draw of t in the window, if random)."""
-        needed = self.runs_needed()
         try:
             t, m = self.magnitudes(error, seed)
         except NotEvaluable as reason:
+            needed = self.runs_needed()
             return PointingResult(self, "not evaluable", error.runs, needed, reason=str(reason))
+        return self.judge(t, m)
+
+    def judge(self, t: np.ndarray, m: np.ndarray) -> PointingResult:
+        """The verdict on the index's magnitudes ``m[run, time]`` at times ``t``
+        (:meth:`magnitudes`)."""
+        needed, runs = self.runs_needed(), len(m)
         exceedances = achieved = None
         if self.interpretation == "ensemble" and self.bound is not None:
             exceedances = int((m > self.bound).sum(axis=0).max())
-            achieved = confidence_achieved(error.runs, exceedances, self.level)
+            achieved = confidence_achieved(runs, exceedances, self.level)
         try:
             stat = statistic(m, self.level, self.interpretation, self.confidence)
         except NotEvaluable as reason:  # too few runs for the confidence: say what they show
@@ -158,7 +164,7 @@ class PointingRequirement:
             return PointingResult(
                 self,
                 "not evaluable",
-                error.runs,
+                runs,
                 needed,
                 estimate=shown.value,
                 confidence_achieved=achieved,
@@ -170,7 +176,7 @@ class PointingRequirement:
         return PointingResult(
             self,
             "computed" if self.bound is None else "met" if stat.value <= self.bound else "not met",
-            error.runs,
+            runs,
             needed,
             value=stat.value,
             estimate=stat.estimate,
