@@ -170,7 +170,7 @@ def _figures(
     written, whether it stopped.)  $AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the
     K-th starts.  Figures that need outputs not recorded (``--record``) are not drawn, and
     the summary says why."""
-    from .output import plots
+    from .output import plots, pointing_figures
 
     hook, started = signal_at("figure"), [0]
 
@@ -186,6 +186,7 @@ def _figures(
             try:
                 if scenario is not None:
                     scenario.draw(results, out_dir, variant)
+                    pointing_figures.run_figures(scenario, variant, results, out_dir)
                 else:
                     plots.overview(results, out_dir)
             except _Stopped:

@@ -252,10 +252,15 @@ def finish(
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     figures = report.histograms(table, metrics, out) if plan.spec.runs > 1 else []
     figures += report.sweeps(plan, table, metrics, out)
-    if plan.kept and (out / "signals.npy").exists():  # none if no run was made
+    if (out / "signals.npy").exists():  # none if no run was made
+        from .pointing_figures import campaign_figures
+
         signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
         figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
+        figures += campaign_figures(
+            plan.ensemble, signals, plan.signals, time_axis(plan), summary["ensemble"], out
+        )
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)

@@ -5,7 +5,8 @@ run`` writes the SVG only with ``--svg``), limits and requirements drawn where t
 A row of :func:`panels` is ``(x, {label: values}, ylabel)`` or ``(x, series, ylabel,
 marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±value, or at
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
-(a dotted line: the paper's value beside ours), ``bottom=y`` (the axis starts there),
+(a dotted line: the paper's value beside ours), ``statistic=(value, label)`` (a dash-dotted
+black line: the statistic a requirement compares), ``bottom=y`` (the axis starts there),
 ``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
@@ -147,7 +148,9 @@ def _span(series) -> float:
 FAR = 20.0
 
 
-def _mark(ax, span: float, limit=None, band=None, paper=None, bottom=None, log=False) -> None:
+def _mark(
+    ax, span: float, limit=None, band=None, paper=None, statistic=None, bottom=None, log=False
+) -> None:
     """The marks of a panel (module docstring) whose series reach ``span`` at most.  A
     limit far above the data (:data:`FAR` times) would flatten it: on a non-negative
     quantity (``bottom=0``, an error) the axis turns logarithmic and shows both; a signed
@@ -177,6 +180,9 @@ def _mark(ax, span: float, limit=None, band=None, paper=None, bottom=None, log=F
             ax.axhline(
                 y, color="0.35", linestyle=":", linewidth=1.2, label=text if k == 0 else None
             )
+    if statistic is not None:
+        value, text = statistic
+        ax.axhline(value, color="black", linestyle="-.", linewidth=1, label=text)
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
     if log:

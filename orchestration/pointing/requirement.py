@@ -127,24 +127,36 @@ class PointingRequirement:
             return error.line_of_sight(self.boresight)
         return error
 
+    def magnitudes(self, error: ErrorHistory, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """(t, m): the index's magnitude ``m[run, time]`` on ``error`` at times ``t`` (what
+        the statistic is taken of; ``seed``: the draw of t in the window, if random);
+        :class:`NotEvaluable` if the history is too short for the index."""
+        rng = np.random.default_rng(seed)
+        parts = []
+        for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once
+            block = self.signal(error.runs_between(start, start + BLOCK))
+            args = (self.index, self.window, self.separation, self.t_in_window, rng)
+            series = index_series(block, *args)
+            parts.append(magnitude(series))
+        return series.t, np.concatenate(parts)
+
     def evaluate(self, error: ErrorHistory, seed: int = 0) -> PointingResult:
         """The verdict on ``error`` (``seed``: the draw of t in the window, if random)."""
-        needed = self.runs_needed()
-        rng = np.random.default_rng(seed)
         try:
-            parts = []
-            for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once
-                block = self.signal(error.runs_between(start, start + BLOCK))
-                args = (self.index, self.window, self.separation, self.t_in_window, rng)
-                series = index_series(block, *args)
-                parts.append(magnitude(series))
-            m = np.concatenate(parts)
+            t, m = self.magnitudes(error, seed)
         except NotEvaluable as reason:
+            needed = self.runs_needed()
             return PointingResult(self, "not evaluable", error.runs, needed, reason=str(reason))
+        return self.judge(t, m)
+
+    def judge(self, t: np.ndarray, m: np.ndarray) -> PointingResult:
+        """The verdict on the index's magnitudes ``m[run, time]`` at times ``t``
+        (:meth:`magnitudes`)."""
+        needed, runs = self.runs_needed(), len(m)
         exceedances = achieved = None
         if self.interpretation == "ensemble" and self.bound is not None:
             exceedances = int((m > self.bound).sum(axis=0).max())
-            achieved = confidence_achieved(error.runs, exceedances, self.level)
+            achieved = confidence_achieved(runs, exceedances, self.level)
         try:
             stat = statistic(m, self.level, self.interpretation, self.confidence)
         except NotEvaluable as reason:  # too few runs for the confidence: say what they show
@@ -152,26 +164,26 @@ class PointingRequirement:
             return PointingResult(
                 self,
                 "not evaluable",
-                error.runs,
+                runs,
                 needed,
                 estimate=shown.value,
                 confidence_achieved=achieved,
                 exceedances=exceedances,
                 reason=str(reason),
                 statistic=shown,
-                t=series.t,
+                t=t,
             )
         return PointingResult(
             self,
             "computed" if self.bound is None else "met" if stat.value <= self.bound else "not met",
-            error.runs,
+            runs,
             needed,
             value=stat.value,
             estimate=stat.estimate,
             confidence_achieved=achieved,
             exceedances=exceedances,
             statistic=stat,
-            t=series.t,
+            t=t,
         )
 
 

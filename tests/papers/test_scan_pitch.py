@@ -77,7 +77,10 @@ def test_summary_reports_paper_values_and_status(nominal):
     assert "paper -0.8075 °/s" in result.stdout
     assert len(list(out.glob("fig*.png"))) == 8
     assert not list(out.glob("*.svg"))  # SVG twins only with --svg
-    assert sorted(summary["figures"]) == sorted(map(str, out.glob("fig*.png")))
+    drawn = sorted(map(str, out.glob("*.png")))  # the paper's and the pointing requirement's
+    assert (
+        sorted(summary["figures"]) == drawn and str(out / "pointing_imaging_rate_pde.png") in drawn
+    )
 
 
 def recorded_momentum(results, inertia):
