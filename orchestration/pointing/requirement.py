@@ -130,7 +130,9 @@ class PointingRequirement:
     def magnitudes(self, error: ErrorHistory, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """(t, m): the index's magnitude ``m[run, time]`` on ``error`` at times ``t`` (what
         the statistic is taken of; ``seed``: the draw of t in the window, if random);
-        :class:`NotEvaluable` if the history is too short for the index."""
+        :class:`NotEvaluable` if the history holds no run or is too short for the index."""
+        if error.runs == 0:
+            raise NotEvaluable("no run to evaluate (none reached the end)")
         rng = np.random.default_rng(seed)
         parts = []
         for start in range(0, error.runs, BLOCK):  # the same draw as all runs at once

@@ -160,3 +160,10 @@ def test_run_and_campaign_of_a_scenario_draw_its_pointing_requirements(tmp_path,
     assert result.returncode in (0, 3), result.stdout + result.stderr
     summary = json.loads((out / "campaign.json").read_text())
     assert names <= set(summary["figures"]) and all((out / n).exists() for n in names)
+
+
+def test_a_campaign_no_run_of_which_reached_the_end_draws_nothing(campaign, tmp_path):
+    """Every run stopped early (NaN kept): no figure, and no crash (the verdict says why)."""
+    signals, _ = campaign
+    r = requirement("ape", 1e-4, 0.9, "ensemble")
+    assert campaign_figures([r], np.full_like(signals, np.nan), NAMES, T, {}, tmp_path) == []

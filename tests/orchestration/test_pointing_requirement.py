@@ -71,6 +71,15 @@ def test_not_evaluable_says_why():
         index_series(white_campaign(runs=2), "PDE", window=20.0, separation=20.0)
 
 
+def test_no_run_is_not_evaluable():
+    """A campaign none of whose runs reached the end: no value, said (not a crash)."""
+    none = rpe(ARCSEC).evaluate(white_campaign(runs=0))
+    assert none.status == "not evaluable" and none.value is None and none.runs == 0
+    assert "no run" in none.reason
+    with pytest.raises(NotEvaluable, match="no run"):
+        rpe(ARCSEC).magnitudes(white_campaign(runs=0))
+
+
 def test_the_line_and_the_record():
     result = rpe(0.001 * math.pi / 180).evaluate(white_campaign(sigma=0.5 * ARCSEC))
     assert result.line("deg") == (
