@@ -121,6 +121,23 @@ def test_indices_of_a_run_directory_against_their_closed_forms(run_dir, tmp_path
     assert code == 3 and "APE at 99.73 % (temporal)" in text and text.rstrip().endswith("not met")
 
 
+def test_a_variant_s_exempt_requirements_are_not_judged(run_dir, capsys):
+    """payload_sweep:no_control does not judge the pointing requirements (the wheel motors
+    are off): ``agilesat pointing`` says so, as the run's summary does, and judges none of
+    them."""
+    (run_dir / "summary.json").write_text(
+        json.dumps({"scenario": "payload_sweep", "variant": "no_control"})
+    )
+    code = main(["pointing", str(run_dir)])
+    text = capsys.readouterr().out
+    assert code == 0 and "payload_sweep:no_control" in text
+    assert "pointing_ape: not judged (the wheel motors are off" in text
+    assert "stability_pde: not judged" in text and "APE" not in text
+    (run_dir / "summary.json").write_text(json.dumps({"scenario": "payload_sweep"}))
+    code = main(["pointing", str(run_dir)])
+    assert "pointing_ape: APE" in capsys.readouterr().out  # judged by the nominal
+
+
 def test_indices_of_a_campaign_directory(campaign_dir, capsys):
     """The ensemble statistic is, at each time, the ⌈P n⌉-th smallest of the n runs'
     magnitudes, worst over time; the run that stopped early is left out, and said."""
