@@ -132,7 +132,7 @@ def knowledge_index(index: str, window: float | None = None) -> m.Metric:
         compute,
         "rad",
         "arcsec",
-        f"{label} at 99.73 % of the time (knowledge, 3-axis)",
+        f"{label} at {100 * POINTING_LEVEL:g} % of the time (knowledge, 3-axis)",
     )
 
 
