@@ -11,9 +11,7 @@ import json
 import re
 from pathlib import Path
 
-import numpy as np
-
-from ..pointing import ANGLE_UNITS, INDICES, INTERPRETATIONS, PointingRequirement, format_angle
+from ..pointing.names import ANGLE_UNITS, INDICES, INTERPRETATIONS
 
 _ANGLE = re.compile(r"^\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)\s*([a-zµ]*)\s*$")
 
@@ -88,6 +86,7 @@ def add_parser(commands) -> None:
 def main(args) -> int:
     from ..mission.requirements import Pointing
     from ..mission.targets import resolve
+    from ..pointing import PointingRequirement
     from .recorded import evaluate, load
 
     recorded = load(args.directory)
@@ -149,6 +148,8 @@ def main(args) -> int:
 def _line(result, unit: str) -> str:
     """The result's line, with the empirical quantile where a confidence made the value
     compared the order statistic that bounds it."""
+    from ..pointing import format_angle
+
     line = result.line(unit)
     if result.value is not None and result.requirement.confidence is not None:
         line += f" (empirical quantile {format_angle(result.estimate, unit)})"
@@ -158,6 +159,8 @@ def _line(result, unit: str) -> str:
 def figure(path: Path, title: str, results: list, unit: str) -> Path:
     """One row per index with a profile: its value at the level against time (ensemble)
     or run (temporal), with the requirement; mixed statistics have none (left out)."""
+    import numpy as np
+
     from . import plots
 
     scale, rows, axes = ANGLE_UNITS[unit], [], set()

@@ -11,24 +11,46 @@ the orchestration, so it works on any arrays.  See docs/pointing.md.
     print(result.line("arcsec"))
 """
 
-from .errors import (
-    ErrorHistory,
-    knowledge_error,
-    performance_error,
-    quaternion_product,
-    rotation_quaternion,
-    rotation_vector,
-)
-from .indices import INDICES, IndexSeries, NotEvaluable, index_series, magnitude
-from .requirement import ANGLE_UNITS, PointingRequirement, PointingResult, format_angle
-from .statistics import (
-    INTERPRETATIONS,
-    Statistic,
-    allowed_exceedances,
-    confidence_achieved,
-    runs_needed,
-    statistic,
-)
+import importlib
+
+from .names import ANGLE_UNITS, INDICES, INTERPRETATIONS
+
+_WHERE = {
+    **dict.fromkeys(
+        (
+            "ErrorHistory",
+            "knowledge_error",
+            "performance_error",
+            "quaternion_product",
+            "rotation_quaternion",
+            "rotation_vector",
+        ),
+        "errors",
+    ),
+    **dict.fromkeys(("IndexSeries", "NotEvaluable", "index_series", "magnitude"), "indices"),
+    **dict.fromkeys(("PointingRequirement", "PointingResult", "format_angle"), "requirement"),
+    **dict.fromkeys(
+        (
+            "Statistic",
+            "allowed_exceedances",
+            "confidence_achieved",
+            "runs_needed",
+            "statistic",
+        ),
+        "statistics",
+    ),
+}
+
+
+def __getattr__(name):
+    """The names are imported on first use (PEP 562): the options' names (:mod:`.names`)
+    come without NumPy and SciPy."""
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "ANGLE_UNITS",

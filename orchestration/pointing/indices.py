@@ -43,21 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ErrorHistory
-
-#: index name: (operation, kind of error it is defined on)
-INDICES = {
-    "APE": ("absolute", "performance"),
-    "MPE": ("mean", "performance"),
-    "RPE": ("relative", "performance"),
-    "PDE": ("drift", "performance"),
-    "PRE": ("drift", "performance"),
-    "AKE": ("absolute", "knowledge"),
-    "MKE": ("mean", "knowledge"),
-    "RKE": ("relative", "knowledge"),
-    "KDE": ("drift", "knowledge"),
-    "KRE": ("drift", "knowledge"),
-}
-T_IN_WINDOW = ("end", "random")
+from .names import INDICES, T_IN_WINDOW
 
 
 class NotEvaluable(ValueError):

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import BLOCK, ErrorHistory, describe, direction
-from .indices import INDICES, NotEvaluable, check_index, index_series, magnitude
+from .indices import NotEvaluable, check_index, index_series, magnitude
+from .names import ANGLE_UNITS, INDICES
 from .statistics import (
     Statistic,
     check_statistic,
@@ -26,17 +27,6 @@ from .statistics import (
     statistic,
 )
 from .statistics import runs_needed as fewest_runs
-
-#: display units of angles: rad per unit
-ANGLE_UNITS = {
-    "rad": 1.0,
-    "mrad": 1e-3,
-    "urad": 1e-6,
-    "µrad": 1e-6,
-    "deg": math.pi / 180,
-    "arcmin": math.pi / 10_800,
-    "arcsec": math.pi / 648_000,
-}
 
 
 def format_angle(value: float, unit: str = "deg") -> str:

@@ -41,8 +41,8 @@ import numpy as np
 from scipy.stats import binom
 
 from .indices import NotEvaluable
+from .names import INTERPRETATIONS
 
-INTERPRETATIONS = ("temporal", "ensemble", "mixed")
 #: relative slack on Pr[...] ≤ 1 − C, so that a case exact in real numbers (0.5² ≤ 0.25)
 #: is not lost to rounding
 _ROUNDING = 1e-12
