@@ -41,7 +41,7 @@ def systems(fmus, tmp_path_factory):
     """{name: (system file, stop, step)}: the shipped scenarios, exported, and the loop."""
     packages = export_elsewhere(tmp_path_factory)
     found = {name: (packages[name], HOST_CASES[name][0], get(name).step) for name in NAMES}
-    found["sensing_loop"] = (write_ssd(tmp_path_factory.mktemp("loop"), fmus), STOP, STEP)
+    found["sensing_loop"] = (write_ssd(tmp_path_factory.mktemp("loop")), STOP, STEP)
     return found
 
 

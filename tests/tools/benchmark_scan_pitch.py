@@ -4,8 +4,8 @@ vary: compare the ratios, measured in one run).
     python tests/tools/benchmark_scan_pitch.py [--repeat N]
 
 scan_pitch at macro steps 0.01, 0.05 and 0.1 s, payload_sweep and video_sar at their own
-steps, and the sensed systems scan_pitch:sensed and video_sar:sensed (tests/tools/sensed.py:
-the four sensing FMUs in the loop), on one core, best of N runs each (CPU time of this
+steps, and the scenarios' sensed variants scan_pitch:sensed and video_sar:sensed (the four
+sensing FMUs in the loop), on one core, best of N runs each (CPU time of this
 process, see best()):
 - the co-simulation (our master, the FMUs) and its real-time factor;
 - its time per macro step split into model compute (the rest of the below), FMI layer
@@ -34,15 +34,14 @@ import os
 import platform
 import resource
 import sys
-import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 os.environ.setdefault("AGILESAT_JIT_AFTER", "0")  # compiled from the first call (jit.py)
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from sensed import sensed
 
 from agilesat.fmus.build import build_all
 from agilesat.orchestration import simulate
@@ -54,13 +53,20 @@ STEPS = (0.01, 0.05, 0.1)
 STOP = 150.0
 OTHERS = ("payload_sweep", "video_sar", "scan_pitch:sensed", "video_sar:sensed")
 TARGET_RTF = 1500.0
-_SENSED = Path(tempfile.mkdtemp(prefix="agilesat_sensed_"))
 
 
-def scenario(name: str):
-    """A shipped scenario, or a sensed system (``name:sensed``, tests/tools/sensed.py)."""
-    base, _, kind = name.partition(":")
-    return sensed(base, _SENSED) if kind == "sensed" else get(name)
+def scenario(name: str) -> SimpleNamespace:
+    """A shipped scenario or one of its variants (``name:variant``): its system file
+    (``ssd``), ``components``, ``step`` and ``stop``."""
+    base, _, variant = name.partition(":")
+    found = get(base)
+    system = found.system_for(variant or None)
+    return SimpleNamespace(
+        ssd=found.system_file(variant or None),
+        components=system.components,
+        step=system.step,
+        stop=system.stop,
+    )
 
 
 def best(function, repeat: int) -> float:
