@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output.kept import reached_the_end
 from ..pointing import ANGLE_UNITS, NotEvaluable, format_angle
 
 
@@ -45,7 +46,7 @@ def campaign_figures(
         if not isinstance(r, Pointing):
             continue
         kept = np.asarray(signals[:, [names.index(c) for c in r.signals]])
-        kept = kept[np.isfinite(kept).all(axis=(1, 2))]
+        kept = kept[reached_the_end(kept)]
         try:
             error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
             times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..output.kept import reached_the_end
 from ..output.summary import format_value
 from ..system.units import quantity, to_si
 
@@ -219,7 +220,7 @@ class Pointing(Requirement):
     def evaluate_campaign(self, signals: np.ndarray, t: np.ndarray) -> Verdict:
         """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds
         :attr:`signals` (NaN where a run stopped early: those runs are left out, and said)."""
-        complete = np.isfinite(signals).all(axis=(1, 2))
+        complete = reached_the_end(signals)
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
         kept = signals[complete]

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..mission.requirements import recorded_error
 from ..pointing import INDICES, PointingRequirement, PointingResult
+from .kept import reached_the_end
 from .results import Results
 
 #: the quaternions an index compares when none is named: (attitude, reference) by kind
@@ -92,7 +93,7 @@ def _campaign(directory: Path) -> Recorded:
             "again with --keep SatelliteDynamics.q_BI and the other quaternions the index needs"
         )
     signals = np.load(directory / "signals.npy", mmap_mode="r")[: summary["runs"]["planned"]]
-    complete = np.isfinite(signals).all(axis=(1, 2))
+    complete = reached_the_end(signals)
     if not complete.any():
         raise ValueError(f"{directory}: no run of the campaign reached the end")
     values = np.asarray(signals[complete])
