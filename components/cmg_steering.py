@@ -45,7 +45,7 @@ from .cmg_cluster import (
 from .flat import StateTable
 from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .rotations import rotate
+from .rotations import dot, rotate
 from .variables import Layout, choice, input_, output, parameter
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
@@ -209,15 +209,10 @@ def wanted_hdot(u) -> tuple:
 
 
 @jitable
-def _dot(a, b) -> float:
-    """a · b, summed from 0.0 in order (the zero's sign as Python's ``sum`` gives it)."""
-    return 0.0 + a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@jitable
 def _null_motion(columns, M_inv, Q, spins) -> list:
     """(1 − Aᵀ M⁻¹ A) ∂Q/∂δ with ∂Q/∂δ_i = −2 Q a_iᵀ M⁻¹ σ_i."""
-    gradient = [-2.0 * Q * _dot(a, rotate(M_inv, s)) for a, s in zip(columns, spins)]
+    # 0.0 + a · b: a zero of the sign Python's ``sum`` gives, as (0.0 + a₀b₀) + ... does
+    gradient = [-2.0 * Q * (0.0 + dot(a, rotate(M_inv, s))) for a, s in zip(columns, spins)]
     v = rotate(M_inv, _sum_weighted(columns, gradient))
     return [d - (a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) for a, d in zip(columns, gradient)]
 

@@ -57,8 +57,8 @@ import numpy as np
 
 from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, dcm, rotate
-from .sensing import EARTH_RADIUS, EARTH_RATE, norm
+from .rotations import IDENTITY_Q, cross, dcm, dot, norm, rotate
+from .sensing import EARTH_RADIUS, EARTH_RATE
 from .variables import Layout, choice, input_, output, parameter
 
 N_FACETS = 10
@@ -282,7 +282,7 @@ def torques_output(values, state, t):
     """The three torques, their sum, the eclipse flag, the density and the field."""
     v = floats(values)
     r = (v[U_R], v[U_R + 1], v[U_R + 2])
-    radius = _norm(r)
+    radius = norm(r)
     if radius == 0.0:
         return NO_POSITION
     q = v[U_Q : U_Q + 4]
@@ -299,7 +299,7 @@ def torques_output(values, state, t):
     srp = zero
     if v[P_SRP] != 0.0 and not eclipse:
         sun_B = rotate(C_BI, sun)
-        if _norm(sun_B) == 0.0:
+        if norm(sun_B) == 0.0:
             return NO_SUN
         srp = _srp(v, sun_B)
     field = rotate(C_BI, field_I(v, r, v[U_EARTH]))
@@ -314,16 +314,6 @@ def torques_output(values, state, t):
 
 
 # -- the three models ----------------------------------------------------------------------
-@jitable
-def _norm(v) -> float:
-    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-
-
-@jitable
-def _dot(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
 @jitable
 def density(v, height: float) -> float:
     """Atmospheric density (kg/m³) at ``height`` (m) above the sphere (below 0 m: the
@@ -344,7 +334,7 @@ def field_I(v, r, earth_angle: float) -> tuple:
     """Tilted-dipole geomagnetic field (T) at r_I, in I (module docstring)."""
     c, s = math.cos(earth_angle), math.sin(earth_angle)
     r_E = (c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])  # R3(θ) r_I
-    radius = _norm(r_E)
+    radius = norm(r_E)
     x, y_, z = r_E[0] / radius, r_E[1] / radius, r_E[2] / radius
     g = (v[P_G11], v[P_H11], v[P_G10])
     k = math.pow(IGRF_RADIUS / radius, 3.0)
@@ -379,10 +369,10 @@ def _aero(v, C_BI, r, rho: float) -> tuple:
             continue
         arm = cross(w, cp)
         relative = (flow[0] + arm[0], flow[1] + arm[1], flow[2] + arm[2])
-        speed = _norm(relative)
+        speed = norm(relative)
         if speed == 0.0:
             continue
-        cos = _dot(normal, relative) / speed
+        cos = dot(normal, relative) / speed
         if cos > 0.0:
             f = -0.5 * rho * v[P_CD] * area * speed * cos  # times v = speed v̂
             t = cross(cp, (f * relative[0], f * relative[1], f * relative[2]))
@@ -392,7 +382,7 @@ def _aero(v, C_BI, r, rho: float) -> tuple:
 
 @jitable
 def _srp(v, sun_B) -> tuple:
-    size = _norm(sun_B)
+    size = norm(sun_B)
     s = (sun_B[0] / size, sun_B[1] / size, sun_B[2] / size)
     pressure = v[P_PRESSURE]
     tx = ty = tz = 0.0
@@ -400,7 +390,7 @@ def _srp(v, sun_B) -> tuple:
         area, normal, cp, specular, diffuse = _facet(v, i)
         if area == 0.0:
             continue
-        cos = _dot(normal, s)
+        cos = dot(normal, s)
         if cos > 0.0:
             a = -pressure * area * cos
             along_s, along_n = a * (1.0 - specular), a * 2.0 * (specular * cos + diffuse / 3.0)
@@ -417,16 +407,11 @@ def _srp(v, sun_B) -> tuple:
 @jitable
 def in_shadow(r, sun) -> bool:
     """In the cylindrical shadow of a sphere of radius EARTH_RADIUS (sun: any length > 0)."""
-    size = _norm(sun)
+    size = norm(sun)
     if size == 0.0:
         return False
     s = (sun[0] / size, sun[1] / size, sun[2] / size)
-    along = _dot(r, s)
+    along = dot(r, s)
     if along >= 0.0:
         return False
-    return _norm((r[0] - along * s[0], r[1] - along * s[1], r[2] - along * s[2])) < EARTH_RADIUS
-
-
-@jitable
-def cross(a, b) -> tuple:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+    return norm((r[0] - along * s[0], r[1] - along * s[1], r[2] - along * s[2])) < EARTH_RADIUS

@@ -18,8 +18,10 @@ are eq. (13): ``w = (φ̇ cψ cθ + θ̇ sψ, −φ̇ sψ cθ + θ̇ cψ, ψ̇ +
 
 The functions take any sequence and compute on Python floats: models call them once or
 several times per co-simulation step on 3- and 4-vectors, where NumPy's per-call cost
-would dominate.  ``dcm``, ``rotate`` and ``qmul`` return tuples for such hot loops; the
-rest return NumPy arrays.
+would dominate.  The tuple primitives (``dcm``, ``rotate``, ``rotate_back``, ``qmul``, and
+the vectors' ``dot``, ``cross``, ``norm`` and ``quat_norm``) return tuples or floats for
+such hot loops, compiled in kernels (:mod:`.jit`), the one copy of each every model uses;
+the rest return NumPy arrays.
 """
 
 from __future__ import annotations
@@ -85,18 +87,35 @@ def qmul(p, q) -> tuple:
     )
 
 
+@jitable
+def dot(a, b) -> float:
+    """a · b of 3-vectors, summed in order (a₀b₀ + a₁b₁) + a₂b₂."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@jitable
+def cross(a, b) -> tuple:
+    """a × b of 3-vectors (np.cross is ten times slower on tiny arrays)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@jitable
+def norm(v) -> float:
+    """|v| of a 3-vector: √(v · v)."""
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@jitable
+def quat_norm(q) -> float:
+    """|q| of a quaternion (any 4-vector)."""
+    return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+
+
 # -- array API ---------------------------------------------------------------------------
 def skew(v) -> np.ndarray:
     """[v×], so that skew(a) @ b = a × b."""
     x, y, z = _floats(v)
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def cross(a, b) -> np.ndarray:
-    """a × b for 3-vectors (np.cross is ten times slower on tiny arrays)."""
-    a0, a1, a2 = _floats(a)
-    b0, b1, b2 = _floats(b)
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def quat_mul(p, q) -> np.ndarray:

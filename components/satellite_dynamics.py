@@ -56,6 +56,7 @@ from .rotations import (
     euler123_dot,
     qmul,
     quat_from_dcm,
+    quat_norm,
     rotate,
     rotate_back,
 )
@@ -380,7 +381,7 @@ def _step(values, state, t, dt):
     for xi in x:
         if not math.isfinite(xi):
             return NON_FINITE
-    norm = _norm(x)
+    norm = quat_norm(x)
     _put(state, S_Q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
     _put(state, S_H_I, x[4:])
     if conflict and s[S_SLOPE_CONFLICT] == 0.0:
@@ -438,7 +439,7 @@ def _output(values, state, t):
     q_OI is not a unit quaternion."""
     v, s = floats(values), floats(state)
     q0, q1, q2, q3 = q = _quaternion(v, Q_OI)
-    norm = _norm(q)
+    norm = quat_norm(q)
     if not _is_unit(norm):
         return NOT_UNIT
     q_OI = (q0 / norm, q1 / norm, q2 / norm, q3 / norm)
@@ -591,11 +592,6 @@ def _put(array, at, x):
 
 
 @jitable
-def _norm(q):
-    return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-
-
-@jitable
 def _is_unit(norm):
     """|q| near enough to 1 for a quaternion meant to be a unit one."""
     return 0.5 < norm < 2.0
@@ -603,7 +599,7 @@ def _is_unit(norm):
 
 def _unit(q, name) -> tuple:
     q0, q1, q2, q3 = q = q.tolist()
-    norm = _norm(q)
+    norm = quat_norm(q)
     if not _is_unit(norm):
         raise ModelError(f"{name} must be a unit quaternion, got {q} (norm {norm})")
     return q0 / norm, q1 / norm, q2 / norm, q3 / norm

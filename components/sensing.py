@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 
 from .jit import jitable
-from .rotations import qmul
+from .rotations import cross, dot, norm, qmul, quat_norm
 
 #: fraction of a sample period by which a time may fall short of a tick and still be it
 TICK_TOLERANCE = 1e-6
@@ -82,9 +82,8 @@ def rotation_vector(q) -> tuple:
 
 @jitable
 def normalized(q) -> tuple:
-    q0, q1, q2, q3 = q
-    n = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
-    return (q0 / n, q1 / n, q2 / n, q3 / n)
+    n = quat_norm(q)
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
 
 
 @jitable
@@ -103,15 +102,4 @@ def slerp(qa, qb, s: float) -> tuple:
 @jitable
 def angle_between(a, b) -> float:
     """Angle between two non-zero vectors, accurate at every angle (atan2 form)."""
-    ax, ay, az = a
-    bx, by, bz = b
-    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
-
-
-@jitable
-def norm(v) -> float:
-    total = 0.0
-    for x in v:
-        total += x * x
-    return math.sqrt(total)
+    return math.atan2(norm(cross(a, b)), dot(a, b))

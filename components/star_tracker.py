@@ -49,13 +49,12 @@ from .flat import StateTable
 from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key, uniform
-from .rotations import IDENTITY_Q, dcm, qmul, rotate_back
+from .rotations import IDENTITY_Q, dcm, norm, qmul, quat_norm, rotate_back
 from .sensing import (
     EARTH_RADIUS,
     TICK_TOLERANCE,
     angle_between,
     lerp,
-    norm,
     normalized,
     quat_exp,
     slerp,
@@ -186,7 +185,7 @@ class StarTracker(Model):
         for name in ("rate", "lf_period", "max_rate"):
             if not getattr(p, name) > 0.0:
                 raise ModelError(f"{name} must be > 0, got {getattr(p, name)}")
-        if abs(norm(p.q_SB) - 1.0) > 1e-6:
+        if abs(quat_norm(p.q_SB) - 1.0) > 1e-6:
             raise ModelError(f"q_SB must be a unit quaternion, got {p.q_SB.tolist()}")
         keys = [half for i in range(3) for half in key_halves(stream_key(p.seed, NOISE + i))]
         phase = [2.0 * math.pi * uniform(stream_key(p.seed, PHASE + i), 0) for i in range(3)]

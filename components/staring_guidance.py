@@ -98,7 +98,18 @@ from .flat import StateTable, hypot
 from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import _unwrap3, cross, dcm, euler123, quat_from_dcm, quat_of_rows, wrap_pi
+from .rotations import (
+    _unwrap3,
+    cross,
+    dcm,
+    dot,
+    euler123,
+    norm,
+    quat_from_dcm,
+    quat_of_rows,
+    rotate,
+    wrap_pi,
+)
 from .variables import Layout, input_, output, parameter
 
 CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"
@@ -129,21 +140,6 @@ _Z = (0.0, 0.0, 1.0)
 
 # -- tuple vectors -------------------------------------------------------------------------
 @jitable
-def _dot(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@jitable
-def _cross(a, b) -> tuple:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-@jitable
-def _norm(a) -> float:
-    return math.sqrt(_dot(a, a))
-
-
-@jitable
 def _scaled(k: float, a) -> tuple:
     return (k * a[0], k * a[1], k * a[2])
 
@@ -170,12 +166,6 @@ def _combination(a, x, b, y) -> tuple:
 
 
 @jitable
-def _rows_times(M, v) -> tuple:
-    """M v for M given as rows."""
-    return (_dot(M[0], v), _dot(M[1], v), _dot(M[2], v))
-
-
-@jitable
 def _rows_product(A, B) -> tuple:
     """A B for 3×3 matrices given as rows."""
     columns = (
@@ -183,7 +173,7 @@ def _rows_product(A, B) -> tuple:
         (B[0][1], B[1][1], B[2][1]),
         (B[0][2], B[1][2], B[2][2]),
     )
-    return (_rows_times(columns, A[0]), _rows_times(columns, A[1]), _rows_times(columns, A[2]))
+    return (rotate(columns, A[0]), rotate(columns, A[1]), rotate(columns, A[2]))
 
 
 # -- geometry (module docstring) -----------------------------------------------------------
@@ -249,15 +239,15 @@ def _at_pole(r_T) -> str:
 def ground_line(beam, axis, up) -> tuple:
     """Direction of the line in which the plane of ``beam`` and ``axis`` meets the plane
     ⊥ ``up``, oriented along ``axis``: d = beam (axis·up) − axis (beam·up) (not normalised)."""
-    return _combination(_dot(axis, up), beam, -_dot(beam, up), axis)
+    return _combination(dot(axis, up), beam, -dot(beam, up), axis)
 
 
 @jitable
 def _azimuth(d, east, north) -> tuple:
     """(defined, azimuth of d from north toward east): undefined for a vertical d."""
-    if not _norm(d) > 1e-12:
+    if not norm(d) > 1e-12:
         return False, 0.0
-    return True, math.atan2(_dot(d, east), _dot(d, north))
+    return True, math.atan2(dot(d, east), dot(d, north))
 
 
 def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
@@ -270,8 +260,8 @@ def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
     C_BI = dcm(tuple((q / math.sqrt(float(q @ q))).tolist()))
     r_T = tuple(np.asarray(r_T_I, dtype=float).tolist())
     up, east, north = _tangent_frame(r_T, _off_axis(r_T))
-    beam = _rows_times(_transposed(C_BI), tuple((b / math.sqrt(float(b @ b))).tolist()))
-    ok, azimuth = _azimuth(ground_line(beam, _rows_times(_transposed(C_BI), a_B), up), east, north)
+    beam = rotate(_transposed(C_BI), tuple((b / math.sqrt(float(b @ b))).tolist()))
+    ok, azimuth = _azimuth(ground_line(beam, rotate(_transposed(C_BI), a_B), up), east, north)
     if not ok:
         raise ModelError(_GRAZING)
     return azimuth
@@ -287,12 +277,12 @@ def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
     """(û, u̇, ü) in I for the slant range s = |r_T − r| > 0: Earth-fixed target,
     two-body satellite (module docstring)."""
     rho, drho = _difference(r_T, r), _difference(v_T, v)
-    r_norm = _norm(r)
-    ddrho = _combination(EARTH_RATE, _cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
+    r_norm = norm(r)
+    ddrho = _combination(EARTH_RATE, cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
     u = _divided(rho, s)
-    ds = _dot(drho, u)
+    ds = dot(drho, u)
     du = _divided(_combination(1.0, drho, -ds, u), s)
-    dds = _dot(ddrho, u) + _dot(drho, du)
+    dds = dot(ddrho, u) + dot(drho, du)
     ddu = (
         (ddrho[0] - dds * u[0] - 2.0 * ds * du[0]) / s,
         (ddrho[1] - dds * u[1] - 2.0 * ds * du[1]) / s,
@@ -305,12 +295,12 @@ def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
 def _aligned_axes(u, a) -> tuple:
     """(defined, x, y, n = û × a, |n|) of F(û, a) (module docstring); undefined for a
     reference direction within PARALLEL_TOLERANCE of û."""
-    n = _cross(u, a)
-    m = _norm(n)
+    n = cross(u, a)
+    m = norm(n)
     if not m > PARALLEL_TOLERANCE:
         return False, n, n, n, m
     y = _divided(n, m)
-    return True, _cross(y, u), y, n, m
+    return True, cross(y, u), y, n, m
 
 
 @jitable
@@ -319,16 +309,16 @@ def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
     ok, x, y, n, m = _aligned_axes(u, a)
     if not ok:
         return False, (n, n, n), n, n
-    dn = _sum(_cross(du, a), _cross(u, da))
-    ddn = _sum(_sum(_cross(ddu, a), _scaled(2.0, _cross(du, da))), _cross(u, dda))
-    dnx = _dot(dn, x)
-    w = (-_dot(y, du), _dot(x, du), -dnx / m)
+    dn = _sum(cross(du, a), cross(u, da))
+    ddn = _sum(_sum(cross(ddu, a), _scaled(2.0, cross(du, da))), cross(u, dda))
+    dnx = dot(dn, x)
+    w = (-dot(y, du), dot(x, du), -dnx / m)
     w_I = _sum(_combination(w[0], x, w[1], y), _scaled(w[2], u))
-    dx, dy = _cross(w_I, x), _cross(w_I, y)
+    dx, dy = cross(w_I, x), cross(w_I, y)
     dw = (
-        -_dot(dy, du) - _dot(y, ddu),
-        _dot(dx, du) + _dot(x, ddu),
-        -(_dot(ddn, x) + _dot(dn, dx)) / m + dnx * _dot(dn, y) / (m * m),
+        -dot(dy, du) - dot(y, ddu),
+        dot(dx, du) + dot(x, ddu),
+        -(dot(ddn, x) + dot(dn, dx)) / m + dnx * dot(dn, y) / (m * m),
     )
     return ok, (x, y, u), w, dw
 
@@ -521,13 +511,13 @@ def guidance_output(values, state, t):
     C_OI = dcm(v[U_Q_OI : U_Q_OI + 4])
 
     # the two-body orbit frame of r, v, checked against q_OI
-    r_norm = _norm(r)
-    h_vec = _cross(r, vel)
-    h = _norm(h_vec)
-    if not h > 1e-12 * r_norm * max(_norm(vel), 1.0):
+    r_norm = norm(r)
+    h_vec = cross(r, vel)
+    h = norm(h_vec)
+    if not h > 1e-12 * r_norm * max(norm(vel), 1.0):
         return NO_ORBIT_FRAME
     r_hat, h_hat = _divided(r, r_norm), _divided(h_vec, h)
-    expected = (_cross(h_hat, r_hat), _scaled(-1.0, h_hat), _scaled(-1.0, r_hat))
+    expected = (cross(h_hat, r_hat), _scaled(-1.0, h_hat), _scaled(-1.0, r_hat))
     mismatch = 0.0
     for i in range(3):
         for j in range(3):
@@ -537,7 +527,7 @@ def guidance_output(values, state, t):
         return Q_OI_MISMATCH
     x_O = C_OI[0]
 
-    s_range = _norm(_difference(r_T, r))
+    s_range = norm(_difference(r_T, r))
     if not s_range > MIN_SLANT_RANGE:
         state[DETAIL] = s_range
         return NO_LINE_OF_SIGHT
@@ -557,7 +547,7 @@ def guidance_output(values, state, t):
         r2 = r_norm * r_norm
         dx_O = _scaled(-(h / r2), r_hat)
         ddx_O = _combination(
-            2.0 * h * _dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
+            2.0 * h * dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
         )
         ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
         x0, y0 = C_PI[0], C_PI[1]
@@ -572,7 +562,7 @@ def guidance_output(values, state, t):
         defined, azimuth = _azimuth(d, east, north)
         if not defined:
             return GRAZING
-        g = _divided(d, _norm(d))
+        g = _divided(d, norm(d))
         state[CAPTURED], state[CAPTURE_TIME], state[AZIMUTH_REF] = 1.0, t, azimuth
         state[LATITUDE] = latitude
         for k in range(3):
@@ -582,8 +572,8 @@ def guidance_output(values, state, t):
         c, sn = math.cos(angle), math.sin(angle)
         gx, gy, gz = state[G_REF], state[G_REF + 1], state[G_REF + 2]
         g = (c * gx - sn * gy, sn * gx + c * gy, gz)
-        dg = _scaled(EARTH_RATE, _cross(_Z, g))
-        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, _scaled(EARTH_RATE, _cross(_Z, dg)))
+        dg = _scaled(EARTH_RATE, cross(_Z, g))
+        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, _scaled(EARTH_RATE, cross(_Z, dg)))
         if not ok:
             return ALONG_G
     C_RI, w, dw = C_PI, w_P, dw_P
@@ -591,7 +581,7 @@ def guidance_output(values, state, t):
     if mounted:
         C_RP = s[C_RP_ : C_RP_ + 9]
         M = ((C_RP[0], C_RP[1], C_RP[2]), (C_RP[3], C_RP[4], C_RP[5]), (C_RP[6], C_RP[7], C_RP[8]))
-        C_RI, w, dw = _rows_product(M, C_PI), _rows_times(M, w_P), _rows_times(M, dw_P)
+        C_RI, w, dw = _rows_product(M, C_PI), rotate(M, w_P), rotate(M, dw_P)
 
     # q_RI with its sign continued; the 1-2-3 angles relative to O on the anchor's branch
     (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C_RI
@@ -601,8 +591,8 @@ def guidance_output(values, state, t):
     if anchored and _dot4(q, s[ANCHOR_Q : ANCHOR_Q + 4]) < 0.0:
         q = (-q[0], -q[1], -q[2], -q[3])
     if not mounted:  # eq (11) and the yaw of eq (12), continued from the anchor
-        x, y_, z = _rows_times(C_OI, u)
-        psi = math.atan2(_dot(C_PI[0], y0), _dot(C_PI[0], x0)) if compensating else 0.0
+        x, y_, z = rotate(C_OI, u)
+        psi = math.atan2(dot(C_PI[0], y0), dot(C_PI[0], x0)) if compensating else 0.0
         euler = (-math.atan2(y_, z), math.asin(min(1.0, max(-1.0, x))), psi)
         if anchored:
             euler = _unwrap3(euler, anchor_euler)
@@ -625,7 +615,7 @@ def guidance_output(values, state, t):
         values[Y_Q + k] = q[k]
         state[LAST_Q + k] = q[k]
     state[LASTED] = 1.0
-    values[Y_LOOK] = math.atan2(_norm(_cross(u, r_hat)), -_dot(u, r_hat))
+    values[Y_LOOK] = math.atan2(norm(cross(u, r_hat)), -dot(u, r_hat))
     values[Y_RANGE] = s_range
     values[Y_ROTATION] = rotation
     return OK
