@@ -112,12 +112,15 @@ class Plan:
         #: requirements judged over the campaign need
         self.kept = [name for key in spec.keep for name in self._signal(key)]
         self.signals = list(self.kept)
-        #: the requirements judged over the whole campaign (an ensemble statistic), and
-        #: the columns of every run they need, kept with the others
+        #: the requirements judged over the whole campaign (an ensemble or mixed
+        #: statistic; a Pointing requirement whose statistic is temporal is judged run by
+        #: run: ``over_campaign`` false), and the columns of every run they need, kept
+        #: with the others
         self.ensemble = [
             r
             for r in (self.scenario.requirements_for(self.variant) if self.scenario else [])
             if hasattr(r, "evaluate_campaign")
+            and getattr(r, "over_campaign", True)
             and r.name not in self.scenario.variant(self.variant).exempt()  # type: ignore[union-attr]
         ]
         for requirement in self.ensemble:

@@ -1,11 +1,11 @@
 """A campaign's pointing figures (docs/pointing.md): for each ECSS pointing requirement
-judged over the campaign, ``pointing_<name>.png``, the distribution of the values its
-statistic is taken of, as the fraction of them above each value (log scale: the tail a
-99.73 % level lives in), with the bound, the value compared, the empirical
-quantile and the level, titled with the verdict.  The values (:func:`values`):
+judged over the campaign (ensemble or mixed: a temporal one is judged run by run),
+``pointing_<name>.png``, the distribution of the values its statistic is taken of, as the
+fraction of them above each value (log scale: the tail a 99.73 % level lives in), with the
+bound, the value compared, the empirical quantile and the level, titled with the verdict.
+The values (:func:`values`):
 
 - ensemble: each run's index at the worst time (the statistic's time);
-- temporal: each run's quantile over time at the level (the statistic is the worst run's);
 - mixed: every run's index at every time.
 
 The level's quantile, the ⌈P n⌉-th smallest of the n values, is the smallest value with
@@ -28,8 +28,6 @@ def values(result, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, str]:
     stat, index = result.statistic, result.requirement.index
     if stat.interpretation == "ensemble":
         return m[:, stat.worst], f"each run's {index} at t = {t[stat.worst]:g} s (worst time)"
-    if stat.interpretation == "temporal":
-        return stat.profile, f"each run's {index} at {100 * stat.level:g} % of its time"
     return m.ravel(), f"{index} of every run at every time"
 
 

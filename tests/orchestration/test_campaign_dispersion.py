@@ -439,6 +439,32 @@ def test_a_requirement_judged_over_the_campaign_has_no_pass_rate_per_run():
     assert report.pass_rates(array, catalog) == {}
 
 
+MISSION = """
+import math
+from agilesat.orchestration.mission import Pointing, Scenario
+from agilesat.orchestration.pointing import PointingRequirement
+from agilesat.orchestration.scenarios.payload_sweep import SYSTEM
+
+def ape(interpretation):
+    return PointingRequirement("APE", math.radians(0.05), 0.9973, interpretation)
+
+SCENARIO = Scenario("mission", "two APE requirements", SYSTEM, requirements=[
+    Pointing("per_run", ape("temporal"), reference="SatelliteDynamics.q_BO"),
+    Pointing("over_runs", ape("ensemble"), reference="OrbitEnvironment.q_OI"),
+])
+"""
+
+
+def test_a_pointing_requirement_judged_run_by_run_is_not_judged_over_the_campaign(tmp_path):
+    """A temporal requirement states each run's share of its time: the campaign gives it a
+    pass rate (its verdict in every run), not a second verdict over the runs, and keeps
+    none of its columns for one; an ensemble requirement is judged over the runs."""
+    (tmp_path / "mission.py").write_text(MISSION)
+    plan = Plan(Spec(str(tmp_path / "mission.py"), runs=2))
+    assert [r.name for r in plan.ensemble] == ["over_runs"]
+    assert not [c for c in plan.signals if "q_BO" in c]
+
+
 def test_progress_of_a_resumed_campaign_counts_the_earlier_failures(capsys):
     import sys
 
