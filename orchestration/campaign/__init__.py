@@ -276,15 +276,21 @@ def _ensemble(plan: Plan, out: Path, made: int) -> dict:
     for requirement in plan.ensemble:
         index = [plan.signals.index(c) for c in requirement.signals]
         verdict = requirement.evaluate_campaign(np.asarray(signals[:, index]), time_axis(plan))
-        result[requirement.name] = {
-            "statement": requirement.statement(),
-            "verdict": verdict.status,
-            "value": verdict.value,
-            **({"reason": verdict.reason} if verdict.reason else {}),
-            **({"text": verdict.text} if verdict.text else {}),
-            **({"details": verdict.details} if verdict.details else {}),
-        }
+        result[requirement.name] = ensemble_entry(requirement, verdict)
     return result
+
+
+def ensemble_entry(requirement, verdict) -> dict:
+    """campaign.json's record of ``requirement``'s :class:`..mission.requirements.Verdict`
+    over the campaign (its ``ensemble``; the pointing figures draw from it)."""
+    return {
+        "statement": requirement.statement(),
+        "verdict": verdict.status,
+        "value": verdict.value,
+        **({"reason": verdict.reason} if verdict.reason else {}),
+        **({"text": verdict.text} if verdict.text else {}),
+        **({"details": verdict.details} if verdict.details else {}),
+    }
 
 
 def replay_arguments(plan: Plan, index: int) -> list[str]:

@@ -3,7 +3,8 @@ judged over the campaign (ensemble or mixed: a temporal one is judged run by run
 ``pointing_<name>.png``, the distribution of the values its statistic is taken of, as the
 fraction of them above each value (log scale: the tail a 99.73 % level lives in), with the
 bound, the value compared, the empirical quantile and the level, titled with the verdict.
-The values (:func:`values`):
+The verdict is the campaign's own (campaign.json's ``ensemble``: its value, estimate and
+worst time); the figure computes only the values it draws.  The values (:func:`values`):
 
 - ensemble: each run's index at the worst time (the statistic's time);
 - mixed: every run's index at every time.
@@ -20,15 +21,22 @@ from pathlib import Path
 import numpy as np
 
 from ..output.kept import reached_the_end
-from ..pointing import ANGLE_UNITS, NotEvaluable, format_angle
+from ..pointing import ANGLE_UNITS, format_angle
 
 
-def values(result, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, str]:
-    """(values, what they are) of ``result``'s statistic on magnitudes ``m[run, time]``."""
-    stat, index = result.statistic, result.requirement.index
-    if stat.interpretation == "ensemble":
-        return m[:, stat.worst], f"each run's {index} at t = {t[stat.worst]:g} s (worst time)"
-    return m.ravel(), f"{index} of every run at every time"
+def values(requirement, verdict: dict, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, str]:
+    """(values, what they are) of ``requirement``'s statistic on magnitudes ``m[run, time]``
+    at times ``t``, the worst time that of the ``verdict`` (its details)."""
+    index = requirement.index
+    if requirement.interpretation == "ensemble":
+        worst = int(np.argmin(np.abs(t - verdict["worst_time"])))
+        return m[:, worst], f"each run's {index} at t = {t[worst]:g} s (worst time)"
+    if requirement.interpretation == "mixed":
+        return m.ravel(), f"{index} of every run at every time"
+    raise ValueError(
+        f"{requirement.label()}: a {requirement.interpretation} statistic is judged run by "
+        "run, not over the campaign"
+    )
 
 
 def campaign_figures(
@@ -36,47 +44,51 @@ def campaign_figures(
 ) -> list[Path]:
     """The figure of each pointing requirement of ``requirements`` (those judged over the
     campaign) on the runs of ``signals`` (runs, ``names``, points) that reached the end;
-    ``ensemble``: campaign.json's verdicts, whose text titles each."""
+    ``ensemble``: the campaign's verdicts (campaign.json's,
+    :func:`..campaign.ensemble_entry`), whose value and estimate each draws and whose text
+    titles it.  None where the verdict has neither (no run reached the end, too short a
+    history: the verdict says why)."""
     from ..mission.requirements import Pointing
 
     paths = []
     for r in requirements:
-        if not isinstance(r, Pointing):
+        entry = ensemble.get(r.name, {})
+        verdict = entry.get("details") or {}
+        if not isinstance(r, Pointing) or verdict.get("estimate") is None:
             continue
         kept = np.asarray(signals[:, [names.index(c) for c in r.signals]])
         kept = kept[reached_the_end(kept)]
-        try:
-            error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
-            times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
-        except NotEvaluable:
-            continue  # no run reached the end, or too short a history: the verdict says
-        result = r.requirement.judge(times, m)  # type: ignore[attr-defined]
-        text = ensemble.get(r.name, {}).get("text") or result.line()
-        path = out / f"pointing_{r.name}.png"
-        paths.append(distribution(path, f"{r.name}: {text}", result, *values(result, times, m)))
+        error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
+        times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
+        title = f"{r.name}: {entry.get('text') or verdict['text']}"
+        x, what = values(r.requirement, verdict, times, m)
+        paths.append(
+            distribution(out / f"pointing_{r.name}.png", title, r.requirement, verdict, x, what)
+        )
     return paths
 
 
-def distribution(path: Path, title: str, result, x: np.ndarray, what: str) -> Path:
-    """The fraction of ``x`` above each value, with ``result``'s marks (module)."""
+def distribution(path: Path, title: str, r, verdict: dict, x: np.ndarray, what: str) -> Path:
+    """The fraction of ``x`` above each value, with the marks of requirement ``r`` and of its
+    ``verdict`` (module)."""
     from ..output.plots import plt
     from .report import _save
 
-    r, stat, unit = result.requirement, result.statistic, "deg"
+    unit = "deg"
     scale, n = ANGLE_UNITS[unit], len(x)
     fig, ax = plt.subplots(figsize=(7, 4.2))
     above = (n - 1 - np.arange(n)) / n  # on [x_i, x_i+1): of the sorted x
     ax.step(np.sort(x) / scale, above, where="post", color="tab:blue", label=f"{n} values")
     ax.set_yscale("log", nonpositive="mask")  # the largest value: where the curve ends
-    ax.set_ylim(0.5 * min(1 / n, 1 - stat.level), 1.5)  # the level shown with few runs
-    tail = 1 - stat.level
+    ax.set_ylim(0.5 * min(1 / n, 1 - r.level), 1.5)  # the level shown with few runs
+    tail = 1 - r.level
     ax.axhline(tail, color="0.35", linestyle=":", label=f"1 − level ({tail:.3g})")
     marks = [
         (r.bound, "tab:red", "--", "requirement"),
-        (result.value, "black", "-.", "value compared"),
-        (result.estimate, "tab:green", ":", "empirical quantile"),
+        (verdict["value"], "black", "-.", "value compared"),
+        (verdict["estimate"], "tab:green", ":", "empirical quantile"),
     ]
-    if result.value == result.estimate:
+    if verdict["value"] == verdict["estimate"]:
         marks.pop()  # one line: the value is the empirical quantile
     for value, colour, style, label in marks:
         if value is not None:

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agilesat.orchestration.campaign import report
+from agilesat.orchestration.campaign import ensemble_entry, report
 from agilesat.orchestration.campaign.pointing_figures import campaign_figures
 from agilesat.orchestration.mission.requirements import Pointing
 from agilesat.orchestration.mission.scenario import Scenario, Variant
@@ -37,6 +37,11 @@ def about_z(angle):
 def requirement(name, bound, level, interpretation, **options):
     r = PointingRequirement("APE", bound, level, interpretation, axis=(0, 0, 1), **options)
     return Pointing(name, r, reference="OrbitEnvironment.q_OI")
+
+
+def judged(r, signals) -> dict:
+    """campaign.json's ``ensemble`` of requirement ``r`` over ``signals`` (its columns)."""
+    return {r.name: ensemble_entry(r, r.evaluate_campaign(signals, T))}
 
 
 def saved_axes(module, monkeypatch):
@@ -100,9 +105,10 @@ def test_a_campaign_draws_the_runs_at_the_worst_time_with_their_quantile(
     and its value line is that order statistic: where the curve first reaches 10 %."""
     signals, magnitude = campaign
     r = requirement("ape", 3e-5, 0.9, "ensemble")
-    text = {"ape": {"text": "the verdict as campaign.json says it"}}
+    verdicts = judged(r, signals)
+    verdicts["ape"]["text"] = "the verdict as campaign.json says it"
     saved = saved_axes(report, monkeypatch)
-    [path] = campaign_figures([r], signals, NAMES, T, text, tmp_path)
+    [path] = campaign_figures([r], signals, NAMES, T, verdicts, tmp_path)
     [(_, ax, saved_path)] = saved
     assert path == saved_path == tmp_path / "pointing_ape.png"
     quantiles = np.sort(magnitude, axis=0)[26]
@@ -124,13 +130,14 @@ def test_a_campaign_too_small_for_the_confidence_shows_its_estimate(campaign, tm
     drawn; the title is the verdict (written here: a real file)."""
     signals, magnitude = campaign
     r = requirement("ape", 1e-4, 0.9973, "ensemble", confidence=0.95)
-    [path] = campaign_figures([r], signals, NAMES, T, {}, tmp_path)
+    verdicts = judged(r, signals)
+    [path] = campaign_figures([r], signals, NAMES, T, verdicts, tmp_path)
     assert path.stat().st_size > 10_000
     saved = []
     report_save = report._save
     try:
         report._save = lambda fig, ax, p: saved.append(ax) or p
-        campaign_figures([r], signals, NAMES, T, {}, tmp_path)
+        campaign_figures([r], signals, NAMES, T, verdicts, tmp_path)
     finally:
         report._save = report_save
     [ax] = saved
@@ -166,4 +173,5 @@ def test_a_campaign_no_run_of_which_reached_the_end_draws_nothing(campaign, tmp_
     """Every run stopped early (NaN kept): no figure, and no crash (the verdict says why)."""
     signals, _ = campaign
     r = requirement("ape", 1e-4, 0.9, "ensemble")
-    assert campaign_figures([r], np.full_like(signals, np.nan), NAMES, T, {}, tmp_path) == []
+    none = np.full_like(signals, np.nan)
+    assert campaign_figures([r], none, NAMES, T, judged(r, none), tmp_path) == []
