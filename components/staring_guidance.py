@@ -267,9 +267,10 @@ def footprint_azimuths(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> np.ndarray:
     a_B = tuple(footprint_axis(b).tolist())
     beam_B = tuple((b / math.sqrt(float(b @ b))).tolist())
     q = np.array(q_BI, dtype=float, ndmin=2)
-    # each row's norm from its own dot product, as NumPy takes it (BLAS, with fused
-    # multiply-adds on some CPUs): the rows are those footprint_azimuth always normalised
-    q_unit = q / np.array([math.sqrt(float(row @ row)) for row in q])[:, np.newaxis]
+    # each row's norm from its dot product with itself as ``row @ row`` takes it (the same
+    # BLAS dot, with fused multiply-adds on some CPUs): the rows footprint_azimuth always
+    # normalised, bit for bit
+    q_unit = q / np.sqrt(np.matmul(q[:, np.newaxis, :], q[:, :, np.newaxis]))[:, 0]
     r_T = np.array(r_T_I, dtype=float, ndmin=2)
     azimuth = np.empty(len(q))
     expect_rows(_footprint_azimuths, len(q))

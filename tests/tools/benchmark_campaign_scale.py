@@ -15,6 +15,9 @@ test; timings on a shared machine vary, compare the ratios within one run).
   workers (its shipped dispersions), timed from the command's start to its end (cluster
   start-up, every FMU load, the report); the runs' own times from its journal: each
   worker's first run and the mean, against the bare run();
+- the CPU of all the campaign's processes (client, scheduler, nannies, workers), which
+  the machine's other load does not inflate, split into the runs, the warm-ups and the
+  rest (Dask, start-up, report);
 - core-seconds per run (wall × workers / runs) and runs per core-second, beside
   Basilisk's Monte Carlo of its VSCMG hub over the same 200 s at 0.05 s (dynamics only, no
   flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given.
@@ -27,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -88,7 +92,14 @@ def first_run(share: int) -> dict:
     return json.loads(out.splitlines()[-1])
 
 
-def campaign(runs: int, workers: int, out: Path) -> tuple[float, list[dict]]:
+def children_cpu() -> float:
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def campaign(runs: int, workers: int, out: Path) -> tuple[float, float, list[dict]]:
+    """(wall, CPU of all its processes: client, scheduler, nannies, workers, records)."""
+    cpu = children_cpu()
     began = time.perf_counter()
     subprocess.run(
         [sys.executable, "-m", "agilesat.orchestration", "campaign", "video_sar"]
@@ -96,9 +107,9 @@ def campaign(runs: int, workers: int, out: Path) -> tuple[float, list[dict]]:
         check=True,
         capture_output=True,
     )
-    wall = time.perf_counter() - began
+    wall, cpu = time.perf_counter() - began, children_cpu() - cpu
     records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
-    return wall, records
+    return wall, cpu, records
 
 
 def basilisk(python: str, runs: int) -> tuple[float, float] | None:
@@ -139,7 +150,7 @@ def main() -> None:
         f"{f['run 1'][1]:.3f} s = {f['run 1'][1] / bare_cpu:.2f}x the bare simulate()'s CPU"
     )
     with tempfile.TemporaryDirectory() as tmp:
-        wall, records = campaign(args.runs, args.workers, Path(tmp) / "c")
+        wall, cpu, records = campaign(args.runs, args.workers, Path(tmp) / "c")
     statuses = {}
     for r in records:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
@@ -177,6 +188,16 @@ def main() -> None:
         f"Dask's round trips, the report ({(wall - in_runs) * args.workers / args.runs:.4f} "
         "core-s per run outside the runs)"
     )
+    in_runs_cpu = args.runs * f["run 1"][1]  # each run as a warm worker's run_one
+    warm_cpu = len(warm) * f["run 0"][1]  # each warm-up as a fresh process's first run_one
+    print(
+        f"  CPU of all its processes (load-independent): {cpu / args.runs:.3f} core-s per "
+        f"run = {cpu / args.runs / bare_cpu:.2f}x the bare simulate()'s CPU; of it the "
+        f"runs (as a warm run_one, {f['run 1'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the "
+        f"warm-ups {warm_cpu / cpu:.0%} (as a first run_one), the rest "
+        f"{1 - (in_runs_cpu + warm_cpu) / cpu:.0%}: "
+        f"Dask (scheduler, nannies, workers' event loops, round trips), start-up, report"
+    )
     print(
         f"  everything (start-up, FMU loads, Dask, report): {core:.3f} core-s per run, "
         f"{1 / core:.1f} runs per core-second; {b['simulate'][1] / core:.2f} of it the bare "
@@ -190,7 +211,8 @@ def main() -> None:
                 f"Basilisk Monte Carlo, VSCMG hub, 200 s at 0.05 s, {args.basilisk_runs} runs in "
                 f"one process: {per_run:.3f} core-s per run ({inside:.3f} s in its "
                 f"dynamics), {1 / per_run:.1f} runs per core-second; this campaign / "
-                f"Basilisk: {per_run / core:.2f}x the runs per core-second"
+                f"Basilisk: {per_run / core:.2f}x the runs per core-second (wall x "
+                f"workers), {per_run / (cpu / args.runs):.2f}x by the CPU of all its processes"
             )
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 
