@@ -205,12 +205,28 @@ class Kernel:
 
 def expect(module, steps: float) -> None:
     """A run of the model of ``module`` expects ``steps`` more steps (an FMU at its first
-    step: its stop time and step size).  With the calls its kernels made in this process
+    step: its stop time and step size).  With the calls its kernels (those it declared:
+    not a metric's, :func:`expect_rows`) made in this process
     before (a notebook's earlier runs) and RUNS runs (a campaign worker's), the calls
     expected of them; they switch to compiled now where that pays: from PAYS_AFTER calls
     when their compiled code is cached, from AFTER otherwise (compiling costs seconds a
     kernel).  Either way the results are the same bits."""
-    found = kernels(module).values()
+    found = [
+        kernel
+        for model, roles in _DECLARED.items()
+        if model.__module__ == module.__name__
+        for kernel in roles.values()
+    ]
+    _expect(found, steps)
+
+
+def expect_rows(kernel: Kernel, rows: int) -> None:
+    """``kernel`` is about to loop over ``rows`` rows of a run's history at once (a
+    metric's): the rows count as :func:`expect` counts a model's steps."""
+    _expect([kernel], rows)
+
+
+def _expect(found, steps: float) -> None:
     if not ENABLED or not found:
         return
     expected = steps * max(RUNS, 1) + max(kernel.calls for kernel in found)

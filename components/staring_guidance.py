@@ -95,7 +95,7 @@ import math
 import numpy as np
 
 from .flat import StateTable, hypot
-from .jit import floats, jitable, output_kernel, step_kernel
+from .jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
 from .rotations import (
@@ -220,14 +220,6 @@ def _tangent_frame(r_T, latitude: float) -> tuple:
     return (cl * cx, cl * sx, sl), (-sx, cx, 0.0), (-sl * cx, -sl * sx, cl)
 
 
-def _off_axis(r_T) -> float:
-    """The geodetic latitude of a point off the polar axis; ModelError at a pole."""
-    ok, latitude = _latitude(r_T)
-    if not ok:
-        raise ModelError(_at_pole(r_T))
-    return latitude
-
-
 def _at_pole(r_T) -> str:
     return (
         f"r_T_I = {list(r_T)} is on the Earth's axis: north (hence the "
@@ -254,17 +246,49 @@ def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
     """Azimuth (rad, from local north toward east, in (−π, π]) of the footprint direction
     of attitude q_BI at the target r_T_I: the ground line of the plane of the body
     boresight and :func:`footprint_axis`, in the target's WGS-84 tangent plane."""
+    return float(footprint_azimuths([q_BI], [r_T_I], boresight_B)[0])
+
+
+def footprint_azimuths(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """:func:`footprint_azimuth` of each row of q_BI (N, 4) and r_T_I (N, 3), in one
+    kernel call (a run's history: the kernel runs compiled where that pays,
+    components/jit.py); ModelError at the first row where it is undefined."""
     b = np.asarray(boresight_B, dtype=float)
     a_B = tuple(footprint_axis(b).tolist())
-    q = np.asarray(q_BI, dtype=float)
-    C_BI = dcm(tuple((q / math.sqrt(float(q @ q))).tolist()))
-    r_T = tuple(np.asarray(r_T_I, dtype=float).tolist())
-    up, east, north = _tangent_frame(r_T, _off_axis(r_T))
-    beam = rotate(_transposed(C_BI), tuple((b / math.sqrt(float(b @ b))).tolist()))
-    ok, azimuth = _azimuth(ground_line(beam, rotate(_transposed(C_BI), a_B), up), east, north)
-    if not ok:
-        raise ModelError(_GRAZING)
+    beam_B = tuple((b / math.sqrt(float(b @ b))).tolist())
+    q = np.array(q_BI, dtype=float, ndmin=2)
+    # each row's norm from its dot product with itself as ``row @ row`` takes it (the same
+    # BLAS dot, with fused multiply-adds on some CPUs): the rows footprint_azimuth always
+    # normalised, bit for bit
+    q_unit = q / np.sqrt(np.matmul(q[:, np.newaxis, :], q[:, :, np.newaxis]))[:, 0]
+    r_T = np.array(r_T_I, dtype=float, ndmin=2)
+    azimuth = np.empty(len(q))
+    expect_rows(_footprint_azimuths, len(q))
+    failed = _footprint_azimuths(q_unit, r_T, beam_B, a_B, azimuth)
+    if failed >= 0:
+        row = tuple(r_T[failed].tolist())
+        raise ModelError(_at_pole(row) if not _latitude(row)[0] else _GRAZING)
     return azimuth
+
+
+@kernel
+def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
+    """The footprint azimuth of each row (unit q_BI, the unit body boresight beam_B and
+    its footprint axis axis_B) into ``azimuth``; the first row where it is undefined (at a
+    pole, or the ground line vertical), or −1."""
+    q, r = floats(q_BI), floats(r_T_I)
+    for k in range(len(azimuth)):
+        r_T = (r[k][0], r[k][1], r[k][2])
+        ok, latitude = _latitude(r_T)
+        if not ok:
+            return k
+        up, east, north = _tangent_frame(r_T, latitude)
+        C_IB = _transposed(dcm(q[k]))
+        beam, axis = rotate(C_IB, beam_B), rotate(C_IB, axis_B)
+        ok, azimuth[k] = _azimuth(ground_line(beam, axis, up), east, north)
+        if not ok:
+            return k
+    return -1
 
 
 @jitable

@@ -34,6 +34,7 @@ bounds is at least the bound at the true worst time, so it keeps the confidence.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -87,6 +88,7 @@ def _exceeds_at_most(k: int, runs: int, level: float) -> float:
     return float(binom.cdf(k, runs, 1.0 - level))
 
 
+@functools.cache  # every run's verdict asks it again (a bisection of ~40 binomial CDFs)
 def runs_needed(level: float, confidence: float, exceedances: int = 0) -> int:
     """The fewest runs whose (n − k)-th smallest value bounds the ``level``-quantile with
     ``confidence``, k = ``exceedances`` runs allowed above it."""

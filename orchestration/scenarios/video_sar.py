@@ -42,7 +42,7 @@ from agilesat.components.cmg_steering import PSEUDO_INVERSE
 from agilesat.components.ephemeris import J2000, parse_epoch
 from agilesat.components.orbit_environment import OrbitEnvironment
 from agilesat.components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
-from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuth
+from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuths
 from agilesat.orchestration.mission import (
     Metric,
     Pointing,
@@ -279,7 +279,7 @@ def footprint_rotation(results) -> np.ndarray:
     b = boresight_B(results)
     q = results.vector("SatelliteDynamics.q_BI")
     r_T = results.vector("OrbitEnvironment.r_T_I")
-    azimuth = np.unwrap([footprint_azimuth(qk, rk, b) for qk, rk in zip(q, r_T)])
+    azimuth = np.unwrap(footprint_azimuths(q, r_T, b))
     return azimuth - azimuth[0]
 
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from agilesat.components import staring_guidance
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import (
     J2,
@@ -603,6 +604,23 @@ def test_line_of_sight_along_the_captured_footprint_direction():
 def test_bad_parameters_are_named(parameters, match):
     with pytest.raises(ModelError, match=match):
         started(consistent_inputs(R0, V0, T0), **parameters)
+
+
+def test_a_history_is_measured_row_by_row_bit_for_bit():
+    """footprint_azimuths normalises each row of a history at once, as
+    footprint_azimuth normalises one quaternion (q / √(q·q), the dot product as NumPy
+    takes it): the same azimuths, bit for bit, for any scale of the rows."""
+    rng = np.random.default_rng(8)
+    q = rng.normal(size=(500, 4)) * rng.uniform(0.5, 2.0, size=(500, 1))
+    r_T = np.array(geodetic_to_ecef(math.radians(48.0), math.radians(11.0), 500.0))
+    r_T = r_T + rng.normal(size=(500, 3)) * 1e3
+    beam, axis = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)
+    one = staring_guidance._footprint_azimuths.py_func
+    expected = np.empty(1)
+    for k, azimuth in enumerate(staring_guidance.footprint_azimuths(q, r_T)):
+        unit = q[k : k + 1] / math.sqrt(float(q[k] @ q[k]))
+        assert one(unit, r_T[k : k + 1], beam, axis, expected) == -1
+        assert azimuth == expected[0], k
 
 
 def test_footprint_azimuth_is_undefined_at_a_pole():

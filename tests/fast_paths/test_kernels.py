@@ -4,6 +4,7 @@ switch back to it, and a compile cache that survives fresh FMU extractions."""
 import json
 import math
 import re
+import types
 
 import numpy as np
 import pytest
@@ -447,6 +448,30 @@ def test_the_c_host_with_compiled_kernels_matches_the_master(fmus, c_host, tmp_p
     names, data = c.read_csv(tmp_path / "c.csv")
     m_names, m_data = c.master_results(ssd, c.STOP, tmp_path / "master.npz")
     assert np.array_equal(data, m_data[:, [m_names.index(n) for n in names]])
+
+
+def test_a_models_tier_is_decided_by_its_own_kernels_alone(monkeypatch):
+    """A kernel of the model's module that the model does not declare (a metric's, run on
+    a run's history) neither holds back nor moves the model's switch: its compiled code
+    is not in the FMU's cache, and need not be."""
+    monkeypatch.setattr(jit, "_DECLARED", {})
+    monkeypatch.setattr(jit, "ENABLED", True)
+    monkeypatch.setattr(jit, "RUNS", 0)
+    module = types.ModuleType("a_model_module")
+
+    class Modelled:
+        pass
+
+    Modelled.__module__ = module.__name__
+    module.model_step = jit.Kernel(lambda values, state, t, dt: 0, 10**9)
+    module.history = jit.Kernel(lambda rows: 0, 10**9)
+    jit._DECLARED[Modelled] = {"step": module.model_step}
+    monkeypatch.setattr(jit, "cached", lambda kernel: kernel is module.model_step)
+    jit.expect(module, jit.PAYS_AFTER)
+    assert module.model_step._left == 0  # compiled from the run's first step
+    assert module.history._left == 10**9
+    jit.expect_rows(module.history, jit.PAYS_AFTER - 1)  # a short history: its Python
+    assert module.history._left == 10**9
 
 
 _TIER = """

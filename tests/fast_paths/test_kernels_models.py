@@ -492,11 +492,11 @@ def test_quat_of_rows_compiled_is_the_python_bit_for_bit():
 def test_every_model_kernel_compiles():
     names = sorted(k.__name__ for k in ALL_KERNELS)
     assert names == [
-        "cluster_output", "cluster_step", "controller_output", "estimator_output",
-        "estimator_step", "flywheel_output", "flywheel_step", "gimbals_output", "gimbals_step",
-        "guidance_output", "guidance_step", "gyro_output", "gyro_step", "orbit_output",
-        "pitch_output", "steering_output", "sweep_output", "torques_output", "tracker_output",
-        "tracker_step",
+        "_footprint_azimuths", "cluster_output", "cluster_step", "controller_output",
+        "estimator_output", "estimator_step", "flywheel_output", "flywheel_step",
+        "gimbals_output", "gimbals_step", "guidance_output", "guidance_step", "gyro_output",
+        "gyro_step", "orbit_output", "pitch_output", "steering_output", "sweep_output",
+        "torques_output", "tracker_output", "tracker_step",
     ]  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
@@ -582,3 +582,29 @@ def test_a_restored_state_calls_sgp4_on_its_own_record():
         map(float, other._sgp4_entry)
     )
     assert "_sgp4_entry" not in state[2]
+
+
+@needs_numba
+def test_footprint_azimuths_compiled_is_the_python_bit_for_bit():
+    """The footprint azimuth of a whole attitude history (the video_sar metric's), compiled
+    and in Python: the same bits, and the same first row where it is undefined."""
+    kernel = staring_guidance._footprint_azimuths
+    orbit = OrbitEnvironment(**video_sar.ORBIT)
+    orbit.start(0.0)
+    r_T = []
+    for k in range(300):
+        orbit.t = k * 0.5
+        orbit.output()
+        r_T.append(orbit.get("r_T_I"))
+    r_T = np.array(r_T)
+    q = np.random.default_rng(5).normal(size=(300, 4))
+    q /= np.linalg.norm(q, axis=1)[:, np.newaxis]
+    beam, axis = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)
+    compiled, readable = np.empty(300), np.empty(300)
+    assert kernel.compiled(q, r_T, beam, axis, compiled) == -1
+    assert kernel.py_func(q, r_T, beam, axis, readable) == -1
+    assert compiled.tobytes() == readable.tobytes()
+    assert np.ptp(compiled) > 1.0
+    r_T[120] = (0.0, 0.0, 6356752.3)  # at a pole: undefined
+    assert kernel.compiled(q, r_T, beam, axis, compiled) == 120
+    assert kernel.py_func(q, r_T, beam, axis, readable) == 120

@@ -7,10 +7,17 @@ test; timings on a shared machine vary, compare the ratios within one run).
 - bare: simulate() of video_sar (its shipped dispersions' nominal run) in a fresh process,
   compiled (AGILESAT_JIT_AFTER=0), after a warm-up run: CPU and wall per run, best of 5;
   and run(), what a campaign worker makes of each run (metrics, no files);
+- a worker's first run, in a fresh process as a worker makes it (AGILESAT_JIT_RUNS = its
+  share): importing numba and SciPy's statistics, then the first run_one (FMU loads, the
+  compiled kernels' loads) and the second; what the campaign's warm-up at worker start-up
+  (worker.warm_up) takes out of the first run;
 - the campaign, as a user starts it: ``agilesat campaign video_sar --runs N`` on local
   workers (its shipped dispersions), timed from the command's start to its end (cluster
   start-up, every FMU load, the report); the runs' own times from its journal: each
   worker's first run and the mean, against the bare run();
+- the CPU of all the campaign's processes (client, scheduler, nannies, workers), which
+  the machine's other load does not inflate, split into the runs, the warm-ups and the
+  rest (Dask, start-up, report);
 - core-seconds per run (wall × workers / runs) and runs per core-second, beside
   Basilisk's Monte Carlo of its VSCMG hub over the same 200 s at 0.05 s (dynamics only, no
   flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given.
@@ -23,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -47,6 +55,22 @@ for name, once in (
         best[name] = min(best.get(name, (wall, cpu)), (wall, cpu))
 print(json.dumps(best))
 """
+FIRST = """
+import json, os, sys, time
+os.environ["AGILESAT_JIT_RUNS"] = sys.argv[1]
+from agilesat.orchestration.campaign.worker import run_one
+def timed(once):
+    wall, cpu = time.perf_counter(), time.process_time()
+    once()
+    return time.perf_counter() - wall, time.process_time() - cpu
+out = {
+    "numba": timed(lambda: __import__("numba")),
+    "scipy.stats": timed(lambda: __import__("scipy.stats")),
+}
+for k in range(2):
+    out[f"run {k}"] = timed(lambda: run_one(k, "video_sar", {}, None, None, None, [], 0))
+print(json.dumps(out))
+"""
 TOOLS = Path(__file__).resolve().parent
 
 
@@ -61,7 +85,21 @@ def bare() -> dict:
     return json.loads(out.splitlines()[-1])
 
 
-def campaign(runs: int, workers: int, out: Path) -> tuple[float, list[dict]]:
+def first_run(share: int) -> dict:
+    out = subprocess.run(
+        [sys.executable, "-c", FIRST, str(share)], check=True, capture_output=True, text=True
+    ).stdout
+    return json.loads(out.splitlines()[-1])
+
+
+def children_cpu() -> float:
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def campaign(runs: int, workers: int, out: Path) -> tuple[float, float, list[dict]]:
+    """(wall, CPU of all its processes: client, scheduler, nannies, workers, records)."""
+    cpu = children_cpu()
     began = time.perf_counter()
     subprocess.run(
         [sys.executable, "-m", "agilesat.orchestration", "campaign", "video_sar"]
@@ -69,9 +107,9 @@ def campaign(runs: int, workers: int, out: Path) -> tuple[float, list[dict]]:
         check=True,
         capture_output=True,
     )
-    wall = time.perf_counter() - began
+    wall, cpu = time.perf_counter() - began, children_cpu() - cpu
     records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
-    return wall, records
+    return wall, cpu, records
 
 
 def basilisk(python: str, runs: int) -> tuple[float, float] | None:
@@ -101,8 +139,18 @@ def main() -> None:
         f"({b['simulate'][0]:.3f} s wall), run() {b['run'][1]:.3f} s CPU "
         f"({b['run'][0]:.3f} s wall) per 200-s run"
     )
+    share = -(-args.runs // args.workers)
+    f = first_run(share)
+    bare_cpu = b["simulate"][1]
+    print(
+        f"a worker's first run, fresh process (wall, CPU): import numba {f['numba'][0]:.3f} s, "
+        f"{f['numba'][1]:.3f} s; import scipy.stats {f['scipy.stats'][0]:.3f} s, "
+        f"{f['scipy.stats'][1]:.3f} s; first run_one {f['run 0'][0]:.3f} s, "
+        f"{f['run 0'][1]:.3f} s (FMU loads, kernel loads); second {f['run 1'][0]:.3f} s, "
+        f"{f['run 1'][1]:.3f} s = {f['run 1'][1] / bare_cpu:.2f}x the bare simulate()'s CPU"
+    )
     with tempfile.TemporaryDirectory() as tmp:
-        wall, records = campaign(args.runs, args.workers, Path(tmp) / "c")
+        wall, cpu, records = campaign(args.runs, args.workers, Path(tmp) / "c")
     statuses = {}
     for r in records:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
@@ -111,6 +159,9 @@ def main() -> None:
         by_pid.setdefault(r["pid"], []).append(r["seconds"])
     mean = sum(r["seconds"] for r in records) / len(records)
     firsts = [seconds[0] for seconds in by_pid.values()]
+    warm = [r["warm_up_seconds"] for r in records if "warm_up_seconds" in r]
+    after_first = [s for seconds in by_pid.values() for s in seconds[1:]]
+    steady = sum(after_first) / max(1, len(after_first))
     core = wall * args.workers / args.runs
     print(
         f"campaign: {args.runs} runs on {args.workers} workers in {wall:.1f} s "
@@ -122,6 +173,30 @@ def main() -> None:
         f"simulate(), {mean / b['run'][0]:.2f}x the bare run(); each worker's first run "
         + ", ".join(f"{s:.3f} s ({s / b['simulate'][0]:.2f}x)" for s in firsts)
         + " (target <= 1.2x from the first run)"
+    )
+    print(
+        "  moved to the workers' start-up (a warm-up run each, before the first task): "
+        + (", ".join(f"{w:.3f} s" for w in warm) or "none")
+        + f"; the runs after each worker's first: mean {steady:.3f} s "
+        f"= {steady / b['simulate'][0]:.2f}x the bare simulate()"
+    )
+    in_runs = sum(r["seconds"] for r in records) / args.workers
+    print(
+        f"  the campaign's wall {wall:.1f} s: {in_runs:.1f} s in runs (per worker), "
+        f"{sum(warm) / args.workers:.1f} s warming up, the rest "
+        f"{wall - in_runs - sum(warm) / args.workers:.1f} s: Python and Dask start-up, "
+        f"Dask's round trips, the report ({(wall - in_runs) * args.workers / args.runs:.4f} "
+        "core-s per run outside the runs)"
+    )
+    in_runs_cpu = args.runs * f["run 1"][1]  # each run as a warm worker's run_one
+    warm_cpu = len(warm) * f["run 0"][1]  # each warm-up as a fresh process's first run_one
+    print(
+        f"  CPU of all its processes (load-independent): {cpu / args.runs:.3f} core-s per "
+        f"run = {cpu / args.runs / bare_cpu:.2f}x the bare simulate()'s CPU; of it the "
+        f"runs (as a warm run_one, {f['run 1'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the "
+        f"warm-ups {warm_cpu / cpu:.0%} (as a first run_one), the rest "
+        f"{1 - (in_runs_cpu + warm_cpu) / cpu:.0%}: "
+        f"Dask (scheduler, nannies, workers' event loops, round trips), start-up, report"
     )
     print(
         f"  everything (start-up, FMU loads, Dask, report): {core:.3f} core-s per run, "
@@ -136,7 +211,8 @@ def main() -> None:
                 f"Basilisk Monte Carlo, VSCMG hub, 200 s at 0.05 s, {args.basilisk_runs} runs in "
                 f"one process: {per_run:.3f} core-s per run ({inside:.3f} s in its "
                 f"dynamics), {1 / per_run:.1f} runs per core-second; this campaign / "
-                f"Basilisk: {per_run / core:.2f}x the runs per core-second"
+                f"Basilisk: {per_run / core:.2f}x the runs per core-second (wall x "
+                f"workers), {per_run / (cpu / args.runs):.2f}x by the CPU of all its processes"
             )
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 
