@@ -7,7 +7,13 @@ marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±v
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
 (a dotted line: the paper's value beside ours), ``statistic=(value, label)`` (a dash-dotted
 black line: the statistic a requirement compares), ``bottom=y`` (the axis starts there),
-``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
+``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel),
+``at=(x, label)`` (a solid black vertical line: an instant a metric gives, such as a
+settling time), ``paper_at=(x, label)`` (a dotted vertical line: the paper's instant),
+``events=(xs, label)`` (thin grey vertical lines: payload reversals, say).
+``panels(..., phases=[(name, start, end), ...])`` marks the phases of a maneuver on every
+axes (dotted grey lines at their boundaries) and names them above the top axes.
+Axes that do not share x each get the x label.
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 
@@ -77,6 +83,22 @@ def drawing(before=None):
         _drawing.reset(token)
 
 
+#: (path, Figure) of each figure written while :func:`kept` (per thread)
+_kept: ContextVar[dict | None] = ContextVar("agilesat_kept_figures", default=None)
+
+
+@contextlib.contextmanager
+def kept():
+    """Figures made inside (in this thread) are kept, as {file name: matplotlib Figure} in
+    the dict yielded: what they show can be asked of their axes (the tests do)."""
+    figures: dict = {}
+    token = _kept.set(figures)
+    try:
+        yield figures
+    finally:
+        _kept.reset(token)
+
+
 def written() -> tuple[str, ...]:
     """The formats figures are written in now."""
     return _written.get()
@@ -88,15 +110,23 @@ def formats(path) -> list[Path]:
 
 
 def lines(
-    path: Path, title: str, t, series: dict, ylabel: str, xlabel: str = "time [s]", **marks
+    path: Path,
+    title: str,
+    t,
+    series: dict,
+    ylabel: str,
+    xlabel: str = "time [s]",
+    phases=(),
+    **marks,
 ) -> Path:
     """One axes: each named series against time (or ``xlabel``)."""
-    return panels(path, title, [(t, series, ylabel, marks)], xlabel)
+    return panels(path, title, [(t, series, ylabel, marks)], xlabel, phases)
 
 
-def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
+def panels(path: Path, title: str, rows, xlabel: str = "time [s]", phases=()) -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
-    fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
+    shared = len({id(r[0]) for r in rows}) == 1
+    fig, axes = _subplots(len(rows), sharex=shared)
     for ax, row in zip(axes[:, 0], rows):
         t, series, ylabel = row[:3]
         for k, (name, values) in enumerate(series.items()):
@@ -111,7 +141,41 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         _legend(ax)
-    return _save(fig, axes, path, title, xlabel)
+        if not shared:
+            ax.set_xlabel(xlabel)
+    _phases(axes[:, 0], phases)
+    return _save(fig, axes, path, title, xlabel, title_pad=14.0 if phases else None)
+
+
+def _phases(axes, phases) -> None:
+    """The phases [(name, start, end), ...] of a maneuver: dotted grey lines at their
+    boundaries on every axes, each phase's name above the top axes, centred on it."""
+    if not phases:
+        return
+    from matplotlib.transforms import blended_transform_factory
+
+    boundaries = sorted({end for _, _, end in phases[:-1]})  # between phases
+    for ax in axes:
+        low, high = ax.get_xlim()
+        for x in boundaries:
+            if low < x < high:
+                ax.axvline(x, color="0.5", linestyle=":", linewidth=0.9, zorder=0.5)
+    top = axes[0]
+    low, high = top.get_xlim()
+    on_x = blended_transform_factory(top.transData, top.transAxes)
+    for name, start, end in phases:
+        start, end = max(start, low), min(end, high)
+        if start < end:
+            top.text(
+                (start + end) / 2,
+                1.01,
+                name,
+                transform=on_x,
+                ha="center",
+                va="bottom",
+                fontsize=7,
+                color="0.35",
+            )
 
 
 def _legend(ax) -> None:
@@ -149,7 +213,17 @@ FAR = 20.0
 
 
 def _mark(
-    ax, span: float, limit=None, band=None, paper=None, statistic=None, bottom=None, log=False
+    ax,
+    span: float,
+    limit=None,
+    band=None,
+    paper=None,
+    statistic=None,
+    bottom=None,
+    log=False,
+    at=None,
+    paper_at=None,
+    events=None,
 ) -> None:
     """The marks of a panel (module docstring) whose series reach ``span`` at most.  A
     limit far above the data (:data:`FAR` times) would flatten it: on a non-negative
@@ -183,6 +257,16 @@ def _mark(
     if statistic is not None:
         value, text = statistic
         ax.axhline(value, color="black", linestyle="-.", linewidth=1, label=text)
+    if at is not None:
+        ax.axvline(at[0], color="black", linestyle="-", linewidth=1, label=at[1])
+    if paper_at is not None:
+        ax.axvline(paper_at[0], color="0.35", linestyle=":", linewidth=1.2, label=paper_at[1])
+    if events is not None:
+        xs, text = events
+        for k, x in enumerate(xs):
+            ax.axvline(
+                x, color="0.6", linestyle="-.", linewidth=0.7, label=text if k == 0 else None
+            )
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
     if log:
@@ -305,7 +389,7 @@ def _subplots(n: int, sharex: bool = False):
     return fig, axes
 
 
-def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
+def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Path:
     """Label the stacked axes, lay them out once (:mod:`.figure_layout`), write the PNG
     from that one Agg drawing and each other format with its own renderer."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -315,7 +399,7 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     if watched is not None and watched[1] is not None:
         watched[1]()
     axes[-1, 0].set_xlabel(xlabel)
-    axes[0, 0].set_title(title)
+    axes[0, 0].set_title(title, pad=title_pad)  # above the phases' names, if any
     figure_layout.fixed(fig, axes, title)
     canvas = FigureCanvasAgg(fig)
     figure_layout.draw(fig, axes, canvas)
@@ -325,6 +409,8 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
         fig.savefig(target, dpi=DPI)
     if watched is not None:
         watched[0].extend([png, *others])
+    if _kept.get() is not None:
+        _kept.get()[Path(path).name] = fig
     return Path(path)
 
 
