@@ -1,0 +1,118 @@
+"""What the figures mark (issue #28): limits, thresholds, the instants metrics give, the
+phases of a maneuver, log axes where a quantity spans decades; asked of the matplotlib
+objects the figures are made of (:func:`plots.kept`)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from agilesat.orchestration.output import plots
+
+ARCSEC = math.pi / 180 / 3600
+
+
+def _horizontal(ax) -> list[float]:
+    """The y of every horizontal line drawn across the axes (axhline)."""
+    return [
+        line.get_ydata()[0]
+        for line in ax.lines
+        if len(set(line.get_xdata())) == 2 and len(set(line.get_ydata())) == 1
+    ]
+
+
+def _vertical(ax) -> list[float]:
+    """The x of every vertical line drawn across the axes (axvline)."""
+    return [
+        line.get_xdata()[0]
+        for line in ax.lines
+        if len(set(line.get_xdata())) == 1 and len(line.get_xdata()) == 2
+    ]
+
+
+def test_axes_of_their_own_x_each_say_what_x_is(tmp_path):
+    t1, t2 = np.linspace(0, 10, 11), np.linspace(10, 20, 11)
+    with plots.kept() as figures:
+        plots.panels(
+            tmp_path / "two.png", "two spans", [(t1, {"a": t1}, "a [m]"), (t2, {"b": t2}, "b [m]")]
+        )
+    assert [ax.get_xlabel() for ax in figures["two.png"].axes] == ["time [s]", "time [s]"]
+
+
+def test_phases_are_marked_on_every_axes_and_named_above_the_top_one(tmp_path):
+    t = np.linspace(0, 30, 301)
+    phases = [("1 accel.", 0.0, 10.0), ("2 coast", 10.0, 20.0), ("3 hold", 20.0, math.inf)]
+    with plots.kept() as figures:
+        plots.panels(
+            tmp_path / "p.png",
+            "phases",
+            [(t, {"x": t}, "x [m]"), (t, {"y": -t}, "y [m]")],
+            phases=phases,
+        )
+    top, bottom = figures["p.png"].axes
+    for ax in (top, bottom):
+        assert sorted(_vertical(ax)) == [10.0, 20.0]  # between phases, not at the start
+    assert [text.get_text() for text in top.texts] == ["1 accel.", "2 coast", "3 hold"]
+    assert not bottom.texts
+
+
+def test_an_instant_the_papers_instant_and_events_are_vertical_lines_in_the_legend(tmp_path):
+    t = np.linspace(0, 10, 101)
+    with plots.kept() as figures:
+        plots.lines(
+            tmp_path / "v.png",
+            "instants",
+            t,
+            {"x": t},
+            "x [m]",
+            at=(4.0, "ours"),
+            paper_at=(5.0, "paper"),
+            events=((1.0, 2.0, 3.0), "reversal"),
+        )
+    ax = figures["v.png"].axes[0]
+    assert sorted(_vertical(ax)) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert {"ours", "paper", "reversal"} <= {t.get_text() for t in ax.get_legend().get_texts()}
+
+
+@pytest.mark.slow
+def test_scan_pitch_figures_mark_phases_settling_and_a_log_singularity_measure(
+    scan_pitch_run, tmp_path
+):
+    from agilesat.orchestration.scenarios.scan_pitch import PROFILE, SCENARIO
+
+    _, _, summary, results = scan_pitch_run
+    with plots.kept() as figures:
+        SCENARIO.draw(results, tmp_path)
+    imaging, settling = figures["fig06_imaging_and_settling.png"].axes
+    assert imaging.get_xlabel() == settling.get_xlabel() == "time [s]"
+    assert settling.get_yscale() == "log"
+    assert _horizontal(settling) == [pytest.approx(0.01)]  # °/s: stable below it
+    settled = summary["metrics"]["settling_time"]["value"]
+    assert sorted(_vertical(settling)) == pytest.approx(sorted([settled, 105.0]))
+    assert figures["fig10_singularity.png"].axes[0].get_yscale() == "log"
+    for name in ("fig04_pitch.png", "fig07_gimbal_rates.png", "fig11_output_torque.png"):
+        for ax in figures[name].axes:
+            assert sorted(_vertical(ax)) == pytest.approx(PROFILE.times[:4])
+
+
+@pytest.mark.slow
+def test_payload_sweep_figures_draw_the_wheel_limits_and_the_errors_in_arcsec_on_log_axes(
+    fmus, tmp_path
+):
+    from agilesat.orchestration.runner import run
+    from agilesat.orchestration.scenarios.payload_sweep import SCENARIO
+
+    results, _ = run("payload_sweep", figures=False, stop=60.0)
+    with plots.kept() as figures:
+        SCENARIO.draw(results, tmp_path)
+    torque, momentum = figures["fig09_wheel.png"].axes
+    assert sorted(_horizontal(torque)) == [-0.2, 0.2]  # N·m, the paper's wheel
+    assert sorted(_horizontal(momentum)) == [-12.0, 12.0]  # N·m·s, the HR12's
+    accuracy, stability = figures["fig08_pointing.png"].axes
+    assert accuracy.get_yscale() == stability.get_yscale() == "log"
+    assert _horizontal(accuracy) == [pytest.approx(0.032 * 3600)]  # arcsec
+    assert _horizontal(stability) == [pytest.approx(0.006 * 3600)]  # arcsec/s
+    assert "arcsec" in accuracy.get_ylabel()
+    zoomed = figures["fig05_payload_momentum.png"].axes[1]
+    reversals = _vertical(zoomed)  # a stroke: 30° at 6 °/s, and half the 1 s turnaround
+    assert np.diff(reversals) == pytest.approx(5.5, abs=0.06)
