@@ -13,7 +13,8 @@ settling time), ``paper_at=(x, label)`` (a dotted vertical line: the paper's ins
 ``events=(xs, label)`` (thin grey vertical lines: payload reversals, say).
 ``panels(..., phases=[(name, start, end), ...])`` marks the phases of a maneuver on every
 axes (dotted grey lines at their boundaries) and names them above the top axes.
-Axes that do not share x each get the x label.
+Axes that do not share x each get the x label.  The overview of a run leaves out Euler rates
+within :data:`GIMBAL_LOCK_MARGIN` of gimbal lock (shaded, and the legend says so).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 
@@ -24,6 +25,7 @@ figures never loads it).
 from __future__ import annotations
 
 import contextlib
+import math
 import textwrap
 from contextvars import ContextVar
 from pathlib import Path
@@ -320,6 +322,15 @@ def signals(
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
+            locked = _near_gimbal_lock(results, name)
+            if locked is not None:
+                values = np.where(locked[:, None], np.nan, values)
+                _shade(
+                    ax,
+                    results.time,
+                    locked,
+                    f"not shown: within {math.degrees(GIMBAL_LOCK_MARGIN):g}° of gimbal lock (θ = ±90°)",
+                )
             columns = results.columns(name)
             for column, v in zip(columns, values.T):
                 element = _element(name, column, len(columns))
@@ -342,6 +353,38 @@ def signals(
         ax.grid(True, alpha=0.3)
         _legend(ax)
     return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
+
+
+#: Euler rates within this of the 1-2-3 sequence's gimbal lock (θ = ±90°) are not drawn:
+#: they grow as 1/cos θ and a pass near the lock would flatten the rest of the panel
+GIMBAL_LOCK_MARGIN = math.radians(5.0)
+
+
+def _near_gimbal_lock(results, name: str):
+    """For Euler rates ("…euler_rate_XY", beside their angles "…euler_XY", 1-2-3): the
+    rows within :data:`GIMBAL_LOCK_MARGIN` of θ = ±90°; None for any other variable."""
+    import numpy as np
+
+    instance, _, variable = name.rpartition(".")
+    angles = f"{instance}.{variable.replace('euler_rate', 'euler', 1)}"
+    if not variable.startswith("euler_rate") or angles not in results:
+        return None
+    theta = results.vector(angles)[:, 1]
+    return np.abs(np.cos(theta)) < math.sin(GIMBAL_LOCK_MARGIN)
+
+
+def _shade(ax, t, rows, text: str) -> None:
+    """Grey spans over the runs of ``rows`` (a Boolean per sample), one legend entry."""
+    import numpy as np
+
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], rows.astype(int), [0]))))
+    for k, (first, end) in enumerate(zip(edges[::2], edges[1::2])):
+        ax.axvspan(
+            t[max(first - 1, 0)],
+            t[min(end, len(t) - 1)],
+            color="0.85",
+            label=text if k == 0 else None,
+        )
 
 
 def _element(name: str, column: str, n: int) -> str:

@@ -116,3 +116,28 @@ def test_payload_sweep_figures_draw_the_wheel_limits_and_the_errors_in_arcsec_on
     zoomed = figures["fig05_payload_momentum.png"].axes[1]
     reversals = _vertical(zoomed)  # a stroke: 30° at 6 °/s, and half the 1 s turnaround
     assert np.diff(reversals) == pytest.approx(5.5, abs=0.06)
+
+
+def test_overview_leaves_out_euler_rates_near_gimbal_lock_and_says_so(tmp_path):
+    from agilesat.orchestration.output.results import Results
+
+    t = np.linspace(0.0, 80.0, 8001)
+    theta = np.radians(50.0 + t)  # through θ = 90° at t = 40 s
+    theta_dot = np.full_like(t, math.radians(1.0))
+    spike = 0.01 / np.maximum(np.abs(np.cos(theta)), 1e-9)  # φ̇ grows as 1/cos θ
+    names = ["time"] + [f"S.euler_BO[{i}]" for i in (1, 2, 3)]
+    names += [f"S.euler_rate_BO[{i}]" for i in (1, 2, 3)]
+    zero = np.zeros_like(t)
+    data = np.column_stack((t, zero, theta, zero, spike, theta_dot, -spike))
+    units = {n: ("rad" if "euler_BO" in n else "rad/s") for n in names[1:]}
+    results = Results(names, data, {"units": units})
+    with plots.kept() as figures:
+        plots.overview(results, tmp_path)
+    angles, rates = figures["overview_S.png"].axes
+    near, far = np.abs(t - 40.0) < 4.99, np.abs(t - 40.0) > 5.01  # 5° of the lock at 1 °/s
+    for line in rates.lines:
+        y = line.get_ydata()
+        assert np.isnan(y[near]).all() and np.isfinite(y[far]).all()
+    assert rates.get_ylim()[1] < 20  # °/s: ±6.6 °/s 5° from the lock (and the legend) set it
+    assert "gimbal lock" in " ".join(t.get_text() for t in rates.get_legend().get_texts())
+    assert all(np.isfinite(line.get_ydata()).all() for line in angles.lines)
