@@ -329,7 +329,8 @@ def signals(
                     ax,
                     results.time,
                     locked,
-                    f"not shown: within {math.degrees(GIMBAL_LOCK_MARGIN):g}° of gimbal lock (θ = ±90°)",
+                    f"not shown: within {math.degrees(GIMBAL_LOCK_MARGIN):g}° of gimbal lock "
+                    "(θ = ±90°)",
                 )
             columns = results.columns(name)
             for column, v in zip(columns, values.T):
