@@ -142,16 +142,17 @@ def run_campaign(
         if not all(isinstance(m, dict) for m in metrics.values()):
             raise CampaignFileError(f"{out / 'metrics.json'}: expected an object per metric")
     before = collections.Counter(str(r.get("status")) for r in done.values())
+    if len(done) < plan.total:  # before the bar is drawn: not on its line
+        print(
+            f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
+            f"grid points), {len(done)} already made in {out}",
+            file=sys.stderr,
+            flush=True,
+        )
     bar = report.Progress(plan.total, len(done), enabled=bool(progress), before=before)
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
     lost, lost_scheduler = [], None
     try:
-        if len(done) < plan.total:
-            print(
-                f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
-                f"grid points), {len(done)} already made in {out}",
-                file=sys.stderr,
-            )
         with engine.cluster(workers, scheduler, listen, dashboard) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
             _, lost, _ = engine.execute(plan, out, client, done, bar, metrics)
