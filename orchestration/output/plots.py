@@ -146,7 +146,7 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]", phases=()) ->
         if not shared:
             ax.set_xlabel(xlabel)
     _phases(axes[:, 0], phases)
-    return _save(fig, axes, path, title, xlabel, title_pad=14.0 if phases else None)
+    return _save(fig, axes, path, title, xlabel, **({"title_pad": 14.0} if phases else {}))
 
 
 def _phases(axes, phases) -> None:

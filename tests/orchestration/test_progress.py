@@ -3,6 +3,8 @@ bar, not into it (issue #28)."""
 
 import io
 
+import pytest
+
 from agilesat.orchestration.output.progress import Progress
 
 
@@ -39,6 +41,7 @@ def test_a_message_while_the_bar_is_shown_gets_a_line_of_its_own():
     assert said == ["  FMU: t=0.5 s CmgCluster [Warning] rate limit"]  # nothing of the bar
 
 
+@pytest.mark.slow
 def test_the_runner_makes_a_progress_count_simulated_seconds(fmus):
     from agilesat.orchestration.runner import run
 
