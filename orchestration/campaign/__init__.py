@@ -258,7 +258,8 @@ def finish(
 
         signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
-        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
+        bounds = plan.scenario.bounds_for(plan.variant) if plan.scenario else []
+        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
         figures += campaign_figures(
             plan.ensemble, signals, plan.signals, time_axis(plan), summary["ensemble"], out
         )

@@ -31,6 +31,7 @@ from agilesat.orchestration.mission import (
     Metric,
     Pointing,
     Scenario,
+    SignalBound,
     System,
     Variant,
     at_most,
@@ -510,6 +511,19 @@ REQUIREMENTS = [
 ]
 
 
+#: what a campaign's envelopes of the recorded signals draw: the stability requirement on
+#: the rate relative to the orbit frame, about every body axis (pointing_stability)
+BOUNDS = [
+    SignalBound(
+        "SatelliteDynamics.w_BO_B",
+        -STABILITY,
+        STABILITY,
+        f"required within ±{STABILITY / DEG:g} °/s",
+        requirement="pointing_stability",
+    )
+]
+
+
 SCENARIO = Scenario(
     "payload_sweep",
     "Two symmetric swinging payloads compensated by a reaction wheel",
@@ -520,4 +534,5 @@ SCENARIO = Scenario(
     figures=figures,
     diagnose=diagnose,
     systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
+    bounds=BOUNDS,
 )

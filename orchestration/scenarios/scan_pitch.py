@@ -30,6 +30,7 @@ from agilesat.orchestration.mission import (
     NotEvaluable,
     Pointing,
     Scenario,
+    SignalBound,
     System,
     Variant,
     lines,
@@ -624,6 +625,29 @@ def figures(results, out_dir) -> list:
     ]
 
 
+#: what a campaign's envelopes of the recorded signals draw: the imaging rate's band over
+#: the imaging phase (the Euler pitch rate relative to O, as the metric reads it) and the
+#: gimbal rate limit
+BOUNDS = [
+    SignalBound(
+        "SatelliteDynamics.euler_rate_BO[2]",
+        PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
+        PROFILE.scan_rate + SCAN_RATE_TOLERANCE,
+        f"required imaging rate {PROFILE.scan_rate / DEG:g} ± {SCAN_RATE_TOLERANCE / DEG:g} °/s",
+        start=PROFILE.times[2],
+        stop=PROFILE.times[3],
+        requirement="imaging_pitch_rate_mean",
+    ),
+    SignalBound(
+        "CmgCluster.delta_dot",
+        -RATE_LIMIT,
+        RATE_LIMIT,
+        f"gimbal rate limit ±{RATE_LIMIT:g} rad/s",
+        limit=True,
+    ),
+]
+
+
 SCENARIO = Scenario(
     "scan_pitch",
     "CMG pitch maneuver 120° → 0° in 100 s with a −0.8 °/s scanning phase",
@@ -634,4 +658,5 @@ SCENARIO = Scenario(
     figures=figures,
     diagnose=diagnose,
     systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
+    bounds=BOUNDS,
 )

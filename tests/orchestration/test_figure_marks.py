@@ -141,3 +141,34 @@ def test_overview_leaves_out_euler_rates_near_gimbal_lock_and_says_so(tmp_path):
     assert rates.get_ylim()[1] < 20  # °/s: ±6.6 °/s 5° from the lock (and the legend) set it
     assert "gimbal lock" in " ".join(t.get_text() for t in rates.get_legend().get_texts())
     assert all(np.isfinite(line.get_ydata()).all() for line in angles.lines)
+
+
+def test_campaign_envelopes_draw_the_scenarios_bounds_of_the_signal(tmp_path, monkeypatch):
+    """A requirement on a signal as a green band over its window, a device limit as dashed
+    red lines; a variant that does not judge the requirement draws no band."""
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    from agilesat.orchestration.campaign import report
+    from agilesat.orchestration.scenarios.payload_sweep import SCENARIO as PAYLOAD
+    from agilesat.orchestration.scenarios.scan_pitch import SCENARIO as SCAN
+
+    saved = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: saved.append(ax) or path)
+    t = np.linspace(0.0, 150.0, 151)
+    signals = np.random.default_rng(0).normal(0.0, 1e-3, (5, 2, len(t)))
+    names = ["SatelliteDynamics.euler_rate_BO[2]", "CmgCluster.delta_dot[4]"]
+    report.envelopes(signals, names, {}, t, tmp_path, SCAN.bounds_for("literal_spin"))
+    rate, gimbal = saved
+    band = [c for c in rate.collections if isinstance(c, PolyCollection)][-1]
+    x, y = band.get_paths()[0].vertices.T
+    deg = math.pi / 180
+    assert (x.min(), x.max()) == pytest.approx((110 / 3, 290 / 3))  # t3, t4 of the maneuver
+    assert (y.min(), y.max()) == pytest.approx((-0.82 * deg, -0.78 * deg))
+    limits = [c for c in gimbal.collections if isinstance(c, LineCollection)]
+    assert sorted(s[0][1] for s in limits[0].get_segments()) == [-0.6, 0.6]  # rad/s
+    saved.clear()
+    w = ["SatelliteDynamics.w_BO_B[3]"]
+    report.envelopes(signals[:, :1], w, {}, t, tmp_path, PAYLOAD.bounds_for(None))
+    report.envelopes(signals[:, :1], w, {}, t, tmp_path, PAYLOAD.bounds_for("no_control"))
+    judged, not_judged = (len(ax.collections) for ax in saved)
+    assert judged == not_judged + 1  # the ±0.006 °/s band, not where it is not judged
