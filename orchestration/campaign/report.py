@@ -207,10 +207,13 @@ def display(meta: dict) -> tuple[float, str]:
     return (1.0, pretty(unit)) if factor is None else (factor, pretty(shown))
 
 
-def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
+def histograms(
+    array: np.ndarray, catalog: dict, out: Path, nominal: dict | None = None
+) -> list[Path]:
     """A histogram of each metric that varies over the runs, titled by its description,
-    with its requirement's bounds and the paper's value (a constant metric has none: one
-    value says it all)."""
+    with its requirement's bounds, the paper's value and the nominal run's (``nominal``:
+    {metric: SI value}); a constant metric has none: one value says it all.  The legend
+    stands beside the axes, off the bars."""
     from ..output.plots import plt
 
     paths = []
@@ -219,7 +222,7 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
         if not len(values) or np.ptp(values) <= 1e-9 * max(np.abs(values).max(), 1e-300):
             continue
         scale, unit = display(meta)
-        fig, ax = plt.subplots(figsize=(6, 3.6))
+        fig, ax = plt.subplots(figsize=(7.5, 3.6))
         ax.hist(
             values * scale,
             bins=min(50, max(5, int(np.sqrt(len(values))))),
@@ -232,8 +235,10 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             )
         if meta.get("paper") is not None:
             ax.axvline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
+        if (nominal or {}).get(name) is not None:
+            ax.axvline(nominal[name] * scale, color="black", linewidth=1.2, label="nominal run")
         if ax.get_legend_handles_labels()[1]:
-            ax.legend(fontsize=8)
+            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         ax.set_xlabel(f"{name} [{unit}]" if unit else name)
         ax.set_ylabel("runs")
         missing = len(array) - len(values)

@@ -172,3 +172,46 @@ def test_campaign_envelopes_draw_the_scenarios_bounds_of_the_signal(tmp_path, mo
     report.envelopes(signals[:, :1], w, {}, t, tmp_path, PAYLOAD.bounds_for("no_control"))
     judged, not_judged = (len(ax.collections) for ax in saved)
     assert judged == not_judged + 1  # the ±0.006 °/s band, not where it is not judged
+
+
+def test_a_campaign_histogram_marks_the_nominal_run_with_its_legend_off_the_bars(
+    tmp_path, monkeypatch
+):
+    from agilesat.orchestration.campaign import report
+
+    drawn = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: drawn.append(ax) or path)
+    meta = {"unit": "rad", "display_unit": "deg", "paper": math.radians(1.5)}
+    array = np.array([(math.radians(x),) for x in (0.5, 1.0, 1.2)], dtype=[("m", float)])
+    report.histograms(array, {"metrics": {"m": meta}}, tmp_path, {"m": math.radians(0.9)})
+    [ax] = drawn
+    marks = {line.get_label(): line.get_xdata()[0] for line in ax.lines}
+    assert marks == pytest.approx({"paper": 1.5, "nominal run": 0.9})  # °
+    ax.figure.canvas.draw()
+    legend = ax.get_legend().get_window_extent()
+    assert not legend.overlaps(ax.get_window_extent())  # beside the axes
+
+
+@pytest.mark.slow
+def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
+    from agilesat.orchestration.campaign import nominal_run
+    from agilesat.orchestration.campaign.plan import Plan, Spec
+    from agilesat.orchestration.runner import run
+
+    spec = Spec(
+        "scan_pitch",
+        runs=3,
+        vary=["CmgCluster.h_rotor=*normal(1, 0.005)"],
+        set={"SatelliteDynamics.gravity_gradient": "false"},
+        stop=40.0,
+    )
+    nominal = nominal_run(Plan(spec))
+    assert nominal["command"] == (
+        "agilesat run scan_pitch --stop 40.0 --set SatelliteDynamics.gravity_gradient=false"
+    )
+    _, summary = run(
+        "scan_pitch", stop=40.0, parameters={"SatelliteDynamics.gravity_gradient": "false"}
+    )
+    assert nominal["metrics"] == {
+        k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None
+    }
