@@ -161,7 +161,7 @@ def _phases(axes, phases) -> None:
         low, high = ax.get_xlim()
         for x in boundaries:
             if low < x < high:
-                ax.axvline(x, color="0.5", linestyle=":", linewidth=0.9, zorder=0.5)
+                ax.axvline(x, color="0.6", linestyle=(0, (2, 4)), linewidth=0.9, zorder=0.5)
     top = axes[0]
     low, high = top.get_xlim()
     on_x = blended_transform_factory(top.transData, top.transAxes)

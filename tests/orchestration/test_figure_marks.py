@@ -30,6 +30,32 @@ def _vertical(ax) -> list[float]:
     ]
 
 
+def _covered(figure) -> list[str]:
+    """What the legends of ``figure`` cover: "y label: line" of each data point or
+    horizontal line (a limit, a requirement) a legend lies on, in the drawn figure's
+    pixels.  Vertical lines (phases, instants) span the axes' height: a legend above the
+    data crosses them, and they show below it."""
+    figure.canvas.draw()
+    covered = []
+    for ax in figure.axes:
+        legend = ax.get_legend()
+        if legend is None:
+            continue
+        box = legend.get_window_extent()
+        for line in ax.lines:
+            x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+            if len(x) == 2 and x[0] == x[1]:
+                continue  # vertical
+            if len(set(y)) == 1 and len(x) == 2:  # horizontal: sample it along its width
+                x = np.linspace(x[0], x[1], 200)
+                y = np.full_like(x, y[0])
+            xy = line.get_transform().transform(np.column_stack((x, y)))
+            xy = xy[np.isfinite(xy).all(axis=1)]
+            if len(xy) and box.count_contains(xy):
+                covered.append(f"{ax.get_ylabel()}: {line.get_label()}")
+    return covered
+
+
 def test_axes_of_their_own_x_each_say_what_x_is(tmp_path):
     t1, t2 = np.linspace(0, 10, 11), np.linspace(10, 20, 11)
     with plots.kept() as figures:
@@ -93,6 +119,9 @@ def test_scan_pitch_figures_mark_phases_settling_and_a_log_singularity_measure(
     for name in ("fig04_pitch.png", "fig07_gimbal_rates.png", "fig11_output_torque.png"):
         for ax in figures[name].axes:
             assert sorted(_vertical(ax)) == pytest.approx(PROFILE.times[:4])
+    assert {name: _covered(figure) for name, figure in figures.items()} == {
+        name: [] for name in figures
+    }
 
 
 @pytest.mark.slow
@@ -113,6 +142,9 @@ def test_payload_sweep_figures_draw_the_wheel_limits_and_the_errors_in_arcsec_on
     assert _horizontal(accuracy) == [pytest.approx(0.032 * 3600)]  # arcsec
     assert _horizontal(stability) == [pytest.approx(0.006 * 3600)]  # arcsec/s
     assert "arcsec" in accuracy.get_ylabel()
+    assert {name: _covered(figure) for name, figure in figures.items()} == {
+        name: [] for name in figures
+    }
     zoomed = figures["fig05_payload_momentum.png"].axes[1]
     reversals = _vertical(zoomed)  # a stroke: 30° at 6 °/s, and half the 1 s turnaround
     assert np.diff(reversals) == pytest.approx(5.5, abs=0.06)
