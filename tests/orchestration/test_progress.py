@@ -1,29 +1,19 @@
 """A run's progress counts simulated seconds, and an FMU's warnings are printed above the
 bar, not into it (issue #28)."""
 
-import io
-
 import pytest
 
 from agilesat.orchestration.output.progress import Progress
-
-
-class _Stream(io.StringIO):
-    def __init__(self, tty):
-        super().__init__()
-        self.tty = tty
-
-    def isatty(self):
-        return self.tty
+from helpers import Stream
 
 
 def test_a_runs_progress_counts_simulated_seconds_in_lines_and_in_the_bar():
-    plain = _Stream(False)
+    plain = Stream(False)
     with Progress("scan_pitch", stream=plain, interval=0.0) as progress:
         progress.simulating(0.05)
         progress(1000, 3000)
     assert plain.getvalue().startswith("scan_pitch: 50/150 s simulated (33 %)")
-    tty = _Stream(True)
+    tty = Stream(True)
     with Progress("scan_pitch", stream=tty) as progress:
         progress.simulating(0.05)
         progress(1000, 3000)
@@ -31,7 +21,7 @@ def test_a_runs_progress_counts_simulated_seconds_in_lines_and_in_the_bar():
 
 
 def test_a_message_while_the_bar_is_shown_gets_a_line_of_its_own():
-    tty = _Stream(True)
+    tty = Stream(True)
     with Progress("scan_pitch", stream=tty) as progress:
         progress(10, 100)
         progress.write("  FMU: t=0.5 s CmgCluster [Warning] rate limit")
@@ -45,7 +35,7 @@ def test_a_message_while_the_bar_is_shown_gets_a_line_of_its_own():
 def test_the_runner_makes_a_progress_count_simulated_seconds(fmus):
     from agilesat.orchestration.runner import run
 
-    plain = _Stream(False)
+    plain = Stream(False)
     with Progress("scan_pitch", stream=plain, interval=0.0) as progress:
         run("scan_pitch", stop=2.0, figures=False, progress=progress)
     assert "2/2 s simulated (100 %)" in plain.getvalue()
