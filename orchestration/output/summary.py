@@ -131,7 +131,8 @@ def format_summary(summary: dict) -> str:
     verdicts = {"met": "PASS", "not met": "FAIL"}
     for name, m in summary.get("metrics", {}).items():
         unit, display = m["unit"], m.get("display_unit")
-        value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
+        u = _display(0.0, unit, display)[1]  # also of the paper's value beside no value
+        value = None if m["value"] is None else _display(m["value"], unit, display)[0]
         text = "no value" if value is None else join(f"{value:.6g}", u)
         paper = (
             "paper " + join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)

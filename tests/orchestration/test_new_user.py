@@ -175,3 +175,18 @@ def test_the_degree_sign_is_spaced_alike_by_every_printer(tmp_path):
         assert_within(results, "A.angle", high=0.5, deg=True)
     with pytest.raises(AssertionError, match=r"within ±0\.05° after t = 0 s: max 1°"):
         assert_settles(results, "A.angle", 0.05, 0.0, deg=True)
+
+
+def test_the_papers_value_keeps_its_unit_beside_a_metric_without_a_value():
+    from agilesat.orchestration.output.summary import format_summary
+
+    metrics = {
+        "settling_time": {
+            "value": None,
+            "unit": "s",
+            "display_unit": "s",
+            "paper": 105.0,
+            "reason": "not settled",
+        }
+    }
+    assert "no value   paper 105 s" in format_summary({"metrics": metrics})
