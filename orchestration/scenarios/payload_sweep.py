@@ -518,7 +518,7 @@ BOUNDS = [
         "SatelliteDynamics.w_BO_B",
         -STABILITY,
         STABILITY,
-        f"required within ±{STABILITY / DEG:g} °/s",
+        f"required within ±{STABILITY / DEG:g} °/s (±{STABILITY:.3g} rad/s)",
         requirement="pointing_stability",
     )
 ]

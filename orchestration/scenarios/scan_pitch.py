@@ -633,7 +633,8 @@ BOUNDS = [
         "SatelliteDynamics.euler_rate_BO[2]",
         PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
         PROFILE.scan_rate + SCAN_RATE_TOLERANCE,
-        f"required imaging rate {PROFILE.scan_rate / DEG:g} ± {SCAN_RATE_TOLERANCE / DEG:g} °/s",
+        f"required imaging rate {PROFILE.scan_rate / DEG:g} ± {SCAN_RATE_TOLERANCE / DEG:g} °/s "
+        f"({PROFILE.scan_rate:.4g} ± {SCAN_RATE_TOLERANCE:.2g} rad/s)",
         start=PROFILE.times[2],
         stop=PROFILE.times[3],
         requirement="imaging_pitch_rate_mean",
