@@ -356,7 +356,7 @@ def _run(args) -> int:
             out_dir=out,
             figures=not args.no_figures,
             svg=args.svg,
-            echo=echo_to(out),
+            echo=echo_to(out, say=progress.write),
             progress=progress,
             derivatives=False if args.no_derivatives else None,
             record=args.record,
@@ -429,16 +429,19 @@ def _export(args) -> int:
     return 0
 
 
-def echo_to(out: Path, limit: int = 5):
-    """Print an FMU's first warnings and errors; the rest go to log.txt only."""
+def echo_to(out: Path, limit: int = 5, say=None):
+    """Print an FMU's first warnings and errors; the rest go to log.txt only.  ``say``:
+    how a line is printed (a :class:`.output.progress.Progress`'s ``write``: above its
+    bar); stderr by default."""
     counts: dict[str, int] = {}
+    say = say or (lambda text: print(text, file=sys.stderr))
 
     def echo(entry):
         counts[entry.instance] = counts.get(entry.instance, 0) + 1
         if counts[entry.instance] <= limit:
-            print(f"  FMU: {entry}", file=sys.stderr)
+            say(f"  FMU: {entry}")
         elif counts[entry.instance] == limit + 1:
-            print(f"  FMU: {entry.instance}: more messages in {out / 'log.txt'}", file=sys.stderr)
+            say(f"  FMU: {entry.instance}: more messages in {out / 'log.txt'}")
 
     return echo
 

@@ -14,7 +14,7 @@ from .mission import targets
 from .system.description import Description
 from .system.parameters import variables
 from .system.ssp import read_system
-from .system.units import pretty, to_degrees
+from .system.units import join, pretty, to_degrees
 from .system.validation import check_system
 
 
@@ -216,8 +216,8 @@ def _given(value, unit: str | None) -> str:
     factor, degrees = to_degrees(unit)
     if degrees != unit and array.dtype != bool and not isinstance(value, bool):
         scaled = [_scaled(v, factor) for v in array.ravel()]
-        return f"{text} {pretty(unit)} ({_format(scaled, array.shape)} {pretty(degrees)})"
-    return f"{text} {pretty(unit)}".rstrip() if unit else text
+        return f"{join(text, pretty(unit))} ({join(_format(scaled, array.shape), pretty(degrees))})"
+    return join(text, pretty(unit))
 
 
 def _scaled(value, factor):

@@ -20,6 +20,7 @@ from .cosim.plan import plan_run
 from .cosim.signals import signal_at, stop_on_signals
 from .mission.targets import resolve
 from .output.lock import holding
+from .output.progress import Progress
 from .output.recorder import write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
@@ -87,6 +88,8 @@ def run(
         record=record,
         output_interval=output_interval,
     )
+    if isinstance(progress, Progress):
+        progress.simulating(plan.step)  # a person's bar counts simulated seconds
     out_dir = plan.out_dir
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)

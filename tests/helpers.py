@@ -5,6 +5,7 @@ Built FMUs are only ever *run* in a separate, fresh interpreter (``run_python`` 
 this pytest process imported could mask a file missing from an FMU.
 """
 
+import io
 import subprocess
 import sys
 from pathlib import Path
@@ -124,3 +125,15 @@ def export_elsewhere(tmp_path_factory) -> dict:
         result[name] = shutil.move(built, elsewhere / built.name)
     assert not str(elsewhere).startswith(str(ROOT))
     return result
+
+
+class Stream(io.StringIO):
+    """A text stream that says whether it is a terminal (``tty``): progress output either
+    way."""
+
+    def __init__(self, tty: bool):
+        super().__init__()
+        self.tty = tty
+
+    def isatty(self):
+        return self.tty

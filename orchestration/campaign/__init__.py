@@ -142,16 +142,17 @@ def run_campaign(
         if not all(isinstance(m, dict) for m in metrics.values()):
             raise CampaignFileError(f"{out / 'metrics.json'}: expected an object per metric")
     before = collections.Counter(str(r.get("status")) for r in done.values())
+    if len(done) < plan.total:  # before the bar is drawn: not on its line
+        print(
+            f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
+            f"grid points), {len(done)} already made in {out}",
+            file=sys.stderr,
+            flush=True,
+        )
     bar = report.Progress(plan.total, len(done), enabled=bool(progress), before=before)
     environment = {"scheduler": scheduler or "LocalCluster", "workers": 0}
     lost, lost_scheduler = [], None
     try:
-        if len(done) < plan.total:
-            print(
-                f"campaign {spec.target}: {plan.total} runs ({spec.runs} × {len(plan.grid)} "
-                f"grid points), {len(done)} already made in {out}",
-                file=sys.stderr,
-            )
         with engine.cluster(workers, scheduler, listen, dashboard) as client:
             environment["workers"] = len(client.scheduler_info()["workers"])
             _, lost, _ = engine.execute(plan, out, client, done, bar, metrics)
@@ -249,21 +250,51 @@ def finish(
         else None,
         "files": [p.name for p in files],
     }
+    histograms = plan.spec.runs > 1
+    if histograms and len(plan.grid) == 1 and status == "complete":
+        summary["nominal"] = nominal_run(plan)
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
-    figures = report.histograms(table, metrics, out) if plan.spec.runs > 1 else []
+    nominal = summary.get("nominal", {}).get("metrics", {})
+    figures = report.histograms(table, metrics, out, nominal) if histograms else []
     figures += report.sweeps(plan, table, metrics, out)
     if (out / "signals.npy").exists():  # none if no run was made
         from .pointing_figures import campaign_figures
 
         signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
-        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out)
+        bounds = plan.scenario.bounds_for(plan.variant) if plan.scenario else []
+        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
         figures += campaign_figures(
             plan.ensemble, signals, plan.signals, time_axis(plan), summary["ensemble"], out
         )
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)
+
+
+def nominal_run(plan: Plan) -> dict:
+    """The run at the nominal values (every dispersed parameter at the system's, the
+    spec's ``--set`` applied), whose metrics the histograms mark: {"command": the
+    ``agilesat run`` that makes it, "metrics": {name: SI value}}, or the reason it has
+    none."""
+    from ..runner import run
+
+    spec = plan.spec
+    command = run_arguments(plan, spec.set)
+    try:
+        _, summary = run(
+            spec.target,
+            step=spec.step,
+            stop=spec.stop,
+            algorithm=spec.algorithm,
+            parameters=spec.set,
+            figures=False,
+            build=False,
+        )
+    except (Exception, KeyboardInterrupt) as failure:  # the marker is not worth a failure
+        return {"command": shlex.join(command), "reason": f"{type(failure).__name__}: {failure}"}
+    values = {k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None}
+    return {"command": shlex.join(command), "metrics": values}
 
 
 def _ensemble(plan: Plan, out: Path, made: int) -> dict:
@@ -295,6 +326,12 @@ def ensemble_entry(requirement, verdict) -> dict:
 
 def replay_arguments(plan: Plan, index: int) -> list[str]:
     """``agilesat run`` arguments that make run ``index`` again, exactly."""
+    return run_arguments(plan, plan.parameters(index))
+
+
+def run_arguments(plan: Plan, parameters: dict) -> list[str]:
+    """``agilesat run`` arguments of a run of the campaign's target and settings with
+    ``parameters`` set."""
     args = ["agilesat", "run", plan.spec.target]
     for option, value in (
         ("--step", plan.spec.step),
@@ -303,7 +340,7 @@ def replay_arguments(plan: Plan, index: int) -> list[str]:
     ):
         if value is not None:
             args += [option, repr(value) if isinstance(value, float) else str(value)]
-    for key, value in plan.parameters(index).items():
+    for key, value in parameters.items():
         args += ["--set", f"{key}={value!r}" if isinstance(value, float) else f"{key}={value}"]
     return args
 

@@ -207,10 +207,13 @@ def display(meta: dict) -> tuple[float, str]:
     return (1.0, pretty(unit)) if factor is None else (factor, pretty(shown))
 
 
-def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
+def histograms(
+    array: np.ndarray, catalog: dict, out: Path, nominal: dict | None = None
+) -> list[Path]:
     """A histogram of each metric that varies over the runs, titled by its description,
-    with its requirement's bounds and the paper's value (a constant metric has none: one
-    value says it all)."""
+    with its requirement's bounds, the paper's value and the nominal run's (``nominal``:
+    {metric: SI value}); a constant metric has none: one value says it all.  The legend
+    stands beside the axes, off the bars."""
     from ..output.plots import plt
 
     paths = []
@@ -219,7 +222,7 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
         if not len(values) or np.ptp(values) <= 1e-9 * max(np.abs(values).max(), 1e-300):
             continue
         scale, unit = display(meta)
-        fig, ax = plt.subplots(figsize=(6, 3.6))
+        fig, ax = plt.subplots(figsize=(7.5, 3.6))
         ax.hist(
             values * scale,
             bins=min(50, max(5, int(np.sqrt(len(values))))),
@@ -232,8 +235,10 @@ def histograms(array: np.ndarray, catalog: dict, out: Path) -> list[Path]:
             )
         if meta.get("paper") is not None:
             ax.axvline(meta["paper"] * scale, color="0.35", linestyle=":", label="paper")
+        if (nominal or {}).get(name) is not None:
+            ax.axvline(nominal[name] * scale, color="black", linewidth=1.2, label="nominal run")
         if ax.get_legend_handles_labels()[1]:
-            ax.legend(fontsize=8)
+            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         ax.set_xlabel(f"{name} [{unit}]" if unit else name)
         ax.set_ylabel("runs")
         missing = len(array) - len(values)
@@ -311,8 +316,12 @@ def _file_name(name: str) -> str:
     return name.replace("[", "_").replace("]", "").replace(",", "_")
 
 
-def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) -> list[Path]:
-    """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal."""
+def envelopes(
+    signals, names: list[str], units: dict, t: np.ndarray, out: Path, bounds=()
+) -> list[Path]:
+    """Percentile envelopes (1–99 %, 5–95 %, median) over time of each kept signal, with
+    the scenario's bounds of it (:class:`..mission.scenario.SignalBound`): a requirement as
+    a green band over its window, a limit as dashed red lines."""
     from ..output.plots import plt
 
     paths = []
@@ -326,12 +335,29 @@ def envelopes(signals, names: list[str], units: dict, t: np.ndarray, out: Path) 
         ax.fill_between(t, p[0], p[4], color="tab:blue", alpha=0.2, label="1–99 %")
         ax.fill_between(t, p[1], p[3], color="tab:blue", alpha=0.4, label="5–95 %")
         ax.plot(t, p[2], color="tab:blue", linewidth=1.2, label="median")
+        for bound in (b for b in bounds if b.applies_to(name)):
+            _bound(ax, t, bound)
         ax.set_xlabel("time [s]")
         ax.set_ylabel(f"{name} [{pretty(units.get(name)) or 'SI'}]")
         ax.set_title(f"{name}: {len(data)} runs", fontsize=10)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the data
         paths.append(_save(fig, ax, out / f"envelope_{_file_name(name)}.png"))
     return paths
+
+
+def _bound(ax, t: np.ndarray, bound) -> None:
+    """A signal bound on an envelope's axes, over its window of the time axis."""
+    start = t[0] if bound.start is None else max(bound.start, t[0])
+    stop = t[-1] if bound.stop is None else min(bound.stop, t[-1])
+    if bound.limit or bound.low is None or bound.high is None:
+        ys = [y for y in (bound.low, bound.high) if y is not None]
+        ax.hlines(
+            ys, start, stop, colors="tab:red", linestyles="--", linewidth=1, label=bound.label
+        )
+    else:
+        ax.fill_between(
+            [start, stop], bound.low, bound.high, color="tab:green", alpha=0.2, label=bound.label
+        )
 
 
 class Progress:

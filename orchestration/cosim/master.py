@@ -48,7 +48,8 @@ steps.
 
 The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
 for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
-be compiled; ``Results.meta["loop"]`` says which.
+be compiled; ``Results.meta["loop"]`` says which.  ``Results.meta["parameters"]`` holds
+every Real parameter's value as the run set it (figures draw the limits of the run).
 """
 
 from __future__ import annotations
@@ -307,6 +308,7 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
             if plan.record is None or f"{name}.{y}" in plan.record
         },
     }
+    meta["parameters"] = _parameter_values(plan, instances)
     if links is not None:
         meta["derivatives"] = links.described
     dll = compiled.select(plan.loop, log)
@@ -451,6 +453,19 @@ def _evaluate(
         if reading:
             for port in reads:
                 port.read(values)
+
+
+def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
+    """{"Instance.variable[i]": value} of every Real parameter as the run sets it: the
+    value the system or the command line gave, else the model description's start."""
+    values: dict[str, object] = {
+        f"{name}.{v.name}": float(v.start)
+        for name, inst in instances.items()
+        for v in inst.variables.values()
+        if v.causality == "parameter" and v.type == "Real" and v.start is not None
+    }
+    values.update({f"{p.component}.{p.name}": p.value for p in plan.bindings})
+    return values
 
 
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:

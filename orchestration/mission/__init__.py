@@ -30,7 +30,7 @@ from .requirements import (
     at_most,
     within,
 )
-from .scenario import Scenario, Variant
+from .scenario import Scenario, SignalBound, Variant
 from .system import System
 from .targets import resolve
 
@@ -42,6 +42,7 @@ __all__ = [
     "Quantity",
     "Requirement",
     "Scenario",
+    "SignalBound",
     "System",
     "Variant",
     "Verdict",

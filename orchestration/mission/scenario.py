@@ -69,13 +69,36 @@ class Variant:
 _NOMINAL = Variant("the scenario as defined")
 
 
+@dataclass(frozen=True)
+class SignalBound:
+    """What every sample of a recorded signal should keep, low ≤ x(t) ≤ high (either may
+    be None) over [start, stop] (None: the whole run): a requirement (``requirement``
+    names it: a variant that does not judge it draws no band) or a device's ``limit``.
+    Campaign envelopes of the signal (``--keep``) draw it: a requirement as a green band,
+    a limit as dashed red lines.  ``signal``: a variable (every element) or an element."""
+
+    signal: str
+    low: float | None
+    high: float | None
+    label: str
+    start: float | None = None
+    stop: float | None = None
+    requirement: str | None = None
+    limit: bool = False
+
+    def applies_to(self, column: str) -> bool:
+        """Does it bound this recorded column ("A.x[2]")?"""
+        return column == self.signal or column.partition("[")[0] == self.signal
+
+
 class Scenario:
     """``name`` (an identifier), ``title``, the ``system``; ``metrics`` and ``requirements``
     (a metric's ``require=`` is one too); ``variants`` {name: :class:`Variant`};
     ``figures``: functions ``(results, out_dir) -> path or [paths]``; ``diagnose``:
     ``(results, metrics) -> [problems]``, the explanation of a run that did not fly as
     required (``metrics``: the summary's entries); ``systems_dir``: where ``agilesat
-    generate`` writes its SSD (the shipped scenarios'; others render theirs on demand)."""
+    generate`` writes its SSD (the shipped scenarios'; others render theirs on demand);
+    ``bounds``: :class:`SignalBound` s a campaign's envelopes draw."""
 
     def __init__(
         self,
@@ -89,6 +112,7 @@ class Scenario:
         figures: Sequence[Callable] | Callable = (),
         diagnose: Callable | None = None,
         systems_dir=None,
+        bounds: Sequence[SignalBound] = (),
     ):
         if not name.isidentifier():
             raise ValueError(f"scenario name {name!r} must be an identifier")
@@ -99,6 +123,7 @@ class Scenario:
         self.variants = dict(variants or {})
         self.figures = [figures] if callable(figures) else list(figures)
         self.diagnose = diagnose
+        self.bounds = list(bounds)
         self.systems_dir = None if systems_dir is None else Path(systems_dir)
         for variant in self.variants:
             if not variant.isidentifier():
@@ -242,6 +267,11 @@ class Scenario:
             "status": "failed" if diagnostics else "ok",
         }
 
+    def bounds_for(self, variant: str | None = None) -> list[SignalBound]:
+        """The signal bounds a variant keeps: not those of requirements it does not judge."""
+        exempt = self.variant(variant).exempt()
+        return [b for b in self.bounds if b.requirement is None or b.requirement not in exempt]
+
     def draw(self, results, out_dir, variant: str | None = None) -> list[Path]:
         """The scenario's and the variant's figures of a run, into ``out_dir``."""
         paths: list[Path] = []
@@ -271,4 +301,4 @@ def _entry(metric: Metric, value) -> dict:
     }
 
 
-__all__ = ["MET", "Scenario", "Variant"]
+__all__ = ["MET", "Scenario", "SignalBound", "Variant"]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..system.units import pretty, to_degrees
+from ..system.units import join, pretty, to_degrees
 
 
 def _signal(results, name, start, stop, deg):
@@ -50,10 +50,10 @@ def assert_within(
             k, j = np.argwhere(bad)[0]
             worst = values.min() if word == "below" else values.max()
             raise AssertionError(
-                f"{name} is {word} {bound:g} {unit} at {bad.any(axis=1).sum()} of {len(t)} "
-                f"points, first at t = {t[k]:g} s ({values[k, j]:.6g} {unit}"
+                f"{name} is {word} {join(f'{bound:g}', unit)} at {bad.any(axis=1).sum()} of "
+                f"{len(t)} points, first at t = {t[k]:g} s ({join(f'{values[k, j]:.6g}', unit)}"
                 + (f", element {j + 1}" if values.shape[1] > 1 else "")
-                + f"); worst {worst:.6g} {unit}"
+                + f"); worst {join(f'{worst:.6g}', unit)}"
             )
 
 
@@ -65,8 +65,8 @@ def assert_settles(results, name: str, bound: float, after: float, *, deg: bool 
     if (magnitude > bound).any():
         last = t[(magnitude > bound).any(axis=1)][-1]
         raise AssertionError(
-            f"{name} does not settle within ±{bound:g} {unit} after t = {after:g} s: max "
-            f"{magnitude.max():.6g} {unit}, last outside at t = {last:g} s"
+            f"{name} does not settle within {join(f'±{bound:g}', unit)} after t = {after:g} s: "
+            f"max {join(f'{magnitude.max():.6g}', unit)}, last outside at t = {last:g} s"
         )
 
 

@@ -7,7 +7,14 @@ marks)`` with ``marks`` any of ``limit=(value, label)`` (dashed red lines at ±v
 the values of a pair), ``band=(low, high, label)`` (a shaded band), ``paper=(value, label)``
 (a dotted line: the paper's value beside ours), ``statistic=(value, label)`` (a dash-dotted
 black line: the statistic a requirement compares), ``bottom=y`` (the axis starts there),
-``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel).
+``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel),
+``at=(x, label)`` (a solid black vertical line: an instant a metric gives, such as a
+settling time), ``paper_at=(x, label)`` (a dotted vertical line: the paper's instant),
+``events=(xs, label)`` (thin grey vertical lines: payload reversals, say).
+``panels(..., phases=[(name, start, end), ...])`` marks the phases of a maneuver on every
+axes (dotted grey lines at their boundaries) and names them above the top axes.
+Axes that do not share x each get the x label.  The overview of a run leaves out Euler rates
+within :data:`GIMBAL_LOCK_MARGIN` of gimbal lock (shaded, and the legend says so).
 Later series are drawn thinner, so that lines lying on top of each other stay visible;
 "planned …" and "reference …" series are dashed.
 
@@ -18,6 +25,7 @@ figures never loads it).
 from __future__ import annotations
 
 import contextlib
+import math
 import textwrap
 from contextvars import ContextVar
 from pathlib import Path
@@ -77,6 +85,22 @@ def drawing(before=None):
         _drawing.reset(token)
 
 
+#: (path, Figure) of each figure written while :func:`kept` (per thread)
+_kept: ContextVar[dict | None] = ContextVar("agilesat_kept_figures", default=None)
+
+
+@contextlib.contextmanager
+def kept():
+    """Figures made inside (in this thread) are kept, as {file name: matplotlib Figure} in
+    the dict yielded: what they show can be asked of their axes (the tests do)."""
+    figures: dict = {}
+    token = _kept.set(figures)
+    try:
+        yield figures
+    finally:
+        _kept.reset(token)
+
+
 def written() -> tuple[str, ...]:
     """The formats figures are written in now."""
     return _written.get()
@@ -88,15 +112,23 @@ def formats(path) -> list[Path]:
 
 
 def lines(
-    path: Path, title: str, t, series: dict, ylabel: str, xlabel: str = "time [s]", **marks
+    path: Path,
+    title: str,
+    t,
+    series: dict,
+    ylabel: str,
+    xlabel: str = "time [s]",
+    phases=(),
+    **marks,
 ) -> Path:
     """One axes: each named series against time (or ``xlabel``)."""
-    return panels(path, title, [(t, series, ylabel, marks)], xlabel)
+    return panels(path, title, [(t, series, ylabel, marks)], xlabel, phases)
 
 
-def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
+def panels(path: Path, title: str, rows, xlabel: str = "time [s]", phases=()) -> Path:
     """Stacked axes sharing x, one per row (see the module docstring)."""
-    fig, axes = _subplots(len(rows), sharex=len({id(r[0]) for r in rows}) == 1)
+    shared = len({id(r[0]) for r in rows}) == 1
+    fig, axes = _subplots(len(rows), sharex=shared)
     for ax, row in zip(axes[:, 0], rows):
         t, series, ylabel = row[:3]
         for k, (name, values) in enumerate(series.items()):
@@ -111,7 +143,41 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]") -> Path:
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         _legend(ax)
-    return _save(fig, axes, path, title, xlabel)
+        if not shared:
+            ax.set_xlabel(xlabel)
+    _phases(axes[:, 0], phases)
+    return _save(fig, axes, path, title, xlabel, **({"title_pad": 14.0} if phases else {}))
+
+
+def _phases(axes, phases) -> None:
+    """The phases [(name, start, end), ...] of a maneuver: dotted grey lines at their
+    boundaries on every axes, each phase's name above the top axes, centred on it."""
+    if not phases:
+        return
+    from matplotlib.transforms import blended_transform_factory
+
+    boundaries = sorted({end for _, _, end in phases[:-1]})  # between phases
+    for ax in axes:
+        low, high = ax.get_xlim()
+        for x in boundaries:
+            if low < x < high:
+                ax.axvline(x, color="0.6", linestyle=(0, (2, 4)), linewidth=0.9, zorder=0.5)
+    top = axes[0]
+    low, high = top.get_xlim()
+    on_x = blended_transform_factory(top.transData, top.transAxes)
+    for name, start, end in phases:
+        start, end = max(start, low), min(end, high)
+        if start < end:
+            top.text(
+                (start + end) / 2,
+                1.01,
+                name,
+                transform=on_x,
+                ha="center",
+                va="bottom",
+                fontsize=7,
+                color="0.35",
+            )
 
 
 def _legend(ax) -> None:
@@ -149,7 +215,17 @@ FAR = 20.0
 
 
 def _mark(
-    ax, span: float, limit=None, band=None, paper=None, statistic=None, bottom=None, log=False
+    ax,
+    span: float,
+    limit=None,
+    band=None,
+    paper=None,
+    statistic=None,
+    bottom=None,
+    log=False,
+    at=None,
+    paper_at=None,
+    events=None,
 ) -> None:
     """The marks of a panel (module docstring) whose series reach ``span`` at most.  A
     limit far above the data (:data:`FAR` times) would flatten it: on a non-negative
@@ -183,6 +259,16 @@ def _mark(
     if statistic is not None:
         value, text = statistic
         ax.axhline(value, color="black", linestyle="-.", linewidth=1, label=text)
+    if at is not None:
+        ax.axvline(at[0], color="black", linestyle="-", linewidth=1, label=at[1])
+    if paper_at is not None:
+        ax.axvline(paper_at[0], color="0.35", linestyle=":", linewidth=1.2, label=paper_at[1])
+    if events is not None:
+        xs, text = events
+        for k, x in enumerate(xs):
+            ax.axvline(
+                x, color="0.6", linestyle="-.", linewidth=0.7, label=text if k == 0 else None
+            )
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
     if log:
@@ -236,6 +322,16 @@ def signals(
     for ax, name in zip(axes[:, 0], variables):
         for k, (run, results) in enumerate(runs.items()):
             values = results.get(name, deg=deg).reshape(len(results), -1)
+            locked = _near_gimbal_lock(results, name)
+            if locked is not None:
+                values = np.where(locked[:, None], np.nan, values)
+                _shade(
+                    ax,
+                    results.time,
+                    locked,
+                    f"not shown: within {math.degrees(GIMBAL_LOCK_MARGIN):g}° of gimbal lock "
+                    "(θ = ±90°)",
+                )
             columns = results.columns(name)
             for column, v in zip(columns, values.T):
                 element = _element(name, column, len(columns))
@@ -258,6 +354,38 @@ def signals(
         ax.grid(True, alpha=0.3)
         _legend(ax)
     return _save(fig, axes, path, instance or textwrap.fill(", ".join(variables), 90), "time [s]")
+
+
+#: Euler rates within this of the 1-2-3 sequence's gimbal lock (θ = ±90°) are not drawn:
+#: they grow as 1/cos θ and a pass near the lock would flatten the rest of the panel
+GIMBAL_LOCK_MARGIN = math.radians(5.0)
+
+
+def _near_gimbal_lock(results, name: str):
+    """For Euler rates ("…euler_rate_XY", beside their angles "…euler_XY", 1-2-3): the
+    rows within :data:`GIMBAL_LOCK_MARGIN` of θ = ±90°; None for any other variable."""
+    import numpy as np
+
+    instance, _, variable = name.rpartition(".")
+    angles = f"{instance}.{variable.replace('euler_rate', 'euler', 1)}"
+    if not variable.startswith("euler_rate") or angles not in results:
+        return None
+    theta = results.vector(angles)[:, 1]
+    return np.abs(np.cos(theta)) < math.sin(GIMBAL_LOCK_MARGIN)
+
+
+def _shade(ax, t, rows, text: str) -> None:
+    """Grey spans over the runs of ``rows`` (a Boolean per sample), one legend entry."""
+    import numpy as np
+
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], rows.astype(int), [0]))))
+    for k, (first, end) in enumerate(zip(edges[::2], edges[1::2])):
+        ax.axvspan(
+            t[max(first - 1, 0)],
+            t[min(end, len(t) - 1)],
+            color="0.85",
+            label=text if k == 0 else None,
+        )
 
 
 def _element(name: str, column: str, n: int) -> str:
@@ -305,7 +433,7 @@ def _subplots(n: int, sharex: bool = False):
     return fig, axes
 
 
-def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
+def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Path:
     """Label the stacked axes, lay them out once (:mod:`.figure_layout`), write the PNG
     from that one Agg drawing and each other format with its own renderer."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -315,7 +443,7 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
     if watched is not None and watched[1] is not None:
         watched[1]()
     axes[-1, 0].set_xlabel(xlabel)
-    axes[0, 0].set_title(title)
+    axes[0, 0].set_title(title, pad=title_pad)  # above the phases' names, if any
     figure_layout.fixed(fig, axes, title)
     canvas = FigureCanvasAgg(fig)
     figure_layout.draw(fig, axes, canvas)
@@ -325,6 +453,8 @@ def _save(fig, axes, path: Path, title: str, xlabel: str) -> Path:
         fig.savefig(target, dpi=DPI)
     if watched is not None:
         watched[0].extend([png, *others])
+    if _kept.get() is not None:
+        _kept.get()[Path(path).name] = fig
     return Path(path)
 
 

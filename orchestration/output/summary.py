@@ -17,7 +17,7 @@ import numpy as np
 
 from ...components.variables import UNITS
 from ..provenance import header
-from ..system.units import display_factor, pretty
+from ..system.units import display_factor, join, pretty
 from .recorder import write_text
 from .results import Results, units_path
 
@@ -88,11 +88,6 @@ def generic_summary(results: Results) -> dict:
     return {"metrics": metrics, "outputs": outputs, "diagnostics": [], "status": "ok"}
 
 
-def _join(number: str, unit: str) -> str:
-    """'0.5 rad/s', '2.1°' (no space before a degree sign), '0.57' (no unit)."""
-    return number + ("" if not unit or unit.startswith("°") and "/" not in unit else " ") + unit
-
-
 def _display(value, unit, display_unit):
     """(value in the display unit, the display unit as people write it); in ``unit`` when
     the display unit does not convert (never a value under another unit's name)."""
@@ -106,7 +101,7 @@ def format_value(value: float, unit: str | None, display_unit: str | None = None
     """A value (SI, in ``unit``) as people read it, in ``display_unit``: '0.032°',
     '0.006 °/s', '5 N·m' (four significant digits)."""
     shown, text = _display(value, unit, display_unit)
-    return _join(f"{shown:.4g}", text)
+    return join(f"{shown:.4g}", text)
 
 
 def _requirement(requirement, unit, display_unit) -> str:
@@ -122,10 +117,10 @@ def _requirement(requirement, unit, display_unit) -> str:
     show = lambda x: f"{_display(x, unit, display_unit)[0]:.4g}"  # noqa: E731
     u = _display(0.0, unit, display_unit)[1]
     if low is not None and high is not None:
-        return _join(f"in [{show(low)}, {show(high)}]", u)
+        return join(f"in [{show(low)}, {show(high)}]", u)
     if high is not None:
-        return _join(f"≤ {show(high)}", u)
-    return _join(f"≥ {show(low)}", u) if low is not None else ""
+        return join(f"≤ {show(high)}", u)
+    return join(f"≥ {show(low)}", u) if low is not None else ""
 
 
 def format_summary(summary: dict) -> str:
@@ -136,10 +131,11 @@ def format_summary(summary: dict) -> str:
     verdicts = {"met": "PASS", "not met": "FAIL"}
     for name, m in summary.get("metrics", {}).items():
         unit, display = m["unit"], m.get("display_unit")
-        value, u = (None, "") if m["value"] is None else _display(m["value"], unit, display)
-        text = "no value" if value is None else _join(f"{value:.6g}", u)
+        u = _display(0.0, unit, display)[1]  # also of the paper's value beside no value
+        value = None if m["value"] is None else _display(m["value"], unit, display)[0]
+        text = "no value" if value is None else join(f"{value:.6g}", u)
         paper = (
-            "paper " + _join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
+            "paper " + join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
             if "paper" in m
             else ""
         )

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..system.units import join, pretty
 from .errors import BLOCK, ErrorHistory, describe, direction
 from .indices import NotEvaluable, check_index, index_series, magnitude
 from .names import ANGLE_UNITS, INDICES
@@ -33,8 +34,7 @@ def format_angle(value: float, unit: str = "deg") -> str:
     """``value`` (rad) in ``unit``, four significant digits: "0.001°", "3.6 arcsec"."""
     if unit not in ANGLE_UNITS:
         raise ValueError(f"unknown angle unit {unit!r}: expected one of {', '.join(ANGLE_UNITS)}")
-    number = f"{value / ANGLE_UNITS[unit]:.4g}"
-    return f"{number}°" if unit == "deg" else f"{number} {unit}"
+    return join(f"{value / ANGLE_UNITS[unit]:.4g}", pretty(unit))
 
 
 def _unit(v, name: str) -> tuple[float, float, float] | None:

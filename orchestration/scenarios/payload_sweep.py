@@ -31,6 +31,7 @@ from agilesat.orchestration.mission import (
     Metric,
     Pointing,
     Scenario,
+    SignalBound,
     System,
     Variant,
     at_most,
@@ -40,6 +41,7 @@ from agilesat.orchestration.mission import metrics as m
 from agilesat.orchestration.pointing import PointingRequirement, performance_error
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
+    UNITS,
     close_the_loop,
     knowledge_rows,
     magnitude_row,
@@ -334,9 +336,45 @@ def yaw_periods(results) -> tuple[float, float]:
     return 1 / float(frequency[slow][np.argmax(spectrum[slow])]), ripple
 
 
+def roll_reversals(results) -> np.ndarray:
+    """The times the payloads' roll stroke reverses: its commanded rate changes sign (the
+    start from rest is none)."""
+    sign = np.sign(results["SweepPlanner.roll_rate_cmd[1]"])
+    moving = np.flatnonzero(sign)
+    return results.time[moving[1:][np.diff(sign[moving]) != 0]]
+
+
+def _per_axis_magnitude(t, values, limit: float, text: str, ylabel: str):
+    """A figure row of |value| about each body axis (rad or rad/s) in arcsec on a log axis,
+    the requirement ``limit`` drawn; the axis starts at 10⁻⁴ of it."""
+    scale, shown = UNITS["arcsec"]
+    magnitude = np.abs(values) / scale
+    return (
+        t,
+        {axis: np.where(m > 0, m, np.nan) for axis, m in zip(AXES_B, magnitude.T)},
+        ylabel.format(unit=shown),
+        {"limit": ((limit / scale,), text), "bottom": 1e-4 * limit / scale, "log": True},
+    )
+
+
+AXES_B = ("x (B)", "y (B)", "z (B)")
+
+
+def _wheel_limit(results, name: str, unit: str):
+    """The limit mark (±value, label) of a Flywheel parameter as the run set it: {} when
+    the run did not say (results read back from a file)."""
+    value = results.meta.get("parameters", {}).get(f"Flywheel.{name}")
+    if value is None:
+        return {}
+    if value == 0:
+        return {"limit": ((0.0,), f"{name.replace('_', ' ')} 0: motors off")}
+    return {"limit": (value, f"{name.replace('_', ' ')} ±{value:g} {unit}")}
+
+
 def figures(results, out_dir) -> list:
     """The paper's Figs 4–8 from a run, body-frame (B) quantities named as such, the pointing
-    requirement and the paper's yaw-torque bound drawn."""
+    requirement, the paper's yaw-torque bound, the wheels' limits and the roll reversals
+    (on the first 30 s) drawn."""
     t = results.time
     deg = 180 / math.pi
     roll, pitch = (
@@ -345,7 +383,9 @@ def figures(results, out_dir) -> list:
     )
     h, hdot = results.vector("PayloadGimbals.h"), results.vector("PayloadGimbals.hdot")
     zoom = t <= min(t[-1], 30.0)
-    axes = ("x (B)", "y (B)", "z (B)")
+    flips = roll_reversals(results)
+    reversals = {"events": (flips[flips <= t[zoom][-1]], "roll reversal")}
+    axes = AXES_B
     angles = ("roll", "pitch", "yaw")
     label = "Fig. 8 compensated" if controlled(results) else "Fig. 7 uncompensated"
     yaw_torque = PAPER["payload_torque_yaw_max"]
@@ -359,6 +399,7 @@ def figures(results, out_dir) -> list:
                     t[zoom],
                     {"payload 1": roll[zoom, 0], "payload 2": roll[zoom, 1]},
                     "roll [°] (first 30 s)",
+                    reversals,
                 ),
             ],
         ),
@@ -367,7 +408,7 @@ def figures(results, out_dir) -> list:
             "Fig. 5 payload pair momentum h, in B",
             [
                 (t, dict(zip(axes, h.T)), "h [N·m·s]"),
-                (t[zoom], {"z (B)": h[zoom, 2]}, "h_z, first 30 s [N·m·s]"),
+                (t[zoom], {"z (B)": h[zoom, 2]}, "h_z, first 30 s [N·m·s]", reversals),
             ],
         ),
         panels(
@@ -380,7 +421,7 @@ def figures(results, out_dir) -> list:
                     "ḣ [N·m]",
                     {"paper": ((-yaw_torque, yaw_torque), f"paper: |ḣ_z| < {yaw_torque:g} N·m")},
                 ),
-                (t[zoom], {"z (B)": hdot[zoom, 2]}, "ḣ_z, first 30 s [N·m]"),
+                (t[zoom], {"z (B)": hdot[zoom, 2]}, "ḣ_z, first 30 s [N·m]", reversals),
             ],
         ),
         panels(
@@ -401,19 +442,22 @@ def figures(results, out_dir) -> list:
         ),
         panels(
             out_dir / "fig08_pointing.png",
-            "Pointing error (body relative to the orbit frame, in B) against the requirement",
+            "Pointing error (body relative to the orbit frame, about each axis of B)",
             [
-                (
+                _per_axis_magnitude(
                     t,
-                    dict(zip(axes, attitude_error(results).T * deg)),
-                    "attitude error [°]",
-                    {"limit": (ACCURACY * deg, f"required ±{ACCURACY * deg:g}°")},
+                    attitude_error(results),
+                    ACCURACY,
+                    f"required ≤ {ACCURACY * deg:g}° ({ACCURACY / UNITS['arcsec'][0]:.4g} arcsec)",
+                    "|attitude error| [{unit}]",
                 ),
-                (
+                _per_axis_magnitude(
                     t,
-                    dict(zip(axes, results.vector("SatelliteDynamics.w_BO_B").T * deg)),
-                    "rate error [°/s]",
-                    {"limit": (STABILITY * deg, f"required ±{STABILITY * deg:g} °/s")},
+                    results.vector("SatelliteDynamics.w_BO_B"),
+                    STABILITY,
+                    f"required ≤ {STABILITY * deg:g} °/s "
+                    f"({STABILITY / UNITS['arcsec'][0]:.4g} arcsec/s)",
+                    "|rate error| [{unit}/s]",
                 ),
             ],
         ),
@@ -425,8 +469,14 @@ def figures(results, out_dir) -> list:
                     t,
                     dict(zip(axes, results.vector("Flywheel.motor_torque")[:, :3].T)),
                     "motor torque [N·m]",
+                    _wheel_limit(results, "torque_limit", "N·m"),
                 ),
-                (t, dict(zip(axes, results.vector("Flywheel.h").T)), "wheel momentum [N·m·s]"),
+                (
+                    t,
+                    dict(zip(axes, results.vector("Flywheel.h").T)),
+                    "wheel momentum [N·m·s]",
+                    _wheel_limit(results, "momentum_limit", "N·m·s"),
+                ),
             ],
         ),
     ]
@@ -461,6 +511,19 @@ REQUIREMENTS = [
 ]
 
 
+#: what a campaign's envelopes of the recorded signals draw: the stability requirement on
+#: the rate relative to the orbit frame, about every body axis (pointing_stability)
+BOUNDS = [
+    SignalBound(
+        "SatelliteDynamics.w_BO_B",
+        -STABILITY,
+        STABILITY,
+        f"required within ±{STABILITY / DEG:g} °/s (±{STABILITY:.3g} rad/s)",
+        requirement="pointing_stability",
+    )
+]
+
+
 SCENARIO = Scenario(
     "payload_sweep",
     "Two symmetric swinging payloads compensated by a reaction wheel",
@@ -471,4 +534,5 @@ SCENARIO = Scenario(
     figures=figures,
     diagnose=diagnose,
     systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
+    bounds=BOUNDS,
 )

@@ -30,6 +30,7 @@ from agilesat.orchestration.mission import (
     NotEvaluable,
     Pointing,
     Scenario,
+    SignalBound,
     System,
     Variant,
     lines,
@@ -469,9 +470,19 @@ def momentum_capacity(direction, h_rotor: float = H_ROTOR) -> float:
     return float(h_rotor * np.sqrt(1.0 - (GIMBAL_AXES @ d) ** 2).sum())
 
 
+#: the maneuver's phases as figures name them: (name, start, end), phase p ending at t_p
+PHASES = tuple(
+    zip(
+        ("1 accel.", "2 coast", "3 decel.", "4 imaging", "5 settling"),
+        (0.0, *PROFILE.times[:4]),
+        (*PROFILE.times[:4], math.inf),
+    )
+)
+
+
 def figures(results, out_dir) -> list:
-    """The paper's Figs 4–11 from a run, with the gimbal limits, the scan-rate requirement
-    and the paper's values drawn."""
+    """The paper's Figs 4–11 from a run, with the gimbal limits, the scan-rate requirement,
+    the settling threshold and time, the paper's values and the maneuver's phases drawn."""
     t = results.time
     deg = 180 / math.pi
     pitch = results["SatelliteDynamics.euler_BO[2]"] * deg
@@ -493,14 +504,23 @@ def figures(results, out_dir) -> list:
     accel_limit = ACCEL_LIMIT
     torque = delivered_torque(results)
     paper_torque = PAPER["max_abs_output_torque"]
+    settled = next(x for x in METRICS if x.name == "settling_time").evaluate(results).value
+    settling_marks = {
+        "limit": ((SETTLED_RATE * deg,), f"stable: |ω_y| < {SETTLED_RATE * deg:g} °/s"),
+        "paper_at": (PAPER["settling_time"], f"paper: stable from {PAPER['settling_time']:g} s"),
+        "log": True,
+        **({"at": (settled, f"stable from {settled:g} s")} if settled is not None else {}),
+    }
+    magnitude = np.abs(rate[settling])
     return [
         panels(
             out_dir / "fig04_pitch.png",
             "Fig. 4 pitch angle (B rel. O)",
             [
-                (t, {"achieved": pitch, "planned": reference[:, 0]}, "pitch [deg]"),
-                (t, {"achieved − planned": pitch - reference[:, 0]}, "error [deg]"),
+                (t, {"achieved": pitch, "planned": reference[:, 0]}, "pitch [°]"),
+                (t, {"achieved − planned": pitch - reference[:, 0]}, "error [°]"),
             ],
+            phases=PHASES,
         ),
         panels(
             out_dir / "fig05_pitch_rate.png",
@@ -513,6 +533,7 @@ def figures(results, out_dir) -> list:
                 ),
                 (t, {"achieved − planned": rate - reference[:, 1]}, "error [°/s]"),
             ],
+            phases=PHASES,
         ),
         panels(
             out_dir / "fig06_imaging_and_settling.png",
@@ -534,7 +555,12 @@ def figures(results, out_dir) -> list:
                         ),
                     },
                 ),
-                (t[settling], {"pitch rate": rate[settling]}, "settling [°/s]"),
+                (
+                    t[settling],
+                    {"|pitch rate|": np.where(magnitude > 0, magnitude, np.nan)},
+                    "settling |ω_y| [°/s]",
+                    settling_marks,
+                ),
             ],
         ),
         lines(
@@ -543,6 +569,7 @@ def figures(results, out_dir) -> list:
             t,
             dict(zip(gyros, delta_dot.T)),
             "gimbal rate [rad/s]",
+            phases=PHASES,
             **rate_limit,
         ),
         panels(
@@ -570,14 +597,16 @@ def figures(results, out_dir) -> list:
             t,
             dict(zip(gyros, results.vector("CmgCluster.delta").T * deg)),
             "gimbal angle [°]",
+            phases=PHASES,
         ),
-        lines(
+        lines(  # log: near a singularity (literal_spin) Q falls by decades
             out_dir / "fig10_singularity.png",
             "Fig. 10 singularity measure",
             t,
             {"Q": results["CmgCluster.singularity"]},
             "Q = det(A Aᵀ) [-], A = [a₁ … a₆] torque axes",
-            bottom=0.0,
+            phases=PHASES,
+            log=True,
         ),
         panels(
             out_dir / "fig11_output_torque.png",
@@ -591,8 +620,33 @@ def figures(results, out_dir) -> list:
                 )
                 for i, axis in enumerate("xyz")
             ],
+            phases=PHASES,
         ),
     ]
+
+
+#: what a campaign's envelopes of the recorded signals draw: the imaging rate's band over
+#: the imaging phase (the Euler pitch rate relative to O, as the metric reads it) and the
+#: gimbal rate limit
+BOUNDS = [
+    SignalBound(
+        "SatelliteDynamics.euler_rate_BO[2]",
+        PROFILE.scan_rate - SCAN_RATE_TOLERANCE,
+        PROFILE.scan_rate + SCAN_RATE_TOLERANCE,
+        f"required imaging rate {PROFILE.scan_rate / DEG:g} ± {SCAN_RATE_TOLERANCE / DEG:g} °/s "
+        f"({PROFILE.scan_rate:.4g} ± {SCAN_RATE_TOLERANCE:.2g} rad/s)",
+        start=PROFILE.times[2],
+        stop=PROFILE.times[3],
+        requirement="imaging_pitch_rate_mean",
+    ),
+    SignalBound(
+        "CmgCluster.delta_dot",
+        -RATE_LIMIT,
+        RATE_LIMIT,
+        f"gimbal rate limit ±{RATE_LIMIT:g} rad/s",
+        limit=True,
+    ),
+]
 
 
 SCENARIO = Scenario(
@@ -605,4 +659,5 @@ SCENARIO = Scenario(
     figures=figures,
     diagnose=diagnose,
     systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
+    bounds=BOUNDS,
 )

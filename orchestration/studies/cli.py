@@ -177,7 +177,12 @@ def _stare(args) -> int:
     print(f"stare: {orbit['epoch']} UTC + 200 s (zero Doppler at t = 100 s)")
     scenario = pass_scenario(orbit, args.out, not args.no_yaw_compensation)
     with Progress("stare", quiet=args.quiet) as progress:
-        _, summary = run(scenario, out_dir=args.out, echo=echo_to(args.out), progress=progress)
+        _, summary = run(
+            scenario,
+            out_dir=args.out,
+            echo=echo_to(args.out, say=progress.write),
+            progress=progress,
+        )
     print(f"results in {args.out}/")
     return report(summary)
 

@@ -69,6 +69,15 @@ def pretty(unit: str | None) -> str:
     return unit.replace(".", "·").translate(_SUPERSCRIPT)
 
 
+def join(number: str, unit: str) -> str:
+    """A number and its unit as people write them: '0.5 rad/s', '0.006 °/s', '2.1°' (no
+    space before a degree sign that stands alone, as before ′ and ″; ISO 80000-1), '0.57'
+    (no unit).  ``unit`` as :func:`pretty` writes it."""
+    if not unit:
+        return number
+    return number + ("" if unit in ("°", "′", "″") else " ") + unit
+
+
 def label(name: str, unit: str | None) -> str:
     """An axis label: 'w_BI_B [rad/s]', or the name alone for a dimensionless value."""
     text = pretty(unit)

@@ -2,7 +2,6 @@
 unit spelling, on synthetic data: each check passes where it should and fails with a
 message that says where."""
 
-import io
 import math
 
 import numpy as np
@@ -18,6 +17,7 @@ from agilesat.orchestration.output.checks import (
 from agilesat.orchestration.output.progress import Progress
 from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.system.units import pretty
+from helpers import Stream
 
 
 @pytest.fixture
@@ -80,25 +80,16 @@ def test_requirements_from_the_summary():
         assert_requirements_met(summary, "f")
 
 
-class _Stream(io.StringIO):
-    def __init__(self, tty):
-        super().__init__()
-        self.tty = tty
-
-    def isatty(self):
-        return self.tty
-
-
 def test_progress_plain_lines_without_a_terminal_bar_in_one_nothing_when_quiet():
-    plain = _Stream(False)
+    plain = Stream(False)
     with Progress("run", stream=plain, interval=0.0) as progress:
         progress(50, 100)
     assert plain.getvalue().startswith("run: 50/100 steps (50 %)")
-    tty = _Stream(True)
+    tty = Stream(True)
     with Progress("run", stream=tty) as progress:
         progress(50, 100)
     assert "run:" in tty.getvalue() and "|" in tty.getvalue()  # tqdm's bar
-    quiet = _Stream(True)
+    quiet = Stream(True)
     with Progress("run", stream=quiet, quiet=True, interval=0.0) as progress:
         progress(50, 100)
     assert quiet.getvalue() == ""

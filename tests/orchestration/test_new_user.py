@@ -13,7 +13,7 @@ def test_info_of_a_variant_shows_its_values_marked_with_degrees_and_the_outputs(
     text = info("video_sar:no_yaw_compensation")
     header = text.split("metrics (")[0]
     # 0.446370651122 rad = 25.5752°, 0.804885764925 rad = 46.1166°
-    assert "SatelliteDynamics.attitude0 = [-0.446371,0.804886,0] rad ([-25.5752,46.1166,0] °)" in (
+    assert "SatelliteDynamics.attitude0 = [-0.446371,0.804886,0] rad ([-25.5752,46.1166,0]°)" in (
         header
     )
     assert "StaringGuidance.yaw_compensation = false" in header
@@ -146,3 +146,47 @@ def test_one_quiet_flag_everywhere():
 
 
 ARGS = {"run": ["x"], "stare": ["--tle", "f"], "campaign": ["x"]}
+
+
+def test_the_degree_sign_is_spaced_alike_by_every_printer(tmp_path):
+    """No space before a degree sign standing alone (as the unit printer writes '2.1°'),
+    one before every other unit, '°/s' included: in summaries, requirement statements,
+    pointing verdicts, the pytest plugin's assertions and `info`."""
+    import math
+
+    import numpy as np
+
+    from agilesat.orchestration.output.checks import assert_settles, assert_within
+    from agilesat.orchestration.output.results import Results
+    from agilesat.orchestration.output.summary import format_value
+    from agilesat.orchestration.pointing.requirement import format_angle
+    from agilesat.orchestration.system.units import join
+
+    deg = math.pi / 180
+    assert format_value(0.05 * deg, "rad", "deg") == "0.05°"
+    assert format_value(0.05 * deg, "rad/s", "deg/s") == "0.05 °/s"
+    assert format_angle(0.05 * deg) == "0.05°"
+    assert join("3", "N·m") == "3 N·m" and join("0.57", "") == "0.57"
+    t = np.linspace(0.0, 1.0, 11)
+    results = Results(
+        ["time", "A.angle"], np.column_stack((t, t * deg)), {"units": {"A.angle": "rad"}}
+    )
+    with pytest.raises(AssertionError, match=r"above 0\.5° at 5 of 11 points.*\(0\.6°\); worst 1°"):
+        assert_within(results, "A.angle", high=0.5, deg=True)
+    with pytest.raises(AssertionError, match=r"within ±0\.05° after t = 0 s: max 1°"):
+        assert_settles(results, "A.angle", 0.05, 0.0, deg=True)
+
+
+def test_the_papers_value_keeps_its_unit_beside_a_metric_without_a_value():
+    from agilesat.orchestration.output.summary import format_summary
+
+    metrics = {
+        "settling_time": {
+            "value": None,
+            "unit": "s",
+            "display_unit": "s",
+            "paper": 105.0,
+            "reason": "not settled",
+        }
+    }
+    assert "no value   paper 105 s" in format_summary({"metrics": metrics})
