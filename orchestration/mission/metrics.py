@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..output.results import ColumnError
-from ..output.summary import relative_drift
+from ..output.summary import format_value, relative_drift
 from ..pointing.errors import performance_error
 from ..pointing.indices import NotEvaluable
-from ..system.units import quantity, to_si
+from ..system.units import quantity, to_degrees, to_si
 
 __all__ = [
     "Metric",
@@ -181,8 +181,9 @@ def settling_time(
         if not len(outside):
             return (after if after is not None else float(t[0])), "s"
         if outside[-1] == len(t) - 1:
+            shown = format_value(limit, unit, to_degrees(unit)[1])  # 0.01 °/s, not 1.745e-4
             raise NotEvaluable(
-                f"not settled: |{_label(signal)}| > {bound} at the end of the run (t = {t[-1]:g} s)"
+                f"not settled: |{_label(signal)}| > {shown} at the end of the run (t = {t[-1]:g} s)"
             )
         return float(t[outside[-1] + 1]), "s"
 

@@ -59,7 +59,9 @@ def test_settling_time_of_an_exponential_decay():
 
 def test_not_settled_is_no_value_with_its_reason():
     never = m.settling_time("S.w", 1e-6).evaluate(DECAY)
-    assert never.value is None and never.reason.startswith("not settled: |S.w| > 1e-06")
+    assert never.value is None and never.reason.startswith("not settled: |S.w| > 5.73e-05 °/s")
+    in_degrees = m.settling_time("S.w", 1e-4 * DEG).evaluate(DECAY)  # the bound as people say it
+    assert in_degrees.reason.startswith("not settled: |S.w| > 0.0001 °/s at the end")
     late = m.settling_time("S.w", 0.01, after=150.0).evaluate(DECAY)
     assert late.value is None and "the run ends at 100 s, before 150 s" in late.reason
 
