@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..output.kept import reached_the_end
-from ..output.summary import format_value
+from ..output.summary import requirement_text
 from ..system.units import quantity, to_si
 
 MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED = "met", "not met", "not evaluated", "not judged"
@@ -103,13 +103,13 @@ class Bound(Requirement):
         return result
 
     def statement(self, unit: str | None = None, display_unit: str | None = None) -> str:
-        """'pointing_accuracy ≤ 0.032°' (without the metric's unit: as the bound is given)."""
-        if unit is None:
-            limits = {k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None}
-            show = lambda x: str(x) if quantity(x) is not None else f"{x:g} (SI)"  # noqa: E731
-        else:
-            limits = self.limits(unit)
-            show = lambda x: format_value(x, unit, display_unit)  # noqa: E731
+        """'pointing_accuracy ≤ 0.032°', 'rate in [-0.82, -0.78] °/s' in the metric's
+        ``unit`` (SI) shown in ``display_unit``, as the summaries write it; without the
+        metric's unit, as the bound is given."""
+        if unit is not None:
+            return f"{self.metric} {requirement_text(self.limits(unit), unit, display_unit)}"
+        limits = {k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None}
+        show = lambda x: str(x) if quantity(x) is not None else f"{x:g} (SI)"  # noqa: E731
         if "min" in limits and "max" in limits:
             return f"{self.metric} in [{show(limits['min'])}, {show(limits['max'])}]"
         if "max" in limits:

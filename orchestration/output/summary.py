@@ -104,7 +104,7 @@ def format_value(value: float, unit: str | None, display_unit: str | None = None
     return join(f"{shown:.4g}", text)
 
 
-def _requirement(requirement, unit, display_unit) -> str:
+def requirement_text(requirement, unit, display_unit) -> str:
     """A requirement as text in the display unit: a bound (≤ x), a band [a, b], or
     {"min"/"max": ...} (either may be missing)."""
     if isinstance(requirement, dict):
@@ -140,7 +140,7 @@ def format_summary(summary: dict) -> str:
             else ""
         )
         required = (
-            f"required {_requirement(m['requirement'], unit, display)}"
+            f"required {requirement_text(m['requirement'], unit, display)}"
             if "requirement" in m
             else ""
         )

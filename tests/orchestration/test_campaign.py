@@ -229,7 +229,7 @@ def test_failures_are_recorded_outcomes(tmp_path, fmus):
     assert result.returncode == 3, result.stderr
     table = rows(out)
     assert [r["status"] for r in table] == ["ok", "error", "failed", "error"]
-    required = "requirement imaging_pitch_rate_mean in [-0.82 °/s, -0.78 °/s] not met: "
+    required = "requirement imaging_pitch_rate_mean in [-0.82, -0.78] °/s not met: "
     assert re.search(re.escape(required) + r"-0\.6\d+ °/s", table[2]["message"])
     assert "rate_limit (-1.0) and accel_limit (0.5) must be positive" in table[1]["message"]
     assert table[0]["met_imaging_pitch_rate_mean"] == "True"
