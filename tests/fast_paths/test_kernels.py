@@ -50,6 +50,7 @@ def _both(function, *arrays_and_args):
     return runs
 
 
+@pytest.mark.slow  # numba compiles the kernels first on a fresh machine
 @needs_numba
 @pytest.mark.parametrize("gravity_gradient", [False, True])
 @pytest.mark.parametrize("seed, spin, dt", [(1, 0.01, 0.05), (2, 0.3, 0.1), (3, 2.0, 0.5)])
@@ -98,9 +99,10 @@ def test_euler_angles_compiled_are_those_of_the_python_through_the_gimbal_lock()
     assert zone >= 3 and exact >= 1  # the lock zone was crossed, exact lock reached
 
 
-@pytest.fixture(params=["compiled", "python"])
+@pytest.fixture(params=[pytest.param("compiled", marks=pytest.mark.slow), "python"])
 def dynamics_kernels(request, monkeypatch):
-    """SatelliteDynamics' kernels run compiled (numba) or as their Python."""
+    """SatelliteDynamics' kernels run compiled (numba; the slow layer: compiled first on a
+    fresh machine) or as their Python."""
     if request.param == "compiled" and jit._numba() is None:
         pytest.skip("numba not installed or AGILESAT_JIT=0")
     for kernel in jit.kernels(satellite_dynamics).values():
@@ -246,6 +248,7 @@ def _runs() -> str:
     return "".join(run(model(), 300).tobytes().hex() for model, (_, run) in _RUNS.items())
 
 
+@pytest.mark.slow  # numba compiles the kernels first on a fresh machine
 @needs_numba
 @pytest.mark.parametrize(
     "model, module, run",

@@ -57,9 +57,10 @@ ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
 STEP = 0.05
 
 
-@pytest.fixture(params=["compiled", "py_func"])
+@pytest.fixture(params=[pytest.param("compiled", marks=pytest.mark.slow), "py_func"])
 def path(request, monkeypatch):
-    """Every kernel of the models running its compiled function or its Python."""
+    """Every kernel of the models running its compiled function or its Python (compiled:
+    the slow layer, as numba compiles every model's kernels first on a fresh machine)."""
     for kernel in ALL_KERNELS:
         monkeypatch.setattr(kernel, "_run", getattr(kernel, request.param))
     return request.param
@@ -336,6 +337,7 @@ def singular_angles():
 
 
 @needs_numba
+@pytest.mark.slow  # numba compiles the steering kernels first on a fresh machine
 @pytest.mark.parametrize("law", [0, SR_INVERSE])
 def test_a_singular_configuration_is_the_same_compiled_and_in_python(law):
     delta = singular_angles()
