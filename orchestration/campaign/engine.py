@@ -40,7 +40,7 @@ from ..cosim.signals import signal_at
 from ..output.recorder import write_text
 from .files import CampaignFileError, changed, journal_record, read_object, system_content
 from .plan import Plan, Spec
-from .worker import quiet_closed_connections, run_batch, warm_up_plugin
+from .worker import quiet_closed_connections, run_batch
 
 IN_FLIGHT_PER_WORKER = 2  # batches queued per worker: the next is there when one ends
 BATCH_SECONDS = 2.0
@@ -270,13 +270,6 @@ def execute(
     timed = [0.0, 0]  # seconds and number of the runs made here, for the batch size
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
     hook = signal_at("run")
-
-    client.register_plugin(  # each worker's imports and loads at its start-up
-        warm_up_plugin(
-            plan.target, plan.step, plan.stop, plan.spec.algorithm, dict(plan.spec.set),
-            -(-plan.total // max(1, len(watcher.workers))),
-        )
-    )  # fmt: skip
 
     def submit():
         workers = len(watcher.workers)

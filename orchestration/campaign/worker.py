@@ -18,7 +18,6 @@ import numpy as np
 from ..cosim.signals import signal_at
 
 _started = 0  # runs this process started
-_warm_up: list[float] = []  # the seconds of this process's warm-up run, until reported
 
 
 def dask_setup(worker) -> None:
@@ -46,41 +45,6 @@ def quiet_closed_connections() -> None:
     for handler in logging.getLogger("distributed").handlers:
         if not any(isinstance(f, _ClosedConnection) for f in handler.filters):
             handler.addFilter(_ClosedConnection())
-
-
-def warm_up(target: str, step, stop, algorithm, parameters: dict, share: int) -> float:
-    """One run of the campaign's target (its nominal values), its results dropped, as the
-    worker starts, before its first task: the imports (numba, SciPy), the FMU loads and
-    the compiled kernels' loads are then made at start-up, not in the first run's time
-    (which it does not shorten overall: the campaign's start-up takes it).  ``share``: the
-    runs this worker is expected to make (AGILESAT_JIT_RUNS, as :func:`run_batch`).  A run
-    that fails here is left to the first real run to report.  Returns the seconds it took,
-    also given in this worker's first record (``warm_up_seconds``)."""
-    from ..runner import run
-
-    os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))
-    began = time.perf_counter()
-    try:
-        run(target, step=step, stop=stop, algorithm=algorithm, parameters=parameters,
-            figures=False, build=False)  # fmt: skip
-    except Exception:  # the first run makes the same run and says what failed
-        pass
-    _warm_up.append(time.perf_counter() - began)
-    return _warm_up[-1]
-
-
-def warm_up_plugin(target: str, step, stop, algorithm, parameters: dict, share: int):
-    """A Dask worker plugin that makes :func:`warm_up` in each worker as it starts (those
-    that join later too); ``Client.register_plugin`` returns once every worker has."""
-    from distributed.diagnostics.plugin import WorkerPlugin
-
-    class WarmUp(WorkerPlugin):
-        name = "agilesat-warm-up"
-
-        def setup(self, worker):
-            warm_up(target, step, stop, algorithm, parameters, share)
-
-    return WarmUp()
 
 
 def run_one(
@@ -134,8 +98,6 @@ def run_one(
         record.update(status="error", message=f"{type(exc).__name__}: {exc}")
     record["signals"] = _signals(results, signals, points)
     record["seconds"] = time.perf_counter() - began
-    if _warm_up:
-        record["warm_up_seconds"] = _warm_up.pop()
     return record
 
 

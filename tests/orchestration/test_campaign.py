@@ -83,19 +83,6 @@ def test_same_command_gives_the_identical_table(three, tmp_path):
     assert "envelope_SatelliteDynamics.w_BO_B_2.png" in summary["figures"]
 
 
-def test_each_worker_warms_up_before_its_first_run(three):
-    """The workers make a run of the target as they start (its imports and loads at
-    start-up): each worker's first record says how long it took, no other record does."""
-    records = sorted(journal(three), key=lambda r: r["index"])
-    firsts = {}
-    for r in records:
-        firsts.setdefault(r["pid"], r["index"])
-    for r in records:
-        warmed = "warm_up_seconds" in r
-        assert warmed == (firsts[r["pid"]] == r["index"]), r
-        assert not warmed or r["warm_up_seconds"] > 0
-
-
 def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
     row = rows(three)[2]
     dispersed = list(row)[list(row).index("grid") + 1 : list(row).index("status")]

@@ -210,20 +210,3 @@ def test_a_worker_binds_each_fmu_once():
     components = [c.name for c in read_system(get("scan_pitch").ssd).components]
     assert sorted(facts["bound"]) == sorted(components)
     assert facts["same"]
-
-
-def test_a_warm_up_that_fails_leaves_the_failure_to_the_first_run(monkeypatch):
-    """A worker's warm-up run (at its start-up) raises nothing: the first real run makes
-    the same run and reports its failure, with the warm-up's seconds in its record."""
-    from agilesat.orchestration.campaign import worker
-
-    monkeypatch.setattr(worker, "_warm_up", [])
-    monkeypatch.setenv("AGILESAT_JIT_RUNS", "3")
-    seconds = worker.warm_up("no_such_scenario", None, None, None, {}, 7)
-    assert seconds > 0
-    assert worker.os.environ["AGILESAT_JIT_RUNS"] == "3"  # a share already given stays
-    first = worker.run_one(0, "no_such_scenario", {}, None, None, None, [], 0)
-    assert first["status"] == "error" and "no_such_scenario" in first["message"]
-    assert first["warm_up_seconds"] == seconds
-    second = worker.run_one(1, "no_such_scenario", {}, None, None, None, [], 0)
-    assert "warm_up_seconds" not in second

@@ -9,15 +9,14 @@ test; timings on a shared machine vary, compare the ratios within one run).
   and run(), what a campaign worker makes of each run (metrics, no files);
 - a worker's first run, in a fresh process as a worker makes it (AGILESAT_JIT_RUNS = its
   share): importing numba and SciPy's statistics, then the first run_one (FMU loads, the
-  compiled kernels' loads) and the second; what the campaign's warm-up at worker start-up
-  (worker.warm_up) takes out of the first run;
+  compiled kernels' loads) and the second;
 - the campaign, as a user starts it: ``agilesat campaign video_sar --runs N`` on local
   workers (its shipped dispersions), timed from the command's start to its end (cluster
   start-up, every FMU load, the report); the runs' own times from its journal: each
   worker's first run and the mean, against the bare run();
 - the CPU of all the campaign's processes (client, scheduler, nannies, workers), which
-  the machine's other load does not inflate, split into the runs, the warm-ups and the
-  rest (Dask, start-up, report);
+  the machine's other load does not inflate, split into the runs and the rest (Dask,
+  start-up, report);
 - core-seconds per run (wall × workers / runs) and runs per core-second, beside
   Basilisk's Monte Carlo of its VSCMG hub over the same 200 s at 0.05 s (dynamics only, no
   flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given.
@@ -159,7 +158,6 @@ def main() -> None:
         by_pid.setdefault(r["pid"], []).append(r["seconds"])
     mean = sum(r["seconds"] for r in records) / len(records)
     firsts = [seconds[0] for seconds in by_pid.values()]
-    warm = [r["warm_up_seconds"] for r in records if "warm_up_seconds" in r]
     after_first = [s for seconds in by_pid.values() for s in seconds[1:]]
     steady = sum(after_first) / max(1, len(after_first))
     core = wall * args.workers / args.runs
@@ -175,27 +173,22 @@ def main() -> None:
         + " (target <= 1.2x from the first run)"
     )
     print(
-        "  moved to the workers' start-up (a warm-up run each, before the first task): "
-        + (", ".join(f"{w:.3f} s" for w in warm) or "none")
-        + f"; the runs after each worker's first: mean {steady:.3f} s "
+        f"  the runs after each worker's first: mean {steady:.3f} s "
         f"= {steady / b['simulate'][0]:.2f}x the bare simulate()"
     )
     in_runs = sum(r["seconds"] for r in records) / args.workers
     print(
-        f"  the campaign's wall {wall:.1f} s: {in_runs:.1f} s in runs (per worker), "
-        f"{sum(warm) / args.workers:.1f} s warming up, the rest "
-        f"{wall - in_runs - sum(warm) / args.workers:.1f} s: Python and Dask start-up, "
+        f"  the campaign's wall {wall:.1f} s: {in_runs:.1f} s in runs (per worker), the rest "
+        f"{wall - in_runs:.1f} s: Python and Dask start-up, "
         f"Dask's round trips, the report ({(wall - in_runs) * args.workers / args.runs:.4f} "
         "core-s per run outside the runs)"
     )
     in_runs_cpu = args.runs * f["run 1"][1]  # each run as a warm worker's run_one
-    warm_cpu = len(warm) * f["run 0"][1]  # each warm-up as a fresh process's first run_one
     print(
         f"  CPU of all its processes (load-independent): {cpu / args.runs:.3f} core-s per "
         f"run = {cpu / args.runs / bare_cpu:.2f}x the bare simulate()'s CPU; of it the "
-        f"runs (as a warm run_one, {f['run 1'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the "
-        f"warm-ups {warm_cpu / cpu:.0%} (as a first run_one), the rest "
-        f"{1 - (in_runs_cpu + warm_cpu) / cpu:.0%}: "
+        f"runs (as a warm run_one, {f['run 1'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the rest "
+        f"{1 - in_runs_cpu / cpu:.0%}: "
         f"Dask (scheduler, nannies, workers' event loops, round trips), start-up, report"
     )
     print(
