@@ -262,7 +262,7 @@ def finish(
 
         signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
-        bounds = plan.scenario.bounds_for(plan.variant) if plan.scenario else []
+        bounds = _bounds(plan)
         figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
         figures += campaign_figures(
             plan.ensemble, signals, plan.signals, time_axis(plan), summary["ensemble"], out
@@ -272,29 +272,54 @@ def finish(
     return Campaign(table, summary, out)
 
 
+def _bounds(plan: Plan) -> list:
+    """The scenario's signal bounds the envelopes draw: not a limit whose parameter the
+    campaign sets or disperses (the system's value would be the wrong line)."""
+    if plan.scenario is None:
+        return []
+    changed = {key.partition("[")[0] for key in [*plan.spec.set, *plan.grid_keys]}
+    changed |= {d.key.partition("[")[0] for d in plan.dispersions}
+    return [b for b in plan.scenario.bounds_for(plan.variant) if b.parameter not in changed]
+
+
 def nominal_run(plan: Plan) -> dict:
-    """The run at the nominal values (every dispersed parameter at the system's, the
-    spec's ``--set`` applied), whose metrics the histograms mark: {"command": the
-    ``agilesat run`` that makes it, "metrics": {name: SI value}}, or the reason it has
-    none."""
+    """The run at the nominal values (every random dispersion at the system's value, the
+    spec's ``--set`` and the grid point's values applied), whose metrics the histograms
+    mark: {"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
+    the reason it has none (said on stderr too).  A signal during it is recorded for the
+    command's exit status (130/143) as one while the cluster closes."""
+    from ..cosim.master import Interrupted
     from ..runner import run
 
     spec = plan.spec
-    command = run_arguments(plan, spec.set)
+    grid = {
+        name: value
+        for name, value in plan.run_values(0).items()
+        if any(name == key or name.startswith(key + "[") for key in plan.grid_keys)
+    }
+    parameters = {**spec.set, **grid}
+    command = shlex.join(run_arguments(plan, parameters))
+    print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
     try:
         _, summary = run(
             spec.target,
             step=spec.step,
             stop=spec.stop,
             algorithm=spec.algorithm,
-            parameters=spec.set,
+            parameters=parameters,
             figures=False,
             build=False,
         )
-    except (Exception, KeyboardInterrupt) as failure:  # the marker is not worth a failure
-        return {"command": shlex.join(command), "reason": f"{type(failure).__name__}: {failure}"}
+    except (Exception, KeyboardInterrupt) as failure:  # the runs are made: not worth failing
+        if isinstance(failure, Interrupted):
+            engine.INTERRUPTS.signals.append(failure.signal)
+        elif isinstance(failure, KeyboardInterrupt) and not engine.INTERRUPTS.signals:
+            raise  # not a signal the campaign's handler took
+        reason = f"{type(failure).__name__}: {failure}"
+        print(f"campaign: no nominal run ({reason})", file=sys.stderr)
+        return {"command": command, "reason": reason}
     values = {k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None}
-    return {"command": shlex.join(command), "metrics": values}
+    return {"command": command, "metrics": values}
 
 
 def _ensemble(plan: Plan, out: Path, made: int) -> dict:

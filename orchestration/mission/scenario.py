@@ -71,11 +71,13 @@ _NOMINAL = Variant("the scenario as defined")
 
 @dataclass(frozen=True)
 class SignalBound:
-    """What every sample of a recorded signal should keep, low ≤ x(t) ≤ high (either may
-    be None) over [start, stop] (None: the whole run): a requirement (``requirement``
-    names it: a variant that does not judge it draws no band) or a device's ``limit``.
-    Campaign envelopes of the signal (``--keep``) draw it: a requirement as a green band,
-    a limit as dashed red lines.  ``signal``: a variable (every element) or an element."""
+    """A band low ≤ x ≤ high (either may be None) of a recorded signal over [start, stop]
+    (None: the whole run), which campaign envelopes of the signal (``--keep``) draw: a
+    requirement's band in green (``requirement`` names it: a variant that does not judge it
+    draws none; the requirement may be on a statistic of the signal, e.g. its mean over the
+    window, which the band bounds), or a device's ``limit`` as dashed red lines, the value
+    of the system's ``parameter`` ("Component.name"): a campaign that sets or disperses
+    that parameter draws none.  ``signal``: a variable (every element) or an element."""
 
     signal: str
     low: float | None
@@ -85,6 +87,7 @@ class SignalBound:
     stop: float | None = None
     requirement: str | None = None
     limit: bool = False
+    parameter: str | None = None
 
     def applies_to(self, column: str) -> bool:
         """Does it bound this recorded column ("A.x[2]")?"""

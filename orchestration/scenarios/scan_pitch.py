@@ -645,6 +645,7 @@ BOUNDS = [
         RATE_LIMIT,
         f"gimbal rate limit ±{RATE_LIMIT:g} rad/s",
         limit=True,
+        parameter="CmgCluster.rate_limit",
     ),
 ]
 

@@ -247,3 +247,71 @@ def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
     assert nominal["metrics"] == {
         k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None
     }
+
+
+def test_the_nominal_run_of_a_one_point_grid_is_at_that_point(monkeypatch, capsys):
+    """A grid of one value is the campaign's setting, not a dispersion: the nominal run
+    sets it too (it ran at the system's value), and says so on stderr."""
+    from agilesat.orchestration import runner
+    from agilesat.orchestration.campaign import nominal_run
+    from agilesat.orchestration.campaign.plan import Plan, Spec
+
+    given = []
+    summary = {"metrics": {"m": {"value": 1.0}}}
+    monkeypatch.setattr(runner, "run", lambda target, **kw: given.append(kw) or (None, summary))
+    vary = ["CmgCluster.rate_limit=values(0.3)", "CmgCluster.h_rotor=*normal(1, 0.005)"]
+    nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, vary=vary, stop=40.0)))
+    assert given[0]["parameters"] == {"CmgCluster.rate_limit": 0.3}
+    assert nominal == {
+        "command": "agilesat run scan_pitch --stop 40.0 --set CmgCluster.rate_limit=0.3",
+        "metrics": {"m": 1.0},
+    }
+    assert "the nominal run, for the histograms: agilesat run scan_pitch" in capsys.readouterr().err
+
+
+def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch, capsys):
+    """The runs are made and kept; the nominal run stopped by SIGTERM is said and recorded,
+    and the campaign command exits 143 (the signal in engine.INTERRUPTS)."""
+    import signal
+
+    from agilesat.orchestration import runner
+    from agilesat.orchestration.campaign import engine, nominal_run
+    from agilesat.orchestration.campaign.plan import Plan, Spec
+    from agilesat.orchestration.cosim.master import Interrupted
+
+    def stopped(target, **kw):
+        raise Interrupted("interrupted by SIGTERM at t = 3 s", None, signal.SIGTERM)
+
+    monkeypatch.setattr(runner, "run", stopped)
+    monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
+    nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))
+    assert nominal["reason"] == "Interrupted: interrupted by SIGTERM at t = 3 s"
+    assert engine.INTERRUPTS.signals == [signal.SIGTERM]
+    assert "no nominal run (Interrupted: interrupted by SIGTERM" in capsys.readouterr().err
+
+    def typo(target, **kw):
+        raise KeyboardInterrupt  # not a signal the campaign's handler recorded: not hidden
+
+    monkeypatch.setattr(runner, "run", typo)
+    monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
+    with pytest.raises(KeyboardInterrupt):
+        nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))
+
+
+@pytest.mark.parametrize(
+    "settings, limit_drawn",
+    [
+        ({}, True),
+        ({"set": {"CmgCluster.rate_limit": "0.4"}}, False),
+        ({"vary": ["CmgCluster.rate_limit=*normal(1, 0.01)"]}, False),
+        ({"vary": ["CmgCluster.rate_limit=values(0.3, 0.6)"]}, False),
+        ({"vary": ["CmgCluster.h_rotor=*normal(1, 0.005)"]}, True),
+    ],
+)
+def test_a_limit_the_campaign_changes_is_not_drawn_at_the_systems_value(settings, limit_drawn):
+    from agilesat.orchestration.campaign import _bounds
+    from agilesat.orchestration.campaign.plan import Plan, Spec
+
+    bounds = _bounds(Plan(Spec("scan_pitch", runs=2, stop=40.0, **settings)))
+    assert [b.requirement for b in bounds if not b.limit] == ["imaging_pitch_rate_mean"]
+    assert any(b.parameter == "CmgCluster.rate_limit" for b in bounds) == limit_drawn
