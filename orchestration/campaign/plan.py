@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
+from ..mission.requirements import judged_over_campaign
 from ..mission.targets import resolve
 from ..system.description import Description
 from ..system.parameters import did_you_mean
@@ -119,8 +120,7 @@ class Plan:
         self.ensemble = [
             r
             for r in (self.scenario.requirements_for(self.variant) if self.scenario else [])
-            if hasattr(r, "evaluate_campaign")
-            and getattr(r, "over_campaign", True)
+            if judged_over_campaign(r)
             and r.name not in self.scenario.variant(self.variant).exempt()  # type: ignore[union-attr]
         ]
         for requirement in self.ensemble:

@@ -233,6 +233,12 @@ class Pointing(Requirement):
         return verdict
 
 
+def judged_over_campaign(requirement) -> bool:
+    """Does a campaign judge ``requirement`` over all its runs (an ``evaluate_campaign``
+    and, where it says, ``over_campaign``), not run by run?"""
+    return hasattr(requirement, "evaluate_campaign") and getattr(requirement, "over_campaign", True)
+
+
 def _quaternion(name: str) -> tuple[str, ...]:
     """The four recorded columns of a quaternion output."""
     return tuple(f"{name}[{i}]" for i in range(1, 5))

@@ -35,7 +35,16 @@ from ..output.results import ColumnError
 from ..output.summary import format_value
 from ..system.parameters import did_you_mean
 from .metrics import Metric
-from .requirements import MET, NOT_EVALUATED, NOT_JUDGED, NOT_MET, Bound, Requirement, Verdict
+from .requirements import (
+    MET,
+    NOT_EVALUATED,
+    NOT_JUDGED,
+    NOT_MET,
+    Bound,
+    Requirement,
+    Verdict,
+    judged_over_campaign,
+)
 from .system import System, _origin
 
 
@@ -246,7 +255,7 @@ class Scenario:
                 **({"reason": verdict.reason} if verdict.reason else {}),
                 **({"text": verdict.text} if verdict.text else {}),
                 **({"details": verdict.details} if verdict.details else {}),
-                **({"judged_over": "campaign"} if getattr(r, "over_campaign", False) else {}),
+                **({"judged_over": "campaign"} if judged_over_campaign(r) else {}),
             }
             if metric in entries and isinstance(r, Bound):
                 entries[metric]["requirement"] = r.limits(unit)

@@ -209,3 +209,24 @@ def test_a_metric_raising_not_evaluable_has_no_value():
 
     value = Metric("late", before, "s").evaluate(DECAY)
     assert (value.value, value.reason) == (None, "the run ends before the window")
+
+
+def test_a_requirement_of_ones_own_judged_over_the_campaign_is_marked_so_in_the_summary():
+    """A user's requirement with ``evaluate_campaign`` (and no ``over_campaign``) is judged
+    over a campaign's runs (campaign/plan.py) and the run's summary says so: one rule
+    (mission.requirements.judged_over_campaign)."""
+    from agilesat.orchestration.mission.requirements import MET, Requirement, Verdict
+
+    class Spread(Requirement):
+        name = "spread"
+        signals = ("S.w[1]",)
+
+        def evaluate(self, results, metrics):
+            return Verdict(MET, 0.0)
+
+        def evaluate_campaign(self, signals, t):
+            return Verdict(MET, 0.0)
+
+    ours = scenario()
+    ours.requirements.append(Spread())
+    assert ours.evaluate(DECAY)["requirements"]["spread"]["judged_over"] == "campaign"
