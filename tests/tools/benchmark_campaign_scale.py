@@ -183,11 +183,11 @@ def main() -> None:
         f"Dask's round trips, the report ({(wall - in_runs) * args.workers / args.runs:.4f} "
         "core-s per run outside the runs)"
     )
-    in_runs_cpu = args.runs * f["run 1"][1]  # each run as a warm worker's run_one
+    in_runs_cpu = args.runs * b["run"][1]  # each run as the bare run()'s CPU
     print(
         f"  CPU of all its processes (load-independent): {cpu / args.runs:.3f} core-s per "
         f"run = {cpu / args.runs / bare_cpu:.2f}x the bare simulate()'s CPU; of it the "
-        f"runs (as a warm run_one, {f['run 1'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the rest "
+        f"runs (as the bare run(), {b['run'][1]:.3f} s) {in_runs_cpu / cpu:.0%}, the rest "
         f"{1 - in_runs_cpu / cpu:.0%}: "
         f"Dask (scheduler, nannies, workers' event loops, round trips), start-up, report"
     )
