@@ -19,9 +19,9 @@ are eq. (13): ``w = (φ̇ cψ cθ + θ̇ sψ, −φ̇ sψ cθ + θ̇ cψ, ψ̇ +
 The functions take any sequence and compute on Python floats: models call them once or
 several times per co-simulation step on 3- and 4-vectors, where NumPy's per-call cost
 would dominate.  The tuple primitives (``dcm``, ``rotate``, ``rotate_back``, ``qmul``, and
-the vectors' ``dot``, ``cross``, ``norm`` and ``quat_norm``) return tuples or floats for
-such hot loops, compiled in kernels (:mod:`.jit`), the one copy of each every model uses;
-the rest return NumPy arrays.
+the vectors' ``dot``, ``cross``, ``norm``, ``quat_dot`` and ``quat_norm``) return tuples or
+floats for such hot loops, compiled in kernels (:mod:`.jit`), the one copy of each every
+model uses; the rest return NumPy arrays.
 """
 
 from __future__ import annotations
@@ -103,6 +103,13 @@ def cross(a, b) -> tuple:
 def norm(v) -> float:
     """|v| of a 3-vector: √(v · v)."""
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@jitable
+def quat_dot(p, q) -> float:
+    """p · q of quaternions (any 4-vectors), summed in order: negative where q is nearer
+    −p than p (its sign, flipped, keeps a quaternion continuous in time)."""
+    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3]
 
 
 @jitable

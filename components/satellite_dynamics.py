@@ -55,6 +55,7 @@ from .rotations import (
     euler123_ddot,
     euler123_dot,
     qmul,
+    quat_dot,
     quat_from_dcm,
     quat_norm,
     rotate,
@@ -447,7 +448,7 @@ def _output(values, state, t):
     w_BI_B = _rate(q_BI, H_I, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), _matrix(s, S_J_INV))
     q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), q_BI)
     last = _quaternion(s, S_Q_BO)
-    if q_BO[0] * last[0] + q_BO[1] * last[1] + q_BO[2] * last[2] + q_BO[3] * last[3] < 0:
+    if quat_dot(q_BO, last) < 0:
         q_BO = (-q_BO[0], -q_BO[1], -q_BO[2], -q_BO[3])  # keep the sign continuous
     C_BO = dcm(q_BO)
     euler = euler123(q_BO, C_BO, _vector(s, S_EULER), True)

@@ -105,9 +105,11 @@ from .rotations import (
     dot,
     euler123,
     norm,
+    quat_dot,
     quat_from_dcm,
     quat_of_rows,
     rotate,
+    rotate_back,
     wrap_pi,
 )
 from .variables import Layout, input_, output, parameter
@@ -167,13 +169,8 @@ def _combination(a, x, b, y) -> tuple:
 
 @jitable
 def _rows_product(A, B) -> tuple:
-    """A B for 3×3 matrices given as rows."""
-    columns = (
-        (B[0][0], B[1][0], B[2][0]),
-        (B[0][1], B[1][1], B[2][1]),
-        (B[0][2], B[1][2], B[2][2]),
-    )
-    return (rotate(columns, A[0]), rotate(columns, A[1]), rotate(columns, A[2]))
+    """A B for 3×3 matrices given as rows (row i of A B is Bᵀ applied to row i of A)."""
+    return (rotate_back(B, A[0]), rotate_back(B, A[1]), rotate_back(B, A[2]))
 
 
 # -- geometry (module docstring) -----------------------------------------------------------
@@ -283,17 +280,12 @@ def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
         if not ok:
             return k
         up, east, north = _tangent_frame(r_T, latitude)
-        C_IB = _transposed(dcm(q[k]))
-        beam, axis = rotate(C_IB, beam_B), rotate(C_IB, axis_B)
+        C_BI = dcm(q[k])
+        beam, axis = rotate_back(C_BI, beam_B), rotate_back(C_BI, axis_B)
         ok, azimuth[k] = _azimuth(ground_line(beam, axis, up), east, north)
         if not ok:
             return k
     return -1
-
-
-@jitable
-def _transposed(M) -> tuple:
-    return ((M[0][0], M[1][0], M[2][0]), (M[0][1], M[1][1], M[2][1]), (M[0][2], M[1][2], M[2][2]))
 
 
 @jitable
@@ -612,7 +604,7 @@ def guidance_output(values, state, t):
     q = quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22)
     anchored = s[ANCHORED] != 0.0
     anchor_euler = (s[ANCHOR_EULER], s[ANCHOR_EULER + 1], s[ANCHOR_EULER + 2])
-    if anchored and _dot4(q, s[ANCHOR_Q : ANCHOR_Q + 4]) < 0.0:
+    if anchored and quat_dot(q, s[ANCHOR_Q : ANCHOR_Q + 4]) < 0.0:
         q = (-q[0], -q[1], -q[2], -q[3])
     if not mounted:  # eq (11) and the yaw of eq (12), continued from the anchor
         x, y_, z = rotate(C_OI, u)
@@ -621,7 +613,9 @@ def guidance_output(values, state, t):
         if anchored:
             euler = _unwrap3(euler, anchor_euler)
     else:
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _rows_product(C_RI, _transposed(C_OI))
+        # C_RO = C_RI C_OIᵀ: row i is C_OI applied to row i of C_RI
+        C_RO = (rotate(C_OI, C_RI[0]), rotate(C_OI, C_RI[1]), rotate(C_OI, C_RI[2]))
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C_RO
         q_RO = quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22)
         euler = euler123(q_RO, dcm(q_RO), anchor_euler, anchored)
 
@@ -643,8 +637,3 @@ def guidance_output(values, state, t):
     values[Y_RANGE] = s_range
     values[Y_ROTATION] = rotation
     return OK
-
-
-@jitable
-def _dot4(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]

@@ -252,7 +252,7 @@ def finish(
     }
     histograms = plan.spec.runs > 1
     if histograms and len(plan.grid) == 1 and status == "complete":
-        summary["nominal"] = nominal_run(plan)
+        summary["nominal"] = nominal_run(plan, previous)
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     nominal = summary.get("nominal", {}).get("metrics", {})
     figures = report.histograms(table, metrics, out, nominal) if histograms else []
@@ -282,12 +282,18 @@ def _bounds(plan: Plan) -> list:
     return [b for b in plan.scenario.bounds_for(plan.variant) if b.parameter not in changed]
 
 
-def nominal_run(plan: Plan) -> dict:
+def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     """The run at the nominal values (every random dispersion at the system's value, the
     spec's ``--set`` and the grid point's values applied), whose metrics the histograms
     mark: {"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
     the reason it has none (said on stderr too).  A signal during it is recorded for the
-    command's exit status (130/143) as one while the cluster closes."""
+    command's exit status (130/143) as one while the cluster closes.
+
+    ``before``: campaign.json as the campaign found it (a resumed one's).  Its nominal run
+    is kept, not made again, when it has metrics, the same command and the same
+    ``versions``: the run would be the same one (a resume has the same spec and system
+    content, :func:`.engine.open_directory`); otherwise it is made again, and stderr says
+    why."""
     from ..cosim.master import Interrupted
     from ..runner import run
 
@@ -299,6 +305,17 @@ def nominal_run(plan: Plan) -> dict:
     }
     parameters = {**spec.set, **grid}
     command = shlex.join(run_arguments(plan, parameters))
+    held = (before or {}).get("nominal")
+    if held:
+        differs = _not_this_nominal_run(held, command, before.get("versions"))
+        if not differs:
+            print(
+                f"campaign: the nominal run, for the histograms: {command} (kept: "
+                "campaign.json has it, made with the same command and versions)",
+                file=sys.stderr,
+            )
+            return {"command": command, "metrics": held["metrics"]}
+        print(f"campaign: the nominal run in campaign.json {differs}: made again", file=sys.stderr)
     print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
     try:
         _, summary = run(
@@ -320,6 +337,18 @@ def nominal_run(plan: Plan) -> dict:
         return {"command": command, "reason": reason}
     values = {k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None}
     return {"command": command, "metrics": values}
+
+
+def _not_this_nominal_run(held, command: str, made_with) -> str | None:
+    """Why campaign.json's nominal run ``held``, made with the versions ``made_with``, is
+    not the one ``command`` makes now, or None."""
+    if not isinstance(held, dict) or not isinstance(held.get("metrics"), dict):
+        return f"has no metrics ({held.get('reason') if isinstance(held, dict) else held})"
+    if held.get("command") != command:
+        return f"was another command ({held.get('command')})"
+    now, then = versions(), made_with if isinstance(made_with, dict) else {}
+    changed = sorted(k for k in {*now, *then} if now.get(k) != then.get(k))
+    return f"was made with other versions ({', '.join(changed)})" if changed else None
 
 
 def _ensemble(plan: Plan, out: Path, made: int) -> dict:

@@ -85,20 +85,20 @@ def drawing(before=None):
         _drawing.reset(token)
 
 
-#: (path, Figure) of each figure written while :func:`kept` (per thread)
-_kept: ContextVar[dict | None] = ContextVar("agilesat_kept_figures", default=None)
+#: {file name: Figure} of each figure written while :func:`figure_objects` (per thread)
+_figure_objects: ContextVar[dict | None] = ContextVar("agilesat_figure_objects", default=None)
 
 
 @contextlib.contextmanager
-def kept():
-    """Figures made inside (in this thread) are kept, as {file name: matplotlib Figure} in
-    the dict yielded: what they show can be asked of their axes (the tests do)."""
+def figure_objects():
+    """Figures made inside (in this thread) are collected, as {file name: matplotlib
+    Figure} in the dict yielded: what they show can be asked of their axes (the tests do)."""
     figures: dict = {}
-    token = _kept.set(figures)
+    token = _figure_objects.set(figures)
     try:
         yield figures
     finally:
-        _kept.reset(token)
+        _figure_objects.reset(token)
 
 
 def written() -> tuple[str, ...]:
@@ -453,8 +453,8 @@ def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Pat
         fig.savefig(target, dpi=DPI)
     if watched is not None:
         watched[0].extend([png, *others])
-    if _kept.get() is not None:
-        _kept.get()[Path(path).name] = fig
+    if _figure_objects.get() is not None:
+        _figure_objects.get()[Path(path).name] = fig
     return Path(path)
 
 

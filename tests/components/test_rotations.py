@@ -11,6 +11,7 @@ from agilesat.components.rotations import (
     euler123_from_quat,
     euler123_rates,
     quat_conj,
+    quat_dot,
     quat_from_axis_angle,
     quat_from_dcm,
     quat_from_euler123,
@@ -18,6 +19,8 @@ from agilesat.components.rotations import (
     rot1,
     rot2,
     rot3,
+    rotate,
+    rotate_back,
 )
 
 RNG = np.random.default_rng(7)
@@ -32,6 +35,28 @@ def random_quats(n):
 def test_frame_rotation_about_an_axis_is_the_passive_elementary_matrix(axis, rot):
     for angle in (-2.0, 0.3, 1.7):
         assert np.allclose(dcm_from_quat(quat_from_axis_angle(axis, angle)), rot(angle), atol=1e-15)
+
+
+def test_the_tuple_products_are_numpys_matrix_products():
+    """rotate: M v, rotate_back: Mᵀ v (M as a tuple of rows), quat_dot: p · q, each to
+    rounding (the bound: a few ulps of the sum of the products' magnitudes)."""
+    rng = np.random.default_rng(11)  # its own draws: the other tests' stay as they were
+    for _ in range(50):
+        M, v, p, q = (
+            rng.normal(size=(3, 3)),
+            rng.normal(size=3),
+            rng.normal(size=4),
+            rng.normal(size=4),
+        )
+        rows = tuple(tuple(row) for row in M.tolist())
+        bound = 4 * np.finfo(float).eps
+        assert np.all(abs(np.array(rotate(rows, v)) - M @ v) <= bound * (abs(M) @ abs(v)))
+        assert np.all(abs(np.array(rotate_back(rows, v)) - M.T @ v) <= bound * (abs(M.T) @ abs(v)))
+        assert abs(quat_dot(p, q) - p @ q) <= bound * (abs(p) @ abs(q))
+    C = dcm_from_quat(quat_from_axis_angle(rng.normal(size=3), 2.0))
+    rows = tuple(tuple(row) for row in C.tolist())
+    v = rng.normal(size=3)
+    assert np.allclose(rotate_back(rows, rotate(rows, v)), v, rtol=0, atol=1e-14)  # CᵀC = 1
 
 
 def test_dcm_maps_reference_coordinates_into_the_rotated_frame():

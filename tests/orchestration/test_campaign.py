@@ -179,6 +179,45 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     assert rows(out)[:3] == (rows(three) if made else [])
 
 
+@pytest.mark.parametrize("held", ["the same", "another command", "other versions", "none"])
+def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
+    three, tmp_path, monkeypatch, capsys, held
+):
+    """Resuming a complete campaign makes no run; its finish kept making the nominal run
+    again.  It is kept when campaign.json has it from the same command and versions, made
+    again (and stderr says why) otherwise; either way the files are those of the fresh
+    finish, byte for byte."""
+    from agilesat.orchestration import cli, runner
+
+    out = tmp_path / "copy"
+    shutil.copytree(three, out)
+    summary = json.loads((out / "campaign.json").read_text())
+    if held == "another command":
+        summary["nominal"]["command"] += " --set CmgCluster.h_rotor=1.0"
+    elif held == "other versions":
+        summary["versions"]["numpy"] = "0.0"
+    elif held == "none":
+        del summary["nominal"]
+    (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
+    made = []
+    real = runner.run
+    monkeypatch.setattr(runner, "run", lambda *a, **k: made.append(a) or real(*a, **k))
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}  # it sets its own
+    try:
+        code = cli.main([*COMMAND, "--runs", "3", "--workers", "2", "--out", str(out), "--resume"])
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    assert code in (0, 3)
+    err = capsys.readouterr().err
+    assert made == ([] if held == "the same" else [("scan_pitch",)])
+    assert ("(kept: campaign.json has it" in err) == (held == "the same")
+    reason = {"another command": "was another command", "other versions": "(numpy)"}
+    assert (f"{reason[held]}" in err) if held in reason else ": made again" not in err
+    for name in ("campaign.json", "runs.csv"):
+        assert (out / name).read_text() == (three / name).read_text(), name
+
+
 def test_resume_after_the_process_is_killed(three, tmp_path, monkeypatch):
     """SIGKILL: no clean-up at all; the journal and the spec written at the start suffice."""
     out = tmp_path / "killed"

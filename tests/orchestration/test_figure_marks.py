@@ -1,6 +1,6 @@
 """What the figures mark (issue #28): limits, thresholds, the instants metrics give, the
 phases of a maneuver, log axes where a quantity spans decades; asked of the matplotlib
-objects the figures are made of (:func:`plots.kept`)."""
+objects the figures are made of (:func:`plots.figure_objects`)."""
 
 import math
 
@@ -58,7 +58,7 @@ def _covered(figure) -> list[str]:
 
 def test_axes_of_their_own_x_each_say_what_x_is(tmp_path):
     t1, t2 = np.linspace(0, 10, 11), np.linspace(10, 20, 11)
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         plots.panels(
             tmp_path / "two.png", "two spans", [(t1, {"a": t1}, "a [m]"), (t2, {"b": t2}, "b [m]")]
         )
@@ -68,7 +68,7 @@ def test_axes_of_their_own_x_each_say_what_x_is(tmp_path):
 def test_phases_are_marked_on_every_axes_and_named_above_the_top_one(tmp_path):
     t = np.linspace(0, 30, 301)
     phases = [("1 accel.", 0.0, 10.0), ("2 coast", 10.0, 20.0), ("3 hold", 20.0, math.inf)]
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         plots.panels(
             tmp_path / "p.png",
             "phases",
@@ -84,7 +84,7 @@ def test_phases_are_marked_on_every_axes_and_named_above_the_top_one(tmp_path):
 
 def test_an_instant_the_papers_instant_and_events_are_vertical_lines_in_the_legend(tmp_path):
     t = np.linspace(0, 10, 101)
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         plots.lines(
             tmp_path / "v.png",
             "instants",
@@ -107,7 +107,7 @@ def test_scan_pitch_figures_mark_phases_settling_and_a_log_singularity_measure(
     from agilesat.orchestration.scenarios.scan_pitch import PROFILE, SCENARIO
 
     _, _, summary, results = scan_pitch_run
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         SCENARIO.draw(results, tmp_path)
     imaging, settling = figures["fig06_imaging_and_settling.png"].axes
     assert imaging.get_xlabel() == settling.get_xlabel() == "time [s]"
@@ -132,7 +132,7 @@ def test_payload_sweep_figures_draw_the_wheel_limits_and_the_errors_in_arcsec_on
     from agilesat.orchestration.scenarios.payload_sweep import SCENARIO
 
     results, _ = run("payload_sweep", figures=False, stop=60.0)
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         SCENARIO.draw(results, tmp_path)
     torque, momentum = figures["fig09_wheel.png"].axes
     assert sorted(_horizontal(torque)) == [-0.2, 0.2]  # N·m, the paper's wheel
@@ -163,7 +163,7 @@ def test_overview_leaves_out_euler_rates_near_gimbal_lock_and_says_so(tmp_path):
     data = np.column_stack((t, zero, theta, zero, spike, theta_dot, -spike))
     units = {n: ("rad" if "euler_BO" in n else "rad/s") for n in names[1:]}
     results = Results(names, data, {"units": units})
-    with plots.kept() as figures:
+    with plots.figure_objects() as figures:
         plots.overview(results, tmp_path)
     angles, rates = figures["overview_S.png"].axes
     near, far = np.abs(t - 40.0) < 4.99, np.abs(t - 40.0) > 5.01  # 5° of the lock at 1 °/s
