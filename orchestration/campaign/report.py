@@ -48,7 +48,29 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
     cols += [(name, "f") for name in catalog.get("metrics", {})]
     for name in catalog.get("requirements", {}):
         cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
-    return cols + [("worker", "s"), ("seconds", "f")]
+    return cols + [("worker", "s"), ("seconds", "f"), ("cpu_seconds", "f")]
+
+
+def warm_ups(records: dict) -> dict:
+    """The workers' warm-ups (:mod:`.worker`; one per worker process, in the record of its
+    first batch's first run): their wall and CPU seconds in all and per process, and the
+    errors they raised.  A cost of the campaign, not of its runs' ``seconds``."""
+    made = [r for _, r in sorted(records.items()) if "warm_up_seconds" in r]
+    return {
+        "processes": len(made),
+        "seconds": sum((r["warm_up_seconds"] for r in made), 0.0),
+        "cpu_seconds": sum((r.get("warm_up_cpu_seconds", 0.0) for r in made), 0.0),
+        "workers": [
+            {
+                "worker": r.get("worker", ""),
+                "pid": r.get("pid"),
+                "seconds": r["warm_up_seconds"],
+                "cpu_seconds": r.get("warm_up_cpu_seconds"),
+                **({"error": r["warm_up_error"]} if "warm_up_error" in r else {}),
+            }
+            for r in made
+        ],
+    }
 
 
 def _cell(record: dict, name: str, kind: str):
