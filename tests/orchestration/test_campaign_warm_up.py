@@ -50,12 +50,17 @@ print(json.dumps(first + second))
 """
 
 
+def _records(mode: str) -> list[dict]:
+    """Two batches of scan_pitch runs in a fresh process (two runs, then one)."""
+    result = run_python(BATCHES, mode)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout.splitlines()[-1])
+
+
 @pytest.mark.slow
 @pytest.mark.integration
 def test_the_first_batch_of_a_process_says_its_warm_up(fmus):
-    result = run_python(BATCHES, "plain")
-    assert result.returncode == 0, result.stderr
-    first, second, third = json.loads(result.stdout.splitlines()[-1])
+    first, second, third = _records("plain")
     assert [r["status"] for r in (first, second, third)] == ["ok"] * 3
     assert first["warm_up_seconds"] > 0 and first["warm_up_cpu_seconds"] > 0
     assert "warm_up_error" not in first
@@ -67,9 +72,7 @@ def test_the_first_batch_of_a_process_says_its_warm_up(fmus):
 @pytest.mark.slow
 @pytest.mark.integration
 def test_a_warm_up_that_raises_is_said_and_the_run_makes_its_own_outcome(fmus):
-    result = run_python(BATCHES, "raising")
-    assert result.returncode == 0, result.stderr
-    first, second, third = json.loads(result.stdout.splitlines()[-1])
+    first, second, third = _records("raising")
     assert first["warm_up_error"] == "RuntimeError: the warm-up broke"
     assert [r["status"] for r in (first, second, third)] == ["ok"] * 3
 
