@@ -7,6 +7,7 @@ import json
 import pytest
 
 from agilesat.components.jit import PAYS_AFTER
+from agilesat.orchestration.campaign.report import warm_ups
 from agilesat.orchestration.campaign.worker import (
     WARM_UP_FRACTION,
     WARM_UP_STEPS,
@@ -25,6 +26,22 @@ def test_the_warm_up_expects_the_compiled_tier_where_the_runs_do(steps, share):
     if steps * share >= PAYS_AFTER and n * share < PAYS_AFTER:  # only when a tenth is short
         assert n == min(WARM_UP_STEPS, steps) and PAYS_AFTER / share > WARM_UP_FRACTION * steps
     assert n <= max(WARM_UP_STEPS, WARM_UP_FRACTION * steps)
+
+
+def test_the_campaign_summary_counts_every_warm_up_and_its_error():
+    records = {
+        0: {"worker": "a", "pid": 1, "warm_up_seconds": 1.5, "warm_up_cpu_seconds": 1.25},
+        1: {"worker": "a", "pid": 1, "seconds": 0.1},
+        2: {"worker": "b", "pid": 2, "warm_up_seconds": 0.5, "warm_up_cpu_seconds": 0.25}
+        | {"warm_up_error": "RuntimeError: x"},
+        3: {"status": "lost"},
+    }
+    summary = warm_ups(records)
+    assert (summary["processes"], summary["seconds"], summary["cpu_seconds"]) == (2, 2.0, 1.5)
+    assert [w["pid"] for w in summary["workers"]] == [1, 2]
+    assert summary["workers"][1]["error"] == "RuntimeError: x"
+    assert "error" not in summary["workers"][0]
+    assert warm_ups({})["processes"] == 0
 
 
 BATCHES = """
