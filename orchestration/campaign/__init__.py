@@ -220,6 +220,7 @@ def finish(
         "versions": versions(),
         "cluster": environment,
         "lost_workers": previous.get("lost_workers", []) + lost,
+        "warm_up": report.warm_ups(records),
         "requirements": metrics.get("requirements", {}),
         "statistics": report.statistics(table, metrics, records),
         "pass_rates": report.pass_rates(table, metrics),

@@ -182,6 +182,16 @@ def format_campaign(summary: dict) -> str:
         lines.append(
             f"  worker {lost['worker']} died; Dask re-ran runs {lost['runs_in_flight']} elsewhere"
         )
+    warm = summary.get("warm_up")
+    if warm and warm["processes"]:
+        each = ", ".join(f"{w['seconds']:.2f}" for w in warm["workers"])
+        lines.append(
+            f"  workers' warm-up: {warm['seconds']:.1f} s in {warm['processes']} worker "
+            f"process(es) ({each} s), {warm['cpu_seconds']:.1f} s CPU; not in the runs' seconds"
+        )
+        for w in warm["workers"]:
+            if "error" in w:
+                lines.append(f"  the warm-up of worker {w['worker']} raised: {w['error'][:200]}")
     lines.append(
         f"  {'metric':32s} {'mean':>11s} {'sd':>10s} {'1 %':>11s} {'median':>11s} "
         f"{'99 %':>11s}  unit"

@@ -3,10 +3,11 @@
 Pass rates: for each requirement the scenario judges (each run's verdict, ``met``, ``not
 met``, ``not evaluated``; :mod:`..mission.requirements`), the fraction of runs that meet
 it, with the two-sided 95 % Clopper-Pearson (exact binomial) interval: lower = B(α/2; k,
-n − k + 1), upper = B(1 − α/2; k + 1, n − k), B the beta quantile (scipy).  It never
-undercovers, and with k = n it gives the lower bound (α/2)^(1/n) engineers quote ("n
-passes out of n: p ≥ … at 97.5 % one-sided").  Every run counts in n: a run that stopped
-(``error``), was ``lost`` or could not be evaluated meets nothing (each counted apart).
+n − k + 1), upper = B(1 − α/2; k + 1, n − k), B the beta quantile
+(``scipy.special.betaincinv``).  It never undercovers, and with k = n it gives the lower
+bound (α/2)^(1/n) engineers quote ("n passes out of n: p ≥ … at 97.5 % one-sided").
+Every run counts in n: a run that stopped (``error``), was ``lost`` or could not be
+evaluated meets nothing (each counted apart).
 """
 
 from __future__ import annotations
@@ -28,13 +29,13 @@ STATUSES = ("ok", "failed", "error", "lost")
 
 
 def clopper_pearson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    from scipy.stats import beta
+    from scipy.special import betaincinv  # type: ignore[import-untyped]
 
     if n == 0:
         return (0.0, 1.0)
     alpha = 1 - confidence
-    low = 0.0 if k == 0 else float(beta.ppf(alpha / 2, k, n - k + 1))
-    high = 1.0 if k == n else float(beta.ppf(1 - alpha / 2, k + 1, n - k))
+    low = 0.0 if k == 0 else float(betaincinv(k, n - k + 1, alpha / 2))
+    high = 1.0 if k == n else float(betaincinv(k + 1, n - k, 1 - alpha / 2))
     return low, high
 
 
@@ -47,7 +48,29 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
     cols += [(name, "f") for name in catalog.get("metrics", {})]
     for name in catalog.get("requirements", {}):
         cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
-    return cols + [("worker", "s"), ("seconds", "f")]
+    return cols + [("worker", "s"), ("seconds", "f"), ("cpu_seconds", "f")]
+
+
+def warm_ups(records: dict) -> dict:
+    """The workers' warm-ups (:mod:`.worker`; one per worker process, in the record of its
+    first batch's first run): their wall and CPU seconds in all and per process, and the
+    errors they raised.  A cost of the campaign, not of its runs' ``seconds``."""
+    made = [r for _, r in sorted(records.items()) if "warm_up_seconds" in r]
+    return {
+        "processes": len(made),
+        "seconds": sum((r["warm_up_seconds"] for r in made), 0.0),
+        "cpu_seconds": sum((r.get("warm_up_cpu_seconds", 0.0) for r in made), 0.0),
+        "workers": [
+            {
+                "worker": r.get("worker", ""),
+                "pid": r.get("pid"),
+                "seconds": r["warm_up_seconds"],
+                "cpu_seconds": r.get("warm_up_cpu_seconds"),
+                **({"error": r["warm_up_error"]} if "warm_up_error" in r else {}),
+            }
+            for r in made
+        ],
+    }
 
 
 def _cell(record: dict, name: str, kind: str):

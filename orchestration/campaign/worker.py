@@ -4,11 +4,22 @@ Outcomes: ``ok``; ``failed`` — the scenario ran but did not fly as required (e
 ``run``; the message is its diagnostics); ``error`` — the run stopped (a failed FMI call,
 bad values; the message says where).  Nothing raised here ends a campaign.  The worker
 process keeps its loaded FMUs between runs (``orchestration.cosim.fmu``).
+
+A worker process warms up once, inside its first batch, before its first run
+(:func:`warm_up`): the first macro steps of the batch's first run, which load what every
+run uses (the FMUs, the models' compiled kernels, the master's compiled loop, the
+metrics' and the pointing statistics' modules), so that the runs themselves cost what a
+run costs.  It is part of that batch: an exception is said in the batch's first record
+(``warm_up_error``) and the run then makes its own outcome; a crash loses the batch's
+runs, as a crash in a run does.  Its time is in that record (``warm_up_seconds``,
+``warm_up_cpu_seconds``); each run's own in ``seconds`` (wall) and ``cpu_seconds`` (the
+CPU of the thread that ran it, which other processes on the machine do not inflate).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import os
 import signal
 import time
@@ -17,7 +28,11 @@ import numpy as np
 
 from ..cosim.signals import signal_at
 
-_started = 0  # runs this process started
+_started = 0  # runs this process started (0: its warm-up is next)
+#: macro steps of a worker's warm-up, at least (measured: docs/performance-log.md)
+WARM_UP_STEPS = 5
+#: the warm-up is at most this fraction of a run's macro steps
+WARM_UP_FRACTION = 0.1
 
 
 def dask_setup(worker) -> None:
@@ -62,10 +77,8 @@ def run_one(
 
     global _started
     _started += 1
-    hook = signal_at("worker")
-    if hook is not None and _started >= hook[1]:
-        os.kill(os.getpid(), hook[0])  # $AGILESAT_TEST_SIGNAL=SIGNAL@worker:K
-    began = time.perf_counter()
+    _hook()
+    began, cpu = time.perf_counter(), time.thread_time()
     record = {
         "index": index,
         "status": "ok",
@@ -98,7 +111,58 @@ def run_one(
         record.update(status="error", message=f"{type(exc).__name__}: {exc}")
     record["signals"] = _signals(results, signals, points)
     record["seconds"] = time.perf_counter() - began
+    record["cpu_seconds"] = time.thread_time() - cpu
     return record
+
+
+def _hook() -> None:
+    """``$AGILESAT_TEST_SIGNAL=SIGNAL@worker:K``: the signal as this process starts its
+    K-th run (K = 0: its warm-up)."""
+    hook = signal_at("worker")
+    if hook is not None and _started >= hook[1]:
+        os.kill(os.getpid(), hook[0])
+
+
+def warm_up_steps(steps: int, share: int) -> int:
+    """The macro steps of a warm-up before runs of ``steps`` macro steps, ``share`` of them
+    expected in this process.  A model's kernels run compiled from a run's first step when
+    the calls expected of them in the process (steps × runs) reach jit.PAYS_AFTER: the
+    warm-up makes enough steps that its expectation (its steps × ``share``) reaches it
+    where the runs' does, so that it loads the compiled kernels the runs use, but at least
+    :data:`WARM_UP_STEPS` and at most :data:`WARM_UP_FRACTION` of a run (past that, the
+    first run decides for itself, as without a warm-up)."""
+    from ...components.jit import PAYS_AFTER
+
+    needed = max(WARM_UP_STEPS, math.ceil(PAYS_AFTER / max(1, share)))
+    if needed > WARM_UP_FRACTION * steps:
+        needed = WARM_UP_STEPS
+    return max(1, min(needed, steps))
+
+
+def warm_up(target: str, parameters: dict, step, stop, algorithm, points: int, share: int):
+    """The first macro steps of a run (:func:`warm_up_steps`) of ``target`` with
+    ``parameters``, nothing kept: (wall seconds, CPU seconds of this thread, the error it
+    raised or None)."""
+    from ..runner import run
+
+    _hook()
+    began, cpu = time.perf_counter(), time.thread_time()
+    steps = points - 1
+    start = stop - steps * step
+    error = None
+    try:
+        run(
+            target,
+            step=step,
+            stop=start + warm_up_steps(steps, share) * step,
+            algorithm=algorithm,
+            parameters=parameters,
+            figures=False,
+            build=False,
+        )
+    except Exception as exc:  # the batch's first run makes its own outcome
+        error = f"{type(exc).__name__}: {exc}"
+    return time.perf_counter() - began, time.thread_time() - cpu, error
 
 
 def run_batch(
@@ -115,13 +179,22 @@ def run_batch(
     with its own record: ``runs`` is [(index, parameters), ...].  ``share``: the runs this
     worker is expected to make, which, from its first run, lets the models' kernels run
     compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs load,
-    unless set)."""
-    if not _started:
+    unless set).  The process's first batch starts with its warm-up (module docstring),
+    on the parameters of the batch's first run."""
+    warmed = None
+    if not _started and runs:
         os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))
-    return [
+        warmed = warm_up(target, runs[0][1], step, stop, algorithm, points, share)
+    records = [
         run_one(index, target, parameters, step, stop, algorithm, signals, points)
         for index, parameters in runs
     ]
+    if warmed is not None:
+        seconds, cpu, error = warmed
+        records[0].update(warm_up_seconds=seconds, warm_up_cpu_seconds=cpu)
+        if error is not None:
+            records[0]["warm_up_error"] = error
+    return records
 
 
 def _signals(results, names, points) -> np.ndarray | None:

@@ -17,7 +17,7 @@ tests of interruptions that must not race the run on a loaded machine
 - ``SIGTERM@run:K``: a campaign sends its own process the signal once K runs of this
   invocation are in its journal (``campaign/engine.py``);
 - ``SIGKILL@worker:K``: a campaign worker process sends itself the signal as it starts its
-  K-th run (``campaign/worker.py``);
+  K-th run, K = 0 its warm-up (``campaign/worker.py``);
 - ``SIGTERM@figure:K``: a run sends itself the signal as it starts drawing its K-th
   figure (``runner.py``).
 """

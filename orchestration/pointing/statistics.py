@@ -30,6 +30,11 @@ with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  So
 
 At the worst time the statement holds for that time; the maximum over time of the per-time
 bounds is at least the bound at the true worst time, so it keeps the confidence.
+
+The binomial tails are the regularised incomplete beta function (Abramowitz & Stegun 26.5.24):
+Pr[Bin(n, q) ≤ k] = 1 − I_q(k + 1, n − k), Pr[Bin(n, q) > k] = I_q(k + 1, n − k) for k < n
+(``scipy.special.betaincc``/``betainc``, what SciPy's binomial distribution evaluates; not
+``scipy.stats``, whose import would be a large part of a campaign worker's start).
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import binom
+from scipy.special import betainc, betaincc  # type: ignore[import-untyped]
 
 from .indices import NotEvaluable
 from .names import INTERPRETATIONS
@@ -84,8 +89,8 @@ def order_statistic(x: np.ndarray, rank: int, axis: int | None) -> np.ndarray:
 
 
 def _exceeds_at_most(k: int, runs: int, level: float) -> float:
-    """Pr[Bin(runs, 1 − level) ≤ k]."""
-    return float(binom.cdf(k, runs, 1.0 - level))
+    """Pr[Bin(runs, 1 − level) ≤ k] = 1 − I_(1 − level)(k + 1, runs − k)."""
+    return 1.0 if k >= runs else float(betaincc(k + 1, runs - k, 1.0 - level))
 
 
 @functools.cache  # every run's verdict asks it again (a bisection of ~40 binomial CDFs)
@@ -122,19 +127,22 @@ def allowed_exceedances(runs: int, level: float, confidence: float) -> int:
             f"{percent(confidence)} confidence needs at least "
             f"{runs_needed(level, confidence)} runs (none above it); it has {runs}"
         )
-    k = int(binom.ppf(1.0 - confidence, runs, 1.0 - level))
-    while k > 0 and _exceeds_at_most(k, runs, level) > limit:
-        k -= 1
-    while _exceeds_at_most(k + 1, runs, level) <= limit:
-        k += 1
-    return k
+    low, high = 0, runs  # Pr[... ≤ low] ≤ limit < Pr[... ≤ high] = 1
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (
+            (middle, high) if _exceeds_at_most(middle, runs, level) <= limit else (low, middle)
+        )
+    return low
 
 
 def confidence_achieved(runs: int, exceedances: int, level: float) -> float:
     """Pr[Bin(runs, 1 − level) > exceedances]: the confidence that at least ``level`` of the
     ensemble is within a bound that ``exceedances`` of ``runs`` runs exceed."""
     check_probability(level, "level")
-    return float(binom.sf(exceedances, runs, 1.0 - level))
+    if exceedances >= runs:
+        return 0.0
+    return float(betainc(exceedances + 1, runs - exceedances, 1.0 - level))
 
 
 @dataclass(frozen=True, eq=False)

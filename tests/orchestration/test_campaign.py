@@ -46,7 +46,11 @@ COMMAND = [
     "SatelliteDynamics.w_BO_B[2]",
     "--no-progress",
 ]
-MACHINE = ("worker", "seconds")  # where and how fast: the only columns that may differ
+MACHINE = (
+    "worker",
+    "seconds",
+    "cpu_seconds",
+)  # where and how fast: the only columns that may differ
 
 
 def rows(out):

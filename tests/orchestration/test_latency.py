@@ -72,6 +72,27 @@ def test_a_run_without_figures_loads_no_matplotlib(fmus, tmp_path):
     assert "matplotlib" not in _imported_by(code)
 
 
+_RUN_PATH = """
+import json, sys
+from agilesat.orchestration.cli import main
+from agilesat.orchestration.campaign.worker import run_batch
+assert main(["run", "video_sar", "--stop", "1", "-q", "--no-figures", "--out", sys.argv[1]]) == 0
+after_run = "scipy.stats" in sys.modules
+(record,) = run_batch([(0, {})], "video_sar", 0.05, 1.0, None, [], 21, share=1109)
+print(json.dumps([after_run, "scipy.stats" in sys.modules, record["status"]]))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_a_run_and_a_campaign_worker_load_no_scipy_stats(fmus, tmp_path):
+    """SciPy's statistics package (a large part of a worker's start, issue 29) is not on a
+    run's path: the pointing statistics and the pass rates use scipy.special."""
+    result = run_python(_RUN_PATH, tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout.splitlines()[-1]) == [False, False, "ok"]
+
+
 @pytest.mark.slow  # imports matplotlib
 def test_each_format_is_drawn_once(tmp_path, monkeypatch):
     """A figure is laid out once, then drawn once per file (savefig with a layout engine

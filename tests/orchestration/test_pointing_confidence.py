@@ -2,6 +2,7 @@
 campaign supports, and its coverage measured on synthetic campaigns."""
 
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -56,6 +57,19 @@ def test_a_campaign_too_small_is_not_evaluable_and_says_how_many_runs():
         statistic(np.ones((1108, 3)), 0.9973, "ensemble", confidence=0.95)
     with pytest.raises(ValueError, match="needs the ensemble interpretation"):
         statistic(np.ones((2000, 3)), 0.9973, "temporal", confidence=0.95)
+
+
+@pytest.mark.parametrize("runs", [1, 2, 10, 59, 300, 1109])
+@pytest.mark.parametrize("level", [0.5, 0.9, 0.99, 0.9973])
+def test_confidence_achieved_is_the_exact_binomial_tail(runs, level):
+    """Pr[Bin(n, 1 − P) > k] against its sum in exact rational arithmetic (the level as the
+    float it is), and for k = 0 the closed form 1 − P^n."""
+    q = 1 - Fraction(level)
+    for k in sorted({0, 1, 2, 10, runs // 2 if runs <= 300 else 0} & set(range(runs))):
+        tail = 1 - sum(math.comb(runs, i) * q**i * (1 - q) ** (runs - i) for i in range(k + 1))
+        assert confidence_achieved(runs, k, level) == pytest.approx(float(tail), rel=1e-13)
+    assert confidence_achieved(runs, 0, level) == pytest.approx(1 - level**runs, rel=1e-12)
+    assert confidence_achieved(runs, runs, level) == 0.0
 
 
 @pytest.mark.parametrize("runs,exceedances", [(1109, 0), (2000, 3), (300, 10)])

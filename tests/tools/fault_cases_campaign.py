@@ -232,6 +232,47 @@ def nonfinite_dispersions():
     )
 
 
+def crashed_warm_up():
+    """Every worker process kills itself (SIGKILL) as it starts its warm-up
+    (``$AGILESAT_TEST_SIGNAL=SIGKILL@worker:0``): each batch is lost as a crashed run's."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "c"
+        result = _campaign(
+            "scan_pitch",
+            out,
+            "--runs",
+            "2",
+            "--workers",
+            "1",
+            env={"AGILESAT_TEST_SIGNAL": "SIGKILL@worker:0"},
+        )
+        try:
+            summary = json.loads((out / "campaign.json").read_text())
+        except (OSError, ValueError) as exc:
+            summary = {"unreadable": str(exc)}
+        journal = (out / "runs.jsonl").read_text().splitlines() if out.exists() else []
+        statuses = [json.loads(line)["status"] for line in journal]
+        runs = summary.get("runs", {})
+        ok = (
+            result.returncode == 3
+            and summary.get("status") == "complete"
+            and (runs.get("made"), runs.get("lost")) == (2, 2)
+            and statuses == ["lost", "lost"]
+            and len(summary.get("lost_workers", [])) >= 1
+            and summary.get("warm_up", {}).get("processes") == 0
+        )
+        return _case(
+            "every campaign worker process killed (SIGKILL) as it starts its warm-up, "
+            "before its first run",
+            "exit 3; campaign.json complete, both runs lost (journaled as such) once Dask "
+            "gives up on them, the dead worker reported; no warm-up counted",
+            f"exit {result.returncode}; {summary.get('status')}; runs {runs}; journal "
+            f"{statuses}; lost workers {len(summary.get('lost_workers', []))}; "
+            f"warm-ups {summary.get('warm_up', {}).get('processes')}; {_last(result)}",
+            ok,
+        )
+
+
 def _damage_journal_json(out: Path) -> None:
     lines = (out / "runs.jsonl").read_text().splitlines(keepends=True)
     lines[0] = "this is not json\n"
@@ -476,4 +517,5 @@ CASES = [
     damaged_campaign_files,
     cluster_sockets,
     killed_scheduler,
+    crashed_warm_up,
 ]
