@@ -54,7 +54,8 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
 def warm_ups(records: dict) -> dict:
     """The workers' warm-ups (:mod:`.worker`; one per worker process, in the record of its
     first batch's first run): their wall and CPU seconds in all and per process, and the
-    errors they raised.  A cost of the campaign, not of its runs' ``seconds``."""
+    errors they raised.  A cost of the campaign, not of its runs' ``seconds``.  A warm-up
+    whose batch was lost with its worker process is not counted: its record is lost too."""
     made = [r for _, r in sorted(records.items()) if "warm_up_seconds" in r]
     return {
         "processes": len(made),

@@ -29,6 +29,8 @@ import numpy as np
 from ..cosim.signals import signal_at
 
 _started = 0  # runs this process started (0: its warm-up is next)
+_warmed: set[str] = set()  # the targets this process has warmed up for (a scheduler's
+# workers outlive a campaign: the next one, of another target, warms up for its own)
 #: macro steps of a worker's warm-up, at least (measured: docs/performance-log.md)
 WARM_UP_STEPS = 5
 #: the warm-up is at most this fraction of a run's macro steps
@@ -128,9 +130,10 @@ def warm_up_steps(steps: int, share: int) -> int:
     expected in this process.  A model's kernels run compiled from a run's first step when
     the calls expected of them in the process (steps × runs) reach jit.PAYS_AFTER: the
     warm-up makes enough steps that its expectation (its steps × ``share``) reaches it
-    where the runs' does, so that it loads the compiled kernels the runs use, but at least
-    :data:`WARM_UP_STEPS` and at most :data:`WARM_UP_FRACTION` of a run (past that, the
-    first run decides for itself, as without a warm-up)."""
+    where the runs' does, so that it loads the compiled kernels the runs use, unless that
+    is more than :data:`WARM_UP_FRACTION` of a run (then the first run decides for itself,
+    as without a warm-up); and at least :data:`WARM_UP_STEPS` (or the whole run, if it is
+    shorter), which load the FMUs and the modules every run uses."""
     from ...components.jit import PAYS_AFTER
 
     needed = max(WARM_UP_STEPS, math.ceil(PAYS_AFTER / max(1, share)))
@@ -147,10 +150,10 @@ def warm_up(target: str, parameters: dict, step, stop, algorithm, points: int, s
 
     _hook()
     began, cpu = time.perf_counter(), time.thread_time()
-    steps = points - 1
-    start = stop - steps * step
     error = None
     try:
+        steps = points - 1
+        start = stop - steps * step
         run(
             target,
             step=step,
@@ -179,11 +182,13 @@ def run_batch(
     with its own record: ``runs`` is [(index, parameters), ...].  ``share``: the runs this
     worker is expected to make, which, from its first run, lets the models' kernels run
     compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs load,
-    unless set).  The process's first batch starts with its warm-up (module docstring),
-    on the parameters of the batch's first run."""
+    unless set).  The process's first batch of ``target`` starts with its warm-up (module
+    docstring), on the parameters of the batch's first run."""
     warmed = None
-    if not _started and runs:
+    if not _started:
         os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))
+    if target not in _warmed and runs:
+        _warmed.add(target)
         warmed = warm_up(target, runs[0][1], step, stop, algorithm, points, share)
     records = [
         run_one(index, target, parameters, step, stop, algorithm, signals, points)

@@ -122,3 +122,45 @@ def test_the_signal_hook_of_the_warm_up_is_run_zero(fmus, monkeypatch, k, calls)
     result = run_python(HOOKED)
     assert result.returncode == -9, result.stderr
     assert result.stdout.splitlines() == calls
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """runner.run replaced by a recorder (a run that flies), in a process that has made no
+    run and warmed up for nothing: [(target, stop, parameters), ...]."""
+    from agilesat.orchestration import runner
+    from agilesat.orchestration.campaign import worker
+
+    made = []
+
+    def recorded(target, **kwargs):
+        made.append((target, kwargs["stop"], kwargs["parameters"]))
+        return None, {"status": "ok"}
+
+    monkeypatch.setattr(runner, "run", recorded)
+    monkeypatch.setattr(worker, "_started", 0)
+    monkeypatch.setattr(worker, "_warmed", set(), raising=False)
+    monkeypatch.setenv("AGILESAT_JIT_RUNS", "1")
+    return made
+
+
+def test_a_process_warms_up_once_per_target_on_its_first_runs_parameters(calls):
+    from agilesat.orchestration.campaign.worker import run_batch
+
+    first = {"SatelliteDynamics.rate0[2]": 0.001}
+    a = run_batch([(0, first), (1, {})], "scan_pitch", 0.05, 20.0, None, [], 401, 1000)
+    b = run_batch([(2, {})], "scan_pitch", 0.05, 20.0, None, [], 401, 1000)
+    c = run_batch([(0, {})], "video_sar", 0.05, 200.0, None, [], 4001, 1000)
+    steps = warm_up_steps(400, 1000)
+    assert calls[0] == ("scan_pitch", pytest.approx(steps * 0.05), first)  # the warm-up
+    assert [call[0] for call in calls] == ["scan_pitch"] * 4 + ["video_sar"] * 2
+    assert calls[4][1] == pytest.approx(warm_up_steps(4000, 1000) * 0.05)
+    assert ["warm_up_seconds" in r for r in a + b + c] == [True, False, False, True]
+
+
+def test_a_warm_up_without_a_step_or_stop_is_said_not_raised(calls):
+    from agilesat.orchestration.campaign.worker import run_batch
+
+    (record,) = run_batch([(0, {})], "scan_pitch", None, None, None, [], 0, 1)
+    assert record["warm_up_error"].startswith("TypeError")
+    assert record["status"] == "ok" and len(calls) == 1  # the run itself, at its defaults
