@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import collections
 import json
+import math
 import platform
 import shlex
 import sys
@@ -344,12 +345,20 @@ def _not_this_nominal_run(held, command: str, made_with) -> str | None:
     """Why campaign.json's nominal run ``held``, made with the versions ``made_with``, is
     not the one ``command`` makes now, or None."""
     if not isinstance(held, dict) or not isinstance(held.get("metrics"), dict):
-        return f"has no metrics ({held.get('reason') if isinstance(held, dict) else held})"
+        reason = held.get("reason") if isinstance(held, dict) else None
+        return "has no metrics" + (f" ({reason})" if reason else "")
+    odd = [k for k, v in held["metrics"].items() if not _is_number(v)]
+    if odd:
+        return f"has metrics that are not numbers ({', '.join(map(str, odd))})"
     if held.get("command") != command:
         return f"was another command ({held.get('command')})"
     now, then = versions(), made_with if isinstance(made_with, dict) else {}
     changed = sorted(k for k in {*now, *then} if now.get(k) != then.get(k))
     return f"was made with other versions ({', '.join(changed)})" if changed else None
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _ensemble(plan: Plan, out: Path, made: int) -> dict:

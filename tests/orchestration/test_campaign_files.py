@@ -68,3 +68,25 @@ def test_kept_signals_grow_with_the_campaign_and_never_shrink(fmus, tmp_path):
     del fewer
     more = engine.signals_file(Plan(Spec(**{**spec.to_dict(), "runs": 6})), tmp_path)
     assert more.shape[0] == 6 and np.array_equal(more[:4], kept) and np.isnan(more[4:]).all()
+
+
+@pytest.mark.parametrize(
+    "held,why",
+    [
+        ({"command": "c", "metrics": {"m": 1.5}}, None),
+        ({"command": "c", "reason": "the run stopped"}, "has no metrics (the run stopped)"),
+        ({"command": "c"}, "has no metrics"),
+        ("a text", "has no metrics"),
+        ({"command": "c", "metrics": [1.5]}, "has no metrics"),
+        ({"command": "c", "metrics": {"m": "1.5", "n": True, "k": 2}}, "not numbers (m, n)"),
+        ({"command": "c", "metrics": {"m": float("nan")}}, "not numbers (m)"),
+        ({"command": "d", "metrics": {"m": 1.5}}, "was another command (d)"),
+    ],
+)
+def test_a_nominal_run_in_campaign_json_is_kept_only_if_it_is_this_one(held, why):
+    from agilesat.orchestration.campaign import _not_this_nominal_run, versions
+
+    said = _not_this_nominal_run(held, "c", versions())
+    assert said is None if why is None else why in said
+    if why is None:
+        assert "(numpy)" in _not_this_nominal_run(held, "c", {**versions(), "numpy": "0"})

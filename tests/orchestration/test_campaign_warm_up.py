@@ -164,3 +164,29 @@ def test_a_warm_up_without_a_step_or_stop_is_said_not_raised(calls):
     (record,) = run_batch([(0, {})], "scan_pitch", None, None, None, [], 0, 1)
     assert record["warm_up_error"].startswith("TypeError")
     assert record["status"] == "ok" and len(calls) == 1  # the run itself, at its defaults
+
+
+def test_the_campaign_report_prints_the_warm_ups_and_what_they_raised():
+    from agilesat.orchestration.campaign.cli import format_campaign
+
+    summary = {
+        "runs": {"planned": 2, "made": 2, "ok": 2, "failed": 0, "error": 0, "lost": 0},
+        "lost_workers": [],
+        "warm_up": warm_ups(
+            {
+                0: {"worker": "tcp://a", "warm_up_seconds": 0.75, "warm_up_cpu_seconds": 0.5},
+                1: {"worker": "tcp://b", "warm_up_seconds": 1.25, "warm_up_cpu_seconds": 1.0}
+                | {"warm_up_error": "RuntimeError: no FMU"},
+            }
+        ),
+        "statistics": {},
+        "pass_rates": {},
+        "grid_pass_rates": [],
+        "failures": [],
+    }
+    lines = format_campaign(summary).splitlines()
+    assert lines[1] == (
+        "  workers' warm-up: 2.0 s in 2 worker process(es) (0.75, 1.25 s), 1.5 s CPU; "
+        "not in the runs' seconds"
+    )
+    assert lines[2] == "  the warm-up of worker tcp://b raised: RuntimeError: no FMU"
