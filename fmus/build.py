@@ -295,16 +295,23 @@ def python_runtime() -> tuple[str, str, str]:
     Python.
 
     The executable is this environment's own (``sys.executable``, not resolved: a virtual
-    environment is recognised by the pyvenv.cfg beside its ``bin/``).  The library is ""
-    when this Python has no shared libpython (then only Python hosts can load the FMUs).
+    environment is recognised by the pyvenv.cfg beside its ``bin/``), named ``python`` where
+    that is the same file: ``.venv/bin/agilesat`` runs ``python3``, ``.venv/bin/python -m
+    pytest`` ``python``, and the FMUs one built were stale for the other (every FMU built
+    again).  The library is "" when this Python has no shared libpython (then only Python
+    hosts can load the FMUs).
     """
+    executable = os.path.abspath(sys.executable)
+    plain = os.path.join(os.path.dirname(executable), "python")
+    if os.path.realpath(plain) == os.path.realpath(executable):
+        executable = plain
     library = ""
     if sysconfig.get_config_var("Py_ENABLE_SHARED"):
         path = Path(
             sysconfig.get_config_var("LIBDIR") or "", sysconfig.get_config_var("INSTSONAME") or ""
         )
         library = str(path) if path.is_file() else ""
-    return library, os.path.abspath(sys.executable), "{}.{}".format(*sys.version_info)
+    return library, executable, "{}.{}".format(*sys.version_info)
 
 
 def _shim_library(out_dir: Path) -> Path:

@@ -220,3 +220,23 @@ def test_the_import_follower_reads_every_form_of_relative_import(tmp_path):
         "fmus/slave.py",
         "fmus/slave.py",
     ]
+
+
+def test_the_fmus_are_the_same_built_by_python_or_python3_of_one_environment():
+    """``.venv/bin/agilesat build`` runs the environment's ``python3``, ``.venv/bin/python
+    -m pytest`` its ``python``: the same Python, so the same FMUs (they were stale for each
+    other: the first test session after the README's build built all 14 again)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = "from agilesat.fmus.build import _sources; print(_sources('SweepPlanner')[1])"
+    bin_dir = Path(sys.executable).parent
+    digests = {
+        name: subprocess.run(
+            [str(bin_dir / name), "-c", code], capture_output=True, text=True, check=True
+        ).stdout
+        for name in ("python", "python3")
+        if (bin_dir / name).exists()
+    }
+    assert len(digests) == 2 and len(set(digests.values())) == 1, digests
