@@ -69,24 +69,14 @@ class RunDirectory:
         except (KeyError, ValueError, OSError):
             return None
 
-    @functools.cache  # noqa: B019 - one directory, read once
-    def _descriptions(self) -> dict:
-        from ..system.description import Description
-
-        found = {}
-        for component in self.system.components if self.system is not None else ():
-            try:
-                found[component.name] = Description(component.name, component.source)
-            except (OSError, ValueError):
-                continue
-        return found
+    @functools.cached_property
+    def _variables(self):
+        return variables_of(self.system)
 
     def variable(self, column: str):
         """The model variable of a column ("A.x[2]") as the FMU's model description has it
         (its ``description``, ``start``, ``unit``), or None."""
-        instance, _, name = column.partition(".")
-        description = self._descriptions().get(instance)
-        return None if description is None else description.variables.get(name)
+        return self._variables(column)
 
     def description(self, column: str) -> str | None:
         found = self.variable(column)
@@ -104,3 +94,23 @@ class RunDirectory:
                 return p.value
         found = self.variable(name)
         return None if found is None else found.start
+
+
+def variables_of(system):
+    """A function of a column ("A.x[2]") giving its model variable as the FMU's model
+    description in ``system`` (a :class:`..system.ssp.SystemFile`, or None) has it, or
+    None.  The model descriptions are read without loading the FMUs."""
+    from ..system.description import Description
+
+    found = {}
+    for component in system.components if system is not None else ():
+        try:
+            found[component.name] = Description(component.name, component.source).variables
+        except (OSError, ValueError):
+            continue
+
+    def variable(column: str):
+        instance, _, name = column.partition(".")
+        return found.get(instance, {}).get(name)
+
+    return variable

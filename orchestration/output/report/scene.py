@@ -2,7 +2,7 @@
 with a time slider and a play button (a plotly figure with one frame per shown time).
 
 Frames (DESIGN.md §2): ``q_BI`` maps I-coordinates to B-coordinates, ``v_B = C(q_BI)
-v_I`` with ``C(q) = (q0² − q·q) 1 + 2 q qᵀ − 2 q0 [q×]`` (:func:`dcm`); the Earth-fixed
+v_I`` with ``C(q) = (q0² − q·q) 1 + 2 q qᵀ − 2 q0 [q×]`` (:func:`..frames.dcm`); the Earth-fixed
 frame E is I turned by the Earth angle θ_E about z, ``C_EI = R3(θ_E)``; the orbit frame O
 is given by ``q_OI``.  Three panels share the slider:
 
@@ -30,6 +30,7 @@ import math
 
 import numpy as np
 
+from ..frames import dcm, r3
 from . import figures
 from .decimate import min_max
 
@@ -43,32 +44,6 @@ CONE = math.radians(6.0)
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")  # x, y, z
 GHOST = "rgba(120,120,120,0.45)"
 ORANGE, PURPLE = "#ff7f0e", "#9467bd"
-
-
-def dcm(q) -> np.ndarray:
-    """C(q) (N, 3, 3) of quaternions (N, 4), scalar first (DESIGN.md §2)."""
-    q = np.asarray(q, dtype=float)
-    q0, v = q[:, 0], q[:, 1:]
-    skew = np.zeros((len(q), 3, 3))
-    skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    skew -= skew.transpose(0, 2, 1)
-    return (
-        (q0**2 - (v * v).sum(1))[:, None, None] * np.eye(3)
-        + 2 * v[:, :, None] * v[:, None, :]
-        - 2 * q0[:, None, None] * skew
-    )
-
-
-def r3(angle) -> np.ndarray:
-    """R3(θ) (N, 3, 3): coordinates in the frame turned by θ about z (C_EI of θ_E)."""
-    c, s = np.cos(angle), np.sin(angle)
-    zero, one = np.zeros_like(c), np.ones_like(c)
-    rows = [
-        np.stack([c, s, zero], -1),
-        np.stack([-s, c, zero], -1),
-        np.stack([zero, zero, one], -1),
-    ]
-    return np.stack(rows, -2)
 
 
 def ellipsoid_hit(p, d) -> np.ndarray:
