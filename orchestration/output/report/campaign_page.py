@@ -196,7 +196,7 @@ def _statistics(page: Page, summary: dict, metrics: dict) -> None:
         meta = {**metrics.get(name, {}), **s}
         factor, unit = _display(meta)
 
-        def shown(value):
+        def shown(value, factor=factor):
             return "" if value is None else f"{value * factor:.5g}"
 
         p = s.get("percentiles") or {}
@@ -346,7 +346,7 @@ def _histograms(page: Page, summary: dict, metrics: dict, table) -> None:
             marks.append((meta["paper"] * factor, "#595959", "dot", "paper"))
         if nominal.get(name) is not None:
             marks.append((nominal[name] * factor, "black", "solid", "nominal run"))
-        for value, colour, dash, label in marks:
+        for value, colour, dash, _ in marks:
             layout["shapes"].append(
                 {
                     "type": "line",
