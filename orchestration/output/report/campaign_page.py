@@ -213,8 +213,12 @@ def _statistics(page: Page, summary: dict, metrics: dict) -> None:
             )
         rows.append(
             [
-                f"<code>{esc(name)}</code>",
-                esc(s.get("description") or ""),
+                f"<code>{esc(name)}</code>"
+                + (
+                    f'<br><span class="note">{esc(s["description"])}</span>'
+                    if s.get("description")
+                    else ""
+                ),
                 esc(unit),
                 shown(s.get("mean")),
                 shown(s.get("sd")),
@@ -233,7 +237,6 @@ def _statistics(page: Page, summary: dict, metrics: dict) -> None:
         static_table(
             [
                 "metric",
-                "what",
                 "unit",
                 "mean",
                 "sd",
@@ -248,7 +251,7 @@ def _statistics(page: Page, summary: dict, metrics: dict) -> None:
                 "without a value",
             ],
             rows,
-            numeric=tuple(range(3, 14)),
+            numeric=tuple(range(2, 13)),
         )
     )
 
@@ -272,6 +275,20 @@ def _value(cell: str):
     except ValueError:
         return cell
     return int(number) if number.is_integer() and "." not in cell and "e" not in cell else number
+
+
+def _marks(meta: dict, nominal, factor: float) -> list:
+    """[(value, colour, dash, label)] of a metric's requirement bounds, the paper's value and
+    the nominal run's, in its display unit."""
+    marks = [
+        (value * factor, figures.LIMIT, "dash", f"requirement ({bound})")
+        for bound, value in (meta.get("requirement") or {}).items()
+    ]
+    if meta.get("paper") is not None:
+        marks.append((meta["paper"] * factor, "#595959", "dot", "paper"))
+    if nominal is not None:
+        marks.append((nominal * factor, "black", "solid", "nominal run"))
+    return marks
 
 
 def _log(values) -> bool:
@@ -307,12 +324,13 @@ def _histograms(page: Page, summary: dict, metrics: dict, table) -> None:
         else esc(meta.get("description") or name)
         for name, meta, _, _, unit in panels
     ]
-    layout = figures.stacked(titles, 230, shared=False)
+    layout = figures.stacked(titles, 250, shared=False, gap=86)
     layout["hovermode"] = "closest"
     data = []
     for k, (name, meta, values, factor, unit) in enumerate(panels, 1):
         x_axis, y_axis = figures.axes(k)
-        log = _log(values)
+        marks = _marks(meta, nominal.get(name), factor)
+        log = _log(np.r_[values, [m[0] for m in marks]])
         bins = min(60, max(8, int(math.sqrt(len(values)))))
         edges = (
             np.geomspace(values.min(), values.max(), bins + 1)
@@ -339,13 +357,6 @@ def _histograms(page: Page, summary: dict, metrics: dict, table) -> None:
             type="log" if log else "linear", title={"text": f"{name} [{unit}]" if unit else name}
         )
         layout[f"yaxis{'' if k == 1 else k}"]["title"] = {"text": "runs"}
-        marks = []
-        for bound, value in (meta.get("requirement") or {}).items():
-            marks.append((value * factor, figures.LIMIT, "dash", f"requirement ({bound})"))
-        if meta.get("paper") is not None:
-            marks.append((meta["paper"] * factor, "#595959", "dot", "paper"))
-        if nominal.get(name) is not None:
-            marks.append((nominal[name] * factor, "black", "solid", "nominal run"))
         for value, colour, dash, _ in marks:
             layout["shapes"].append(
                 {
