@@ -8,10 +8,10 @@ by the standard's definition, points at the target the OEM's positions see."""
 import datetime
 import math
 
+import ccsds_text
 import numpy as np
 import pytest
 
-import ccsds_text
 from agilesat.components.ephemeris import gmst
 from agilesat.orchestration.output.results import Results
 from helpers import agilesat
