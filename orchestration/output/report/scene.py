@@ -141,15 +141,16 @@ def figure(results, parameter=lambda name: None) -> dict:
     looks = boresights(results, parameter)
     k0 = int(shown[0])
     if orbit:
-        fig.layout["scene"] = {"domain": {"x": [0, 0.5], "y": [bottom, 0.96]}}
-        fig.title("orbit and boresight, Earth-fixed frame E [km]", 0.25, 0.965)
+        fig.layout["scene"] = {"domain": {"x": [0, 0.49], "y": [bottom, 0.96]}}
+        fig.title("orbit and boresight, Earth-fixed frame E [km]", 0.245, 0.965)
         _orbit_view(fig, results, C_BI, looks, r_name, theta, k0)
     attitude_scene = "scene2" if orbit else "scene"
-    fig.layout[attitude_scene] = {"domain": {"x": [0.5 if orbit else 0, 1], "y": [bottom, 0.96]}}
+    right = 0.81  # the legend beside it
+    fig.layout[attitude_scene] = {"domain": {"x": [0.5 if orbit else 0, right], "y": [bottom, 0.96]}}
     q_oi = column(results, "q_OI")
     fig.title(
         f"attitude in the {'orbit frame O' if q_oi else 'inertial frame I'}",
-        0.75 if orbit else 0.5,
+        (0.5 + right) / 2 if orbit else right / 2,
         0.965,
     )
     _attitude_view(fig, results, C_BI, looks, q_oi, attitude_scene, k0)
