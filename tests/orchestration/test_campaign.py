@@ -92,7 +92,9 @@ def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
     dispersed = list(row)[list(row).index("grid") + 1 : list(row).index("status")]
     assert len(dispersed) == 9 + 6 + 18 + 1
     sets = [arg for key in dispersed for arg in ("--set", f"{key}={row[key]}")]
-    result = agilesat("run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path, "--no-figures")
+    result = agilesat(
+        "run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path, "--no-figures", "--no-report"
+    )
     assert result.returncode in (0, 3), result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     for name, metric in summary["metrics"].items():
@@ -501,6 +503,7 @@ def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
         "--out",
         tmp_path / "replay",
         "--no-figures",
+        "--no-report",
     )
     assert result.returncode in (0, 3), result.stderr
     summary = json.loads((tmp_path / "replay" / "summary.json").read_text())

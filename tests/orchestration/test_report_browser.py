@@ -6,10 +6,10 @@ screen), the campaign's table sorts by a click on a column's header."""
 
 import io
 
+import browser
 import numpy as np
 import pytest
 
-import browser
 from helpers import agilesat
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
@@ -43,7 +43,9 @@ def test_a_run_s_report_draws_and_its_slider_moves_the_spacecraft(scan_pitch_run
         assert page.evaluate("document.body.dataset.failed") == ""
         assert int(page.evaluate("document.body.dataset.drawn")) >= 3
         browser.open_section(page)  # every output of the first instance, drawn on opening
-        assert page.evaluate("document.querySelectorAll('div.figure[data-state=failed]').length") == 0
+        assert (
+            page.evaluate("document.querySelectorAll('div.figure[data-state=failed]').length") == 0
+        )
         assert all(n >= 1 for n in lines_drawn(page)), lines_drawn(page)
         view = page.locator("div.figure").filter(has=page.locator(".gl-container")).first
         view.scroll_into_view_if_needed()
@@ -57,9 +59,11 @@ def test_a_run_s_report_draws_and_its_slider_moves_the_spacecraft(scan_pitch_run
         page.mouse.down()
         page.mouse.move(rail["x"] + 0.8 * rail["width"], y, steps=12)
         page.mouse.up()
-        page.wait_for_function(f"(() => {{ const d = document.querySelector("
-                               f"'div.figure[data-state=drawn] .gl-container').closest('div.figure');"
-                               f" return ({SPACECRAFT})(d)[0] !== {shown[0]}; }})()")
+        page.wait_for_function(
+            f"(() => {{ const d = document.querySelector("
+            f"'div.figure[data-state=drawn] .gl-container').closest('div.figure');"
+            f" return ({SPACECRAFT})(d)[0] !== {shown[0]}; }})()"
+        )
         moved = view.evaluate(SPACECRAFT)
         after = pixels(view.screenshot())
         assert np.linalg.norm(np.subtract(moved, shown)) > 100  # km along the orbit
@@ -70,8 +74,23 @@ def test_a_run_s_report_draws_and_its_slider_moves_the_spacecraft(scan_pitch_run
 
 def test_a_campaign_s_report_draws_and_sorts(tmp_path):
     out = tmp_path / "c"
-    made = agilesat("campaign", "scan_pitch", "--runs", "3", "--stop", "40", "--seed", "1",
-                    "--keep", "SatelliteDynamics.w_BO_B", "--workers", "1", "--out", out, "-q")
+    made = agilesat(
+        "campaign",
+        "scan_pitch",
+        "--runs",
+        "3",
+        "--stop",
+        "40",
+        "--seed",
+        "1",
+        "--keep",
+        "SatelliteDynamics.w_BO_B",
+        "--workers",
+        "1",
+        "--out",
+        out,
+        "-q",
+    )
     assert made.returncode in (0, 3), made.stderr
     with browser.opened(out / "report.html") as (page, problems):
         assert page.evaluate("document.body.dataset.failed") == ""

@@ -34,7 +34,9 @@ STEP = 0.05
 
 
 def run(out, target, step, *settings):
-    result = agilesat("run", target, "--step", step, "--no-figures", "-q", "--out", out, *settings)
+    result = agilesat(
+        "run", target, "--step", step, "--no-figures", "--no-report", "-q", "--out", out, *settings
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert result.returncode in (0, 3), result.stdout + result.stderr
     return summary, Results.from_csv(out / "results.csv")

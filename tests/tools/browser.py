@@ -36,7 +36,10 @@ def opened(path, width: int = 1300, height: int = 1000, timeout: float = 120.0):
     problems: list[str] = []
     with sync_playwright() as p, tempfile.TemporaryDirectory() as profile:
         context = p.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
+            profile,
+            executable_path=CHROMIUM,
+            headless=True,
+            args=FLAGS,
             viewport={"width": width, "height": height},
         )
         try:

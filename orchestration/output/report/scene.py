@@ -146,7 +146,9 @@ def figure(results, parameter=lambda name: None) -> dict:
         _orbit_view(fig, results, C_BI, looks, r_name, theta, k0)
     attitude_scene = "scene2" if orbit else "scene"
     right = 0.81  # the legend beside it
-    fig.layout[attitude_scene] = {"domain": {"x": [0.5 if orbit else 0, right], "y": [bottom, 0.96]}}
+    fig.layout[attitude_scene] = {
+        "domain": {"x": [0.5 if orbit else 0, right], "y": [bottom, 0.96]}
+    }
     q_oi = column(results, "q_OI")
     fig.title(
         f"attitude in the {'orbit frame O' if q_oi else 'inertial frame I'}",
