@@ -27,13 +27,13 @@ def pixels(png: bytes) -> np.ndarray:
 
 
 def lines_drawn(page) -> list[int]:
-    """Per 2-D figure: the number of its line paths with points (SVG 'd' longer than a
-    move)."""
+    """Per figure drawn: the number of its 2-D lines with points (SVG 'd' longer than a
+    move) and bars."""
     return page.evaluate(
-        """Array.from(document.querySelectorAll('div.figure'))
-             .filter((d) => !d.querySelector('.gl-container'))
-             .map((d) => Array.from(d.querySelectorAll('.scatterlayer path.js-line'))
-                           .filter((p) => (p.getAttribute('d') || '').length > 20).length)"""
+        """Array.from(document.querySelectorAll('div.figure[data-state=drawn]'))
+             .map((d) => Array.from(d.querySelectorAll(
+                 '.scatterlayer path.js-line, .barlayer .point path'))
+               .filter((p) => (p.getAttribute('d') || '').length > 20).length)"""
     )
 
 
@@ -43,6 +43,9 @@ def test_a_run_s_report_draws_and_its_slider_moves_the_spacecraft(scan_pitch_run
         assert page.evaluate("document.body.dataset.failed") == ""
         assert int(page.evaluate("document.body.dataset.drawn")) >= 3
         browser.open_section(page)  # every output of the first instance, drawn on opening
+        assert (
+            page.evaluate("document.querySelectorAll('div.figure[data-state=drawn]').length") >= 4
+        )
         assert (
             page.evaluate("document.querySelectorAll('div.figure[data-state=failed]').length") == 0
         )

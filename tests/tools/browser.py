@@ -58,7 +58,7 @@ def open_section(page, index: int = 0, timeout: float = 120.0) -> None:
     (or failed)."""
     page.evaluate(f"document.querySelectorAll('details')[{index}].open = true")
     page.wait_for_function(
-        "Array.from(document.querySelectorAll('div.figure'))"
+        f"Array.from(document.querySelectorAll('details')[{index}].querySelectorAll('div.figure'))"
         ".every((d) => d.dataset.state === 'drawn' || d.dataset.state === 'failed')",
         timeout=timeout * 1e3,
     )

@@ -45,17 +45,22 @@ def section(page, heading: str, until: str | None = None) -> bytes:
     top = page.locator(f"h2:text-is('{heading}')").bounding_box()
     following = page.locator(f"h2:text-is('{until}')" if until else f"h2:text-is('{heading}') ~ h2")
     bottom = following.first.bounding_box()
-    return page.screenshot(full_page=True, clip={"x": 0, "y": top["y"] - 8, "width": 1300,
-                                                 "height": bottom["y"] - top["y"]})
+    return page.screenshot(
+        full_page=True,
+        clip={"x": 0, "y": top["y"] - 8, "width": 1300, "height": bottom["y"] - top["y"]},
+    )
 
 
 def run_shots(directory: Path, out: Path) -> None:
     with browser.opened(report(directory)) as (page, _):
         first = page.locator("h2").first.bounding_box()
         page.set_viewport_size({"width": 1300, "height": 1000})
-        save(page.screenshot(full_page=True, clip={"x": 0, "y": 0, "width": 1300,
-                                                   "height": first["y"] + 560}),
-             out / "report-run-top.png")
+        save(
+            page.screenshot(
+                full_page=True, clip={"x": 0, "y": 0, "width": 1300, "height": first["y"] + 560}
+            ),
+            out / "report-run-top.png",
+        )
         save(section(page, "Signals and their bounds"), out / "report-run-bounds.png")
 
 
@@ -77,7 +82,9 @@ def view_shots(directory: Path, out: Path) -> None:
 
 def campaign_shots(directory: Path, out: Path) -> None:
     with browser.opened(report(directory)) as (page, _):
-        save(section(page, "Pass rates", "Metrics over the runs"), out / "report-campaign-rates.png")
+        save(
+            section(page, "Pass rates", "Metrics over the runs"), out / "report-campaign-rates.png"
+        )
         envelope = page.locator("h2:text-is('Envelopes of the kept signals') ~ div.figure").first
         envelope.scroll_into_view_if_needed()
         save(envelope.screenshot(), out / "report-campaign-envelope.png")

@@ -131,7 +131,7 @@ def hband(low: float, high: float, k: int, colour: str = BAND, x0=None, x1=None)
         "y0": low,
         "y1": high,
         "fillcolor": colour,
-        "line": {"width": 0},
+        "line": {"width": 1, "color": "rgba(44,160,44,0.85)"},  # seen where it is thin
         "layer": "below",
     }
 
@@ -156,6 +156,9 @@ def note(text: str, k: int, colour: str, top: bool = True) -> dict:
 def phases(layout: dict, phases, t_end: float) -> None:
     """A maneuver's phases [(name, start, end)] across every panel of a stacked layout
     (x matched): alternating shades, dotted boundaries, each named at the top."""
+    if phases:
+        layout["margin"]["t"] += 18
+        layout["height"] += 18
     for k, (name, start, end) in enumerate(phases):
         end = min(end, t_end)
         if not start < end:
@@ -196,6 +199,7 @@ def phases(layout: dict, phases, t_end: float) -> None:
                 "x": (start + end) / 2,
                 "y": 1.0,
                 "yanchor": "bottom",
+                "yshift": 18,  # above the top panel's title
                 "showarrow": False,
                 "font": {"size": 10, "color": "#59647a"},
             }
