@@ -549,7 +549,8 @@ def _attitude_view(fig: _Figure, results, C_BI, looks, q_oi, where: str, k0: int
         )
     box = {"range": [-2.1, 2.1], "showticklabels": False, "title": {"text": ""}}
     fig.layout[where].update(xaxis=box, yaxis=dict(box), zaxis=dict(box), aspectmode="cube")
-    if q_oi is not None:  # nadir down, looking across the track
+    if q_oi is not None:  # nadir down, looking across the track (orbit: any up)
+        fig.layout[where]["dragmode"] = "orbit"
         fig.layout[where]["camera"] = {
             "up": {"x": 0, "y": 0, "z": -1},
             "eye": {"x": 0.7, "y": -1.9, "z": -0.8},
