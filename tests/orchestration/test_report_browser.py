@@ -112,3 +112,16 @@ def test_a_campaign_s_report_draws_and_sorts(tmp_path):
         table.locator("th").nth(column).click()
         assert seconds() == sorted(seconds(), reverse=True)
     assert not problems, problems
+
+
+def test_no_report_leaves_none_of_an_earlier_run(tmp_path):
+    """``--no-report`` writes no report.html and removes the one an earlier run left
+    (it would show that run as this one); the report is written by default."""
+    first = agilesat("run", "scan_pitch", "--stop", "2", "--no-figures", "--out", tmp_path, "-q")
+    assert first.returncode == 0, first.stderr
+    assert (tmp_path / "report.html").exists()
+    second = agilesat(
+        "run", "scan_pitch", "--stop", "1", "--no-figures", "--no-report", "--out", tmp_path, "-q"
+    )
+    assert second.returncode == 0, second.stderr
+    assert not (tmp_path / "report.html").exists()

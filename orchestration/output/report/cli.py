@@ -44,8 +44,11 @@ def main(args) -> int:
 
 def after(args, directory) -> None:
     """What ``run`` and ``campaign`` do after their figures: the report, unless
-    ``--no-report``."""
-    if not args.no_report:
-        from . import write_report
+    ``--no-report`` (then a report an earlier run left in ``directory`` is removed: it
+    would show that run as this one)."""
+    from . import NAME, write_report
 
+    if args.no_report:
+        (Path(directory) / NAME).unlink(missing_ok=True)
+    else:
         write_report(directory)
