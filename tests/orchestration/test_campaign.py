@@ -37,6 +37,7 @@ VARY = [
 COMMAND = [
     "campaign",
     "scan_pitch",
+    "--no-report",
     "--stop",
     STOP,
     "--seed",
@@ -245,6 +246,7 @@ def test_failures_are_recorded_outcomes(tmp_path, fmus):
     out = tmp_path / "failures"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "100",
@@ -345,6 +347,7 @@ def test_distributed_campaign_survives_a_worker_killed_midway(dask_cluster, tmp_
     out = tmp_path / "remote"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "20",
@@ -440,6 +443,7 @@ def test_runs_in_one_batch_are_each_their_own_outcome(tmp_path, fmus):
     out = tmp_path / "batched"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "0.5",
@@ -477,6 +481,7 @@ def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
     out = tmp_path / "laws"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         STOP,

@@ -89,7 +89,7 @@ def test_a_sensed_campaign_and_its_indices_after_the_fact(fmus, tmp_path):
     out = tmp_path / "campaign"
     result = agilesat(
         "campaign", "video_sar:sensed", "--runs", "3", "--stop", "20", "--workers", "1",
-        "--keep", "AttitudeEstimator.q_BI_est", "--no-progress", "--out", out,
+        "--keep", "AttitudeEstimator.q_BI_est", "--no-progress", "--no-report", "--out", out,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout + result.stderr
     summary = json.loads((out / "campaign.json").read_text())
