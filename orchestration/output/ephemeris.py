@@ -140,11 +140,9 @@ def export(
     t = results.time
     when = dates(start, t)
     name = object_name or run.label.replace(":", "-")
-    q_BT = quaternion_product(turn_z(-alpha), _quaternions(run, "SatelliteDynamics.q_BI"))
+    q_BT = quaternion_product(turn_z(-alpha), _vector(run, "SatelliteDynamics.q_BI", 4))
     q_BT *= np.where(q_BT[:, :1] < 0, -1.0, 1.0)
-    w = np.degrees(
-        np.column_stack([_recorded(run, f"SatelliteDynamics.w_BI_B[{k}]") for k in (1, 2, 3)])
-    )
+    w = np.degrees(_vector(run, "SatelliteDynamics.w_BI_B"))
     created = datetime.datetime.now(datetime.timezone.utc).replace(tzinfo=None)
     created_text = created.isoformat(timespec="seconds")
     originator = f"agilesat {metadata.version('agilesat')}"
@@ -191,8 +189,8 @@ def export(
     messages = [("aem", aem)]
     if orbit:
         C_TI = r3(alpha)
-        r = np.column_stack([_recorded(run, f"OrbitEnvironment.r_I[{k}]") for k in (1, 2, 3)])
-        v = np.column_stack([_recorded(run, f"OrbitEnvironment.v_I[{k}]") for k in (1, 2, 3)])
+        r = _vector(run, "OrbitEnvironment.r_I")
+        v = _vector(run, "OrbitEnvironment.v_I")
         state = np.column_stack([r @ C_TI.T, v @ C_TI.T]) / 1e3  # km, km/s
         oem = ccsds_ndm.Oem(
             ccsds_ndm.OdmHeader(created_text, originator),
@@ -230,5 +228,6 @@ def export(
     return written
 
 
-def _quaternions(run: RunDirectory, name: str) -> np.ndarray:
-    return np.column_stack([_recorded(run, f"{name}[{k}]") for k in (1, 2, 3, 4)])
+def _vector(run: RunDirectory, name: str, n: int = 3) -> np.ndarray:
+    """The recorded elements 1 … n of ``name`` as (samples, n)."""
+    return np.column_stack([_recorded(run, f"{name}[{k}]") for k in range(1, n + 1)])

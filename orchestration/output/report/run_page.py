@@ -266,23 +266,12 @@ def _pointing(page: Page, run, phases) -> None:
     scenario = run.scenario
     if scenario is None:
         return
-    from ...mission.requirements import Pointing
-    from ...pointing import NotEvaluable
-    from ..results import ColumnError
+    from ..pointing_figures import shown as judged
 
     results = run.results
-    exempt = scenario.variant(run.variant).exempt()
     verdicts = run.summary.get("requirements") or {}
     shown = []
-    for r in scenario.requirements_for(run.variant):
-        if not isinstance(r, Pointing) or r.name in exempt:
-            continue
-        try:
-            error = r.error(results, results.time)
-            t, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
-        except (ColumnError, NotEvaluable):
-            continue
-        result = r.requirement.judge(t, m)  # type: ignore[attr-defined]
+    for r, result, t, m in judged(scenario, run.variant, results):
         deg = 180 / math.pi
         bound, stat = r.requirement.bound * deg, result.statistic  # type: ignore[attr-defined]
         said = verdicts.get(r.name, {}).get("verdict", result.status)
