@@ -65,14 +65,14 @@ def build(run) -> Page:
     _bounded(page, run, phases)
     _pointing(page, run, phases)
     _outputs(page, run, phases)
-    figures = s.get("figures") or []
-    if figures:
+    written = s.get("figures") or []
+    if written:
         page.heading("Figures written beside this page")
         page.add(
             "<p>"
             + " · ".join(
                 f'<a href="{esc(name)}">{esc(name)}</a>'
-                for name in (str(f).rsplit("/", 1)[-1] for f in figures)
+                for name in (str(f).rsplit("/", 1)[-1] for f in written)
             )
             + "</p>"
         )
