@@ -53,9 +53,14 @@ def opened(path, width: int = 1300, height: int = 1000, timeout: float = 120.0):
             context.close()
 
 
-def open_section(page, index: int = 0, timeout: float = 120.0) -> None:
-    """Open a closed section (the ``index``-th) and wait until each of its figures is drawn
-    (or failed)."""
+def open_section(page, timeout: float = 120.0) -> None:
+    """Open the closed section with the fewest outputs (its summary says how many) and
+    wait until its figures are drawn (or failed)."""
+    index = page.evaluate(
+        """(() => { const sizes = Array.from(document.querySelectorAll('details summary'))
+             .map((s) => parseInt((s.textContent.match(/\\((\\d+) outputs?\\)/) || [0, 1e9])[1]));
+           return sizes.indexOf(Math.min(...sizes)); })()"""
+    )
     page.evaluate(f"document.querySelectorAll('details')[{index}].open = true")
     page.wait_for_function(
         f"Array.from(document.querySelectorAll('details')[{index}].querySelectorAll('div.figure'))"

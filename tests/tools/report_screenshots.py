@@ -74,7 +74,7 @@ def view_shots(directory: Path, out: Path) -> None:
             y = grip["y"] + grip["height"] / 2
             page.mouse.move(grip["x"] + grip["width"] / 2, y)
             page.mouse.down()
-            page.mouse.move(rail["x"] + fraction * rail["width"], y, steps=10)
+            page.mouse.move(rail["x"] + fraction * rail["width"], y, steps=2)
             page.mouse.up()
             page.wait_for_timeout(1500)
             save(view.screenshot(), out / f"report-view-{k}.png")
