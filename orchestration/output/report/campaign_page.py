@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...system.units import display_factor, pretty
+from ...system.units import display_factor, pretty, to_degrees
 from . import figures
 from .decimate import indices
 from .page import Page, esc, facts, static_table, verdict
@@ -441,8 +441,6 @@ def _context(summary: dict):
 def _envelope(name: str, t, values, variable, bounds) -> dict:
     unit = getattr(variable, "unit", None)
     factor, shown_unit = 1.0, pretty(unit)
-    from ...system.units import to_degrees
-
     degrees, in_degrees = to_degrees(unit)
     if degrees != 1.0:
         factor, shown_unit = degrees, pretty(in_degrees)

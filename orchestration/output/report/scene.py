@@ -353,14 +353,14 @@ def _earth(fig: _Figure, low, high) -> None:
         & (z >= low[2])
         & (z <= high[2])
     )
-    shade = np.where(inside, z, np.nan)  # outside the box: not drawn
+    shown = _grid(np.where(inside, z, np.nan))  # outside the box: not drawn
     fig.add(
         {
             "type": "surface",
             "x": _grid(x),
             "y": _grid(y),
-            "z": _grid(np.where(inside, z, np.nan)),
-            "surfacecolor": _grid(shade),
+            "z": shown,
+            "surfacecolor": shown,
             "showscale": False,
             "opacity": 0.95,
             "colorscale": [[0, "#a9c8e6"], [1, "#c9dcef"]],
