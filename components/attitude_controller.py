@@ -41,10 +41,10 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, output_kernel
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
+from .runtime.flat import StateTable
+from .runtime.jit import floats, output_kernel
 from .variables import Layout, input_, output, parameter
 
 DESIGN_INERTIA = 150.0  # kg·m² ([Chang 2015] satellite, each axis)

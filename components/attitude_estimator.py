@@ -68,11 +68,11 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
 from .gyro import DEFAULT_RATE, DEG_PER_HOUR, FILTER_BIAS_WALK, STIM300_ARW
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm, qmul, rotate
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import (
     TICK_TOLERANCE,
     conj,

@@ -35,9 +35,9 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
 
 N_GYROS = 6

@@ -42,10 +42,10 @@ from .cmg_cluster import (
     gram,
     inv3,
 )
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import dot, rotate
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel
 from .variables import Layout, choice, input_, output, parameter
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES

@@ -55,9 +55,9 @@ import math
 
 import numpy as np
 
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, cross, dcm, dot, norm, rotate
+from .runtime.jit import floats, jitable, output_kernel
 from .sensing import EARTH_RADIUS, EARTH_RATE
 from .variables import Layout, choice, input_, output, parameter
 

@@ -66,10 +66,10 @@ from __future__ import annotations
 
 import math
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import tick, tick_time
 from .variables import input_, output, parameter
 

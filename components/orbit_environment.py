@@ -117,10 +117,10 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
-from .flat import StateTable, remainder
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import quat_of_rows
+from .runtime.flat import StateTable, remainder
+from .runtime.jit import floats, jitable, output_kernel
 from .sun import sun_direction
 from .variables import Layout, output, parameter
 

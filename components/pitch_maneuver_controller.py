@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .flat import StateTable, hypot
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
+from .runtime.flat import StateTable, hypot
+from .runtime.jit import floats, jitable, output_kernel
 from .variables import Layout, input_, output, parameter
 
 DEG = math.pi / 180.0

@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 
-from .jit import floats as _floats
-from .jit import jitable
+from .runtime.jit import floats as _floats
+from .runtime.jit import jitable
 
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 #: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined

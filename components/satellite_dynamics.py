@@ -43,8 +43,6 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
@@ -61,6 +59,8 @@ from .rotations import (
     rotate,
     rotate_back,
 )
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad

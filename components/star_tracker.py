@@ -45,11 +45,11 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key, uniform
 from .rotations import IDENTITY_Q, dcm, norm, qmul, quat_norm, rotate_back
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import (
     EARTH_RADIUS,
     TICK_TOLERANCE,

@@ -94,8 +94,6 @@ import math
 
 import numpy as np
 
-from .flat import StateTable, hypot
-from .jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
 from .rotations import (
@@ -112,6 +110,8 @@ from .rotations import (
     rotate_back,
     wrap_pi,
 )
+from .runtime.flat import StateTable, hypot
+from .runtime.jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
 from .variables import Layout, input_, output, parameter
 
 CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"

@@ -51,9 +51,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
+from .runtime.flat import StateTable
+from .runtime.jit import floats, jitable, output_kernel
 from .variables import Layout, output, parameter
 
 DEG = math.pi / 180.0

@@ -21,7 +21,7 @@ import functools
 import warnings
 from typing import NamedTuple
 
-from ..components import jit
+from ..components.runtime import jit
 
 
 class CEntry:

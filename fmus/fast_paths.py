@@ -39,8 +39,8 @@ import math
 
 import numpy as np
 
-from ..components import jit
-from ..components.switches import value
+from ..components.runtime import jit
+from ..components.runtime.switches import value
 from . import c_entries
 from .protocol import (
     B_N_SAVED,

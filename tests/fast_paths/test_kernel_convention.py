@@ -10,8 +10,8 @@ import pickle
 import numpy as np
 import pytest
 
-from agilesat.components import jit
 from agilesat.components.model import Model
+from agilesat.components.runtime import jit
 from agilesat.fmus import FMUS, c_entries, model_class
 from helpers import ISS_TLE, operating_point
 

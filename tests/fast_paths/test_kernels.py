@@ -9,10 +9,11 @@ import types
 import numpy as np
 import pytest
 
-from agilesat.components import cmg_cluster, cmg_steering, jit, rotations, satellite_dynamics
+from agilesat.components import cmg_cluster, cmg_steering, rotations, satellite_dynamics
 from agilesat.components.cmg_cluster import CmgCluster
 from agilesat.components.cmg_steering import CmgSteering
 from agilesat.components.model import Model, ModelError
+from agilesat.components.runtime import jit
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.fmus import fmu_state
 from agilesat.orchestration.scenarios import get as get_scenario

@@ -1,4 +1,4 @@
-"""The models' whole step/output kernels (components/jit.py, components/flat.py): compiled
+"""The models' whole step/output kernels (components/runtime/jit.py, runtime/flat.py): compiled
 and Python give the same values, warnings, errors and saved states bit for bit, each step
 and output is one kernel call, and the helpers numba lacks match CPython's."""
 
@@ -14,10 +14,8 @@ from agilesat.components import (
     cmg_cluster,
     cmg_steering,
     disturbance_torques,
-    flat,
     flywheel,
     gyro,
-    jit,
     orbit_environment,
     payload_gimbals,
     pitch_maneuver_controller,
@@ -37,6 +35,7 @@ from agilesat.components.orbit_environment import OrbitEnvironment
 from agilesat.components.payload_gimbals import PayloadGimbals
 from agilesat.components.pitch_maneuver_controller import PitchManeuverController
 from agilesat.components.rotations import dcm, quat_of_rows
+from agilesat.components.runtime import flat, jit
 from agilesat.components.satellite_dynamics import SatelliteDynamics
 from agilesat.components.sensing import quat_exp
 from agilesat.components.star_tracker import StarTracker

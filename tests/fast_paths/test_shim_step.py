@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components import jit
+from agilesat.components.runtime import jit
 from agilesat.fmus import c_entries
 from helpers import TOOLS, run_python
 

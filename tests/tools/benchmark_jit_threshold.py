@@ -24,7 +24,7 @@ import statistics
 import subprocess
 import sys
 
-from agilesat.components import jit
+from agilesat.components.runtime import jit
 from agilesat.orchestration.scenarios import NAMES
 
 RUN = """
