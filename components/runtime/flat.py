@@ -1,29 +1,64 @@
-"""The flat arrays of the models' step/output kernels (components/jit.py), and compilable
+"""The flat arrays of the models' kernels (:mod:`.jit`), reached by name, and compilable
 equivalents of CPython functions numba lacks or computes otherwise, bit for bit
 (tests/fast_paths/test_kernels_models.py): ``math.remainder``, ``math.fmod``,
 ``math.hypot``.
 
-Those kernels are one function each on the model's value array (:mod:`.variables`:
-parameters, inputs, outputs at the offsets of its table, named by module constants) and a
-small float64 state array of the model, laid out by a :class:`StateTable`; they read both
-through :func:`.jit.floats`, write outputs and state by index and return a status code,
-from which the model's Python wrapper raises its ModelError or issues its warning, so that
-the messages are those of the readable code.
+A kernel is one function on the model's value array (parameters, inputs and outputs at the
+offsets of its variable table, components/variables.py) and a small float64 state array of
+the model; it reads both through :func:`.jit.floats`, writes outputs and state by index and
+returns a status code, from which the model's Python wrapper raises its ModelError or
+issues its warning, so that the messages are those of the readable code.
+
+It reaches every place by name, as the Modelica Reference-FMUs' ``M(x)`` macro does: the
+offsets are integer constants generated from the tables, one namespace per table
+(:func:`offsets`): ``values[U.tau_cmd + 1]`` is input ``tau_cmd[2]``, ``state[S.omega + k]``
+row ``omega`` of the state table, element k.  A namespace is a module object: numba reads
+a module's attribute as a constant (``U.tau_cmd`` compiles to the same machine code as the
+literal offset), CPython reads it at the cost of a global (specialised module attribute
+access), so naming costs neither tier anything.  :func:`state_table` lays out a state
+array as the variable table lays out the value array: named rows, one after the other.
 """
 
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 
 from .jit import jitable
 
 
+def offsets(label: str, at: dict[str, int]) -> types.ModuleType:
+    """A namespace of integer constants, ``at``'s names (module docstring); ``label`` says
+    whose in messages ('Flywheel inputs')."""
+    namespace = types.ModuleType(label)
+    for name, offset in at.items():
+        if not name.isidentifier() or hasattr(namespace, name):
+            raise ValueError(f"{label}: {name!r} cannot be a name of an offset")
+        setattr(namespace, name, int(offset))
+    return namespace
+
+
+def state_table(label: str, **sizes: int) -> types.ModuleType:
+    """A kernel's state array: named rows of the given sizes, one after the other; the
+    namespace of their offsets (:func:`offsets`), with ``size`` the array's length and
+    ``zeros()`` a new state array (so no row may be called ``size`` or ``zeros``)."""
+    at, rows = 0, {}
+    for name, size in sizes.items():
+        rows[name] = at
+        at += size
+    table = offsets(label, {**rows, "size": at})
+    if "size" in sizes or "zeros" in sizes:
+        raise ValueError(f"{label}: a state row cannot be called size or zeros")
+    size = at
+    table.zeros = lambda: np.zeros(size)
+    return table
+
+
 class StateTable:
-    """A kernel's state array: named rows of given sizes, one after the other, as the
-    variable table lays out the value array.  ``offsets`` in row order (the kernels' module
-    constants), ``offset[name]``, ``size``; ``zeros()`` a state array."""
+    """The former state table (rows reached by module constants); goes once every model
+    reaches its rows by name (:func:`state_table`)."""
 
     def __init__(self, **sizes: int):
         self.offset: dict[str, int] = {}
