@@ -42,10 +42,11 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, dcm, qmul, rotate
+from .rotations import IDENTITY_Q, dcm, qmul
 from .runtime.flat import StateTable
 from .runtime.jit import floats, output_kernel
 from .variables import Layout, input_, output, parameter
+from .vectors import rotate
 
 DESIGN_INERTIA = 150.0  # kg·m² ([Chang 2015] satellite, each axis)
 DESIGN_BANDWIDTH = 0.2  # rad/s

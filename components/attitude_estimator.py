@@ -70,7 +70,7 @@ import numpy as np
 
 from .gyro import DEFAULT_RATE, DEG_PER_HOUR, FILTER_BIAS_WALK, STIM300_ARW
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, dcm, qmul, rotate
+from .rotations import IDENTITY_Q, dcm, qmul
 from .runtime.flat import StateTable
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import (
@@ -84,6 +84,7 @@ from .sensing import (
 )
 from .star_tracker import RIGEL_NEA_BORESIGHT, RIGEL_NEA_CROSS
 from .variables import Layout, input_, output, parameter
+from .vectors import rotate
 
 _MEASUREMENT = ("q_BI_meas", "meas_valid", "t_meas")
 _INPUTS = ("w_meas_B",) + _MEASUREMENT

@@ -39,6 +39,7 @@ from .model import Model, ModelError
 from .runtime.flat import StateTable
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
+from .vectors import det3, gram, total
 
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
@@ -94,7 +95,7 @@ class ClusterGeometry:
 
     def momentum(self, delta) -> np.ndarray:
         """h = h_rotor Σ σ_i."""
-        return self.h_rotor * np.array(_sum(self.axes(delta)[0]))
+        return self.h_rotor * np.array(total(self.axes(delta)[0]))
 
     def spins(self, delta) -> np.ndarray:
         """σ_i as rows (6×3)."""
@@ -146,48 +147,6 @@ def zero_momentum_angles(
     if not np.linalg.norm(geometry.momentum(d)) < 1e-12 * geometry.h_rotor:
         raise ModelError(f"no zero-momentum gimbal set found near {list(delta)}")
     return d
-
-
-@jitable
-def gram(columns) -> tuple:
-    """Σ a aᵀ over the columns (3×3 rows)."""
-    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    for a0, a1, a2 in columns:
-        m00 += a0 * a0
-        m01 += a0 * a1
-        m02 += a0 * a2
-        m11 += a1 * a1
-        m12 += a1 * a2
-        m22 += a2 * a2
-    return (m00, m01, m02), (m01, m11, m12), (m02, m12, m22)
-
-
-@jitable
-def det3(M) -> float:
-    (a, b, c), (d, e, f), (g, h, i) = M
-    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-
-
-@jitable
-def inv3(M) -> tuple:
-    """Inverse of a 3×3 matrix (rows) by its adjugate."""
-    (a, b, c), (d, e, f), (g, h, i) = M
-    det = det3(M)
-    return (
-        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
-        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
-        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
-    )
-
-
-@jitable
-def _sum(vectors) -> tuple:
-    x = y = z = 0.0
-    for v in vectors:
-        x += v[0]
-        y += v[1]
-        z += v[2]
-    return x, y, z
 
 
 @jitable
@@ -421,8 +380,8 @@ def cluster_output(values, state, t):
     s = floats(state)
     delta, rates = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
     spins, columns = axes(delta, s[ST : ST + 6 * N_GYROS])
-    h = _sum(spins)
-    hdot = _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
+    h = total(spins)
+    hdot = total([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
     h_rotor = s[H_ROTOR]
     values[Y_DELTA : Y_DELTA + N_GYROS] = delta
     values[Y_RATE : Y_RATE + N_GYROS] = rates

@@ -38,15 +38,12 @@ from .cmg_cluster import (
     ClusterGeometry,
     CmgCluster,
     axes,
-    det3,
-    gram,
-    inv3,
 )
 from .model import Model, ModelError
-from .rotations import dot, rotate
 from .runtime.flat import StateTable
 from .runtime.jit import floats, jitable, output_kernel
 from .variables import Layout, choice, input_, output, parameter
+from .vectors import det3, dot, gram, inv3, rotate
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
 PSEUDO_INVERSE, SR_INVERSE = 0, 1

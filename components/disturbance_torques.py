@@ -56,10 +56,11 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, cross, dcm, dot, norm, rotate
+from .rotations import IDENTITY_Q, dcm
 from .runtime.jit import floats, jitable, output_kernel
 from .sensing import EARTH_RADIUS, EARTH_RATE
 from .variables import Layout, choice, input_, output, parameter
+from .vectors import cross, dot, norm, rotate
 
 N_FACETS = 10
 #: [Vallado 2013] Table 8-4: base height (km), density at it (kg/m³), scale height (km)

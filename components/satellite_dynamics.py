@@ -53,15 +53,12 @@ from .rotations import (
     euler123_ddot,
     euler123_dot,
     qmul,
-    quat_dot,
     quat_from_dcm,
-    quat_norm,
-    rotate,
-    rotate_back,
 )
 from .runtime.flat import StateTable
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
+from .vectors import quat_dot, quat_norm, rotate, rotate_back
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000

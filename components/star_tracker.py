@@ -47,7 +47,7 @@ import numpy as np
 
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key, uniform
-from .rotations import IDENTITY_Q, dcm, norm, qmul, quat_norm, rotate_back
+from .rotations import IDENTITY_Q, dcm, qmul
 from .runtime.flat import StateTable
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import (
@@ -62,6 +62,7 @@ from .sensing import (
     tick_time,
 )
 from .variables import Layout, input_, output, parameter
+from .vectors import norm, quat_norm, rotate_back
 
 ARCSEC = math.pi / 180.0 / 3600.0
 RIGEL_NEA_CROSS = 3.0 * ARCSEC

@@ -96,23 +96,24 @@ import numpy as np
 
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import (
-    _unwrap3,
-    cross,
-    dcm,
-    dot,
-    euler123,
-    norm,
-    quat_dot,
-    quat_from_dcm,
-    quat_of_rows,
-    rotate,
-    rotate_back,
-    wrap_pi,
-)
+from .rotations import _unwrap3, dcm, euler123, quat_from_dcm, quat_of_rows, wrap_pi
 from .runtime.flat import StateTable, hypot
 from .runtime.jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
 from .variables import Layout, input_, output, parameter
+from .vectors import (
+    add,
+    combine,
+    cross,
+    divide,
+    dot,
+    matmul,
+    norm,
+    quat_dot,
+    rotate,
+    rotate_back,
+    scale,
+    sub,
+)
 
 CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"
 Q_OI_TOLERANCE = 1e-6  # rad (max element of C_OI error): q_OI vs r_I, v_I
@@ -138,39 +139,6 @@ _Z = (0.0, 0.0, 1.0)
     OK, NOT_FINITE, NO_ORBIT_FRAME, Q_OI_MISMATCH, NO_LINE_OF_SIGHT, ALONG_X_O, ALONG_G, AT_POLE,
     GRAZING,
 ) = range(9)  # fmt: skip
-
-
-# -- tuple vectors -------------------------------------------------------------------------
-@jitable
-def _scaled(k: float, a) -> tuple:
-    return (k * a[0], k * a[1], k * a[2])
-
-
-@jitable
-def _sum(a, b) -> tuple:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-@jitable
-def _difference(a, b) -> tuple:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-@jitable
-def _divided(a, k: float) -> tuple:
-    return (a[0] / k, a[1] / k, a[2] / k)
-
-
-@jitable
-def _combination(a, x, b, y) -> tuple:
-    """a x + b y."""
-    return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2])
-
-
-@jitable
-def _rows_product(A, B) -> tuple:
-    """A B for 3×3 matrices given as rows (row i of A B is Bᵀ applied to row i of A)."""
-    return (rotate_back(B, A[0]), rotate_back(B, A[1]), rotate_back(B, A[2]))
 
 
 # -- geometry (module docstring) -----------------------------------------------------------
@@ -228,7 +196,7 @@ def _at_pole(r_T) -> str:
 def ground_line(beam, axis, up) -> tuple:
     """Direction of the line in which the plane of ``beam`` and ``axis`` meets the plane
     ⊥ ``up``, oriented along ``axis``: d = beam (axis·up) − axis (beam·up) (not normalised)."""
-    return _combination(dot(axis, up), beam, -dot(beam, up), axis)
+    return combine(dot(axis, up), beam, -dot(beam, up), axis)
 
 
 @jitable
@@ -292,12 +260,12 @@ def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
 def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
     """(û, u̇, ü) in I for the slant range s = |r_T − r| > 0: Earth-fixed target,
     two-body satellite (module docstring)."""
-    rho, drho = _difference(r_T, r), _difference(v_T, v)
+    rho, drho = sub(r_T, r), sub(v_T, v)
     r_norm = norm(r)
-    ddrho = _combination(EARTH_RATE, cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
-    u = _divided(rho, s)
+    ddrho = combine(EARTH_RATE, cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
+    u = divide(rho, s)
     ds = dot(drho, u)
-    du = _divided(_combination(1.0, drho, -ds, u), s)
+    du = divide(combine(1.0, drho, -ds, u), s)
     dds = dot(ddrho, u) + dot(drho, du)
     ddu = (
         (ddrho[0] - dds * u[0] - 2.0 * ds * du[0]) / s,
@@ -315,7 +283,7 @@ def _aligned_axes(u, a) -> tuple:
     m = norm(n)
     if not m > PARALLEL_TOLERANCE:
         return False, n, n, n, m
-    y = _divided(n, m)
+    y = divide(n, m)
     return True, cross(y, u), y, n, m
 
 
@@ -325,11 +293,11 @@ def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
     ok, x, y, n, m = _aligned_axes(u, a)
     if not ok:
         return False, (n, n, n), n, n
-    dn = _sum(cross(du, a), cross(u, da))
-    ddn = _sum(_sum(cross(ddu, a), _scaled(2.0, cross(du, da))), cross(u, dda))
+    dn = add(cross(du, a), cross(u, da))
+    ddn = add(add(cross(ddu, a), scale(2.0, cross(du, da))), cross(u, dda))
     dnx = dot(dn, x)
     w = (-dot(y, du), dot(x, du), -dnx / m)
-    w_I = _sum(_combination(w[0], x, w[1], y), _scaled(w[2], u))
+    w_I = add(combine(w[0], x, w[1], y), scale(w[2], u))
     dx, dy = cross(w_I, x), cross(w_I, y)
     dw = (
         -dot(dy, du) - dot(y, ddu),
@@ -532,8 +500,8 @@ def guidance_output(values, state, t):
     h = norm(h_vec)
     if not h > 1e-12 * r_norm * max(norm(vel), 1.0):
         return NO_ORBIT_FRAME
-    r_hat, h_hat = _divided(r, r_norm), _divided(h_vec, h)
-    expected = (cross(h_hat, r_hat), _scaled(-1.0, h_hat), _scaled(-1.0, r_hat))
+    r_hat, h_hat = divide(r, r_norm), divide(h_vec, h)
+    expected = (cross(h_hat, r_hat), scale(-1.0, h_hat), scale(-1.0, r_hat))
     mismatch = 0.0
     for i in range(3):
         for j in range(3):
@@ -543,7 +511,7 @@ def guidance_output(values, state, t):
         return Q_OI_MISMATCH
     x_O = C_OI[0]
 
-    s_range = norm(_difference(r_T, r))
+    s_range = norm(sub(r_T, r))
     if not s_range > MIN_SLANT_RANGE:
         state[DETAIL] = s_range
         return NO_LINE_OF_SIGHT
@@ -561,8 +529,8 @@ def guidance_output(values, state, t):
         C_PI, w_P, dw_P = (x0, y0, u), x0, y0  # P: after the capture below
     else:  # P0 = F(û, x_O) is the reference
         r2 = r_norm * r_norm
-        dx_O = _scaled(-(h / r2), r_hat)
-        ddx_O = _combination(
+        dx_O = scale(-(h / r2), r_hat)
+        ddx_O = combine(
             2.0 * h * dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
         )
         ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
@@ -578,7 +546,7 @@ def guidance_output(values, state, t):
         defined, azimuth = _azimuth(d, east, north)
         if not defined:
             return GRAZING
-        g = _divided(d, norm(d))
+        g = divide(d, norm(d))
         state[CAPTURED], state[CAPTURE_TIME], state[AZIMUTH_REF] = 1.0, t, azimuth
         state[LATITUDE] = latitude
         for k in range(3):
@@ -588,8 +556,8 @@ def guidance_output(values, state, t):
         c, sn = math.cos(angle), math.sin(angle)
         gx, gy, gz = state[G_REF], state[G_REF + 1], state[G_REF + 2]
         g = (c * gx - sn * gy, sn * gx + c * gy, gz)
-        dg = _scaled(EARTH_RATE, cross(_Z, g))
-        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, _scaled(EARTH_RATE, cross(_Z, dg)))
+        dg = scale(EARTH_RATE, cross(_Z, g))
+        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, scale(EARTH_RATE, cross(_Z, dg)))
         if not ok:
             return ALONG_G
     C_RI, w, dw = C_PI, w_P, dw_P
@@ -597,7 +565,7 @@ def guidance_output(values, state, t):
     if mounted:
         C_RP = s[C_RP_ : C_RP_ + 9]
         M = ((C_RP[0], C_RP[1], C_RP[2]), (C_RP[3], C_RP[4], C_RP[5]), (C_RP[6], C_RP[7], C_RP[8]))
-        C_RI, w, dw = _rows_product(M, C_PI), rotate(M, w_P), rotate(M, dw_P)
+        C_RI, w, dw = matmul(M, C_PI), rotate(M, w_P), rotate(M, dw_P)
 
     # q_RI with its sign continued; the 1-2-3 angles relative to O on the anchor's branch
     (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C_RI
