@@ -298,7 +298,8 @@ def _along_axes(s, values) -> tuple:
     """Σ a_i v_i over the wheels, in B (v_i: speeds for h, J Ω̇_i for ḣ)."""
     x = y = z = 0.0
     for i in range(int(s[S.n])):
-        ax, ay, az = s[S.axes + 3 * i], s[S.axes + 3 * i + 1], s[S.axes + 3 * i + 2]
+        at = S.axes + 3 * i
+        ax, ay, az = s[at], s[at + 1], s[at + 2]
         x += ax * values[i]
         y += ay * values[i]
         z += az * values[i]
@@ -329,16 +330,13 @@ def _drive(v, s):
     rz = -tz - (wx * hy - wy * hx)
     torques, net = [0.0] * N_WHEELS, [0.0] * N_WHEELS
     held, momentum, torque = [False] * N_WHEELS, [False] * N_WHEELS, [False] * N_WHEELS
+    cv, cc, tau_max, speed_max = s[S.viscous], s[S.coulomb], s[S.torque_limit], s[S.speed_limit]
     for k in range(int(s[S.n])):
-        px, py, pz = (
-            s[S.distribution + 3 * k],
-            s[S.distribution + 3 * k + 1],
-            s[S.distribution + 3 * k + 2],
-        )
+        at = S.distribution + 3 * k
+        px, py, pz = s[at], s[at + 1], s[at + 2]
         torques[k], net[k], held[k], momentum[k], torque[k] = _wheel(
-            s[S.omega + k], px * rx + py * ry + pz * rz, s[S.viscous], s[S.coulomb],
-            s[S.torque_limit], s[S.speed_limit],
-        )  # fmt: skip
+            s[S.omega + k], px * rx + py * ry + pz * rz, cv, cc, tau_max, speed_max
+        )
     return torques, net, held, momentum, torque
 
 
@@ -386,16 +384,16 @@ def flywheel_step(values, state, t, dt):
     v, s = floats(values), floats(state)
     torques, _, held, momentum, torque = _drive(v, s)
     status = 0
+    J, cv, cc, speed_max = s[S.inertia], s[S.viscous], s[S.coulomb], s[S.speed_limit]
     for k in range(int(s[S.n])):
         for j, limited in ((0, momentum[k]), (1, torque[k])):
-            if limited and s[S.limited + 2 * k + j] == 0.0:
+            at = S.limited + 2 * k + j
+            if limited and s[at] == 0.0:
                 status = NEW_LIMIT
-            state[S.limited + 2 * k + j] = 1.0 if limited else 0.0
+            state[at] = 1.0 if limited else 0.0
         if not held[k]:
-            state[S.omega + k] = wheel_step(
-                s[S.omega + k], torques[k], dt, s[S.inertia], s[S.viscous], s[S.coulomb],
-                s[S.speed_limit],
-            )  # fmt: skip
+            at = S.omega + k
+            state[at] = wheel_step(s[at], torques[k], dt, J, cv, cc, speed_max)
     return status
 
 

@@ -206,6 +206,17 @@ def gram(columns) -> tuple:
 
 
 @jitable
+def outer_sum(xs, ys) -> tuple:
+    """Σ x_i y_iᵀ over paired 3-vectors, accumulated from 0.0 in order (rows)."""
+    m = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    for x, y in zip(xs, ys):
+        for j in range(3):
+            for k in range(3):
+                m[j][k] += x[j] * y[k]
+    return (m[0][0], m[0][1], m[0][2]), (m[1][0], m[1][1], m[1][2]), (m[2][0], m[2][1], m[2][2])
+
+
+@jitable
 def det3(M) -> float:
     """det M by its first row: a (ei − fh) − b (di − fg) + c (dh − eg)."""
     (a, b, c), (d, e, f), (g, h, i) = M
@@ -213,26 +224,42 @@ def det3(M) -> float:
 
 
 @jitable
+def adjugate(M) -> tuple:
+    """adj(M), the transposed cofactors: M adj(M) = det(M) I."""
+    (a, b, c), (d, e, f), (g, h, i) = M
+    return (
+        (e * i - f * h, c * h - b * i, b * f - c * e),
+        (f * g - d * i, a * i - c * g, c * d - a * f),
+        (d * h - e * g, b * g - a * h, a * e - b * d),
+    )
+
+
+@jitable
 def inv3(M) -> tuple:
     """M⁻¹ = adj(M) / det M, each cofactor divided by :func:`det3`."""
-    (a, b, c), (d, e, f), (g, h, i) = M
+    (A0, A1, A2), (B0, B1, B2), (C0, C1, C2) = adjugate(M)
     det = det3(M)
     return (
-        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
-        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
-        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
+        (A0 / det, A1 / det, A2 / det),
+        (B0 / det, B1 / det, B2 / det),
+        (C0 / det, C1 / det, C2 / det),
     )
 
 
 @jitable
 def inv3_reciprocal(M) -> tuple:
     """M⁻¹ = adj(M) · (1 / det M): one division, the cofactors multiplied by its result
-    (det M by the first row's cofactors, a A + b B + c C)."""
-    (a, b, c), (d, e, f), (g, h, i) = M
-    A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
-    inverse_det = 1.0 / (a * A + b * B + c * C)
+    (det M by the first row's cofactors, M₀₀ A₀₀ + M₀₁ A₁₀ + M₀₂ A₂₀)."""
+    (A0, A1, A2), (B0, B1, B2), (C0, C1, C2) = adjugate(M)
+    k = 1.0 / (M[0][0] * A0 + M[0][1] * B0 + M[0][2] * C0)
+    return (A0 * k, A1 * k, A2 * k), (B0 * k, B1 * k, B2 * k), (C0 * k, C1 * k, C2 * k)
+
+
+@jitable
+def trace_product(X, Y) -> float:
+    """tr(X Y), the diagonal of :func:`matmul` summed in order."""
     return (
-        (A * inverse_det, (c * h - b * i) * inverse_det, (b * f - c * e) * inverse_det),
-        (B * inverse_det, (a * i - c * g) * inverse_det, (c * d - a * f) * inverse_det),
-        (C * inverse_det, (b * g - a * h) * inverse_det, (a * e - b * d) * inverse_det),
+        (X[0][0] * Y[0][0] + X[0][1] * Y[1][0] + X[0][2] * Y[2][0])
+        + (X[1][0] * Y[0][1] + X[1][1] * Y[1][1] + X[1][2] * Y[2][1])
+        + (X[2][0] * Y[0][2] + X[2][1] * Y[1][2] + X[2][2] * Y[2][2])
     )

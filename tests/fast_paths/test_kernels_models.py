@@ -126,7 +126,7 @@ def test_a_scan_pitch_run_is_the_same_compiled_and_in_python():
     steps = round(150.0 / STEP)  # the whole maneuver: every phase, the terminal PD
     compiled, readable = both(lambda: scan_pitch_run(steps))
     assert compiled == readable
-    phases = {np.frombuffer(row[3][0])[pitch_maneuver_controller.Y_PHASE] for row in compiled}
+    phases = {np.frombuffer(row[3][0])[pitch_maneuver_controller.Y.phase] for row in compiled}
     assert phases == {1.0, 2.0, 3.0, 4.0, 5.0}
 
 
@@ -352,8 +352,8 @@ def test_a_singular_configuration_is_the_same_compiled_and_in_python(law):
     compiled, readable = both(run)
     assert compiled == readable
     values = np.frombuffer(compiled[0])
-    assert values[cmg_steering.Y_Q] < cmg_steering.SINGULAR_Q
-    rates = values[cmg_steering.Y_RATES : cmg_steering.Y_RATES + 6]
+    assert values[cmg_steering.Y.singularity] < cmg_steering.SINGULAR_Q
+    rates = values[cmg_steering.Y.delta_dot_cmd : cmg_steering.Y.delta_dot_cmd + 6]
     assert np.all(np.isfinite(rates)) and np.any(rates != 0)
     assert len(compiled[2]) == 1
     assert re.fullmatch(
