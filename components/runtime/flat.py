@@ -42,18 +42,48 @@ def offsets(label: str, at: dict[str, int]) -> types.ModuleType:
 
 def state_table(label: str, **sizes: int) -> types.ModuleType:
     """A kernel's state array: named rows of the given sizes, one after the other; the
-    namespace of their offsets (:func:`offsets`), with ``size`` the array's length and
-    ``zeros()`` a new state array (so no row may be called ``size`` or ``zeros``)."""
-    at, rows = 0, {}
+    namespace of their offsets (:func:`offsets`), with ``size`` the array's length,
+    ``zeros()`` a new state array and ``at(base)`` the namespace of the same rows in a copy
+    of the table that starts at ``base`` of a larger one (so no row may be called ``size``,
+    ``zeros`` or ``at``)."""
+    if {"size", "zeros", "at"} & set(sizes):
+        raise ValueError(f"{label}: a state row cannot be called size, zeros or at")
+    start, rows = 0, {}
     for name, size in sizes.items():
-        rows[name] = at
-        at += size
-    table = offsets(label, {**rows, "size": at})
-    if "size" in sizes or "zeros" in sizes:
-        raise ValueError(f"{label}: a state row cannot be called size or zeros")
-    size = at
+        rows[name] = start
+        start += size
+    size = start
+    table = offsets(label, {**rows, "size": size})
     table.zeros = lambda: np.zeros(size)
+    table.at = lambda base: offsets(
+        f"{label} at {base}", {name: base + row for name, row in rows.items()}
+    )
     return table
+
+
+@jitable
+def vector(a, at: int) -> tuple:
+    """The 3-vector at ``at`` of a flat array (``vector(v, U.w_BI_B)``)."""
+    return a[at], a[at + 1], a[at + 2]
+
+
+@jitable
+def quaternion(a, at: int) -> tuple:
+    """The 4-vector at ``at`` of a flat array."""
+    return a[at], a[at + 1], a[at + 2], a[at + 3]
+
+
+@jitable
+def matrix(a, at: int) -> tuple:
+    """The row-major 3×3 at ``at`` of a flat array, as a tuple of rows."""
+    return vector(a, at), vector(a, at + 3), vector(a, at + 6)
+
+
+@jitable
+def put(array, at: int, x) -> None:
+    """array[at : at + len(x)] = x."""
+    for i in range(len(x)):
+        array[at + i] = x[i]
 
 
 class StateTable:

@@ -83,7 +83,7 @@ def both(run):
 def snapshot(model):
     state = model.state.copy()
     if isinstance(model, OrbitEnvironment):  # the addresses of its own SGP4 record
-        state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = 0.0
+        state[orbit_environment.S.sgp4 : orbit_environment.S.sgp4 + 2] = 0.0
     return model.values.tobytes(), state.tobytes(), list(model.warnings)
 
 
@@ -577,9 +577,9 @@ def test_a_restored_state_calls_sgp4_on_its_own_record():
     other = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
     state = one.get_state()
     state[0][:] = 0.0  # the value array
-    state[2]["state"][orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = (8.0, 16.0)
+    state[2]["state"][orbit_environment.S.sgp4 : orbit_environment.S.sgp4 + 2] = (8.0, 16.0)
     other.set_state(state)
-    assert tuple(other.state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2]) == tuple(
+    assert tuple(other.state[orbit_environment.S.sgp4 : orbit_environment.S.sgp4 + 2]) == tuple(
         map(float, other._sgp4_entry)
     )
     assert "_sgp4_entry" not in state[2]

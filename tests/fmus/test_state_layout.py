@@ -115,9 +115,13 @@ def _set(at: int, x: float):
     [
         ("Flywheel", _set(1, 40.0), "wheel constants (places, axes, distribution) are not"),
         ("Flywheel", _set(0, 4.0), "wheel constants"),
-        ("StarTracker", _set(st.SECTION, 1e6), "constants (capacity, section length"),
-        ("StarTracker", _set(st.SECTIONS + st.N, 1e6), "count of samples waiting 1000000.0"),
-        ("StarTracker", _set(st.SECTIONS + st.N, -1.0), "count of samples waiting -1.0"),
+        ("StarTracker", _set(st.S.section, 1e6), "constants (capacity, section length"),
+        (
+            "StarTracker",
+            _set(st.SECTIONS + st.WAITING.n, 1e6),
+            "count of samples waiting 1000000.0",
+        ),
+        ("StarTracker", _set(st.SECTIONS + st.WAITING.n, -1.0), "count of samples waiting -1.0"),
         ("AttitudeEstimator", _set(ae.CAPACITY, 1e6), "constants (capacity, section length, R)"),
         ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 2.5), "count of records 2.5"),
         ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 1e6), "count of records 1000000.0"),
