@@ -6,7 +6,7 @@ package (tests/test_layers.py), and everything above may import it.
 - :mod:`.jit` — the models' kernels compiled by numba once a run is long, the kernel
   convention, the compile cache keyed on content;
 - :mod:`.flat` — the flat arrays kernels work on: offsets by name (the variable table's
-  and a kernel's :class:`~.flat.StateTable`), small accessors, and compilable bit-exact
+  and a kernel's :func:`~.flat.state_table`), small accessors, and compilable bit-exact
   twins of CPython functions numba computes otherwise;
 - :mod:`.cache` — agilesat's cache directory and its entries sealed with their SHA-256;
 - :mod:`.switches` — every ``AGILESAT_*`` environment variable, read and checked;

@@ -54,9 +54,9 @@ def state_table(label: str, **sizes: int) -> types.ModuleType:
         start += size
     size = start
     table = offsets(label, {**rows, "size": size})
-    table.zeros = lambda: np.zeros(size)
-    table.at = lambda base: offsets(
-        f"{label} at {base}", {name: base + row for name, row in rows.items()}
+    vars(table).update(
+        zeros=lambda: np.zeros(size),
+        at=lambda base: offsets(f"{label} at {base}", {n: base + r for n, r in rows.items()}),
     )
     return table
 
@@ -84,23 +84,6 @@ def put(array, at: int, x) -> None:
     """array[at : at + len(x)] = x."""
     for i in range(len(x)):
         array[at + i] = x[i]
-
-
-class StateTable:
-    """The former state table (rows reached by module constants); goes once every model
-    reaches its rows by name (:func:`state_table`)."""
-
-    def __init__(self, **sizes: int):
-        self.offset: dict[str, int] = {}
-        at = 0
-        for name, size in sizes.items():
-            self.offset[name] = at
-            at += size
-        self.offsets = tuple(self.offset.values())
-        self.size = at
-
-    def zeros(self) -> np.ndarray:
-        return np.zeros(self.size)
 
 
 @jitable

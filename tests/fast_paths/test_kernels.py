@@ -197,7 +197,7 @@ def _spin_up_interpolated(model: SatelliteDynamics, steps: int) -> np.ndarray:
     non-isotropic body)."""
     model.set("r_I", [7.0e6, 1.0e5, -2.0e5])
     rows = _spin_up_run(model, steps, interpolated=True)
-    assert model.state[satellite_dynamics.S_SLOPE_CONFLICT] == 1.0
+    assert model.state[satellite_dynamics.S.slope_conflict] == 1.0
     return rows
 
 
