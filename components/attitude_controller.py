@@ -31,7 +31,7 @@ of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) 
 short against the 300 s pitch envelope of the payload sweep.
 
 Stateless: outputs are a function of the inputs at the communication point.  ``output`` is
-one kernel (components/jit.py) on the value array and a state array of the gains and the
+one kernel (components/runtime/jit.py) on the value array and a state array of the gains and the
 inertia (``S``).
 """
 

@@ -3,7 +3,7 @@
 The surface is a table of flat facets i (unused rows: zero area): area A_i, outward unit
 normal n_i and centre of pressure c_i (from the centre of mass), in B.  Facets do not
 shadow each other.  Stateless: the outputs are functions of the inputs at each time, by one
-kernel (components/jit.py) reading the parameters and inputs from the value array.
+kernel (components/runtime/jit.py) reading the parameters and inputs from the value array.
 
 Aerodynamics ([Vallado 2013] ch. 8, [Wertz 1978] ch. 17; free-molecular flat plates).  The
 atmosphere co-rotates with the Earth; the flow seen by facet i, in B::

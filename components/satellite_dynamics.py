@@ -30,7 +30,7 @@ q̇_BO = ½ q_BO ⊗ (0, w_BO_B), ẇ_BO_B = ẇ_BI_B + w_BO_B × C_BO w_OI_O �
 the derivative set for w_OI_O), the Euler angles' first and second derivatives
 (rotations.euler123_ddot).
 
-``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
+``step`` and ``output`` are each one kernel (components/runtime/jit.py: their Python in short
 runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
 read and written at the offsets of the variable table, and on ``self.state``: q_BI, H_I,
 the last q_BO and euler_BO, and the constants ``initialize`` derives (the state table

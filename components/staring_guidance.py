@@ -81,7 +81,7 @@ I and E z axes coincide; :mod:`.orbit`; with an epoch the orbit model turns the 
 the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH;
 q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad).
 
-``step`` and ``output`` are each one kernel (components/jit.py) on the value array and the
+``step`` and ``output`` are each one kernel (components/runtime/jit.py) on the value array and the
 state array ``STATE`` (the mount, the captured g, the anchors of the angle branches), on
 tuples of floats; the sums of products are taken in the order written (the NumPy version
 before them summed the dot products as the CPU's BLAS kernel does, with fused
@@ -217,7 +217,7 @@ def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
 def footprint_azimuths(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> np.ndarray:
     """:func:`footprint_azimuth` of each row of q_BI (N, 4) and r_T_I (N, 3), in one
     kernel call (a run's history: the kernel runs compiled where that pays,
-    components/jit.py); ModelError at the first row where it is undefined."""
+    components/runtime/jit.py); ModelError at the first row where it is undefined."""
     b = np.asarray(boresight_B, dtype=float)
     a_B = tuple(footprint_axis(b).tolist())
     beam_B = tuple((b / math.sqrt(float(b @ b))).tolist())

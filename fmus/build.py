@@ -127,7 +127,7 @@ with tempfile.TemporaryDirectory() as folder:
 
 
 def compile_kernels(fmu: Path, name: str, package: str) -> None:
-    """Fill the compile cache of the FMU's kernels (components/jit.py): load its code from
+    """Fill the compile cache of the FMU's kernels (components/runtime/jit.py): load its code from
     an extraction, as a host does, in a fresh process of this Python, and run its model at
     the defaults for one step.  The cache is keyed on content, so any later extraction of
     this FMU loads the compiled kernels instead of compiling them."""

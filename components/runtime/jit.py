@@ -5,19 +5,21 @@ the model's module, with its equations; ``@kernel`` marks it and ``@jitable`` th
 functions it calls.  A kernel runs that Python for its first ``AGILESAT_JIT_AFTER`` calls
 (default 50,000), then the same function compiled by numba in nopython
 mode without fastmath: IEEE double arithmetic in the order written, the same libm, so the
-results are those of the Python bit for bit (tests/test_kernels.py) and switching midway
+results are those of the Python bit for bit (tests/fast_paths/test_kernels_models.py) and
+switching midway
 changes nothing.  The threshold is measured, not guessed: importing numba and loading the
 compiled kernels costs about a second per process, which the kernels win back only after
-tens of thousands of calls (README, "Benchmark"); short runs never import numba, long runs
+tens of thousands of calls (docs/performance.md); short runs never import numba, long runs
 and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the Python;
 ``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
 ``kernel.compiled`` the compiled function (the Python without numba, or where numba cannot
 compile the kernel: it then says so in a warning at the switch).
 
-A kernel may work on a model's whole value array (SatelliteDynamics): it reads through
-:func:`floats` (in its Python a list of Python floats, which index and compute several
-times faster than NumPy scalars; compiled, the array itself) at offsets named after the
-variable table, and writes into the array.
+A kernel works on a model's whole value array and a state array of its own: it reads them
+through :func:`floats` (in its Python a list of Python floats, which index and compute
+several times faster than NumPy scalars; compiled, the array itself) at the offsets the
+tables name (:mod:`.flat`: ``values[U.tau_cmd]``, ``state[S.omega + k]``), and writes
+into them.
 
 Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's path and
 modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,

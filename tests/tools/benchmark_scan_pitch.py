@@ -13,7 +13,7 @@ process, see best()):
   loaded FMUs, the shim's C step path kept: ctypes, our shim, and pythonfmu and our slave
   where a call enters Python; less the master) and master (that run again with every FMI
   call of the compiled loop a C no-op: the loop, its rows and their CSV text);
-- the previous design in the same run: the kernels (components/jit.py) running their
+- the previous design in the same run: the kernels (components/runtime/jit.py) running their
   readable Python (AGILESAT_JIT=0), the shim's get/set through pythonfmu and the slave
   (AGILESAT_SHIM_FAST=0) and the Python master loop (loop="python"), split into model
   compute, FMI layer and master (the Python loop with every FMI call a Python no-op), and
