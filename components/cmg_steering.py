@@ -40,7 +40,7 @@ from .cmg_cluster import (
     axes,
 )
 from .model import Model, ModelError
-from .runtime.flat import state_table
+from .runtime.flat import relative, state_table
 from .runtime.jit import floats, jitable, output_kernel
 from .variables import choice, input_, output, parameter
 from .vectors import det3, dot, gram, inv3, rotate
@@ -135,7 +135,7 @@ class CmgSteering(Model):
         status = steering_output(self.values, self.state, self.t)
         if status & PSEUDO_INVERSE_SINGULAR:
             _, columns = self.geometry.axes(self.u.delta.tolist())
-            h_dot = wanted_hdot(self.values.tolist())
+            h_dot = wanted_hdot(self.values[U.tau_cmd : U.h + 3].tolist())
             rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
             self.y.delta_dot_cmd[:] = rates
         if status & BECAME_SINGULAR:
@@ -148,6 +148,8 @@ class CmgSteering(Model):
 
 # -- kernel (components/runtime/jit.py) -----------------------------------------------
 P, U, Y = CmgSteering.names()
+#: the inputs' places in the slice of them the kernel reads, values[U.tau_cmd : U.h + 3]
+UI = relative(U, U.tau_cmd)
 #: the state array: s_i, t_i of each gyro (ClusterGeometry.st), the law's constants, and 1
 #: while the configuration is singular (Q ≤ SINGULAR_Q)
 S = state_table(
@@ -165,8 +167,8 @@ def steering_output(values, state, t):
     or only Q and returns PSEUDO_INVERSE_SINGULAR where the law is the pseudo-inverse and
     Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's); keeps whether the
     configuration is singular (Q ≤ SINGULAR_Q) and adds BECAME_SINGULAR when it becomes so."""
-    v, s = floats(values), floats(state)
-    spins, columns = axes(v[U.delta : U.delta + N_GYROS], s[S.st : S.h_rotor])
+    u, s = floats(values[U.tau_cmd : U.h + 3]), floats(state)  # the inputs alone
+    spins, columns = axes(u[UI.delta : UI.delta + N_GYROS], s[S.st : S.h_rotor])
     M = gram(columns)
     Q = det3(M)
     values[Y.singularity] = Q
@@ -184,7 +186,7 @@ def steering_output(values, state, t):
     elif not Q > SINGULAR_Q:
         return PSEUDO_INVERSE_SINGULAR | became
     M_inv = inv3(M)
-    x = rotate(M_inv, wanted_hdot(v))
+    x = rotate(M_inv, wanted_hdot(u))
     h_rotor = s[S.h_rotor]
     rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / h_rotor for a in columns]
     null_gain = s[S.null_gain]
@@ -196,11 +198,11 @@ def steering_output(values, state, t):
 
 
 @jitable
-def wanted_hdot(v) -> tuple:
-    """ḣ = −τ_cmd − w × h from the inputs in the value array ``v``."""
-    wx, wy, wz = v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]
-    hx, hy, hz = v[U.h], v[U.h + 1], v[U.h + 2]
-    tx, ty, tz = v[U.tau_cmd], v[U.tau_cmd + 1], v[U.tau_cmd + 2]
+def wanted_hdot(u) -> tuple:
+    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U.tau_cmd : U.h + 3])."""
+    wx, wy, wz = u[UI.w_BI_B], u[UI.w_BI_B + 1], u[UI.w_BI_B + 2]
+    hx, hy, hz = u[UI.h], u[UI.h + 1], u[UI.h + 2]
+    tx, ty, tz = u[UI.tau_cmd], u[UI.tau_cmd + 1], u[UI.tau_cmd + 2]
     return (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
 
 

@@ -40,6 +40,15 @@ def offsets(label: str, at: dict[str, int]) -> types.ModuleType:
     return namespace
 
 
+def relative(namespace: types.ModuleType, origin: int) -> types.ModuleType:
+    """``namespace``'s offsets less ``origin``: the places in a slice of the array that
+    starts there (a kernel that converts only its inputs, ``values[U.tau_cmd : ...]``)."""
+    return offsets(
+        f"{namespace.__name__} from {origin}",
+        {name: at - origin for name, at in vars(namespace).items() if type(at) is int},
+    )
+
+
 def state_table(label: str, **sizes: int) -> types.ModuleType:
     """A kernel's state array: named rows of the given sizes, one after the other; the
     namespace of their offsets (:func:`offsets`), with ``size`` the array's length,
