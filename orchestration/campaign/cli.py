@@ -1,8 +1,12 @@
 """``agilesat campaign``: the command-line layer on :func:`run_campaign`.
 
-Exit status: 0 every run met every requirement; 3 the campaign finished but some run
-failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
-130 interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
+Exit status: 0 every run met every requirement judged run by run and every requirement
+judged over the campaign is met; 3 the campaign finished but some run failed, stopped or
+missed a requirement, or a requirement judged over the campaign is not met (campaign.json
+says which); 4 nothing of that, but a requirement judged over the campaign is undecided
+(its runs show neither compliance nor a violation at its confidence: the verdict says
+roughly how many runs would settle it; ``--until-decided`` makes them); 1 bad input; 130
+interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
 """
 
 from __future__ import annotations
@@ -26,6 +30,12 @@ def add_parser(commands) -> argparse.ArgumentParser:
         "(3×3 inertia), linspace(lo,hi,n), values(a,b,...) (grids: full factorial); a "
         "leading + or * applies it to the nominal value; SI, 'deg' after a number for "
         "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.",
+        epilog="Exit status: 0 every requirement met (run by run, and over the campaign); "
+        "3 a run failed or stopped, or a requirement is not met; 4 none of that, but a "
+        "requirement judged over the campaign is undecided (its runs show neither compliance "
+        "nor a violation at its confidence; the line says roughly how many runs would settle "
+        "it: --until-decided makes them); 1 bad input; 130/143 interrupted (--resume "
+        "continues).",
     )
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
     p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
@@ -153,11 +163,16 @@ def main(args) -> int:
     if engine.INTERRUPTS.signals:  # as the cluster closed
         print(f"{_first().name} as the cluster closed: every run was made and written")
         return 128 + _first()
-    runs = result.summary["runs"]
-    unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
-        r["verdict"] == "not met" for r in result.summary["ensemble"].values()
-    )
-    return 3 if runs["planned"] != runs["ok"] or unmet else 0
+    return campaign_status(result.summary)
+
+
+def campaign_status(summary: dict) -> int:
+    """The exit status of a campaign's summary (module docstring)."""
+    from ..cli import exit_status
+
+    runs = summary["runs"]
+    unmet = any(r["not_met"] for r in summary["pass_rates"].values())
+    return exit_status(runs["planned"] != runs["ok"] or unmet, summary["ensemble"])
 
 
 RESUME = "the same command with --resume continues it"
@@ -216,7 +231,11 @@ def format_campaign(summary: dict) -> str:
     statements = {n: r.get("statement", n) for n, r in summary.get("requirements", {}).items()}
     for name, r in summary["pass_rates"].items():
         low, high = r["ci95"]
-        what = "all requirements" if name == "all" else f"requirement {statements.get(name, name)}"
+        what = (
+            "all requirements judged run by run"
+            if name == "all"
+            else f"requirement {statements.get(name, name)}"
+        )
         others = ", ".join(
             f"{r[k]} {k.replace('_', ' ')}" for k in ("not_met", "not_evaluated", "stopped") if r[k]
         )

@@ -46,8 +46,10 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
     cols += [(name, plan.kinds[name]) for name in plan.columns]
     cols += [("status", "s"), ("message", "s")]
     cols += [(name, "f") for name in catalog.get("metrics", {})]
-    for name in catalog.get("requirements", {}):
-        cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
+    for name, requirement in catalog.get("requirements", {}).items():
+        if requirement.get("judged_over") != "campaign":  # else: "judged over the campaign"
+            cols.append((f"met_{name}", "b"))
+        cols.append((f"verdict_{name}", "s"))
     return cols + [("worker", "s"), ("seconds", "f"), ("cpu_seconds", "f")]
 
 

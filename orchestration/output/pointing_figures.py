@@ -5,7 +5,7 @@ under the requirement's interpretation).  A campaign's are in :mod:`..campaign.p
 
 from __future__ import annotations
 
-import textwrap
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,26 +19,33 @@ def run_figures(scenario, variant, results, out_dir) -> list[Path]:
     """The figure of each pointing requirement ``variant`` judges that the run can show
     (one whose columns were not recorded, or whose index the run is too short for, has
     none: the summary's verdict says why it was not evaluated)."""
-    from ..mission.requirements import Pointing
+    from ..mission.requirements import OVER_CAMPAIGN, Pointing
 
     exempt = scenario.variant(variant).exempt()
     paths = []
     for r in scenario.requirements_for(variant):
         if not isinstance(r, Pointing) or r.name in exempt:
             continue
+        requirement = r.requirement
+        if r.over_campaign:  # what the run shows: its estimate (no confidence: one run)
+            requirement = replace(requirement, confidence=None)  # type: ignore[type-var]
         try:
             error = r.error(results, results.time)
-            t, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
+            t, m = requirement.magnitudes(error)  # type: ignore[attr-defined]
         except (ColumnError, NotEvaluable):
             continue
-        result = r.requirement.judge(t, m)  # type: ignore[attr-defined]
-        paths.append(profile(Path(out_dir) / f"pointing_{r.name}.png", r.name, result, t, m[0]))
+        result = requirement.judge(t, m)  # type: ignore[attr-defined]
+        verdict = OVER_CAMPAIGN if r.over_campaign else result.short()
+        path = Path(out_dir) / f"pointing_{r.name}.png"
+        paths.append(profile(path, f"{r.name}: {verdict}", result, t, m[0]))
     return paths
 
 
-def profile(path: Path, name: str, result, t, m, unit: str = "deg") -> Path:
-    """The index's magnitude ``m`` at times ``t`` of one run, with the bound (red dashed)
-    and ``result``'s statistic (dash-dotted; the estimate where no value was compared)."""
+def profile(path: Path, title: str, result, t, m, unit: str = "deg") -> Path:
+    """The index's magnitude ``m`` at times ``t`` of one run (t random in Δt: its largest
+    over the window's positions), with the bound (red dashed) and ``result``'s statistic
+    (dash-dotted; the estimate where no value was compared); ``title``: the requirement's
+    name and verdict."""
     r, stat, scale = result.requirement, result.statistic, ANGLE_UNITS[unit]
     marks: dict = {"bottom": 0.0}
     if r.bound is not None:
@@ -46,6 +53,7 @@ def profile(path: Path, name: str, result, t, m, unit: str = "deg") -> Path:
     shown = f"at {100 * stat.level:g} % ({stat.interpretation})"
     shown += f"{' estimate' * (result.value is None)}: {format_angle(stat.value, unit)}"
     marks["statistic"] = (stat.value / scale, shown)
-    title = textwrap.fill(f"{name}: {result.line(unit)}", 90)
-    series = {r.label(): np.asarray(m) / scale}
+    m = np.asarray(m)
+    label = r.label() + (" (largest over the window's positions)" if m.ndim == 2 else "")
+    series = {label: (m.max(axis=1) if m.ndim == 2 else m) / scale}
     return plots.lines(path, title, t, series, f"{r.index} [{unit}]", **marks)

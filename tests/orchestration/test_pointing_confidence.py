@@ -55,7 +55,7 @@ def test_a_campaign_too_small_is_not_evaluable_and_says_how_many_runs():
         allowed_exceedances(1108, 0.9973, 0.95)
     with pytest.raises(NotEvaluable, match="1109 runs"):
         statistic(np.ones((1108, 3)), 0.9973, "ensemble", confidence=0.95)
-    with pytest.raises(ValueError, match="needs the ensemble interpretation"):
+    with pytest.raises(ValueError, match="needs the ensemble or mixed interpretation"):
         statistic(np.ones((2000, 3)), 0.9973, "temporal", confidence=0.95)
 
 
