@@ -49,7 +49,7 @@ _WHERE = {
         ),
         "statistics",
     ),
-    **dict.fromkeys(("Decision", "decide", "runs_to_decide"), "verdicts"),
+    **dict.fromkeys(("Decision", "decide", "decide_counts", "next_look"), "verdicts"),
 }
 
 
@@ -77,17 +77,18 @@ __all__ = [
     "allowed_exceedances",
     "confidence_achieved",
     "decide",
+    "decide_counts",
     "format_angle",
     "index_series",
     "knowledge_error",
     "magnitude",
+    "next_look",
     "performance_error",
     "position_weights",
     "quaternion_product",
     "rotation_quaternion",
     "rotation_vector",
     "runs_needed",
-    "runs_to_decide",
     "statistic",
     "window_positions",
 ]

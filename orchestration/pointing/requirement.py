@@ -417,11 +417,12 @@ class PointingResult:
             worst = {"worst_run": stat.worst}
         evidence = None
         if decision is not None:
-            evidence = {
-                "compliance": decision.compliance,
-                "compliance_needed": decision.needed_compliance,
-                "violation": decision.violation,
-                "violation_needed": decision.needed_violation,
+            ten = math.log(10)
+            evidence = {  # decimal logarithms of the e-values and of what they must reach
+                "log10_compliance": decision.log_compliance / ten,
+                "log10_compliance_needed": math.log10(decision.needed_compliance),
+                "log10_violation": decision.log_violation / ten,
+                "log10_violation_needed": math.log10(decision.needed_violation),
                 "tests": decision.tests,
                 "rule": "anytime-valid e-processes (docs/pointing.md)",
             }

@@ -79,32 +79,25 @@ def _bets(q: float, alpha: float, side: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _log_capital(x: np.ndarray, q: float, lam: np.ndarray, side: int) -> np.ndarray:
     """ln Π_i (1 + λ side (x_i − q)) for each bet λ (first axis) and each stream (the
-    axes of ``x`` after the first, the runs')."""
-    x = np.asarray(x)
-    shape = (len(lam),) + (1,) * (x.ndim - 1)
-    lam = lam.reshape(shape)
+    second axis of the shares ``x[run, stream]``)."""
+    with np.errstate(divide="ignore"):  # a factor 0: ln 0 = −inf, the bet lost
+        return np.stack([np.log1p(np.maximum(-1.0, side * b * (x - q))).sum(axis=0) for b in lam])
+
+
+def _log_capital_of_counts(above, runs: int, q: float, lam: np.ndarray, side: int):
+    """:func:`_log_capital` of runs above or not (x ∈ {0, 1}): ``above[stream]`` of
+    ``runs`` are (a factor 1 + λ side (1 − q) each, the others 1 − λ side q)."""
+    above = np.asarray(above)[None, :]
+    lam = lam[:, None]
     with np.errstate(divide="ignore"):
-        if x.dtype == bool:  # runs above or not: by the count above
-            above = x.sum(axis=0)
-            return _times(above, np.log1p(side * lam * (1.0 - q))) + _times(
-                len(x) - above, np.log1p(-side * lam * q)
-            )
-        return np.stack(
-            [np.log1p(np.maximum(-1.0, side * b * (x - q))).sum(axis=0) for b in lam.ravel()]
+        return _times(above, np.log1p(side * lam * (1.0 - q))) + _times(
+            runs - above, np.log1p(-side * lam * q)
         )
 
 
 def _times(count, log_factor):
     """count · ln factor, 0 where the count is 0 (also when the factor is 0)."""
     return np.where(count > 0, count * np.where(count > 0, log_factor, 0.0), 0.0)
-
-
-def log_evidence(x: np.ndarray, q: float, alpha: float, side: int) -> np.ndarray:
-    """ln of the compliance (``side`` −1) or violation (+1) evidence of ``x[run, ...]``
-    (bool: above the bound or not; float: the shares above it), per stream."""
-    lam, weights = _bets(q, alpha, side)
-    terms = _log_capital(x, q, lam, side) + weights.reshape((-1,) + (1,) * (np.ndim(x) - 1))
-    return np.logaddexp.reduce(terms, axis=0)
 
 
 @dataclass(frozen=True)
@@ -122,9 +115,19 @@ class Decision:
     level: float
     confidence: float
     tests: int
-    compliance: float  # e-value; met when ≥ 1/α
-    violation: float  # e-value; not met when ≥ tests/α
+    log_compliance: float  # ln e-value; met when ≥ ln(1/α)
+    log_violation: float  # ln e-value; not met when ≥ ln(tests/α)
     increments: tuple = ()
+
+    @property
+    def compliance(self) -> float:
+        """The compliance evidence (e-value; inf beyond the floats)."""
+        return _exp(self.log_compliance)
+
+    @property
+    def violation(self) -> float:
+        """The violation evidence (e-value; inf beyond the floats)."""
+        return _exp(self.log_violation)
 
     @property
     def needed_compliance(self) -> float:
@@ -137,12 +140,12 @@ class Decision:
     @property
     def compliance_confidence(self) -> float:
         """The highest confidence at which compliance is shown (0 if none)."""
-        return max(0.0, 1.0 - 1.0 / self.compliance) if self.compliance > 0 else 0.0
+        return max(0.0, 1.0 - math.exp(-self.log_compliance))
 
     @property
     def violation_confidence(self) -> float:
         """The highest confidence at which a violation is shown, corrected for the tests."""
-        return max(0.0, 1.0 - self.tests / self.violation) if self.violation > 0 else 0.0
+        return max(0.0, 1.0 - self.tests * math.exp(-min(self.log_violation, 700.0)))
 
     def runs_to_decide(self) -> int | None:
         """Undecided: roughly the runs that would settle it if the runs to come were like
@@ -151,6 +154,10 @@ class Decision:
         if self.status != UNDECIDED:
             return None
         return _runs_to_decide(self.increments, self.runs, self.level, self.confidence, self.tests)
+
+
+def _exp(x: float) -> float:
+    return math.exp(x) if x < 700 else math.inf
 
 
 def _check(level: float, confidence: float) -> tuple[float, float]:
@@ -162,39 +169,65 @@ def _check(level: float, confidence: float) -> tuple[float, float]:
 def decide(x, level: float, confidence: float) -> Decision:
     """Met, not met or undecided on ``x[run]`` (one statement: a mixed requirement's
     shares) or ``x[run, time]`` (an ensemble requirement: every time must comply; the
-    violation corrected for the times): bool, above the bound or not, or float shares in
-    [0, 1] (module docstring)."""
-    q, alpha = _check(level, confidence)
+    violation corrected for the times): bool, above the bound or not (then by the counts,
+    :func:`decide_counts`), or float shares in [0, 1] (module docstring)."""
     x = np.asarray(x)
     if x.ndim == 1:
         x = x[:, None]
     if x.ndim != 2 or not len(x):
         raise ValueError(f"x: expected (runs,) or (runs, times) with runs ≥ 1, got {x.shape}")
-    if x.dtype != bool and not ((x >= 0.0) & (x <= 1.0)).all():
+    if x.dtype == bool:
+        return decide_counts(x.sum(axis=0), len(x), level, confidence)
+    if not ((x >= 0.0) & (x <= 1.0)).all():
         raise ValueError("x: shares above the bound, in [0, 1]")
-    runs, tests = x.shape
-    compliance = log_evidence(x, q, alpha, -1)
-    violation = log_evidence(x, q, alpha, +1)
+    q, alpha = _check(level, confidence)
+    capital = {side: _log_capital(x, q, _bets(q, alpha, side)[0], side) for side in (-1, 1)}
+    return _decision(capital, x.sum(axis=0), len(x), level, confidence)
+
+
+def decide_counts(above, runs: int, level: float, confidence: float) -> Decision:
+    """:func:`decide` on runs above the bound or not: ``above[time]`` of ``runs`` runs are
+    (an ensemble requirement at each of its times; one number: one statement)."""
+    q, alpha = _check(level, confidence)
+    above = np.atleast_1d(np.asarray(above, dtype=float))
+    if runs < 1 or not ((above >= 0) & (above <= runs)).all():
+        raise ValueError(f"above: counts in [0, runs = {runs}], runs ≥ 1")
+    counts, at = np.unique(above, return_inverse=True)  # the evidence of each count, once
+    capital = {
+        side: _log_capital_of_counts(counts, runs, q, _bets(q, alpha, side)[0], side)
+        for side in (-1, 1)
+    }
+    return _decision(capital, above, runs, level, confidence, at.ravel())
+
+
+def _decision(
+    capital: dict, above, runs: int, level: float, confidence: float, at=None
+) -> Decision:
+    """The verdict from each bet's ln-capital at each time, ``capital[side][bet, time]``
+    (or, ``at`` given, at column ``at[time]``)."""
+    q, alpha = _check(level, confidence)
+    at = np.arange(len(above)) if at is None else at
+    evidence = {
+        side: np.logaddexp.reduce(c + _bets(q, alpha, side)[1][:, None], axis=0)[at]
+        for side, c in capital.items()
+    }  # ln e-value per time
+    tests = len(above)
     slack = math.log1p(_ROUNDING)
-    met = compliance.min() >= -math.log(alpha) - slack
-    shown = violation.max() >= math.log(tests / alpha) - slack
+    met = evidence[-1].min() >= -math.log(alpha) - slack
+    shown = evidence[1].max() >= math.log(tests / alpha) - slack
     status = MET if met else NOT_MET if shown else UNDECIDED
-    stream = int(np.argmax(violation) if status == NOT_MET else np.argmin(compliance))
-    column = x[:, stream]
-    increments = tuple(
-        tuple(_log_capital(column, q, _bets(q, alpha, side)[0], side) / runs) for side in (-1, 1)
-    )
+    stream = int(np.argmax(evidence[1]) if status == NOT_MET else np.argmin(evidence[-1]))
     return Decision(
         status,
         stream,
-        float(column.sum()),
+        float(above[stream]),
         runs,
         level,
         confidence,
         tests,
-        math.exp(compliance[stream] if status != NOT_MET else compliance.min()),
-        math.exp(violation[stream] if status == NOT_MET else violation.max()),
-        increments,
+        float(evidence[-1][stream] if status != NOT_MET else evidence[-1].min()),
+        float(evidence[1][stream] if status == NOT_MET else evidence[1].max()),
+        tuple(tuple(capital[side][:, at[stream]] / runs) for side in (-1, 1)),
     )
 
 
@@ -207,7 +240,7 @@ def allowed_above(runs: int, level: float, confidence: float) -> int | None:
     lam, weights = _bets(q, alpha, -1)
 
     def shown(above: int) -> bool:
-        capital = _log_capital(np.arange(runs) < above, q, lam, -1)
+        capital = _log_capital_of_counts([above], runs, q, lam, -1)[:, 0]
         return float(np.logaddexp.reduce(capital + weights)) >= threshold
 
     if not shown(0):
@@ -239,3 +272,14 @@ def _runs_to_decide(increments, runs: int, level: float, confidence: float, test
         middle = (low + high) // 2
         low, high = (low, middle) if decided(middle) else (middle, high)
     return high
+
+
+def next_look(runs: int, needed, max_runs: int) -> int:
+    """The runs of a campaign's next look while it runs until decided: what the undecided
+    requirements would need (``needed``: each one's :meth:`Decision.runs_to_decide`, None
+    if it cannot say; twice the runs if none can), at least 10 % (and 10) more runs than
+    now, at most ten times as many, and at most ``max_runs``.  Any schedule keeps the
+    risks (the tests are anytime-valid); this one looks little and overshoots little."""
+    known = [n for n in needed if n is not None]
+    target = max(known) if known else 2 * runs
+    return min(max_runs, max(runs + max(10, runs // 10), min(target, 10 * runs)))
