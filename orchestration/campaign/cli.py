@@ -18,6 +18,7 @@ from pathlib import Path
 from ..cli import ALGORITHM
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
+from .sequential import format_until_decided, run_until_decided
 
 
 def add_parser(commands) -> argparse.ArgumentParser:
@@ -81,6 +82,20 @@ def add_parser(commands) -> argparse.ArgumentParser:
         help="keep this output per run (signals.npy, envelope figure); a whole "
         "vector (SatelliteDynamics.w_BO_B) or one element",
     )
+    p.add_argument(
+        "--until-decided",
+        action="store_true",
+        help="add runs in looks (--runs the first) until every requirement judged over the "
+        "campaign is met or not met (anytime-valid verdicts: looking keeps their risks), "
+        "or --max-runs",
+    )
+    p.add_argument(
+        "--max-runs",
+        type=int,
+        metavar="N",
+        help="with --until-decided, the most runs (default: 5 times the most any such "
+        "requirement needs with none above its bound)",
+    )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
     p.add_argument(
         "--resume",
@@ -133,20 +148,29 @@ def main(args) -> int:
         args.stop,
         args.algorithm,
     )
+    if args.max_runs is not None and not args.until_decided:
+        raise ValueError("--max-runs is the most runs of --until-decided: give it too")
     engine.INTERRUPTS.signals.clear()
     for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
         signal.signal(signum, engine.INTERRUPTS)
-    try:
-        result = run_campaign(
+
+    def look(spec: Spec, resume: bool):
+        return run_campaign(
             spec,
             args.out,
-            args.resume,
+            resume,
             args.workers,
             args.scheduler,
             progress=not args.quiet,
             listen=args.listen,
             dashboard=args.dashboard,
         )
+
+    try:
+        if args.until_decided:
+            result = run_until_decided(spec, args.max_runs, args.out, args.resume, look)
+        else:
+            result = look(spec, args.resume)
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
         print(f"interrupted by {_first().name}: the runs made are in runs.jsonl; {RESUME}")
@@ -159,6 +183,8 @@ def main(args) -> int:
         )
         return 128 + _first()
     print(format_campaign(result.summary))
+    if "until_decided" in result.summary:
+        print(format_until_decided(result.summary))
     print(f"results in {result.out_dir}/")
     if engine.INTERRUPTS.signals:  # as the cluster closed
         print(f"{_first().name} as the cluster closed: every run was made and written")
@@ -248,9 +274,9 @@ def format_campaign(summary: dict) -> str:
         )
     for name, why in summary.get("not_judged", {}).items():
         lines.append(f"  requirement {statements.get(name, name)}: not judged ({why})")
-    for r in summary.get("ensemble", {}).values():
+    for name, r in summary.get("ensemble", {}).items():
         lines.append(
-            f"  over the campaign: {r.get('text') or r['statement']}"
+            f"  over the campaign: {name}: {r.get('text') or r['statement']}"
             + ("" if r.get("text") else f": {r['verdict']}")
             + (f" ({r['reason']})" if r.get("reason") and not r.get("text") else "")
         )
