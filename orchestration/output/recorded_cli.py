@@ -125,6 +125,11 @@ def main(args) -> int:
             recorded=recorded,
         )
         print(f"  {result.line(args.unit)}")
+        if INDICES[args.index][1] == "knowledge" and args.start is None:
+            print(
+                "  (over the whole record: the estimator's start-up included; --start T "
+                "judges it after it, docs/sensing.md)"
+            )
         records.append(result.to_dict())
         results.append((requirement.label(), result))
     else:

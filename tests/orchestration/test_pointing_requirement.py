@@ -16,7 +16,6 @@ from agilesat.orchestration.pointing import (
     format_angle,
     index_series,
     magnitude,
-    statistic,
 )
 
 ARCSEC = math.pi / 648_000
