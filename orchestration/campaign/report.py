@@ -324,12 +324,13 @@ def _described(meta: dict) -> str:
 
 
 def _save(fig, ax, path: Path) -> Path:
-    """A campaign figure written (grid, layout, the run figures' resolution) and closed."""
+    """A campaign figure written (grid, layout, the run figures' resolution; its title also
+    in the PNG's "Title", for tools and tests that read files) and closed."""
     from ..output.plots import DPI, plt
 
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    fig.savefig(path, dpi=DPI, metadata={"Title": ax.get_title()})
     plt.close(fig)
     return path
 
