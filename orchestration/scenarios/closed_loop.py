@@ -120,6 +120,11 @@ def knowledge_index(index: str, window: float | None = None) -> m.Metric:
 
     def compute(results):
         valid = (results["AttitudeEstimator.valid"] > 0) & (results.time >= KNOWLEDGE_START)
+        if valid.sum() < 2:
+            raise NotEvaluable(
+                f"fewer than 2 valid estimates from t = {KNOWLEDGE_START:g} s on (the run "
+                f"covers {results.time[0]:g} … {results.time[-1]:g} s)"
+            )
         error = knowledge_error(
             results.vector("AttitudeEstimator.q_BI_est")[valid],
             results.vector("SatelliteDynamics.q_BI")[valid],
