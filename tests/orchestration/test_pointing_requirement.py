@@ -174,6 +174,21 @@ def test_t_random_in_the_window_is_the_exact_mixture_of_the_draws():
     assert requirement.evaluate(error).value == requirement.evaluate(error).value
 
 
+def test_a_temporal_requirement_with_t_random_goes_run_by_run_in_blocks(monkeypatch):
+    """Each run's mixture on its own: blocks of 3 runs give the verdict of all at once."""
+    import agilesat.orchestration.pointing.requirement as module
+
+    error = white_campaign(runs=40, samples=60)
+    requirement = rpe(
+        2.0 * ARCSEC, t_in_window="random", interpretation="temporal", confidence=None
+    )
+    whole = requirement.judge(*requirement.magnitudes(error))
+    monkeypatch.setattr(module, "MIXTURE_LIMIT", 3 * 40 * 11)
+    blocks = requirement.evaluate(error)
+    assert blocks.line("arcsec") == whole.line("arcsec") and blocks.runs == 40
+    assert np.array_equal(blocks.statistic.profile, whole.statistic.profile)
+
+
 def test_knowledge_indices_take_knowledge_errors():
     knowledge = white_campaign(runs=3, kind="knowledge")
     assert PointingRequirement("RKE", 1.0, 0.9, "mixed", window=1.0).evaluate(knowledge).met

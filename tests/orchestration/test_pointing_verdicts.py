@@ -11,6 +11,7 @@ import pytest
 
 from agilesat.orchestration.pointing import decide, decide_counts, next_look, runs_needed
 from agilesat.orchestration.pointing.verdicts import GRID, allowed_above
+from helpers import ROOT
 
 
 @pytest.mark.parametrize(
@@ -147,3 +148,16 @@ def test_the_looks_of_a_campaign_run_until_decided():
         decide_counts([5], 3, 0.9, 0.9)
     with pytest.raises(ValueError, match="shares above the bound"):
         decide(np.array([0.5, 1.5]), 0.9, 0.9)
+
+
+@pytest.mark.slow
+def test_the_verdicts_error_rates_hold_and_are_the_documented_ones(capsys):
+    """tests/tools/verdict_error_rates.py: every false rate within α + 3 binomial standard
+    errors, and its tables (seeded) are those docs/pointing.md shows."""
+    import verdict_error_rates
+
+    assert verdict_error_rates.main(["--check"]) == 0
+    printed = capsys.readouterr().out
+    page = (ROOT / "docs" / "pointing.md").read_text(encoding="utf-8")
+    shown = page.split("<!-- verdict-error-rates -->\n", 1)[1].split("<!-- /verdict", 1)[0]
+    assert shown.strip() == printed.strip()
