@@ -47,7 +47,8 @@ from .names import INDICES, T_IN_WINDOW
 
 
 class NotEvaluable(ValueError):
-    """The data cannot answer: a record shorter than the windows, a campaign too small."""
+    """The data cannot answer: a record shorter than the windows, no run, or (for a bound
+    at a confidence, :func:`.statistics.statistic`) a campaign too small to show any."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -12,6 +12,7 @@ SI (rad, s); only :meth:`PointingResult.line` takes a display unit.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -63,8 +64,8 @@ class PointingRequirement:
     ``window`` Δt (s) for all but APE/AKE; ``separation`` Δt_s (s, start to start) for
     PDE/PRE/KDE/KRE; ``t_in_window`` ("end" or "random") for RPE/RKE.  The error signal:
     about ``axis``, the half-cone of ``boresight``, or (neither) the 3-axis angle; a scalar
-    error history takes neither.  ``confidence`` (ensemble only): the value compared to
-    the bound is then the order statistic that bounds the level's quantile with it.
+    error history takes neither.  ``confidence`` (ensemble, mixed): the value compared to
+    the bound is then the value the runs show the level's quantile stays under.
     ``bound`` None: the index is computed, not judged (status "computed").
 
     The verdict (:meth:`judge`): with a ``confidence`` (ensemble, mixed), met, not met or
@@ -131,12 +132,14 @@ class PointingRequirement:
             return error.line_of_sight(self.boresight)
         return error
 
-    def magnitudes(self, error: ErrorHistory) -> tuple[np.ndarray, np.ndarray]:
+    def magnitudes(self, error: ErrorHistory, seed=None) -> tuple[np.ndarray, np.ndarray]:
         """(t, m): the index's magnitude ``m[run, time]`` on ``error`` at times ``t`` (what
         the statistic is taken of); t random in Δt: ``m[run, time, position]`` over the
         window's positions (:func:`.indices.window_positions`, weighted by
         :func:`.indices.position_weights`).  :class:`NotEvaluable` if the history holds no
-        run or is too short for the index (or, t random, too large to hold at once)."""
+        run or is too short for the index (or, t random, too large to hold at once).
+        ``seed``: no longer used (no random draw); say so once."""
+        _no_seed(seed)
         if error.runs == 0:
             raise NotEvaluable("no run to evaluate (none reached the end)")
         random = self.t_in_window == "random"
@@ -159,9 +162,11 @@ class PointingRequirement:
             parts.append(magnitude(series))
         return series.t, np.concatenate(parts)
 
-    def evaluate(self, error: ErrorHistory) -> PointingResult:
+    def evaluate(self, error: ErrorHistory, seed=None) -> PointingResult:
         """The verdict on ``error`` (a temporal requirement with t random in Δt: run by
-        run, in blocks that hold at most :data:`MIXTURE_LIMIT` values)."""
+        run, in blocks that hold at most :data:`MIXTURE_LIMIT` values).  ``seed``: no
+        longer used."""
+        _no_seed(seed)
         try:
             if self.t_in_window == "random" and self.interpretation == "temporal":
                 return self._temporal_in_blocks(error)
@@ -286,6 +291,16 @@ class PointingRequirement:
             return PointingResult(self, COMPUTED, reason=reason, statistic=shown, **common)
         stat = bounded or shown
         return PointingResult(self, COMPUTED, value=stat.value, statistic=stat, **common)
+
+
+def _no_seed(seed) -> None:
+    if seed is not None:
+        warnings.warn(
+            "PointingRequirement: seed is no longer used: t random in Δt is the exact "
+            "mixture over the window's positions, with no random draw",
+            DeprecationWarning,
+            stacklevel=3,
+        )
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,5 +1,5 @@
 """An index at a probability level under a statistical interpretation, and the confidence
-of an ensemble statistic from order statistics.
+of a statistic over the runs from order statistics.
 
 A requirement states a bound that the index's magnitude keeps with probability P.  The
 probability is over time, over the statistical ensemble (the runs), or both: the standard's
@@ -14,13 +14,16 @@ three statistical interpretations ([Ecss 2008], detailed in [Esa 2011]):
 The empirical P-quantile of n values is the ⌈P n⌉-th smallest: the smallest value that at
 least a fraction P of the values do not exceed.
 
-Confidence (ensemble only: its n values at one time come from n independent runs; the
-samples of one run in time are correlated and give no such statement).  If k of n runs may
-exceed a value X, X is the (n − k)-th smallest of the n; it bounds the true P-quantile
-with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  So
+Confidence (over the runs: the n values of an ensemble statistic at one time come from n
+independent runs; the samples of one run in time are correlated and give no such
+statement).  If k of n runs may exceed a value X, X is the (n − k)-th smallest of the n;
+it bounds the true P-quantile with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  The
+bound :func:`statistic` gives with a confidence takes the most runs k that the verdicts'
+anytime-valid test allows above it (:func:`supported`, :mod:`.verdicts`); a design fixed
+in advance, looked at once, may allow more:
 
-- the bound a campaign supports at P with confidence C is the (n − k)-th smallest value
-  with k the largest count such that Pr[Bin(n, 1 − P) ≤ k] ≤ 1 − C;
+- its bound at P with confidence C is the (n − k)-th smallest value with k the largest
+  count such that Pr[Bin(n, 1 − P) ≤ k] ≤ 1 − C (:func:`allowed_exceedances`);
 - the runs needed with k runs allowed above the bound: the smallest n with
   Pr[Bin(n, 1 − P) ≤ k] = Σ_{i≤k} C(n, i) (1 − P)^i P^(n−i) ≤ 1 − C; for k = 0,
   P^n ≤ 1 − C, n = ⌈ln(1 − C)/ln P⌉: 1109 runs for 99.73 % with 95 % confidence;

@@ -55,7 +55,7 @@ MET, NOT_MET, UNDECIDED = "met", "not met", "undecided"
 GRID = 10
 #: relative slack on a threshold, so that a case exact in real numbers is not lost
 _ROUNDING = 1e-12
-#: the most runs :func:`runs_to_decide` looks for
+#: the most runs :meth:`Decision.runs_to_decide` looks for
 MAX_RUNS = 10**7
 
 
@@ -97,7 +97,7 @@ def _log_capital_of_counts(above, runs: int, q: float, lam: np.ndarray, side: in
 
 def _times(count, log_factor):
     """count · ln factor, 0 where the count is 0 (also when the factor is 0)."""
-    return np.where(count > 0, count * np.where(count > 0, log_factor, 0.0), 0.0)
+    return count * np.where(count > 0, log_factor, 0.0)
 
 
 @dataclass(frozen=True)
