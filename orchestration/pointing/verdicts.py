@@ -21,11 +21,11 @@ looked at, after any number of runs chosen after looking (a campaign extended wi
 each bet is the likelihood ratio of an alternative p' (λ = |q − p'|/(q (1 − q))), so the
 evidence depends on the number S of runs above only; shares use the same bets.
 
-- violation: the bets of the alternatives whose odds are those of q times 2, 4, …, 2^10,
+- violation: the bets of the alternatives whose odds are those of q times √2, 2, …, 2^10,
   mixed uniformly (a scale-free prior on how large the violation is);
 - compliance: w₀ · the all-in bet λ = 1/(1 − q), which pays (1 − x)/(1 − q) per run:
   (1 − q)^(−n) while no run is above, nothing once one is wholly above; plus (1 − w₀) · the
-  bets of odds of q times 2^(−1) … 2^(−10).  w₀ = (1 − q)^(n₀)/α, n₀ = ⌈ln α / ln(1 − q)⌉
+  bets of odds of q times 2^(−1/2) … 2^(−10).  w₀ = (1 − q)^(n₀)/α, n₀ = ⌈ln α / ln(1 − q)⌉
   the classic zero-failure count ([Wilks 1941]), so that n₀ runs with none above show
   compliance exactly as the order statistic does (1,109 at 99.73 % with 95 %); the
   remaining weight lets a campaign with runs above the bound show it later.
@@ -51,8 +51,9 @@ import numpy as np
 from .statistics import check_probability, runs_needed
 
 MET, NOT_MET, UNDECIDED = "met", "not met", "undecided"
-#: bets on each side: those of the alternatives whose odds are q's times 2^±1 … 2^±GRID
-GRID = 10
+#: bets on each side: those of the alternatives whose odds are q's times 2^±(j/2),
+#: j = 1 … GRID (√2 apart, up to 2^±10: a violation or a margin from 1.4 to 1,000 times)
+GRID = 20
 #: relative slack on a threshold, so that a case exact in real numbers is not lost
 _ROUNDING = 1e-12
 #: the most runs :meth:`Decision.runs_to_decide` looks for
@@ -63,7 +64,7 @@ MAX_RUNS = 10**7
 def _bets(q: float, alpha: float, side: int) -> tuple[np.ndarray, np.ndarray]:
     """(λ, ln weight) of the bets of ``side`` (+1: violation, −1: compliance, whose first
     is the all-in bet)."""
-    odds = q / (1.0 - q) * 2.0 ** (side * np.arange(1, GRID + 1))
+    odds = q / (1.0 - q) * 2.0 ** (side * np.arange(1, GRID + 1) / 2)
     alternative = odds / (1.0 + odds)
     lam = np.abs(alternative - q) / (q * (1.0 - q))
     weights = np.full(GRID, -math.log(GRID))

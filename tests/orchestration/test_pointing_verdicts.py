@@ -34,7 +34,7 @@ def test_with_no_run_above_compliance_takes_the_zero_failure_count(level, confid
 
 def likelihood_ratio_evidence(above: int, runs: int, level: float, confidence: float):
     """The two evidences written out as mixtures of likelihood ratios of alternatives p'
-    whose odds are q's times 2^±j, in exact rational arithmetic (the alternatives
+    whose odds are q's times 2^±(j/2), in exact rational arithmetic (the alternatives
     rounded to floats first)."""
     q = 1 - Fraction(level)
     alpha = 1 - Fraction(confidence)
@@ -48,7 +48,8 @@ def likelihood_ratio_evidence(above: int, runs: int, level: float, confidence: f
     def alternatives(side):
         odds = float(q / (1 - q))
         return [
-            odds * 2.0 ** (side * j) / (1 + odds * 2.0 ** (side * j)) for j in range(1, GRID + 1)
+            odds * 2.0 ** (side * j / 2) / (1 + odds * 2.0 ** (side * j / 2))
+            for j in range(1, GRID + 1)
         ]
 
     violation = sum(ratio(p) for p in alternatives(+1)) / GRID
@@ -136,6 +137,19 @@ def test_roughly_the_runs_that_would_settle_it():
         assert grown.status != "undecided"
     at_the_bound = decide_counts([27], 10_000, 0.9973, 0.95)  # exactly q
     assert at_the_bound.status == "undecided" and at_the_bound.runs_to_decide() is None
+
+
+def test_the_cases_of_the_issue():
+    """A shown violation is not met, "not shown" is undecided (issue 33): 30 of 60
+    scan_pitch runs above the PDE bound at one of 1,160 times; 20 of 200 runs above an RPE
+    bound; none of 200 above the video_sar APE bound (1,109 would show it); 8 of 200 above
+    an AKE bound at 95 % whose estimate lies under it."""
+    assert decide_counts([30] + [0] * 1159, 60, 0.9973, 0.95).status == "not met"
+    assert decide_counts([20] + [0] * 3999, 200, 0.9973, 0.95).status == "not met"
+    none = decide_counts([0] * 4001, 200, 0.9973, 0.95)
+    assert none.status == "undecided" and none.runs_to_decide() == 1109
+    few = decide_counts([8] + [0] * 4000, 200, 0.95, 0.95)
+    assert few.status == "undecided" and 5_000 < few.runs_to_decide() < 20_000
 
 
 def test_the_looks_of_a_campaign_run_until_decided():
