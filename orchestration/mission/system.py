@@ -77,6 +77,12 @@ def _origin(prefer: str | None = None) -> tuple[str, int]:
     return found
 
 
+def where_written() -> str:
+    """ "file:line" of the user's call (:func:`_origin`), or "" where there is no file."""
+    file, line = _origin()
+    return f"{file}:{line}" if line else ""
+
+
 def _split(name: str, what: str) -> tuple[str, str]:
     component, _, variable = str(name).partition(".")
     if not component or not variable:

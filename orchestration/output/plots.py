@@ -75,8 +75,9 @@ _drawing: ContextVar[tuple[list, object] | None] = ContextVar("agilesat_drawing"
 @contextlib.contextmanager
 def drawing(before=None):
     """Figures made inside (in this thread) are listed, as they are written, in the list
-    yielded; ``before()`` is called before each one is drawn (it may raise: a run stopped
-    by a signal then says which figures were written)."""
+    yielded; ``before(paths)`` is called before each one is written, with the files it
+    is written as (it may raise: a run stopped by a signal then says which figures were
+    written)."""
     drawn: list[Path] = []
     token = _drawing.set((drawn, before))
     try:
@@ -441,7 +442,7 @@ def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Pat
 
     watched = _drawing.get()
     if watched is not None and watched[1] is not None:
-        watched[1]()
+        watched[1](formats(path))
     axes[-1, 0].set_xlabel(xlabel)
     axes[0, 0].set_title(title, pad=title_pad)  # above the phases' names, if any
     figure_layout.fixed(fig, axes, title)
