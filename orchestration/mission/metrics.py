@@ -34,6 +34,7 @@ from ..output.summary import format_value, relative_drift
 from ..pointing.errors import performance_error
 from ..pointing.indices import NotEvaluable
 from ..system.units import quantity, to_degrees, to_si
+from .requirements import not_covered
 from .system import where_written
 
 __all__ = [
@@ -129,7 +130,8 @@ class Metric:
 
 
 def _signal(results, signal, start=None, stop=None) -> tuple[np.ndarray, np.ndarray, str | None]:
-    """(t, values (N, k), unit) of a signal over [start, stop]."""
+    """(t, values (N, k), unit) of a signal over [start, stop]; :class:`NotEvaluable` if the
+    run's records do not cover the window (to the nearest sample)."""
     t = results.time
     if callable(signal):  # its unit: its ``unit`` attribute, if it has one
         values, unit = np.asarray(signal(results), dtype=float), getattr(signal, "unit", None)
@@ -141,8 +143,9 @@ def _signal(results, signal, start=None, stop=None) -> tuple[np.ndarray, np.ndar
         rows &= t >= start - 1e-12
     if stop is not None:
         rows &= t <= stop + 1e-12
-    if start is not None and start > t[-1]:
-        raise NotEvaluable(f"the run ends at {t[-1]:g} s, before {start:g} s")
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
     if not rows.any():
         raise NotEvaluable(
             f"no sample in [{start if start is not None else t[0]:g}, "

@@ -263,9 +263,13 @@ def recorded_error(
     """The :class:`..pointing.ErrorHistory` of the recorded quaternion ``attitude`` against
     ``reference`` (a recorded quaternion, or a function of the columns: :class:`Pointing`)
     over [``start``, ``stop``]: ``columns[name]`` is (points,) for a run, (runs, points) for
-    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples."""
+    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples,
+    or a window the records do not cover (to the nearest sample: :func:`not_covered`)."""
     from ..pointing import NotEvaluable, knowledge_error, performance_error
 
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
     rows = np.ones(len(t), bool)
     if start is not None:
         rows &= t >= start - 1e-12
@@ -281,3 +285,19 @@ def recorded_error(
     return (performance_error if kind == "performance" else knowledge_error)(
         q_x[..., rows, :], q_y[..., rows, :], t[rows]
     )
+
+
+def not_covered(t: np.ndarray, start=None, stop=None) -> str:
+    """Why records at times ``t`` do not cover the window [``start``, ``stop``] (None: the
+    records' own end), to the nearest sample; "" if they do."""
+    if not len(t):
+        return "no records"
+    half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
+    first, last = float(t[0]), float(t[-1])
+    if start is not None and start > last + half:
+        return f"the records end at {last:g} s, before the window's start {start:g} s"
+    if start is not None and start < first - half:
+        return f"the records begin at {first:g} s, after the window's start {start:g} s"
+    if stop is not None and stop > last + half:
+        return f"the records end at {last:g} s, before the window's end {stop:g} s"
+    return ""

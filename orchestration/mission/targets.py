@@ -212,7 +212,7 @@ def found_again(record: dict, where, mission: str | None = None) -> tuple[Target
         if not made or found.source is not None and sha256(found.source) == made:
             return found, ""
         return found, (
-            f"note: {found.source or mission} is not the {kind} {where} was made of ({path}, "
+            f"note: {found.source or mission} is not what {where} was made of (the {kind} {path}, "
             f"SHA-256 {made[:12]}…): judged by it as it is now"
         )
     if path and not Path(path).is_file():

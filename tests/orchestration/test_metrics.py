@@ -63,7 +63,7 @@ def test_not_settled_is_no_value_with_its_reason():
     in_degrees = m.settling_time("S.w", 1e-4 * DEG).evaluate(DECAY)  # the bound as people say it
     assert in_degrees.reason.startswith("not settled: |S.w| > 0.0001 °/s at the end")
     late = m.settling_time("S.w", 0.01, after=150.0).evaluate(DECAY)
-    assert late.value is None and "the run ends at 100 s, before 150 s" in late.reason
+    assert late.value is None and "the records end at 100 s, before the window's start 150 s" in late.reason
 
 
 def test_max_and_rms_over_a_window_of_a_sine():
