@@ -129,7 +129,7 @@ class System:
             raise ValueError(f"{file}:{line}: component name {name!r} is not an identifier")
         if name in self._components:
             raise ValueError(f"{file}:{line}: component {name!r} is added twice")
-        self._components[name] = _Component(name, _fmu(fmu or name, file), step, line)
+        self._components[name] = _Component(name, _fmu(fmu or name, file, line), step, line)
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
         self._resolved.clear()
@@ -151,7 +151,7 @@ class System:
         parameter values are ``parameters``."""
         file, line = _origin(self.file)
         old = self._component(name, "replace")
-        self._components[name] = _Component(name, _fmu(fmu, file), old.step, line)
+        self._components[name] = _Component(name, _fmu(fmu, file, line), old.step, line)
         self._parameters = {k: v for k, v in self._parameters.items() if k.split(".")[0] != name}
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
@@ -432,14 +432,22 @@ def _report(file: str, problems: list[str]) -> str:
     return f"{file}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
 
 
-def _fmu(fmu, file: str) -> str:
+def _fmu(fmu, file: str, line: int) -> str:
     """A component's FMU as stored: our FMU's name, or an absolute path (a relative one is
-    relative to the directory of ``file``, the file that names it)."""
+    relative to the directory of ``file``, the file that names it at ``line``)."""
     text = os.fspath(fmu)
     path, cls = text.rsplit(":", 1) if ".py:" in text else (text, "")
     if Path(path).suffix not in (".fmu", ".py"):
+        from ...fmus import FMUS
+
         if os.sep in text or "/" in text:
             raise ValueError(f"{text}: an FMU is one of ours by name, an .fmu file or a model .py")
+        if text not in FMUS:  # said here, not at the first connection to it
+            raise KeyError(
+                f"{file}:{line}: unknown FMU {text!r}"
+                + did_you_mean(text, FMUS)
+                + f" (ours: {', '.join(FMUS)}; or the path of an .fmu file or a model .py)"
+            )
         return text
     base = Path(file).parent if os.path.isfile(file) else Path.cwd()
     absolute = str((base / path).resolve())
