@@ -1,7 +1,8 @@
 """Print the fault-injection matrix (fault → expected → observed) of every fault-case
 module (``fault_cases_*.py``: the master and its files, runs and their interruptions,
-inputs, what a run leaves and what reads it back, campaigns, FMU states and what is loaded, the FMU binary), the counts of cases
-that held, failed and were skipped, then the resource figures, as Markdown for the docs
+inputs, what a run leaves and what reads it back, campaigns, FMU states and what is
+loaded, the FMU binary), the counts of cases that held, failed and were skipped, then the
+resource figures, as Markdown for the docs
 (docs/reliability.md).
 
     .venv/bin/python tests/tools/fault_matrix.py [--n N] [--no-figures] [--brief] [--only MODULE]
