@@ -20,6 +20,7 @@ from .cosim.master import Interrupted, SimulationError, execute
 from .cosim.plan import plan_run
 from .cosim.signals import signal_at, stop_on_signals
 from .mission import reads
+from .mission.scenario import defined_at
 from .mission.targets import resolve
 from .output.lock import holding
 from .output.progress import Progress
@@ -190,7 +191,6 @@ def _figures(
     function that raises is said in the summary's ``errors`` (status "error") and the
     others are drawn; figures that need outputs not recorded (``--record``) are not
     drawn, and the summary says why."""
-    from .mission.scenario import defined_at
     from .output import plots, pointing_figures
 
     hook, started = signal_at("figure"), [0]

@@ -287,17 +287,17 @@ def recorded_error(
     )
 
 
-def not_covered(t: np.ndarray, start=None, stop=None) -> str:
-    """Why records at times ``t`` do not cover the window [``start``, ``stop``] (None: the
+def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:
+    """Why records at times ``t`` do not cover ``what``, [``start``, ``stop``] (None: the
     records' own end), to the nearest sample; "" if they do."""
     if not len(t):
         return "no records"
     half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
     first, last = float(t[0]), float(t[-1])
     if start is not None and start > last + half:
-        return f"the records end at {last:g} s, before the window's start {start:g} s"
+        return f"the records end at {last:g} s, before {what}'s start {start:g} s"
     if start is not None and start < first - half:
-        return f"the records begin at {first:g} s, after the window's start {start:g} s"
+        return f"the records begin at {first:g} s, after {what}'s start {start:g} s"
     if stop is not None and stop > last + half:
-        return f"the records end at {last:g} s, before the window's end {stop:g} s"
+        return f"the records end at {last:g} s, before {what}'s end {stop:g} s"
     return ""

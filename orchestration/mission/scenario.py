@@ -326,7 +326,7 @@ def _raised(exc: Exception) -> str:
 
 
 def defined_at(function) -> str:
-    """ "(file:line)" where a function was defined, or ""."""
+    """Where a function was defined, as "(file:line)" ("" if unknown)."""
     code = getattr(function, "__code__", None)
     return f"({code.co_filename}:{code.co_firstlineno})" if code is not None else ""
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..mission.requirements import recorded_error
+from ..mission.requirements import not_covered, recorded_error
 from ..pointing import INDICES, PointingRequirement, PointingResult
 from .kept import reached_the_end
 from .results import Results
@@ -66,17 +66,8 @@ class Recorded:
             ) from None
 
     def shortfall(self) -> str:
-        """What the records do not cover of the run's span, or ""."""
-        if self.span is None or not len(self.t):
-            return ""
-        first, last = float(self.t[0]), float(self.t[-1])
-        half = float(self.t[1] - self.t[0]) / 2 if len(self.t) > 1 else 0.0
-        if first - half <= self.span[0] and self.span[1] <= last + half:
-            return ""
-        return (
-            f"its records cover {first:g} … {last:g} s of the run's {self.span[0]:g} … "
-            f"{self.span[1]:g} s (it stopped early)"
-        )
+        """What the records do not cover of the run's span (it stopped early), or ""."""
+        return "" if self.span is None else not_covered(self.t, *self.span, what="the run")
 
 
 class _Kept(dict):

@@ -156,14 +156,16 @@ def test_a_window_the_records_do_not_cover_is_refused(made, capsys):
     ape = ("--index", "APE", "--reference", "OrbitEnvironment.q_OI", "--axis", "0", "0", "1")
     code, out, err = pointing(run, *ape, capsys=capsys)
     assert code == 1 and "APE at" not in out
-    assert out.startswith(f"{run}: eo_roll_slew, 1 run(s); its records cover 0 … 60 s of the run's")
+    assert out.startswith(
+        f"{run}: eo_roll_slew, 1 run(s); the records end at 60 s, before the run's end 120 s"
+    )
     assert err.strip().endswith(f"{run}: the records end at 60 s, before the window's end 120 s")
     code, _, err = pointing(run, *ape, "--start", "-5", "--stop", "30", capsys=capsys)
     assert code == 1 and "the records begin at 0 s, after the window's start -5 s" in err
     code, out, _ = pointing(run, *ape, "--stop", "30", capsys=capsys)
     assert code == 0 and "APE about (0, 0, 1) at 99.73 % (temporal): " in out
     code, _, err = pointing(run, "--mission", tmp_path / "a" / "mission.py", capsys=capsys)
-    assert code == 1 and "its records cover 0 … 60 s of the run's 0 … 120 s" in err
+    assert code == 1 and "the records end at 60 s, before the run's end 120 s: the req" in err
 
 
 def test_cut_short_and_foreign_records_are_said_naming_the_file(tmp_path, capsys):

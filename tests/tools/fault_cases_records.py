@@ -108,7 +108,7 @@ def uncovered_window():
 def cut_results():
     """A whole run's directory with results.npz cut to half its bytes, with a results.npz
     of its first 50 rows (summary.json says 101), and with results.csv cut in mid-row (no
-    npz): `agilesat pointing` and `agilesat plot` on each."""
+    npz): `agilesat pointing` on each, `agilesat plot` on the short one."""
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         run = _agilesat(
@@ -134,10 +134,10 @@ def cut_results():
             (b, "results.npz", "50 rows, but"),
             (c, "results.csv", "not a whole results file"),
         ):
-            for result in (
-                _pointing(directory, "--reference", "OrbitEnvironment.q_OI"),
-                _agilesat("plot", directory, "SatelliteDynamics.q_BI"),
-            ):
+            results = [_pointing(directory, "--reference", "OrbitEnvironment.q_OI")]
+            if directory == b:  # what plots it reads the same
+                results.append(_agilesat("plot", directory, "SatelliteDynamics.q_BI"))
+            for result in results:
                 good = (
                     result.returncode == 1
                     and f"{directory / file}: {said}" in result.stderr
@@ -147,7 +147,7 @@ def cut_results():
         return _case(
             "a scan_pitch run's results.npz cut to half its bytes; a results.npz of its "
             "first 50 of 101 rows; results.csv cut in mid-row (no npz): `agilesat pointing` "
-            "and `agilesat plot` on each",
+            "on each, `agilesat plot` on the short one",
             "exit 1 each, naming the file and what is wrong (cut, or fewer rows than "
             "summary.json says); no traceback, never a short series",
             f"run exit {run.returncode}; "
