@@ -37,13 +37,10 @@ _FILLER = {"a", "an", "and", "as", "at", "by", "in", "is", "of", "on", "the", "t
 _SAME = [{"rate", "velocity", "speed", "dot", "omega"}, {"body", "b"}, {"angle", "attitude"}]
 #: words of a name that imply a kind of unit: what the unit of an output that is meant has
 _UNIT_WORDS = {
-    "rate": lambda u: "/s" in u,
-    "speed": lambda u: "/s" in u,
-    "velocity": lambda u: "/s" in u,
-    "dot": lambda u: "/s" in u,
-    "angle": lambda u: u == "rad",
-    "torque": lambda u: u == "N.m",
-    "momentum": lambda u: u == "N.m.s",
+    **dict.fromkeys(("rate", "speed", "velocity", "dot"), lambda unit: "/s" in unit),
+    "angle": lambda unit: unit == "rad",
+    "torque": lambda unit: unit == "N.m",
+    "momentum": lambda unit: unit == "N.m.s",
 }
 
 
@@ -116,20 +113,19 @@ def problems(scenario, variant: str | None = None, build: bool = True) -> list[s
     system = scenario.system_for(variant)
     described = system.descriptions(build)
     probe = Probe(described, system.start, system.stop)
-    found: dict[str, None] = {}
-    values = {}
-    for metric in scenario.metrics_for(variant):
-        values[metric.name] = MetricValue(None, metric.unit or "1", "not run")
-        for name in _read(probe, lambda m=metric: m.compute(probe)):
-            found[_problem(f"metric {metric.name}", metric.origin, name, described)] = None
+    metrics = scenario.metrics_for(variant)
+    values = {m.name: MetricValue(None, m.unit or "1", "not run") for m in metrics}
     exempt = scenario.variant(variant).exempt()
-    for r in scenario.requirements_for(variant):
-        if r.name in exempt:
-            continue
-        for name in _read(probe, lambda r=r: r.evaluate(probe, values)):
-            found[_problem(f"requirement {r.name}", getattr(r, "origin", ""), name, described)] = (
-                None
-            )
+    readers = [(f"metric {m.name}", m.origin, lambda m=m: m.compute(probe)) for m in metrics]
+    readers += [
+        (f"requirement {r.name}", getattr(r, "origin", ""), lambda r=r: r.evaluate(probe, values))
+        for r in scenario.requirements_for(variant)
+        if r.name not in exempt
+    ]
+    found: dict[str, None] = {}
+    for what, origin, evaluate in readers:
+        for name in _read(probe, evaluate):
+            found.setdefault(_problem(what, origin, name, described))
     return list(found)
 
 
@@ -150,8 +146,9 @@ def _problem(what: str, origin: str, name: str, described: dict) -> str:
     component, _, variable = str(name).partition(".")
     base = variable.partition("[")[0]
     where = f"{origin}: " if origin else ""
-    close = closest(name, described)  # of a name that is no variable of it
+    close: list[str] = []
     if component not in described:
+        close = closest(name, described)
         why = f"no component {component!r} in the system"
         why += "" if close else did_you_mean(component, described)
     elif not variable:
@@ -162,10 +159,11 @@ def _problem(what: str, origin: str, name: str, described: dict) -> str:
         if base not in table:  # an element of it: said once, for the whole variable
             name = f"{component}.{base}"
             why = f"{component} ({d.path.name}) has no output {base!r}"
+            close = closest(name, described)
         elif table[base].first.causality != "output":
-            why, close = f"{name} is a {table[base].first.causality}: a run records outputs", []
+            causality = table[base].first.causality
+            why = f"{name} is not an output (its causality: {causality}): a run records outputs"
         else:
-            close = []
             elements = table[base].scalars
             why = (
                 f"the elements of {component}.{base} are {elements[0].name} .. {elements[-1].name}"

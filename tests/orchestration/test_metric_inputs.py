@@ -65,8 +65,8 @@ def expected(path) -> list[str]:
         "CmgCluster.delta_dot (gimbal rates, rad/s)",
         f"{at['wheel_speed,']}: metric wheel_speed reads Wheels.speed: no component 'Wheels' in "
         "the system",
-        f"{at['rotor']}: metric rotor reads CmgCluster.h_rotor: CmgCluster.h_rotor is a "
-        "parameter: a run records outputs",
+        f"{at['rotor']}: metric rotor reads CmgCluster.h_rotor: CmgCluster.h_rotor is not an "
+        "output (its causality: parameter): a run records outputs",
         f"{at['Pointing(']}: requirement ape reads OrbitEnvironment.q_IO: OrbitEnvironment "
         "(OrbitEnvironment.fmu) has no output 'q_IO'; did you mean OrbitEnvironment.q_OI",
     ]
