@@ -43,6 +43,10 @@ class Recorder:
         self._memory = np.empty((64, len(columns)))
         self._files = []
         if self.out_dir is not None:
+            # an earlier run's results.npz would be read in place of this run's CSV if it
+            # were killed before it writes its own
+            npz = self.out_dir / "results.npz"
+            _checked(npz, lambda: npz.unlink(missing_ok=True))
             header = (",".join(map(_csv_field, self.columns)) + "\n").encode()
             self.csv = _File(self.out_dir / "results.csv", header)
             self.raw = _File(self.out_dir / RAW, b"")

@@ -256,9 +256,12 @@ def figure_raises():
         )
 
 
-def older_figures():
+def earlier_run_files():
     """A run killed (SIGKILL) as it starts its third figure, then a run without figures
-    on the same --out."""
+    on the same --out killed at macro step 40: what the directory then holds is the
+    second run's."""
+    from agilesat.orchestration.output.results import Results
+
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         first = _agilesat(
@@ -266,15 +269,32 @@ def older_figures():
             env={"AGILESAT_TEST_SIGNAL": "SIGKILL@figure:3"},
         )  # fmt: skip
         drawn = sorted(p.name for p in out.glob("*.png"))
-        second = _agilesat("run", "scan_pitch", "--stop", "5", "-q", "--no-figures", "--out", out)
+        second = _agilesat(
+            "run", "scan_pitch", "--stop", "5", "-q", "--no-figures", "--out", out,
+            env={"AGILESAT_TEST_SIGNAL": "SIGKILL@step:40"},
+        )  # fmt: skip
         left = sorted(p.name for p in out.glob("*.png"))
-        ok = first.returncode == -9 and len(drawn) == 2 and second.returncode == 0 and not left
+        rows = (out / "results.csv").read_text().count("\n") - 1
+        try:
+            read = f"{len(Results.load(out))} rows"
+        except (OSError, ValueError) as exc:
+            read = f"{type(exc).__name__}: {exc}"
+        ok = (
+            first.returncode == second.returncode == -9
+            and len(drawn) == 2
+            and not left
+            and not (out / "summary.json").exists()
+            and 40 <= rows < 101
+            and read == f"{rows} rows"
+        )
         return _case(
-            "a scan_pitch run killed (SIGKILL) as it starts its third figure, then a run "
-            "with --no-figures on the same --out",
-            "the second run leaves no figure of the first beside its results",
-            f"first: exit {first.returncode}, figures {drawn}; second: exit "
-            f"{second.returncode}, figures left {left}",
+            "a scan_pitch run killed (SIGKILL) as it starts its third figure, then one "
+            "without figures on the same --out killed at macro step 40",
+            "the directory holds the second run's records only: no figure, summary.json or "
+            "results.npz of the first; its results read back are the second run's rows",
+            f"exits {first.returncode}, {second.returncode}; first drew {drawn}; left "
+            f"{left}, summary.json {(out / 'summary.json').exists()}; results.csv {rows} "
+            f"rows, read back {read}",
             ok,
         )
 
@@ -325,7 +345,7 @@ CASES = [
     foreign_folders,
     metric_raises,
     figure_raises,
-    older_figures,
+    earlier_run_files,
     new_user_names,
 ]
 
