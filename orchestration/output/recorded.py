@@ -47,7 +47,7 @@ class Recorded:
     made_of: dict | None = None
     span: tuple[float, float] | None = None
 
-    def scenario(self, where, mission: str | None = None):
+    def find_target(self, where, mission: str | None = None):
         """(The :class:`..mission.targets.Target` the records were made of, a note to
         print or ""), found from any folder (:func:`..mission.targets.found_again`;
         ``mission``: the target to judge them by instead); None if it has no scenario."""

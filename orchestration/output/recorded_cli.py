@@ -138,7 +138,7 @@ def main(args) -> int:
                 f"{args.directory}: {short}: the requirements are stated over the whole run "
                 "(--index with --start and --stop gives an index over what it recorded)"
             )
-        target, note = recorded.scenario(args.directory, args.mission)
+        target, note = recorded.find_target(args.directory, args.mission)
         if note:
             print(note, file=sys.stderr)
         if target is None or target.scenario is None:
