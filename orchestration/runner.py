@@ -25,7 +25,7 @@ from .mission.targets import resolve
 from .output.lock import holding
 from .output.progress import Progress
 from .output.recorder import write_text
-from .output.results import ColumnError, Results, units_path
+from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
 from .provenance import provenance
 
@@ -110,7 +110,7 @@ def run(
     figures = figures and out_dir is not None
     with stop_on_signals() as signals, holding(out_dir) if out_dir else nullcontext():
         if out_dir is not None:
-            _drop_previous(out_dir)
+            _drop_previous_figures(out_dir)
         try:
             results = execute(plan)
         except SimulationError as failure:
@@ -161,20 +161,17 @@ def run(
     return results, summary
 
 
-def _drop_previous(out_dir: Path) -> None:
-    """Remove what an earlier run in ``out_dir`` wrote beside its results: its figures
-    (its summary.json lists them, also while they are drawn) and its summary.json,
-    log.txt and units (nothing else is touched): a reused ``--out`` shows this run's
-    files only, and a run killed before it writes its summary leaves none of another."""
-    summary = out_dir / "summary.json"
+def _drop_previous_figures(out_dir: Path) -> None:
+    """Remove the figures an earlier run in ``out_dir`` drew (its summary.json lists
+    them, also while they are drawn; nothing else is touched: its summary and records go
+    as this run's recording starts, :data:`.output.recorder.REPLACED`): a reused ``--out``
+    shows this run's figures only."""
     try:
-        listed = json.loads(summary.read_text(encoding="utf-8"))["figures"]
+        listed = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))["figures"]
     except (OSError, ValueError, KeyError, TypeError):
-        listed = []
+        return
     for name in listed if isinstance(listed, list) else ():
         (out_dir / Path(str(name)).name).unlink(missing_ok=True)
-    for path in (summary, out_dir / "log.txt", units_path(out_dir / "results.csv")):
-        path.unlink(missing_ok=True)
 
 
 class _Stopped(Exception):
