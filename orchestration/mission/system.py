@@ -78,7 +78,7 @@ def _origin(prefer: str | None = None) -> tuple[str, int]:
 
 
 def where_written() -> str:
-    """ "file:line" of the user's call (:func:`_origin`), or "" where there is no file."""
+    """Where the user's call is (:func:`_origin`), as "file:line" ("" where no file)."""
     file, line = _origin()
     return f"{file}:{line}" if line else ""
 
