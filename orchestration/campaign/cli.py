@@ -16,6 +16,7 @@ import signal
 from pathlib import Path
 
 from ..cli import ALGORITHM
+from ..output.report import cli as report_cli
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
 from .sequential import format_until_decided, run_until_decided
@@ -112,6 +113,7 @@ def add_parser(commands) -> argparse.ArgumentParser:
         help="a parameter value of every run (as `agilesat run --set`)",
     )
     p.add_argument("--algorithm", **ALGORITHM)
+    report_cli.add_option(p)
     p.add_argument(
         "-q",
         "--quiet",
@@ -182,6 +184,7 @@ def main(args) -> int:
             f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
         )
         return 128 + _first()
+    report_cli.after(args, result.out_dir)
     print(format_campaign(result.summary))
     if "until_decided" in result.summary:
         print(format_until_decided(result.summary))

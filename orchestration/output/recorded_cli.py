@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 from ..pointing.names import ANGLE_UNITS, INDICES, INTERPRETATIONS
@@ -75,8 +76,14 @@ def add_parser(commands) -> None:
         help="quaternion: the reference (performance; required), "
         "default SatelliteDynamics.q_BI (knowledge)",
     )
-    p.add_argument("--start", type=float, help="[s]")
-    p.add_argument("--stop", type=float, help="[s]")
+    p.add_argument("--start", type=float, help="[s] (default: the run's start)")
+    p.add_argument("--stop", type=float, help="[s] (default: the run's planned stop)")
+    p.add_argument(
+        "--mission",
+        metavar="PATH",
+        help="the mission file (or scenario) to judge the requirements by, where the one "
+        "the run was made of has moved or changed",
+    )
     p.add_argument(
         "--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout (default deg)"
     )
@@ -91,8 +98,7 @@ def add_parser(commands) -> None:
 
 def main(args) -> int:
     from ..mission.requirements import Pointing
-    from ..mission.targets import resolve
-    from ..pointing import PointingRequirement
+    from ..pointing import NotEvaluable, PointingRequirement
     from .recorded import evaluate, load
     from .results import Results
 
@@ -100,7 +106,10 @@ def main(args) -> int:
     what = f"{recorded.runs} run(s)" + (
         f", {recorded.left_out} that stopped early left out" if recorded.left_out else ""
     )
-    print(f"{args.directory}: {recorded.target or 'a run'}, {what}")
+    short = recorded.shortfall()
+    print(
+        f"{args.directory}: {recorded.target or 'a run'}, {what}" + (f"; {short}" if short else "")
+    )
     records, results = [], []
     if args.index:
         requirement = PointingRequirement(
@@ -115,15 +124,18 @@ def main(args) -> int:
             args.boresight,
             args.confidence,
         )
-        result = evaluate(
-            None,
-            requirement,
-            attitude=args.attitude,
-            reference=args.reference,
-            start=args.start,
-            stop=args.stop,
-            recorded=recorded,
-        )
+        try:
+            result = evaluate(
+                None,
+                requirement,
+                attitude=args.attitude,
+                reference=args.reference,
+                start=args.start,
+                stop=args.stop,
+                recorded=recorded,
+            )
+        except NotEvaluable as reason:  # a window its records do not cover
+            raise ValueError(f"{args.directory}: {reason}") from None
         print(f"  {result.line(args.unit)}")
         if INDICES[args.index][1] == "knowledge" and args.start is None:
             print(
@@ -133,7 +145,14 @@ def main(args) -> int:
         records.append(result.to_dict())
         results.append((requirement.label(), result))
     else:
-        target = resolve(recorded.target) if recorded.target else None
+        if short:
+            raise ValueError(
+                f"{args.directory}: {short}: the requirements are stated over the whole run "
+                "(--index with --start and --stop gives an index over what it recorded)"
+            )
+        target, note = recorded.find_target(args.directory, args.mission)
+        if note:
+            print(note, file=sys.stderr)
         if target is None or target.scenario is None:
             raise ValueError(f"{args.directory}: no scenario recorded: give --index ...")
         stated = [
@@ -152,7 +171,13 @@ def main(args) -> int:
                 print(f"  {r.name}: {verdict.text}")
                 records.append({"name": r.name, "status": verdict.status, "text": verdict.text})
                 continue
-            result = r.requirement.evaluate(r.error(recorded.columns, recorded.t))  # type: ignore[attr-defined]
+            try:
+                error = r.error(recorded.columns, recorded.t)  # type: ignore[attr-defined]
+            except NotEvaluable as reason:  # a window the run does not reach, as its summary
+                print(f"  {r.name}: not evaluated ({reason})")
+                records.append({"name": r.name, "status": "not evaluated", "met": None})
+                continue
+            result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
             print(f"  {r.name}: {result.line(args.unit)}")
             records.append({"name": r.name, **result.to_dict()})
             results.append((r.name, result))
