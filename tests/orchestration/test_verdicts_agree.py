@@ -56,7 +56,7 @@ def test_every_line_and_file_of_a_campaign_says_the_same_verdict(campaign):
     with (out / "runs.csv").open() as stream:
         table = list(csv.DictReader(stream))
     journal = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
-    again = agilesat("pointing", "c", cwd=out.parent)  # where the mission file is
+    again = agilesat("pointing", out)  # from elsewhere: the mission file is recorded
     assert again.returncode == 3, again.stdout + again.stderr
     assert len(table) == len(journal) == 22
     for name, verdict in EXPECTED.items():
