@@ -14,9 +14,10 @@ offsets are integer constants generated from the tables, one namespace per table
 (:func:`offsets`): ``values[U.tau_cmd + 1]`` is input ``tau_cmd[2]``, ``state[S.omega + k]``
 row ``omega`` of the state table, element k.  A namespace is a module object: numba reads
 a module's attribute as a constant (``U.tau_cmd`` compiles to the same machine code as the
-literal offset), CPython reads it at the cost of a global (specialised module attribute
-access), so naming costs neither tier anything.  :func:`state_table` lays out a state
-array as the variable table lays out the value array: named rows, one after the other.
+literal offset), CPython with one specialised module attribute access more than a global
+(the kernels' Python within a few percent of hand-written constants:
+docs/performance-log.md).  :func:`state_table` lays out a state array as the variable table
+lays out the value array: named rows, one after the other.
 """
 
 from __future__ import annotations
