@@ -351,7 +351,9 @@ def shim_flags(libpython: str, python: str, version: str) -> list[str]:
     a Python runtime (:func:`python_runtime`).  ``-z nodelete``: a host that unloads the
     library between two instances (ECOS loads and unloads an FMU's library per instance)
     keeps its instance registry and pythonfmu's handles alive, as pythonfmu's own binary
-    is (its GNU-unique C++ symbols make it NODELETE)."""
+    is (its GNU-unique C++ symbols make it NODELETE).  ``-ffp-contract=off``: no fused
+    multiply-add, so what the C step path computes beside the Python
+    (``inputs_to_step_end``) is the same bits."""
     defines = [
         f"-DAGILESAT_{key}={_c_string(value)}"
         for key, value in (
@@ -360,7 +362,14 @@ def shim_flags(libpython: str, python: str, version: str) -> list[str]:
             ("PYTHON_VERSION", version),
         )
     ]
-    return ["-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-z,nodelete", *defines]
+    return [
+        "-shared",
+        "-fPIC",
+        "-ffp-contract=off",
+        "-fvisibility=hidden",
+        "-Wl,-z,nodelete",
+        *defines,
+    ]
 
 
 def generated_files() -> dict[Path, Callable[[], bytes]]:

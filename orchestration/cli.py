@@ -450,8 +450,8 @@ def _generate(args) -> int:
     from ..fmus.build import generated_files
     from .mission.targets import generated_systems
 
-    files = generated_systems()
-    files.update(generated_files())
+    files = generated_files()  # first: the systems build FMUs, which need protocol.h
+    files.update(generated_systems())
     checkout = source_checkout()
     if not checkout and not args.check:
         raise ValueError(
