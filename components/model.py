@@ -88,6 +88,10 @@ class Model:
     INTERPOLATES_INPUTS = False
     #: the model answers output_derivatives(); the FMU declares maxOutputDerivativeOrder 1
     OUTPUT_DERIVATIVES = False
+    #: the FMU's DefaultExperiment: its natural communication step and a stop time that
+    #: shows its behaviour at its defaults (s), what a host runs it with by default
+    DEFAULT_STEP = 0.05
+    DEFAULT_STOP = 10.0
     _layouts: dict[type, Layout] = {}
 
     def __init_subclass__(cls, **kwargs):

@@ -97,7 +97,7 @@ def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str,
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
     }
     entries = {
-        "modelDescription.xml": description_xml(name, digest, model=model, binaries=binaries),
+        "modelDescription.xml": description_xml(name, digest, model, binaries),
         **binaries,
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": entry_module.encode(),
@@ -141,26 +141,16 @@ def compile_kernels(fmu: Path, name: str, package: str) -> None:
         raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
 
 
-def description_xml(
-    name: str,
-    digest: str,
-    starts: dict | None = None,
-    key: str = "",
-    model=None,
-    binaries: dict[str, bytes] | None = None,
-) -> bytes:
-    """The model description of FMU ``name`` (of ``model``, default ours of that name) built
-    from the sources of hash ``digest``, with the SHA-256 of its ``binaries``; ``starts``
-    ({scalar name: start text}) and ``key`` (their hash) for a configured FMU
-    (fmus/configure.py), whose GUID is its own (:func:`.protocol.fmu_guid`)."""
-    model = model or model_class(name)
+def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -> bytes:
+    """The model description of FMU ``name`` of ``model`` built from the sources of hash
+    ``digest``, with the SHA-256 of its ``binaries`` (an exported FMU's is this one with
+    its values written in: fmus/configure.py)."""
     return model_description(
         name,
         model,
-        protocol.fmu_guid(name, digest, key),
+        protocol.fmu_guid(name, digest),
         (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0],
         f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
-        starts,
         binaries,
     )
 
@@ -475,22 +465,27 @@ def _table(header, rows) -> str:
     return "<table border='1'>" + "\n".join(f"<tr>{c}</tr>" for c in cells) + "</table>"
 
 
-def documentation(name: str, model, configured: dict | None = None) -> str:
-    """documentation/index.html: the model's docstring, what the FMU needs, the values it
-    was configured with (fmus/configure.py), its variables."""
+def configured_section(configured: dict) -> str:
+    """The part of documentation/index.html that lists the values an exported FMU was
+    configured with (fmus/configure.py)."""
+    return (
+        "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
+        "defaults (the start values of its model description, and the model's values "
+        "at instantiation); the package's parameter set gives them too.</p>"
+        + _table(("name", "value"), sorted(configured.items()))
+    )
+
+
+def documentation(name: str, model) -> str:
+    """documentation/index.html: the model's docstring, what the FMU needs, its variables
+    (an exported FMU adds the values it was configured with before them:
+    :func:`configured_section`)."""
     points = "".join(f"<li>{escape(point)}</li>" for point in requirements()[1])
     parts = [
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>",
         f"<body><h1>{name}</h1><pre>{escape(model.__doc__ or '')}</pre>",
         f"<h2>What this FMU needs</h2><ul>{points}</ul>",
     ]
-    if configured:
-        parts.append(
-            "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
-            "defaults (the start values of its model description, and the model's values "
-            "at instantiation); the package's parameter set gives them too.</p>"
-            + _table(("name", "value"), sorted(configured.items()))
-        )
     header = ("name", "causality", "type", "unit", "start", "description")
     parts.append(f"<h2>Variables</h2>{_table(header, interface_rows(model))}</body></html>\n")
     return "".join(parts)

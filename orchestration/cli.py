@@ -227,7 +227,7 @@ def _system_commands(commands, quiet) -> None:
     export = commands.add_parser(
         "export",
         help="write a scenario[:variant], a mission file or a system file as a "
-        "self-contained SSP package (.ssd + FMUs)",
+        "self-contained SSP package (.ssd + FMUs), a system file or one configured FMU",
     )
     export.add_argument("target", help=TARGETS)
     export.add_argument(
@@ -237,7 +237,24 @@ def _system_commands(commands, quiet) -> None:
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value written into the package (as `run --set`)",
     )
-    export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
+    export.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="the file to write: an .ssp package, an .ssd (its FMUs in OUT_STEM.fmus/ beside "
+        "it), or one component's .fmu (with --component)",
+    )
+    export.add_argument(
+        "--accuracy",
+        metavar="ANGLE",
+        help="choose the package's step (halving it) so that hosts holding the inputs over "
+        "a step (libcosim, ECOS) stay within ANGLE of our master on the attitude, e.g. 0.05deg",
+    )
+    export.add_argument(
+        "--component",
+        metavar="NAME",
+        help="write only this component's FMU, configured with the system's values and step",
+    )
 
     generate = commands.add_parser(
         "generate",  # a developer's command: not in `agilesat --help`
@@ -422,10 +439,10 @@ def report(summary) -> int:
 
 
 def _export(args) -> int:
-    from .export import export_ssp
+    from .export import export
     from .system.parameters import parse_set
 
-    print(export_ssp(args.target, args.out, parse_set(args.set)))
+    print(export(args.target, args.out, parse_set(args.set), args.component, args.accuracy))
     return 0
 
 
