@@ -186,6 +186,12 @@ def _system_commands(commands, quiet) -> None:
         "(SatelliteDynamics.*); default all",
     )
     run.add_argument(
+        "--error-estimate",
+        action="store_true",
+        help="rerun at half and a quarter of the step and state each metric's numerical "
+        "error (Richardson, observed order) and the requirements it leaves undecided",
+    )
+    run.add_argument(
         "--no-derivatives",
         action="store_true",
         help="do not couple through FMI input/output derivatives where no wire passes "
@@ -387,7 +393,28 @@ def _run(args) -> int:
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return report(summary)
+    status = report(summary)
+    if args.error_estimate:
+        from .error_estimate import estimate, lines
+        from .output.recorder import write_text
+        from .output.summary import summary_text
+
+        def rerun(step):
+            return run(
+                args.target,
+                step=step,
+                stop=args.stop,
+                start=args.start,
+                algorithm=args.algorithm,
+                parameters=overrides,
+                figures=False,
+                derivatives=False if args.no_derivatives else None,
+            )[1]
+
+        summary["numerical_error"] = estimate(summary, rerun)
+        write_text(out / "summary.json", summary_text(summary))
+        print("\n".join(lines(summary["numerical_error"])))
+    return status
 
 
 def _pointing(args) -> int:
