@@ -350,6 +350,7 @@ def shim_flags(libpython: str, python: str, version: str) -> list[str]:
             ("LIBPYTHON", libpython),
             ("PYTHON", python),
             ("PYTHON_VERSION", version),
+            ("PYTHON_MINIMUM", python_minimum()),
         )
     ]
     return [
@@ -360,6 +361,11 @@ def shim_flags(libpython: str, python: str, version: str) -> list[str]:
         "-Wl,-z,nodelete",
         *defines,
     ]
+
+
+def python_minimum() -> str:
+    """The oldest Python agilesat runs on, "X.Y" (its Requires-Python)."""
+    return metadata.metadata("agilesat")["Requires-Python"].lstrip(">=~ ")
 
 
 def generated_files() -> dict[Path, Callable[[], bytes]]:
@@ -437,7 +443,8 @@ def requirements() -> tuple[str, list[str]]:
     glibc, libstdcxx = (v.split("_")[1] for v in PYTHONFMU_NEEDS)
     line = (
         f"Needs Python {metadata.metadata('agilesat')['Requires-Python']} with {numpy}; in a "
-        f"host without Python, Python {version} (set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
+        "host without Python, the libpython and the environment of one such Python (built "
+        f"with {version}; set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
         f"Linux x86-64, glibc >= {glibc}, libstdc++ >= GLIBCXX_{libstdcxx} (see "
         "documentation/index.html)."
     )
@@ -448,10 +455,11 @@ def requirements() -> tuple[str, list[str]]:
         "compiles the models' hot loops in long runs).",
         f"In a host without Python (a C/C++ tool, OMSimulator, libcosim's or ECOS's command "
         f"line) the FMU starts the Python it was built with, Python {version}: the shared "
-        f"libpython and the environment of {python}.  On another machine, make a Python "
-        f"{version} environment with numpy (and sgp4) and set AGILESAT_LIBPYTHON to its "
-        f"shared libpython (libpython{version}.so.1.0) and AGILESAT_PYTHON to its python; "
-        "anything missing is named by fmi2Instantiate through the host's logger.",
+        f"libpython and the environment of {python}.  On another machine, any Python "
+        f"{python_minimum()} or later will do: make an environment of it with numpy (and "
+        "sgp4) and set AGILESAT_LIBPYTHON to its shared libpython (libpython3.X.so.1.0) and "
+        "AGILESAT_PYTHON to the environment's python, both of one minor version; anything "
+        "missing or mismatched is named by fmi2Instantiate through the host's logger.",
         f"Linux x86-64 with glibc >= {glibc} and the libstdc++ of GCC 12 or later "
         f"(GLIBCXX_{libstdcxx}): what pythonfmu's binary needs (Debian 12, Ubuntu 22.04 and "
         "later; not Ubuntu 20.04, RHEL 8 or RHEL 9).  The FMU's own binary needs glibc 2.2.5.",
