@@ -443,8 +443,9 @@ def requirements() -> tuple[str, list[str]]:
     glibc, libstdcxx = (v.split("_")[1] for v in PYTHONFMU_NEEDS)
     line = (
         f"Needs Python {metadata.metadata('agilesat')['Requires-Python']} with {numpy}; in a "
-        "host without Python, the libpython and the environment of one such Python (built "
-        f"with {version}; set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
+        "host without Python, the libpython and the environment of one such Python, of one "
+        f"minor version (built with Python {version}; set AGILESAT_LIBPYTHON and "
+        "AGILESAT_PYTHON); "
         f"Linux x86-64, glibc >= {glibc}, libstdc++ >= GLIBCXX_{libstdcxx} (see "
         "documentation/index.html)."
     )

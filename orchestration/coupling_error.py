@@ -167,6 +167,8 @@ def measure(package: Path, scenario=None, variant: str | None = None, stop=None)
             difference = None
             if value.value is not None and ours.value is not None:
                 difference = abs(value.value - ours.value)
+                if difference <= 1e-12 * max(abs(value.value), abs(ours.value)):
+                    difference = 0.0  # the last bits
             found[m.name] = (difference, ours.unit, m.display_unit or ours.unit)
         errors[host] = found
     return plan.step, errors, seconds

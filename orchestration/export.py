@@ -65,15 +65,17 @@ def export(
     component: str | None = None,
     accuracy=None,
     say: Callable[[str], None] = _stderr,
+    tell: Callable[[str], None] = print,
 ) -> Path:
     """Write ``target`` (see :func:`.mission.targets.resolve`) with ``parameters``
     ({"Instance.variable": value}, as ``--set`` gives them) as ``out``: an SSP package
     (``.ssp``), an SSD with its FMUs in ``<stem>.fmus/`` (``.ssd``), or the configured FMU
     of ``component`` (``.fmu``).  A system's coupling error per host class
-    (:mod:`.coupling_error`) goes to ``say`` and into its documentation
+    (:mod:`.coupling_error`) goes to ``tell`` and into its documentation
     (``documentation/index.html`` of the package, ``<stem>.html`` beside an SSD);
     ``accuracy`` (an angle, ``"0.05 deg"``) chooses its step so that the held-input hosts
-    meet it.  ``say`` is also told what is packed unconfigured."""
+    meet it, which ``tell`` is told with its cost.  ``say`` is told what is packed
+    unconfigured."""
     out = Path(out)
     if (component is not None) != (out.suffix == ".fmu"):
         raise ValueError(
@@ -103,13 +105,13 @@ def export(
         return out
     scenario, variant = found.scenario, found.variant
     if accuracy is not None:
-        system = _step_for(accuracy, system, described, folder, say)
+        system = _step_for(accuracy, system, described, folder, say, tell)
     entries = package_entries(system, described, say, folder)
     with tempfile.TemporaryDirectory(prefix="agilesat_export_") as scratch:
         measured = write_archive(Path(scratch) / "package.ssp", entries)
         statement = coupling_error.state(measured, scenario, variant)
     for line in statement.lines():
-        say(line)
+        tell(line)
     page = coupling_error.documentation(system.name, statement)
     if out.suffix == ".ssp":
         entries["documentation/index.html"] = page
@@ -123,7 +125,7 @@ def export(
     return out
 
 
-def _step_for(accuracy, system, described, folder, say) -> SystemFile:
+def _step_for(accuracy, system, described, folder, say, tell) -> SystemFile:
     """The system at the first of its step, its half, its quarter, ... at which both
     held-input host classes stay within ``accuracy`` of our master on the attitude, with
     what it costs said (:mod:`.coupling_error`)."""
@@ -141,7 +143,7 @@ def _step_for(accuracy, system, described, folder, say) -> SystemFile:
             raise ValueError("--accuracy: the system has no attitude (q_BI) to hold to it")
         if worst <= limit:
             sampled = [c.name for c in system.components if c.step_size is None]
-            say(
+            tell(
                 f"--accuracy {accuracy}: step {step:g} s, the held-input hosts within "
                 f"{math.degrees(worst):.3g}°; it costs {2**halvings}× the macro steps of "
                 f"{base:g} s (our master's run: {seconds:.2g} s CPU, {costs[0]:.2g} s at "

@@ -138,10 +138,13 @@ class Wires:
         raise RuntimeError("the inputs do not settle: an algebraic loop?")
 
     def feed(self, target=None):
-        """Every input (of ``target``) set once from the outputs as they are now."""
-        for source, to, type_name, ys, us in self.groups:
-            if target is None or to is target:
-                to.set(type_name, us, source.get(type_name, ys))
+        """Every input (of ``target``) set once from the outputs as they are now: all read
+        first, then all set (a set of a feedthrough input would change what a later read
+        gives)."""
+        chosen = [g for g in self.groups if target is None or g[1] is target]
+        values = [source.get(type_name, ys) for source, _, type_name, ys, _ in chosen]
+        for (_, to, type_name, _, us), got in zip(chosen, values):
+            to.set(type_name, us, got)
 
 
 def main(path, stop, step, out, *options):
