@@ -140,7 +140,7 @@ def test_a_libpython_and_an_environment_of_two_versions_are_named(
 ):
     """The environment's pyvenv.cfg says another minor version than the libpython: named
     before Python starts (it would start with the other version's standard library)."""
-    other = "3.{}".format(sys.version_info.minor + 1)
+    other = f"3.{sys.version_info.minor + 1}"
     env_dir = tmp_path / "other"
     (env_dir / "bin").mkdir(parents=True)
     (env_dir / "bin" / "python").symlink_to(Path(sys.executable).resolve())

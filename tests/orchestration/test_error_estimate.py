@@ -57,7 +57,6 @@ def test_scan_pitchs_estimate_is_its_error(fmus, tmp_path):
     truth = json.loads((tmp_path / "f" / "summary.json").read_text())["metrics"]["pitch_at_T"]
     pitch = found["metrics"]["pitch_at_T"]
     actual = pitch["values"][0] - truth["value"]
-    print(
-        f"pitch_at_T: estimate {math.degrees(pitch['estimate']):.4g}°, actual {math.degrees(actual):.4g}°"
-    )
+    estimated = math.degrees(pitch["estimate"])
+    print(f"pitch_at_T: estimate {estimated:.4g}°, actual {math.degrees(actual):.4g}°")
     assert pitch["estimate"] == pytest.approx(actual, rel=0.2)
