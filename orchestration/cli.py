@@ -59,6 +59,8 @@ def main(argv=None) -> int:
                 "generate": _generate,
                 **study_cli.COMMANDS,
                 "pointing": _pointing,
+                "report": _report,
+                "export-ephemeris": _export_ephemeris,
                 "campaign": campaign_cli.main if campaign else None,
             }[args.command](args)
         except KeyboardInterrupt as exc:
@@ -114,9 +116,12 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _system_commands(commands, quiet)
     study_cli.add_parsers(commands, quiet)
-    from .output import recorded_cli
+    from .output import ephemeris_cli, recorded_cli
+    from .output.report import cli as report_cli
 
     recorded_cli.add_parser(commands)
+    report_cli.add_parser(commands)
+    ephemeris_cli.add_parser(commands)
     if campaign:
         from .campaign import cli as campaign_cli
 
@@ -214,6 +219,9 @@ def _system_commands(commands, quiet) -> None:
         help="also write each figure as SVG (vector, for reports; ~25 %% more figure time)",
     )
     run.add_argument("--mat", action="store_true", help="also write results.mat (MATLAB)")
+    from .output.report import cli as report_cli
+
+    report_cli.add_option(run)
 
     plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
     plot.add_argument(
@@ -388,6 +396,9 @@ def _run(args) -> int:
         )
     if args.mat:
         results.to_mat(out / "results.mat")
+    from .output.report import cli as report_cli
+
+    report_cli.after(args, out)
     settings = summary["settings"]
     print(
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
@@ -421,6 +432,18 @@ def _pointing(args) -> int:
     from .output import recorded_cli
 
     return recorded_cli.main(args)
+
+
+def _report(args) -> int:
+    from .output.report import cli as report_cli
+
+    return report_cli.main(args)
+
+
+def _export_ephemeris(args) -> int:
+    from .output import ephemeris_cli
+
+    return ephemeris_cli.main(args)
 
 
 def _plot(args) -> int:

@@ -110,7 +110,8 @@ class Scenario:
     ``(results, metrics) -> [problems]``, the explanation of a run that did not fly as
     required (``metrics``: the summary's entries); ``systems_dir``: where ``agilesat
     generate`` writes its SSD (the shipped scenarios'; others render theirs on demand);
-    ``bounds``: :class:`SignalBound` s a campaign's envelopes draw."""
+    ``bounds``: :class:`SignalBound` s a campaign's envelopes draw; ``phases``: the
+    maneuver's phases ``(name, start, end)`` [s] that the report marks on its time axes."""
 
     def __init__(
         self,
@@ -125,6 +126,7 @@ class Scenario:
         diagnose: Callable | None = None,
         systems_dir=None,
         bounds: Sequence[SignalBound] = (),
+        phases: Sequence[tuple[str, float, float]] = (),
     ):
         if not name.isidentifier():
             raise ValueError(f"scenario name {name!r} must be an identifier")
@@ -136,6 +138,7 @@ class Scenario:
         self.figures = [figures] if callable(figures) else list(figures)
         self.diagnose = diagnose
         self.bounds = list(bounds)
+        self.phases = list(phases)
         self.systems_dir = None if systems_dir is None else Path(systems_dir)
         for variant in self.variants:
             if not variant.isidentifier():

@@ -17,12 +17,20 @@ from .results import ColumnError
 
 def run_figures(scenario, variant, results, out_dir) -> list[Path]:
     """The figure of each pointing requirement ``variant`` judges that the run can show
-    (one whose columns were not recorded, or whose index the run is too short for, has
-    none: the summary's verdict says why it was not evaluated)."""
+    (:func:`shown`)."""
+    return [
+        profile(Path(out_dir) / f"pointing_{r.name}.png", r.name, result, t, m[0])
+        for r, result, t, m in shown(scenario, variant, results)
+    ]
+
+
+def shown(scenario, variant, results):
+    """(requirement, result, times, magnitudes) of each pointing requirement ``variant``
+    judges that the run can show (one whose columns were not recorded, or whose index the
+    run is too short for, has none: the summary's verdict says why it was not evaluated)."""
     from ..mission.requirements import Pointing
 
     exempt = scenario.variant(variant).exempt()
-    paths = []
     for r in scenario.requirements_for(variant):
         if not isinstance(r, Pointing) or r.name in exempt:
             continue
@@ -31,9 +39,7 @@ def run_figures(scenario, variant, results, out_dir) -> list[Path]:
             t, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
         except (ColumnError, NotEvaluable):
             continue
-        result = r.requirement.judge(t, m)  # type: ignore[attr-defined]
-        paths.append(profile(Path(out_dir) / f"pointing_{r.name}.png", r.name, result, t, m[0]))
-    return paths
+        yield r, r.requirement.judge(t, m), t, m  # type: ignore[attr-defined]
 
 
 def profile(path: Path, name: str, result, t, m, unit: str = "deg") -> Path:

@@ -162,7 +162,7 @@ def test_run_and_campaign_of_a_scenario_draw_its_pointing_requirements(tmp_path,
     result = agilesat(
         "campaign", "payload_sweep", "--stop", "3", "--runs", "2", "--workers", "1",
         "--vary", "SatelliteDynamics.rate0[3]=+normal(0, 0.01deg)", "--no-progress",
-        "--out", out,
+        "--no-report", "--out", out,
     )  # fmt: skip
     assert result.returncode in (0, 3), result.stdout + result.stderr
     summary = json.loads((out / "campaign.json").read_text())
