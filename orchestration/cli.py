@@ -396,6 +396,8 @@ def _run(args) -> int:
         )
     if args.mat:
         results.to_mat(out / "results.mat")
+    if args.error_estimate:
+        _error_estimate(args, overrides, summary, out)
     from .output.report import cli as report_cli
 
     report_cli.after(args, out)
@@ -406,26 +408,34 @@ def _run(args) -> int:
     )
     status = report(summary)
     if args.error_estimate:
-        from .error_estimate import estimate, lines
-        from .output.recorder import write_text
-        from .output.summary import summary_text
+        from .error_estimate import lines
 
-        def rerun(step):
-            return run(
-                args.target,
-                step=step,
-                stop=args.stop,
-                start=args.start,
-                algorithm=args.algorithm,
-                parameters=overrides,
-                figures=False,
-                derivatives=False if args.no_derivatives else None,
-            )[1]
-
-        summary["numerical_error"] = estimate(summary, rerun)
-        write_text(out / "summary.json", summary_text(summary))
         print("\n".join(lines(summary["numerical_error"])))
     return status
+
+
+def _error_estimate(args, overrides, summary: dict, out: Path) -> None:
+    """``--error-estimate``: the run again at half and a quarter of its step
+    (:mod:`.error_estimate`), into the summary and summary.json."""
+    from .error_estimate import estimate
+    from .output.recorder import write_text
+    from .output.summary import summary_text
+    from .runner import run
+
+    def rerun(step):
+        return run(
+            args.target,
+            step=step,
+            stop=args.stop,
+            start=args.start,
+            algorithm=args.algorithm,
+            parameters=overrides,
+            figures=False,
+            derivatives=False if args.no_derivatives else None,
+        )[1]
+
+    summary["numerical_error"] = estimate(summary, rerun)
+    write_text(out / "summary.json", summary_text(summary))
 
 
 def _pointing(args) -> int:

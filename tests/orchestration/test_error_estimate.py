@@ -46,12 +46,27 @@ def test_a_requirement_whose_margin_is_within_the_error_is_said_undecided():
 def test_scan_pitchs_estimate_is_its_error(fmus, tmp_path):
     """pitch at T = 100 s: the estimate at 0.05 s against the run's distance from a run at
     0.05 / 32 s (itself within 1/32 of it, first order): within 20 %."""
-    run = agilesat("run", "scan_pitch", "--error-estimate", "--no-figures", "--out", tmp_path / "a")
+    run = agilesat(
+        "run",
+        "scan_pitch",
+        "--error-estimate",
+        "--no-figures",
+        "--no-report",
+        "--out",
+        tmp_path / "a",
+    )
     assert run.returncode == 0, run.stderr
     assert "numerical error (Richardson over the steps 0.05, 0.025, 0.0125 s):" in run.stdout
     found = json.loads((tmp_path / "a" / "summary.json").read_text())["numerical_error"]
     fine = agilesat(
-        "run", "scan_pitch", "--step", 0.05 / 32, "--no-figures", "--out", tmp_path / "f"
+        "run",
+        "scan_pitch",
+        "--step",
+        0.05 / 32,
+        "--no-figures",
+        "--no-report",
+        "--out",
+        tmp_path / "f",
     )
     assert fine.returncode == 0, fine.stderr
     truth = json.loads((tmp_path / "f" / "summary.json").read_text())["metrics"]["pitch_at_T"]

@@ -169,7 +169,14 @@ def test_an_ssd_with_its_fmus_beside_it_runs_as_the_package(fmus, tmp_path):
     runs = {}
     for out in ("p.ssp", "s.ssd"):
         run = agilesat(
-            "run", tmp_path / out, "--stop", 2, "--no-figures", "--out", tmp_path / f"r_{out}"
+            "run",
+            tmp_path / out,
+            "--stop",
+            2,
+            "--no-figures",
+            "--no-report",
+            "--out",
+            tmp_path / f"r_{out}",
         )
         assert run.returncode == 0, run.stderr
         runs[out] = Results.load(tmp_path / f"r_{out}")
@@ -193,7 +200,9 @@ def test_one_component_exported_runs_with_the_systems_values_and_step(fmus, tmp_
     assert run.returncode == 0, run.stderr
     experiment = read_model_description(str(fmu)).defaultExperiment
     assert (float(experiment.stopTime), float(experiment.stepSize)) == (150.0, 0.05)
-    alone = agilesat("run", fmu, "--stop", 1, "--no-figures", "--out", tmp_path / "run")
+    alone = agilesat(
+        "run", fmu, "--stop", 1, "--no-figures", "--no-report", "--out", tmp_path / "run"
+    )
     assert alone.returncode == 0, alone.stderr
     results = Results.load(tmp_path / "run")
     settings = json.loads((tmp_path / "run" / "summary.json").read_text())["settings"]
