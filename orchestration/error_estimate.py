@@ -42,7 +42,8 @@ def estimate(summary: dict, rerun) -> dict:
     step = summary["settings"]["step"]
     runs = [summary] + [rerun(step / k) for k in (2, 4)]
     metrics, requirements = {}, {}
-    for name, entry in summary.get("metrics", {}).items():
+    for name, given in summary.get("metrics", {}).items():
+        entry = {**runs[1]["metrics"].get(name, {}), **given}  # units, bounds: any run's
         values = [run["metrics"].get(name, {}).get("value") for run in runs]
         if any(not isinstance(v, (int, float)) for v in values):
             metrics[name] = {"values": values, "estimate": None}
@@ -70,6 +71,64 @@ def estimate(summary: dict, rerun) -> dict:
         "metrics": metrics,
         "requirements": requirements,
     }
+
+
+def sample(records: list[dict], step: float, rerun) -> dict:
+    """A campaign's ``numerical_error`` from a sample of its runs (``records``: journal
+    records, their ``values`` and metric values at ``step``): each run's estimate
+    (``rerun(values, step)`` runs it again), and per metric the largest over the sample;
+    per requirement the runs it leaves undecided."""
+    found = [
+        estimate(
+            {"settings": {"step": step}, "metrics": record["metrics"]},
+            lambda h, values=record["values"]: rerun(values, h),
+        )
+        for record in records
+    ]
+    metrics = {}
+    for name in found[0]["metrics"] if found else ():
+        each = [f["metrics"][name] for f in found if f["metrics"][name]["estimate"] is not None]
+        largest = max(each, key=lambda m: abs(m["estimate"]), default=None)
+        metrics[name] = {
+            "estimate": None if largest is None else abs(largest["estimate"]),
+            "runs": len(each),
+            "orders_observed": sum(bool(m.get("order_observed")) for m in each),
+            "unit": largest and largest["unit"],
+            "display_unit": largest and largest["display_unit"],
+        }
+    undecided = {}
+    for f, record in zip(found, records):
+        for name, r in f["requirements"].items():
+            undecided.setdefault(name, [])
+            if not r["decided"]:
+                undecided[name].append(record["index"])
+    return {
+        "steps": [step, step / 2, step / 4],
+        "sample": [record["index"] for record in records],
+        "metrics": metrics,
+        "undecided": undecided,
+    }
+
+
+def sample_lines(found: dict) -> list[str]:
+    """A campaign's sampled estimate as ``agilesat campaign`` prints it."""
+    from .output.summary import format_value
+
+    runs = ", ".join(map(str, found["sample"]))
+    out = [f"numerical error on {len(found['sample'])} runs ({runs}), the largest of each:"]
+    for name, m in found["metrics"].items():
+        if m["estimate"] is not None:
+            shown = format_value(m["estimate"], m["unit"], m["display_unit"])
+            out.append(
+                f"  {name}: ± {shown} ({m['orders_observed']} of {m['runs']} orders observed)"
+            )
+    for name, indices in found["undecided"].items():
+        if indices:
+            out.append(
+                f"  requirement on {name}: runs {', '.join(map(str, indices))} are within "
+                "its numerical error of the bound: not decided by those runs"
+            )
+    return out
 
 
 def lines(found: dict) -> list[str]:

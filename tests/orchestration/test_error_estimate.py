@@ -75,3 +75,23 @@ def test_scan_pitchs_estimate_is_its_error(fmus, tmp_path):
     estimated = math.degrees(pitch["estimate"])
     print(f"pitch_at_T: estimate {estimated:.4g}°, actual {math.degrees(actual):.4g}°")
     assert pitch["estimate"] == pytest.approx(actual, rel=0.2)
+
+
+def test_a_campaigns_sample_gives_each_metrics_largest_estimate_and_the_undecided_runs():
+    """Two runs of a campaign (journal records: their values and metric values at 0.05 s),
+    each rerun at 0.025 and 0.0125 s: per metric the larger estimate, per requirement the
+    run whose margin is within it."""
+    from agilesat.orchestration.error_estimate import sample
+
+    def metric(x):  # run 7 is near the bound (0.5), run 9 far from it
+        return {"pointing": {"value": x}}
+
+    at = {7: {0.025: 0.459, 0.0125: 0.449}, 9: {0.025: 0.25, 0.0125: 0.2475}}
+    records = [
+        {"index": 7, "values": {"run": 7}, "metrics": metric(0.499)},
+        {"index": 9, "values": {"run": 9}, "metrics": metric(0.26)},
+    ]
+    found = sample(records, 0.05, lambda values, h: _summary(h, at[values["run"]][h]))
+    assert found["sample"] == [7, 9] and found["undecided"] == {"pointing": [7]}
+    assert found["metrics"]["pointing"]["estimate"] == pytest.approx(0.04 * 4 / 3)
+    assert found["metrics"]["pointing"]["orders_observed"] == 2
