@@ -10,15 +10,13 @@ at their defaults."""
 import json
 import math
 import shutil
-import subprocess
-import sys
 import zipfile
 
 import pytest
 from fmpy import read_model_description
 
 from agilesat.orchestration.output.results import Results
-from helpers import agilesat, run_python
+from helpers import agilesat, pythonfmu_damper, run_python
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 
@@ -120,29 +118,13 @@ def test_a_model_fmu_another_agilesat_built_is_an_error_naming_the_rebuild(user,
 
 
 def test_a_third_party_fmu_is_packed_as_it_is_with_a_note(fmus, tmp_path):
-    source = tmp_path / "damper.py"
-    source.write_text(
-        "from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real\n"
-        "class Damper(Fmi2Slave):\n"
-        "    def __init__(self, **kw):\n"
-        "        super().__init__(**kw)\n"
-        "        self.gain = 5.0\n"
-        "        self.register_variable(Real('gain', causality=Fmi2Causality.parameter,"
-        " variability=Fmi2Variability.fixed))\n"
-        "    def do_step(self, t, dt):\n"
-        "        return True\n"
-    )
-    built = subprocess.run(
-        [sys.executable, "-m", "pythonfmu", "build", "-f", source, "-d", tmp_path],
-        capture_output=True,
-        text=True,
-    )
-    assert built.returncode == 0, built.stderr
+    pythonfmu_damper(tmp_path)
     (tmp_path / "mission.py").write_text(
         "from agilesat.orchestration.mission import System\n"
         "SYSTEM = System('damped', step=0.1, stop=1.0)\n"
         "SYSTEM.add('Damper', 'Damper.fmu', gain=2.0)\n"
         "SYSTEM.add('SatelliteDynamics')\n"
+        "SYSTEM.connect('SatelliteDynamics.w_BI_B', 'Damper.w_BI_B')\n"
         "from agilesat.orchestration.mission import Scenario\n"
         "SCENARIO = Scenario(SYSTEM.name, 'a test', SYSTEM)\n"
     )
