@@ -128,23 +128,24 @@ def state(package: Path, scenario=None, variant: str | None = None) -> Statement
     return said
 
 
-def held_attitude(package: Path) -> tuple[float | None, float]:
+def held_attitude(package: Path, step=None) -> tuple[float | None, float]:
     """(the larger attitude difference of the two held-input classes from our master, in
-    rad (None: no attitude), our master's CPU seconds for the run) at the package's step."""
-    _, errors, seconds = measure(package)
+    rad (None: no attitude), our master's CPU seconds for the run) at the package's step
+    (or ``step``)."""
+    _, errors, seconds = measure(package, step=step)
     found = [errors[host].get("attitude") for host, how in HOST_CLASSES.items() if how]
     return (None if None in found else max(x[0] for x in found)), seconds
 
 
-def measure(package: Path, scenario=None, variant: str | None = None, stop=None):
+def measure(package: Path, scenario=None, variant: str | None = None, stop=None, step=None):
     """(step, {host class: {quantity: (difference, unit, display unit)}}, our master's CPU
     seconds for its run) of the package run by our master as each host class (module
-    docstring), at its step, to its stop time (or ``stop``); the quantities: the attitude
-    and the scenario's metrics that have a requirement or a paper's value."""
+    docstring), at its step (or ``step``), to its stop time (or ``stop``); the quantities:
+    the attitude and the scenario's metrics that have a requirement or a paper's value."""
     from .cosim.master import execute
     from .cosim.plan import plan_run
 
-    plan = plan_run(Path(package), stop=stop, algorithm="jacobi", derivatives=True)
+    plan = plan_run(Path(package), step=step, stop=stop, algorithm="jacobi", derivatives=True)
     runs = {}
     for host, how in HOST_CLASSES.items():
         if how is not None:

@@ -45,29 +45,13 @@ def test_a_requirement_whose_margin_is_within_the_error_is_said_undecided():
 @pytest.mark.integration
 def test_scan_pitchs_estimate_is_its_error(fmus, tmp_path):
     """pitch at T = 100 s: the estimate at 0.05 s against the run's distance from a run at
-    0.05 / 32 s (itself within 1/32 of it, first order): within 20 %."""
-    run = agilesat(
-        "run",
-        "scan_pitch",
-        "--error-estimate",
-        "--no-figures",
-        "--no-report",
-        "--out",
-        tmp_path / "a",
-    )
+    0.05 / 16 s (itself within 2 % of it at the observed order 1.5): within 20 %."""
+    common = ("--stop", 100, "--no-figures", "--no-report")
+    run = agilesat("run", "scan_pitch", "--error-estimate", *common, "--out", tmp_path / "a")
     assert run.returncode == 0, run.stderr
     assert "numerical error (Richardson over the steps 0.05, 0.025, 0.0125 s):" in run.stdout
     found = json.loads((tmp_path / "a" / "summary.json").read_text())["numerical_error"]
-    fine = agilesat(
-        "run",
-        "scan_pitch",
-        "--step",
-        0.05 / 32,
-        "--no-figures",
-        "--no-report",
-        "--out",
-        tmp_path / "f",
-    )
+    fine = agilesat("run", "scan_pitch", "--step", 0.05 / 16, *common, "--out", tmp_path / "f")
     assert fine.returncode == 0, fine.stderr
     truth = json.loads((tmp_path / "f" / "summary.json").read_text())["metrics"]["pitch_at_T"]
     pitch = found["metrics"]["pitch_at_T"]
@@ -75,23 +59,3 @@ def test_scan_pitchs_estimate_is_its_error(fmus, tmp_path):
     estimated = math.degrees(pitch["estimate"])
     print(f"pitch_at_T: estimate {estimated:.4g}°, actual {math.degrees(actual):.4g}°")
     assert pitch["estimate"] == pytest.approx(actual, rel=0.2)
-
-
-def test_a_campaigns_sample_gives_each_metrics_largest_estimate_and_the_undecided_runs():
-    """Two runs of a campaign (journal records: their values and metric values at 0.05 s),
-    each rerun at 0.025 and 0.0125 s: per metric the larger estimate, per requirement the
-    run whose margin is within it."""
-    from agilesat.orchestration.error_estimate import sample
-
-    def metric(x):  # run 7 is near the bound (0.5), run 9 far from it
-        return {"pointing": {"value": x}}
-
-    at = {7: {0.025: 0.459, 0.0125: 0.449}, 9: {0.025: 0.25, 0.0125: 0.2475}}
-    records = [
-        {"index": 7, "values": {"run": 7}, "metrics": metric(0.499)},
-        {"index": 9, "values": {"run": 9}, "metrics": metric(0.26)},
-    ]
-    found = sample(records, 0.05, lambda values, h: _summary(h, at[values["run"]][h]))
-    assert found["sample"] == [7, 9] and found["undecided"] == {"pointing": [7]}
-    assert found["metrics"]["pointing"]["estimate"] == pytest.approx(0.04 * 4 / 3)
-    assert found["metrics"]["pointing"]["orders_observed"] == 2

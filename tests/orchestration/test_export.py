@@ -141,7 +141,7 @@ def test_a_third_party_fmu_is_packed_as_it_is_with_a_note(fmus, tmp_path):
 
 def test_an_ssd_with_its_fmus_beside_it_runs_as_the_package(fmus, tmp_path):
     for out in ("p.ssp", "s.ssd"):
-        run = agilesat("export", "payload_sweep", "--out", tmp_path / out)
+        run = agilesat("export", "scan_pitch", "--out", tmp_path / out)
         assert run.returncode == 0, run.stderr
     assert sorted(p.name for p in (tmp_path / "s.fmus").iterdir()) == sorted(
         n.removeprefix("resources/")
@@ -199,7 +199,7 @@ def test_a_package_states_its_coupling_error_per_host_class(fmus, tmp_path):
     """Printed by export and in the package's documentation; measured once, then from the
     cache (keyed on the package).  That it is what libcosim gives: tests/interop/
     test_libcosim.py."""
-    runs = [agilesat("export", "video_sar", "--out", tmp_path / f"{k}.ssp") for k in (1, 2)]
+    runs = [agilesat("export", "scan_pitch", "--out", tmp_path / f"{k}.ssp") for k in (1, 2)]
     for run in runs:
         assert run.returncode == 0, run.stderr
     first, again = (run.stdout.splitlines()[:-1] for run in runs)  # then the package's path
@@ -218,16 +218,15 @@ def test_a_package_states_its_coupling_error_per_host_class(fmus, tmp_path):
 
 
 def test_accuracy_chooses_the_step_at_which_held_input_hosts_meet_it(fmus, tmp_path):
-    """payload_sweep's held-input Jacobi host is 0.090° from our master at 0.05 s: for
-    0.06° the package's step halves (once), and export says what that costs."""
+    """scan_pitch's held-input Jacobi host is 1.38° from our master at 0.05 s: for 1° the
+    package's step halves (once), and export says what that costs."""
     from agilesat.orchestration.coupling_error import held_attitude
     from agilesat.orchestration.system.ssp import read_system
 
-    run = agilesat("export", "payload_sweep", "--accuracy", "0.06deg", "--out", tmp_path / "a.ssp")
+    run = agilesat("export", "scan_pitch", "--accuracy", "1deg", "--out", tmp_path / "a.ssp")
     assert run.returncode == 0, run.stderr
     said = [line for line in run.stdout.splitlines() if line.startswith("--accuracy")]
     assert len(said) == 1 and "step 0.025 s" in said[0] and "2× the macro steps" in said[0]
     assert read_system(tmp_path / "a.ssp").step_size == 0.025
-    assert held_attitude(tmp_path / "a.ssp")[0] <= math.radians(0.06)
-    plain = agilesat("export", "payload_sweep", "--out", tmp_path / "p.ssp")
-    assert plain.returncode == 0 and held_attitude(tmp_path / "p.ssp")[0] > math.radians(0.06)
+    assert held_attitude(tmp_path / "a.ssp")[0] <= math.radians(1.0)
+    assert held_attitude(tmp_path / "a.ssp", step=0.05)[0] > math.radians(1.0)
