@@ -13,9 +13,9 @@ values written in.
 
 Any FMU ``agilesat build`` made from these sources can be configured: ours
 (``fmus/build/<Name>.fmu``) and a user's model (:mod:`.user_models`, wherever its FMU was
-written: the model's source is inside it).  Any other is :class:`NotConfigurable`, with the
-reason: a third party's FMU (:class:`NotConfigurable`), or one agilesat built from other
-sources (another version of agilesat, or a model changed since: :class:`OtherSources`).
+written: the model's source is inside it).  Any other is refused with the reason: a third
+party's FMU (:class:`NotConfigurable`), or one agilesat built from other sources (another
+version of agilesat: :class:`OtherSources`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from __future__ import annotations
 import json
 import zipfile
 from pathlib import Path
-from xml.etree.ElementTree import Element, fromstring, indent, tostring
+from xml.etree.ElementTree import Element, fromstring, tostring
 
 from . import CONFIGURATION, FMUS, configuration_key
 from .build import archive_bytes, configured_section, is_current
@@ -62,12 +62,8 @@ def configured_fmu(fmu: Path, values: dict, experiment: tuple | None = None) -> 
     for scalar, value in typed.items():
         _type(variables[scalar]).set("start", start_text(_type(variables[scalar]).tag, value))
     root.set("guid", "{" + fmu_guid(name, digest, configuration_key(text.encode())) + "}")
-    if experiment is not None:
+    if experiment is not None:  # every FMU these sources build declares one
         element = root.find("DefaultExperiment")
-        if element is None:  # before the vendor annotations and variables (FMI 2.0 schema)
-            element = Element("DefaultExperiment")
-            root.insert(list(root).index(root.find("LogCategories")) + 1, element)
-            indent(root)
         element.attrib.clear()
         element.attrib.update(experiment_attributes(*experiment))
     entries["modelDescription.xml"] = tostring(root, encoding="UTF-8", xml_declaration=True)
@@ -102,7 +98,7 @@ def built_here(fmu: Path, entries: dict[str, bytes]) -> tuple[str, str]:
     if current != digest:
         raise OtherSources(
             f"{fmu}: built by agilesat from other sources than these (another version of "
-            f"agilesat, or a model changed since): {what}"
+            f"agilesat): {what}"
         )
     return name, digest
 

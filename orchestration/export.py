@@ -24,8 +24,8 @@ fmi2Warning (OMSimulator) run to the end.  One FMU file per FMU and set of value
 ``resources/<FMU>.fmu``, or ``resources/<FMU>_<component>.fmu`` where components of one FMU
 have different values.  Every FMU ``agilesat build`` made from these sources is configured,
 ours and a user's models; a third party's is packed as it is and ``say`` is told (its
-values are in the SSD's parameter sets only); one agilesat built from other sources (a
-model changed since) is an error naming what to rebuild.
+values are in the SSD's parameter sets only); one agilesat built from other sources
+(another version) is an error naming what to rebuild.
 """
 
 from __future__ import annotations
