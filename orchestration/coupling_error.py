@@ -69,10 +69,6 @@ class Statement:
     errors: dict[str, dict[str, tuple[float | None, str, str]]]
     provenance: str
 
-    def attitude(self, host: str) -> float | None:
-        found = self.errors[host].get("attitude")
-        return None if found is None else found[0]
-
     def header(self) -> str:
         at = f" at {self.step:g} s" if self.step else ""
         return f"coupling error per host class{at} ({self.provenance}):"
@@ -109,6 +105,7 @@ def state(package: Path, scenario=None, variant: str | None = None) -> Statement
     except (OSError, ValueError, KeyError):
         pass
     from .cosim.master import SimulationError
+    from .output.recorder import write_text
 
     began = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     clock = time.perf_counter()
@@ -122,7 +119,7 @@ def state(package: Path, scenario=None, variant: str | None = None) -> Statement
     )
     try:
         cached.parent.mkdir(parents=True, exist_ok=True)
-        cached.write_text(json.dumps({"step": step, "errors": errors, "date": began}))
+        write_text(cached, json.dumps({"step": step, "errors": errors, "date": began}))
     except OSError:
         pass  # an unwritable cache costs the measurement next time, nothing else
     return said
