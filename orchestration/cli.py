@@ -1,6 +1,7 @@
 """``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
 
-Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
+Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
+or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
 as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
 by SIGTERM (everything recorded so far is kept, and the summary says what was not
@@ -491,11 +492,13 @@ def _plot(args) -> int:
 
 
 def report(summary) -> int:
-    """Print the summary's numbers; the exit status of a run."""
+    """Print the summary's numbers; the exit status of a run: 1 when a metric,
+    requirement or figure raised (status "error": the run's records are written), 3 when
+    it did not fly as required."""
     from .output.summary import format_summary
 
     print(format_summary(summary))
-    return 3 if summary.get("status") == "failed" else 0
+    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
 
 
 def _export(args) -> int:
