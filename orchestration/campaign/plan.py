@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
+from ..mission import reads
 from ..mission.requirements import judged_over_campaign
 from ..mission.targets import resolve
 from ..system.description import Description
@@ -53,6 +54,20 @@ class Spec:
         ]
 
 
+def over_campaign(scenario, variant) -> list:
+    """The requirements of ``scenario``'s ``variant`` judged over the whole campaign (an
+    ensemble or mixed statistic; a Pointing requirement whose statistic is temporal is
+    judged run by run) that the variant judges; none without a scenario."""
+    if scenario is None:
+        return []
+    exempt = scenario.variant(variant).exempt()
+    return [
+        r
+        for r in scenario.requirements_for(variant)
+        if judged_over_campaign(r) and r.name not in exempt
+    ]
+
+
 class Plan:
     def __init__(self, spec: Spec):
         if spec.runs < 1:
@@ -64,7 +79,11 @@ class Plan:
         self.scenario, self.variant = found.scenario, found.variant
         #: the target as the workers take it (a mission file by its absolute path)
         self.target = _absolute(spec.target) if found.scenario is not None else spec.target
+        #: campaign.json's ``target``: found again from any folder (``agilesat pointing``)
+        self.target_record = found.record()
         self.system = found.system_file(build=True)  # the FMUs built once, here
+        if found.scenario is not None:  # what its metrics and requirements read: outputs
+            reads.check(found.scenario, found.variant)
         self.step = spec.step or self.system.step_size
         self.stop = self.system.stop_time if spec.stop is None else spec.stop
         self.start = self.system.start_time
@@ -117,12 +136,7 @@ class Plan:
         #: statistic; a Pointing requirement whose statistic is temporal is judged run by
         #: run: ``over_campaign`` false), and the columns of every run they need, kept
         #: with the others
-        self.ensemble = [
-            r
-            for r in (self.scenario.requirements_for(self.variant) if self.scenario else [])
-            if judged_over_campaign(r)
-            and r.name not in self.scenario.variant(self.variant).exempt()  # type: ignore[union-attr]
-        ]
+        self.ensemble = over_campaign(self.scenario, self.variant)
         for requirement in self.ensemble:
             self.signals += [c for c in requirement.signals if c not in self.signals]
 

@@ -21,7 +21,10 @@ After a run, :meth:`Scenario.evaluate` gives the summary's ``metrics`` (value, u
 display unit, description, the reference value, and its bound where it has one),
 ``requirements`` (each one's verdict, :mod:`.requirements`), ``diagnostics`` (the
 requirements not met, then what the scenario's ``diagnose`` explains) and ``status``
-("failed" when a requirement is not met or a diagnosis is given: ``agilesat run`` exits 3).
+("failed" when a requirement is not met or a diagnosis is given: ``agilesat run`` exits 3;
+an undecided requirement fails nothing, and ``agilesat run`` exits 4).  A requirement
+judged over a campaign (:func:`.requirements.judged_over_campaign`) is "judged over the
+campaign" in a run: one verdict per requirement and scope.
 """
 
 from __future__ import annotations
@@ -34,12 +37,14 @@ from pathlib import Path
 from ..output.results import ColumnError
 from ..output.summary import format_value
 from ..system.parameters import did_you_mean
-from .metrics import Metric
+from .metrics import Metric, NotEvaluable
 from .requirements import (
     MET,
     NOT_EVALUATED,
     NOT_JUDGED,
     NOT_MET,
+    OVER_CAMPAIGN,
+    OVER_CAMPAIGN_REASON,
     Bound,
     Requirement,
     Verdict,
@@ -235,20 +240,25 @@ class Scenario:
         only (what needs another is not evaluated, and the diagnosis is left out)."""
         metrics = self.metrics_for(variant)
         values = {m.name: m.evaluate(results, partial) for m in metrics}
+        errors = [v.reason for v in values.values() if v.failed]
         exempt = self.variant(variant).exempt()
         entries = {m.name: _entry(m, values[m.name]) for m in metrics}
         verdicts: dict[str, dict] = {}
         problems = []
         for r in self.requirements_for(variant):
-            verdict = (
-                Verdict(NOT_JUDGED, reason=exempt[r.name])
-                if r.name in exempt
-                else _judged(r, results, values, partial)
-            )
             metric = getattr(r, "metric", None)
             unit = values[metric].unit if metric in values else None
             display = entries[metric]["display_unit"] if metric in entries else None
             statement = r.statement(unit, display) if isinstance(r, Bound) else r.statement()
+            verdict = (
+                Verdict(NOT_JUDGED, reason=exempt[r.name])
+                if r.name in exempt
+                else _judged(r, results, values, partial, errors)
+            )
+            if judged_over_campaign(r) and verdict.status not in (NOT_JUDGED, OVER_CAMPAIGN):
+                # one verdict per requirement and scope: the campaign's
+                text = f"{statement}: {OVER_CAMPAIGN}"
+                verdict = Verdict(OVER_CAMPAIGN, verdict.value, OVER_CAMPAIGN_REASON, text)
             verdicts[r.name] = {
                 "statement": statement,
                 "verdict": verdict.status,
@@ -273,13 +283,17 @@ class Scenario:
                     else repr(verdict.value)
                 )
                 problems.append(f"requirement {statement} not met: {shown}")
-        diagnose = self.diagnose if self.diagnose is not None and not partial else None
-        diagnostics = problems + (list(diagnose(results, entries)) if diagnose else [])
+        if self.diagnose is not None and not partial:
+            try:
+                problems += list(self.diagnose(results, entries))
+            except Exception as exc:  # noqa: BLE001 - the diagnosis's mistake: said
+                errors.append(f"the diagnosis {defined_at(self.diagnose)} {_raised(exc)}")
         return {
             "metrics": entries,
             "requirements": verdicts,
-            "diagnostics": diagnostics,
-            "status": "failed" if diagnostics else "ok",
+            "diagnostics": problems,
+            "status": "error" if errors else "failed" if problems else "ok",
+            **({"errors": errors} if errors else {}),
         }
 
     def bounds_for(self, variant: str | None = None) -> list[SignalBound]:
@@ -287,22 +301,46 @@ class Scenario:
         exempt = self.variant(variant).exempt()
         return [b for b in self.bounds if b.requirement is None or b.requirement not in exempt]
 
+    def figures_for(self, variant: str | None = None) -> list[Callable]:
+        """The scenario's and the variant's figure functions."""
+        return [*self.figures, *self.variant(variant).figures]
+
     def draw(self, results, out_dir, variant: str | None = None) -> list[Path]:
         """The scenario's and the variant's figures of a run, into ``out_dir``."""
         paths: list[Path] = []
-        for figure in [*self.figures, *self.variant(variant).figures]:
+        for figure in self.figures_for(variant):
             made = figure(results, Path(out_dir))
             paths += [Path(p) for p in (made if isinstance(made, (list, tuple)) else [made])]
         return paths
 
 
-def _judged(requirement, results, values: dict, partial: bool) -> Verdict:
+def _judged(requirement, results, values: dict, partial: bool, errors: list) -> Verdict:
+    """The verdict of ``requirement``; not evaluated where it cannot be had, and where it
+    raised (a mistake of the requirement's: said in ``errors`` too)."""
     try:
         return requirement.evaluate(results, values)
+    except NotEvaluable as reason:
+        return Verdict(NOT_EVALUATED, reason=str(reason))
     except ColumnError as missing:
-        if not partial:
-            raise
-        return Verdict(NOT_EVALUATED, reason=f"not recorded: {missing}")
+        if partial:
+            return Verdict(NOT_EVALUATED, reason=f"not recorded: {missing}")
+        failure: Exception = missing
+    except Exception as exc:  # noqa: BLE001 - said, the run kept
+        failure = exc
+    where = getattr(requirement, "origin", "")
+    reason = f"requirement {requirement.name}{f' ({where})' if where else ''} {_raised(failure)}"
+    errors.append(reason)
+    return Verdict(NOT_EVALUATED, reason=reason)
+
+
+def _raised(exc: Exception) -> str:
+    return f"raised {type(exc).__name__}: {exc}"
+
+
+def defined_at(function) -> str:
+    """Where a function was defined, as "(file:line)" ("" if unknown)."""
+    code = getattr(function, "__code__", None)
+    return f"({code.co_filename}:{code.co_firstlineno})" if code is not None else ""
 
 
 def _entry(metric: Metric, value) -> dict:
@@ -312,6 +350,7 @@ def _entry(metric: Metric, value) -> dict:
         "display_unit": metric.display_unit or value.unit,
         "description": metric.description,
         **({"reason": value.reason} if value.value is None else {}),
+        **({"failed": True} if value.failed else {}),
         **({"paper": metric.paper} if metric.paper is not None else {}),
     }
 

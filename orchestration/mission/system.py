@@ -78,6 +78,12 @@ def _origin(prefer: str | None = None) -> tuple[str, int]:
     return found
 
 
+def where_written() -> str:
+    """Where the user's call is (:func:`_origin`), as "file:line" ("" where no file)."""
+    file, line = _origin()
+    return f"{file}:{line}" if line else ""
+
+
 def _split(name: str, what: str) -> tuple[str, str]:
     component, _, variable = str(name).partition(".")
     if not component or not variable:
@@ -124,7 +130,9 @@ class System:
             raise ValueError(f"{file}:{line}: component name {name!r} is not an identifier")
         if name in self._components:
             raise ValueError(f"{file}:{line}: component {name!r} is added twice")
-        self._components[name] = _Component(name, _fmu(fmu or name, file), step, line)
+        self._components[name] = _Component(
+            name, _fmu(fmu or name, file, f"{file}:{line}: component {name!r}"), step, line
+        )
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
         self._resolved.clear()
@@ -146,7 +154,9 @@ class System:
         parameter values are ``parameters``."""
         file, line = _origin(self.file)
         old = self._component(name, "replace")
-        self._components[name] = _Component(name, _fmu(fmu, file), old.step, line)
+        self._components[name] = _Component(
+            name, _fmu(fmu, file, f"{file}:{line}: component {name!r}"), old.step, line
+        )
         self._parameters = {k: v for k, v in self._parameters.items() if k.split(".")[0] != name}
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
@@ -412,12 +422,22 @@ class System:
         return write_package(system, self.descriptions(), path)
 
 
-def write_package(system: SystemFile, described: dict, path) -> Path:
-    """An SSP package (SSP 1.0 §5): ``SystemStructure.ssd`` and every FMU under
-    ``resources/``, named by relative URI, so it runs wherever it is copied, each FMU
-    configured with the values the system binds to it (:func:`..export.package`);
-    deterministic (the same system gives the same file)."""
+def write_package(system: SystemFile, described: dict, path, say=None) -> Path:
+    """An SSP package (SSP 1.0 §5) of ``system`` written as ``path``: ``SystemStructure.ssd``
+    and every FMU under ``resources/`` (:func:`package_entries`); deterministic (the same
+    system gives the same file)."""
     from ...fmus.build import write_archive
+
+    return write_archive(Path(path), package_entries(system, described, say))
+
+
+def package_entries(
+    system: SystemFile, described: dict, say=None, folder: str = "resources"
+) -> dict[str, bytes]:
+    """The files of the SSP package of ``system``: ``SystemStructure.ssd`` and every FMU
+    under ``folder``, named by relative URI, so it runs wherever it is copied, each FMU
+    configured with the values the system binds to it (:func:`..export.package`, which
+    tells ``say`` of an FMU it packs unconfigured)."""
     from ..export import package
 
     fmus: dict[str, bytes] = {}
@@ -427,7 +447,7 @@ def write_package(system: SystemFile, described: dict, path) -> Path:
         fmus.setdefault(member, Path(ref.source).read_bytes())
         sources[ref.name], files[member] = member, Path(ref.source)
     ssd = render_ssd(system, described, sources)
-    return write_archive(Path(path), package(ssd, files))
+    return package(ssd, files, say, folder)
 
 
 def _member(fmu: Path, entries: dict) -> str:
@@ -513,14 +533,23 @@ def _report(file: str, problems: list[str]) -> str:
     return f"{file}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
 
 
-def _fmu(fmu, file: str) -> str:
+def _fmu(fmu, file: str, where: str) -> str:
     """A component's FMU as stored: our FMU's name, or an absolute path (a relative one is
-    relative to the directory of ``file``, the file that names it)."""
+    relative to the directory of ``file``, the file that names it; ``where``: the call
+    that does, for the message about an FMU that is none of ours)."""
     text = os.fspath(fmu)
     path, cls = text.rsplit(":", 1) if ".py:" in text else (text, "")
     if Path(path).suffix not in (".fmu", ".py"):
+        from ...fmus import FMUS
+
         if os.sep in text or "/" in text:
             raise ValueError(f"{text}: an FMU is one of ours by name, an .fmu file or a model .py")
+        if text not in FMUS:  # said here, not at the first connection to it
+            raise SystemFileError(
+                f"{where}: unknown FMU {text!r}"
+                + did_you_mean(text, FMUS)
+                + f" (ours: {', '.join(FMUS)}; or the path of an .fmu file or a model .py)"
+            )
         return text
     base = Path(file).parent if os.path.isfile(file) else Path.cwd()
     absolute = str((base / path).resolve())

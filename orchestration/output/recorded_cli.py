@@ -2,13 +2,16 @@
 
 With ``--index``, that index (the options of :class:`..pointing.PointingRequirement`);
 without, the pointing requirements the run's or campaign's scenario states
-(:class:`..mission.Pointing`).  Exit 0, or 3 when a requirement is not met.
+(:class:`..mission.Pointing`; in a run, one judged over a campaign says so and what the run
+shows).  Exit 0, 3 when a requirement is not met, 4 when none is but one is undecided
+(neither compliance nor a violation shown at its confidence).
 """
 
 from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 from ..pointing.names import ANGLE_UNITS, INDICES, INTERPRETATIONS
@@ -34,6 +37,10 @@ def add_parser(commands) -> None:
         help="ECSS-E-ST-60-10C pointing indices (APE, RPE, ... AKE, RKE, ...) of a recorded "
         "run or campaign directory",
         description=__doc__.split("\n\n")[0] + "  See docs/pointing.md.",
+        epilog="Exit status: 0 every requirement met (or computed, without --bound); 3 one "
+        "not met; 4 none not met, but one undecided (its runs show neither compliance nor a "
+        "violation at its confidence; the line says roughly how many runs would settle it); "
+        "1 bad input.",
     )
     p.add_argument("directory", type=Path, help="a run's or a campaign's output directory")
     p.add_argument("--index", choices=list(INDICES), help="default: the scenario's requirements")
@@ -69,8 +76,14 @@ def add_parser(commands) -> None:
         help="quaternion: the reference (performance; required), "
         "default SatelliteDynamics.q_BI (knowledge)",
     )
-    p.add_argument("--start", type=float, help="[s]")
-    p.add_argument("--stop", type=float, help="[s]")
+    p.add_argument("--start", type=float, help="[s] (default: the run's start)")
+    p.add_argument("--stop", type=float, help="[s] (default: the run's planned stop)")
+    p.add_argument(
+        "--mission",
+        metavar="PATH",
+        help="the mission file (or scenario) to judge the requirements by, where the one "
+        "the run was made of has moved or changed",
+    )
     p.add_argument(
         "--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout (default deg)"
     )
@@ -85,15 +98,18 @@ def add_parser(commands) -> None:
 
 def main(args) -> int:
     from ..mission.requirements import Pointing
-    from ..mission.targets import resolve
-    from ..pointing import PointingRequirement
+    from ..pointing import NotEvaluable, PointingRequirement
     from .recorded import evaluate, load
+    from .results import Results
 
     recorded = load(args.directory)
     what = f"{recorded.runs} run(s)" + (
         f", {recorded.left_out} that stopped early left out" if recorded.left_out else ""
     )
-    print(f"{args.directory}: {recorded.target or 'a run'}, {what}")
+    short = recorded.shortfall()
+    print(
+        f"{args.directory}: {recorded.target or 'a run'}, {what}" + (f"; {short}" if short else "")
+    )
     records, results = [], []
     if args.index:
         requirement = PointingRequirement(
@@ -108,20 +124,35 @@ def main(args) -> int:
             args.boresight,
             args.confidence,
         )
-        result = evaluate(
-            None,
-            requirement,
-            attitude=args.attitude,
-            reference=args.reference,
-            start=args.start,
-            stop=args.stop,
-            recorded=recorded,
-        )
-        print(f"  {_line(result, args.unit)}")
+        try:
+            result = evaluate(
+                None,
+                requirement,
+                attitude=args.attitude,
+                reference=args.reference,
+                start=args.start,
+                stop=args.stop,
+                recorded=recorded,
+            )
+        except NotEvaluable as reason:  # a window its records do not cover
+            raise ValueError(f"{args.directory}: {reason}") from None
+        print(f"  {result.line(args.unit)}")
+        if INDICES[args.index][1] == "knowledge" and args.start is None:
+            print(
+                "  (over the whole record: the estimator's start-up included; --start T "
+                "judges it after it, docs/sensing.md)"
+            )
         records.append(result.to_dict())
         results.append((requirement.label(), result))
     else:
-        target = resolve(recorded.target) if recorded.target else None
+        if short:
+            raise ValueError(
+                f"{args.directory}: {short}: the requirements are stated over the whole run "
+                "(--index with --start and --stop gives an index over what it recorded)"
+            )
+        target, note = recorded.find_target(args.directory, args.mission)
+        if note:
+            print(note, file=sys.stderr)
         if target is None or target.scenario is None:
             raise ValueError(f"{args.directory}: no scenario recorded: give --index ...")
         stated = [
@@ -130,30 +161,33 @@ def main(args) -> int:
         if not stated:
             raise ValueError(f"{recorded.target} states no pointing requirement: give --index")
         exempt = target.scenario.variant(target.variant).exempt()
+        a_run = isinstance(recorded.columns, Results)
         for r in stated:
             if r.name in exempt:  # the variant does not judge it: as the run's summary
                 print(f"  {r.name}: not judged ({exempt[r.name]})")
                 continue
-            result = r.requirement.evaluate(r.error(recorded.columns, recorded.t))  # type: ignore[attr-defined]
-            print(f"  {r.name}: {_line(result, args.unit)}")
+            if a_run and r.over_campaign:  # one verdict per scope: the campaign's
+                verdict = r.evaluate(recorded.columns, {})
+                print(f"  {r.name}: {verdict.text}")
+                records.append({"name": r.name, "status": verdict.status, "text": verdict.text})
+                continue
+            try:
+                error = r.error(recorded.columns, recorded.t)  # type: ignore[attr-defined]
+            except NotEvaluable as reason:  # a window the run does not reach, as its summary
+                print(f"  {r.name}: not evaluated ({reason})")
+                records.append({"name": r.name, "status": "not evaluated", "met": None})
+                continue
+            result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
+            print(f"  {r.name}: {result.line(args.unit)}")
             records.append({"name": r.name, **result.to_dict()})
             results.append((r.name, result))
     if args.json:
         args.json.write_text(json.dumps(records, indent=2) + "\n")
     if args.figure:
         print(figure(args.figure, str(args.directory), results, args.unit))
-    return 3 if any(r["met"] is False for r in records) else 0
+    from ..cli import exit_status
 
-
-def _line(result, unit: str) -> str:
-    """The result's line, with the empirical quantile where a confidence made the value
-    compared the order statistic that bounds it."""
-    from ..pointing import format_angle
-
-    line = result.line(unit)
-    if result.value is not None and result.requirement.confidence is not None:
-        line += f" (empirical quantile {format_angle(result.estimate, unit)})"
-    return line
+    return exit_status(False, {str(i): {"verdict": r["status"]} for i, r in enumerate(records)})
 
 
 def figure(path: Path, title: str, results: list, unit: str) -> Path:

@@ -77,7 +77,7 @@ CASES = {
         lambda s: retarget(
             s, R_I, connection("SatelliteDynamics", "tau_ext[1]", "SatelliteDynamics", "r_I[1]")
         ),
-        ["'tau_ext[1]' of SatelliteDynamics is a input, expected an output"],
+        ["'tau_ext[1]' of SatelliteDynamics is an input, expected an output"],
     ),
     "type": (
         lambda s: retarget(
@@ -103,7 +103,7 @@ CASES = {
     ),
     "not a parameter": (
         lambda s: s.replace('<ssv:Parameter name="h_rotor">', '<ssv:Parameter name="hdot[1]">', 1),
-        ["CmgCluster.hdot[1] is a output, expected a parameter"],
+        ["CmgCluster.hdot[1] is an output, expected a parameter"],
     ),
     "algebraic loop": (
         lambda s: retarget(
