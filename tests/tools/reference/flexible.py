@@ -116,6 +116,19 @@ class Hub:
         q_dot = 0.5 * np.array(scan_pitch.qmul(q, (0.0, *w)))
         return np.concatenate([q_dot, accel[:3], eta_dot, accel[3:]])
 
+    def rk4(self, x0, t0, t1, steps) -> np.ndarray:
+        """The state at t1 from x0 at t0 by ``steps`` classical Runge-Kutta steps (for
+        inputs that turn too fast for DOP853's step control to be cheap: rotors)."""
+        x, h = np.asarray(x0, dtype=float), (t1 - t0) / steps
+        for k in range(steps):
+            t = t0 + k * h
+            k1 = self.rhs(t, x)
+            k2 = self.rhs(t + h / 2, x + h / 2 * k1)
+            k3 = self.rhs(t + h / 2, x + h / 2 * k2)
+            k4 = self.rhs(t + h, x + h * k3)
+            x = x + h / 6 * (k1 + 2 * (k2 + k3) + k4)
+        return x
+
     def run(self, x0, times, max_step=np.inf) -> np.ndarray:
         """States at ``times`` (rows) from x0 at times[0]."""
         sol = solve_ivp(
@@ -172,38 +185,33 @@ def steady_jitter(inertia, coupling, h_u, h_u_dot, Omega):
 # --- scan_pitch with appendages and imbalanced CMG rotors ---------------------------------------
 def cmg_rotors(delta, rate, rotors, t):
     """(h_u, ḣ_u) of the six CMG rotors at gimbal angles ``delta`` and rates ``rate``
-    (``rotors``: static, dynamic imbalance, position_B rows, speed Ω, phase0 rows), the
-    reference direction of each rotor's angle being its gimbal axis g_i."""
-    h, h_dot = np.zeros(3), np.zeros(3)
+    (``rotors``: static, dynamic imbalance, position rows, speed Ω, phase0 rows), the
+    reference direction of each rotor's angle being its gimbal axis g_i: :func:`imbalance`
+    of the six at once (``housing_rate`` δ̇_i g_i)."""
     if rotors is None:
-        return h, h_dot
+        return np.zeros(3), np.zeros(3)
     Omega = rotors["speed"]
-    for i in range(6):
-        c, s = math.cos(delta[i]), math.sin(delta[i])
-        spin = scan_pitch.S_AX[:, i] * c + scan_pitch.T_AX[:, i] * s
-        g = scan_pitch.G_AX[:, i]
-        hi, hdi, _, _ = imbalance(
-            rotors["static"][i],
-            rotors["dynamic"][i],
-            rotors["position"][i],
-            spin,
-            g,
-            Omega,
-            rotors["phase0"][i] + Omega * t,
-            housing_rate=rate[i] * g,
-        )
-        h, h_dot = h + hi, h_dot + hdi
-    return h, h_dot
+    G = scan_pitch.G_AX.T
+    spin = scan_pitch.S_AX.T * np.cos(delta)[:, None] + scan_pitch.T_AX.T * np.sin(delta)[:, None]
+    phi = np.asarray(rotors["phase0"]) + Omega * t
+    e = G * np.cos(phi)[:, None] + np.cross(spin, G) * np.sin(phi)[:, None]
+    w = np.cross(spin, e)
+    w_dot = -Omega * e + np.cross(np.asarray(rate)[:, None] * G, w)
+    us, ud = np.asarray(rotors["static"])[:, None], np.asarray(rotors["dynamic"])[:, None]
+    r = np.asarray(rotors["position"])
+    h = Omega * (ud * w + us * np.cross(r, w)).sum(axis=0)
+    return h, Omega * (ud * w_dot + us * np.cross(r, w_dot)).sum(axis=0)
 
 
-def scan_pitch_closed_loop(stop, modes, rotors=None, control_period=0.05, max_step=np.inf):
+def scan_pitch_closed_loop(stop, modes, rotors=None, control_period=0.05, rk4_steps=0):
     """scan_pitch (tests/tools/reference/scan_pitch.py: orbit, cluster, pseudo-inverse
     steering, the five-phase controller, the 956 kg·m² hub) with the appendages ``modes``
     (``frequency``, ``damping``, ``coupling`` rows, ``eta0``, ``eta_dot0``) and the CMG rotors'
     imbalances ``rotors`` (:func:`cmg_rotors`; None: balanced), as a sampled-data system:
     controller and steering at ``control_period``, their commands held, the plant (the hub
     with its modes, the exact gimbal servo, the rotors' imbalance momentum) integrated
-    together by DOP853 (``max_step``: resolve the rotors, e.g. a twentieth of their period).
+    together by DOP853 or, with ``rk4_steps``, that many classical RK4 steps a control
+    period (the rotors resolved: DOP853 would take as many steps at twelve evaluations).
     The body starts in the rotors' steady jitter (:func:`steady_jitter`) about the
     scenario's initial state.  Returns arrays at t = j·control_period: ``time``, ``q_BI``,
     ``w_BI_B``, ``q_BO``, ``w_BO_B``, ``pitch``, ``eta``, ``eta_dot``, ``h`` (gimbals),
@@ -255,7 +263,10 @@ def scan_pitch_closed_loop(stop, modes, rotors=None, control_period=0.05, max_st
         if j == n_steps:
             break
         state["cmd"] = scan_pitch.steering(tau, w, h_gimbal, state["delta"])
-        x = hub.run(x, np.array([t, t + control_period]), max_step=max_step)[-1]
+        if rk4_steps:
+            x = hub.rk4(x, t, t + control_period, rk4_steps)
+        else:
+            x = hub.run(x, np.array([t, t + control_period]))[-1]
         x[:4] /= np.linalg.norm(x[:4])
         state["delta"], state["rate"] = gimbals(t + control_period)
     a, n = np.array(rows), L.shape[0]
