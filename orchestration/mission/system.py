@@ -192,7 +192,8 @@ class System:
             )
         if replace and not existing:
             raise ValueError(f"{file}:{line}: replace=True, but {target} is not connected")
-        self._connections = [c for c in self._connections if c[1] != target]
+        if replace:
+            self._connections = [c for c in self._connections if c[1] != target]
         self._connections.append((source, target, line))
         self._resolved.clear()
         return self
@@ -496,7 +497,7 @@ def _is_slot_table(causality: str, shape: tuple, optional: bool) -> bool:
 def _slots(d, name: str, shape: tuple, scalars: list, size: int):
     """The slot table ``name`` (shape) when a connection of ``size`` scalars names it whole
     and fills whole rows of it, else None."""
-    optional = d.optional_inputs is not None and name in d.optional_inputs
+    optional = d.optional_inputs is not None and scalars[0].name in d.optional_inputs
     if not _is_slot_table(scalars[0].causality, shape, optional) or size == len(scalars):
         return None
     return shape if size % shape[1] == 0 and size < len(scalars) else None
