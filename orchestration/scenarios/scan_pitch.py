@@ -44,6 +44,7 @@ from agilesat.orchestration.pointing import (
     performance_error,
     quaternion_product,
 )
+from agilesat.orchestration.scenarios import flexible
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
     close_the_loop,
@@ -192,7 +193,25 @@ REQUIREMENTS = [
         reference_signals=PLAN_SIGNALS,
         start=PROFILE.times[2],
         stop=PROFILE.times[3],
-    )
+    ),
+    # the scan's stability within a second: a pitch error drifting at the band's edge,
+    # 0.02 °/s, moves from its 1 s mean by half of 0.02° at the window's end
+    Pointing(
+        "imaging_rpe",
+        PointingRequirement(
+            "RPE",
+            SCAN_RATE_TOLERANCE * 1.0 / 2,
+            POINTING_LEVEL,
+            "ensemble",
+            window=1.0,
+            axis=(0.0, 1.0, 0.0),
+            confidence=POINTING_CONFIDENCE,
+        ),
+        reference=planned_attitude,
+        reference_signals=PLAN_SIGNALS,
+        start=PROFILE.times[2],
+        stop=PROFILE.times[3],
+    ),
 ]
 
 
@@ -228,7 +247,24 @@ def sensed_figure(results, out_dir):
     )
 
 
+def imaging_error(results):
+    """The performance error of the body from the planned attitude about the pitch axis,
+    the scan's (the requirements' axis)."""
+    return performance_error(
+        results.vector("SatelliteDynamics.q_BI"), planned_attitude(results), results.time
+    ).about((0.0, 1.0, 0.0))
+
+
+IMAGING = PROFILE.times[2], PROFILE.times[3]
+
 VARIANTS = {
+    "flexible": Variant(
+        "two solar-array wings (six modes) and imbalanced CMG rotors (their jitter)",
+        parameters=flexible.PARAMETERS,
+        system=flexible.with_jitter,
+        metrics=[flexible.jitter_metric(*IMAGING)],
+        figures=[flexible.figure(imaging_error, *IMAGING, "from the plan")],
+    ),
     "literal_spin": Variant(
         "rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
         parameters={"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS},
@@ -402,6 +438,9 @@ METRICS = [
     m.momentum_drift(
         description="max |H_I(t) − H_I(0)| / |H_I(0)|: 0 on the isotropic hub (a conservation "
         "check); with an anisotropic inertia (a campaign's), the gravity-gradient torque's effect"
+    ),
+    *flexible.stability_metrics(
+        lambda results: imaging_error(results), *IMAGING, "the pitch from the plan"
     ),
 ]
 
