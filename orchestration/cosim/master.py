@@ -46,9 +46,9 @@ in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive 
 the stop time finite and after the start, and the run at most :data:`.plan.MAX_STEPS` macro
 steps.
 
-The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
-for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
-be compiled; ``Results.meta["loop"]`` says which.  ``Results.meta["parameters"]`` holds
+The macro steps are one program of FMI calls (:mod:`.loop`), run in C, or in Python (the
+same operations, the results bit for bit): with ``loop="python"``, or where the C loop
+cannot be compiled; ``Results.meta["loop"]`` says which.  ``Results.meta["parameters"]`` holds
 every Real parameter's value as the run set it (figures draw the limits of the run).
 """
 
@@ -284,11 +284,9 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(wiring.steps, nodes)
     init_sequence = _sequence(wiring.init, nodes)
-    jacobi_reads = _fed_reads(sequence, wiring.sources)
     links = Derivatives(nodes, wiring.sources, layout, plan.algorithm) if plan.derivatives else None
     if links is not None and not links.consumers:
         links = None
-    couple = None if links is None else links.couple
 
     values = np.zeros(len(layout))
     row = np.zeros(len(layout) + 1)
@@ -318,43 +316,17 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     recorder = Recorder(columns, plan.out_dir, keep, plan.output_every)
     if plan.output_every > 1:
         meta["output_interval"] = plan.output_every * step
-    progress = plan.progress
-    failure, report_every = None, max(1, n_steps // 100)
+    failure = None
     try:
         _initialize(plan, instances, nodes, init_sequence, values, log)
         if links is not None:
             links.read()
         row[0], row[1:] = plan.start, values
         recorder.append(row)
-        if dll is not None:
-            program = compiled.Program(plan.algorithm, nodes, sequence, jacobi_reads, step, links)
-            compiled.run(dll, program, plan, values, recorder, signals, log)
-        else:
-            for n in range(n_steps):
-                if signals.signal is not None:
-                    break
-                t = plan.start + n * step
-                log.time = t
-                if plan.algorithm == "gauss-seidel":
-                    if links is not None and links.interpolating:
-                        links.previous[:] = values
-                    _evaluate(sequence, values, n + 1, t, step, couple)
-                else:
-                    for node in nodes.values():
-                        if n % node.every == 0:
-                            node.set_inputs(values)
-                            if couple is not None:
-                                couple(node, values, step)
-                            _do_step(node.instance, t, step * node.every)
-                    _read_after_steps(jacobi_reads, values, n + 1)
-                if links is not None:
-                    links.read()
-                row[0], row[1:] = plan.start + (n + 1) * step, values
-                recorder.append(row)
-                if progress and (n + 1) % report_every == 0:
-                    progress(n + 1, n_steps)
-            else:
-                log.time = plan.stop
+        program = compiled.Program.macro_step(
+            plan.algorithm, nodes, sequence, _fed_reads(sequence, wiring.sources), step, links
+        )
+        compiled.run(dll, program, plan, values, recorder, signals, log)
         for inst in instances.values():
             inst.call("fmi2Terminate")
     except (FmiCallError, OSError) as exc:
@@ -377,12 +349,6 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     if failure is not None or problems:
         raise SimulationError("\n".join([f"{name}: {failure or 'results lost'}"] + kept), results)
     return results
-
-
-def _do_step(instance: Instance, t: float, step: float) -> None:
-    status = instance.fmi2DoStep(instance.component, t, step, 1)
-    if status > 1:
-        instance.check(status, "fmi2DoStep")
 
 
 def _sequence(schedule, nodes) -> list:
@@ -420,41 +386,6 @@ def _port_names(port: _Port, node: _Node) -> list[str]:
     return [by_place[int(i)] for i in port.index]
 
 
-def _read_after_steps(reads, values, k: int) -> None:
-    """Jacobi: bring every output to communication point k once all FMUs stepped, block
-    by block, setting a block's inputs only if its outputs depend on them directly (the
-    next step sets every input anyway).  As :func:`_evaluate` without a step."""
-    for node, ports, feeds in reads:
-        if k % node.every == 0:
-            if feeds:
-                node.set_inputs(values)
-            for port in ports:
-                port.read(values)
-
-
-def _evaluate(
-    sequence, values, k: int, t: float = 0.0, step: float | None = None, couple=None
-) -> None:
-    """Bring every output to communication point k, block by block; with a step, each FMU
-    first steps from t = t_{k-1} at its first block (Gauss-Seidel; ``couple(node, values,
-    step)`` passes the input derivatives just before).  An FMU with its own
-    step m·H (:mod:`.multirate`) steps only from t_{k-1} with k − 1 a multiple of m, and
-    has its inputs set and outputs read only at k a multiple of m (else they hold)."""
-    for node, reads, first in sequence:
-        stepping = first and step is not None and (k - 1) % node.every == 0
-        reading = k % node.every == 0
-        if stepping or reading:
-            node.set_inputs(values)
-        if stepping:
-            moved = couple(node, values, step) if couple is not None else None
-            _do_step(node.instance, t, step * node.every)
-            if moved is not None and reading:  # inputs set to their t_{k-1} values
-                moved.restore(values)
-        if reading:
-            for port in reads:
-                port.read(values)
-
-
 def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
     """{"Instance.variable[i]": value} of every Real parameter as the run sets it: the
     value the system or the command line gave, else the model description's start."""
@@ -469,6 +400,9 @@ def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
 
 
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
+    """Instantiate, set up, set the parameters; in initialisation mode, bring the outputs
+    to t0 block by block in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set
+    every input once more."""
     log.time = plan.start
     for node in nodes.values():
         inst = node.instance
@@ -478,7 +412,10 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    _evaluate(init_sequence, values, 0)
+    evaluation = compiled.Program.evaluation(init_sequence)
+    k, status = evaluation.python(values, 0, plan.start)
+    if k >= 0:
+        evaluation.raise_failure(k, status)
     for node in nodes.values():
         node.set_inputs(values)
     for inst in instances.values():
