@@ -16,6 +16,7 @@ import sys
 from contextlib import nullcontext
 from pathlib import Path
 
+from .cosim.options import RunOptions, add_flags, from_arguments, setting
 from .cosim.signals import interruptible
 from .provenance import version
 from .studies import cli as study_cli
@@ -23,11 +24,6 @@ from .studies import cli as study_cli
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
 #: master are imported only to run a campaign; a test checks it is the campaign's own)
 CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
-#: the --algorithm option of `run` and `campaign`
-ALGORITHM = {
-    "choices": ("gauss-seidel", "jacobi"),
-    "help": "coupling algorithm (default the system's; gauss-seidel if it names none)",
-}
 #: what TARGET may be (``mission.targets``)
 TARGETS = (
     "a scenario[:variant] (`agilesat list`), a mission file path/to/mission.py[:variant], "
@@ -166,48 +162,7 @@ def _system_commands(commands, quiet) -> None:
         "run", parents=[quiet], help="run a scenario[:variant], a mission file, a system or an FMU"
     )
     run.add_argument("target", help=TARGETS)
-    run.add_argument("--step", type=float, help="macro step [s]")
-    run.add_argument("--stop", type=float, help="stop time [s]")
-    run.add_argument("--start", type=float, help="start time [s] (default the system's)")
-    run.add_argument("--algorithm", **ALGORITHM)
-    run.add_argument(
-        "--output-interval",
-        type=float,
-        metavar="SECONDS",
-        help="record every SECONDS (a multiple of the step; default every step)",
-    )
-    run.add_argument(
-        "--record",
-        action="extend",
-        nargs="+",
-        default=None,
-        metavar="VAR",
-        help="record only these outputs: columns, whole arrays by base name, or patterns "
-        "(SatelliteDynamics.*); default all",
-    )
-    run.add_argument(
-        "--no-derivatives",
-        action="store_true",
-        help="do not couple through FMI input/output derivatives where no wire passes "
-        "them (first-order coupling of those inputs)",
-    )
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="INSTANCE.VAR=VALUE",
-        help="override a parameter: an element (A.inertia[2,2]=900) or a whole "
-        "array (A.inertia=[[900,0,0],[0,900,0],[0,0,900]]); with a unit where it converts "
-        "(A.attitude0[2]='100 deg'); `agilesat info` lists them",
-    )
-    run.add_argument("--out", type=Path, help="output directory (default out/<target>)")
-    run.add_argument("--no-figures", action="store_true", help="draw no figures")
-    run.add_argument(
-        "--svg",
-        action="store_true",
-        help="also write each figure as SVG (vector, for reports; ~25 %% more figure time)",
-    )
-    run.add_argument("--mat", action="store_true", help="also write results.mat (MATLAB)")
+    add_flags(run, RunOptions)
 
     plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
     plot.add_argument(
@@ -233,7 +188,8 @@ def _system_commands(commands, quiet) -> None:
     export.add_argument(
         "--set",
         action="append",
-        default=[],
+        type=setting,
+        dest="parameters",
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value written into the package (as `run --set`)",
     )
@@ -341,30 +297,20 @@ def _validate(args) -> int:
 def _run(args) -> int:
     from .output.progress import Progress
     from .runner import run
-    from .system.parameters import parse_set
 
-    overrides = parse_set(args.set)
-    out = args.out or Path("out") / args.target.replace(":", "-").replace("/", "_")
+    out = args.out_dir or Path("out") / args.target.replace(":", "-").replace("/", "_")
     with Progress(args.target, quiet=args.quiet) as progress:
         results, summary = run(
             args.target,
-            step=args.step,
-            stop=args.stop,
-            start=args.start,
-            algorithm=args.algorithm,
-            parameters=overrides,
-            out_dir=out,
-            figures=not args.no_figures,
-            svg=args.svg,
-            echo=echo_to(out, say=progress.write),
-            progress=progress,
-            derivatives=False if args.no_derivatives else None,
-            record=args.record,
-            output_interval=args.output_interval,
-            notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
+            from_arguments(
+                RunOptions,
+                args,
+                out_dir=out,
+                progress=progress,
+                echo=echo_to(out, say=progress.write),
+                notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
+            ),
         )
-    if args.mat:
-        results.to_mat(out / "results.mat")
     settings = summary["settings"]
     print(
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
@@ -423,9 +369,8 @@ def report(summary) -> int:
 
 def _export(args) -> int:
     from .export import export_ssp
-    from .system.parameters import parse_set
 
-    print(export_ssp(args.target, args.out, parse_set(args.set)))
+    print(export_ssp(args.target, args.out, dict(args.parameters or ())))
     return 0
 
 

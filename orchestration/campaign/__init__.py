@@ -320,15 +320,7 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
         print(f"campaign: the nominal run in campaign.json {differs}: made again", file=sys.stderr)
     print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
     try:
-        _, summary = run(
-            spec.target,
-            step=spec.step,
-            stop=spec.stop,
-            algorithm=spec.algorithm,
-            parameters=parameters,
-            figures=False,
-            build=False,
-        )
+        _, summary = run(spec.target, plan.run_options(grid))
     except (Exception, KeyboardInterrupt) as failure:  # the runs are made: not worth failing
         if isinstance(failure, Interrupted):
             engine.INTERRUPTS.signals.append(failure.signal)

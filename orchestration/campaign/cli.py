@@ -11,7 +11,7 @@ import argparse
 import signal
 from pathlib import Path
 
-from ..cli import ALGORITHM
+from ..cosim.options import add_flags, from_arguments
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
 
@@ -28,23 +28,7 @@ def add_parser(commands) -> argparse.ArgumentParser:
         "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.",
     )
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
-    p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
-    p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
-    p.add_argument(
-        "--vary",
-        action="append",
-        default=[],
-        metavar="INSTANCE.VAR=DIST",
-        help="disperse a parameter (DIST above); repeat for more",
-    )
-    p.add_argument(
-        "--dispersions",
-        action="append",
-        default=[],
-        type=Path,
-        metavar="FILE",
-        help='TOML/JSON file with a [vary] table of "Instance.var" = "DIST"',
-    )
+    add_flags(p, Spec)
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, help="local worker processes (default: cores)")
     where.add_argument(
@@ -63,30 +47,12 @@ def add_parser(commands) -> argparse.ArgumentParser:
         help="serve Dask's dashboard of the LocalCluster there, e.g. 127.0.0.1:8787 "
         "(default: none)",
     )
-    p.add_argument(
-        "--keep",
-        action="append",
-        default=[],
-        metavar="SIGNAL",
-        help="keep this output per run (signals.npy, envelope figure); a whole "
-        "vector (SatelliteDynamics.w_BO_B) or one element",
-    )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
     p.add_argument(
         "--resume",
         action="store_true",
         help="continue (or extend with a larger --runs) the campaign in --out",
     )
-    p.add_argument("--step", type=float, help="macro step [s]")
-    p.add_argument("--stop", type=float, help="stop time [s]")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="INSTANCE.VAR=VALUE",
-        help="a parameter value of every run (as `agilesat run --set`)",
-    )
-    p.add_argument("--algorithm", **ALGORITHM)
     p.add_argument(
         "-q",
         "--quiet",
@@ -99,30 +65,15 @@ def add_parser(commands) -> argparse.ArgumentParser:
 
 
 def main(args) -> int:
-    from ..system.parameters import parse_set
-
-    overrides = parse_set(args.set)
-    files = [str(f) for f in args.dispersions]
-    if not args.vary and not files:
+    spec = from_arguments(Spec, args, target=args.target)
+    if not spec.vary and not spec.files:
         try:
-            files = [str(path) for path in shipped_files(args.target)]
+            spec.files = [str(path) for path in shipped_files(args.target)]
         except KeyError:
             raise ValueError(
                 f"campaign {args.target}: nothing to vary: give --vary or --dispersions"
             ) from None
-        print(f"dispersions: {', '.join(files)} (the shipped campaign)")
-    spec = Spec(
-        args.target,
-        args.runs,
-        args.seed,
-        list(args.vary),
-        files,
-        overrides,
-        list(args.keep),
-        args.step,
-        args.stop,
-        args.algorithm,
-    )
+        print(f"dispersions: {', '.join(spec.files)} (the shipped campaign)")
     engine.INTERRUPTS.signals.clear()
     for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
         signal.signal(signum, engine.INTERRUPTS)

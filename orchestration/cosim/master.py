@@ -67,6 +67,7 @@ from ..output.results import Results
 from . import loop as compiled
 from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance
+from .options import RunOptions
 from .plan import RunPlan, plan_run, unreadable
 from .signals import at_step, stop_on_signals
 
@@ -185,59 +186,19 @@ class _Node:
             port.read(values)
 
 
-def simulate(
-    system,
-    *,
-    step: float | None = None,
-    stop: float | None = None,
-    algorithm: str | None = None,
-    parameters: dict | None = None,
-    out_dir=None,
-    logging_on: bool = False,
-    echo=None,
-    progress=None,
-    derivatives: bool | None = None,
-    loop: str | None = None,
-    start: float | None = None,
-    record=None,
-    output_interval: float | None = None,
-) -> Results:
-    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
+def simulate(system, options: RunOptions | None = None, /, **keywords) -> Results:
+    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`) with ``options``
+    (:class:`.options.RunOptions`, or its fields as keywords: ``step``, ``stop``,
+    ``parameters``, ``out_dir``, ``record``, ...).
 
-    ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
-    "A.inertia": 3×3) to values that override the system's.  With ``out_dir``,
-    ``results.csv`` is written there row by row and ``results.npz`` at the end, and the
-    Results returned map their rows from disk (memory independent of the run length);
-    without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
-    hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
-    plain scheme, for comparison; default: as the system says, else on).  ``start``: the
-    start time (default the system's); ``record``: the outputs recorded (columns, whole
-    arrays by base name or patterns such as ``"SatelliteDynamics.*"``; default all);
-    ``output_interval``: record every that many seconds (a multiple of the step).
-    ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled" or "python" (:mod:`.loop`).
-    Returns :class:`Results` (``meta`` holds the settings, the units of the columns, the
-    FMU log and the open inputs); raises :class:`SimulationError` (:class:`Interrupted` on
-    SIGINT/SIGTERM) with the rows so far.  The same as
-    ``execute(plan_run(system, ...))`` (:mod:`.plan`).
+    With ``out_dir``, ``results.csv`` is written there row by row and ``results.npz`` at
+    the end, and the Results returned map their rows from disk (memory independent of the
+    run length); without, the rows are held in memory.  Returns :class:`Results`
+    (``meta`` holds the settings, the units of the columns, the FMU log and the open
+    inputs); raises :class:`SimulationError` (:class:`Interrupted` on SIGINT/SIGTERM) with
+    the rows so far.  The same as ``execute(plan_run(system, options))`` (:mod:`.plan`).
     """
-    return execute(
-        plan_run(
-            system,
-            step=step,
-            stop=stop,
-            algorithm=algorithm,
-            parameters=parameters,
-            derivatives=derivatives,
-            loop=loop,
-            out_dir=out_dir,
-            progress=progress,
-            echo=echo,
-            logging_on=logging_on,
-            start=start,
-            record=record,
-            output_interval=output_interval,
-        )
-    )
+    return execute(plan_run(system, RunOptions.given(options, keywords)))
 
 
 def execute(plan: RunPlan) -> Results:
@@ -245,10 +206,10 @@ def execute(plan: RunPlan) -> Results:
     :func:`simulate`."""
     hooked = at_step(plan.progress)  # $AGILESAT_TEST_SIGNAL (tests of interruptions)
     if hooked is not plan.progress:
-        plan = dataclasses.replace(plan, progress=hooked)
+        plan = dataclasses.replace(plan, options=dataclasses.replace(plan.options, progress=hooked))
     held = holding(plan.out_dir) if plan.out_dir is not None else contextlib.nullcontext()
     with held, stop_on_signals() as signals:
-        log = compiled.ClockLog(echo=plan.echo)
+        log = compiled.ClockLog(echo=plan.options.echo)
         log.time = plan.start
         instances = {}
         try:
@@ -406,7 +367,7 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
     log.time = plan.start
     for node in nodes.values():
         inst = node.instance
-        inst.instantiate(plan.logging_on)
+        inst.instantiate(plan.options.logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, plan.start, 1, plan.stop)
     for value in plan.bindings:
         _set_value(instances[value.component], value.name, value.type, value.value)

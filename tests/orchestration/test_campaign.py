@@ -205,7 +205,7 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     made = []
     real = runner.run
-    monkeypatch.setattr(runner, "run", lambda *a, **k: made.append(a) or real(*a, **k))
+    monkeypatch.setattr(runner, "run", lambda *a, **k: made.append(a[0]) or real(*a, **k))
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}  # it sets its own
     try:
         code = cli.main([*COMMAND, "--runs", "3", "--workers", "2", "--out", str(out), "--resume"])
@@ -214,7 +214,7 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
             signal.signal(s, handler)
     assert code in (0, 3)
     err = capsys.readouterr().err
-    assert made == ([] if held == "the same" else [("scan_pitch",)])
+    assert made == ([] if held == "the same" else ["scan_pitch"])
     assert ("(kept: campaign.json has it" in err) == (held == "the same")
     reason = {"another command": "was another command", "other versions": "(numpy)"}
     assert (f"{reason[held]}" in err) if held in reason else ": made again" not in err
@@ -393,12 +393,15 @@ def test_python_api_returns_the_table(dask_cluster, tmp_path):
 REUSE = """
 import sys
 import numpy as np
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign.worker import run_one
-nominal = {"CmgCluster.h_rotor": 16.65}
-other = {"CmgCluster.h_rotor": 17.0, "SatelliteDynamics.inertia[1,1]": 900.0}
+nominal = RunOptions(stop=20.0, parameters={"CmgCluster.h_rotor": 16.65})
+other = RunOptions(
+    stop=20.0, parameters={"CmgCluster.h_rotor": 17.0, "SatelliteDynamics.inertia[1,1]": 900.0}
+)
 keep = ["SatelliteDynamics.q_BI[1]", "SatelliteDynamics.w_BI_B[2]", "CmgCluster.delta[3]"]
 order = sys.argv[1].split(",")
-runs = [run_one(i, "scan_pitch", nominal if k == "a" else other, None, 20.0, None, keep, 401)
+runs = [run_one(i, "scan_pitch", nominal if k == "a" else other, keep, 401)
         for i, k in enumerate(order)]
 assert all(r["status"] == "ok" for r in runs), [r["message"] for r in runs]
 np.save(sys.argv[2], np.stack([r["signals"] for r in runs]))

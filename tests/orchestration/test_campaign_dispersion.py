@@ -513,3 +513,51 @@ def test_a_histogram_says_what_the_metric_is_and_marks_the_requirement_and_the_p
     assert ax.get_title().startswith("max tilt of the pitch axis\n3 runs")
     marks = {line.get_label(): line.get_xdata()[0] for line in ax.lines}
     assert marks == pytest.approx({"requirement (max)": 2.0, "paper": 1.5})
+
+
+@pytest.fixture
+def hidden(fmus, tmp_path):
+    """scan_pitch.ssd with SatelliteDynamics and CmgSteering as FMU files whose names are
+    none of ours (copies: nothing but their model descriptions says what they are, as of
+    a third party's FMUs): the .ssd's path."""
+    from agilesat.orchestration.scenarios import get
+
+    text = get("scan_pitch").ssd.read_text()
+    for name, path in fmus.items():
+        alias = {"SatelliteDynamics": "Hub", "CmgSteering": "Steering"}.get(name)
+        if alias:
+            (tmp_path / f"{alias}.fmu").write_bytes(path.read_bytes())
+            path = tmp_path / f"{alias}.fmu"
+        text = text.replace(f'source="../../fmus/build/{name}.fmu"', f'source="{path}"')
+    (tmp_path / "system.ssd").write_text(text)
+    return str(tmp_path / "system.ssd")
+
+
+def test_a_campaign_of_fmus_not_ours_is_checked_and_drawn_from_their_model_descriptions(hidden):
+    """Shapes, types, start values, named choices and units come from the model
+    descriptions, for any FMU: the same plan as of ours, and the same errors before any
+    run (whole-variable dispersions, names, elements, causality)."""
+    from agilesat.orchestration.scenarios import get
+
+    vary = [
+        "SatelliteDynamics.inertia=inertia(0.03, 1deg)",
+        "CmgSteering.law=choice(PSEUDO_INVERSE, sr_inverse)",
+        "CmgSteering.gimbal_axis=rotate(0.1deg)",
+    ]
+    keep = ["SatelliteDynamics.w_BI_B"]
+    theirs = Plan(Spec(hidden, 5, 3, vary, keep=keep, stop=1.0))
+    ours = Plan(Spec(str(get("scan_pitch").ssd), 5, 3, vary, keep=keep, stop=1.0))
+    assert theirs.fmus["SatelliteDynamics"] == "Hub"
+    assert theirs.kinds == ours.kinds and theirs.units == ours.units
+    assert theirs.units["SatelliteDynamics.w_BI_B[2]"] == "rad/s"
+    for i in range(5):
+        assert theirs.run_values(i) == ours.run_values(i)
+    for text, match in [
+        ("SatelliteDynamics.inertai=normal(1, 0.1)", "Hub has no variable 'inertai'; did you"),
+        ("SatelliteDynamics.inertia[4,4]=normal(1, 0.1)", r"has shape \(3, 3\); elements"),
+        ("SatelliteDynamics.w_BI_B=rotate(1deg)", "Real output; only numeric parameters"),
+        ("CmgSteering.law=choice(FASTEST, 0)", "law must be one of 0 \\(PSEUDO_INVERSE\\)"),
+        ("SatelliteDynamics.inertia=rotate(1deg)", "rotate\\(\\) turns unit vectors"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            Plan(Spec(hidden, 2, vary=[text], stop=1.0))

@@ -2,11 +2,13 @@
 runs' compiled kernels load in it, short beside a run, said in its batch's first record,
 and a warm-up that raises leaves the run its own outcome."""
 
+import dataclasses
 import json
 
 import pytest
 
 from agilesat.components.jit import PAYS_AFTER
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign.report import warm_ups
 from agilesat.orchestration.campaign.worker import (
     WARM_UP_FRACTION,
@@ -46,23 +48,24 @@ def test_the_campaign_summary_counts_every_warm_up_and_its_error():
 
 BATCHES = """
 import json, sys
-from agilesat.orchestration import runner
+from agilesat.orchestration import RunOptions, runner
 from agilesat.orchestration.campaign.worker import run_batch
 
 if sys.argv[1] == "raising":
-    run = runner.run
+    planned = runner.planned
     calls = []
 
-    def first_raises(*args, **kwargs):
-        calls.append(kwargs["stop"])
+    def first_raises(target, options):
+        calls.append(options.stop)
         if len(calls) == 1:
             raise RuntimeError("the warm-up broke")
-        return run(*args, **kwargs)
+        return planned(target, options)
 
-    runner.run = first_raises
+    runner.planned = first_raises
 batch = [(0, {}), (1, {"SatelliteDynamics.rate0[2]": 0.001})]
-first = run_batch(batch, "scan_pitch", 0.05, 20.0, None, [], 401, share=1000)
-second = run_batch([(2, {})], "scan_pitch", 0.05, 20.0, None, [], 401, share=1000)
+options = RunOptions(step=0.05, stop=20.0)
+first = run_batch(batch, "scan_pitch", options, [], 401, share=1000)
+second = run_batch([(2, {})], "scan_pitch", options, [], 401, share=1000)
 print(json.dumps(first + second))
 """
 
@@ -96,17 +99,17 @@ def test_a_warm_up_that_raises_is_said_and_the_run_makes_its_own_outcome(fmus):
 
 HOOKED = """
 import sys
-from agilesat.orchestration import runner
+from agilesat.orchestration import RunOptions, runner
 from agilesat.orchestration.campaign.worker import run_batch
 
-run = runner.run
+planned = runner.planned
 
-def said(*args, **kwargs):
-    print("run to", kwargs["stop"], flush=True)
-    return run(*args, **kwargs)
+def said(target, options):
+    print("run to", options.stop, flush=True)
+    return planned(target, options)
 
-runner.run = said
-run_batch([(0, {})], "scan_pitch", 0.05, 20.0, None, [], 401, share=1000)
+runner.planned = said
+run_batch([(0, {})], "scan_pitch", RunOptions(step=0.05, stop=20.0), [], 401, share=1000)
 print("done", flush=True)
 """
 
@@ -126,18 +129,26 @@ def test_the_signal_hook_of_the_warm_up_is_run_zero(fmus, monkeypatch, k, calls)
 
 @pytest.fixture
 def calls(monkeypatch):
-    """runner.run replaced by a recorder (a run that flies), in a process that has made no
-    run and warmed up for nothing: [(target, stop, parameters), ...]."""
+    """runner.planned replaced by a recorder of runs (each flies), in a process that has
+    made no run and warmed up for nothing: [(target, stop, parameters), ...]."""
     from agilesat.orchestration import runner
     from agilesat.orchestration.campaign import worker
 
     made = []
 
-    def recorded(target, **kwargs):
-        made.append((target, kwargs["stop"], kwargs["parameters"]))
-        return None, {"status": "ok"}
+    class Recorded:
+        def __init__(self, target, options):
+            self.target, self.options = target, options
 
-    monkeypatch.setattr(runner, "run", recorded)
+        def swapped(self, values):
+            parameters = {**self.options.parameters, **values}
+            return Recorded(self.target, dataclasses.replace(self.options, parameters=parameters))
+
+        def run(self, wall=None):
+            made.append((self.target, self.options.stop, self.options.parameters))
+            return None, {"status": "ok"}
+
+    monkeypatch.setattr(runner, "planned", Recorded)
     monkeypatch.setattr(worker, "_started", 0)
     monkeypatch.setattr(worker, "_warmed", set(), raising=False)
     monkeypatch.setenv("AGILESAT_JIT_RUNS", "1")
@@ -148,9 +159,10 @@ def test_a_process_warms_up_once_per_target_on_its_first_runs_parameters(calls):
     from agilesat.orchestration.campaign.worker import run_batch
 
     first = {"SatelliteDynamics.rate0[2]": 0.001}
-    a = run_batch([(0, first), (1, {})], "scan_pitch", 0.05, 20.0, None, [], 401, 1000)
-    b = run_batch([(2, {})], "scan_pitch", 0.05, 20.0, None, [], 401, 1000)
-    c = run_batch([(0, {})], "video_sar", 0.05, 200.0, None, [], 4001, 1000)
+    scan, sar = RunOptions(step=0.05, stop=20.0), RunOptions(step=0.05, stop=200.0)
+    a = run_batch([(0, first), (1, {})], "scan_pitch", scan, [], 401, 1000)
+    b = run_batch([(2, {})], "scan_pitch", scan, [], 401, 1000)
+    c = run_batch([(0, {})], "video_sar", sar, [], 4001, 1000)
     steps = warm_up_steps(400, 1000)
     assert calls[0] == ("scan_pitch", pytest.approx(steps * 0.05), first)  # the warm-up
     assert [call[0] for call in calls] == ["scan_pitch"] * 4 + ["video_sar"] * 2
@@ -161,7 +173,7 @@ def test_a_process_warms_up_once_per_target_on_its_first_runs_parameters(calls):
 def test_a_warm_up_without_a_step_or_stop_is_said_not_raised(calls):
     from agilesat.orchestration.campaign.worker import run_batch
 
-    (record,) = run_batch([(0, {})], "scan_pitch", None, None, None, [], 0, 1)
+    (record,) = run_batch([(0, {})], "scan_pitch", RunOptions(), [], 0, 1)
     assert record["warm_up_error"].startswith("TypeError")
     assert record["status"] == "ok" and len(calls) == 1  # the run itself, at its defaults
 

@@ -19,8 +19,9 @@ EDITS = """
 import json, sys
 from pathlib import Path
 import numpy as np
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.system import ssp
-from agilesat.orchestration.campaign.worker import run_one
+from agilesat.orchestration.campaign.worker import run_batch, run_one
 
 ssd, ssv = Path(sys.argv[1]), Path(sys.argv[2])
 reads = []
@@ -29,7 +30,7 @@ ssp._read_ssd = lambda path, *a, **kw: reads.append(Path(path).name) or read_ssd
 keep = ["SatelliteDynamics.w_BI_B[2]", "CmgCluster.delta[1]", "CmgCluster.h[2]"]
 
 def signals(parameters=None):
-    r = run_one(0, str(ssd), parameters or {}, None, 4.0, None, keep, 81)
+    r = run_one(0, str(ssd), RunOptions(stop=4.0, parameters=parameters or {}), keep, 81)
     assert r["status"] == "ok", r["message"]
     return r["signals"]
 
@@ -50,8 +51,15 @@ edit(ssd, G.replace("0.0", "0.01"), G)
 edit(ssv, R.replace("0.0", "0.001"), R)
 set_gimbal = signals({"CmgCluster.delta0[2]": 0.01})
 set_both = signals({"CmgCluster.delta0[2]": 0.01, "SatelliteDynamics.rate0[2]": 0.001})
+runs = reads[:]
+run_batch([(0, {})], str(ssd), RunOptions(stop=4.0), keep, 81)  # the process's warm-up
+batch = reads[:]
+made = run_batch([(k, {}) for k in range(3)], str(ssd), RunOptions(stop=4.0), keep, 81)
+assert all(r["status"] == "ok" for r in made), made
 print(json.dumps({
-    "reads": reads,
+    "runs": runs,
+    "batch": reads[len(batch):],
+    "batched": bool(all(np.array_equal(r["signals"], nominal) for r in made)),
     "again": bool(np.array_equal(nominal, again)),
     "gimbal differs": not np.array_equal(gimbal, nominal),
     "both differs": not np.array_equal(both, gimbal),
@@ -91,21 +99,21 @@ def system_with_ssv(fmus, tmp_path):
     return ssd, ssv
 
 
-def test_a_worker_reads_the_system_once_per_content(system_with_ssv):
-    """Runs of one worker read the .ssd once while it and its .ssv are unchanged; an edit
-    of either is read again and gives the result of setting the same value (--set) on
-    the original files."""
+def test_a_worker_reads_the_system_once_per_batch(system_with_ssv):
+    """A batch of runs plans them once: it reads the .ssd once.  Each batch reads it: an
+    edit of the .ssd or its .ssv between two is read, and gives the result of setting the
+    same value (--set) on the original files."""
     result = run_python(EDITS, *system_with_ssv)
     assert result.returncode == 0, result.stderr
     facts = json.loads(result.stdout.splitlines()[-1])
-    # nominal (read), again (kept), ssd edited (read), ssv edited (read), both restored
-    # (the nominal content: kept)
-    assert facts.pop("reads") == ["system.ssd"] * 3
+    assert facts.pop("runs") == ["system.ssd"] * 6  # run_one: a batch of one
+    assert facts.pop("batch") == ["system.ssd"]
     assert all(facts.values()), facts
 
 
 QUIET = """
 import json, os, resource
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign import engine
 from agilesat.orchestration.campaign.worker import run_one
 
@@ -116,10 +124,10 @@ def facts(dask_worker):
     return sorted(dask_worker.periodic_callbacks), tick, trimmed
 
 def faults():
-    run_one(0, "scan_pitch", {}, None, 20.0, None, [], 0)
+    run_one(0, "scan_pitch", RunOptions(stop=20.0), [], 0)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
     for i in range(3):
-        run_one(i, "scan_pitch", {}, None, 20.0, None, [], 0)
+        run_one(i, "scan_pitch", RunOptions(stop=20.0), [], 0)
     return (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before) / 3
 
 with engine.cluster(1) as client:
@@ -158,7 +166,7 @@ plan = Plan(Spec("scan_pitch", warm + runs, 1, vary, stop=0.5))
 keep = ["SatelliteDynamics.w_BI_B[2]"]
 
 def make(i):
-    r = run_one(i, "scan_pitch", plan.parameters(i), None, 0.5, None, keep, 11)
+    r = run_one(i, "scan_pitch", plan.run_options(plan.run_values(i)), keep, 11)
     assert r["status"] == "ok", r["message"]
 
 tracemalloc.start()
@@ -188,14 +196,15 @@ def test_a_worker_keeps_nothing_per_run():
 BINDINGS = """
 import json
 from fmpy.fmi1 import _FMU
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign.worker import run_one
 
 bound = []
 load = _FMU._loadFunctions  # fmpy's inspect.signature binding of every FMI function
 _FMU._loadFunctions = lambda self: bound.append(self.instanceName) or load(self)
 keep = ["SatelliteDynamics.w_BI_B[2]"]
-runs = [run_one(i, "scan_pitch", {"CmgCluster.h_rotor": h}, None, 1.0, None, keep, 21)
-        for i, h in enumerate((16.65, 17.0, 16.65))]
+options = [RunOptions(stop=1.0, parameters={"CmgCluster.h_rotor": h}) for h in (16.65, 17.0, 16.65)]
+runs = [run_one(i, "scan_pitch", chosen, keep, 21) for i, chosen in enumerate(options)]
 assert all(r["status"] == "ok" for r in runs), [r["message"] for r in runs]
 print(json.dumps({"bound": bound, "same": (runs[0]["signals"] == runs[2]["signals"]).all().item()}))
 """

@@ -258,10 +258,12 @@ def test_the_nominal_run_of_a_one_point_grid_is_at_that_point(monkeypatch, capsy
 
     given = []
     summary = {"metrics": {"m": {"value": 1.0}}}
-    monkeypatch.setattr(runner, "run", lambda target, **kw: given.append(kw) or (None, summary))
+    monkeypatch.setattr(
+        runner, "run", lambda target, options: given.append(options) or (None, summary)
+    )
     vary = ["CmgCluster.rate_limit=values(0.3)", "CmgCluster.h_rotor=*normal(1, 0.005)"]
     nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, vary=vary, stop=40.0)))
-    assert given[0]["parameters"] == {"CmgCluster.rate_limit": 0.3}
+    assert given[0].parameters == {"CmgCluster.rate_limit": 0.3}
     assert nominal == {
         "command": "agilesat run scan_pitch --stop 40.0 --set CmgCluster.rate_limit=0.3",
         "metrics": {"m": 1.0},
@@ -279,7 +281,7 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.cosim.master import Interrupted
 
-    def stopped(target, **kw):
+    def stopped(target, options):
         raise Interrupted("interrupted by SIGTERM at t = 3 s", None, signal.SIGTERM)
 
     monkeypatch.setattr(runner, "run", stopped)
@@ -289,7 +291,7 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     assert engine.INTERRUPTS.signals == [signal.SIGTERM]
     assert "no nominal run (Interrupted: interrupted by SIGTERM" in capsys.readouterr().err
 
-    def typo(target, **kw):
+    def typo(target, options):
         raise KeyboardInterrupt  # not a signal the campaign's handler recorded: not hidden
 
     monkeypatch.setattr(runner, "run", typo)

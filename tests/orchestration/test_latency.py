@@ -76,9 +76,10 @@ _RUN_PATH = """
 import json, sys
 from agilesat.orchestration.cli import main
 from agilesat.orchestration.campaign.worker import run_batch
+from agilesat.orchestration.cosim.options import RunOptions
 assert main(["run", "video_sar", "--stop", "1", "-q", "--no-figures", "--out", sys.argv[1]]) == 0
 after_run = "scipy.stats" in sys.modules
-(record,) = run_batch([(0, {})], "video_sar", 0.05, 1.0, None, [], 21, share=1109)
+(record,) = run_batch([(0, {})], "video_sar", RunOptions(step=0.05, stop=1.0), [], 21, share=1109)
 print(json.dumps([after_run, "scipy.stats" in sys.modules, record["status"]]))
 """
 

@@ -102,7 +102,9 @@ def test_every_command_and_option_says_what_it_does_and_its_default():
                 problems.append(f"{' '.join(path)}: no description in its --help")
             continue
         name = f"{' '.join(path)} {'/'.join(item.option_strings) or item.dest}"
-        trivial = item.default in (None, False, [], ())
+        trivial = item.default in (None, False, [], ()) or (  # --no-figures: figures=True
+            isinstance(item, argparse._StoreFalseAction) and item.default is True
+        )
         if not item.help:
             problems.append(f"{name}: no help")
         elif not trivial and "default" not in item.help:

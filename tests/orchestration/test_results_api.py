@@ -125,3 +125,27 @@ def test_matlab_file_has_one_struct_per_instance(results, tmp_path):
     assert np.array_equal(sat.inertia, results["Sat.inertia"])
     assert np.array_equal(mat["time"][:, 0], results.time)
     assert str(mat["units"][0, 0].Sat[0, 0].w_BI_B[0]) == "rad/s"
+
+
+def test_display_units_are_those_the_model_descriptions_define(fmus, monkeypatch):
+    """A metric shown in a display unit is converted by the factor its FMU's model
+    description gives (any FMU's: here a gyro noise density, and a third party's "mm"),
+    never by our variable tables; one that does not convert is shown in its SI unit."""
+    from types import SimpleNamespace
+
+    from agilesat.orchestration.output.summary import format_value
+    from agilesat.orchestration.system import units
+    from agilesat.orchestration.system.description import Description
+
+    monkeypatch.setattr(units, "DECLARED", {})
+    shown = format_value(1e-4, "rad/s0.5", "deg/h0.5")
+    assert shown == "0.0001 " + units.pretty("rad/s0.5")  # no model description read yet
+    Description("Gyro", fmus["Gyro"])
+    shown = format_value(1e-4, "rad/s0.5", "deg/h0.5")
+    assert shown == "0.3438 " + units.pretty("deg/h0.5")
+    millimetre = SimpleNamespace(name="mm", factor=1000.0, offset=0.0)
+    celsius = SimpleNamespace(name="degC", factor=1.0, offset=-273.15)
+    units.declare([SimpleNamespace(name="m", displayUnits=[millimetre])])
+    units.declare([SimpleNamespace(name="K", displayUnits=[celsius])])
+    assert format_value(0.0021, "m", "mm") == "2.1 mm"
+    assert format_value(300.0, "K", "degC") == "300 K"  # an offset: not a factor
