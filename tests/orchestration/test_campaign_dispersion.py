@@ -474,7 +474,7 @@ def test_progress_of_a_resumed_campaign_counts_the_earlier_failures(capsys):
 
 
 def test_the_failure_list_says_how_many_more_there_are():
-    from agilesat.orchestration.campaign.cli import format_campaign
+    from agilesat.orchestration.cli.campaign import format_campaign
 
     failures = [
         {"index": i, "status": "failed", "message": f"m{i}", "replay": ""} for i in range(8)

@@ -179,7 +179,7 @@ def test_a_warm_up_without_a_step_or_stop_is_said_not_raised(calls):
 
 
 def test_the_campaign_report_prints_the_warm_ups_and_what_they_raised():
-    from agilesat.orchestration.campaign.cli import format_campaign
+    from agilesat.orchestration.cli.campaign import format_campaign
 
     summary = {
         "runs": {"planned": 2, "made": 2, "ok": 2, "failed": 0, "error": 0, "lost": 0},

@@ -46,21 +46,6 @@ def test_the_package_names_are_imported_on_first_use():
     assert "fmpy" in _imported_by("from agilesat.orchestration import simulate")
 
 
-@pytest.mark.slow  # fresh interpreters: over 1 s
-def test_campaign_is_named_in_help_as_the_campaign_package_says():
-    code = (
-        "import argparse\n"
-        "from agilesat.orchestration import cli\n"
-        "from agilesat.orchestration.campaign import cli as campaign_cli\n"
-        "commands = argparse.ArgumentParser().add_subparsers()\n"
-        "campaign_cli.add_parser(commands)\n"
-        "action = commands._choices_actions[0]\n"
-        "assert action.help == cli.CAMPAIGN_HELP, (action.help, cli.CAMPAIGN_HELP)\n"
-    )
-    result = run_python(code)
-    assert result.returncode == 0, result.stderr
-
-
 @pytest.mark.slow
 @pytest.mark.integration
 def test_a_run_without_figures_loads_no_matplotlib(fmus, tmp_path):

@@ -128,7 +128,7 @@ def test_generate_check_in_an_installed_package_checks_what_it_ships(tmp_path, m
 
     monkeypatch.setattr(build, "generated_files", lambda: {tmp_path / "INTERFACES.md": bytes})
     assert cli.main(["generate", "--check"]) == 1  # a source checkout: missing is stale
-    monkeypatch.setattr(cli, "source_checkout", lambda: False)
+    monkeypatch.setattr(cli.system, "source_checkout", lambda: False)
     assert cli.main(["generate", "--check"]) == 0
     assert cli.main(["generate"]) == 1  # writes into a checkout only
 

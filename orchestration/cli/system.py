@@ -1,29 +1,14 @@
-"""``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
-
-Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
-2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
-by SIGTERM (everything recorded so far is kept, and the summary says what was not
-written; a second signal changes nothing).
-"""
+"""``agilesat list|info|build|validate|run|plot|export|generate``: the commands on FMUs,
+scenarios, mission files and system files, and the generated files."""
 
 from __future__ import annotations
 
-import argparse
 import os
-import signal
 import sys
-from contextlib import nullcontext
 from pathlib import Path
 
-from .cosim.options import RunOptions, add_flags, from_arguments, setting
-from .cosim.signals import interruptible
-from .provenance import version
-from .studies import cli as study_cli
+from ..cosim.options import RunOptions, add_flags, from_arguments, setting
 
-#: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
-#: master are imported only to run a campaign; a test checks it is the campaign's own)
-CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
 #: what TARGET may be (``mission.targets``)
 TARGETS = (
     "a scenario[:variant] (`agilesat list`), a mission file path/to/mission.py[:variant], "
@@ -31,101 +16,11 @@ TARGETS = (
 )
 
 
-def main(argv=None) -> int:
-    """The command line.  Nothing heavy is imported here: each command imports what it
-    uses (``agilesat --help`` and ``agilesat run --no-figures`` load no matplotlib)."""
-    program = argv is None  # the process ends with the command
-    argv = sys.argv[1:] if argv is None else list(argv)
-    campaign = bool(argv) and argv[0] == "campaign"
-    if campaign:
-        from .campaign import cli as campaign_cli
-    args = _parser(campaign).parse_args(argv)
-    # a signal stops a command at once until a run writes, then is a flag (signals.py);
-    # a campaign handles its own (campaign/cli.py)
-    with nullcontext() if campaign else interruptible(restore=not program) as signals:
-        try:
-            code = {
-                "list": _list,
-                "info": _info,
-                "build": _build,
-                "validate": _validate,
-                "run": _run,
-                "plot": _plot,
-                "export": _export,
-                "generate": _generate,
-                **study_cli.COMMANDS,
-                "pointing": _pointing,
-                "campaign": campaign_cli.main if campaign else None,
-            }[args.command](args)
-        except KeyboardInterrupt as exc:
-            print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)
-            return 128 + getattr(exc, "signal", signal.SIGINT)
-        except UsageError as exc:
-            print(f"agilesat {args.command}: error: {exc}", file=sys.stderr)
-            return 2
-        except (KeyError, ValueError, RuntimeError, OSError, ImportError) as exc:
-            if _interrupted(exc):
-                print(f"agilesat {args.command}: {exc}", file=sys.stderr)
-                return 128 + exc.signal
-            message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-            print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
-            return 1
-        if signals is not None and signals.signal is not None:  # at the very end
-            name = signal.Signals(signals.signal).name
-            print(
-                f"agilesat {args.command}: {name} at the end: everything was written",
-                file=sys.stderr,
-            )
-            return 128 + signals.signal
-        return code
-
-
 class UsageError(ValueError):
     """A command line argparse cannot judge wrong (exit 2, as argparse's own)."""
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """A run stopped by SIGINT/SIGTERM (master.Interrupted; only a command that imported
-    the master can raise one)."""
-    master = sys.modules.get(f"{__package__}.cosim.master")
-    return master is not None and isinstance(exc, master.Interrupted)
-
-
-def _parser(campaign: bool = True) -> argparse.ArgumentParser:
-    """The command line: the options of every subcommand (each one's --help); without
-    ``campaign``, `agilesat campaign` is only named (its options need the campaign
-    package)."""
-    doc = __doc__.split("\n\n")
-    parser = argparse.ArgumentParser(
-        prog="agilesat",
-        description=doc[0].replace("``", ""),
-        epilog=doc[1].strip(),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    parser.add_argument("--version", action="version", version=version())
-    quiet = argparse.ArgumentParser(add_help=False)
-    quiet.add_argument(
-        "-q", "--quiet", action="store_true", help="no progress bar or progress lines"
-    )
-    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    _system_commands(commands, quiet)
-    study_cli.add_parsers(commands, quiet)
-    from .output import recorded_cli
-
-    recorded_cli.add_parser(commands)
-    if campaign:
-        from .campaign import cli as campaign_cli
-
-        campaign_cli.add_parser(commands)
-    else:
-        commands.add_parser("campaign", help=CAMPAIGN_HELP)
-    listed = {c.dest: c.help for c in commands._choices_actions}
-    for name, command in commands.choices.items():  # each command's --help says what it does
-        command.description = command.description or listed.get(name)
-    return parser
-
-
-def _system_commands(commands, quiet) -> None:
+def add_parsers(commands, quiet) -> None:
     """Subcommands on FMUs, scenarios and system files, and the generated files."""
     commands.add_parser("list", help="the scenarios and their variants")
     info = commands.add_parser(
@@ -206,23 +101,23 @@ def _system_commands(commands, quiet) -> None:
 
 
 def _list(args) -> int:
-    from .info import listing
+    from ..info import listing
 
     print(listing())
     return 0
 
 
 def _info(args) -> int:
-    from .info import info
+    from ..info import info
 
     print(info(args.target))
     return 0
 
 
 def _build(args) -> int:
-    from ..fmus import FMUS
-    from ..fmus.build import BUILD_DIR, build_fmu
-    from .output.progress import Progress
+    from ...fmus import FMUS
+    from ...fmus.build import BUILD_DIR, build_fmu
+    from ..output.progress import Progress
 
     models = [n for n in args.names if n.endswith(".py") or ".py:" in n]
     if models:
@@ -250,7 +145,7 @@ def _build(args) -> int:
 def _build_models(models: list[str], args) -> int:
     """``agilesat build path/to/model.py[:Class] ...``: each model file's classes as FMUs,
     validated (:mod:`..fmus.user_models`)."""
-    from ..fmus.user_models import build_model
+    from ...fmus.user_models import build_model
 
     others = [n for n in args.names if n not in models]
     if others:
@@ -265,9 +160,9 @@ def _build_models(models: list[str], args) -> int:
 def _validate(args) -> int:
     from fmpy.validation import validate_fmu
 
-    from ..fmus import FMUS
-    from ..fmus.build import BUILD_DIR, build_fmu
-    from .system.parameters import did_you_mean
+    from ...fmus import FMUS
+    from ...fmus.build import BUILD_DIR, build_fmu
+    from ..system.parameters import did_you_mean
 
     paths = []
     for given in args.fmus:
@@ -295,8 +190,8 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
-    from .output.progress import Progress
-    from .runner import run
+    from ..output.progress import Progress
+    from ..runner import run
 
     out = args.out_dir or Path("out") / args.target.replace(":", "-").replace("/", "_")
     with Progress(args.target, quiet=args.quiet) as progress:
@@ -319,15 +214,9 @@ def _run(args) -> int:
     return report(summary)
 
 
-def _pointing(args) -> int:
-    from .output import recorded_cli
-
-    return recorded_cli.main(args)
-
-
 def _plot(args) -> int:
-    from .output import plots
-    from .output.results import ColumnError, Results
+    from ..output import plots
+    from ..output.results import ColumnError, Results
 
     runs = [Path(item) for item in args.items if Path(item).is_dir()]
     variables = [item for item in args.items if not Path(item).is_dir()]
@@ -361,14 +250,14 @@ def _plot(args) -> int:
 
 def report(summary) -> int:
     """Print the summary's numbers; the exit status of a run."""
-    from .output.summary import format_summary
+    from ..output.summary import format_summary
 
     print(format_summary(summary))
     return 3 if summary.get("status") == "failed" else 0
 
 
 def _export(args) -> int:
-    from .export import export_ssp
+    from ..export import export_ssp
 
     print(export_ssp(args.target, args.out, dict(args.parameters or ())))
     return 0
@@ -392,8 +281,8 @@ def echo_to(out: Path, limit: int = 5, say=None):
 
 
 def _generate(args) -> int:
-    from ..fmus.build import generated_files
-    from .mission.targets import generated_systems
+    from ...fmus.build import generated_files
+    from ..mission.targets import generated_systems
 
     files = generated_systems()
     files.update(generated_files())
@@ -401,7 +290,7 @@ def _generate(args) -> int:
     if not checkout and not args.check:
         raise ValueError(
             "generate writes the generated files of a source checkout of agilesat; "
-            f"this one is installed ({Path(__file__).parent}): `generate --check` checks it"
+            f"this one is installed ({Path(__file__).parents[1]}): `generate --check` checks it"
         )
     stale = []
     for path, render in files.items():
@@ -423,4 +312,16 @@ def _generate(args) -> int:
 def source_checkout() -> bool:
     """Whether agilesat runs from a source checkout (an editable install), where the
     generated files all are; an installed package has only those it ships."""
-    return (Path(__file__).resolve().parent.parent / "pyproject.toml").is_file()
+    return (Path(__file__).resolve().parents[2] / "pyproject.toml").is_file()
+
+
+COMMANDS = {
+    "list": _list,
+    "info": _info,
+    "build": _build,
+    "validate": _validate,
+    "run": _run,
+    "plot": _plot,
+    "export": _export,
+    "generate": _generate,
+}

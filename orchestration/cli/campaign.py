@@ -7,19 +7,19 @@ failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
 
 from __future__ import annotations
 
-import argparse
 import signal
 from pathlib import Path
 
+from ..campaign import Spec, engine, run_campaign, shipped_files
+from ..campaign.report import display
 from ..cosim.options import add_flags, from_arguments
-from . import Spec, engine, run_campaign, shipped_files
-from .report import display
+from . import CAMPAIGN_HELP
 
 
-def add_parser(commands) -> argparse.ArgumentParser:
+def add_parsers(commands, quiet) -> None:
     p = commands.add_parser(
         "campaign",
-        help="Monte Carlo campaign or parameter sweep of a scenario on Dask",
+        help=CAMPAIGN_HELP,
         description="Run TARGET many times with dispersed parameters.  DIST: normal(mean,sd), "
         "uniform(lo,hi), choice(a,b,...), integers(lo,hi) (seeds), rotate(sd) (unit "
         "vectors), inertia(sd_rel,sd_angle) "
@@ -61,7 +61,6 @@ def add_parser(commands) -> argparse.ArgumentParser:
         action="store_true",
         help="no progress bar or progress lines (--no-progress: the same)",
     )
-    return p
 
 
 def main(args) -> int:
@@ -203,3 +202,6 @@ def format_campaign(summary: dict) -> str:
     if summary["failures"]:
         lines.append('  (campaign.json "failures" has the `agilesat run` command replaying each)')
     return "\n".join(lines)
+
+
+COMMANDS = {"campaign": main}

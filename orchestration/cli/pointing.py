@@ -28,7 +28,7 @@ def angle(text: str) -> float:
     return float(match.group(1)) * ANGLE_UNITS[unit or "rad"]
 
 
-def add_parser(commands) -> None:
+def add_parsers(commands, quiet) -> None:
     p = commands.add_parser(
         "pointing",
         help="ECSS-E-ST-60-10C pointing indices (APE, RPE, ... AKE, RKE, ...) of a recorded "
@@ -86,8 +86,8 @@ def add_parser(commands) -> None:
 def main(args) -> int:
     from ..mission.requirements import Pointing
     from ..mission.targets import resolve
+    from ..output.recorded import evaluate, load
     from ..pointing import PointingRequirement
-    from .recorded import evaluate, load
 
     recorded = load(args.directory)
     what = f"{recorded.runs} run(s)" + (
@@ -161,7 +161,7 @@ def figure(path: Path, title: str, results: list, unit: str) -> Path:
     or run (temporal), with the requirement; mixed statistics have none (left out)."""
     import numpy as np
 
-    from . import plots
+    from ..output import plots
 
     scale, rows, axes = ANGLE_UNITS[unit], [], set()
     for name, result in results:
@@ -180,3 +180,6 @@ def figure(path: Path, title: str, results: list, unit: str) -> Path:
     if not rows:
         raise ValueError("no index with a profile to draw (a mixed statistic has none)")
     return plots.panels(path, title, rows, xlabel=" or ".join(sorted(axes, reverse=True)))
+
+
+COMMANDS = {"pointing": main}

@@ -137,10 +137,10 @@ def add_parsers(commands, quiet) -> None:
 
 
 def _stare(args) -> int:
-    from ..cli import echo_to, report
     from ..output.progress import Progress
     from ..runner import run
-    from .stare import pass_scenario, search_start, tle_pass
+    from ..studies.stare import pass_scenario, search_start, tle_pass
+    from .system import echo_to, report
 
     lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
     if len(lines) not in (2, 3):
@@ -200,7 +200,7 @@ def _overlap(args, altitude: float) -> None:
     import numpy as np
 
     from ..output import plots
-    from . import mission
+    from ..studies import mission
 
     look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
     # the paper's carrier, resolution and target latitude; altitude and look as asked
@@ -240,7 +240,7 @@ def _overlap(args, altitude: float) -> None:
 
 def _walker(args, altitude: float) -> None:
     """Walker sizing (eqs 14-20) under both readings of the paper's β."""
-    from . import mission
+    from ..studies import mission
 
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")
@@ -262,7 +262,7 @@ def _walker(args, altitude: float) -> None:
 
 
 def _size_flywheel(args) -> int:
-    from .sizing import size_flywheel
+    from ..studies.sizing import size_flywheel
 
     print("wheel torque limit [N·m]   accuracy [deg]   stability [deg/s]   momentum [N·m·s]")
     result = size_flywheel(
