@@ -84,7 +84,8 @@ def test_kept_signals_grow_with_the_campaign_and_never_shrink(fmus, tmp_path):
     ],
 )
 def test_a_nominal_run_in_campaign_json_is_kept_only_if_it_is_this_one(held, why):
-    from agilesat.orchestration.campaign import _not_this_nominal_run, versions
+    from agilesat.orchestration.campaign.nominal import _not_this_nominal_run
+    from agilesat.orchestration.campaign.replay import versions
 
     said = _not_this_nominal_run(held, "c", versions())
     assert said is None if why is None else why in said

@@ -226,7 +226,7 @@ def test_a_campaign_histogram_marks_the_nominal_run_with_its_legend_off_the_bars
 
 @pytest.mark.slow
 def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
-    from agilesat.orchestration.campaign import nominal_run
+    from agilesat.orchestration.campaign.nominal import nominal_run
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.runner import run
 
@@ -253,7 +253,7 @@ def test_the_nominal_run_of_a_one_point_grid_is_at_that_point(monkeypatch, capsy
     """A grid of one value is the campaign's setting, not a dispersion: the nominal run
     sets it too (it ran at the system's value), and says so on stderr."""
     from agilesat.orchestration import runner
-    from agilesat.orchestration.campaign import nominal_run
+    from agilesat.orchestration.campaign.nominal import nominal_run
     from agilesat.orchestration.campaign.plan import Plan, Spec
 
     given = []
@@ -277,7 +277,8 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     import signal
 
     from agilesat.orchestration import runner
-    from agilesat.orchestration.campaign import engine, nominal_run
+    from agilesat.orchestration.campaign import engine
+    from agilesat.orchestration.campaign.nominal import nominal_run
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.cosim.master import Interrupted
 
@@ -311,8 +312,8 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     ],
 )
 def test_a_limit_the_campaign_changes_is_not_drawn_at_the_systems_value(settings, limit_drawn):
-    from agilesat.orchestration.campaign import _bounds
     from agilesat.orchestration.campaign.plan import Plan, Spec
+    from agilesat.orchestration.campaign.summary import _bounds
 
     bounds = _bounds(Plan(Spec("scan_pitch", runs=2, stop=40.0, **settings)))
     assert [b.requirement for b in bounds if not b.limit] == ["imaging_pitch_rate_mean"]

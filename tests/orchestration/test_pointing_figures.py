@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agilesat.orchestration.campaign import ensemble_entry, report
+from agilesat.orchestration.campaign import report
 from agilesat.orchestration.campaign.pointing_figures import campaign_figures
+from agilesat.orchestration.campaign.summary import ensemble_entry
 from agilesat.orchestration.mission.requirements import Pointing
 from agilesat.orchestration.mission.scenario import Scenario, Variant
 from agilesat.orchestration.output import plots
