@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..output.kept import reached_the_end
+from ..output.kept_signals import reached_the_end
 from ..pointing import ANGLE_UNITS, format_angle
 
 

@@ -200,7 +200,7 @@ def _overlap(args, altitude: float) -> None:
     import numpy as np
 
     from ..output import plots
-    from ..studies import mission
+    from ..studies import mission_analysis as mission
 
     look = constants.VIDEO_SAR_LOOK_ANGLE if args.angle is None else args.angle * DEG
     # the paper's carrier, resolution and target latitude; altitude and look as asked
@@ -240,7 +240,7 @@ def _overlap(args, altitude: float) -> None:
 
 def _walker(args, altitude: float) -> None:
     """Walker sizing (eqs 14-20) under both readings of the paper's β."""
-    from ..studies import mission
+    from ..studies import mission_analysis as mission
 
     beta = constants.VIDEO_SAR_MAX_INCIDENCE if args.angle is None else args.angle * DEG
     print(f"Walker sizing (eqs 14-20): h = {args.altitude:g} km, β = {beta / DEG:g}°")

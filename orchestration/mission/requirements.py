@@ -30,7 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..output.kept import reached_the_end
+from ..output.kept_signals import reached_the_end
 from ..output.summary import requirement_text
 from ..system.units import quantity, to_si
 

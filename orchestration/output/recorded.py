@@ -21,7 +21,7 @@ import numpy as np
 
 from ..mission.requirements import recorded_error
 from ..pointing import INDICES, PointingRequirement, PointingResult
-from .kept import reached_the_end
+from .kept_signals import reached_the_end
 from .results import Results
 
 #: the quaternions an index compares when none is named: (attitude, reference) by kind

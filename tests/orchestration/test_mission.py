@@ -1,6 +1,6 @@
 """Mission analysis of the video-SAR paper ([Liang 2019]): frame overlap (eqs 1–5) and Walker
 sizing (eqs 14–20), against the printed formulas, independent geometry and the paper's
-numbers under the readings stated in orchestration/studies/mission.py."""
+numbers under the readings stated in orchestration/studies/mission_analysis.py."""
 
 import math
 
@@ -11,7 +11,7 @@ from agilesat.components.orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A,
 from agilesat.orchestration.scenarios.constants import VIDEO_SAR_OVERLAP as CASE
 from agilesat.orchestration.scenarios.constants import VIDEO_SAR_TARGET_LAT as LAT
 from agilesat.orchestration.scenarios.constants import VIDEO_SAR_TARGET_LON as LON
-from agilesat.orchestration.studies import mission as m
+from agilesat.orchestration.studies import mission_analysis as m
 from agilesat.orchestration.studies.passes import sun_synchronous_inclination
 
 DEG = math.pi / 180.0
