@@ -170,7 +170,8 @@ def _figures(
     written, whether it stopped.)  $AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the
     K-th starts.  Figures that need outputs not recorded (``--record``) are not drawn, and
     the summary says why."""
-    from .output import plots, pointing_figures
+    from .mission import pointing_figures
+    from .output import plots
 
     hook, started = signal_at("figure"), [0]
 

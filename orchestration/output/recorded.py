@@ -4,7 +4,7 @@ A *source* is a run (:class:`.results.Results`, or its directory: results.npz/.c
 campaign (:class:`..campaign.Campaign`, or its directory: campaign.json and the signals
 every run kept, signals.npy).  :func:`columns` gives its recorded columns as arrays,
 (points,) for a run and (runs, points) for a campaign (the runs that reached the end; the
-others are counted and said), which :func:`..mission.requirements.recorded_error` turns into an
+others are counted and said), which :func:`..pointing.errors.recorded_error` turns into an
 error history; :func:`evaluate` judges a :class:`..pointing.PointingRequirement` on it.
 
 ``agilesat pointing DIR`` (:func:`main`) and ``assert_pointing`` (:mod:`.checks`) are
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..mission.requirements import recorded_error
 from ..pointing import INDICES, PointingRequirement, PointingResult
+from ..pointing.errors import recorded_error
 from .kept_signals import reached_the_end
 from .results import Results
 

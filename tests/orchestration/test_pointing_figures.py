@@ -12,10 +12,10 @@ import pytest
 from agilesat.orchestration.campaign import report
 from agilesat.orchestration.campaign.pointing_figures import campaign_figures
 from agilesat.orchestration.campaign.summary import ensemble_entry
+from agilesat.orchestration.mission.pointing_figures import run_figures
 from agilesat.orchestration.mission.requirements import Pointing
 from agilesat.orchestration.mission.scenario import Scenario, Variant
 from agilesat.orchestration.output import plots
-from agilesat.orchestration.output.pointing_figures import run_figures
 from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.pointing import PointingRequirement
 from agilesat.orchestration.scenarios.video_sar import SYSTEM

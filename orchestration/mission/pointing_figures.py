@@ -1,7 +1,8 @@
 """A run's pointing figures (docs/pointing.md): for each ECSS pointing requirement the
 scenario or variant judges, ``pointing_<name>.png``, the index's magnitude against time
 with the requirement's bound and the statistic compared to it (the level's quantile
-under the requirement's interpretation).  A campaign's are in :mod:`..campaign.pointing_figures`."""
+under the requirement's interpretation).  A campaign's are in
+:mod:`..campaign.pointing_figures`."""
 
 from __future__ import annotations
 
@@ -10,17 +11,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output import plots
+from ..output.results import ColumnError
 from ..pointing import ANGLE_UNITS, NotEvaluable, format_angle
-from . import plots
-from .results import ColumnError
+from .requirements import Pointing
 
 
 def run_figures(scenario, variant, results, out_dir) -> list[Path]:
     """The figure of each pointing requirement ``variant`` judges that the run can show
     (one whose columns were not recorded, or whose index the run is too short for, has
     none: the summary's verdict says why it was not evaluated)."""
-    from ..mission.requirements import Pointing
-
     exempt = scenario.variant(variant).exempt()
     paths = []
     for r in scenario.requirements_for(variant):
