@@ -53,8 +53,8 @@ SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP = 0, 1, 2, 3, 4
 GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS = 5, 6, 7, 8
 AT_STEP, AT_READ = 1, 2
 _KINDS = {"SetReal": SET_REAL, "GetReal": GET_REAL, "SetInteger": SET_INTEGER}
-_KINDS.update(GetInteger=GET_INTEGER, SetBoolean=SET_INTEGER, GetBoolean=GET_INTEGER)
-# (fmi2Boolean is an int, as fmi2Integer)
+_KINDS.update(GetInteger=GET_INTEGER)
+_KINDS.update(SetBoolean=SET_INTEGER, GetBoolean=GET_INTEGER)  # an fmi2Boolean is an int
 
 
 class LoopUnavailable(RuntimeError):

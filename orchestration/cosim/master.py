@@ -36,8 +36,8 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
    second run on it is refused before it writes anything.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes
    (:func:`.signals.stop_on_signals`):
-   the run stops between two macro steps (the compiled loop: between two chunks of a few
-   milliseconds), terminates and frees the FMUs, keeps its rows and raises
+   the run stops between two macro steps (between two chunks of a few milliseconds of
+   the loop), terminates and frees the FMUs, keeps its rows and raises
    :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
 
 The system is checked against the model descriptions before any FMU is instantiated; open
@@ -64,7 +64,7 @@ import numpy as np
 from ..output.lock import holding
 from ..output.recorder import Recorder
 from ..output.results import Results
-from . import loop as compiled
+from . import loop
 from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance
 from .options import RunOptions
@@ -209,7 +209,7 @@ def execute(plan: RunPlan) -> Results:
         plan = dataclasses.replace(plan, options=dataclasses.replace(plan.options, progress=hooked))
     held = holding(plan.out_dir) if plan.out_dir is not None else contextlib.nullcontext()
     with held, stop_on_signals() as signals:
-        log = compiled.ClockLog(echo=plan.options.echo)
+        log = loop.ClockLog(echo=plan.options.echo)
         log.time = plan.start
         instances = {}
         try:
@@ -270,7 +270,7 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     meta["parameters"] = _parameter_values(plan, instances)
     if links is not None:
         meta["derivatives"] = links.described
-    dll = compiled.select(plan.loop, log)
+    dll = loop.select(plan.loop, log)
     meta["loop"] = "python" if dll is None else "compiled"
     chosen = None if plan.record is None else set(plan.record)
     keep = None if chosen is None else [0] + [k for k, c in enumerate(columns) if c in chosen]
@@ -284,10 +284,10 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
             links.read()
         row[0], row[1:] = plan.start, values
         recorder.append(row)
-        program = compiled.Program.macro_step(
+        program = loop.Program.macro_step(
             plan.algorithm, nodes, sequence, _fed_reads(sequence, wiring.sources), step, links
         )
-        compiled.run(dll, program, plan, values, recorder, signals, log)
+        loop.run(dll, program, plan, values, recorder, signals, log)
         for inst in instances.values():
             inst.call("fmi2Terminate")
     except (FmiCallError, OSError) as exc:
@@ -373,7 +373,7 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    evaluation = compiled.Program.evaluation(init_sequence)
+    evaluation = loop.Program.evaluation(init_sequence)
     k, status = evaluation.python(values, 0, plan.start)
     if k >= 0:
         evaluation.raise_failure(k, status)
