@@ -19,6 +19,7 @@ CPU of the thread that ran it, which other processes on the machine do not infla
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import os
@@ -160,7 +161,7 @@ def run_batch(
     """Several runs in one Dask task (one round trip through the scheduler for all), each
     with its own record: ``runs`` is [(index, its dispersed values), ...], on top of
     ``options`` (:class:`..cosim.options.RunOptions`: the campaign's settings and
-    ``--set``).  The batch plans its runs once (:func:`batch_plans`).  ``share``: the runs
+    ``--set``).  The batch plans its runs once (:class:`Batch`).  ``share``: the runs
     this worker is expected to make, which, from its first run, lets the models' kernels
     run compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs
     load, unless set).  The process's first batch of ``target`` starts with its warm-up
@@ -171,8 +172,11 @@ def run_batch(
     if target not in _warmed and runs:
         _warmed.add(target)
         warmed = warm_up(target, _with(options, runs[0][1]), points, share)
-    plans = batch_plans(target, options)
-    records = [_made(index, plans(values), signals, points) for index, values in runs]
+    batch = Batch(target, options)
+    records = [
+        _made(index, functools.partial(batch.planned, values), signals, points)
+        for index, values in runs
+    ]
     if warmed is not None:
         seconds, cpu, error = warmed
         records[0].update(warm_up_seconds=seconds, warm_up_cpu_seconds=cpu)
@@ -181,28 +185,27 @@ def run_batch(
     return records
 
 
-def batch_plans(target: str, options):
-    """For each run's values, a function that gives its planned run: the target resolved
-    and the run planned once, with the values of the first run that plans, and the values
-    of each run that sets the same parameters (every run of a campaign does) swapped in
+class Batch:
+    """The runs of a batch, planned once: the target resolved and the run planned with the
+    values of the first run that plans, then the values of each run that sets the same
+    parameters (every run of a campaign does) swapped in
     (:meth:`..runner.Planned.swapped`); a run that sets others is planned on its own.  A
     run whose values do not plan fails alone."""
-    from ..runner import planned
 
-    base: list = []  # (the planned run, its values)
+    def __init__(self, target: str, options):
+        self.target, self.options = target, options
+        self.base = None  # (the planned run, its values)
 
-    def plans(values: dict):
-        def plan():
-            if base and base[0][1].keys() == values.keys():
-                return base[0][0].swapped(values)
-            made = planned(target, _with(options, values))
-            if not base:
-                base.append((made, values))
-            return made
+    def planned(self, values: dict):
+        """The :class:`..runner.Planned` run of ``values``."""
+        from ..runner import planned
 
-        return plan
-
-    return plans
+        if self.base is not None and self.base[1].keys() == values.keys():
+            return self.base[0].swapped(values)
+        made = planned(self.target, _with(self.options, values))
+        if self.base is None:
+            self.base = (made, values)
+        return made
 
 
 def _with(options, values: dict):

@@ -28,6 +28,7 @@ note in the run's log when the compiled one is not available; ``"compiled"`` rai
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import os
 import platform
@@ -198,14 +199,18 @@ class Op:
         self.call: str | None = fields.pop("call", None)
         self.function = fields.pop("function", None)
         self.vrs = fields.pop("vrs", None)  # ctypes array of value references
-        self.index = _int64(fields.pop("index", ()))  # places in the value vector
+        index = fields.pop("index", None)  # places in the value vector
+        self.index = None if index is None else np.ascontiguousarray(index, dtype=np.int64)
         self.buffer: np.ndarray | None = fields.pop("buffer", None)
         self.h: float = fields.pop("h", 0.0)
         self.orders = fields.pop("orders", None)
         self.slopes: np.ndarray | None = fields.pop("slopes", None)
         self.previous: np.ndarray | None = fields.pop("previous", None)
-        self.interpolated = np.ascontiguousarray(fields.pop("interpolated", ()), dtype=np.uint8)
-        self.n: int = fields.pop("n", len(self.index))
+        interpolated = fields.pop("interpolated", None)
+        self.interpolated = (
+            None if interpolated is None else np.ascontiguousarray(interpolated, dtype=np.uint8)
+        )
+        self.n: int = fields.pop("n", 0 if self.index is None else len(self.index))
         assert not fields, fields
 
     def due(self, n: int) -> bool:
@@ -216,23 +221,20 @@ class Op:
         return stepping or bool(self.when & AT_READ) and (n + 1) % self.every == 0
 
     def struct(self) -> dict:
-        """Its ``struct operation`` fields (addresses of what it points into)."""
-        return dict(
-            kind=self.kind,
-            when=self.when,
-            every=self.every,
-            function=_address(self.function),
-            component=None if self.instance is None else self.instance.component,
-            vrs=None if self.vrs is None else ctypes.addressof(self.vrs),
-            n=self.n,
-            index=self.index.ctypes.data,
-            buffer=_data(self.buffer),
-            h=self.h,
-            orders=None if self.orders is None else ctypes.addressof(self.orders),
-            slopes=_data(self.slopes),
-            previous=_data(self.previous),
-            interpolated=self.interpolated.ctypes.data,
+        """Its ``struct operation`` fields (addresses of what it points into; those it has
+        not stay null)."""
+        fields: dict[str, object] = dict(
+            kind=self.kind, when=self.when, every=self.every, n=self.n, h=self.h
         )
+        if self.instance is not None:
+            fields.update(component=self.instance.component, function=_address(self.function))
+        for name in ("vrs", "orders"):
+            if getattr(self, name) is not None:
+                fields[name] = ctypes.addressof(getattr(self, name))
+        for name in ("index", "buffer", "slopes", "previous", "interpolated"):
+            if getattr(self, name) is not None:
+                fields[name] = getattr(self, name).ctypes.data
+        return fields
 
     def python(self):
         """The operation in Python: a function (values, t) -> its FMI status, with
@@ -282,6 +284,7 @@ class Op:
 
             return get_slopes
         assert kind == SET_DERIVATIVES and previous is not None
+        assert index is not None and self.interpolated is not None
         inner = self.interpolated.astype(bool)
         moved = index[inner] if inner.any() else None
 
@@ -297,10 +300,6 @@ class Op:
 _CTYPES = {"d": ctypes.c_double, "i": ctypes.c_int}
 
 
-def _int64(index) -> np.ndarray:
-    return np.ascontiguousarray(index, dtype=np.int64)
-
-
 def _where(index: np.ndarray):
     """A slice for contiguous places (a faster scatter), else the places."""
     if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
@@ -309,28 +308,26 @@ def _where(index: np.ndarray):
 
 
 def _address(function) -> int | None:
-    return None if function is None else ctypes.cast(function, ctypes.c_void_p).value
-
-
-def _data(array: np.ndarray | None) -> int | None:
-    return None if array is None else array.ctypes.data
+    return ctypes.cast(function, ctypes.c_void_p).value
 
 
 class Program:
     """The FMI calls of one macro step (:mod:`.master`'s docstring, step 3), written once:
     ``loop.c`` runs them (``ops``, a ``struct operation`` array) and so does the Python
     loop (:meth:`python_chunk`).  ``steps``: each :class:`Op`, whose instance and call
-    name an error.  :meth:`macro_step` builds the program of a step from a run's schedule,
-    :meth:`evaluation` that of bringing every output to a communication point without a
-    step (initialisation)."""
+    name an error.  :meth:`macro_step` builds it from a run's schedule."""
 
     def __init__(self, steps: list[Op]):
         self.steps = steps
-        self.ops = (Operation * len(steps))()
-        for op, step in zip(self.ops, steps):
+
+    @functools.cached_property
+    def ops(self) -> ctypes.Array:
+        """The operations as ``loop.c``'s ``struct operation`` array."""
+        ops = (Operation * len(self.steps))()
+        for op, step in zip(ops, self.steps):
             for field, value in step.struct().items():
                 setattr(op, field, value)
-        self._python = [(step.python(), step.every == 1, step) for step in steps]
+        return ops
 
     @classmethod
     def macro_step(
@@ -387,13 +384,11 @@ class Program:
             steps.append(_derivatives(source, GET_DERIVATIVES, links))
         return cls(steps)
 
-    @classmethod
-    def evaluation(cls, sequence: list) -> Program:
-        """Every block of ``sequence`` once: its FMU's inputs set, its outputs read."""
-        steps = []
-        for node, chosen, _ in sequence:
-            steps += [_port(port, 1, AT_READ) for port in [*node.inputs, *chosen]]
-        return cls(steps)
+    @functools.cached_property
+    def _python(self) -> list:
+        """(the operation in Python, due at every step?, the operation) of each (made when
+        the Python loop first runs the program)."""
+        return [(step.python(), step.every == 1, step) for step in self.steps]
 
     def python(self, values: np.ndarray, n: int, t: float) -> tuple[int, int]:
         """Run step n (at t) in Python: (-1, 0), or at the first call that returns more

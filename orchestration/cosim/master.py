@@ -373,10 +373,10 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    evaluation = loop.Program.evaluation(init_sequence)
-    k, status = evaluation.python(values, 0, plan.start)
-    if k >= 0:
-        evaluation.raise_failure(k, status)
+    for node, reads, _ in init_sequence:
+        node.set_inputs(values)
+        for port in reads:
+            port.read(values)
     for node in nodes.values():
         node.set_inputs(values)
     for inst in instances.values():
