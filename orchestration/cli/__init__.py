@@ -1,6 +1,7 @@
 """``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
 
-Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
+Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
+or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
 as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
 by SIGTERM (everything recorded so far is kept, and the summary says what was not
@@ -10,7 +11,8 @@ written; a second signal changes nothing).
 # The command layer: each module adds its commands' parsers (``add_parsers``) and names
 # the function of each (``COMMANDS``): system.py the commands on FMUs, targets and runs,
 # campaign.py `agilesat campaign`, studies.py the papers' analyses, pointing.py
-# `agilesat pointing`.  A run's and a campaign's options are declared with their flags
+# `agilesat pointing`, report.py `agilesat report` (and --no-report), ephemeris.py
+# `agilesat export-ephemeris`.  A run's and a campaign's options are declared with their flags
 # where they are read (cosim/options.py RunOptions, campaign/plan.py Spec).
 
 from __future__ import annotations
@@ -22,13 +24,13 @@ from contextlib import nullcontext
 
 from ..cosim.signals import interruptible
 from ..provenance import version
-from . import pointing, studies, system
-from .system import UsageError, echo_to, report
+from . import ephemeris, pointing, report, studies, system
+from .system import UsageError, echo_to, exit_status
 
-__all__ = ["main", "UsageError", "echo_to", "report"]
+__all__ = ["main", "UsageError", "echo_to", "exit_status"]
 
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
-#: master are imported only to run a campaign; a test checks it is the campaign's own)
+#: master are imported only to run a campaign; cli/campaign.py gives it its parser)
 CAMPAIGN_HELP = "Monte Carlo campaign or parameter sweep of a scenario on Dask"
 
 
@@ -39,6 +41,7 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     campaign = bool(argv) and argv[0] == "campaign"
     commands = {**system.COMMANDS, **studies.COMMANDS, **pointing.COMMANDS}
+    commands.update(report.COMMANDS, **ephemeris.COMMANDS)
     if campaign:
         from . import campaign as campaign_cli
 
@@ -99,6 +102,8 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
     system.add_parsers(commands, quiet)
     studies.add_parsers(commands, quiet)
     pointing.add_parsers(commands, quiet)
+    report.add_parsers(commands, quiet)
+    ephemeris.add_parsers(commands, quiet)
     if campaign:
         from . import campaign as campaign_cli
 

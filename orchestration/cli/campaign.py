@@ -13,7 +13,7 @@ from pathlib import Path
 from ..campaign import Spec, engine, run_campaign, shipped_files
 from ..campaign.report import display
 from ..cosim.options import add_flags, from_arguments
-from . import CAMPAIGN_HELP
+from . import CAMPAIGN_HELP, report
 
 
 def add_parsers(commands, quiet) -> None:
@@ -53,6 +53,7 @@ def add_parsers(commands, quiet) -> None:
         action="store_true",
         help="continue (or extend with a larger --runs) the campaign in --out",
     )
+    report.add_option(p)
     p.add_argument(
         "-q",
         "--quiet",
@@ -98,6 +99,7 @@ def main(args) -> int:
             f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
         )
         return 128 + _first()
+    report.after(args, result.out_dir)
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if engine.INTERRUPTS.signals:  # as the cluster closed

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..cosim.options import RunOptions, add_flags, from_arguments, setting
+from . import report
 
 #: what TARGET may be (``mission.targets``)
 TARGETS = (
@@ -58,6 +59,7 @@ def add_parsers(commands, quiet) -> None:
     )
     run.add_argument("target", help=TARGETS)
     add_flags(run, RunOptions)
+    report.add_option(run)
 
     plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
     plot.add_argument(
@@ -206,12 +208,13 @@ def _run(args) -> int:
                 notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
             ),
         )
+    report.after(args, out)
     settings = summary["settings"]
     print(
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return report(summary)
+    return exit_status(summary)
 
 
 def _plot(args) -> int:
@@ -248,12 +251,14 @@ def _plot(args) -> int:
     return 0
 
 
-def report(summary) -> int:
-    """Print the summary's numbers; the exit status of a run."""
+def exit_status(summary) -> int:
+    """Print the summary's numbers; the exit status of a run: 1 when a metric,
+    requirement or figure raised (status "error": the run's records are written), 3 when
+    it did not fly as required."""
     from ..output.summary import format_summary
 
     print(format_summary(summary))
-    return 3 if summary.get("status") == "failed" else 0
+    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
 
 
 def _export(args) -> int:

@@ -34,6 +34,7 @@ from ..output.kept_signals import reached_the_end
 from ..output.summary import requirement_text
 from ..pointing.errors import quaternion_columns, recorded_error
 from ..system.units import quantity, to_si
+from .system import where_written
 
 MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED = "met", "not met", "not evaluated", "not judged"
 VERDICTS = (MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED)
@@ -82,16 +83,19 @@ class Bound(Requirement):
     max: object = None
     metric: str | None = None
     name: str = ""  # type: ignore[assignment]
+    origin: str = field(default="", compare=False)  # "file:line" where it was written
 
     def __post_init__(self):
         if self.min is None and self.max is None:
             raise ValueError("a bound needs min, max or both")
         if not self.name and self.metric:
             object.__setattr__(self, "name", self.metric)
+        if not self.origin:
+            object.__setattr__(self, "origin", where_written())
 
     def on(self, metric: str) -> Bound:
         """This bound on ``metric`` (a metric's ``require=``)."""
-        return Bound(self.min, self.max, metric, self.name or metric)
+        return Bound(self.min, self.max, metric, self.name or metric, self.origin)
 
     def limits(self, unit: str | None) -> dict[str, float]:
         """{"min": ..., "max": ...} (those given) in ``unit`` (SI)."""
@@ -170,8 +174,11 @@ class Pointing(Requirement):
     stop: float | None = None
     reference_signals: tuple = ()
     signals: tuple = field(init=False, default=())
+    origin: str = field(default="", compare=False)  # "file:line" where it was written
 
     def __post_init__(self):
+        if not self.origin:
+            object.__setattr__(self, "origin", where_written())
         if self.kind not in ("performance", "knowledge"):
             raise ValueError(f"kind must be 'performance' or 'knowledge', got {self.kind!r}")
         if getattr(self.requirement, "bound", None) is None:

@@ -254,9 +254,13 @@ def recorded_error(
     (a recorded quaternion, or a function of the columns: a scenario's
     :class:`..mission.requirements.Pointing`) over [``start``, ``stop``]: ``columns[name]``
     is (points,) for a run, (runs, points) for a campaign, at times ``t``;
-    :class:`.indices.NotEvaluable` with fewer than 2 samples."""
+    :class:`.indices.NotEvaluable` with fewer than 2 samples, or a window the records do
+    not cover (to the nearest sample: :func:`not_covered`)."""
     from .indices import NotEvaluable
 
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
     rows = np.ones(len(t), bool)
     if start is not None:
         rows &= t >= start - 1e-12
@@ -272,3 +276,19 @@ def recorded_error(
     return (performance_error if kind == "performance" else knowledge_error)(
         q_x[..., rows, :], q_y[..., rows, :], t[rows]
     )
+
+
+def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:
+    """Why records at times ``t`` do not cover ``what``, [``start``, ``stop``] (None: the
+    records' own end), to the nearest sample; "" if they do."""
+    if not len(t):
+        return "no records"
+    half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
+    first, last = float(t[0]), float(t[-1])
+    if start is not None and start > last + half:
+        return f"the records end at {last:g} s, before {what}'s start {start:g} s"
+    if start is not None and start < first - half:
+        return f"the records begin at {first:g} s, after {what}'s start {start:g} s"
+    if stop is not None and stop > last + half:
+        return f"the records end at {last:g} s, before {what}'s end {stop:g} s"
+    return ""
