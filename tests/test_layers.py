@@ -80,9 +80,9 @@ def test_the_generic_master_knows_no_model(path):
 
 #: orchestration/'s own layers, lowest first (docs/architecture.md): reading and checking
 #: a system; the pointing indices; what a run leaves; running it; a mission in Python, the
-#: shipped scenarios on it; a target run, exported or described end to end; campaigns;
-#: the papers' studies; the command line.  A module imports from its own layer and those
-#: below it only.
+#: shipped scenarios on it; what runs left read back (report, indices, ephemerides,
+#: assertions); a target run, exported or described end to end; campaigns; the papers'
+#: studies; the command line.  A module imports from its own layer and those below it only.
 ORCHESTRATION = (
     ("system", "provenance.py"),
     ("pointing",),
@@ -90,6 +90,7 @@ ORCHESTRATION = (
     ("cosim",),
     ("mission",),
     ("scenarios",),
+    ("postprocess",),
     ("runner.py", "export.py", "info.py"),
     ("campaign",),
     ("studies",),
@@ -99,6 +100,7 @@ ORCHESTRATION = (
 ORCHESTRATION_UPWARD = {
     ("output/pytest_plugin.py", "runner.py"): "the pytest plugin's fixture runs a target; "
     "the plugin's entry point (pytest11, pyproject.toml) names this module",
+    ("output/pytest_plugin.py", "postprocess"): "the plugin re-exports the assertions",
 }
 
 

@@ -1,5 +1,5 @@
 """``agilesat export-ephemeris DIR``: a run's attitude as a CCSDS AEM and its orbit as an
-OEM, KVN and XML (:mod:`..output.ephemeris`, docs/ephemerides.md)."""
+OEM, KVN and XML (:mod:`..postprocess.ephemeris`, docs/ephemerides.md)."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def add_parsers(commands, quiet) -> None:
 
 
 def main(args) -> int:
-    from ..output.ephemeris import FORMATS, export
+    from ..postprocess.ephemeris import FORMATS, export
 
     for path in export(
         args.directory,

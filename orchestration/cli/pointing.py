@@ -92,8 +92,8 @@ def add_parsers(commands, quiet) -> None:
 
 def main(args) -> int:
     from ..mission.requirements import Pointing
-    from ..output.recorded import evaluate, load
     from ..pointing import NotEvaluable, PointingRequirement
+    from ..postprocess.recorded import evaluate, load
 
     recorded = load(args.directory)
     what = f"{recorded.runs} run(s)" + (

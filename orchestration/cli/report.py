@@ -1,5 +1,5 @@
 """``agilesat report DIR``: the interactive report of a run or a campaign
-(:mod:`..output.report`), and
+(:mod:`..postprocess.report`), and
 the ``--no-report`` option of ``agilesat run`` and ``agilesat campaign``, which write it by
 default."""
 
@@ -35,7 +35,7 @@ def add_option(parser) -> None:
 
 
 def main(args) -> int:
-    from ..output.report import write_report
+    from ..postprocess.report import write_report
 
     if not args.directory.is_dir():
         raise ValueError(f"no such run or campaign directory: {args.directory}")
@@ -47,7 +47,7 @@ def after(args, directory) -> None:
     """What ``run`` and ``campaign`` do after their figures: the report, unless
     ``--no-report`` (then a report an earlier run left in ``directory`` is removed: it
     would show that run as this one)."""
-    from ..output.report import NAME, write_report
+    from ..postprocess.report import NAME, write_report
 
     if args.no_report:
         (Path(directory) / NAME).unlink(missing_ok=True)

@@ -1,4 +1,4 @@
-"""The shipped assertions (agilesat.orchestration.output.checks), the progress reporter and the
+"""The shipped assertions (agilesat.orchestration.postprocess.checks), the progress reporter and the
 unit spelling, on synthetic data: each check passes where it should and fails with a
 message that says where."""
 
@@ -7,15 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.orchestration.output.checks import (
+from agilesat.orchestration.output.progress import Progress
+from agilesat.orchestration.output.results import Results
+from agilesat.orchestration.postprocess.checks import (
     assert_momentum_conserved,
     assert_requirements_met,
     assert_settles,
     assert_within,
     requirement_met,
 )
-from agilesat.orchestration.output.progress import Progress
-from agilesat.orchestration.output.results import Results
 from agilesat.orchestration.system.units import pretty
 from helpers import Stream
 

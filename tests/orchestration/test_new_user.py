@@ -158,10 +158,10 @@ def test_the_degree_sign_is_spaced_alike_by_every_printer(tmp_path):
 
     import numpy as np
 
-    from agilesat.orchestration.output.checks import assert_settles, assert_within
     from agilesat.orchestration.output.results import Results
     from agilesat.orchestration.output.summary import format_value
     from agilesat.orchestration.pointing.requirement import format_angle
+    from agilesat.orchestration.postprocess.checks import assert_settles, assert_within
     from agilesat.orchestration.system.units import join
 
     deg = math.pi / 180

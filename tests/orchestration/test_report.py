@@ -11,10 +11,10 @@ import pytest
 
 from agilesat.components.rotations import dcm as dcm_one
 from agilesat.orchestration.output.frames import dcm, r3, turn_z
-from agilesat.orchestration.output.report import figures
-from agilesat.orchestration.output.report.decimate import indices, min_max
-from agilesat.orchestration.output.report.page import Page
-from agilesat.orchestration.output.report.scene import WGS84_A, WGS84_B, ellipsoid_hit
+from agilesat.orchestration.postprocess.report import figures
+from agilesat.orchestration.postprocess.report.decimate import indices, min_max
+from agilesat.orchestration.postprocess.report.page import Page
+from agilesat.orchestration.postprocess.report.scene import WGS84_A, WGS84_B, ellipsoid_hit
 
 
 @pytest.mark.parametrize("buckets", [7, 50, 333])

@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from ..frames import dcm, r3
+from ...output.frames import dcm, r3
 from . import figures
 from .decimate import min_max
 

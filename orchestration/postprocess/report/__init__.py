@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..recorder import write_text
+from ...output.recorder import write_text
 
 #: the page's file name in the directory
 NAME = "report.html"

@@ -393,7 +393,7 @@ def _envelopes(page: Page, directory: Path, summary: dict) -> None:
     path = directory / "signals.npy"
     if not kept or not path.exists():
         return
-    from ..kept_signals import reached_the_end
+    from ...output.kept_signals import reached_the_end
 
     keep = summary["spec"].get("keep") or []
     names = [s for s in kept["signals"] if any(s == k or s.startswith(k + "[") for k in keep)]

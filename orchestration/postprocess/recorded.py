@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output.kept_signals import reached_the_end
+from ..output.results import Results
 from ..pointing import INDICES, PointingRequirement, PointingResult
 from ..pointing.errors import not_covered, recorded_error
-from .kept_signals import reached_the_end
-from .results import Results
 
 #: the quaternions an index compares when none is named: (attitude, reference) by kind
 DEFAULTS = {

@@ -124,7 +124,7 @@ def assert_requirements_met(summary: dict, *names: str) -> None:
         shown = r.get("text") or r["statement"]
         value = ""
         if r.get("value") is not None and r.get("unit"):
-            from .summary import format_value
+            from ..output.summary import format_value
 
             value = f" = {format_value(r['value'], r['unit'], r.get('display_unit'))}"
         failed.append(

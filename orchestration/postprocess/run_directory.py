@@ -10,7 +10,7 @@ import functools
 import json
 from pathlib import Path
 
-from .results import Results
+from ..output.results import Results
 
 
 class RunDirectory:

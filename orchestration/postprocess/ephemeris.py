@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output.frames import r3, turn_z
 from ..pointing import quaternion_product
-from .frames import r3, turn_z
 from .run_directory import RunDirectory
 
 #: the files written, by message and format
@@ -132,7 +132,7 @@ def export(
     import ccsds_ndm
 
     from ...components.ephemeris import parse_epoch
-    from .recorder import write_text
+    from ..output.recorder import write_text
 
     run = RunDirectory(directory)
     start, alpha = frame_turn(run, None if epoch is None else parse_epoch(epoch))

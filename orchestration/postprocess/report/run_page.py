@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
+from ...output.summary import format_value, requirement_text
 from ...system.units import pretty, to_degrees
-from ..summary import format_value, requirement_text
 from . import figures, scene
 from .decimate import min_max
 from .page import Page, esc, facts, static_table, verdict
