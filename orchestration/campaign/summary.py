@@ -70,6 +70,8 @@ def finish(
         "versions": versions(),
         "cluster": environment,
         "lost_workers": previous.get("lost_workers", []) + lost,
+        # the looks of a campaign run until decided (:mod:`.sequential`), kept through each
+        **({"until_decided": previous["until_decided"]} if "until_decided" in previous else {}),
         "warm_up": report.warm_ups(records),
         "requirements": metrics.get("requirements", {}),
         "statistics": report.statistics(table, metrics, records),

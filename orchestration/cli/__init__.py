@@ -3,9 +3,12 @@
 Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
 or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
-by SIGTERM (everything recorded so far is kept, and the summary says what was not
-written; a second signal changes nothing).
+as required, a requirement not met (the summary's diagnostics say why); 4 nothing not
+met, but a statistical requirement undecided: its runs show neither compliance nor a
+violation at its confidence (campaign, pointing; the verdict says roughly how many runs
+would settle it); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (everything
+recorded so far is kept, and the summary says what was not written; a second signal
+changes nothing).
 """
 
 # The command layer: each module adds its commands' parsers (``add_parsers``) and names
@@ -25,9 +28,9 @@ from contextlib import nullcontext
 from ..cosim.signals import interruptible
 from ..provenance import version
 from . import ephemeris, pointing, report, studies, system
-from .system import UsageError, echo_to, exit_status
+from .system import UsageError, echo_to, exit_status, run_status
 
-__all__ = ["main", "UsageError", "echo_to", "exit_status"]
+__all__ = ["main", "UsageError", "echo_to", "exit_status", "run_status"]
 
 #: `agilesat campaign`'s line in `agilesat --help` (the campaign package, Dask and the
 #: master are imported only to run a campaign; cli/campaign.py gives it its parser)

@@ -140,7 +140,7 @@ def _stare(args) -> int:
     from ..output.progress import Progress
     from ..runner import run
     from ..studies.stare import pass_scenario, search_start, tle_pass
-    from .system import echo_to, exit_status
+    from .system import echo_to, run_status
 
     lines = [line for line in args.tle.read_text().splitlines() if line.strip()]
     if len(lines) not in (2, 3):
@@ -184,7 +184,7 @@ def _stare(args) -> int:
             progress=progress,
         )
     print(f"results in {args.out}/")
-    return exit_status(summary)
+    return run_status(summary)
 
 
 def _mission(args) -> int:

@@ -214,7 +214,7 @@ def _run(args) -> int:
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return exit_status(summary)
+    return run_status(summary)
 
 
 def _plot(args) -> int:
@@ -251,14 +251,24 @@ def _plot(args) -> int:
     return 0
 
 
-def exit_status(summary) -> int:
+def run_status(summary) -> int:
     """Print the summary's numbers; the exit status of a run: 1 when a metric,
-    requirement or figure raised (status "error": the run's records are written), 3 when
-    it did not fly as required."""
+    requirement or figure raised (status "error": the run's records are written), else
+    :func:`exit_status`."""
     from ..output.summary import format_summary
 
     print(format_summary(summary))
-    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
+    if summary.get("status") == "error":  # a metric, requirement or figure raised
+        return 1
+    return exit_status(summary.get("status") == "failed", summary.get("requirements", {}))
+
+
+def exit_status(failed: bool, verdicts) -> int:
+    """3 when something failed or a requirement is not met, else 4 when one is
+    undecided, else 0; ``verdicts``: {name: {"verdict": ...}} (a summary's
+    ``requirements``, a campaign's ``ensemble``)."""
+    statuses = {v.get("verdict") for v in verdicts.values()}
+    return 3 if failed or "not met" in statuses else 4 if "undecided" in statuses else 0
 
 
 def _export(args) -> int:
