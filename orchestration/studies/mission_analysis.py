@@ -114,8 +114,8 @@ exact integer is not pushed up by floating-point noise).
 an overflown target stays within the angle limit on a spherical Earth, with the Earth's
 rotation ignored (equals eq 15 to solver precision) or included (the paper ignores it).
 
-Against the paper's numbers (tests/orchestration/test_mission.py holds the full table of readings)
------------------------------------------------------------------------------------
+Against the paper's numbers (the full table of readings: test_mission_analysis.py)
+---------------------------------------------------------------------------------
 - Overlap, broadside frame, look angle 30°, V = inertial orbital speed: 56.7 % at 5 Hz
   and 91.34 % at 25 Hz with Rc to the WGS-84 ellipsoid at 33.16° N (56.2 %, 91.24 % on the
   sphere of R_e; the Earth's rotation, which the paper neglects, lowers both by ≈ 0.45

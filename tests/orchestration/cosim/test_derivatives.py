@@ -8,7 +8,7 @@ both FMUs declare them).  The yardstick is the monolithic sampled-data reference
 run of |pitch(co-simulation) − pitch(reference)|.  Controller and steering run at
 P = 0.05 s, the plant FMUs at H (multi-rate), so a smaller H changes the coupling only.
 
-``python tests/orchestration/test_derivatives.py`` prints the table the README quotes.
+``python tests/orchestration/cosim/test_derivatives.py`` prints the table the README quotes.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-TESTS = Path(__file__).resolve().parents[1]
+TESTS = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(TESTS), str(TESTS / "tools")]  # also run as a script: helpers, reference
 
 from agilesat.orchestration.cosim.master import simulate  # noqa: E402

@@ -327,7 +327,7 @@ def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
 @pytest.mark.slow
 def test_no_derivatives_reaches_the_master(fmus, tmp_path, monkeypatch):
     """`agilesat run --no-derivatives` plans the run with derivatives=False (what it does
-    there is in tests/orchestration/test_derivatives.py); without the flag, True."""
+    there is in tests/orchestration/cosim/test_derivatives.py); without the flag, True."""
     from agilesat.orchestration import cli, runner
 
     seen = []
