@@ -34,11 +34,11 @@ def flag(*names: str, default: Any = None, **keywords: Any) -> Any:
     return field(default=default, metadata={"flag": (names, keywords)})
 
 
-def add_flags(parser, options: type, only: tuple[str, ...] | None = None) -> None:
+def add_flags(parser, options: type) -> None:
     """Add the flags of the fields of ``options`` (a dataclass) to an argparse parser, in
-    field order (``only``: of these fields)."""
+    field order."""
     for f in fields(options):
-        if "flag" in f.metadata and (only is None or f.name in only):
+        if "flag" in f.metadata:
             names, keywords = f.metadata["flag"]
             parser.add_argument(*names, dest=f.name, default=f.default, **keywords)
 

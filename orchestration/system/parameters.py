@@ -313,15 +313,3 @@ def _element(name: str) -> re.Match:
     if match is None:
         raise ValueError(f"{name!r} is not an array element name")
     return match
-
-
-def parse_set(items) -> dict[str, str]:
-    """``--set INSTANCE.VARIABLE=VALUE`` options -> {"INSTANCE.VARIABLE": "VALUE"} (the values
-    are typed later, against the FMU's variable: :func:`typed_parameters`)."""
-    overrides = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
-        overrides[key.strip()] = value.strip()
-    return overrides
