@@ -51,9 +51,9 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
-from ..components import jit
 from ..components.model import ModelError
-from ..components.switches import SwitchError
+from ..components.runtime import jit
+from ..components.runtime.switches import SwitchError
 from . import CONFIGURATION, configuration_key, fmu_state, state_layout
 from .fast_paths import FastPaths, kind
 from .protocol import (
@@ -243,6 +243,7 @@ class ModelSlave(Fmi2Slave):
             steps, self._stop_time = (self._stop_time - current_time) / step_size, None
             jit.expect(sys.modules[type(self.model).__module__], steps)
         self.model.step(current_time, step_size)
+        self.model.inputs_to_step_end(step_size)
         self._flush_warnings()
         self._next_time = current_time + step_size
         self._outputs_valid = False

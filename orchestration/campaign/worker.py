@@ -130,7 +130,7 @@ def warm_up_steps(steps: int, share: int) -> int:
     is more than :data:`WARM_UP_FRACTION` of a run (then the first run decides for itself,
     as without a warm-up); and at least :data:`WARM_UP_STEPS` (or the whole run, if it is
     shorter), which load the FMUs and the modules every run uses."""
-    from ...components.jit import PAYS_AFTER
+    from ...components.runtime.jit import PAYS_AFTER
 
     needed = max(WARM_UP_STEPS, math.ceil(PAYS_AFTER / max(1, share)))
     if needed > WARM_UP_FRACTION * steps:
@@ -165,9 +165,9 @@ def run_batch(
     ``options`` (:class:`..cosim.options.RunOptions`: the campaign's settings and
     ``--set``).  The batch plans its runs once (:class:`Batch`).  ``share``: the runs
     this worker is expected to make, which, from its first run, lets the models' kernels
-    run compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs
-    load, unless set).  The process's first batch of ``target`` starts with its warm-up
-    (module docstring), with the values of the batch's first run."""
+    run compiled where that pays (AGILESAT_JIT_RUNS, components/runtime/jit.py; read as
+    the FMUs load, unless set).  The process's first batch of ``target`` starts with its
+    warm-up (module docstring), with the values of the batch's first run."""
     warmed = None
     if not _started:
         os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))

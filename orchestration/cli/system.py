@@ -59,6 +59,12 @@ def add_parsers(commands, quiet) -> None:
     )
     run.add_argument("target", help=TARGETS)
     add_flags(run, RunOptions)
+    run.add_argument(
+        "--error-estimate",
+        action="store_true",
+        help="rerun at half and a quarter of the step and state each metric's numerical "
+        "error (Richardson, observed order) and the requirements it leaves undecided",
+    )
     report.add_option(run)
 
     plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
@@ -79,7 +85,7 @@ def add_parsers(commands, quiet) -> None:
     export = commands.add_parser(
         "export",
         help="write a scenario[:variant], a mission file or a system file as a "
-        "self-contained SSP package (.ssd + FMUs)",
+        "self-contained SSP package (.ssd + FMUs), a system file or one configured FMU",
     )
     export.add_argument("target", help=TARGETS)
     export.add_argument(
@@ -90,7 +96,24 @@ def add_parsers(commands, quiet) -> None:
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value written into the package (as `run --set`)",
     )
-    export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
+    export.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="the file to write: an .ssp package, an .ssd (its FMUs in OUT_STEM.fmus/ beside "
+        "it), or one component's .fmu (with --component)",
+    )
+    export.add_argument(
+        "--accuracy",
+        metavar="ANGLE",
+        help="choose the package's step (halving it) so that hosts holding the inputs over "
+        "a step (libcosim, ECOS) stay within ANGLE of our master on the attitude, e.g. 0.05deg",
+    )
+    export.add_argument(
+        "--component",
+        metavar="NAME",
+        help="write only this component's FMU, configured with the system's values and step",
+    )
 
     generate = commands.add_parser(
         "generate",  # a developer's command: not in `agilesat --help`
@@ -197,24 +220,53 @@ def _run(args) -> int:
 
     out = args.out_dir or Path("out") / args.target.replace(":", "-").replace("/", "_")
     with Progress(args.target, quiet=args.quiet) as progress:
-        results, summary = run(
-            args.target,
-            from_arguments(
-                RunOptions,
-                args,
-                out_dir=out,
-                progress=progress,
-                echo=echo_to(out, say=progress.write),
-                notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
-            ),
+        options = from_arguments(
+            RunOptions,
+            args,
+            out_dir=out,
+            progress=progress,
+            echo=echo_to(out, say=progress.write),
+            notice=lambda text: print(f"agilesat run: note: {text}", file=sys.stderr),
         )
+        results, summary = run(args.target, options)
+    if args.error_estimate:
+        _error_estimate(args.target, options, summary, out)
     report.after(args, out)
     settings = summary["settings"]
     print(
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return run_status(summary)
+    status = run_status(summary)
+    if args.error_estimate:
+        from ..error_estimate import lines
+
+        print("\n".join(lines(summary["numerical_error"])))
+    return status
+
+
+def _error_estimate(target, options: RunOptions, summary: dict, out: Path) -> None:
+    """``--error-estimate``: the run again at half and a quarter of its step, nothing
+    written (:mod:`..error_estimate`), into the summary and summary.json."""
+    from ..error_estimate import estimate
+    from ..output.recorder import write_text
+    from ..output.summary import summary_text
+    from ..runner import run
+
+    def rerun(step):
+        again = RunOptions(
+            step=step,
+            stop=options.stop,
+            start=options.start,
+            algorithm=options.algorithm,
+            parameters=options.parameters,
+            derivatives=options.derivatives,
+            figures=False,
+        )
+        return run(target, again)[1]
+
+    summary["numerical_error"] = estimate(summary, rerun)
+    write_text(out / "summary.json", summary_text(summary))
 
 
 def _plot(args) -> int:
@@ -272,9 +324,9 @@ def exit_status(failed: bool, verdicts) -> int:
 
 
 def _export(args) -> int:
-    from ..export import export_ssp
+    from ..export import export
 
-    print(export_ssp(args.target, args.out, dict(args.parameters or ())))
+    print(export(args.target, args.out, dict(args.parameters or ()), args.component, args.accuracy))
     return 0
 
 
@@ -299,8 +351,8 @@ def _generate(args) -> int:
     from ...fmus.build import generated_files
     from ..mission.targets import generated_systems
 
-    files = generated_systems()
-    files.update(generated_files())
+    files = generated_files()  # first: the systems build FMUs, which need protocol.h
+    files.update(generated_systems())
     checkout = source_checkout()
     if not checkout and not args.check:
         raise ValueError(

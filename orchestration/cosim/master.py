@@ -245,6 +245,9 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     columns = ["time"] + [f"{name}.{output}" for name, output in layout]
     sequence = _sequence(wiring.steps, nodes)
     init_sequence = _sequence(wiring.init, nodes)
+    jacobi_reads = _fed_reads(sequence, wiring.sources)
+    if plan.read_after_step:
+        jacobi_reads = [(node, reads, False) for node, reads, _ in jacobi_reads]
     links = Derivatives(nodes, wiring.sources, layout, plan.algorithm) if plan.derivatives else None
     if links is not None and not links.consumers:
         links = None
@@ -285,7 +288,7 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
         row[0], row[1:] = plan.start, values
         recorder.append(row)
         program = loop.Program.macro_step(
-            plan.algorithm, nodes, sequence, _fed_reads(sequence, wiring.sources), step, links
+            plan.algorithm, nodes, sequence, jacobi_reads, step, links
         )
         loop.run(dll, program, plan, values, recorder, signals, log)
         for inst in instances.values():

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from agilesat.components.jit import PAYS_AFTER
+from agilesat.components.runtime.jit import PAYS_AFTER
 from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign.report import warm_ups
 from agilesat.orchestration.campaign.worker import (
