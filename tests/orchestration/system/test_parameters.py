@@ -33,6 +33,26 @@ def test_named_choices_are_read_from_the_variables_description(description, name
     assert choice_names(integer_parameter(description)) == names
 
 
+def test_one_parser_of_named_choices_for_the_tables_and_the_master():
+    """What a variable table writes (components/variables.py ``choice``) the master reads
+    back, and a value given to the model (``Var.choice_value``) and to a run (``--set``)
+    is parsed by one function, with one message."""
+    from agilesat.components.variables import choice
+
+    law = choice("law", 0, "steering law", [("FIRST", "the first"), ("SECOND", "the 2nd")])
+    read = SimpleNamespace(type="Integer", causality="parameter", description=law.description)
+    names = choice_names(read)
+    assert names == ("FIRST", "SECOND")
+    for given in ("second", " 1 ", 1, "FIRST", 0):
+        assert law.choice_value(given) == parameters.choice_value("law", names, given, "x")
+    with pytest.raises(ValueError) as model:
+        law.choice_value("THIRD")
+    with pytest.raises(SystemFileError) as run:
+        parameters.choice_value("law", names, "THIRD", "--set A.law=THIRD")
+    assert str(run.value) == f"--set A.law=THIRD: {model.value}"
+    assert str(model.value) == "law must be one of 0 (FIRST), 1 (SECOND), got 'THIRD'"
+
+
 def test_only_integer_parameters_have_named_choices():
     text = "mode: 0 = OFF (nothing), 1 = ON (all of it)"
     real = SimpleNamespace(type="Real", causality="parameter", description=text)
