@@ -1,31 +1,13 @@
 """``agilesat export``: anything that runs, as a self-contained SSP package, a system file
 with its FMUs beside it, or one configured FMU.
 
-An ``.ssp`` file (SSP 1.0, §5 "SSP package") is a zip archive holding
-``SystemStructure.ssd`` and, here, every FMU it uses under ``resources/``; the SSD names
-them by relative URI (``resources/SatelliteDynamics.fmu``), so the package runs wherever it
-is copied: in our master (``agilesat run FILE.ssp``), in libcosim
-(``CosimExecution.from_ssp_file``) or in any SSP importer.  ``--out x.ssd`` writes the same
-SSD as ``x.ssd`` with its FMUs in ``x.fmus/`` beside it; ``--component NAME --out x.fmu``
-the one FMU of component NAME, configured as the package's would be.  The target is a
-shipped scenario or variant, a mission file of your own (``mission.py[:variant]``), or an
-``.ssd``/``.ssp`` system file; a variant's and ``--set``'s values are written into the
-SSD (typed as a run types them, units converted).  The archives are deterministic: the
-same sources give the same files.
-
-Each component's FMU carries the values the SSD binds to it as its own defaults
-(fmus/configure.py: start values, the model's values, a GUID of its own) and the system's
-experiment as its ``DefaultExperiment`` (its start and stop, the component's step), beside
-the SSD's parameter sets: a host that applies no parameter set (ECOS without a set name,
-``fmpy simulate`` of one FMU) runs the system as described.  They also default
-``warnings_return_ok`` to true: the FMUs' warnings (limits, saturation) reach every host's
-log at category ``logStatusWarning`` with status fmi2OK, so that hosts that stop on
-fmi2Warning (OMSimulator) run to the end.  One FMU file per FMU and set of values:
-``resources/<FMU>.fmu``, or ``resources/<FMU>_<component>.fmu`` where components of one FMU
-have different values.  Every FMU ``agilesat build`` made from these sources is configured,
-ours and a user's models; a third party's is packed as it is and ``say`` is told (its
-values are in the SSD's parameter sets only); one agilesat built from other sources
-(another version) is an error naming what to rebuild.
+``--out x.ssp`` writes an SSP package, ``--out x.ssd`` the same SSD as ``x.ssd`` with its
+FMUs in ``x.fmus/`` beside it, ``--component NAME --out x.fmu`` the one FMU of component
+NAME, configured as the package's would be (what a package holds and how each FMU carries
+its values: :mod:`.mission.package`).  The target is a shipped scenario or variant, a
+mission file of your own (``mission.py[:variant]``), or an ``.ssd``/``.ssp`` system file;
+a variant's and ``--set``'s values are written into the SSD (typed as a run types them,
+units converted).  The archives are deterministic: the same sources give the same files.
 """
 
 from __future__ import annotations
