@@ -234,17 +234,19 @@ class System:
 
     def _may_take_several(self, target: str) -> bool:
         """Whether ``target`` may be fed by several connections: a table of slots of one of
-        our FMUs (its variable table says), or a variable of an FMU file or a model of
-        yours, whose connections are checked when the system is (the master's check of
-        an input driven twice)."""
+        our FMUs (its model description says), or any input whose connections are checked
+        only when the system is (the master's check of an input driven twice): of an FMU
+        file, of a model of yours, of one of ours not built yet."""
         component, variable = _split(target, "connect")
         fmu = self._components[component].fmu
         if fmu.endswith(".fmu") or ".py" in fmu:
             return True
-        from ...fmus import model_class
-
-        v = model_class(fmu).table_layout().by_name.get(variable)
-        return v is not None and _is_slot_table(v.causality, v.shape, bool(v.optional))
+        try:
+            d = Description(component, fmu_file(fmu, build=False))
+        except FileNotFoundError:
+            return True
+        array = variables(d).get(variable)
+        return array is not None and _is_slot_table(d, array.shape, array.scalars)
 
     def _component(self, name: str, what: str) -> _Component:
         if name not in self._components:
@@ -420,45 +422,9 @@ class System:
             }
             path.write_bytes(self.ssd(sources))
             return path
+        from .package import write_package
+
         return write_package(system, self.descriptions(), path)
-
-
-def write_package(system: SystemFile, described: dict, path, say=None) -> Path:
-    """An SSP package (SSP 1.0 §5) of ``system`` written as ``path``: ``SystemStructure.ssd``
-    and every FMU under ``resources/`` (:func:`package_entries`); deterministic (the same
-    system gives the same file)."""
-    from ...fmus.build import write_archive
-
-    return write_archive(Path(path), package_entries(system, described, say))
-
-
-def package_entries(
-    system: SystemFile, described: dict, say=None, folder: str = "resources"
-) -> dict[str, bytes]:
-    """The files of the SSP package of ``system``: ``SystemStructure.ssd`` and every FMU
-    under ``folder``, named by relative URI, so it runs wherever it is copied, each FMU
-    configured with the values the system binds to it (:func:`..export.package`, which
-    tells ``say`` of an FMU it packs unconfigured)."""
-    from ..export import package
-
-    fmus: dict[str, bytes] = {}
-    sources, files = {}, {}
-    for ref in system.components:
-        member = _member(Path(ref.source), fmus)
-        fmus.setdefault(member, Path(ref.source).read_bytes())
-        sources[ref.name], files[member] = member, Path(ref.source)
-    ssd = render_ssd(system, described, sources)
-    return package(ssd, files, say, folder)
-
-
-def _member(fmu: Path, entries: dict) -> str:
-    """The package member of an FMU: ``resources/<file name>``, numbered if another FMU
-    has that name."""
-    member, k = f"resources/{fmu.name}", 1
-    while member in entries and entries[member] != fmu.read_bytes():
-        k += 1
-        member = f"resources/{fmu.stem}_{k}{fmu.suffix}"
-    return member
 
 
 def _end(end: str, described: dict, tables: dict, at: str, problems: list):
@@ -489,16 +455,18 @@ def _end(end: str, described: dict, tables: dict, at: str, problems: list):
 _ROW = re.compile(r"^(.*)\[([0-9]+)\]$")
 
 
-def _is_slot_table(causality: str, shape: tuple, optional: bool) -> bool:
-    """A table of slots: an optional input of shape (n, k), one source a row."""
-    return causality == "input" and len(shape) == 2 and optional
+def _is_slot_table(d, shape: tuple, scalars: list) -> bool:
+    """Whether a variable of ``d`` is a table of slots: an optional input of shape (n, k),
+    one source a row."""
+    first = scalars[0]
+    optional = d.optional_inputs is not None and first.name in d.optional_inputs
+    return first.causality == "input" and len(shape) == 2 and optional
 
 
 def _slots(d, name: str, shape: tuple, scalars: list, size: int):
     """The slot table ``name`` (shape) when a connection of ``size`` scalars names it whole
     and fills whole rows of it, else None."""
-    optional = d.optional_inputs is not None and scalars[0].name in d.optional_inputs
-    if not _is_slot_table(scalars[0].causality, shape, optional) or size == len(scalars):
+    if not _is_slot_table(d, shape, scalars) or size == len(scalars):
         return None
     return shape if size % shape[1] == 0 and size < len(scalars) else None
 
