@@ -43,7 +43,7 @@ import numpy as np
 
 from agilesat.components.cmg_cluster import N_GYROS, PYRAMID_AZIMUTHS
 from agilesat.components.satellite_dynamics import N_MODES
-from agilesat.orchestration.mission import Metric, panels
+from agilesat.orchestration.mission import Metric, Variant, panels
 from agilesat.orchestration.pointing import ErrorHistory, index_series, magnitude
 
 DEG = math.pi / 180
@@ -215,3 +215,16 @@ def figure(error, start: float, stop: float, name: str):
         return panels(out_dir / "imaging_stability.png", "Imaging window: stability", rows)
 
     return draw
+
+
+def variant(error, start: float, stop: float, name: str) -> Variant:
+    """A scenario's ``flexible`` variant: the wings and the rotors, the rotors' jitter
+    metric and the stability figure over the imaging window [start, stop] of ``error``
+    (named ``name`` in the figure)."""
+    return Variant(
+        "two solar-array wings (six modes) and imbalanced CMG rotors (their jitter)",
+        parameters=PARAMETERS,
+        system=with_jitter,
+        metrics=[jitter_metric(start, stop)],
+        figures=[figure(error, start, stop, name)],
+    )
