@@ -25,6 +25,13 @@ PATHS_ON = {
         **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)},
     },
     "StaringGuidance": {"yaw_compensation": [False]},  # q_ref <- q_OI after the capture
+    # a slew from nadir into a stare (at lat 0, lon 0) under way at t = STEP
+    "SlewGuidance": {
+        "segment_count": [2],
+        "segment_kind[1]": [2],
+        "segment_kind[2]": [3],
+        "segment_start[2]": [STEP / 2],
+    },
     "StarTracker": {"latency": [0.0], "rate": [10.0]},  # a sample at t = STEP, released
     "Gyro": {"quantization": [0.0]},  # a perturbation far below one LSB moves nothing
 }
@@ -38,6 +45,9 @@ CONSERVATIVE = {
         for out in ("q_ref", "euler_ref_BO", "footprint_rotation")
         for v in ("v_I", "v_T_I")
     },
+    # the orbit frame's rate enters a slew's attitude only through its plan (the limits'
+    # margins, none at this point)
+    "SlewGuidance": {("q_ref", "w_OI_O")},
     # the rate turns the attitude only of the samples before t0
     "StarTracker": {("q_BI_meas", "w_BI_B")},
     # the position switches the solar pressure only on entering or leaving the shadow
