@@ -90,6 +90,8 @@ def test_references_resolve_inside_the_repository():
         "Wilks 1941",
         "Clopper 1934",
         "Alken 2021",
+        "Biagiotti 2008",
+        "Camillo 1980",
         "Crassidis 2012",
         "Farrenkopf 1978",
         "Kopp 2011",
