@@ -18,8 +18,8 @@ The run starts in segment 1 (whose start must not be after the run's), on it.  A
 ``segment_start[k]`` (k ≥ 2) the slew into segment k begins; it must end before segment
 k + 1 starts (else a ModelError at its start, with the times).  With ``segment_count`` 0
 the table is the single inertial slew of DESIGN.md §3.2: hold ``q_initial``, then at
-``slew_start`` slew to ``q_target``.  :func:`timeline` writes the table from readable
-segments (:func:`inertial`, :func:`nadir`, :func:`stare`).
+``slew_start`` slew to ``q_target``.  ``agilesat.orchestration.mission.timeline`` writes
+the table from readable segments.
 
 Slews (components/slew.py).  A slew from segment A into segment B follows the blend
 q_R = q_A ⊗ exp(s L), L = log(q_A* ⊗ q_B), with s = p(t − t_s)/Θ driven by the least-time
@@ -98,46 +98,6 @@ _IDENTITY = tuple(IDENTITY_Q.tolist())
 _ROLL_30 = (math.cos(15 * DEG), math.sin(15 * DEG), 0.0, 0.0)
 _KINDS = "1 = INERTIAL (segment_q = q_RI), 2 = NADIR (segment_q = q_RO), 3 = STARE"
 _INPUTS = ("r_I", "v_I", "q_OI", "w_OI_O", "earth_angle")
-
-
-# -- the table from readable segments ------------------------------------------------------
-class Segment(NamedTuple):
-    kind: int
-    start: float
-    q: tuple = _IDENTITY
-    target: tuple = (0.0, 0.0, 0.0)  # lat, lon (rad), alt (m)
-
-
-def inertial(start: float, q_RI) -> Segment:
-    """Hold the attitude q_RI from ``start`` (s) on."""
-    return Segment(INERTIAL, start, tuple(q_RI))
-
-
-def nadir(start: float, q_RO=_IDENTITY) -> Segment:
-    """Follow the orbit frame (with the fixed offset q_RO) from ``start`` on."""
-    return Segment(NADIR, start, tuple(q_RO))
-
-
-def stare(start: float, lat: float, lon: float, alt: float = 0.0) -> Segment:
-    """Stare at the ground target (geodetic lat, lon in rad, alt in m) from ``start`` on."""
-    return Segment(STARE, start, target=(lat, lon, alt))
-
-
-def timeline(*segments: Segment) -> dict:
-    """SlewGuidance's parameter values of a timeline: ``system.add("SlewGuidance",
-    **timeline(nadir(0.0), stare(60.0, deg(33.16), deg(129.72)), ...))``."""
-    if not 1 <= len(segments) <= N_SEGMENTS:
-        raise ValueError(f"a timeline has 1 to {N_SEGMENTS} segments, got {len(segments)}")
-    rows = list(segments) + [Segment(0, 0.0)] * (N_SEGMENTS - len(segments))
-    return {
-        "segment_count": len(segments),
-        "segment_kind": [row.kind for row in rows],
-        "segment_start": [row.start for row in rows],
-        "segment_q": [list(row.q) for row in rows],
-        "target_lat": [row.target[0] for row in rows],
-        "target_lon": [row.target[1] for row in rows],
-        "target_alt": [row.target[2] for row in rows],
-    }
 
 
 # -- orbit: prediction and frame -----------------------------------------------------------

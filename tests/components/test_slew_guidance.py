@@ -15,18 +15,9 @@ from agilesat.components import slew
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment, geodetic_to_ecef
 from agilesat.components.rotations import dcm_from_quat, quat_mul
-from agilesat.components.slew_guidance import (
-    N_SEGMENTS,
-    NADIR,
-    SLEW,
-    STARE,
-    SlewGuidance,
-    inertial,
-    nadir,
-    stare,
-    timeline,
-)
+from agilesat.components.slew_guidance import N_SEGMENTS, NADIR, SLEW, STARE, SlewGuidance
 from agilesat.components.staring_guidance import footprint_azimuth
+from agilesat.orchestration.mission import deg, inertial, nadir, stare, timeline
 from agilesat.orchestration.scenarios.video_sar import ORBIT
 
 DEG = math.pi / 180
@@ -345,13 +336,12 @@ def test_a_restored_state_continues_the_slew_bit_for_bit():
 
 
 def test_a_timeline_is_the_table_a_host_sets():
-    table = timeline(nadir(0.0), stare(60.0, 0.5, 2.0, 10.0))
+    table = timeline(nadir(0.0, roll=deg(25)), stare(60.0, deg(30), "120 deg", 10.0))
     assert table["segment_count"] == 2
     assert table["segment_kind"][:2] == [NADIR, STARE] and len(table["segment_kind"]) == N_SEGMENTS
-    assert (table["target_lat"][1], table["target_lon"][1], table["target_alt"][1]) == (
-        0.5,
-        2.0,
-        10.0,
-    )
+    half = 12.5 * DEG
+    assert table["segment_q"][0] == pytest.approx([math.cos(half), math.sin(half), 0, 0])
+    target = (table["target_lat"][1], table["target_lon"][1], table["target_alt"][1])
+    assert target == pytest.approx((30 * DEG, 120 * DEG, 10.0))
     with pytest.raises(ValueError, match="1 to 10 segments"):
         timeline(*[nadir(float(k)) for k in range(N_SEGMENTS + 1)])

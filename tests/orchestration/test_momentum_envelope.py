@@ -23,9 +23,8 @@ from agilesat.components.orbit_environment import (
     MU_EARTH,
     OrbitEnvironment,
 )
-from agilesat.components.slew_guidance import nadir, timeline
 from agilesat.orchestration import run
-from agilesat.orchestration.mission import System
+from agilesat.orchestration.mission import System, nadir, timeline
 
 PERIOD = 2 * math.pi * math.sqrt(DEFAULT_SEMI_MAJOR_AXIS**3 / MU_EARTH)
 J = [[60.0, 0.0, 8.0], [0.0, 80.0, 0.0], [8.0, 0.0, 50.0]]  # kg·m²
