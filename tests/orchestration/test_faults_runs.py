@@ -1,13 +1,19 @@
 """Faults of a run's output, its interruptions, what it is given and campaigns, each
 injected in fresh processes with real signals (``tests/tools/fault_cases_runs.py``,
-``fault_cases_inputs.py``, ``fault_cases_campaign.py``)."""
+``fault_cases_inputs.py``, ``fault_cases_records.py``, ``fault_cases_campaign.py``)."""
 
 import fault_cases_campaign
 import fault_cases_inputs
+import fault_cases_records
 import fault_cases_runs
 import pytest
 
-CASES = fault_cases_runs.CASES + fault_cases_inputs.CASES + fault_cases_campaign.CASES
+CASES = (
+    fault_cases_runs.CASES
+    + fault_cases_inputs.CASES
+    + fault_cases_records.CASES
+    + fault_cases_campaign.CASES
+)
 
 
 @pytest.mark.slow

@@ -22,6 +22,7 @@ from helpers import ROOT
 
 KEEP = "SatelliteDynamics.w_BO_B[2]"
 SMALL = [
+    "--no-report",
     "--stop",
     "1",
     "--vary",
@@ -140,7 +141,15 @@ def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
     with tempfile.TemporaryDirectory() as tmp:
         for label, extra in trials:
             out = Path(tmp) / "c"
-            command = [*CLI, "campaign", "scan_pitch", "--stop", "1", "--no-progress"]
+            command = [
+                *CLI,
+                "campaign",
+                "scan_pitch",
+                "--stop",
+                "1",
+                "--no-progress",
+                "--no-report",
+            ]
             command += ["--out", str(out), *extra]
             code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", limit_seconds * 2)
             good = (
@@ -208,7 +217,17 @@ def nonfinite_dispersions():
     with tempfile.TemporaryDirectory() as tmp:
         for vary in trials:
             result = subprocess.run(
-                [*CLI, "campaign", "scan_pitch", "--stop", "1", "--vary", vary, "--no-progress"]
+                [
+                    *CLI,
+                    "campaign",
+                    "scan_pitch",
+                    "--stop",
+                    "1",
+                    "--vary",
+                    vary,
+                    "--no-progress",
+                    "--no-report",
+                ]
                 + ["--out", str(Path(tmp) / "c")],
                 cwd=ROOT,
                 capture_output=True,
