@@ -3,9 +3,12 @@
 Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
 or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
-by SIGTERM (everything recorded so far is kept, and the summary says what was not
-written; a second signal changes nothing).
+as required, a requirement not met (the summary's diagnostics say why); 4 nothing not
+met, but a statistical requirement undecided: its runs show neither compliance nor a
+violation at its confidence (campaign, pointing; the verdict says roughly how many runs
+would settle it); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (everything
+recorded so far is kept, and the summary says what was not written; a second signal
+changes nothing).
 """
 
 from __future__ import annotations
@@ -444,7 +447,17 @@ def report(summary) -> int:
     from .output.summary import format_summary
 
     print(format_summary(summary))
-    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
+    if summary.get("status") == "error":  # a metric, requirement or figure raised
+        return 1
+    return exit_status(summary.get("status") == "failed", summary.get("requirements", {}))
+
+
+def exit_status(failed: bool, verdicts) -> int:
+    """3 when something failed or a requirement is not met, else 4 when one is
+    undecided, else 0; ``verdicts``: {name: {"verdict": ...}} (a summary's
+    ``requirements``, a campaign's ``ensemble``)."""
+    statuses = {v.get("verdict") for v in verdicts.values()}
+    return 3 if failed or "not met" in statuses else 4 if "undecided" in statuses else 0
 
 
 def _export(args) -> int:

@@ -46,8 +46,10 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
     cols += [(name, plan.kinds[name]) for name in plan.columns]
     cols += [("status", "s"), ("message", "s")]
     cols += [(name, "f") for name in catalog.get("metrics", {})]
-    for name in catalog.get("requirements", {}):
-        cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
+    for name, requirement in catalog.get("requirements", {}).items():
+        if requirement.get("judged_over") != "campaign":  # else: "judged over the campaign"
+            cols.append((f"met_{name}", "b"))
+        cols.append((f"verdict_{name}", "s"))
     return cols + [("worker", "s"), ("seconds", "f"), ("cpu_seconds", "f")]
 
 
@@ -322,12 +324,13 @@ def _described(meta: dict) -> str:
 
 
 def _save(fig, ax, path: Path) -> Path:
-    """A campaign figure written (grid, layout, the run figures' resolution) and closed."""
+    """A campaign figure written (grid, layout, the run figures' resolution; its title also
+    in the PNG's "Title", for tools and tests that read files) and closed."""
     from ..output.plots import DPI, plt
 
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI)
+    fig.savefig(path, dpi=DPI, metadata={"Title": ax.get_title()})
     plt.close(fig)
     return path
 
