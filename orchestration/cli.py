@@ -195,6 +195,12 @@ def _system_commands(commands, quiet) -> None:
         "(SatelliteDynamics.*); default all",
     )
     run.add_argument(
+        "--error-estimate",
+        action="store_true",
+        help="rerun at half and a quarter of the step and state each metric's numerical "
+        "error (Richardson, observed order) and the requirements it leaves undecided",
+    )
+    run.add_argument(
         "--no-derivatives",
         action="store_true",
         help="do not couple through FMI input/output derivatives where no wire passes "
@@ -239,7 +245,7 @@ def _system_commands(commands, quiet) -> None:
     export = commands.add_parser(
         "export",
         help="write a scenario[:variant], a mission file or a system file as a "
-        "self-contained SSP package (.ssd + FMUs)",
+        "self-contained SSP package (.ssd + FMUs), a system file or one configured FMU",
     )
     export.add_argument("target", help=TARGETS)
     export.add_argument(
@@ -249,7 +255,24 @@ def _system_commands(commands, quiet) -> None:
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value written into the package (as `run --set`)",
     )
-    export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
+    export.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="the file to write: an .ssp package, an .ssd (its FMUs in OUT_STEM.fmus/ beside "
+        "it), or one component's .fmu (with --component)",
+    )
+    export.add_argument(
+        "--accuracy",
+        metavar="ANGLE",
+        help="choose the package's step (halving it) so that hosts holding the inputs over "
+        "a step (libcosim, ECOS) stay within ANGLE of our master on the attitude, e.g. 0.05deg",
+    )
+    export.add_argument(
+        "--component",
+        metavar="NAME",
+        help="write only this component's FMU, configured with the system's values and step",
+    )
 
     generate = commands.add_parser(
         "generate",  # a developer's command: not in `agilesat --help`
@@ -377,6 +400,8 @@ def _run(args) -> int:
         )
     if args.mat:
         results.to_mat(out / "results.mat")
+    if args.error_estimate:
+        _error_estimate(args, overrides, summary, out)
     from .output.report import cli as report_cli
 
     report_cli.after(args, out)
@@ -385,7 +410,36 @@ def _run(args) -> int:
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return report(summary)
+    status = report(summary)
+    if args.error_estimate:
+        from .error_estimate import lines
+
+        print("\n".join(lines(summary["numerical_error"])))
+    return status
+
+
+def _error_estimate(args, overrides, summary: dict, out: Path) -> None:
+    """``--error-estimate``: the run again at half and a quarter of its step
+    (:mod:`.error_estimate`), into the summary and summary.json."""
+    from .error_estimate import estimate
+    from .output.recorder import write_text
+    from .output.summary import summary_text
+    from .runner import run
+
+    def rerun(step):
+        return run(
+            args.target,
+            step=step,
+            stop=args.stop,
+            start=args.start,
+            algorithm=args.algorithm,
+            parameters=overrides,
+            figures=False,
+            derivatives=False if args.no_derivatives else None,
+        )[1]
+
+    summary["numerical_error"] = estimate(summary, rerun)
+    write_text(out / "summary.json", summary_text(summary))
 
 
 def _pointing(args) -> int:
@@ -461,10 +515,10 @@ def exit_status(failed: bool, verdicts) -> int:
 
 
 def _export(args) -> int:
-    from .export import export_ssp
+    from .export import export
     from .system.parameters import parse_set
 
-    print(export_ssp(args.target, args.out, parse_set(args.set)))
+    print(export(args.target, args.out, parse_set(args.set), args.component, args.accuracy))
     return 0
 
 
@@ -489,8 +543,8 @@ def _generate(args) -> int:
     from ..fmus.build import generated_files
     from .mission.targets import generated_systems
 
-    files = generated_systems()
-    files.update(generated_files())
+    files = generated_files()  # first: the systems build FMUs, which need protocol.h
+    files.update(generated_systems())
     checkout = source_checkout()
     if not checkout and not args.check:
         raise ValueError(

@@ -12,10 +12,12 @@ interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
 from __future__ import annotations
 
 import argparse
+import json
 import signal
 from pathlib import Path
 
 from ..cli import ALGORITHM
+from ..error_estimate import sample, sample_lines
 from ..output.report import cli as report_cli
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
@@ -96,6 +98,15 @@ def add_parser(commands) -> argparse.ArgumentParser:
         metavar="N",
         help="with --until-decided, the most runs (default: 5 times the most any such "
         "requirement needs with none above its bound)",
+    )
+    p.add_argument(
+        "--error-estimate",
+        type=int,
+        metavar="N",
+        default=0,
+        help="rerun the first N runs that succeeded at half and a quarter of the step and "
+        "state each metric's numerical error (Richardson) and the runs a requirement is "
+        "not decided by",
     )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
     p.add_argument(
@@ -184,10 +195,14 @@ def main(args) -> int:
             f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
         )
         return 128 + _first()
+    if args.error_estimate:
+        _error_estimate(args, spec, result)
     report_cli.after(args, result.out_dir)
     print(format_campaign(result.summary))
     if "until_decided" in result.summary:
         print(format_until_decided(result.summary))
+    if args.error_estimate:
+        print("\n".join(sample_lines(result.summary["numerical_error"])))
     print(f"results in {result.out_dir}/")
     if engine.INTERRUPTS.signals:  # as the cluster closed
         print(f"{_first().name} as the cluster closed: every run was made and written")
@@ -202,6 +217,30 @@ def campaign_status(summary: dict) -> int:
     runs = summary["runs"]
     unmet = any(r["not_met"] for r in summary["pass_rates"].values())
     return exit_status(runs["planned"] != runs["ok"] or unmet, summary["ensemble"])
+
+
+def _error_estimate(args, spec, result) -> None:
+    """``--error-estimate N`` (orchestration/error_estimate.py), into campaign.json."""
+    from ..output.recorder import write_text
+    from ..runner import run
+
+    journal = engine.read_journal(result.out_dir / "runs.jsonl")
+    chosen = [r for _, r in sorted(journal.items()) if r["status"] == "ok"][: args.error_estimate]
+    settings = result.summary["settings"]
+
+    def rerun(values, step):
+        parameters = {**spec.set, **values}
+        return run(
+            spec.target,
+            step=step,
+            stop=settings["stop"],
+            algorithm=spec.algorithm,
+            parameters=parameters,
+            figures=False,
+        )[1]
+
+    result.summary["numerical_error"] = sample(chosen, settings["step"], rerun)
+    write_text(result.out_dir / "campaign.json", json.dumps(result.summary, indent=2) + "\n")
 
 
 RESUME = "the same command with --resume continues it"
