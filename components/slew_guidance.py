@@ -207,6 +207,8 @@ class Plan:
 class SlewGuidance(Model):
     """Segments (inertial, nadir, stare) and minimum-time eigenaxis slews between them."""
 
+    DEFAULT_STOP = 30.0  #: the default 30° slew (20 s) and its end
+
     VARIABLES = (
         parameter("rate_limit", 2.0 * DEG, "rad/s", "largest slew rate", display_unit="deg/s"),
         parameter(
