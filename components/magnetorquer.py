@@ -18,8 +18,8 @@ import math
 import numpy as np
 
 from .model import Model, ModelError
-from .rotations import cross
 from .variables import input_, output, parameter
+from .vectors import cross
 
 
 class Magnetorquer(Model):

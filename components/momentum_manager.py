@@ -30,8 +30,8 @@ from __future__ import annotations
 import math
 
 from .model import Model, ModelError
-from .rotations import cross, dot
 from .variables import input_, output, parameter
+from .vectors import cross, dot
 
 
 class MomentumManager(Model):

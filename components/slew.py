@@ -46,7 +46,8 @@ from __future__ import annotations
 
 import math
 
-from .rotations import cross, dcm, dot, norm, qmul, rotate
+from .rotations import dcm, qmul
+from .vectors import add, combine, cross, dot, norm, rotate, scale, sub, total
 
 SERIES_BELOW = 0.2  # rad: the Jacobians' coefficients from their Taylor series below it
 
@@ -140,16 +141,11 @@ def _coefficients(x: float) -> tuple:
     )
 
 
-def _sum(*terms) -> tuple:
-    """Σ k v over the (k, v) pairs."""
-    return tuple(sum(k * v[i] for k, v in terms) for i in range(3))
-
-
 def jacobian(psi, v) -> tuple:
     """J(ψ) v."""
     a, b, _, _ = _coefficients(norm(psi))
     u = cross(psi, v)
-    return _sum((1.0, v), (-a, u), (b, cross(psi, u)))
+    return add(v, combine(-a, u, b, cross(psi, u)))
 
 
 def jacobian_inverse(psi, v) -> tuple:
@@ -163,7 +159,7 @@ def jacobian_inverse(psi, v) -> tuple:
     else:
         c = 1.0 / x2 - (1.0 + math.cos(x)) / (2.0 * x * math.sin(x))
     u = cross(psi, v)
-    return _sum((1.0, v), (0.5, u), (c, cross(psi, u)))
+    return add(v, combine(0.5, u, c, cross(psi, u)))
 
 
 def jacobian_rate(psi, dpsi, v) -> tuple:
@@ -175,12 +171,12 @@ def jacobian_rate(psi, dpsi, v) -> tuple:
     a, b, a1, b1 = _coefficients(norm(psi))
     rate = dot(psi, dpsi)
     u, du = cross(psi, v), cross(dpsi, v)
-    return _sum(
-        (-a1 * rate, u),
-        (-a, du),
-        (b1 * rate, cross(psi, u)),
-        (b, cross(dpsi, u)),
-        (b, cross(psi, du)),
+    return total(
+        (
+            combine(-a1 * rate, u, -a, du),
+            scale(b1 * rate, cross(psi, u)),
+            scale(b, add(cross(dpsi, u), cross(psi, du))),
+        )
     )
 
 
@@ -190,28 +186,30 @@ def relative(a, b, q_D) -> tuple:
     chosen by the caller (module docstring)."""
     C_BA = dcm(q_D)
     w_A = rotate(C_BA, a[1])
-    w_BA = _sum((1.0, b[1]), (-1.0, w_A))
-    dw_BA = _sum((1.0, b[2]), (-1.0, rotate(C_BA, a[2])), (1.0, cross(w_BA, w_A)))
+    w_BA = sub(b[1], w_A)
+    dw_BA = add(sub(b[2], rotate(C_BA, a[2])), cross(w_BA, w_A))
     L = log_q(q_D)
     dL = jacobian_inverse(L, w_BA)
-    ddL = jacobian_inverse(L, _sum((1.0, dw_BA), (-1.0, jacobian_rate(L, dL, dL))))
+    ddL = jacobian_inverse(L, sub(dw_BA, jacobian_rate(L, dL, dL)))
     return L, dL, ddL
 
 
 def blend(a, L, dL, ddL, s: float, ds: float, dds: float) -> tuple:
     """(q_R, ω_R, ω̇_R) of the frame turned from frame a = (q_A, ω_A, ω̇_A) by the
     fraction s (with ṡ, s̈) of the relative rotation (L, L̇, L̈) (module docstring)."""
-    psi = _sum((s, L))
-    dpsi = _sum((ds, L), (s, dL))
-    ddpsi = _sum((dds, L), (2.0 * ds, dL), (s, ddL))
+    psi = scale(s, L)
+    dpsi = combine(ds, L, s, dL)
+    ddpsi = add(combine(dds, L, 2.0 * ds, dL), scale(s, ddL))
     E = exp_q(psi)
     C_RA = dcm(E)
     w_A = rotate(C_RA, a[1])
     w_RA = jacobian(psi, dpsi)
-    dw = _sum(
-        (1.0, rotate(C_RA, a[2])),
-        (1.0, cross(w_A, w_RA)),
-        (1.0, jacobian(psi, ddpsi)),
-        (1.0, jacobian_rate(psi, dpsi, dpsi)),
+    dw = total(
+        (
+            rotate(C_RA, a[2]),
+            cross(w_A, w_RA),
+            jacobian(psi, ddpsi),
+            jacobian_rate(psi, dpsi, dpsi),
+        )
     )
-    return qmul(a[0], E), _sum((1.0, w_A), (1.0, w_RA)), dw
+    return qmul(a[0], E), add(w_A, w_RA), dw

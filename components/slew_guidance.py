@@ -69,22 +69,28 @@ import numpy as np
 from . import slew
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, geodetic_to_ecef
-from .rotations import IDENTITY_Q, cross, dcm, dot, norm, qmul, quat_dot, quat_of_rows, rotate
+from .rotations import IDENTITY_Q, dcm, qmul, quat_of_rows
 from .staring_guidance import (
-    _START_Q_OI,
-    _START_R,
-    _START_V,
     MIN_SLANT_RANGE,
+    OK,
     Q_OI_TOLERANCE,
-    _aligned_axes,
-    _aligned_frame,
-    _latitude,
-    _line_of_sight,
-    _tangent_frame,
-    footprint_axis,
-    ground_line,
+    START_Q_OI,
+    START_R,
+    START_V,
+    aligned_axes,
+    aligned_frame,
+    frozen_direction,
+    geodetic_latitude,
+    ground_fixed,
+    line_of_sight,
+    mismatch,
+    mount,
+    orbit_axes,
+    tangent_frame,
+    x_axis_rates,
 )
 from .variables import input_, output, parameter
+from .vectors import dot, norm, quat_dot, rotate, sub
 
 SLEW, INERTIAL, NADIR, STARE = range(4)
 N_SEGMENTS = 10
@@ -93,7 +99,6 @@ SAMPLES = 32  # instants of a slew between moving segments checked against the l
 #: (with the ends of its profile's phases)
 DEG = math.pi / 180.0
 ZERO = (0.0, 0.0, 0.0)
-_Z = (0.0, 0.0, 1.0)
 _IDENTITY = tuple(IDENTITY_Q.tolist())
 _ROLL_30 = (math.cos(15 * DEG), math.sin(15 * DEG), 0.0, 0.0)
 _KINDS = "1 = INERTIAL (segment_q = q_RI), 2 = NADIR (segment_q = q_RO), 3 = STARE"
@@ -132,36 +137,17 @@ def two_body(r, v, dt: float) -> tuple:
 def orbit_frame(r, v) -> tuple:
     """(C_OI rows, w_OI_O, its derivative) of the two-body orbit frame of (r, v)
     (components/orbit_environment.py): w_OI_O = (0, −|h|/r², 0), d/dt = (0, 2|h| ṙ/r³, 0)."""
-    h_vec = cross(r, v)
-    h, radius = norm(h_vec), norm(r)
-    if not h > 1e-12 * radius * max(norm(v), 1.0):
+    defined, rows, radius, r_hat, h = orbit_axes(r, v)
+    if not defined:
         raise ModelError("r_I and v_I are parallel or zero: the orbit frame is undefined")
-    r_hat = tuple(x / radius for x in r)
-    h_hat = tuple(x / h for x in h_vec)
-    rows = (cross(h_hat, r_hat), tuple(-x for x in h_hat), tuple(-x for x in r_hat))
-    rate = dot(v, r_hat)
-    return rows, (0.0, -h / radius**2, 0.0), (0.0, 2.0 * h * rate / radius**3, 0.0)
+    return rows, (0.0, -h / radius**2, 0.0), (0.0, 2.0 * h * dot(v, r_hat) / radius**3, 0.0)
 
 
 def _yaw_zero_direction(r, v) -> tuple:
-    """(x_O, ẋ_O, ẍ_O) along the two-body orbit (components/staring_guidance.py)."""
-    (x_O, _, _), (_, w_y, _), _ = orbit_frame(r, v)
-    radius = norm(r)
-    r_hat = tuple(x / radius for x in r)
-    k = -w_y  # |h|/r²
-    rate = dot(v, r_hat)
-    return (
-        x_O,
-        tuple(-k * x for x in r_hat),
-        tuple(2.0 * k * rate / radius * a - k * k * b for a, b in zip(r_hat, x_O)),
-    )
-
-
-def _earth_fixed(vector, angle: float, inverse: bool = False) -> tuple:
-    """R3(angle) vector (I to E), or its transpose (E to I) with ``inverse``."""
-    c, s = math.cos(angle), (-1.0 if inverse else 1.0) * math.sin(angle)
-    x, y, z = vector
-    return (c * x + s * y, -s * x + c * y, z)
+    """(x_O, ẋ_O, ẍ_O) along the two-body orbit (StaringGuidance's reference direction)."""
+    (x_O, _, _), _, _ = orbit_frame(r, v)
+    _, _, radius, r_hat, h = orbit_axes(r, v)
+    return (x_O, *x_axis_rates(x_O, r_hat, radius, h, v))
 
 
 class Geometry(NamedTuple):
@@ -321,7 +307,7 @@ class SlewGuidance(Model):
             "r_I",
             "m",
             "satellite position in I",
-            _START_R,
+            START_R,
             shape=(3,),
             optional="needed by NADIR and STARE segments only",
         ),
@@ -329,7 +315,7 @@ class SlewGuidance(Model):
             "v_I",
             "m/s",
             "satellite velocity in I",
-            _START_V,
+            START_V,
             shape=(3,),
             optional="needed by NADIR and STARE segments only",
         ),
@@ -337,7 +323,7 @@ class SlewGuidance(Model):
             "q_OI",
             "1",
             "attitude of the orbit frame O relative to I (must match r_I, v_I)",
-            _START_Q_OI,
+            START_Q_OI,
             shape=(4,),
             optional="needed by NADIR segments only",
         ),
@@ -401,11 +387,8 @@ class SlewGuidance(Model):
         if not p.jerk_limit > 0.0:
             raise ModelError(f"jerk_limit must be > 0 (inf: none), got {p.jerk_limit}")
         self.rows = self._rows(t0)
-        b = np.array(p.boresight_B)
-        a_B = footprint_axis(b)
-        b = b / math.sqrt(float(b @ b))
-        mount = np.column_stack((a_B, np.cross(b, a_B), b))
-        self.mount = None if np.array_equal(mount, np.eye(3)) else tuple(map(tuple, mount))
+        C_RP = mount(p.boresight_B)
+        self.mount = None if np.array_equal(C_RP, np.eye(3)) else tuple(map(tuple, C_RP))
         self.segment = 0  # held, or entered by self.plan
         self.plan: Plan | None = None
         self.footprint: dict = {}  # segment -> (g in E, the time it was frozen)
@@ -512,15 +495,12 @@ class SlewGuidance(Model):
             if bad:
                 raise ModelError(f"t={self.t:.6g} s: inputs {bad} are not finite")
             rows, w_two_body, dw_O = orbit_frame(r, v)
-            if any(row.kind == NADIR for row in self.rows):
-                C_OI = dcm(q_OI)
-                mismatch = max(abs(C_OI[i][j] - rows[i][j]) for i in range(3) for j in range(3))
-                if mismatch > Q_OI_TOLERANCE:
-                    raise ModelError(
-                        f"t={self.t:.6g} s: q_OI does not match the orbit frame of r_I, v_I by "
-                        f"{mismatch:.3g} > {Q_OI_TOLERANCE:g}: connect q_OI, r_I and v_I from "
-                        "one orbit"
-                    )
+            error = mismatch(dcm(q_OI), rows)
+            if any(row.kind == NADIR for row in self.rows) and error > Q_OI_TOLERANCE:
+                raise ModelError(
+                    f"t={self.t:.6g} s: q_OI does not match the orbit frame of r_I, v_I by "
+                    f"{error:.3g} > {Q_OI_TOLERANCE:g}: connect q_OI, r_I and v_I from one orbit"
+                )
             self._now = Geometry(
                 r, v, float(u.earth_angle), q_OI, w_O if any(w_O) else w_two_body, dw_O
             )
@@ -546,22 +526,19 @@ class SlewGuidance(Model):
 
     def _target(self, row: Row, geometry: Geometry) -> tuple:
         """(r_T, v_T, û, u̇, ü) in I (StaringGuidance's line of sight)."""
-        r_T = _earth_fixed(row.r_T_E, geometry.earth_angle, inverse=True)
-        v_T = tuple(EARTH_RATE * x for x in cross(_Z, r_T))
-        distance = norm(tuple(a - b for a, b in zip(r_T, geometry.r)))
+        r_T, v_T, _ = ground_fixed(row.r_T_E, geometry.earth_angle)
+        distance = norm(sub(r_T, geometry.r))
         if not distance > MIN_SLANT_RANGE:
             raise ModelError(f"t={self.t:.6g} s: the satellite is at the target of a stare")
-        return (r_T, v_T) + _line_of_sight(geometry.r, geometry.v, r_T, v_T, distance)
+        return (r_T, v_T) + line_of_sight(geometry.r, geometry.v, r_T, v_T, distance)
 
     def _stare(self, row: Row, geometry: Geometry, footprint, k: int) -> tuple:
         _, _, u, du, ddu = self._target(row, geometry)
         if footprint is None:
             a, da, dda = _yaw_zero_direction(geometry.r, geometry.v)
         else:
-            a = _earth_fixed(footprint, geometry.earth_angle, inverse=True)
-            da = tuple(EARTH_RATE * x for x in cross(_Z, a))
-            dda = tuple(EARTH_RATE * x for x in cross(_Z, da))
-        ok, C_RI, w, dw = _aligned_frame(u, du, ddu, a, da, dda)
+            a, da, dda = ground_fixed(footprint, geometry.earth_angle)
+        ok, C_RI, w, dw = aligned_frame(u, du, ddu, a, da, dda)
         if not ok:
             raise ModelError(
                 f"t={self.t:.6g} s: segment {k + 1}: the line of sight is parallel to the "
@@ -580,27 +557,22 @@ class SlewGuidance(Model):
     def _freeze(self, row: Row, geometry: Geometry) -> tuple:
         """g in E: the ground line of the yaw-0 frame at ``geometry`` (StaringGuidance)."""
         r_T, _, u, _, _ = self._target(row, geometry)
-        x_O = _yaw_zero_direction(geometry.r, geometry.v)[0]
-        ok, x0, _, _, _ = _aligned_axes(u, x_O)
-        found, latitude = _latitude(r_T)
-        d = ground_line(u, x0, _tangent_frame(r_T, latitude)[0]) if ok and found else ZERO
-        if not norm(d) > 1e-12:
+        ok, x0, _, _, _ = aligned_axes(u, _yaw_zero_direction(geometry.r, geometry.v)[0])
+        status, g, _, _ = frozen_direction(u, x0, r_T) if ok else (not OK, x0, 0.0, 0.0)
+        if status != OK:
             raise ModelError(
                 f"t={self.t:.6g} s: the footprint direction of a stare is undefined (target at "
                 "a pole, pitch +-90 deg, or a grazing view)"
             )
-        return _earth_fixed(tuple(x / norm(d) for x in d), geometry.earth_angle)
+        return ground_fixed(g, -geometry.earth_angle)[0]  # in E
 
     def _check_horizon(self, k: int) -> None:
         """Warn once when a stare's target is below the satellite's horizon."""
         row, geometry = self.rows[k], self.now()
-        r_T = _earth_fixed(row.r_T_E, geometry.earth_angle, inverse=True)
-        found, latitude = _latitude(r_T)
-        up = _tangent_frame(r_T, latitude)[0] if found else tuple(x / norm(r_T) for x in r_T)
-        if (
-            dot(up, tuple(a - b for a, b in zip(geometry.r, r_T))) < 0.0
-            and k not in self.below_horizon
-        ):
+        r_T = ground_fixed(row.r_T_E, geometry.earth_angle)[0]
+        found, latitude = geodetic_latitude(r_T)
+        up = tangent_frame(r_T, latitude)[0] if found else tuple(x / norm(r_T) for x in r_T)
+        if dot(up, sub(geometry.r, r_T)) < 0.0 and k not in self.below_horizon:
             self.below_horizon |= {k}
             self.warnings.append(
                 f"t={self.t:.6g} s: the target of segment {k + 1} is below the horizon: the "
