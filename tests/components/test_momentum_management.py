@@ -81,7 +81,7 @@ def test_the_unloading_rate_over_a_polar_orbit_is_the_orbit_averaged_closed_form
         orbit.advance(0.0, t)
         field.set("r_I", orbit.get("r_I"))
         field.set("v_I", orbit.get("v_I"))
-        return field.start(t).get("mag_field_B")
+        return field.start(t).get("b_B")
 
     def hdot(h, b_B):
         return torque(h, b_B, k)[1]

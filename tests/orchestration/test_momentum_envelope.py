@@ -66,8 +66,8 @@ def managed_nadir(orbits: int) -> System:
     system.connect("Flywheel.h", "SatelliteDynamics.h_wheel")
     system.connect("Flywheel.hdot", "SatelliteDynamics.hdot_wheel")
     system.connect("Flywheel.h", "MomentumManager.h_B")
-    system.connect("DisturbanceTorques.mag_field_B", "MomentumManager.b_B")
-    system.connect("DisturbanceTorques.mag_field_B", "Magnetorquer.b_B")
+    system.connect("DisturbanceTorques.b_B", "MomentumManager.b_B")
+    system.connect("DisturbanceTorques.b_B", "Magnetorquer.b_B")
     system.connect("MomentumManager.m_cmd_B", "Magnetorquer.m_cmd_B")
     system.connect("Magnetorquer.tau_B", "SatelliteDynamics.tau_ext")
     return system
