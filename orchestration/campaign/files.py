@@ -1,6 +1,7 @@
-"""Reading a campaign's own files back (``--resume``, the summary): what is not what the
-campaign wrote is an error naming the file (and line) and what was expected, never a
-traceback; and the content hash of the system a campaign runs, which a resume must match.
+"""A campaign's files: its own read back (``--resume``, the summary), where what is not
+what the campaign wrote is an error naming the file (and line) and what was expected,
+never a traceback; the content hash of the system a campaign runs, which a resume must
+match; and the shipped dispersion files of the scenarios (``shipped/``).
 """
 
 from __future__ import annotations
@@ -8,6 +9,8 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
+
+SHIPPED_DIR = Path(__file__).resolve().parent / "shipped"
 
 
 class CampaignFileError(ValueError):
@@ -65,3 +68,23 @@ def _sha256(path) -> str:
 def changed(recorded: dict, now: dict) -> list[str]:
     """The files whose content (or presence) differs between two :func:`system_content`."""
     return sorted(f for f in set(recorded) | set(now) if recorded.get(f) != now.get(f))
+
+
+def shipped(name: str) -> Path:
+    """The shipped dispersion file of a scenario (``shipped/<name>.toml``)."""
+    path = SHIPPED_DIR / f"{name}.toml"
+    if not path.exists():
+        raise KeyError(
+            f"no shipped campaign {name!r}; shipped: "
+            f"{', '.join(p.stem for p in sorted(SHIPPED_DIR.glob('*.toml')))}"
+        )
+    return path
+
+
+def shipped_files(target: str) -> list[Path]:
+    """The shipped dispersion files of a scenario[:variant]: the scenario's, then the
+    variant's additions where it has some (``shipped/<name>.<variant>.toml``: the sensed
+    variants' sensor noise)."""
+    name, _, variant = target.partition(":")
+    extra = SHIPPED_DIR / f"{name}.{variant}.toml"
+    return [shipped(name), *([extra] if variant and extra.exists() else [])]

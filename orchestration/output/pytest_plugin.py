@@ -9,7 +9,7 @@ Fixtures:
   ``step``, ``stop``, ``parameters``, ``figures``, ...) and returns ``(results, summary)``;
   the run's files are in ``summary["out_dir"]``.
 
-Assertions (:mod:`agilesat.orchestration.output.checks`, re-exported here): ``assert_within``,
+Assertions (:mod:`agilesat.orchestration.postprocess.checks`, re-exported here): ``assert_within``,
 ``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``,
 ``assert_pointing`` (an ECSS index of a run or a campaign).
 """
@@ -20,7 +20,7 @@ import json
 
 import pytest
 
-from .checks import (  # noqa: F401
+from ..postprocess.checks import (  # noqa: F401
     assert_momentum_conserved,
     assert_pointing,
     assert_requirements_met,
