@@ -43,12 +43,13 @@ u_T::
 
 u_I integrates over each step with att_error at its start (the inputs held) and is
 clamped to ``integral_limit`` per axis (anti-windup: it never holds more torque than the
-limit, so it comes off it as soon as the error changes sign).  Bumpless switching by
-integrator re-initialisation: when ``mode`` changes, the command's jump
-Δ = PD_new − PD_old (PD = −kp ∘ att_error − kd ∘ rate_error at the switch) is taken up so
-that tau_cmd is continuous: on an axis where the new mode integrates, the integrator is
-re-initialised to u_I + u_T + Δ (within its limit; what exceeds it joins u_T), elsewhere
-u_I + u_T + Δ becomes the transfer term; u_T then decays with ``transfer_time``.  The mode,
+limit, so it comes off it as soon as the error changes sign).  Bumpless switching: when
+``mode`` changes, the command's jump Δ = PD_new − PD_old (PD = −kp ∘ att_error −
+kd ∘ rate_error at the switch) is taken up by the transfer term, u_T ← u_T + Δ, so that
+tau_cmd is continuous, and u_T then decays with ``transfer_time`` (short against the new
+mode's loop: the torque the old gains gave a transient is not held open loop); the
+integrator keeps u_I where the new mode integrates (the disturbance it has learnt) and
+hands it to u_T on an axis where the new mode does not (no bias held forever).  The mode,
 u_I and u_T change at communication points: an output evaluated again at the same time (a
 Gauss-Seidel host) gives the same command.
 
@@ -121,7 +122,7 @@ class AttitudeController(Model):
         ),
         parameter(
             "transfer_time",
-            10.0,
+            1.0,
             "s",
             "time constant of the decay of the transfer term that keeps the command "
             "continuous across a change of mode",
@@ -313,8 +314,8 @@ def errors(v) -> tuple:
 
 @jitable
 def offsets(v, s, e, r) -> tuple:
-    """(u_I, u_T) at this communication point: the state's, re-initialised across a change
-    of mode so that the command is continuous (module docstring)."""
+    """(u_I, u_T) at this communication point: the state's, across a change of mode the
+    transfer term taking up the command's jump (module docstring)."""
     m, last = int(v[U.mode]), int(s[S.mode])
     new, old = S.gains + 9 * m, S.gains + 9 * last
     u_I = [s[S.integral], s[S.integral + 1], s[S.integral + 2]]
@@ -323,10 +324,9 @@ def offsets(v, s, e, r) -> tuple:
         for i in range(3):
             pd_new = -s[new + i] * e[i] - s[new + 3 + i] * r[i]
             pd_old = -s[old + i] * e[i] - s[old + 3 + i] * r[i]
-            held = u_I[i] + u_T[i] + (pd_new - pd_old)
-            limit = s[S.limit + i]
-            u_I[i] = min(limit, max(-limit, held)) if s[new + 6 + i] != 0.0 else 0.0
-            u_T[i] = held - u_I[i]
+            u_T[i] += pd_new - pd_old
+            if s[new + 6 + i] == 0.0:  # no integral action in the new mode
+                u_I[i], u_T[i] = 0.0, u_T[i] + u_I[i]
     return (u_I[0], u_I[1], u_I[2]), (u_T[0], u_T[1], u_T[2])
 
 

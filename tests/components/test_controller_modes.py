@@ -101,14 +101,17 @@ def test_a_switch_is_bumpless_and_the_transfer_decays_with_transfer_time():
     assert tau[10:] == pytest.approx(new + (old - new) * np.exp(-after / transfer), rel=1e-12)
 
 
-def test_switching_into_an_integrating_mode_reinitialises_the_integrator():
-    """Into a mode with integral action the jump is taken up by the integrator, which then
-    integrates from there: continuous, and ramping at ki e."""
-    ki, dt = 0.2, 0.5
+def test_switching_into_an_integrating_mode_keeps_the_integral_and_transfers_the_jump():
+    """Into a mode with integral action: continuous; the integral ramps at ki e from where
+    it was (zero here) and the jump decays with transfer_time."""
+    ki, dt, transfer = 0.2, 0.5, 1.0
     c = AttitudeController(**table({3: (20.0, KD, ki)}), integral_limit=[1.0] * 3)
     tau = held(c, np.arange(20) * dt, [0] * 10 + [3] * 10)
     assert tau[10] == pytest.approx(tau[9], abs=1e-15)  # the error and the time as before
-    assert np.diff(tau[10:]) == pytest.approx([-ki * ERROR * dt] * 9, rel=1e-9)
+    after = np.arange(10) * dt
+    new, old = -20.0 * ERROR, -KP * ERROR
+    expected = new - ki * ERROR * after + (old - new) * np.exp(-after / transfer)
+    assert tau[10:] == pytest.approx(expected, rel=1e-12)
 
 
 def test_a_constant_disturbance_leaves_tau_over_kp_with_pd_and_nothing_with_pid():
