@@ -31,6 +31,12 @@ Output derivatives at the current time: δ̇; δ̈ (±accel_limit toward the tar
 target's own slope once on it); ḣ; ḧ = h_rotor Σ (a_i δ̈_i − σ_i δ̇_i²) (ȧ_i = −σ_i δ̇_i);
 Q̇ = tr(adj(A Aᵀ) d(A Aᵀ)/dt); the jitter's Ḟ, τ̇, ḣ_u, ḧ_u (components/imbalance.py).
 
+Faults (DESIGN.md §3.2): gyro i's gimbal locks at ``fail_time[i]`` (inf: never) at the
+angle it has then — the step that contains the time moves it until then — and holds it;
+``healthy[i]`` is false from then on.  A locked gyro keeps its rotor's momentum in h; its
+column leaves the torque Jacobian, so Q (and its rate) is that of the healthy gyros, the
+measure of what the cluster can still deliver (CmgSteering steers the healthy ones).
+
 Default geometry: the paper's five-pyramid cluster (α0 = 63.4°; gimbals 1–5 at azimuths
 90°, 162°, 234°, 306°, 18°; gimbal 6 along z, reference spin x) with the rotor spin
 *reversed* with respect to the printed A_s0: the paper's eq. (14) delivers +ḣ to the
@@ -291,6 +297,13 @@ class CmgCluster(Model):
         parameter("rate_limit", 0.6, "rad/s", "gimbal rate limit", display_unit="deg/s"),
         parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit", display_unit="deg/s2"),
         parameter(
+            "fail_time",
+            math.inf,
+            "s",
+            "time each gimbal locks at its angle (inf: never)",
+            shape=(N_GYROS,),
+        ),
+        parameter(
             "static_imbalance", 0.0, "kg.m", "static imbalance U_s of each rotor", shape=(6,)
         ),
         parameter(
@@ -319,7 +332,10 @@ class CmgCluster(Model):
         output("delta_dot", "rad/s", "gimbal rates", shape=(6,), display_unit="deg/s"),
         output("h", "N.m.s", "cluster angular momentum relative to the body, in B", shape=(3,)),
         output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,), derivative_of="h"),
-        output("singularity", "1", "singularity measure Q = det(A A^T)"),
+        output("singularity", "1", "singularity measure Q = det(A A^T) of the healthy gyros"),
+        output(
+            "healthy", "1", "each gimbal is free (not locked)", shape=(N_GYROS,), type="Boolean"
+        ),
         output("f_jitter_B", "N", "force of the rotors' imbalances on the body, in B", shape=(3,)),
         output(
             "tau_jitter_B",
@@ -358,6 +374,9 @@ class CmgCluster(Model):
             p.accel_limit,
         )
         self.state[S.delta : S.delta + N_GYROS] = p.delta0
+        if np.any(np.isnan(p.fail_time)):
+            raise ModelError(f"fail_time must be a time or inf, got {p.fail_time.tolist()}")
+        self.state[S.fail : S.fail + N_GYROS] = p.fail_time
         if np.any(p.static_imbalance != 0.0) or np.any(p.dynamic_imbalance != 0.0):
             self.state[S.jitter] = 1.0
             put(self.state, S.us, p.static_imbalance)
@@ -392,13 +411,13 @@ class CmgCluster(Model):
 P, U, Y = CmgCluster.names()
 DU, _ = CmgCluster.derivative_names()  # DU.delta_dot_cmd: the command's slope a host set
 #: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
-#: and 1 while a rate command exceeds the rate limit (saturated)
-#: and, for the rotors' imbalance: Ω, 1 if any, and (read only then) U_s, U_d, r (rows),
+#: 1 while a rate command exceeds the rate limit (saturated); the gimbals' fail times before
+#: the axes; for the rotors' imbalance: Ω, 1 if any, and (read only then) U_s, U_d, r (rows),
 #: φ0 and the gimbal axes
 S = state_table(
     "CmgCluster state", delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1,
-    speed=1, jitter=1, st=6 * N_GYROS, saturated=1, us=N_GYROS, ud=N_GYROS, r=3 * N_GYROS,
-    phase0=N_GYROS, g=3 * N_GYROS,
+    fail=N_GYROS, speed=1, jitter=1, st=6 * N_GYROS, saturated=1, us=N_GYROS, ud=N_GYROS,
+    r=3 * N_GYROS, phase0=N_GYROS, g=3 * N_GYROS,
 )  # fmt: skip
 
 
@@ -408,7 +427,8 @@ def cluster_step(values, state, t, dt):
     :func:`servo_ramp` where a host set the command's derivative.  The cluster is
     saturated while the largest |command| at the step's start exceeds the rate limit (it
     cannot deliver the commanded torque): returns 1 + the gimbal with the largest |command|
-    (the first of equals) when it becomes saturated (step() warns), else 0."""
+    (the first of equals) when it becomes saturated (step() warns), else 0.  A gimbal whose
+    fail time falls in the step moves until then and is locked after (zero rate)."""
     command, s = floats(values[U.delta_dot_cmd : U.delta_dot_cmd + N_GYROS]), floats(state[: S.st])
     slope = floats(values[DU.delta_dot_cmd : DU.delta_dot_cmd + N_GYROS])
     delta, rate = s[S.delta : S.delta + N_GYROS], s[S.rate : S.rate + N_GYROS]
@@ -419,11 +439,19 @@ def cluster_step(values, state, t, dt):
             angles[i], rates[i] = servo_ramp(
                 delta[i], rate[i], command[i], slope[i], dt, limit, accel
             )
+        fail = s[S.fail + i]
+        if fail < t + dt:  # locked at its angle at fail_time (moving until then)
+            moving = min(dt, max(0.0, fail - t))
+            if slope[i] != 0.0:
+                angle = servo_ramp(delta[i], rate[i], command[i], slope[i], moving, limit, accel)
+            else:
+                angle = servo1(delta[i], rate[i], command[i], moving, limit, accel)
+            angles[i], rates[i] = angle[0], 0.0
     state[S.delta : S.delta + N_GYROS] = angles
     state[S.rate : S.rate + N_GYROS] = rates
-    worst, largest = 0, abs(command[0])
+    worst, largest = 0, -1.0  # over the gimbals free throughout the step
     for i in range(N_GYROS):
-        if abs(command[i]) > largest:
+        if abs(command[i]) > largest and s[S.fail + i] >= t + dt:
             worst, largest = i, abs(command[i])
     saturated = largest > s[S.rate_limit]
     started = saturated and state[S.saturated] == 0.0
@@ -444,7 +472,10 @@ def cluster_output(values, state, t):
     values[Y.delta_dot : Y.delta_dot + N_GYROS] = rates
     for k in range(3):
         values[Y.h + k], values[Y.hdot + k] = h_rotor * h[k], h_rotor * hdot[k]
-    values[Y.singularity] = det3(gram(columns))
+    for i in range(N_GYROS):
+        values[Y.healthy + i] = 1.0 if t < s[S.fail + i] else 0.0
+    free = healthy_columns(columns, values[Y.healthy : Y.healthy + N_GYROS])
+    values[Y.singularity] = det3(gram(free))
     values[Y.jitter_frequency] = s[S.speed]
     if s[S.jitter] != 0.0:
         jitter = _jitter(floats(state), t, spins, rates, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
@@ -473,6 +504,12 @@ def _jitter(s, t, spins, rates, accels) -> list:
 
 
 @jitable
+def healthy_columns(columns, healthy) -> list:
+    """The Jacobian columns a_i of the healthy gyros, zero for the others."""
+    return [a if healthy[i] != 0.0 else (0.0, 0.0, 0.0) for i, a in enumerate(columns)]
+
+
+@jitable
 def cluster_rates(v, s, t) -> list:
     """d/dt of the outputs at the model's time ``t``, in the table's order (module
     docstring): δ̇; δ̈ (:func:`servo_accel`); ḣ as :func:`cluster_output` wrote it;
@@ -483,6 +520,8 @@ def cluster_rates(v, s, t) -> list:
     limit, accel, h_rotor = s[S.rate_limit], s[S.accel_limit], s[S.h_rotor]
     accels = [
         servo_accel(rates[i], v[U.delta_dot_cmd + i], v[DU.delta_dot_cmd + i], limit, accel)
+        if v[Y.healthy + i] != 0.0
+        else 0.0
         for i in range(N_GYROS)
     ]
     spins, columns = axes(s[S.delta : S.delta + N_GYROS], s[S.st : S.st + 6 * N_GYROS])
@@ -494,12 +533,14 @@ def cluster_rates(v, s, t) -> list:
             total([scale(rates[i], a_dots[i]) for i in range(N_GYROS)]),
         ),
     )
-    gram_dot = mat_add(outer_sum(a_dots, columns), outer_sum(columns, a_dots))
-    q_dot = trace_product(adjugate(gram(columns)), gram_dot)
+    free = healthy_columns(columns, v[Y.healthy : Y.healthy + N_GYROS])
+    gram_dot = mat_add(outer_sum(a_dots, free), outer_sum(free, a_dots))
+    q_dot = trace_product(adjugate(gram(free)), gram_dot)
+    hdot = (v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2])
     jitter = [(0.0, 0.0, 0.0) for _ in range(7)]
     if s[S.jitter] != 0.0:
         jitter = _jitter(s, t, spins, rates, accels)
     return [
-        *rates, *accels, v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2], *hddot, q_dot,
+        *rates, *accels, *hdot, *hddot, q_dot, *[0.0] * N_GYROS,  # healthy: held
         *jitter[4], *jitter[6], *jitter[1], *jitter[2], 0.0,
     ]  # fmt: skip

@@ -2,7 +2,8 @@
 
 States: the attitude q_BI and the *total* angular momentum H_I (hub + devices, inertial
 axes).  With J the hub inertia, h the devices' momentum relative to the body (in B) and
-τ the external torque on the body (in B)::
+τ the external torque on the body (in B: ``tau_ext``, the environment's, plus
+``tau_ctrl``, that of external-torque actuators such as magnetorquers)::
 
     w_BI_B = J⁻¹ (C_BI H_I − h)                       (eq. 2 solved for w)
     q̇_BI  = ½ q_BI ⊗ (0, w_BI_B)
@@ -14,7 +15,7 @@ co-simulation step.  Across a step the inputs the model integrates follow their
 derivatives (FMI 2.0 input interpolation, components/model.py): the devices' momentum
 h(t_c + s) = h + ḣ s + ½ ḧ s², with ḣ its slope (the derivative a host set for ``h_*``,
 else the input ``hdot_*``: :meth:`Model.slope`) and ḧ the derivative set for ``hdot_*``;
-τ_ext + τ̇ s and r_I + ṙ s likewise (never set: zero, the input held).  q_OI and w_OI_O
+τ + τ̇ s and r_I + ṙ s likewise (never set: zero, the input held).  q_OI and w_OI_O
 enter only the outputs, at communication points.  Integration: classical RK4 with
 sub-steps of at most 0.02 rad of rotation.  The gravity-gradient torque is skipped when
 J ∝ 1, where it vanishes identically.
@@ -199,6 +200,14 @@ class SatelliteDynamics(Model):
             "other external torque on the body, in B",
             shape=(3,),
             optional="zero: no other external torque",
+        ),
+        input_(
+            "tau_ctrl",
+            "N.m",
+            "torque of external-torque actuators (magnetorquers, thrusters) on the body, in "
+            "B; added to tau_ext",
+            shape=(3,),
+            optional="zero: no such actuator",
         ),
         input_(
             "r_I",
@@ -433,7 +442,7 @@ class SatelliteDynamics(Model):
         q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
         J, M_inv = matrix(s, S.J), matrix(s, S.M_inv)
         slope, _, _, r_rate, tau_rate = _rates(u, d, g)
-        h, tau = _device_sum(u, UI.h_cmg, UI.h_wheel, UI.h_payload), vector(u, UI.tau_ext)
+        h, tau = _device_sum(u, UI.h_cmg, UI.h_wheel, UI.h_payload), external(u)
         extra = _extras(u, d, g)
         if extra[0]:
             h, slope = add(h, extra[1]), add(slope, extra[2])
@@ -583,7 +592,7 @@ def _step(values, state, t, dt):
     s = floats(state[:RIGID])
     h0 = _device_sum(u, UI.h_cmg, UI.h_wheel, UI.h_payload)
     hdot, conflict, curvature, r_rate, tau_rate = _rates(u, d, g)
-    tau, r_I = vector(u, UI.tau_ext), vector(u, UI.r_I)
+    tau, r_I = external(u), vector(u, UI.r_I)
     if s[S.needs_position] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
         return NO_POSITION
     q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
@@ -633,7 +642,7 @@ def _step_extended(values, state, dt):
     hdot, conflict, curvature, r_rate, tau_rate = _rates(u, d, g)
     h0 = add(_device_sum(u, UI.h_cmg, UI.h_wheel, UI.h_payload), extra[1])
     hdot, curvature, conflict = add(hdot, extra[2]), add(curvature, extra[3]), conflict or extra[7]
-    tau, tau_rate = add(vector(u, UI.tau_ext), extra[4]), add(tau_rate, extra[5])
+    tau, tau_rate = add(external(u), extra[4]), add(tau_rate, extra[5])
     r_I = vector(u, UI.r_I)
     if s[S.needs_position] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
         return NO_POSITION
@@ -730,7 +739,15 @@ def _rates(u, d, g):
         (slope[2] + slope[5]) + slope[8],
     )
     curvature = _device_sum(d, DI.hdot_cmg, DI.hdot_wheel, DI.hdot_payload)
-    return hdot, conflict, curvature, vector(d, DI.r_I), vector(d, DI.tau_ext)
+    tau_rate = add(vector(d, DI.tau_ext), vector(d, DI.tau_ctrl))
+    return hdot, conflict, curvature, vector(d, DI.r_I), tau_rate
+
+
+@jitable
+def external(u) -> tuple:
+    """τ = tau_ext + tau_ctrl, the fixed inputs' external torque on the body (in B; ``u``
+    the inputs' slice, :func:`_inputs`)."""
+    return add(vector(u, UI.tau_ext), vector(u, UI.tau_ctrl))
 
 
 @jitable

@@ -102,6 +102,8 @@ def test_references_resolve_inside_the_repository():
         "Buckingham 1975",
         "Masterson 2002",
         "Alken 2021",
+        "Biagiotti 2008",
+        "Camillo 1980",
         "Crassidis 2012",
         "Farrenkopf 1978",
         "Kopp 2011",
