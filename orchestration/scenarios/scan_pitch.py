@@ -171,47 +171,37 @@ def attitude_error(results) -> np.ndarray:
     return np.linalg.norm(error.values[0], axis=1)
 
 
+def _over_imaging(name: str, index: str, bound: float, **window) -> Pointing:
+    """A pointing requirement about the pitch axis over the imaging phase, from the plan."""
+    return Pointing(
+        name,
+        PointingRequirement(
+            index,
+            bound,
+            POINTING_LEVEL,
+            "ensemble",
+            axis=(0.0, 1.0, 0.0),
+            confidence=POINTING_CONFIDENCE,
+            **window,
+        ),
+        reference=planned_attitude,
+        reference_signals=PLAN_SIGNALS,
+        start=PROFILE.times[2],
+        stop=PROFILE.times[3],
+    )
+
+
 #: the imaging-rate band as a contract states it ([Ecss 2008], docs/pointing.md): over the
 #: imaging phase, the pitch error from the plan (a scan at exactly the scan rate) drifts by
 #: at most the band's half-width in a second from one 1 s mean to the next (the mean scan
 #: rate over a second within ±0.02 °/s of −0.8 °/s), at every time for 99.73 % of the runs,
-#: with 95 % confidence
+#: with 95 % confidence; and the scan's stability within a second: a pitch error drifting at
+#: the band's edge, 0.02 °/s, moves from its 1 s mean by half of 0.02° at the window's end
 REQUIREMENTS = [
-    Pointing(
-        "imaging_rate_pde",
-        PointingRequirement(
-            "PDE",
-            SCAN_RATE_TOLERANCE * 1.0,  # rad/s over Δt_s = 1 s
-            POINTING_LEVEL,
-            "ensemble",
-            window=1.0,
-            separation=1.0,
-            axis=(0.0, 1.0, 0.0),
-            confidence=POINTING_CONFIDENCE,
-        ),
-        reference=planned_attitude,
-        reference_signals=PLAN_SIGNALS,
-        start=PROFILE.times[2],
-        stop=PROFILE.times[3],
-    ),
-    # the scan's stability within a second: a pitch error drifting at the band's edge,
-    # 0.02 °/s, moves from its 1 s mean by half of 0.02° at the window's end
-    Pointing(
-        "imaging_rpe",
-        PointingRequirement(
-            "RPE",
-            SCAN_RATE_TOLERANCE * 1.0 / 2,
-            POINTING_LEVEL,
-            "ensemble",
-            window=1.0,
-            axis=(0.0, 1.0, 0.0),
-            confidence=POINTING_CONFIDENCE,
-        ),
-        reference=planned_attitude,
-        reference_signals=PLAN_SIGNALS,
-        start=PROFILE.times[2],
-        stop=PROFILE.times[3],
-    ),
+    _over_imaging(
+        "imaging_rate_pde", "PDE", SCAN_RATE_TOLERANCE * 1.0, window=1.0, separation=1.0
+    ),  # rad/s over Δt_s = 1 s
+    _over_imaging("imaging_rpe", "RPE", SCAN_RATE_TOLERANCE * 1.0 / 2, window=1.0),
 ]
 
 
