@@ -21,7 +21,7 @@ from .cosim.signals import signal_at, stop_on_signals
 from .mission.targets import resolve
 from .output.lock import holding
 from .output.progress import Progress
-from .output.recorder import write_text
+from .output.recorder import make_directory, write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
 from .provenance import provenance
@@ -92,7 +92,7 @@ def run(
         progress.simulating(plan.step)  # a person's bar counts simulated seconds
     out_dir = plan.out_dir
     if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        make_directory(out_dir)
         _say_size(plan, out_dir, notice)
     summary = {
         **provenance(),

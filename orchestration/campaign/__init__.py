@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output.lock import holding
 from ..output.recorder import write_text
-from . import dispersion, engine, report
+from . import dispersion, engine, isolated, report
 from .files import CampaignFileError, read_object
 from .plan import Plan, Spec, time_axis
 
@@ -129,13 +130,22 @@ def run_campaign(
     dashboard: str | None = None,
 ) -> Campaign:
     """:func:`campaign` returning a :class:`Campaign` (table, summary, directory).
-    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`)."""
+    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`).  The campaign
+    holds ``out_dir`` from before it writes anything to its end (:mod:`..output.lock`):
+    another campaign or run on it, ``--resume`` included, is refused meanwhile."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
         spec.set = {**fixed, **spec.set}
     plan = Plan(spec)  # builds the FMUs the target needs: their content is recorded
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
+    with holding(out):
+        return _held(plan, out, resume, workers, scheduler, progress, listen, dashboard)
+
+
+def _held(plan: Plan, out: Path, resume, workers, scheduler, progress, listen, dashboard):
+    """:func:`run_campaign` in its directory, which it holds."""
+    spec = plan.spec
     done = engine.open_directory(plan, out, resume)
     metrics: dict = {}
     if done and (out / "metrics.json").exists():
@@ -163,6 +173,11 @@ def run_campaign(
         pass
     except engine.SchedulerLost as exc:
         lost_scheduler = exc
+    except Exception:
+        # a terminal's Ctrl-C reaches the worker processes Dask is starting too, which
+        # then fail to start ("Nanny failed to start"): the signal stopped the campaign
+        if not engine.INTERRUPTS.signals:
+            raise
     finally:
         bar.close()
     # the summary is the journal's: a run written there just as a signal came is in it
@@ -211,6 +226,7 @@ def finish(
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),
         "system_sha256": previous.get("system_sha256"),
+        "code_sha256": previous.get("code_sha256"),
         "settings": {
             "start": plan.start,
             "stop": plan.stop,
@@ -288,7 +304,8 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     """The run at the nominal values (every random dispersion at the system's value, the
     spec's ``--set`` and the grid point's values applied), whose metrics the histograms
     mark: {"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
-    the reason it has none (said on stderr too).  A signal during it is recorded for the
+    the reason it has none (said on stderr too).  It runs in a process of its own
+    (:mod:`.isolated`).  A signal during it is recorded for the
     command's exit status (130/143) as one while the cluster closes.
 
     ``before``: campaign.json as the campaign found it (a resumed one's).  Its nominal run
@@ -297,7 +314,6 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     content, :func:`.engine.open_directory`); otherwise it is made again, and stderr says
     why."""
     from ..cosim.master import Interrupted
-    from ..runner import run
 
     spec = plan.spec
     grid = {
@@ -319,9 +335,9 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
             return {"command": command, "metrics": held["metrics"]}
         print(f"campaign: the nominal run in campaign.json {differs}: made again", file=sys.stderr)
     print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
-    try:
-        _, summary = run(
-            spec.target,
+    try:  # in a process of its own: an FMU crashing there does not end the campaign
+        summary = isolated.run(
+            target=spec.target,
             step=spec.step,
             stop=spec.stop,
             algorithm=spec.algorithm,

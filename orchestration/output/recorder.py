@@ -20,6 +20,7 @@ the rows offered are numbered from 0, and row n is recorded when n is a multiple
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import zipfile
@@ -180,15 +181,34 @@ def file_error(path, exc: OSError, note: str = "") -> OSError:
 
 
 def write_text(path: Path, text: str) -> None:
-    """Write under a temporary name, then rename (a kill leaves the old file or the new,
-    never half of one); an OSError names the file."""
+    """Write under a temporary name, then rename (:func:`atomically`)."""
+    with atomically(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
+
+
+@contextlib.contextmanager
+def atomically(path: Path):
+    """A temporary name beside ``path`` to write, renamed to ``path`` when the block ends
+    (a kill leaves the old file or the new, never half of one); on an OSError (a full
+    disk, a read-only directory) the temporary is removed and the error names ``path``."""
+    path = Path(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
     try:
-        temporary.write_text(text, encoding="utf-8")
+        yield temporary
         os.replace(temporary, path)
     except OSError as exc:
-        temporary.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            temporary.unlink(missing_ok=True)
         raise file_error(path, exc, "; not written") from None
+
+
+def make_directory(path: Path) -> Path:
+    """``path`` created (with its parents) if need be; an OSError names it."""
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise file_error(path, exc, " (the output directory: it cannot be created)") from None
+    return Path(path)
 
 
 def _checked(path, action):
@@ -215,9 +235,8 @@ def write_npz(
     """results.npz (``names``, ``data``, ``units`` as :meth:`Results.to_npz` writes them) from
     the raw float64 rows in ``raw``, copied in chunks; written to a temporary name, then
     renamed."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
     n = len(names)
-    try:
+    with atomically(path) as temporary:
         with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
             with archive.open("names.npy", "w") as stream:
                 np.lib.format.write_array(stream, np.array(names))
@@ -237,7 +256,3 @@ def write_npz(
                         raise OSError(errno.EIO, f"{raw}: shorter than {rows} rows")
                     stream.write(block)
                     left -= len(block)
-        os.replace(temporary, path)
-    except OSError as exc:
-        temporary.unlink(missing_ok=True)
-        raise file_error(path, exc, "; not written") from None

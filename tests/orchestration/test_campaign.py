@@ -191,7 +191,8 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
     again.  It is kept when campaign.json has it from the same command and versions, made
     again (and stderr says why) otherwise; either way the files are those of the fresh
     finish, byte for byte."""
-    from agilesat.orchestration import cli, runner
+    from agilesat.orchestration import cli
+    from agilesat.orchestration.campaign import isolated
 
     out = tmp_path / "copy"
     shutil.copytree(three, out)
@@ -204,8 +205,8 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
         del summary["nominal"]
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     made = []
-    real = runner.run
-    monkeypatch.setattr(runner, "run", lambda *a, **k: made.append(a) or real(*a, **k))
+    real = isolated.run
+    monkeypatch.setattr(isolated, "run", lambda **k: made.append(k["target"]) or real(**k))
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}  # it sets its own
     try:
         code = cli.main([*COMMAND, "--runs", "3", "--workers", "2", "--out", str(out), "--resume"])
@@ -214,7 +215,7 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
             signal.signal(s, handler)
     assert code in (0, 3)
     err = capsys.readouterr().err
-    assert made == ([] if held == "the same" else [("scan_pitch",)])
+    assert made == ([] if held == "the same" else ["scan_pitch"])
     assert ("(kept: campaign.json has it" in err) == (held == "the same")
     reason = {"another command": "was another command", "other versions": "(numpy)"}
     assert (f"{reason[held]}" in err) if held in reason else ": made again" not in err

@@ -86,7 +86,7 @@ def two_runs_one_out(stop: float = 100.0):
             good = (
                 (won, lost) == (0, 1)
                 and (together or winner == "A")
-                and "is being written by another run (process " in said
+                and "is being written by another run or campaign (process " in said
                 and _whole_run(out, rows)
             )
             ok &= good
