@@ -51,6 +51,7 @@ from .protocol import (
     B_SAVED,
     B_STATE,
     B_STEP,
+    B_STOP,
     B_TIME,
     C_DIRTY,
     C_OUTPUT,
@@ -96,6 +97,7 @@ class FastPaths:
         self.control = np.zeros(N_CONTROL, dtype=np.int32)  # never replaced
         self.block = np.zeros(N_BLOCK)  # never replaced
         self.block[B_TIME] = math.nan
+        self.block[B_STOP] = math.inf
         self.saved = np.zeros(0)  # the C path's snapshot (its address is in block)
         self.entries = c_entries.of(type(slave.model))
         self.c_path = False  # the shim asked for the addresses, the model has C entries

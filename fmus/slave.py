@@ -57,6 +57,7 @@ from ..components.switches import SwitchError
 from . import CONFIGURATION, configuration_key, fmu_state, state_layout
 from .fast_paths import FastPaths, kind
 from .protocol import (
+    B_STOP,
     B_TIME,
     C_DIRTY,
     DERIVATIVE_BASE,
@@ -77,6 +78,7 @@ _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 #: the handshake's value reference as pythonfmu 0.7.0 passes it (a C int) and as unsigned
 _HANDSHAKE = (FAST_PATH_VR - (1 << 32), FAST_PATH_VR)
+_INT32 = (-(2**31), 2**31 - 1)  # fmi2Integer
 
 
 def _guarded(default):
@@ -216,6 +218,7 @@ class ModelSlave(Fmi2Slave):
         self._start_time = float(start_time)
         stop = None if stop_time is None else float(stop_time)
         self._stop_time = stop if stop is not None and math.isfinite(stop) else None
+        self._fast.block[B_STOP] = math.inf if self._stop_time is None else self._stop_time
 
     @_guarded(None)
     def enter_initialization_mode(self):
@@ -238,6 +241,12 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(
                 f"time discontinuity: the last step ended at "
                 f"t={self._next_time!r}, doStep starts at t={current_time!r}"
+            )
+        stop, end = float(self._fast.block[B_STOP]), current_time + step_size
+        if not (end <= stop or continuous(end, stop)):
+            raise _CallRejected(
+                f"the step to t={end!r} ends after the stop time {stop!r} of "
+                "fmi2SetupExperiment (FMI 2.0 section 4.2.1: no step past a defined stop time)"
             )
         if self._stop_time is not None:  # the first step: the run's length decides the tier
             steps, self._stop_time = (self._stop_time - current_time) / step_size, None
@@ -266,11 +275,32 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(_zeros)
     def get_integer(self, vrs):
-        return [int(x) for x in self._read(vrs, "Integer")]
+        values = self._read(vrs, "Integer")
+        fits = (values == np.trunc(values)) & (values >= _INT32[0]) & (values <= _INT32[1])
+        if not fits.all():
+            self._unfit(vrs, values, fits, "Integer", "whole numbers of fmi2Integer's range")
+        return [int(x) for x in values]
 
     @_guarded(_zeros)
     def get_boolean(self, vrs):
-        return [bool(x) for x in self._read(vrs, "Boolean")]
+        values = self._read(vrs, "Boolean")
+        fits = (values == 0.0) | (values == 1.0)
+        if not fits.all():
+            self._unfit(vrs, values, fits, "Boolean", "0 (false) or 1 (true)")
+        return [bool(x) for x in values]
+
+    def _unfit(self, vrs, values, fits, type_name: str, expected: str):
+        """The values a model left in Integer or Boolean variables that their FMI type
+        cannot hold (an output of a model of a user): refused, never wrapped or rounded."""
+        bad = [
+            f"{self._scalar_names[vr]}={x!r}"
+            for vr, x, ok in zip(vrs, values.tolist(), fits.tolist())
+            if not ok
+        ]
+        raise _CallRejected(
+            f"the model produced {type_name} values {', '.join(bad)} at t={self.model.t!r}: "
+            f"{type_name} variables hold {expected}"
+        )
 
     @_guarded(lambda vrs: [""] * len(vrs))
     def get_string(self, vrs):
@@ -278,7 +308,7 @@ class ModelSlave(Fmi2Slave):
             digest = _PACKAGE.partition("_")[2]  # "" outside an FMU: nothing to compare
             guid = fmu_guid(type(self).__name__, digest, self._configuration_key)
             return ["{" + guid + "}" if digest else ""]  # as modelDescription.xml has it
-        self._plan(vrs, "String")
+        self._read(vrs, "String")
         return [self.model.strings[self._scalar_names[vr]] for vr in vrs]
 
     @_guarded(None)
@@ -521,6 +551,11 @@ class ModelSlave(Fmi2Slave):
         return index, touches_parameters
 
     def _read(self, vrs, type_name):
+        if self._mode == "instantiated":
+            raise _CallRejected(
+                "not allowed in mode 'instantiated' (only from fmi2EnterInitializationMode "
+                "on: FMI 2.0 section 4.2.4)"
+            )
         index = self._plan(vrs, type_name)
         values = self.model.values
         if not self._outputs_valid:
