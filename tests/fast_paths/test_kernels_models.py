@@ -268,6 +268,7 @@ CASES = {
     "orbit_j2_eccentric_epoch": (
         OrbitEnvironment,
         {
+            "semi_major_axis": 1.0e7,  # perigee 7000 km: above the ground
             "eccentricity": 0.3,
             "j2": True,
             "raan": 1.0,
@@ -279,7 +280,10 @@ CASES = {
             "target_alt": 100.0,
         },
     ),
-    "orbit_very_eccentric": (OrbitEnvironment, {"eccentricity": 0.9, "earth_angle0": 1.0}),
+    "orbit_very_eccentric": (
+        OrbitEnvironment,
+        {"semi_major_axis": 7.0e7, "eccentricity": 0.9, "earth_angle0": 1.0},
+    ),
     "orbit_tle": (OrbitEnvironment, {"tle_line1": ISS_TLE[0], "tle_line2": ISS_TLE[1]}),
 }
 
@@ -380,7 +384,7 @@ def test_the_pseudo_inverse_at_a_singularity_leaves_the_singular_direction_undel
 
 @needs_numba
 def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(path):
-    model = OrbitEnvironment(eccentricity=0.3).start(0.0)
+    model = OrbitEnvironment(semi_major_axis=1.0e7, eccentricity=0.3).start(0.0)
     model.state[orbit_environment.M0] = math.nan  # no finite input makes Newton fail
     before = model.values.copy()
     with pytest.raises(
