@@ -2,6 +2,8 @@
 
 Each raises ``AssertionError`` with what failed, where (time) and by how much; values are
 in the signal's unit (SI) unless ``deg=True`` (the bound then in degrees, for angles).
+pytest shows the failing test's line and this message, not the code here
+(``__tracebackhide__``).
 A signal is a column (``SatelliteDynamics.w_BI_B[2]``) or a whole array by base name
 (``AttitudeController.att_error``: every element must hold).
 """
@@ -14,6 +16,7 @@ from ..system.units import join, pretty, to_degrees
 
 
 def _signal(results, name, start, stop, deg):
+    __tracebackhide__ = True
     t = results.time
     rows = np.ones(len(t), bool)
     if start is not None:
@@ -41,6 +44,7 @@ def assert_within(
     deg: bool = False,
 ) -> None:
     """Every element of ``name`` in [low, high] (either may be None) over [start, stop]."""
+    __tracebackhide__ = True
     t, values, unit = _signal(results, name, start, stop, deg)
     for bound, bad, word in (
         (low, values < low if low is not None else None, "below"),
@@ -60,6 +64,7 @@ def assert_within(
 def assert_settles(results, name: str, bound: float, after: float, *, deg: bool = False) -> None:
     """|name| ≤ bound (every element) from t = ``after`` to the end: e.g. the pointing error
     below 0.01° after a 60-s settling time."""
+    __tracebackhide__ = True
     t, values, unit = _signal(results, name, after, None, deg)
     magnitude = np.abs(values)
     if (magnitude > bound).any():
@@ -74,6 +79,7 @@ def assert_momentum_conserved(
     results, rtol: float = 1e-9, name: str = "SatelliteDynamics.H_I"
 ) -> None:
     """max |H(t) − H(0)| / |H(0)| ≤ rtol for the recorded inertial momentum ``name``."""
+    __tracebackhide__ = True
     H = results.vector(name)
     drift = np.linalg.norm(H - H[0], axis=1) / max(np.linalg.norm(H[0]), 1e-300)
     if drift.max() > rtol:
@@ -107,6 +113,7 @@ def assert_requirements_met(summary: dict, *names: str) -> None:
     (its metric has no value) fails the assertion too, saying why; one the variant does not
     judge is left out, or fails if named.  A summary without verdicts: each metric with a
     requirement against it."""
+    __tracebackhide__ = True
     if "requirements" not in summary:
         return _metrics_meet(summary, names)
     verdicts = summary["requirements"]
@@ -135,6 +142,7 @@ def assert_requirements_met(summary: dict, *names: str) -> None:
 
 
 def _metrics_meet(summary: dict, names) -> None:
+    __tracebackhide__ = True
     metrics = summary["metrics"]
     unknown = [n for n in names if n not in metrics]
     if unknown:
@@ -176,6 +184,7 @@ def assert_pointing(
     defaults to the estimate against the truth).  Fails when it is not met or cannot be
     shown (a record too short, a campaign too small for the confidence), saying why;
     returns the :class:`..pointing.PointingResult`."""
+    __tracebackhide__ = True
     from ..pointing import PointingRequirement
     from .recorded import evaluate
 
