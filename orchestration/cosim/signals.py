@@ -71,14 +71,16 @@ class _Stop:
             timer = threading.Timer(grace, self._overdue, (grace,))
             timer.daemon = True
             timer.start()
-        elif self.overdue is not None and self.watched and _inside_an_fmu(frame):
-            self.watched = False  # once
+        elif self._kick and self.watched and _inside_an_fmu(frame):
+            self._kick = self.watched = False  # once, for the watchdog's own signal
             raise StepOverdue(f"no return within {self.overdue:g} s of the signal")
+
+    _kick = False  # the watchdog's signal is on its way
 
     def _overdue(self, grace: float) -> None:
         """The watchdog (a timer thread): the run has not reached the flag."""
         if self.watched and self.overdue is None:
-            self.overdue = grace
+            self.overdue, self._kick = grace, True
             signal.pthread_kill(threading.main_thread().ident, self.signal or signal.SIGINT)
 
     @contextlib.contextmanager
