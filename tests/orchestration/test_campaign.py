@@ -138,7 +138,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path, monkeypatch):
     assert result.returncode == 1 and "seed: 12 here, 11 in the campaign" in result.stderr
 
 
-@pytest.mark.parametrize("when", ["start", "fresh start", "close"])
+@pytest.mark.parametrize("when", ["start", "fresh start", "close", "nanny"])
 def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     three, tmp_path, monkeypatch, when
 ):
@@ -147,7 +147,9 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     in campaign.json; it used to escape and leave the campaign "running" (CI saw it: a
     fast campaign finished before the test's SIGTERM, which came while the cluster
     closed).  While a resumed campaign runs, campaign.json says "running" (it said the
-    last run's "complete")."""
+    last run's "complete").  "nanny": a terminal's Ctrl-C reaches the worker processes
+    Dask starts too, and Dask says "Nanny failed to start" (a RuntimeError): the signal the
+    campaign's handler took is what stopped it (it exited 1, campaign.json "running")."""
     from agilesat.orchestration import cli
     from agilesat.orchestration.campaign import engine
 
@@ -160,6 +162,10 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     @contextlib.contextmanager
     def cluster(workers=None, scheduler=None, *settings):
         seen.append(json.loads((out / "campaign.json").read_text())["status"])
+        if when == "nanny":  # as cluster() while the LocalCluster starts: a flag
+            monkeypatch.setattr(engine.INTERRUPTS, "deferred", True)
+            engine.INTERRUPTS(signal.SIGINT, None)
+            raise RuntimeError("Nanny failed to start.")
         if when != "close":
             raise KeyboardInterrupt
         with real(workers, scheduler, *settings) as client:
@@ -175,7 +181,7 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
         for s, handler in previous.items():
             signal.signal(s, handler)
     summary = json.loads((out / "campaign.json").read_text())
-    made = {"start": 3, "fresh start": 0, "close": 4}[when]
+    made = {"start": 3, "fresh start": 0, "close": 4, "nanny": 3}[when]
     assert seen == ["running"]
     assert summary["runs"]["made"] == len(rows(out)) == made
     assert summary["status"] == ("complete" if when == "close" else "interrupted")

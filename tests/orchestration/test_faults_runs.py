@@ -1,13 +1,20 @@
-"""Faults of a run's output, its interruptions, what it is given and campaigns, each
-injected in fresh processes with real signals (``tests/tools/fault_cases_runs.py``,
-``fault_cases_inputs.py``, ``fault_cases_campaign.py``)."""
+"""Faults of a run's output, its interruptions, what it is given, missions of a user's own
+and campaigns, each injected in fresh processes with real signals
+(``tests/tools/fault_cases_runs.py``, ``fault_cases_inputs.py``, ``fault_cases_mission.py``,
+``fault_cases_campaign.py``)."""
 
 import fault_cases_campaign
 import fault_cases_inputs
+import fault_cases_mission
 import fault_cases_runs
 import pytest
 
-CASES = fault_cases_runs.CASES + fault_cases_inputs.CASES + fault_cases_campaign.CASES
+CASES = (
+    fault_cases_runs.CASES
+    + fault_cases_inputs.CASES
+    + fault_cases_mission.CASES
+    + fault_cases_campaign.CASES
+)
 
 
 @pytest.mark.slow

@@ -1,6 +1,7 @@
 """Print the fault-injection matrix (fault → expected → observed) of every fault-case
 module (``fault_cases_*.py``: the master and its files, runs and their interruptions,
-inputs, campaigns, FMU states and what is loaded, the FMU binary), the counts of cases
+inputs, missions of a user's own, campaigns, FMU states and what is loaded, the FMU
+binary), the counts of cases
 that held, failed and were skipped, then the resource figures, as Markdown for the docs
 (docs/reliability.md).
 
@@ -26,6 +27,7 @@ import fault_cases_campaign  # noqa: E402
 import fault_cases_fmu  # noqa: E402
 import fault_cases_inputs  # noqa: E402
 import fault_cases_master  # noqa: E402
+import fault_cases_mission  # noqa: E402
 import fault_cases_runs  # noqa: E402
 import fault_cases_state  # noqa: E402
 
@@ -33,6 +35,7 @@ MODULES = (
     fault_cases_master,
     fault_cases_runs,
     fault_cases_inputs,
+    fault_cases_mission,
     fault_cases_campaign,
     fault_cases_state,
     fault_cases_fmu,
