@@ -9,10 +9,12 @@ so no exception leaves this class: a bad call is *logged* at ``fmi2Error`` and a
 with a harmless value, and the FMU's C shim (``shim/agilesat_fmi2.c``) returns the worst
 status logged during the call.  Checked here: unknown value reference or wrong type,
 setting an output or a fixed parameter after initialisation, non-finite values,
-non-positive or non-finite step size, a time discontinuity between steps, calls in the
-wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
-instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
-from the model.  FMU states are data (``fmu_state``), never pickles.
+non-positive or non-finite step size, a time discontinuity between steps, a step past the
+stop time fmi2SetupExperiment defined (section 4.2.1), calls in the wrong mode (FMI 2.0
+section 4.2.4: setup and entering initialisation only after instantiation, getting nothing
+before initialisation mode, setting nothing after terminate, ...), and exceptions,
+non-finite outputs, Integer outputs that are not whole numbers of fmi2Integer's range and
+Boolean outputs that are not 0 or 1 from the model.  FMU states are data (``fmu_state``), never pickles.
 
 Input and output derivatives (FMI 2.0 section 4.2.1).  pythonfmu 0.7 answers
 ``fmi2SetRealInputDerivatives`` and ``fmi2GetRealOutputDerivatives`` "not supported"; the
@@ -308,7 +310,8 @@ class ModelSlave(Fmi2Slave):
             digest = _PACKAGE.partition("_")[2]  # "" outside an FMU: nothing to compare
             guid = fmu_guid(type(self).__name__, digest, self._configuration_key)
             return ["{" + guid + "}" if digest else ""]  # as modelDescription.xml has it
-        self._read(vrs, "String")
+        self._require_readable()
+        self._plan(vrs, "String")
         return [self.model.strings[self._scalar_names[vr]] for vr in vrs]
 
     @_guarded(None)
@@ -550,12 +553,16 @@ class ModelSlave(Fmi2Slave):
             index = slice(vrs[0], vrs[0] + len(vrs))  # one range: a view, not a gather
         return index, touches_parameters
 
-    def _read(self, vrs, type_name):
+    def _require_readable(self):
+        """FMI 2.0 section 4.2.4: no fmi2Get* before initialisation mode."""
         if self._mode == "instantiated":
             raise _CallRejected(
                 "not allowed in mode 'instantiated' (only from fmi2EnterInitializationMode "
                 "on: FMI 2.0 section 4.2.4)"
             )
+
+    def _read(self, vrs, type_name):
+        self._require_readable()
         index = self._plan(vrs, type_name)
         values = self.model.values
         if not self._outputs_valid:

@@ -67,8 +67,7 @@ class _Stop:
         if first and not self.deferring:
             raise Interruption(signum)
         if first and self.watched:
-            grace = value("AGILESAT_STEP_GRACE")
-            timer = threading.Timer(grace, self._overdue, (grace,))
+            timer = threading.Timer(self.grace, self._overdue, (self.grace,))
             timer.daemon = True
             timer.start()
         elif self._kick and self.watched and _inside_an_fmu(frame):
@@ -83,10 +82,13 @@ class _Stop:
             self.overdue, self._kick = grace, True
             signal.pthread_kill(threading.main_thread().ident, self.signal or signal.SIGINT)
 
+    grace = 5.0  # AGILESAT_STEP_GRACE's, read as the run starts watching
+
     @contextlib.contextmanager
     def watching(self):
         """While inside, the run calls its FMUs: the watchdog may stop a call that does
         not return after a signal (module docstring)."""
+        self.grace = value("AGILESAT_STEP_GRACE")  # a bad value: said here, not in a handler
         self.watched = True
         try:
             yield self
