@@ -14,7 +14,8 @@ stop time fmi2SetupExperiment defined (section 4.2.1), calls in the wrong mode (
 section 4.2.4: setup and entering initialisation only after instantiation, getting nothing
 before initialisation mode, setting nothing after terminate, ...), and exceptions,
 non-finite outputs, Integer outputs that are not whole numbers of fmi2Integer's range and
-Boolean outputs that are not 0 or 1 from the model.  FMU states are data (``fmu_state``), never pickles.
+Boolean outputs that are not 0 or 1 from the model.  FMU states are data (``fmu_state``),
+never pickles.
 
 Input and output derivatives (FMI 2.0 section 4.2.1).  pythonfmu 0.7 answers
 ``fmi2SetRealInputDerivatives`` and ``fmi2GetRealOutputDerivatives`` "not supported"; the

@@ -80,7 +80,9 @@ class _Stop:
         """The watchdog (a timer thread): the run has not reached the flag."""
         if self.watched and self.overdue is None:
             self.overdue, self._kick = grace, True
-            signal.pthread_kill(threading.main_thread().ident, self.signal or signal.SIGINT)
+            main = threading.main_thread().ident
+            assert main is not None  # the main thread has started
+            signal.pthread_kill(main, self.signal or signal.SIGINT)
 
     grace = 5.0  # AGILESAT_STEP_GRACE's, read as the run starts watching
 

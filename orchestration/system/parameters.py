@@ -187,11 +187,12 @@ def typed_value(description, key: str, value, origin: str | None = None) -> Para
         try:
             value = float(to_si(with_unit, declared.unit, display))
         except ValueError as exc:
-            if not is_unit(with_unit.unit, display):  # 0x10, 1_000, "5 apples"
-                exc = (
-                    f"expected a finite Real number (like 0.01 or 1e-3), or one with a unit: {exc}"
+            said = str(exc)
+            if not is_unit(with_unit.unit, display):  # 0x10, "5 apples"
+                said = (
+                    f"expected a finite Real number (like 0.01 or 1e-3), or one with a unit: {said}"
                 )
-            raise SystemFileError(f"{given}: {exc}") from None
+            raise SystemFileError(f"{given}: {said}") from None
     elif kind in _READERS:
         if isinstance(value, Quantity):
             raise SystemFileError(f"{origin}: {name}.{variable} is an {kind}, not {value}")
