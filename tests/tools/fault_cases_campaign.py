@@ -527,6 +527,20 @@ def killed_scheduler():
         )
 
 
+def _started(out: Path, *extra, env=None) -> subprocess.Popen:
+    """`agilesat campaign scan_pitch` of 4 small runs into ``out``, in a session of its
+    own (a signal to its process group is a terminal's Ctrl-C)."""
+    return subprocess.Popen(
+        [*CLI, "campaign", "scan_pitch", *SMALL, "--runs", "4", "--out", str(out), *extra],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, **(env or {})},
+        start_new_session=True,
+    )
+
+
 def _stopped(process, timeout: float = 300) -> bool:
     """Wait until ``process`` stopped itself (SIGSTOP: state T); False if it ended first."""
     deadline = time.monotonic() + timeout
@@ -542,15 +556,7 @@ def two_campaigns_one_out():
     --out, then B with --resume, run while A holds it; then A goes on."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
-        a = subprocess.Popen(
-            [*CLI, "campaign", "scan_pitch", *SMALL, "--runs", "4", "--workers", "1"]
-            + ["--out", str(out)],
-            cwd=ROOT,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env={**os.environ, "AGILESAT_TEST_SIGNAL": "SIGSTOP@run:1"},
-        )
+        a = _started(out, "--workers", "1", env={"AGILESAT_TEST_SIGNAL": "SIGSTOP@run:1"})
         held = _stopped(a)
         before = {p.name: p.read_bytes() for p in out.iterdir()}
         b = _campaign("scan_pitch", out, "--runs", "4", "--workers", "1", "--seed", "7")
@@ -651,15 +657,7 @@ def ctrl_c_while_the_cluster_starts():
     LocalCluster's first processes exist (the nannies starting their workers)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
-        process = subprocess.Popen(
-            [*CLI, "campaign", "scan_pitch", *SMALL, "--runs", "4", "--workers", "2"]
-            + ["--out", str(out)],
-            cwd=ROOT,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            start_new_session=True,
-        )
+        process = _started(out, "--workers", "2")
         deadline = time.monotonic() + 300
         while process.poll() is None and time.monotonic() < deadline:
             if len(_children(process.pid)) >= 2:

@@ -182,19 +182,24 @@ def duplicate_connections(copies: int = 50_000):
         )
 
 
+def _export(path: Path) -> None:
+    """scan_pitch exported as an .ssp package to ``path``."""
+    export = subprocess.run(
+        [*CLI, "export", "scan_pitch", "--out", str(path)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert export.returncode == 0, export.stderr
+
+
 def ssp_nested_fmu(padding: int = 64 << 20, limit: int = 32 << 20):
     """An exported scan_pitch package whose CmgCluster.fmu carries ``padding`` zero bytes
     (a few kB packed), run with a limit of ``limit`` bytes on a fresh cache."""
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        export = subprocess.run(
-            [*CLI, "export", "scan_pitch", "--out", str(tmp / "clean.ssp")],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=600,
-        )
-        assert export.returncode == 0, export.stderr
+        _export(tmp / "clean.ssp")
         with zipfile.ZipFile(tmp / "clean.ssp") as package:
             members = {i.filename: package.read(i) for i in package.infolist()}
         name = next(n for n in members if n.endswith("CmgCluster.fmu"))
@@ -372,14 +377,7 @@ def ssp_members(extra: int = 20_000):
     """An exported scan_pitch package with ``extra`` empty members more."""
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        export = subprocess.run(
-            [*CLI, "export", "scan_pitch", "--out", str(tmp / "clean.ssp")],
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=600,
-        )
-        assert export.returncode == 0, export.stderr
+        _export(tmp / "clean.ssp")
         with zipfile.ZipFile(tmp / "clean.ssp", "a") as package:
             for k in range(extra):
                 package.writestr(f"resources/empty{k}", b"")

@@ -20,10 +20,10 @@ from fault_cases_master import CLI, _case, _csv_rows, _stderr_line, _summary
 from helpers import ROOT
 
 
-def _start(out: Path, *extra, env=None, code=None) -> subprocess.Popen:
-    """`agilesat run scan_pitch --out out ...` (or ``code`` with those arguments) in a
-    session of its own: a signal to its process group is a terminal's Ctrl-C."""
-    command = [*CLI, "run", "scan_pitch", "--out", str(out), "-q", *extra]
+def _start(out: Path, *extra, env=None, code=None, target="scan_pitch") -> subprocess.Popen:
+    """`agilesat run TARGET --out out ...` (or ``code`` with those arguments) in a session
+    of its own: a signal to its process group is a terminal's Ctrl-C."""
+    command = [*CLI, "run", str(target), "--out", str(out), "-q", *extra]
     if code is not None:
         command = [sys.executable, "-c", code, *command[3:]]
     return subprocess.Popen(
@@ -254,16 +254,8 @@ def _wild(out: Path, *extra, env=None) -> subprocess.Popen:
     """`agilesat run Wild.fmu` (``wild_model``) for 2 s, in a session of its own."""
     import wild_model
 
-    return subprocess.Popen(
-        [*CLI, "run", str(wild_model.built()), "--step", "0.1", "--stop", "2", "--out"]
-        + [str(out), "--no-figures", "-q", *extra],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env={**os.environ, **(env or {})},
-        start_new_session=True,
-    )
+    fmu = wild_model.built()
+    return _start(out, "--step", "0.1", "--stop", "2", "--no-figures", *extra, env=env, target=fmu)
 
 
 def stuck_step(grace: float = 1.0):
