@@ -1,6 +1,7 @@
 """``agilesat``: build, validate and run the toolkit's FMUs and scenarios.
 
-Exit status: 0 success; 1 bad input or a failed run (the message says what and where);
+Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
+or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
 as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
 by SIGTERM (everything recorded so far is kept, and the summary says what was not
@@ -72,6 +73,8 @@ def _main(argv: list, program: bool) -> int:
                 "generate": _generate,
                 **study_cli.COMMANDS,
                 "pointing": _pointing,
+                "report": _report,
+                "export-ephemeris": _export_ephemeris,
                 "campaign": campaign_cli.main if campaign else None,
             }[args.command](args)
         except KeyboardInterrupt as exc:
@@ -129,9 +132,12 @@ def _parser(campaign: bool = True) -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _system_commands(commands, quiet)
     study_cli.add_parsers(commands, quiet)
-    from .output import recorded_cli
+    from .output import ephemeris_cli, recorded_cli
+    from .output.report import cli as report_cli
 
     recorded_cli.add_parser(commands)
+    report_cli.add_parser(commands)
+    ephemeris_cli.add_parser(commands)
     if campaign:
         from .campaign import cli as campaign_cli
 
@@ -223,6 +229,9 @@ def _system_commands(commands, quiet) -> None:
         help="also write each figure as SVG (vector, for reports; ~25 %% more figure time)",
     )
     run.add_argument("--mat", action="store_true", help="also write results.mat (MATLAB)")
+    from .output.report import cli as report_cli
+
+    report_cli.add_option(run)
 
     plot = commands.add_parser("plot", help="plot recorded variables of one or more runs")
     plot.add_argument(
@@ -392,6 +401,9 @@ def _run(args) -> int:
         )
     if args.mat:
         results.to_mat(out / "results.mat")
+    from .output.report import cli as report_cli
+
+    report_cli.after(args, out)
     settings = summary["settings"]
     print(
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
@@ -404,6 +416,18 @@ def _pointing(args) -> int:
     from .output import recorded_cli
 
     return recorded_cli.main(args)
+
+
+def _report(args) -> int:
+    from .output.report import cli as report_cli
+
+    return report_cli.main(args)
+
+
+def _export_ephemeris(args) -> int:
+    from .output import ephemeris_cli
+
+    return ephemeris_cli.main(args)
 
 
 def _plot(args) -> int:
@@ -441,11 +465,13 @@ def _plot(args) -> int:
 
 
 def report(summary) -> int:
-    """Print the summary's numbers; the exit status of a run."""
+    """Print the summary's numbers; the exit status of a run: 1 when a metric,
+    requirement or figure raised (status "error": the run's records are written), 3 when
+    it did not fly as required."""
     from .output.summary import format_summary
 
     print(format_summary(summary))
-    return 3 if summary.get("status") == "failed" else 0
+    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
 
 
 def _export(args) -> int:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .cosim.derivatives import derivative_links, describe
-from .mission import targets
+from .mission import reads, targets
 from .system.description import Description
 from .system.parameters import variables
 from .system.ssp import read_system
@@ -50,6 +50,7 @@ def info(target: str) -> str:
 
 def scenario_info(scenario, variant: str | None) -> str:
     """A scenario (or one of its variants): what it is held to, its variants, its system."""
+    reads.check(scenario, variant)  # what its metrics and requirements read: outputs
     lines = [f"{scenario.name}: {scenario.title}"]
     for name, v in scenario.variants.items():
         lines.append(f"  {'>' if name == variant else ' '} variant :{name} — {v.description}")

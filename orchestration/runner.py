@@ -13,11 +13,14 @@ import signal
 import time
 import warnings
 from contextlib import nullcontext
+from functools import partial
 from pathlib import Path
 
 from .cosim.master import Interrupted, SimulationError, execute
 from .cosim.plan import plan_run
 from .cosim.signals import signal_at, stop_on_signals
+from .mission import reads
+from .mission.scenario import defined_at
 from .mission.targets import resolve
 from .output.lock import holding
 from .output.progress import Progress
@@ -74,6 +77,8 @@ def run(
     scenario, variant = found.scenario, found.variant
     wall = time.perf_counter()
     system = found.system_file(build)
+    if scenario is not None:  # what its metrics and requirements read: outputs
+        reads.check(scenario, variant, build)
     plan = plan_run(
         system,
         step=step,
@@ -98,6 +103,7 @@ def run(
         **provenance(),
         "scenario": scenario.name if scenario else None,
         "variant": variant,
+        "target": found.record(),
         "system": str(system.path),
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in plan.overrides.items()},
     }
@@ -131,10 +137,14 @@ def run(
         if out_dir is not None:
             write_records(results, summary, out_dir)
             if figures and signals.signal is None:
+                failed = len(summary.get("errors", ()))
                 summary["figures"], stopped = _figures(
                     scenario, variant, results, out_dir, svg, summary, signals
                 )
-                write_text(out_dir / "summary.json", summary_text(summary))
+                if len(summary.get("errors", ())) > failed:  # log.txt says it too
+                    write_records(results, summary, out_dir)
+                else:
+                    write_text(out_dir / "summary.json", summary_text(summary))
         if signals.signal is not None:  # after the last macro step: said, and exit 130/143
             during = "the figures" if stopped else "the results"
             _interruption(summary, signals.signal, during, [], figures)
@@ -153,7 +163,9 @@ def run(
 
 def _drop_previous_figures(out_dir: Path) -> None:
     """Remove the figures an earlier run in ``out_dir`` drew (its summary.json lists
-    them; nothing else is touched): a reused ``--out`` shows this run's figures only."""
+    them, also while they are drawn; nothing else is touched: its summary and records go
+    as this run's recording starts, :data:`.output.recorder.REPLACED`): a reused ``--out``
+    shows this run's figures only."""
     try:
         listed = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))["figures"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -171,34 +183,58 @@ def _figures(
 ) -> tuple[list[str], bool]:
     """Draw the figures; stop before the next one once a signal came.  (The files
     written, whether it stopped.)  $AGILESAT_TEST_SIGNAL=SIGNAL@figure:K: a signal as the
-    K-th starts.  Figures that need outputs not recorded (``--record``) are not drawn, and
-    the summary says why."""
+    K-th starts.  Before each file is written, summary.json lists it with those written
+    (a run killed while drawing leaves nothing the next one does not remove).  A figure
+    function that raises is said in the summary's ``errors`` (status "error") and the
+    others are drawn; figures that need outputs not recorded (``--record``) are not
+    drawn, and the summary says why."""
     from .output import plots, pointing_figures
 
     hook, started = signal_at("figure"), [0]
 
-    def before():
+    def before(paths):
         started[0] += 1
         if hook is not None and started[0] == hook[1]:
             os.kill(os.getpid(), hook[0])
         if signals.signal is not None:
             raise _Stopped
+        summary["figures"] = [str(p) for p in (*drawn, *paths)]
+        write_text(out_dir / "summary.json", summary_text(summary))
 
+    if scenario is None:
+        draws = [("the overview", lambda: plots.overview(results, out_dir))]
+    else:
+        draws = [
+            (
+                f"figure {getattr(f, '__qualname__', f)} {defined_at(f)}".rstrip(),
+                partial(f, results, out_dir),
+            )
+            for f in scenario.figures_for(variant)
+        ]
+        draws.append(
+            (
+                "the pointing figures",
+                partial(pointing_figures.run_figures, scenario, variant, results, out_dir),
+            )
+        )
     with plots.written_as(plots.FORMATS if svg else plots.FORMATS[:1]):
         with plots.drawing(before) as drawn:
-            try:
-                if scenario is not None:
-                    scenario.draw(results, out_dir, variant)
-                    pointing_figures.run_figures(scenario, variant, results, out_dir)
-                else:
-                    plots.overview(results, out_dir)
-            except _Stopped:
-                return [str(p) for p in drawn], True
-            except ColumnError as missing:
-                if len(results.names) == len(results.meta.get("units", {})) + 1:
-                    raise  # every output was recorded: a mistake of the figure's
-                summary["figures_not_drawn"] = f"they need outputs not recorded ({missing})"
-                return [], False
+            for what, draw in draws:
+                try:
+                    draw()
+                except _Stopped:
+                    return [str(p) for p in drawn], True
+                except Exception as exc:  # noqa: BLE001 - said; the other figures drawn
+                    recorded = len(results.names) == len(results.meta.get("units", {})) + 1
+                    if isinstance(exc, ColumnError) and not recorded:
+                        summary.setdefault(
+                            "figures_not_drawn", f"they need outputs not recorded ({exc})"
+                        )
+                        continue
+                    summary.setdefault("errors", []).append(
+                        f"{what} raised {type(exc).__name__}: {exc}"
+                    )
+                    summary["status"] = "error"
     return [str(p) for p in drawn], False
 
 

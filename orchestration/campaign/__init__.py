@@ -222,6 +222,7 @@ def finish(
         "status": status,
         **({"interruption": interruption} if interruption else {}),
         "spec": plan.spec.to_dict(),
+        "target": plan.target_record,
         "runs": {"planned": plan.total, "made": len(records), **counts},
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),

@@ -12,6 +12,7 @@ import signal
 from pathlib import Path
 
 from ..cli import ALGORITHM
+from ..output.report import cli as report_cli
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
 
@@ -87,6 +88,7 @@ def add_parser(commands) -> argparse.ArgumentParser:
         help="a parameter value of every run (as `agilesat run --set`)",
     )
     p.add_argument("--algorithm", **ALGORITHM)
+    report_cli.add_option(p)
     p.add_argument(
         "-q",
         "--quiet",
@@ -148,6 +150,7 @@ def main(args) -> int:
             f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
         )
         return 128 + _first()
+    report_cli.after(args, result.out_dir)
     print(format_campaign(result.summary))
     print(f"results in {result.out_dir}/")
     if engine.INTERRUPTS.signals:  # as the cluster closed

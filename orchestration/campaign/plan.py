@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...fmus import FMUS, model_class
+from ..mission import reads
 from ..mission.requirements import judged_over_campaign
 from ..mission.targets import resolve
 from ..system.description import Description
@@ -64,7 +65,11 @@ class Plan:
         self.scenario, self.variant = found.scenario, found.variant
         #: the target as the workers take it (a mission file by its absolute path)
         self.target = _absolute(spec.target) if found.scenario is not None else spec.target
+        #: campaign.json's ``target``: found again from any folder (``agilesat pointing``)
+        self.target_record = found.record()
         self.system = found.system_file(build=True)  # the FMUs built once, here
+        if found.scenario is not None:  # what its metrics and requirements read: outputs
+            reads.check(found.scenario, found.variant)
         self.step = spec.step or self.system.step_size
         self.stop = self.system.stop_time if spec.stop is None else spec.stop
         self.start = self.system.start_time

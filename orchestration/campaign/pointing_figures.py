@@ -15,12 +15,12 @@ at most a fraction 1 − P above it: where the curve first reaches 1 − P or be
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
 import numpy as np
 
 from ..output.kept import reached_the_end
+from ..output.pointing_figures import title as figure_title
 from ..pointing import ANGLE_UNITS, format_angle
 
 
@@ -60,7 +60,7 @@ def campaign_figures(
         kept = kept[reached_the_end(kept)]
         error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
         times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
-        title = f"{r.name}: {entry.get('text') or verdict['text']}"
+        title = figure_title(r.requirement, verdict)
         x, what = values(r.requirement, verdict, times, m)
         paths.append(
             distribution(out / f"pointing_{r.name}.png", title, r.requirement, verdict, x, what)
@@ -96,6 +96,6 @@ def distribution(path: Path, title: str, r, verdict: dict, x: np.ndarray, what: 
             ax.axvline(value / scale, color=colour, linestyle=style, linewidth=1.2, label=shown)
     ax.set_xlabel(f"{what} [{unit}]")
     ax.set_ylabel("fraction above")
-    ax.set_title(textwrap.fill(title, 90), fontsize=9)
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)
     return _save(fig, ax, path)

@@ -107,7 +107,9 @@ def run_one(
         )
         record["metrics"] = summary.get("metrics", {})
         record["requirements"] = summary.get("requirements", {})
-        if summary.get("status") == "failed":
+        if summary.get("status") == "error":  # a metric or requirement raised
+            record.update(status="error", message="; ".join(summary["errors"]))
+        elif summary.get("status") == "failed":
             record["status"] = "failed"
             record["message"] = "; ".join(summary["diagnostics"])
     except SimulationError as failure:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -34,6 +34,8 @@ from ..output.summary import format_value, relative_drift
 from ..pointing.errors import performance_error
 from ..pointing.indices import NotEvaluable
 from ..system.units import quantity, to_degrees, to_si
+from .requirements import not_covered
+from .system import where_written
 
 __all__ = [
     "Metric",
@@ -58,11 +60,13 @@ __all__ = [
 
 @dataclass(frozen=True)
 class MetricValue:
-    """A metric of one run: ``value`` (SI; None: no value, ``reason`` says why)."""
+    """A metric of one run: ``value`` (SI; None: no value, ``reason`` says why;
+    ``failed``: the metric raised, a mistake of its own, not a run without a value)."""
 
     value: float | None
     unit: str
     reason: str = ""
+    failed: bool = False
 
 
 @dataclass(frozen=True)
@@ -71,7 +75,8 @@ class Metric:
     ``unit`` None: the unit of the signal (set by the library's metrics); ``display_unit``
     the unit it is printed in (``deg`` for ``rad``); ``require`` a bound on it
     (:func:`.requirements.at_most`, :func:`~.requirements.within`, ...); ``paper`` a
-    reference value (SI) shown beside it."""
+    reference value (SI) shown beside it.  ``origin``: "file:line" where it was written
+    (set from the caller: the messages about it name it)."""
 
     name: str
     compute: Callable
@@ -82,15 +87,19 @@ class Metric:
     paper: float | None = None
     #: the recorded output it is computed from, if one (its unit is the metric's)
     signal: str | None = None
+    origin: str = field(default="", compare=False)
 
     def __post_init__(self):
         if not self.name.isidentifier():
             raise ValueError(f"metric name {self.name!r} must be an identifier")
+        if not self.origin:
+            object.__setattr__(self, "origin", where_written())
 
     def evaluate(self, results, partial: bool = False) -> MetricValue:
         """The value on ``results`` (None with the reason when it cannot be had);
         ``partial``: the run recorded some outputs only, so a missing one makes the metric
-        not evaluable (else it is a mistake of the metric's, and raised)."""
+        not evaluable.  A metric that raises anything else is not evaluated either, and
+        ``failed``: the reason names the exception and where the metric was written."""
         try:
             value, unit = self.compute(results), self.unit
             if isinstance(value, tuple):  # the library's: (value, unit of the signal)
@@ -99,8 +108,10 @@ class Metric:
             return MetricValue(None, self.unit or "1", str(reason))
         except ColumnError as missing:
             if not partial:
-                raise
+                return MetricValue(None, self.unit or "1", self.raised(missing), True)
             return MetricValue(None, self.unit or "1", f"not recorded: {missing}")
+        except Exception as exc:  # noqa: BLE001 - the metric's mistake: said, the run kept
+            return MetricValue(None, self.unit or "1", self.raised(exc), True)
         unit = unit or "1"
         if value is None:
             return MetricValue(None, unit, "no value")
@@ -110,12 +121,18 @@ class Metric:
             return MetricValue(None, unit, why)
         return MetricValue(value, unit)
 
+    def raised(self, exc: Exception) -> str:
+        """The reason of a metric that raised ``exc``."""
+        where = f" ({self.origin})" if self.origin else ""
+        return f"metric {self.name}{where} raised {type(exc).__name__}: {exc}"
+
 
 # -- signals ------------------------------------------------------------------------------
 
 
 def _signal(results, signal, start=None, stop=None) -> tuple[np.ndarray, np.ndarray, str | None]:
-    """(t, values (N, k), unit) of a signal over [start, stop]."""
+    """(t, values (N, k), unit) of a signal over [start, stop]; :class:`NotEvaluable` if the
+    run's records do not cover the window (to the nearest sample)."""
     t = results.time
     if callable(signal):  # its unit: its ``unit`` attribute, if it has one
         values, unit = np.asarray(signal(results), dtype=float), getattr(signal, "unit", None)
@@ -127,8 +144,9 @@ def _signal(results, signal, start=None, stop=None) -> tuple[np.ndarray, np.ndar
         rows &= t >= start - 1e-12
     if stop is not None:
         rows &= t <= stop + 1e-12
-    if start is not None and start > t[-1]:
-        raise NotEvaluable(f"the run ends at {t[-1]:g} s, before {start:g} s")
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
     if not rows.any():
         raise NotEvaluable(
             f"no sample in [{start if start is not None else t[0]:g}, "

@@ -33,6 +33,7 @@ import numpy as np
 from ..output.kept import reached_the_end
 from ..output.summary import requirement_text
 from ..system.units import CONVERSIONS, quantity, to_si
+from .system import where_written
 
 MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED = "met", "not met", "not evaluated", "not judged"
 VERDICTS = (MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED)
@@ -81,6 +82,7 @@ class Bound(Requirement):
     max: object = None
     metric: str | None = None
     name: str = ""  # type: ignore[assignment]
+    origin: str = field(default="", compare=False)  # "file:line" where it was written
 
     def __post_init__(self):
         if self.min is None and self.max is None:
@@ -103,10 +105,12 @@ class Bound(Requirement):
                 )
         if not self.name and self.metric:
             object.__setattr__(self, "name", self.metric)
+        if not self.origin:
+            object.__setattr__(self, "origin", where_written())
 
     def on(self, metric: str) -> Bound:
         """This bound on ``metric`` (a metric's ``require=``)."""
-        return Bound(self.min, self.max, metric, self.name or metric)
+        return Bound(self.min, self.max, metric, self.name or metric, self.origin)
 
     def limits(self, unit: str | None) -> dict[str, float]:
         """{"min": ..., "max": ...} (those given) in ``unit`` (SI)."""
@@ -205,8 +209,11 @@ class Pointing(Requirement):
     stop: float | None = None
     reference_signals: tuple = ()
     signals: tuple = field(init=False, default=())
+    origin: str = field(default="", compare=False)  # "file:line" where it was written
 
     def __post_init__(self):
+        if not self.origin:
+            object.__setattr__(self, "origin", where_written())
         if self.kind not in ("performance", "knowledge"):
             raise ValueError(f"kind must be 'performance' or 'knowledge', got {self.kind!r}")
         if getattr(self.requirement, "bound", None) is None:
@@ -292,9 +299,13 @@ def recorded_error(
     """The :class:`..pointing.ErrorHistory` of the recorded quaternion ``attitude`` against
     ``reference`` (a recorded quaternion, or a function of the columns: :class:`Pointing`)
     over [``start``, ``stop``]: ``columns[name]`` is (points,) for a run, (runs, points) for
-    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples."""
+    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples,
+    or a window the records do not cover (to the nearest sample: :func:`not_covered`)."""
     from ..pointing import NotEvaluable, knowledge_error, performance_error
 
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
     rows = np.ones(len(t), bool)
     if start is not None:
         rows &= t >= start - 1e-12
@@ -310,3 +321,19 @@ def recorded_error(
     return (performance_error if kind == "performance" else knowledge_error)(
         q_x[..., rows, :], q_y[..., rows, :], t[rows]
     )
+
+
+def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:
+    """Why records at times ``t`` do not cover ``what``, [``start``, ``stop``] (None: the
+    records' own end), to the nearest sample; "" if they do."""
+    if not len(t):
+        return "no records"
+    half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
+    first, last = float(t[0]), float(t[-1])
+    if start is not None and start > last + half:
+        return f"the records end at {last:g} s, before {what}'s start {start:g} s"
+    if start is not None and start < first - half:
+        return f"the records begin at {first:g} s, after {what}'s start {start:g} s"
+    if stop is not None and stop > last + half:
+        return f"the records end at {last:g} s, before {what}'s end {stop:g} s"
+    return ""

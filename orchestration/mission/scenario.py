@@ -34,7 +34,7 @@ from pathlib import Path
 from ..output.results import ColumnError
 from ..output.summary import format_value
 from ..system.parameters import did_you_mean
-from .metrics import Metric
+from .metrics import Metric, NotEvaluable
 from .requirements import (
     MET,
     NOT_EVALUATED,
@@ -110,7 +110,8 @@ class Scenario:
     ``(results, metrics) -> [problems]``, the explanation of a run that did not fly as
     required (``metrics``: the summary's entries); ``systems_dir``: where ``agilesat
     generate`` writes its SSD (the shipped scenarios'; others render theirs on demand);
-    ``bounds``: :class:`SignalBound` s a campaign's envelopes draw."""
+    ``bounds``: :class:`SignalBound` s a campaign's envelopes draw; ``phases``: the
+    maneuver's phases ``(name, start, end)`` [s] that the report marks on its time axes."""
 
     def __init__(
         self,
@@ -125,6 +126,7 @@ class Scenario:
         diagnose: Callable | None = None,
         systems_dir=None,
         bounds: Sequence[SignalBound] = (),
+        phases: Sequence[tuple[str, float, float]] = (),
     ):
         if not name.isidentifier():
             raise ValueError(f"scenario name {name!r} must be an identifier")
@@ -136,6 +138,7 @@ class Scenario:
         self.figures = [figures] if callable(figures) else list(figures)
         self.diagnose = diagnose
         self.bounds = list(bounds)
+        self.phases = list(phases)
         self.systems_dir = None if systems_dir is None else Path(systems_dir)
         for variant in self.variants:
             if not variant.isidentifier():
@@ -232,6 +235,7 @@ class Scenario:
         only (what needs another is not evaluated, and the diagnosis is left out)."""
         metrics = self.metrics_for(variant)
         values = {m.name: m.evaluate(results, partial) for m in metrics}
+        errors = [v.reason for v in values.values() if v.failed]
         exempt = self.variant(variant).exempt()
         entries = {m.name: _entry(m, values[m.name]) for m in metrics}
         verdicts: dict[str, dict] = {}
@@ -240,7 +244,7 @@ class Scenario:
             verdict = (
                 Verdict(NOT_JUDGED, reason=exempt[r.name])
                 if r.name in exempt
-                else _judged(r, results, values, partial)
+                else _judged(r, results, values, partial, errors)
             )
             metric = getattr(r, "metric", None)
             unit = values[metric].unit if metric in values else None
@@ -270,13 +274,17 @@ class Scenario:
                     else repr(verdict.value)
                 )
                 problems.append(f"requirement {statement} not met: {shown}")
-        diagnose = self.diagnose if self.diagnose is not None and not partial else None
-        diagnostics = problems + (list(diagnose(results, entries)) if diagnose else [])
+        if self.diagnose is not None and not partial:
+            try:
+                problems += list(self.diagnose(results, entries))
+            except Exception as exc:  # noqa: BLE001 - the diagnosis's mistake: said
+                errors.append(f"the diagnosis {defined_at(self.diagnose)} {_raised(exc)}")
         return {
             "metrics": entries,
             "requirements": verdicts,
-            "diagnostics": diagnostics,
-            "status": "failed" if diagnostics else "ok",
+            "diagnostics": problems,
+            "status": "error" if errors else "failed" if problems else "ok",
+            **({"errors": errors} if errors else {}),
         }
 
     def bounds_for(self, variant: str | None = None) -> list[SignalBound]:
@@ -284,22 +292,46 @@ class Scenario:
         exempt = self.variant(variant).exempt()
         return [b for b in self.bounds if b.requirement is None or b.requirement not in exempt]
 
+    def figures_for(self, variant: str | None = None) -> list[Callable]:
+        """The scenario's and the variant's figure functions."""
+        return [*self.figures, *self.variant(variant).figures]
+
     def draw(self, results, out_dir, variant: str | None = None) -> list[Path]:
         """The scenario's and the variant's figures of a run, into ``out_dir``."""
         paths: list[Path] = []
-        for figure in [*self.figures, *self.variant(variant).figures]:
+        for figure in self.figures_for(variant):
             made = figure(results, Path(out_dir))
             paths += [Path(p) for p in (made if isinstance(made, (list, tuple)) else [made])]
         return paths
 
 
-def _judged(requirement, results, values: dict, partial: bool) -> Verdict:
+def _judged(requirement, results, values: dict, partial: bool, errors: list) -> Verdict:
+    """The verdict of ``requirement``; not evaluated where it cannot be had, and where it
+    raised (a mistake of the requirement's: said in ``errors`` too)."""
     try:
         return requirement.evaluate(results, values)
+    except NotEvaluable as reason:
+        return Verdict(NOT_EVALUATED, reason=str(reason))
     except ColumnError as missing:
-        if not partial:
-            raise
-        return Verdict(NOT_EVALUATED, reason=f"not recorded: {missing}")
+        if partial:
+            return Verdict(NOT_EVALUATED, reason=f"not recorded: {missing}")
+        failure: Exception = missing
+    except Exception as exc:  # noqa: BLE001 - said, the run kept
+        failure = exc
+    where = getattr(requirement, "origin", "")
+    reason = f"requirement {requirement.name}{f' ({where})' if where else ''} {_raised(failure)}"
+    errors.append(reason)
+    return Verdict(NOT_EVALUATED, reason=reason)
+
+
+def _raised(exc: Exception) -> str:
+    return f"raised {type(exc).__name__}: {exc}"
+
+
+def defined_at(function) -> str:
+    """Where a function was defined, as "(file:line)" ("" if unknown)."""
+    code = getattr(function, "__code__", None)
+    return f"({code.co_filename}:{code.co_firstlineno})" if code is not None else ""
 
 
 def _entry(metric: Metric, value) -> dict:
@@ -309,6 +341,7 @@ def _entry(metric: Metric, value) -> dict:
         "display_unit": metric.display_unit or value.unit,
         "description": metric.description,
         **({"reason": value.reason} if value.value is None else {}),
+        **({"failed": True} if value.failed else {}),
         **({"paper": metric.paper} if metric.paper is not None else {}),
     }
 

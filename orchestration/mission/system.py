@@ -77,6 +77,12 @@ def _origin(prefer: str | None = None) -> tuple[str, int]:
     return found
 
 
+def where_written() -> str:
+    """Where the user's call is (:func:`_origin`), as "file:line" ("" where no file)."""
+    file, line = _origin()
+    return f"{file}:{line}" if line else ""
+
+
 def _split(name: str, what: str) -> tuple[str, str]:
     component, _, variable = str(name).partition(".")
     if not component or not variable:
@@ -123,7 +129,9 @@ class System:
             raise ValueError(f"{file}:{line}: component name {name!r} is not an identifier")
         if name in self._components:
             raise ValueError(f"{file}:{line}: component {name!r} is added twice")
-        self._components[name] = _Component(name, _fmu(fmu or name, file), step, line)
+        self._components[name] = _Component(
+            name, _fmu(fmu or name, file, f"{file}:{line}: component {name!r}"), step, line
+        )
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
         self._resolved.clear()
@@ -145,7 +153,9 @@ class System:
         parameter values are ``parameters``."""
         file, line = _origin(self.file)
         old = self._component(name, "replace")
-        self._components[name] = _Component(name, _fmu(fmu, file), old.step, line)
+        self._components[name] = _Component(
+            name, _fmu(fmu, file, f"{file}:{line}: component {name!r}"), old.step, line
+        )
         self._parameters = {k: v for k, v in self._parameters.items() if k.split(".")[0] != name}
         for variable, value in parameters.items():
             self._parameters[f"{name}.{variable}"] = (value, line)
@@ -426,14 +436,23 @@ def _report(file: str, problems: list[str]) -> str:
     return f"{file}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
 
 
-def _fmu(fmu, file: str) -> str:
+def _fmu(fmu, file: str, where: str) -> str:
     """A component's FMU as stored: our FMU's name, or an absolute path (a relative one is
-    relative to the directory of ``file``, the file that names it)."""
+    relative to the directory of ``file``, the file that names it; ``where``: the call
+    that does, for the message about an FMU that is none of ours)."""
     text = os.fspath(fmu)
     path, cls = text.rsplit(":", 1) if ".py:" in text else (text, "")
     if Path(path).suffix not in (".fmu", ".py"):
+        from ...fmus import FMUS
+
         if os.sep in text or "/" in text:
             raise ValueError(f"{text}: an FMU is one of ours by name, an .fmu file or a model .py")
+        if text not in FMUS:  # said here, not at the first connection to it
+            raise SystemFileError(
+                f"{where}: unknown FMU {text!r}"
+                + did_you_mean(text, FMUS)
+                + f" (ours: {', '.join(FMUS)}; or the path of an .fmu file or a model .py)"
+            )
         return text
     base = Path(file).parent if os.path.isfile(file) else Path.cwd()
     absolute = str((base / path).resolve())

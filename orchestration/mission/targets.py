@@ -45,6 +45,10 @@ class Target:
     variant: str | None = None
     system: System | None = None
     path: Path | None = None
+    #: how it was named ("scenario", "mission file", "module", "system file", "FMU") and
+    #: the file that defines it, if there is one
+    kind: str = ""
+    source: Path | None = None
 
     def system_file(self, build: bool = True):
         """The :class:`..system.ssp.SystemFile` it runs (a file read once per content)."""
@@ -61,6 +65,21 @@ class Target:
         if self.scenario is not None:
             return self.scenario.name + (f":{self.variant}" if self.variant else "")
         return self.text
+
+    def record(self) -> dict:
+        """What summary.json and campaign.json keep of it, to find it again from any folder
+        (:func:`found_again`): the target as given, how it was named, the scenario and
+        variant, the absolute path of the file that defines it and the SHA-256 of that
+        file's content."""
+        source = self.source if self.source is not None and self.source.is_file() else None
+        return {
+            "text": self.text,
+            "kind": self.kind,
+            "scenario": self.scenario.name if self.scenario is not None else None,
+            "variant": self.variant,
+            "path": None if source is None else str(source),
+            "sha256": None if source is None else sha256(source),
+        }
 
 
 @functools.cache
@@ -111,25 +130,28 @@ def resolve(target) -> Target:
     for one that is none of them, or a variant the scenario does not have."""
     if isinstance(target, Target):
         return target
-    if isinstance(target, Scenario):
-        return Target(target.name, scenario=target)
+    if isinstance(target, Scenario):  # made in Python: its system's file, if one
+        return Target(target.name, scenario=target, kind="mission file", source=_file(target))
     if isinstance(target, System):
-        return Target(target.name, system=target)
+        return Target(target.name, system=target, kind="system")
     text = str(target)
     name, variant = _split(text)
     suffix = Path(name).suffix
     if suffix in (".ssd", ".ssp") and not variant:
-        return Target(text, path=Path(text))
+        return Target(text, path=Path(text), kind="system file", source=Path(text).resolve())
     if suffix == ".fmu" and not variant:
-        return Target(text, system=single(Path(text)))
+        return Target(text, system=single(Path(text)), kind="FMU", source=Path(text).resolve())
     if suffix == ".py":
-        found = load_file(Path(name))
+        kind, source = "mission file", Path(name).resolve()
+        found = load_file(source)
     elif name in shipped() or name in registered():
         found = scenario(name)
+        kind, source = "scenario", _module_file(name)
     elif "." in name and _importable(name):
         found = _scenario_of(importlib.import_module(name), name)
+        kind, source = "module", _origin_of(name)
     elif not variant and _ours(name):
-        return Target(text, system=single(name))
+        return Target(text, system=single(name), kind="FMU")
     else:
         from ...fmus import FMUS
 
@@ -140,7 +162,79 @@ def resolve(target) -> Target:
             f"{', '.join(FMUS)})" + did_you_mean(name, [*known, *FMUS])
         )
     found.variant(variant)  # a variant it does not have: KeyError
-    return Target(text, scenario=found, variant=variant or None)
+    return Target(text, found, variant or None, kind=kind, source=source)
+
+
+def sha256(path: Path) -> str:
+    """The SHA-256 of a file's content."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _file(found: Scenario) -> Path | None:
+    """The file a scenario made in Python was built in: its system's."""
+    path = Path(found.system.file)
+    return path.resolve() if path.suffix == ".py" and path.is_file() else None
+
+
+def _module_file(name: str) -> Path | None:
+    """The module file of a scenario by name (shipped, or a package's entry point)."""
+    if name in shipped():
+        return SHIPPED_DIR / f"{name}.py"
+    return _origin_of(registered()[name].module)
+
+
+def _origin_of(module: str) -> Path | None:
+    try:
+        spec = importlib.util.find_spec(module)
+    except (ImportError, ValueError):
+        return None
+    return Path(spec.origin) if spec is not None and spec.origin else None
+
+
+class TargetMoved(KeyError):
+    """A run's or campaign's target cannot be found again as it was (moved, edited)."""
+
+    def __str__(self):
+        return str(self.args[0])
+
+
+def found_again(record: dict, where, mission: str | None = None) -> tuple[Target, str]:
+    """The scenario a run or campaign in ``where`` was made of (its :meth:`Target.record`),
+    found from any folder; ``mission``: the target to judge it by instead (its file moved,
+    or as it is now).  (The target, a note to print or "".)  :class:`TargetMoved` when
+    the file that defined it is no longer there or has changed since (SHA-256)."""
+    variant, kind = record.get("variant"), record.get("kind") or "target"
+    path, made = record.get("path"), record.get("sha256")
+    if mission is not None:
+        found = resolve(
+            mission if ":" in Path(mission).name or not variant else f"{mission}:{variant}"
+        )
+        if not made or found.source is not None and sha256(found.source) == made:
+            return found, ""
+        return found, (
+            f"note: {found.source or mission} is not what {where} was made of (the {kind} {path}, "
+            f"SHA-256 {made[:12]}…): judged by it as it is now"
+        )
+    if path and not Path(path).is_file():
+        raise TargetMoved(
+            f"{where} was made of the {kind} {path}, which is no longer there (moved or "
+            "deleted): give --mission PATH, where it is now"
+        )
+    if path and made and sha256(Path(path)) != made:
+        raise TargetMoved(
+            f"{where} was made of the {kind} {path}, which has changed since (SHA-256 "
+            f"{made[:12]}… then, {sha256(Path(path))[:12]}… now): its requirements may not be "
+            f"those it was judged by; --mission {path} judges it by the file as it is now"
+        )
+    text = record.get("text") or ""
+    if kind == "mission file" or kind == "module" and not _importable(_split(text)[0]):
+        if not path:
+            raise TargetMoved(
+                f"{where} was made of the scenario {record.get('scenario')}, made in Python "
+                "in no file of its own: give --mission PATH, the file that defines it"
+            )
+        text = f"{path}:{variant}" if variant else path  # by its absolute path
+    return resolve(text), ""
 
 
 def _split(text: str) -> tuple[str, str]:

@@ -10,7 +10,9 @@ black line: the statistic a requirement compares), ``bottom=y`` (the axis starts
 ``log=True`` (a logarithmic axis: an error of 100° and of 0.001° on one panel),
 ``at=(x, label)`` (a solid black vertical line: an instant a metric gives, such as a
 settling time), ``paper_at=(x, label)`` (a dotted vertical line: the paper's instant),
-``events=(xs, label)`` (thin grey vertical lines: payload reversals, say).
+``events=(xs, label)`` (thin grey vertical lines: payload reversals, say),
+``empty=(x0, x1, label)`` (a light grey span where the quantity has no value: before a
+windowed index's first full window).
 ``panels(..., phases=[(name, start, end), ...])`` marks the phases of a maneuver on every
 axes (dotted grey lines at their boundaries) and names them above the top axes.
 Axes that do not share x each get the x label.  The overview of a run leaves out Euler rates
@@ -76,8 +78,9 @@ _drawing: ContextVar[tuple[list, object] | None] = ContextVar("agilesat_drawing"
 @contextlib.contextmanager
 def drawing(before=None):
     """Figures made inside (in this thread) are listed, as they are written, in the list
-    yielded; ``before()`` is called before each one is drawn (it may raise: a run stopped
-    by a signal then says which figures were written)."""
+    yielded; ``before(paths)`` is called before each one is written, with the files it
+    is written as (it may raise: a run stopped by a signal then says which figures were
+    written)."""
     drawn: list[Path] = []
     token = _drawing.set((drawn, before))
     try:
@@ -120,14 +123,18 @@ def lines(
     ylabel: str,
     xlabel: str = "time [s]",
     phases=(),
+    title_size=None,
     **marks,
 ) -> Path:
     """One axes: each named series against time (or ``xlabel``)."""
-    return panels(path, title, [(t, series, ylabel, marks)], xlabel, phases)
+    return panels(path, title, [(t, series, ylabel, marks)], xlabel, phases, title_size)
 
 
-def panels(path: Path, title: str, rows, xlabel: str = "time [s]", phases=()) -> Path:
-    """Stacked axes sharing x, one per row (see the module docstring)."""
+def panels(
+    path: Path, title: str, rows, xlabel: str = "time [s]", phases=(), title_size=None
+) -> Path:
+    """Stacked axes sharing x, one per row (see the module docstring); ``title_size``:
+    the title's font size (default matplotlib's)."""
     shared = len({id(r[0]) for r in rows}) == 1
     fig, axes = _subplots(len(rows), sharex=shared)
     for ax, row in zip(axes[:, 0], rows):
@@ -147,7 +154,8 @@ def panels(path: Path, title: str, rows, xlabel: str = "time [s]", phases=()) ->
         if not shared:
             ax.set_xlabel(xlabel)
     _phases(axes[:, 0], phases)
-    return _save(fig, axes, path, title, xlabel, **({"title_pad": 14.0} if phases else {}))
+    pad = 14.0 if phases else None
+    return _save(fig, axes, path, title, xlabel, title_pad=pad, title_size=title_size)
 
 
 def _phases(axes, phases) -> None:
@@ -227,6 +235,7 @@ def _mark(
     at=None,
     paper_at=None,
     events=None,
+    empty=None,
 ) -> None:
     """The marks of a panel (module docstring) whose series reach ``span`` at most.  A
     limit far above the data (:data:`FAR` times) would flatten it: on a non-negative
@@ -270,6 +279,8 @@ def _mark(
             ax.axvline(
                 x, color="0.6", linestyle="-.", linewidth=0.7, label=text if k == 0 else None
             )
+    if empty is not None:
+        ax.axvspan(empty[0], empty[1], color="0.92", label=empty[2])
     if bottom is not None:
         ax.set_ylim(bottom=bottom)
     if log:
@@ -434,7 +445,7 @@ def _subplots(n: int, sharex: bool = False):
     return fig, axes
 
 
-def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Path:
+def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None, title_size=None) -> Path:
     """Label the stacked axes, lay them out once (:mod:`.figure_layout`), write the PNG
     from that one Agg drawing and each other format with its own renderer."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -442,9 +453,10 @@ def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None) -> Pat
 
     watched = _drawing.get()
     if watched is not None and watched[1] is not None:
-        watched[1]()
+        watched[1](formats(path))
     axes[-1, 0].set_xlabel(xlabel)
-    axes[0, 0].set_title(title, pad=title_pad)  # above the phases' names, if any
+    size = {} if title_size is None else {"fontsize": title_size}
+    axes[0, 0].set_title(title, pad=title_pad, **size)  # above the phases' names, if any
     figure_layout.fixed(fig, axes, title)
     canvas = FigureCanvasAgg(fig)
     figure_layout.draw(fig, axes, canvas)

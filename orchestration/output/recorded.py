@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..mission.requirements import recorded_error
+from ..mission.requirements import not_covered, recorded_error
 from ..pointing import INDICES, PointingRequirement, PointingResult
 from .kept import reached_the_end
 from .results import Results
@@ -34,13 +34,40 @@ DEFAULTS = {
 @dataclass(frozen=True)
 class Recorded:
     """A source's ``columns`` ({name: array} or a Results), times ``t``, how many runs
-    were ``left_out`` (stopped early), and the ``target`` it ran (None if unknown)."""
+    were ``left_out`` (stopped early), the ``target`` it ran (None if unknown), the record
+    of it (``made_of``, :meth:`..mission.targets.Target.record`; None in files written
+    before there was one) and the times the run was to cover, ``span`` (start, stop;
+    None if unknown): the records of a run that stopped early end before it."""
 
     columns: object
     t: np.ndarray
     runs: int
     left_out: int
     target: str | None
+    made_of: dict | None = None
+    span: tuple[float, float] | None = None
+
+    def find_target(self, where, mission: str | None = None):
+        """(The :class:`..mission.targets.Target` the records were made of, a note to
+        print or ""), found from any folder (:func:`..mission.targets.found_again`;
+        ``mission``: the target to judge them by instead); None if it has no scenario."""
+        from ..mission.targets import TargetMoved, found_again, resolve
+
+        if self.made_of is not None and (self.made_of.get("scenario") or mission):
+            return found_again(self.made_of, where, mission)
+        if mission is None and not self.target:
+            return None, ""
+        try:
+            return resolve(mission or self.target), ""
+        except KeyError as exc:  # written before the target was recorded whole
+            raise TargetMoved(
+                f"{where} names its target {self.target!r} only, which is not found from here"
+                f" ({exc}): give --mission PATH, the mission file it was made of"
+            ) from None
+
+    def shortfall(self) -> str:
+        """What the records do not cover of the run's span (it stopped early), or ""."""
+        return "" if self.span is None else not_covered(self.t, *self.span, what="the run")
 
 
 class _Kept(dict):
@@ -59,23 +86,41 @@ class _Kept(dict):
 
 
 def load(source) -> Recorded:
-    """The recorded columns of a run or a campaign (see the module)."""
+    """The recorded columns of a run or a campaign (see the module).  A directory that
+    is neither, or whose files are not what a run or a campaign writes, is a ValueError
+    naming the file and what was expected."""
     if isinstance(source, Results):
-        return Recorded(source, source.time, 1, 0, None)
+        span = (source.meta["start"], source.meta["stop"]) if "stop" in source.meta else None
+        return Recorded(source, source.time, 1, 0, None, None, span)
     directory = Path(getattr(source, "out_dir", source))
     if (directory / "campaign.json").exists():
         return _campaign(directory)
     if (directory / "results.npz").exists() or (directory / "results.csv").exists():
         results = Results.load(directory)
-        target = None
-        if (directory / "summary.json").exists():
-            summary = json.loads((directory / "summary.json").read_text())
-            target = _target(summary.get("scenario"), summary.get("variant"))
-        return Recorded(results, results.time, 1, 0, target)
+        summary = (
+            _object(directory / "summary.json", "a run's summary")
+            if (directory / "summary.json").exists()
+            else {}
+        )
+        settings = summary.get("settings") or {}
+        span = (settings["start"], settings["stop"]) if "stop" in settings else None
+        target = _target(summary.get("scenario"), summary.get("variant"))
+        return Recorded(results, results.time, 1, 0, target, summary.get("target"), span)
     raise FileNotFoundError(
-        f"{directory}: neither a run directory (results.npz or results.csv) nor a campaign "
-        "directory (campaign.json)"
+        f"{directory}: neither a run directory of `agilesat run` (results.npz or results.csv) "
+        "nor a campaign directory of `agilesat campaign` (campaign.json)"
     )
+
+
+def _object(path: Path, what: str) -> dict:
+    """The JSON object of one of our files; a ValueError naming it if it is not one."""
+    try:
+        value = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: not {what} of agilesat's ({exc})") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"{path}: not {what} of agilesat's (a JSON {type(value).__name__})")
+    return value
 
 
 def _target(scenario, variant) -> str | None:
@@ -85,14 +130,30 @@ def _target(scenario, variant) -> str | None:
 
 
 def _campaign(directory: Path) -> Recorded:
-    summary = json.loads((directory / "campaign.json").read_text())
-    kept = summary.get("kept")
+    summary = _object(directory / "campaign.json", "a campaign's summary")
+    kept, runs = summary.get("kept"), summary.get("runs")
+    fields = ("signals", "start", "step", "points")
+    if not (_has(runs, ("planned",)) and (kept is None or _has(kept, fields))):
+        raise ValueError(
+            f"{directory / 'campaign.json'}: not a campaign's summary of agilesat's (expected "
+            "'runs' with 'planned' and 'kept' with the signals, start, step and points)"
+        )
     if not kept or not (directory / "signals.npy").exists():
         raise FileNotFoundError(
             f"{directory}: the campaign kept no signals of its runs (signals.npy); run it "
             "again with --keep SatelliteDynamics.q_BI and the other quaternions the index needs"
         )
-    signals = np.load(directory / "signals.npy", mmap_mode="r")[: summary["runs"]["planned"]]
+    shape = (runs["planned"], len(kept["signals"]), kept["points"])
+    try:
+        signals = np.load(directory / "signals.npy", mmap_mode="r")
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{directory / 'signals.npy'}: not a whole signals file ({exc})") from None
+    if signals.ndim != 3 or signals.shape[0] < shape[0] or signals.shape[1:] != shape[1:]:
+        raise ValueError(
+            f"{directory / 'signals.npy'}: holds {signals.shape}, not the (runs ≥ {shape[0]}, "
+            f"signals, points) = {shape} campaign.json says it kept: cut, or another campaign's"
+        )
+    signals = signals[: shape[0]]
     complete = reached_the_end(signals)
     if not complete.any():
         raise ValueError(f"{directory}: no run of the campaign reached the end")
@@ -100,9 +161,21 @@ def _campaign(directory: Path) -> Recorded:
     columns = {name: values[:, i] for i, name in enumerate(kept["signals"])}
     t = kept["start"] + kept["step"] * np.arange(kept["points"])
     left = int((~complete).sum())
+    made_of = summary.get("target") or {}
     return Recorded(
-        _Kept(columns, directory), t, int(complete.sum()), left, summary["spec"]["target"]
+        _Kept(columns, directory),
+        t,
+        int(complete.sum()),
+        left,
+        _target(made_of.get("scenario"), made_of.get("variant"))
+        or (summary.get("spec") or {}).get("target"),
+        summary.get("target"),
+        (float(t[0]), float(t[-1])),
     )
+
+
+def _has(value, keys) -> bool:
+    return isinstance(value, dict) and all(k in value for k in keys)
 
 
 def evaluate(
@@ -118,7 +191,9 @@ def evaluate(
     """``requirement`` on the error of ``attitude`` against ``reference`` (recorded
     quaternions; by default, for a knowledge index the estimate AttitudeEstimator.q_BI_est
     against the truth SatelliteDynamics.q_BI, for a performance index the truth
-    SatelliteDynamics.q_BI against a ``reference`` that must be named) over [start, stop]."""
+    SatelliteDynamics.q_BI against a ``reference`` that must be named) over [start, stop]
+    (default: what the run was to cover; a window its records do not cover is
+    :class:`..pointing.NotEvaluable`)."""
     kind = INDICES[requirement.index][1]
     attitude = attitude or DEFAULTS[kind][0]
     reference = reference or DEFAULTS[kind][1]
@@ -128,5 +203,8 @@ def evaluate(
             "(a recorded quaternion: StaringGuidance.q_ref, OrbitEnvironment.q_OI, ...)"
         )
     recorded = recorded or load(source)
+    if recorded.span is not None:  # the window the run was to cover, not what it recorded
+        start = recorded.span[0] if start is None else start
+        stop = recorded.span[1] if stop is None else stop
     error = recorded_error(recorded.columns, recorded.t, attitude, reference, kind, start, stop)
     return requirement.evaluate(error)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 from ..pointing.names import ANGLE_UNITS, INDICES, INTERPRETATIONS
@@ -69,8 +70,14 @@ def add_parser(commands) -> None:
         help="quaternion: the reference (performance; required), "
         "default SatelliteDynamics.q_BI (knowledge)",
     )
-    p.add_argument("--start", type=float, help="[s]")
-    p.add_argument("--stop", type=float, help="[s]")
+    p.add_argument("--start", type=float, help="[s] (default: the run's start)")
+    p.add_argument("--stop", type=float, help="[s] (default: the run's planned stop)")
+    p.add_argument(
+        "--mission",
+        metavar="PATH",
+        help="the mission file (or scenario) to judge the requirements by, where the one "
+        "the run was made of has moved or changed",
+    )
     p.add_argument(
         "--unit", choices=list(ANGLE_UNITS), default="deg", help="of the printout (default deg)"
     )
@@ -85,15 +92,17 @@ def add_parser(commands) -> None:
 
 def main(args) -> int:
     from ..mission.requirements import Pointing
-    from ..mission.targets import resolve
-    from ..pointing import PointingRequirement
+    from ..pointing import NotEvaluable, PointingRequirement
     from .recorded import evaluate, load
 
     recorded = load(args.directory)
     what = f"{recorded.runs} run(s)" + (
         f", {recorded.left_out} that stopped early left out" if recorded.left_out else ""
     )
-    print(f"{args.directory}: {recorded.target or 'a run'}, {what}")
+    short = recorded.shortfall()
+    print(
+        f"{args.directory}: {recorded.target or 'a run'}, {what}" + (f"; {short}" if short else "")
+    )
     records, results = [], []
     if args.index:
         requirement = PointingRequirement(
@@ -108,20 +117,30 @@ def main(args) -> int:
             args.boresight,
             args.confidence,
         )
-        result = evaluate(
-            None,
-            requirement,
-            attitude=args.attitude,
-            reference=args.reference,
-            start=args.start,
-            stop=args.stop,
-            recorded=recorded,
-        )
+        try:
+            result = evaluate(
+                None,
+                requirement,
+                attitude=args.attitude,
+                reference=args.reference,
+                start=args.start,
+                stop=args.stop,
+                recorded=recorded,
+            )
+        except NotEvaluable as reason:  # a window its records do not cover
+            raise ValueError(f"{args.directory}: {reason}") from None
         print(f"  {_line(result, args.unit)}")
         records.append(result.to_dict())
         results.append((requirement.label(), result))
     else:
-        target = resolve(recorded.target) if recorded.target else None
+        if short:
+            raise ValueError(
+                f"{args.directory}: {short}: the requirements are stated over the whole run "
+                "(--index with --start and --stop gives an index over what it recorded)"
+            )
+        target, note = recorded.find_target(args.directory, args.mission)
+        if note:
+            print(note, file=sys.stderr)
         if target is None or target.scenario is None:
             raise ValueError(f"{args.directory}: no scenario recorded: give --index ...")
         stated = [
@@ -134,7 +153,13 @@ def main(args) -> int:
             if r.name in exempt:  # the variant does not judge it: as the run's summary
                 print(f"  {r.name}: not judged ({exempt[r.name]})")
                 continue
-            result = r.requirement.evaluate(r.error(recorded.columns, recorded.t))  # type: ignore[attr-defined]
+            try:
+                error = r.error(recorded.columns, recorded.t)  # type: ignore[attr-defined]
+            except NotEvaluable as reason:  # a window the run does not reach, as its summary
+                print(f"  {r.name}: not evaluated ({reason})")
+                records.append({"name": r.name, "status": "not evaluated", "met": None})
+                continue
+            result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
             print(f"  {r.name}: {_line(result, args.unit)}")
             records.append({"name": r.name, **result.to_dict()})
             results.append((r.name, result))

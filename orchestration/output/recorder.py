@@ -13,6 +13,10 @@ renamed when complete, and hands back :class:`Results` that map the raw rows fro
 
 Without an output directory the caller gets the rows in memory (a buffer grown by doubling).
 
+A recording replaces an earlier run's records in its directory: as it starts it truncates
+``results.csv`` and removes the files that describe those rows (:data:`REPLACED`), so a
+run killed before it writes its own leaves none of another run's beside its rows.
+
 A run may record some of the columns (``keep``) at every ``every``-th communication point:
 the rows offered are numbered from 0, and row n is recorded when n is a multiple of
 ``every``.
@@ -24,6 +28,7 @@ import contextlib
 import errno
 import os
 import zipfile
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +36,9 @@ import numpy as np
 from .results import Results
 
 RAW = ".results.f64"
+#: what an earlier run left that describes its rows: a recording in the same directory
+#: removes them as it starts (results.csv it truncates)
+REPLACED = ("results.npz", "results.units.json", "summary.json", "log.txt")
 
 
 class Recorder:
@@ -44,6 +52,8 @@ class Recorder:
         self._memory = np.empty((64, len(columns)))
         self._files = []
         if self.out_dir is not None:
+            for old in (self.out_dir / name for name in REPLACED):  # none beside these rows
+                _checked(old, partial(old.unlink, missing_ok=True))
             header = (",".join(map(_csv_field, self.columns)) + "\n").encode()
             self.csv = _File(self.out_dir / "results.csv", header)
             self.raw = _File(self.out_dir / RAW, b"")

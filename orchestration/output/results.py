@@ -225,12 +225,58 @@ class Results:
 
     @classmethod
     def load(cls, directory) -> Results:
-        """The results of a run directory: results.npz, else results.csv."""
+        """The results of a run directory: results.npz, else results.csv.  A
+        :class:`ResultsFileError` names the file when it is not a whole run's: one the
+        library cannot read (cut, damaged), without a first column ``time`` (not a run's
+        of ours), with time not increasing, or with fewer or more rows than the run's
+        summary.json says it recorded."""
         directory = Path(directory)
-        if (directory / "results.npz").exists():
-            return cls.from_npz(directory / "results.npz")
-        if (directory / "results.csv").exists():
-            return cls.from_csv(directory / "results.csv")
-        raise FileNotFoundError(
-            f"{directory}: no results.npz or results.csv (not a run directory of `agilesat run`?)"
+        path = directory / "results.npz"
+        if not path.exists():
+            path = directory / "results.csv"
+        if not path.exists():
+            raise FileNotFoundError(
+                f"{directory}: no results.npz or results.csv (not a run directory of "
+                "`agilesat run`?)"
+            )
+        read = cls.from_npz if path.suffix == ".npz" else cls.from_csv
+        try:
+            results = read(path)
+        except Exception as exc:  # noqa: BLE001 - what the library says of a damaged file
+            raise ResultsFileError(
+                f"{path}: not a whole results file ({type(exc).__name__}: {exc}): cut or damaged"
+            ) from None
+        problem = _not_whole(results, directory / "summary.json")
+        if problem:
+            raise ResultsFileError(f"{path}: {problem}")
+        return results
+
+
+class ResultsFileError(ValueError):
+    """A run directory's results file that is not a whole run's (:meth:`Results.load`)."""
+
+
+def _not_whole(results: Results, summary: Path) -> str:
+    """What is wrong with a run's results (read from a file), or ""."""
+    if results.names[:1] != ["time"]:
+        return (
+            f"its first column is {results.names[0]!r}, not 'time': not the results of an "
+            "agilesat run (columns time, Instance.variable, ...)"
         )
+    t = results.time
+    back = np.flatnonzero(~(np.diff(t) > 0))
+    if len(back):
+        return (
+            f"time does not increase from row {back[0] + 1} to {back[0] + 2} (t = "
+            f"{t[back[0]]:g} s, then {t[back[0] + 1]:g} s): rows of two runs, or damaged"
+        )
+    try:
+        rows = json.loads(summary.read_text(encoding="utf-8")).get("rows")
+    except (OSError, ValueError, AttributeError):
+        return ""  # no summary (a killed run's), or not ours: nothing to compare with
+    if isinstance(rows, int) and rows != len(results):
+        return (
+            f"{len(results)} rows, but {summary} says the run recorded {rows}: the file is "
+            "cut, or another run's"
+        )
+    return ""

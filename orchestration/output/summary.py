@@ -53,8 +53,9 @@ def _finite(value):
 
 
 def write_records(results: Results, summary: dict, out_dir: Path) -> None:
-    """The units of results.csv, log.txt and summary.json (the master writes results.csv
-    row by row and results.npz); an OSError names each file not written."""
+    """The units of results.csv, log.txt (the FMUs' messages, then the summary's
+    ``errors``) and summary.json (the master writes results.csv row by row and
+    results.npz); an OSError names each file not written."""
     problems = []
     for path, text in (
         (
@@ -64,7 +65,8 @@ def write_records(results: Results, summary: dict, out_dir: Path) -> None:
         (
             out_dir / "log.txt",
             header({k: summary[k] for k in ("version", "command", "date") if k in summary})
-            + "".join(f"{e}\n" for e in results.meta["log"]),
+            + "".join(f"{e}\n" for e in results.meta["log"])
+            + "".join(f"error: {e}\n" for e in summary.get("errors", ())),
         ),
         (out_dir / "summary.json", summary_text(summary)),
     ):
@@ -145,7 +147,9 @@ def format_summary(summary: dict) -> str:
         unit, display = m["unit"], m.get("display_unit")
         u = _display(0.0, unit, display)[1]  # also of the paper's value beside no value
         value = None if m["value"] is None else _display(m["value"], unit, display)[0]
-        text = "no value" if value is None else join(f"{value:.6g}", u)
+        text = join(f"{value:.6g}", u) if value is not None else "no value"
+        if m.get("failed"):  # it raised: a mistake of its own
+            text = "not evaluated"
         paper = (
             "paper " + join(f"{_display(m['paper'], unit, display)[0]:.6g}", u)
             if "paper" in m
@@ -187,6 +191,8 @@ def format_summary(summary: dict) -> str:
         )
     for problem in summary.get("diagnostics", []):
         lines.append(f"  FAILED: {problem}")
+    for error in summary.get("errors", []):
+        lines.append(f"  ERROR: {error}")
     return "\n".join(lines)
 
 

@@ -18,6 +18,19 @@ INDICES = {
     "KDE": ("drift", "knowledge"),
     "KRE": ("drift", "knowledge"),
 }
+#: what each index is, in words ([Ecss 2008] §3.2): figure titles
+MEANINGS = {
+    "APE": "absolute performance error",
+    "MPE": "mean performance error",
+    "RPE": "relative performance error",
+    "PDE": "performance drift error",
+    "PRE": "performance reproducibility error",
+    "AKE": "absolute knowledge error",
+    "MKE": "mean knowledge error",
+    "RKE": "relative knowledge error",
+    "KDE": "knowledge drift error",
+    "KRE": "knowledge reproducibility error",
+}
 T_IN_WINDOW = ("end", "random")
 INTERPRETATIONS = ("temporal", "ensemble", "mixed")
 #: display units of angles: rad per unit

@@ -661,4 +661,5 @@ SCENARIO = Scenario(
     diagnose=diagnose,
     systems_dir=Path(__file__).resolve().parent.parent / "systems",  # agilesat generate
     bounds=BOUNDS,
+    phases=PHASES,
 )

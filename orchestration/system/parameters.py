@@ -138,10 +138,11 @@ def typed_parameters(
                 f"({'×'.join(map(str, shape)) or 'a scalar'}); the elements are "
                 f"{table[base].first.name} .. {table[base].scalars[-1].name}"
             )
-        if variable not in table:
+        if variable not in table:  # the closest parameters (else inputs): never outputs
+            by = {c: [n for n, v in table.items() if v.first.causality == c] for c in SETTABLE}
             raise SystemFileError(
-                f"{at}: {name} ({description.path.name}) has "
-                f"no variable {variable!r}" + did_you_mean(variable, table)
+                f"{at}: {name} ({description.path.name}) has no variable {variable!r}"
+                + (did_you_mean(variable, by["parameter"]) or did_you_mean(variable, by["input"]))
             )
         array = table[variable]
         if np.shape(_number(value)) != array.shape:
@@ -280,6 +281,11 @@ def choice_value(variable: str, names, value, where: str) -> int:
 
 def _literal(array) -> str:
     return str(array).replace(" ", "")
+
+
+#: the causalities of the variables a run is given values of: parameters, and inputs held
+#: at a value (one FMU run alone)
+SETTABLE = ("parameter", "input")
 
 
 def did_you_mean(name: str, known) -> str:

@@ -107,9 +107,9 @@ def variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
     """One connection's ends: an output of ``a`` to an input of ``b``, same type and unit."""
     problems = []
     if va.causality != "output":
-        problems.append(f"{at}: '{va.name}' of {a.name} is a {va.causality}, expected an output")
+        problems.append(f"{at}: '{va.name}' of {a.name} is {_a(va.causality)}, expected an output")
     if vb.causality != "input":
-        problems.append(f"{at}: '{vb.name}' of {b.name} is a {vb.causality}, expected an input")
+        problems.append(f"{at}: '{vb.name}' of {b.name} is {_a(vb.causality)}, expected an input")
     if va.type != vb.type:
         problems.append(f"{at}: type mismatch, {va.type} -> {vb.type}")
     elif va.type == "Real" and va.unit and vb.unit and va.unit != vb.unit:
@@ -152,7 +152,7 @@ def _binding_problems(instances, bindings) -> list[str]:
             )
         elif var.causality not in ("parameter", "input") or var.variability == "constant":
             problems.append(
-                f"{value.origin}: {inst.name}.{value.name} is a {var.causality}, "
+                f"{value.origin}: {inst.name}.{value.name} is {_a(var.causality)}, "
                 "expected a parameter"
             )
         elif var.type != value.type:
@@ -222,7 +222,9 @@ def _connector_problems(system, instances) -> list[str]:
                 problems.append(f"{at}: {ref.name} ({inst.path.name}) has no variable '{c.name}'")
                 continue
             if c.kind in ("input", "output", "parameter") and c.kind != var.causality:
-                problems.append(f"{at}: declared {c.kind}, the FMU's variable is a {var.causality}")
+                problems.append(
+                    f"{at}: declared {c.kind}, the FMU's variable is {_a(var.causality)}"
+                )
             if c.type is not None and c.type != var.type:
                 problems.append(f"{at}: declared {c.type}, the FMU's variable is {var.type}")
             elif c.unit is not None and var.type == "Real" and c.unit != (var.unit or ""):
@@ -230,3 +232,8 @@ def _connector_problems(system, instances) -> list[str]:
                     f"{at}: declared unit '{c.unit}', the FMU's variable has '{var.unit or ''}'"
                 )
     return problems
+
+
+def _a(noun: str) -> str:
+    """'an output', 'an input', 'a parameter'."""
+    return f"{'an' if noun[:1] in 'aeiou' else 'a'} {noun}"

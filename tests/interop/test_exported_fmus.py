@@ -109,7 +109,9 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
     assert {c.name: c.source.name for c in system.components} == {
         k: f"SatelliteDynamics_{k}.fmu" for k in "ABC"
     }
-    run = agilesat("run", tmp_path / "p.ssp", "--out", tmp_path / "out", "--no-figures")
+    run = agilesat(
+        "run", tmp_path / "p.ssp", "--out", tmp_path / "out", "--no-figures", "--no-report"
+    )
     assert run.returncode == 0, run.stderr
 
 

@@ -73,6 +73,7 @@ def ours(package, stop, step, out_dir):
             "--out",
             out_dir,
             "--no-figures",
+            "--no-report",
             cwd=out_dir.parent,
         )
         assert run.returncode == 0, run.stderr

@@ -48,16 +48,20 @@ def test_an_unknown_component_is_named_at_once_with_the_closest(fmus):
         system.set("Sat.inertia", np.eye(3))
 
 
-def test_an_unknown_fmu_is_named_with_file_and_line(fmus):
+def test_an_unknown_fmu_is_named_with_file_and_line_where_it_is_added(fmus):
+    """A misspelt FMU is said at add(), with the FMU meant (not at the first connection,
+    whose closest component would be the misspelt one)."""
     system = System("s", step=0.1, stop=1.0)
-    system.add("Wheel", "Flywhel")
     with pytest.raises(SystemFileError) as error:
-        system.check()
+        system.add("Wheel", "Flywhel")
     line = line_of('system.add("Wheel", "Flywhel")')
     at = f"{HERE}:{line}"
-    assert f"{at}: component 'Wheel': unknown FMU 'Flywhel'; did you mean Flywheel?" in str(
-        error.value
+    assert str(error.value).startswith(
+        f"{at}: component 'Wheel': unknown FMU 'Flywhel'; did you mean Flywheel? (ours: "
     )
+    with pytest.raises(SystemFileError, match="unknown FMU 'Flywhel'; did you mean Flywheel?"):
+        system.add("Flywhel")  # its name is its FMU's
+    assert system.components == ()
 
 
 def test_variable_shape_and_unit_mistakes_are_reported_together_where_they_were_made(fmus):
@@ -118,7 +122,7 @@ def test_causality_and_an_input_left_open_in_the_masters_words(fmus):
     system.add("Flywheel")
     system.connect("Flywheel.tau_cmd", "SatelliteDynamics.h_wheel")  # an input as the source
     with pytest.raises(
-        SystemFileError, match="'tau_cmd' of Flywheel is a input, expected an output"
+        SystemFileError, match="'tau_cmd' of Flywheel is an input, expected an output"
     ):
         system.check()
     system = System("open", step=0.1, stop=1.0).add("Flywheel")

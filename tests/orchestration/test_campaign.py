@@ -37,6 +37,7 @@ VARY = [
 COMMAND = [
     "campaign",
     "scan_pitch",
+    "--no-report",
     "--stop",
     STOP,
     "--seed",
@@ -92,7 +93,9 @@ def test_any_run_replays_exactly_with_agilesat_run(three, tmp_path):
     dispersed = list(row)[list(row).index("grid") + 1 : list(row).index("status")]
     assert len(dispersed) == 9 + 6 + 18 + 1
     sets = [arg for key in dispersed for arg in ("--set", f"{key}={row[key]}")]
-    result = agilesat("run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path, "--no-figures")
+    result = agilesat(
+        "run", "scan_pitch", "--stop", STOP, *sets, "--out", tmp_path, "--no-figures", "--no-report"
+    )
     assert result.returncode in (0, 3), result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     for name, metric in summary["metrics"].items():
@@ -250,6 +253,7 @@ def test_failures_are_recorded_outcomes(tmp_path, fmus):
     out = tmp_path / "failures"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "100",
@@ -350,6 +354,7 @@ def test_distributed_campaign_survives_a_worker_killed_midway(dask_cluster, tmp_
     out = tmp_path / "remote"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "20",
@@ -445,6 +450,7 @@ def test_runs_in_one_batch_are_each_their_own_outcome(tmp_path, fmus):
     out = tmp_path / "batched"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         "0.5",
@@ -482,6 +488,7 @@ def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
     out = tmp_path / "laws"
     result = agilesat(
         "campaign",
+        "--no-report",
         "scan_pitch",
         "--stop",
         STOP,
@@ -508,6 +515,7 @@ def test_a_named_choice_is_recorded_by_name_and_replays(tmp_path, fmus):
         "--out",
         tmp_path / "replay",
         "--no-figures",
+        "--no-report",
     )
     assert result.returncode in (0, 3), result.stderr
     summary = json.loads((tmp_path / "replay" / "summary.json").read_text())

@@ -110,7 +110,7 @@ def test_a_named_choice_is_set_by_its_name_or_its_number(fmus):
 @pytest.mark.integration
 def test_set_a_named_choice_on_the_command_line(fmus, tmp_path):
     result = agilesat(
-        "run", "scan_pitch", "--stop", 0.5, "--out", tmp_path, "--no-figures",
+        "run", "scan_pitch", "--stop", 0.5, "--out", tmp_path, "--no-figures", "--no-report",
         "--set", "CmgSteering.law=SR_INVERSE",
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
@@ -310,6 +310,7 @@ def test_set_a_whole_array_on_an_ssp_package(fmus, tmp_path):
         "--stop",
         1,
         "--no-figures",
+        "--no-report",
         "--out",
         tmp_path / "run",
         "--set",

@@ -49,7 +49,7 @@ def sampled():
 def cosim(tmp_path_factory, *args):
     out = tmp_path_factory.mktemp("run")
     args = args if str(args[0]).endswith(".ssd") else ("scan_pitch", *args)
-    run = agilesat("run", *args, "--out", out, "--no-figures", "-q")
+    run = agilesat("run", *args, "--out", out, "--no-figures", "--no-report", "-q")
     assert run.returncode == 0, run.stderr
     return Results.from_csv(out / "results.csv")
 

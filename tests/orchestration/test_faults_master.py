@@ -106,7 +106,7 @@ CONNECTOR = '<ssd:Connector name="r_I[1]" kind="input">\n            <ssc:Real u
         (CONNECTOR.replace('"m"', '"km"'), "declared unit 'km', the FMU's variable has 'm'"),
         (
             CONNECTOR.replace('kind="input"', 'kind="output"'),
-            "declared output, the FMU's variable is a input",
+            "declared output, the FMU's variable is an input",
         ),
         (
             CONNECTOR.replace('<ssc:Real unit="m"/>', "<ssc:Integer/>"),

@@ -62,7 +62,7 @@ def test_a_command_stops_at_once_until_a_run_writes_then_signals_are_flags():
 def test_figures_are_listed_as_written_and_a_check_before_each_can_stop_them(tmp_path):
     t = np.linspace(0.0, 1.0, 11)
 
-    def before():
+    def before(paths):
         if len(drawn) >= 1:
             raise KeyboardInterrupt
 

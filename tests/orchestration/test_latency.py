@@ -76,7 +76,8 @@ _RUN_PATH = """
 import json, sys
 from agilesat.orchestration.cli import main
 from agilesat.orchestration.campaign.worker import run_batch
-assert main(["run", "video_sar", "--stop", "1", "-q", "--no-figures", "--out", sys.argv[1]]) == 0
+options = ["--stop", "1", "-q", "--no-figures", "--no-report", "--out", sys.argv[1]]
+assert main(["run", "video_sar", *options]) == 0
 after_run = "scipy.stats" in sys.modules
 (record,) = run_batch([(0, {})], "video_sar", 0.05, 1.0, None, [], 21, share=1109)
 print(json.dumps([after_run, "scipy.stats" in sys.modules, record["status"]]))

@@ -63,7 +63,10 @@ def test_not_settled_is_no_value_with_its_reason():
     in_degrees = m.settling_time("S.w", 1e-4 * DEG).evaluate(DECAY)  # the bound as people say it
     assert in_degrees.reason.startswith("not settled: |S.w| > 0.0001 °/s at the end")
     late = m.settling_time("S.w", 0.01, after=150.0).evaluate(DECAY)
-    assert late.value is None and "the run ends at 100 s, before 150 s" in late.reason
+    assert (
+        late.value is None
+        and "the records end at 100 s, before the window's start 150 s" in late.reason
+    )
 
 
 def test_max_and_rms_over_a_window_of_a_sine():
@@ -121,10 +124,17 @@ def test_rate_error_saturation_and_momentum_margin():
 
 
 def test_a_nan_is_no_value_and_a_missing_column_is_a_mistake():
+    """A metric that raises (a column its run recorded not, any exception) is not
+    evaluated, ``failed``: the reason names it, where it was written and what it raised."""
     nan = Metric("x", lambda r: float("nan")).evaluate(DECAY)
-    assert nan.value is None and nan.reason == "not a number"
-    with pytest.raises(KeyError, match="no column 'S.v'"):
-        m.max_abs("S.v").evaluate(DECAY)
+    assert nan.value is None and nan.reason == "not a number" and not nan.failed
+    missing = m.max_abs("S.v").evaluate(DECAY)
+    line = next(n for n, text in enumerate(open(__file__), 1) if 'max_abs("S.v").eval' in text)
+    assert missing.value is None and missing.failed
+    assert missing.reason.startswith(f"metric max_abs_v ({__file__}:{line}) raised ColumnError")
+    assert "no column 'S.v'" in missing.reason
+    broken = Metric("broken", lambda r: 1 / 0).evaluate(DECAY)
+    assert broken.failed and broken.reason.endswith("raised ZeroDivisionError: division by zero")
     partial = m.max_abs("S.v").evaluate(DECAY, partial=True)  # --record chose the columns
     assert partial.value is None and partial.reason.startswith("not recorded")
 

@@ -126,6 +126,7 @@ def test_libcosim_runs_the_package_to_the_coupling_error(mission, tmp_path):
                 "--out",
                 ours_dir,
                 "--no-figures",
+                "--no-report",
                 "-q",
             ],
             capture_output=True,

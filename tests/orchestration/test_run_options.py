@@ -22,7 +22,7 @@ slow = [pytest.mark.slow, pytest.mark.integration]
 def full_and_chosen(fmus, tmp_path_factory):
     """scan_pitch from 10 to 12 s: every output at every step, and two of them every 0.5 s."""
     base = tmp_path_factory.mktemp("options")
-    window = ("--start", 10, "--stop", 12, "--no-figures", "-q")
+    window = ("--start", 10, "--stop", 12, "--no-figures", "--no-report", "-q")
     full = agilesat("run", "scan_pitch", *window, "--out", base / "full")
     chosen = agilesat(
         "run",
@@ -89,7 +89,7 @@ def test_one_fmu_at_its_defaults_and_with_set(fmus, tmp_path):
     measures its bias, +5 °/h on z), or at what --set gives (0.01 rad/s about z, with its
     500 ppm scale factor).  The mean of 4000 samples of its white noise (ARW 0.15 °/√h at
     20 Hz: σ = 1.95e-4 rad/s per sample) has σ = 3.1e-6 rad/s: within 4σ."""
-    common = ("--step", 0.05, "--stop", 200, "--no-figures")
+    common = ("--step", 0.05, "--stop", 200, "--no-figures", "--no-report")
     alone = agilesat("run", "Gyro", *common, "--out", tmp_path / "a")
     assert alone.returncode == 0, alone.stderr
     bias = 5 * math.pi / 180 / 3600
@@ -147,7 +147,9 @@ def test_export_a_system_file_with_set_values(fmus, tmp_path):
 def test_a_run_that_ends_before_it_settles_has_no_settling_time(fmus, tmp_path):
     """scan_pitch to 100 s: the pitch rate is still above 0.01 °/s at the end, so there is
     no settling time (it was once stop + step, a number a campaign averaged)."""
-    result = agilesat("run", "scan_pitch", "--stop", 100, "--no-figures", "-q", "--out", tmp_path)
+    result = agilesat(
+        "run", "scan_pitch", "--stop", 100, "--no-figures", "--no-report", "-q", "--out", tmp_path
+    )
     assert result.returncode == 0, result.stderr
     settling = json.loads((tmp_path / "summary.json").read_text())["metrics"]["settling_time"]
     assert settling["value"] is None and settling["reason"].startswith("not settled")

@@ -77,7 +77,7 @@ CASES = {
         lambda s: retarget(
             s, R_I, connection("SatelliteDynamics", "tau_ext[1]", "SatelliteDynamics", "r_I[1]")
         ),
-        ["'tau_ext[1]' of SatelliteDynamics is a input, expected an output"],
+        ["'tau_ext[1]' of SatelliteDynamics is an input, expected an output"],
     ),
     "type": (
         lambda s: retarget(
@@ -103,7 +103,7 @@ CASES = {
     ),
     "not a parameter": (
         lambda s: s.replace('<ssv:Parameter name="h_rotor">', '<ssv:Parameter name="hdot[1]">', 1),
-        ["CmgCluster.hdot[1] is a output, expected a parameter"],
+        ["CmgCluster.hdot[1] is an output, expected a parameter"],
     ),
     "algebraic loop": (
         lambda s: retarget(
@@ -164,6 +164,7 @@ def test_a_failing_fmu_stops_the_run_and_keeps_what_was_recorded(fmus, tmp_path)
         "--out",
         out,
         "--no-figures",
+        "--no-report",
     )
     assert result.returncode == 1
     assert "SatelliteDynamics: fmi2DoStep at t=0.35 s returned fmi2Error" in result.stderr
@@ -207,6 +208,7 @@ def test_results_have_named_columns_at_every_communication_point(fmus, tmp_path,
         "--out",
         tmp_path,
         "--no-figures",
+        "--no-report",
     )
     assert result.returncode == 0, result.stderr
     results = Results.from_csv(tmp_path / "results.csv")

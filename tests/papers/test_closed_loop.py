@@ -34,7 +34,9 @@ STEP = 0.05
 
 
 def run(out, target, step, *settings):
-    result = agilesat("run", target, "--step", step, "--no-figures", "-q", "--out", out, *settings)
+    result = agilesat(
+        "run", target, "--step", step, "--no-figures", "--no-report", "-q", "--out", out, *settings
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert result.returncode in (0, 3), result.stdout + result.stderr
     return summary, Results.from_csv(out / "results.csv")
@@ -87,7 +89,7 @@ def test_a_sensed_campaign_and_its_indices_after_the_fact(fmus, tmp_path):
     out = tmp_path / "campaign"
     result = agilesat(
         "campaign", "video_sar:sensed", "--runs", "3", "--stop", "20", "--workers", "1",
-        "--keep", "AttitudeEstimator.q_BI_est", "--no-progress", "--out", out,
+        "--keep", "AttitudeEstimator.q_BI_est", "--no-progress", "--no-report", "--out", out,
     )  # fmt: skip
     assert result.returncode == 0, result.stdout + result.stderr
     summary = json.loads((out / "campaign.json").read_text())

@@ -19,7 +19,7 @@ ORBIT_RATE = math.sqrt(3.986004418e14 / (6378137.0 + 500e3) ** 3)
 
 
 def run(out, target, *args):
-    result = agilesat("run", target, "--out", out, "--no-figures", *args)
+    result = agilesat("run", target, "--out", out, "--no-figures", "--no-report", *args)
     summary = json.loads((out / "summary.json").read_text())
     return result, summary, Results.from_csv(out / "results.csv")
 

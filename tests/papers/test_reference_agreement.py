@@ -50,7 +50,9 @@ def errors(fmus, truth, scan_pitch_run, tmp_path_factory):
             cosim = scan_pitch_run[3]
         else:
             out = tmp_path_factory.mktemp(f"h{step}")
-            run = agilesat("run", "scan_pitch", "--step", step, "--out", out, "--no-figures")
+            run = agilesat(
+                "run", "scan_pitch", "--step", step, "--out", out, "--no-figures", "--no-report"
+            )
             assert run.returncode == 0, run.stderr
             cosim = Results.from_csv(out / "results.csv")
         every = round(step / 1e-3)

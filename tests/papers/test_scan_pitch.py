@@ -108,6 +108,7 @@ def test_momentum_is_conserved_at_any_macro_step(fmus, tmp_path, step):
         "--stop",
         60,
         "--no-figures",
+        "--no-report",
         "--set",
         "SatelliteDynamics.gravity_gradient=false",
     ]
@@ -123,7 +124,7 @@ def test_momentum_is_conserved_at_any_macro_step(fmus, tmp_path, step):
 
 
 def test_literal_spin_is_diagnosed_not_flown_silently(fmus, tmp_path):
-    result, summary = run(tmp_path, "scan_pitch:literal_spin", "--no-figures")
+    result, summary = run(tmp_path, "scan_pitch:literal_spin", "--no-figures", "--no-report")
     assert result.returncode == 3
     assert summary["status"] == "failed"
     diagnosis = "\n".join(summary["diagnostics"])
@@ -137,7 +138,14 @@ def test_literal_spin_is_diagnosed_not_flown_silently(fmus, tmp_path):
 @pytest.mark.parametrize("step", [0.05])
 def test_jacobi_also_meets_the_requirement(fmus, tmp_path, step):
     result, summary = run(
-        tmp_path, "scan_pitch", "--algorithm", "jacobi", "--step", step, "--no-figures"
+        tmp_path,
+        "scan_pitch",
+        "--algorithm",
+        "jacobi",
+        "--step",
+        step,
+        "--no-figures",
+        "--no-report",
     )
     assert result.returncode == 0, result.stderr
     assert value(summary, "imaging_pitch_rate_mean") == pytest.approx(-0.8 * DEG, abs=0.02 * DEG)

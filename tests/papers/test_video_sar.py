@@ -32,13 +32,19 @@ def run(out, *args):
 
 @pytest.fixture(scope="module")
 def default(fmus, tmp_path_factory):
-    return run(tmp_path_factory.mktemp("video_sar"), "run", "video_sar", "--no-figures")
+    return run(
+        tmp_path_factory.mktemp("video_sar"), "run", "video_sar", "--no-figures", "--no-report"
+    )
 
 
 @pytest.fixture(scope="module")
 def uncompensated(fmus, tmp_path_factory):
     return run(
-        tmp_path_factory.mktemp("no_yaw"), "run", "video_sar:no_yaw_compensation", "--no-figures"
+        tmp_path_factory.mktemp("no_yaw"),
+        "run",
+        "video_sar:no_yaw_compensation",
+        "--no-figures",
+        "--no-report",
     )
 
 
@@ -160,7 +166,7 @@ def test_total_angular_momentum_is_conserved(default):
 
 
 def test_the_acceleration_feedforward_matters(default, fmus, tmp_path):
-    summary, _ = run(tmp_path, "run", "video_sar:no_feedforward", "--no-figures")
+    summary, _ = run(tmp_path, "run", "video_sar:no_feedforward", "--no-figures", "--no-report")
     assert value(summary, "pointing_error_max") > 10 * value(default[0], "pointing_error_max")
 
 

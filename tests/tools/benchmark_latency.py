@@ -92,7 +92,7 @@ def run_once(env: dict, target: str, out: Path, figures: bool, work: Path) -> di
     """One `agilesat run` in a fresh interpreter; its phases [s]."""
     marks_file = work / "marks.json"
     command = [sys.executable, "-c", WRAPPER, str(marks_file), "run", target, "-q"]
-    command += ["--out", str(out)] + ([] if figures else ["--no-figures"])
+    command += ["--out", str(out)] + ([] if figures else ["--no-figures", "--no-report"])
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     launch = time.time()
     result = subprocess.run(command, env=env, capture_output=True, text=True, cwd=work)

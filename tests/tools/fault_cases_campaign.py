@@ -22,6 +22,7 @@ from helpers import ROOT
 
 KEEP = "SatelliteDynamics.w_BO_B[2]"
 SMALL = [
+    "--no-report",
     "--stop",
     "1",
     "--vary",
@@ -142,7 +143,15 @@ def oversized():
     with tempfile.TemporaryDirectory() as tmp:
         for label, extra in trials:
             out = Path(tmp) / "c"
-            command = [*CLI, "campaign", "scan_pitch", "--stop", "1", "--no-progress"]
+            command = [
+                *CLI,
+                "campaign",
+                "scan_pitch",
+                "--stop",
+                "1",
+                "--no-progress",
+                "--no-report",
+            ]
             command += ["--out", str(out), *extra]
             code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", 600)
             good = (
@@ -216,6 +225,7 @@ def nonfinite_dispersions():
             given = ["--dispersions", str(file)] if vary.startswith("--") else ["--vary", vary]
             result = subprocess.run(
                 [*CLI, "campaign", "scan_pitch", "--stop", "1", *given, "--no-progress"]
+                + ["--no-report"]
                 + ["--out", str(Path(tmp) / "c")],
                 cwd=ROOT,
                 capture_output=True,

@@ -51,7 +51,7 @@ def gyro_system(directory: Path, extra: str = "") -> Path:
 def _run(path, *extra, env=None, out=None):
     with tempfile.TemporaryDirectory() as tmp:
         return subprocess.run(
-            [*CLI, "run", str(path), "--stop", "0.5", "--no-figures"]
+            [*CLI, "run", str(path), "--stop", "0.5", "--no-figures", "--no-report"]
             + ["--out", str(out or Path(tmp) / "out"), *map(str, extra)],
             cwd=ROOT,
             capture_output=True,

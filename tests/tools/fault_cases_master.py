@@ -240,7 +240,7 @@ def connector_unit():
 
 def _start_run(out: Path, *extra, env=None) -> subprocess.Popen:
     return subprocess.Popen(
-        [*CLI, "run", "scan_pitch", "--out", str(out), "--no-figures", *extra],
+        [*CLI, "run", "scan_pitch", "--out", str(out), "--no-figures", "--no-report", *extra],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -512,7 +512,9 @@ def disk_full():
         subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(mount)], check=True)
         try:
             out = mount / "out"
-            result = agilesat("run", "scan_pitch", "--stop", "30", "--out", out, "--no-figures")
+            result = agilesat(
+                "run", "scan_pitch", "--stop", "30", "--out", out, "--no-figures", "--no-report"
+            )
             rows, whole = _csv_rows(out / "results.csv")
             leftovers = [
                 p.name
@@ -558,6 +560,7 @@ def parallel_builds(tries: int = 3):
                     "--stop",
                     "1",
                     "--no-figures",
+                    "--no-report",
                     "--out",
                     str(Path(tmp) / "out"),
                 ],

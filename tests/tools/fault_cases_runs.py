@@ -75,10 +75,10 @@ def two_runs_one_out(stop: float = 100.0):
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp) / "out"
             hook = {} if together else {"AGILESAT_TEST_SIGNAL": "SIGSTOP@step:100"}
-            a = _start(out, "--stop", str(stop), "--no-figures", env=hook)
+            a = _start(out, "--stop", str(stop), "--no-figures", "--no-report", env=hook)
             if not together:
                 _until(lambda: _stopped(a), a)
-            b = _start(out, "--stop", str(stop), "--no-figures")
+            b = _start(out, "--stop", str(stop), "--no-figures", "--no-report")
             b_err = b.communicate(timeout=600)[1]
             os.kill(a.pid, signal.SIGCONT)
             a_err = a.communicate(timeout=600)[1]
@@ -189,7 +189,11 @@ def second_sigint(at: int = 30):
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         process = _start(
-            out, "--no-figures", env={"AGILESAT_TEST_SIGNAL": f"SIGINT@step:{at}"}, code=_TWICE
+            out,
+            "--no-figures",
+            "--no-report",
+            env={"AGILESAT_TEST_SIGNAL": f"SIGINT@step:{at}"},
+            code=_TWICE,
         )
         _, stderr = process.communicate(timeout=600)
         summary = _summary(out)

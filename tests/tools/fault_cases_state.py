@@ -186,7 +186,18 @@ def _state_case(jit: str):
 # -- what the master loads: GUID, shim, cache ---------------------------------------------
 def _run(ssd, out, *extra, env=None):
     return subprocess.run(
-        [*CLI, "run", str(ssd), "--stop", "0.5", "--no-figures", "--out", str(out), *extra],
+        [
+            *CLI,
+            "run",
+            str(ssd),
+            "--stop",
+            "0.5",
+            "--no-figures",
+            "--no-report",
+            "--out",
+            str(out),
+            *extra,
+        ],
         cwd=ROOT,
         capture_output=True,
         text=True,
