@@ -632,7 +632,8 @@ def resume_changed_module():
 
         def campaign(*extra):
             return subprocess.run(
-                [*CLI, "campaign", str(mission), *vary, "--out", str(out), "-q", *extra],
+                [*CLI, "campaign", str(mission), *vary, "--out", str(out), "-q", "--no-report"]
+                + list(extra),
                 cwd=tmp,
                 capture_output=True,
                 text=True,
@@ -720,7 +721,7 @@ def crashing_nominal_run():
         out = Path(tmp) / "c"
         result = subprocess.run(
             [*CLI, "campaign", str(mission), "--runs", "2", "--workers", "1", "--vary"]
-            + ["Wild.crash_at=uniform(10, 20)", "--out", str(out), "-q"],
+            + ["Wild.crash_at=uniform(10, 20)", "--out", str(out), "-q", "--no-report"],
             cwd=tmp,
             capture_output=True,
             text=True,

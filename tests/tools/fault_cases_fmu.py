@@ -257,6 +257,7 @@ def user_model_outputs():
             run = subprocess.run(
                 [sys.executable, "-m", "agilesat.orchestration", "run", str(fmu), "--step"]
                 + ["0.1", "--stop", "0.3", "--set", f"Wild.{value}", "--no-figures", "-q"]
+                + ["--no-report"]
                 + ["--out", str(Path(tmp) / "out")],
                 capture_output=True,
                 text=True,

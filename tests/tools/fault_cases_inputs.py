@@ -400,6 +400,7 @@ def estimator_history():
 
     with tempfile.TemporaryDirectory() as tmp:
         command = [*CLI, "run", "scan_pitch:sensed", "--stop", "0.5", "--no-figures", "-q"]
+        command += ["--no-report"]
         command += ["--set", "AttitudeEstimator.history=20000", "--out", str(Path(tmp) / "out")]
         code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", 600)
         ok = (

@@ -35,7 +35,7 @@ def _mission(directory, lines: str, name: str = "mission.py") -> Path:
 
 def _run(path: Path, out: Path, *extra):
     return subprocess.run(
-        [*CLI, "run", str(path), "--no-figures", "-q", "--out", str(out), *extra],
+        [*CLI, "run", str(path), "--no-figures", "--no-report", "-q", "--out", str(out), *extra],
         cwd=path.parent,
         capture_output=True,
         text=True,

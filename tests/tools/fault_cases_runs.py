@@ -236,7 +236,9 @@ def sigint_as_python_exits(at: int = 30):
         for signal_at, code in ((f"SIGINT@step:{at}", 130), ("", 0)):
             out = Path(tmp) / f"out{code}"
             env = {"AGILESAT_TEST_SIGNAL": signal_at} if signal_at else {}
-            process = _start(out, "--no-figures", "--stop", "2", env=env, code=_AS_IT_EXITS)
+            process = _start(
+                out, "--no-figures", "--no-report", "--stop", "2", env=env, code=_AS_IT_EXITS
+            )
             _, stderr = process.communicate(timeout=600)
             good = process.returncode == code and "Traceback" not in stderr
             ok &= good
@@ -259,7 +261,8 @@ def _wild(out: Path, *extra, env=None) -> subprocess.Popen:
     import wild_model
 
     fmu = wild_model.built()
-    return _start(out, "--step", "0.1", "--stop", "2", "--no-figures", *extra, env=env, target=fmu)
+    extra = ("--step", "0.1", "--stop", "2", "--no-figures", "--no-report", *extra)
+    return _start(out, *extra, env=env, target=fmu)
 
 
 def stuck_step(grace: float = 1.0):
@@ -370,7 +373,7 @@ def unwritable_out():
             for label, command, directory in trials:
                 result = subprocess.run(
                     [*CLI, command, "scan_pitch", "--stop", "0.5", "--out", str(mount / directory)]
-                    + ["-q"],
+                    + ["-q", "--no-report"],
                     cwd=ROOT,
                     capture_output=True,
                     text=True,
@@ -389,7 +392,8 @@ def unwritable_out():
                 observed.append(f"{label}: exit {result.returncode}: {said}")
             subprocess.run(["mount", "-o", "remount,rw", str(mount)], check=True)
             result = subprocess.run(
-                [*CLI, "run", "scan_pitch", "--stop", "5", "--out", str(mount / "full"), "-q"],
+                [*CLI, "run", "scan_pitch", "--stop", "5", "--out", str(mount / "full"), "-q"]
+                + ["--no-report"],
                 cwd=ROOT,
                 capture_output=True,
                 text=True,
