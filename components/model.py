@@ -35,6 +35,13 @@ never set, u̇ is zero: u held).  Where a table also has an input that *is* an i
 (``hdot_cmg`` of ``h_cmg``), the slope of ``h_cmg`` over the step is the derivative set for
 it if one was set, else ``hdot_cmg`` (:meth:`Model.slope`); a non-zero ``hdot_cmg`` that
 differs from a set derivative is reported once as a warning (:meth:`Model.slope_conflicts`).
+After the step the inputs are those of its end (:meth:`Model.inputs_to_step_end`, which
+the FMU calls after every step, in Python and in C): every input whose derivative was set
+is moved to u + u̇ h (with ½ ü h² where its rate input's derivative was set too: ``h_cmg``
+with that of ``hdot_cmg``), so that outputs read right after ``fmi2DoStep`` are those of
+the inputs the step integrated, as FMI 2.0 computes the outputs at t_{c+1} from the inputs
+it extrapolated (section 4.1; a host that sets the inputs again first gets the same
+outputs).  An input without a derivative set stays as the host set it.
 A model that says ``OUTPUT_DERIVATIVES`` (``maxOutputDerivativeOrder="1"``) answers
 :meth:`Model.output_derivatives`: the first time derivative of every output at ``self.t``,
 along its own trajectory over the coming step with the inputs as it interpolates them
@@ -81,6 +88,10 @@ class Model:
     INTERPOLATES_INPUTS = False
     #: the model answers output_derivatives(); the FMU declares maxOutputDerivativeOrder 1
     OUTPUT_DERIVATIVES = False
+    #: the FMU's DefaultExperiment: its natural communication step and a stop time that
+    #: shows its behaviour at its defaults (s), what a host runs it with by default
+    DEFAULT_STEP = 0.05
+    DEFAULT_STOP = 10.0
     _layouts: dict[type, Layout] = {}
 
     def __init_subclass__(cls, **kwargs):
@@ -136,6 +147,25 @@ class Model:
         self.input_rate(name)[:] = np.broadcast_to(np.asarray(rate, dtype=float).reshape(-1), size)
         at = self.layout.given[name]
         self.values[at : at + size] = 1.0
+
+    def inputs_to_step_end(self, dt: float) -> None:
+        """The inputs at the end of a step of ``dt`` (module docstring): each whose
+        derivative u̇ was set moves to u + u̇ dt; an input with a rate input (``h_cmg``,
+        ``hdot_cmg``) where either's derivative was set to u + (s dt + ½ ü dt dt), s its
+        slope (:meth:`slope`), ü the rate's derivative.  Rows of ``Layout.step_end``; the
+        shim's C step path does the same, operation for operation
+        (``fmus/shim/fast_paths.c``, ``inputs_to_step_end``)."""
+        rows = self.layout.step_end
+        v = self.values
+        if not rows or not v[self.layout.n_numeric :].any():
+            return  # no derivative set (the derivatives and the given flags are zero)
+        for x, d, g, r, c, rg in rows:
+            if r >= 0:
+                if v[g] != 0.0 or v[rg] != 0.0:
+                    slope = v[d] if v[g] != 0.0 else v[r]
+                    v[x] = v[x] + (slope * dt + 0.5 * v[c] * dt * dt)
+            elif v[g] != 0.0:
+                v[x] = v[x] + v[d] * dt
 
     def _given(self, name: str) -> np.ndarray:
         at = self.layout.given[name]
@@ -246,8 +276,10 @@ class Model:
         return self
 
     def advance(self: _M, t: float, dt: float) -> _M:
-        """Step from ``t`` to ``t + dt`` and evaluate the outputs; returns self."""
+        """Step from ``t`` to ``t + dt``, bring the inputs to its end
+        (:meth:`inputs_to_step_end`) and evaluate the outputs; returns self."""
         self.step(t, dt)
+        self.inputs_to_step_end(dt)
         self.output()
         return self
 

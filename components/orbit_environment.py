@@ -203,6 +203,9 @@ class OrbitEnvironment(Model):
     """Orbit (Kepler with optional secular J2, or SGP4 from a TLE), orbit frame and a
     rotating-Earth ground target; the Earth angle from GMST when an epoch is given."""
 
+    #: one orbit of the default orbit (681 km: 5,902.5 s), in 10 s steps
+    DEFAULT_STEP, DEFAULT_STOP = 10.0, 5910.0
+
     VARIABLES = (
         # defaults: the [Zhao 2016] orbit, 681 km, 98.1° (DESIGN.md §4.1)
         parameter(

@@ -125,6 +125,8 @@ def reference_at(theta0, theta_f, times, accel, rate_max, scan_rate, t) -> tuple
 class PitchManeuverController(Model):
     """Five-phase pitch maneuver law (feedforward + terminal PD) with roll/yaw hold."""
 
+    DEFAULT_STOP = 150.0  #: the maneuver (100 s) and its settling
+
     _ATTITUDE = ("q_BO", "w_BO_B")
     VARIABLES = (
         parameter("inertia", 956.0, "kg.m2", "pitch-axis inertia I used for the feedforward"),

@@ -80,6 +80,8 @@ _INPUTS = ("q_BI", "w_BI_B", "sun_I", "r_I")
 class StarTracker(Model):
     """Star tracker with noise, low-frequency error, latency and Sun/Earth/rate exclusions."""
 
+    DEFAULT_STEP = 1.0 / RIGEL_RATE  #: its update period
+
     VARIABLES = (
         parameter(
             "q_SB",

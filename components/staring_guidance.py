@@ -342,6 +342,8 @@ def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
 class StaringGuidance(Model):
     """Reference attitude staring at a ground target, with yaw compensation ([Liang 2019])."""
 
+    DEFAULT_STOP = 200.0  #: the paper's staring window
+
     VARIABLES = (
         parameter(
             "yaw_compensation",

@@ -130,6 +130,8 @@ def sweep_at(A: float, r: float, tau: float, period: float, t: float) -> tuple:
 class SweepPlanner(Model):
     """Roll/pitch sweep commands of two payloads ([Chang 2015] §1.2, Figs 3–4)."""
 
+    DEFAULT_STOP = 300.0  #: one pitch period of the default sweep
+
     VARIABLES = (
         parameter(
             "roll_amplitude",

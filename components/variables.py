@@ -225,6 +225,10 @@ class Layout:
     (``derivative[name]``: offset of the derivative of input ``name``), then 1.0 where one
     was set, 0.0 where none was (``given[name]``).  No value reference reaches them: they
     are state (FMU states save them), read by the model where it integrates its inputs.
+    ``step_end``: per Real input scalar, the offsets (value, derivative, given, rate, the
+    rate's derivative, the rate's given) that bring it to the step's end
+    (``Model.inputs_to_step_end``), those with a rate first; rate: the input declared its
+    derivative (``hdot_cmg`` of ``h_cmg``), -1 (and -1, -1) if none.
     ``n_values`` is the array's length, ``n_numeric`` that of the variables alone."""
 
     def __init__(self, variables: tuple[Var, ...], interpolated: bool = False):
@@ -266,12 +270,31 @@ class Layout:
         input_range = self.range["input"]
         self.derivative: dict[str, int] = {}
         self.given: dict[str, int] = {}
+        self.step_end: tuple[tuple[int, ...], ...] = ()
         if interpolated:
             for v in numeric:
                 if v.causality == "input" and v.type == "Real":
                     at = self.offset[v.name] - input_range.start
                     self.derivative[v.name] = self.n_numeric + at
                     self.given[v.name] = self.n_numeric + len(input_range) + at
+            rates = {
+                v.derivative_of: v.name for v in numeric if v.derivative_of and v.name in self.given
+            }
+            rows = [
+                (self.offset[name] + k, self.derivative[name] + k, self.given[name] + k)
+                + (
+                    (
+                        self.offset[rates[name]] + k,
+                        self.derivative[rates[name]] + k,
+                        self.given[rates[name]] + k,
+                    )
+                    if name in rates
+                    else (-1, -1, -1)
+                )
+                for name in self.derivative
+                for k in range(by_name[name].size)
+            ]
+            self.step_end = tuple(sorted(rows, key=lambda row: row[3] < 0))
         self.n_values = self.n_numeric + (2 * len(input_range) if interpolated else 0)
         for v in strings:
             self.offset[v.name] = position

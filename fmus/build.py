@@ -97,7 +97,7 @@ def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str,
         f"binaries/{PLATFORM}/pythonfmu-export.so": _pythonfmu_binary().read_bytes(),
     }
     entries = {
-        "modelDescription.xml": description_xml(name, digest, model=model, binaries=binaries),
+        "modelDescription.xml": description_xml(name, digest, model, binaries),
         **binaries,
         "resources/slavemodule.txt": entry.encode(),
         f"resources/{entry}.py": entry_module.encode(),
@@ -141,26 +141,16 @@ def compile_kernels(fmu: Path, name: str, package: str) -> None:
         raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
 
 
-def description_xml(
-    name: str,
-    digest: str,
-    starts: dict | None = None,
-    key: str = "",
-    model=None,
-    binaries: dict[str, bytes] | None = None,
-) -> bytes:
-    """The model description of FMU ``name`` (of ``model``, default ours of that name) built
-    from the sources of hash ``digest``, with the SHA-256 of its ``binaries``; ``starts``
-    ({scalar name: start text}) and ``key`` (their hash) for a configured FMU
-    (fmus/configure.py), whose GUID is its own (:func:`.protocol.fmu_guid`)."""
-    model = model or model_class(name)
+def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -> bytes:
+    """The model description of FMU ``name`` of ``model`` built from the sources of hash
+    ``digest``, with the SHA-256 of its ``binaries`` (an exported FMU's is this one with
+    its values written in: fmus/configure.py)."""
     return model_description(
         name,
         model,
-        protocol.fmu_guid(name, digest, key),
+        protocol.fmu_guid(name, digest),
         (model.__doc__ or name).strip().splitlines()[0] + " " + requirements()[0],
         f"agilesat {metadata.version('agilesat')} (pythonfmu {metadata.version('pythonfmu')})",
-        starts,
         binaries,
     )
 
@@ -351,16 +341,31 @@ def shim_flags(libpython: str, python: str, version: str) -> list[str]:
     a Python runtime (:func:`python_runtime`).  ``-z nodelete``: a host that unloads the
     library between two instances (ECOS loads and unloads an FMU's library per instance)
     keeps its instance registry and pythonfmu's handles alive, as pythonfmu's own binary
-    is (its GNU-unique C++ symbols make it NODELETE)."""
+    is (its GNU-unique C++ symbols make it NODELETE).  ``-ffp-contract=off``: no fused
+    multiply-add, so what the C step path computes beside the Python
+    (``inputs_to_step_end``) is the same bits."""
     defines = [
         f"-DAGILESAT_{key}={_c_string(value)}"
         for key, value in (
             ("LIBPYTHON", libpython),
             ("PYTHON", python),
             ("PYTHON_VERSION", version),
+            ("PYTHON_MINIMUM", python_minimum()),
         )
     ]
-    return ["-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-z,nodelete", *defines]
+    return [
+        "-shared",
+        "-fPIC",
+        "-ffp-contract=off",
+        "-fvisibility=hidden",
+        "-Wl,-z,nodelete",
+        *defines,
+    ]
+
+
+def python_minimum() -> str:
+    """The oldest Python agilesat runs on, "X.Y" (its Requires-Python)."""
+    return metadata.metadata("agilesat")["Requires-Python"].lstrip(">=~ ")
 
 
 def generated_files() -> dict[Path, Callable[[], bytes]]:
@@ -438,7 +443,9 @@ def requirements() -> tuple[str, list[str]]:
     glibc, libstdcxx = (v.split("_")[1] for v in PYTHONFMU_NEEDS)
     line = (
         f"Needs Python {metadata.metadata('agilesat')['Requires-Python']} with {numpy}; in a "
-        f"host without Python, Python {version} (set AGILESAT_LIBPYTHON and AGILESAT_PYTHON); "
+        "host without Python, the libpython and the environment of one such Python, of one "
+        f"minor version (built with Python {version}; set AGILESAT_LIBPYTHON and "
+        "AGILESAT_PYTHON); "
         f"Linux x86-64, glibc >= {glibc}, libstdc++ >= GLIBCXX_{libstdcxx} (see "
         "documentation/index.html)."
     )
@@ -449,10 +456,11 @@ def requirements() -> tuple[str, list[str]]:
         "compiles the models' hot loops in long runs).",
         f"In a host without Python (a C/C++ tool, OMSimulator, libcosim's or ECOS's command "
         f"line) the FMU starts the Python it was built with, Python {version}: the shared "
-        f"libpython and the environment of {python}.  On another machine, make a Python "
-        f"{version} environment with numpy (and sgp4) and set AGILESAT_LIBPYTHON to its "
-        f"shared libpython (libpython{version}.so.1.0) and AGILESAT_PYTHON to its python; "
-        "anything missing is named by fmi2Instantiate through the host's logger.",
+        f"libpython and the environment of {python}.  On another machine, any Python "
+        f"{python_minimum()} or later will do: make an environment of it with numpy (and "
+        "sgp4) and set AGILESAT_LIBPYTHON to its shared libpython (libpython3.X.so.1.0) and "
+        "AGILESAT_PYTHON to the environment's python, both of one minor version; anything "
+        "missing or mismatched is named by fmi2Instantiate through the host's logger.",
         f"Linux x86-64 with glibc >= {glibc} and the libstdc++ of GCC 12 or later "
         f"(GLIBCXX_{libstdcxx}): what pythonfmu's binary needs (Debian 12, Ubuntu 22.04 and "
         "later; not Ubuntu 20.04, RHEL 8 or RHEL 9).  The FMU's own binary needs glibc 2.2.5.",
@@ -466,22 +474,27 @@ def _table(header, rows) -> str:
     return "<table border='1'>" + "\n".join(f"<tr>{c}</tr>" for c in cells) + "</table>"
 
 
-def documentation(name: str, model, configured: dict | None = None) -> str:
-    """documentation/index.html: the model's docstring, what the FMU needs, the values it
-    was configured with (fmus/configure.py), its variables."""
+def configured_section(configured: dict) -> str:
+    """The part of documentation/index.html that lists the values an exported FMU was
+    configured with (fmus/configure.py)."""
+    return (
+        "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
+        "defaults (the start values of its model description, and the model's values "
+        "at instantiation); the package's parameter set gives them too.</p>"
+        + _table(("name", "value"), sorted(configured.items()))
+    )
+
+
+def documentation(name: str, model) -> str:
+    """documentation/index.html: the model's docstring, what the FMU needs, its variables
+    (an exported FMU adds the values it was configured with before them:
+    :func:`configured_section`)."""
     points = "".join(f"<li>{escape(point)}</li>" for point in requirements()[1])
     parts = [
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title></head>",
         f"<body><h1>{name}</h1><pre>{escape(model.__doc__ or '')}</pre>",
         f"<h2>What this FMU needs</h2><ul>{points}</ul>",
     ]
-    if configured:
-        parts.append(
-            "<h2>Configured defaults</h2><p>Exported by agilesat with these values as its "
-            "defaults (the start values of its model description, and the model's values "
-            "at instantiation); the package's parameter set gives them too.</p>"
-            + _table(("name", "value"), sorted(configured.items()))
-        )
     header = ("name", "causality", "type", "unit", "start", "description")
     parts.append(f"<h2>Variables</h2>{_table(header, interface_rows(model))}</body></html>\n")
     return "".join(parts)

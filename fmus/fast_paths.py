@@ -22,6 +22,7 @@ call the slave answers) arms it with what it may do until the next call: the ste
 output (C_OUTPUT), with the addresses of the entries, of the model's state array and of
 the snapshot buffer ``saved`` (both may be replaced by a call here, never between two).
 The shim serves a step only when ``do_step`` would accept it, does what ``do_step`` does
+(the inputs brought to the step's end included: ``step_end``, Model.inputs_to_step_end)
 and sets C_DIRTY; at the start of the next call here ``sync`` takes over the model's time.
 An entry leaving the call to the Python (a warning, an error) makes the shim put the
 arrays back from the snapshot and forward the call: the slave gives its status and
@@ -45,12 +46,14 @@ from . import c_entries
 from .protocol import (
     B_N_SAVED,
     B_N_STATE,
+    B_N_STEP_END,
     B_OUTPUT,
     B_OUTPUTS_START,
     B_OUTPUTS_STOP,
     B_SAVED,
     B_STATE,
     B_STEP,
+    B_STEP_END,
     B_STOP,
     B_TIME,
     C_DIRTY,
@@ -98,6 +101,10 @@ class FastPaths:
         self.block = np.zeros(N_BLOCK)  # never replaced
         self.block[B_TIME] = math.nan
         self.block[B_STOP] = math.inf
+        #: the rows that bring the inputs to a step's end (Model.inputs_to_step_end)
+        self.step_end = np.array(slave.model.layout.step_end, dtype=np.float64).reshape(-1, 6)
+        self.block[B_STEP_END] = _address(self.step_end) if self.step_end.size else 0.0
+        self.block[B_N_STEP_END] = len(self.step_end)
         self.saved = np.zeros(0)  # the C path's snapshot (its address is in block)
         self.entries = c_entries.of(type(slave.model))
         self.c_path = False  # the shim asked for the addresses, the model has C entries

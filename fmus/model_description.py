@@ -4,7 +4,9 @@ pythonfmu's own generator declares no units, no InitialUnknowns and makes every 
 depend on every input; this one writes UnitDefinitions (SI base-unit exponents, with
 display units), a description and start value for every variable, and the true
 dependencies: an output depends on the inputs its table row lists in ``depends``; at
-initialisation also on the inputs the initial state reads and on the parameters.
+initialisation also on the inputs the initial state reads and on the parameters.  A
+``DefaultExperiment`` from the model's ``DEFAULT_STEP`` and ``DEFAULT_STOP`` (a host that is
+given no step and stop runs it so: ``agilesat run Gyro``, ``fmpy simulate Gyro.fmu``).
 
 Derivatives.  A model that interpolates its inputs (``INTERPOLATES_INPUTS``) declares
 ``canInterpolateInputs``, one that answers its outputs' derivatives (``OUTPUT_DERIVATIVES``)
@@ -38,13 +40,11 @@ def model_description(
     guid: str,
     description: str,
     generation_tool: str,
-    starts: dict[str, str] | None = None,
     binaries: dict[str, bytes] | None = None,
 ) -> bytes:
-    """The model description; ``starts`` ({scalar name: text}) replaces the table's start
-    values of those scalars (an FMU configured with them: fmus/configure.py); ``binaries``:
-    {path in the FMU: content} of its shared libraries, whose SHA-256 a master checks
-    before loading them (:func:`_binaries_annotation`)."""
+    """The model description; ``binaries``: {path in the FMU: content} of its shared
+    libraries, whose SHA-256 a master checks before loading them
+    (:func:`_binaries_annotation`)."""
     layout = Layout(model_class.VARIABLES)
     for causality, capable in (
         ("input", model_class.INTERPOLATES_INPUTS),
@@ -92,11 +92,23 @@ def model_description(
     categories = SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": category, "description": text})
+    SubElement(root, "DefaultExperiment", experiment_attributes(
+        0.0, model_class.DEFAULT_STOP, model_class.DEFAULT_STEP
+    ))  # fmt: skip
     _binaries_annotation(_input_annotation(root, layout), binaries or {})
-    _model_variables(root, layout, starts or {})
+    _model_variables(root, layout)
     _model_structure(root, layout, model_class.INITIAL_STATE_DEPENDS)
     indent(root)
     return tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def experiment_attributes(start: float, stop: float, step: float) -> dict[str, str]:
+    """The attributes of FMI 2.0's ``<DefaultExperiment>``: start, stop, step (s)."""
+    return {
+        "startTime": repr(float(start)),
+        "stopTime": repr(float(stop)),
+        "stepSize": repr(float(step)),
+    }
 
 
 def _unit_definitions(root, layout):
@@ -140,7 +152,7 @@ def _binaries_annotation(annotations, binaries: dict[str, bytes]) -> None:
             SubElement(files, "File", {"name": path, "sha256": hashlib.sha256(data).hexdigest()})
 
 
-def _model_variables(root, layout, starts: dict[str, str]):
+def _model_variables(root, layout):
     variables = SubElement(root, "ModelVariables")
     index = {name: i for i, (_, name) in enumerate(layout.scalars, start=1)}
     for vr, (var, scalar_name) in enumerate(layout.scalars):
@@ -169,9 +181,7 @@ def _model_variables(root, layout, starts: dict[str, str]):
                 type_attributes["derivative"] = str(index[base])
         if var.causality != "output":
             at = vr - layout.offset[var.name]
-            type_attributes["start"] = (
-                starts[scalar_name] if scalar_name in starts else _start_text(var, at)
-            )
+            type_attributes["start"] = _start_text(var, at)
         SubElement(element, var.type, type_attributes)
 
 

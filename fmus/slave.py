@@ -255,6 +255,7 @@ class ModelSlave(Fmi2Slave):
             steps, self._stop_time = (self._stop_time - current_time) / step_size, None
             jit.expect(sys.modules[type(self.model).__module__], steps)
         self.model.step(current_time, step_size)
+        self.model.inputs_to_step_end(step_size)
         self._flush_warnings()
         self._next_time = current_time + step_size
         self._outputs_valid = False

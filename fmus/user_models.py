@@ -59,8 +59,7 @@ def build_model(path, name: str | None = None, out_dir=None, force: bool = False
     names = _chosen(path, name)
     out_dir = Path(out_dir) if out_dir is not None else path.parent / "build"
     source, modules = packed_source(path)
-    files, base = _sources(names[0], modules or ["components/model.py"])
-    digest = hashlib.sha256(source.encode() + b"\0" + base.encode()).hexdigest()[:12]
+    files, digest = _digest(source, modules)
     built = []
     for cls in names:
         target = out_dir / f"{cls}.fmu"
@@ -77,12 +76,30 @@ def model_fmu(path: Path, name: str | None = None, build: bool = True) -> Path:
         return build_model(path, _one(path, name))[0]
     cls = _one(path, name)
     target = Path(path).resolve().parent / "build" / f"{cls}.fmu"
-    source, modules = packed_source(Path(path).resolve())
-    base = _sources(cls, modules or ["components/model.py"])[1]
-    digest = hashlib.sha256(source.encode() + b"\0" + base.encode()).hexdigest()[:12]
+    digest = _digest(*packed_source(Path(path).resolve()))[1]
     if not is_current(target, cls, digest):
         raise BuildError(f"{target} is missing or older than {path} (agilesat build {path})")
     return target
+
+
+def _digest(source: str, modules: list[str]) -> tuple[dict, str]:
+    """(our code packed with a model: relative path -> file, the content hash of its FMU)
+    for the model's packed ``source`` importing the component ``modules``."""
+    files, base = _sources("", modules or ["components/model.py"])
+    return files, hashlib.sha256(source.encode() + b"\0" + base.encode()).hexdigest()[:12]
+
+
+def packed_digest(entries: dict[str, bytes], package: str) -> str:
+    """The content hash the model FMU of ``entries`` (its files, ``package`` the folder of
+    its code) would have if built now from the source packed in it: its own if these
+    sources built it (fmus/configure.py).  Nothing in it is run."""
+    source = next(
+        data.decode()
+        for path, data in entries.items()
+        if path.startswith(f"{package}user/") and not path.endswith("/__init__.py")
+    )
+    modules = [path[len(package) :] for path in entries if path.startswith(f"{package}components/")]
+    return _digest(source, sorted(modules))[1]
 
 
 def _one(path: Path, name: str | None) -> str:

@@ -3,9 +3,12 @@
 Exit status: 0 success; 1 bad input, a failed run, or a run whose metric, requirement
 or figure raised (the message says what and where; the run's records are written);
 2 a usage error (unknown option, missing argument); 3 a scenario that ran but did not fly
-as required (the summary's diagnostics say why); 130 interrupted by SIGINT (Ctrl-C), 143
-by SIGTERM (everything recorded so far is kept, and the summary says what was not
-written; a second signal changes nothing).
+as required, a requirement not met (the summary's diagnostics say why); 4 nothing not
+met, but a statistical requirement undecided: its runs show neither compliance nor a
+violation at its confidence (campaign, pointing; the verdict says roughly how many runs
+would settle it); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (everything
+recorded so far is kept, and the summary says what was not written; a second signal
+changes nothing).
 """
 
 from __future__ import annotations
@@ -207,6 +210,12 @@ def _system_commands(commands, quiet) -> None:
         "(SatelliteDynamics.*); default all",
     )
     run.add_argument(
+        "--error-estimate",
+        action="store_true",
+        help="rerun at half and a quarter of the step and state each metric's numerical "
+        "error (Richardson, observed order) and the requirements it leaves undecided",
+    )
+    run.add_argument(
         "--no-derivatives",
         action="store_true",
         help="do not couple through FMI input/output derivatives where no wire passes "
@@ -251,7 +260,7 @@ def _system_commands(commands, quiet) -> None:
     export = commands.add_parser(
         "export",
         help="write a scenario[:variant], a mission file or a system file as a "
-        "self-contained SSP package (.ssd + FMUs)",
+        "self-contained SSP package (.ssd + FMUs), a system file or one configured FMU",
     )
     export.add_argument("target", help=TARGETS)
     export.add_argument(
@@ -261,7 +270,24 @@ def _system_commands(commands, quiet) -> None:
         metavar="INSTANCE.VAR=VALUE",
         help="a parameter value written into the package (as `run --set`)",
     )
-    export.add_argument("--out", type=Path, required=True, help="the .ssp file to write")
+    export.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="the file to write: an .ssp package, an .ssd (its FMUs in OUT_STEM.fmus/ beside "
+        "it), or one component's .fmu (with --component)",
+    )
+    export.add_argument(
+        "--accuracy",
+        metavar="ANGLE",
+        help="choose the package's step (halving it) so that hosts holding the inputs over "
+        "a step (libcosim, ECOS) stay within ANGLE of our master on the attitude, e.g. 0.05deg",
+    )
+    export.add_argument(
+        "--component",
+        metavar="NAME",
+        help="write only this component's FMU, configured with the system's values and step",
+    )
 
     generate = commands.add_parser(
         "generate",  # a developer's command: not in `agilesat --help`
@@ -401,6 +427,8 @@ def _run(args) -> int:
         )
     if args.mat:
         results.to_mat(out / "results.mat")
+    if args.error_estimate:
+        _error_estimate(args, overrides, summary, out)
     from .output.report import cli as report_cli
 
     report_cli.after(args, out)
@@ -409,7 +437,36 @@ def _run(args) -> int:
         f"{args.target}: {len(results)} communication points, step {settings['step']} s, "
         f"{settings['algorithm']}; results in {out}/"
     )
-    return report(summary)
+    status = report(summary)
+    if args.error_estimate:
+        from .error_estimate import lines
+
+        print("\n".join(lines(summary["numerical_error"])))
+    return status
+
+
+def _error_estimate(args, overrides, summary: dict, out: Path) -> None:
+    """``--error-estimate``: the run again at half and a quarter of its step
+    (:mod:`.error_estimate`), into the summary and summary.json."""
+    from .error_estimate import estimate
+    from .output.recorder import write_text
+    from .output.summary import summary_text
+    from .runner import run
+
+    def rerun(step):
+        return run(
+            args.target,
+            step=step,
+            stop=args.stop,
+            start=args.start,
+            algorithm=args.algorithm,
+            parameters=overrides,
+            figures=False,
+            derivatives=False if args.no_derivatives else None,
+        )[1]
+
+    summary["numerical_error"] = estimate(summary, rerun)
+    write_text(out / "summary.json", summary_text(summary))
 
 
 def _pointing(args) -> int:
@@ -471,14 +528,24 @@ def report(summary) -> int:
     from .output.summary import format_summary
 
     print(format_summary(summary))
-    return {"error": 1, "failed": 3}.get(summary.get("status"), 0)
+    if summary.get("status") == "error":  # a metric, requirement or figure raised
+        return 1
+    return exit_status(summary.get("status") == "failed", summary.get("requirements", {}))
+
+
+def exit_status(failed: bool, verdicts) -> int:
+    """3 when something failed or a requirement is not met, else 4 when one is
+    undecided, else 0; ``verdicts``: {name: {"verdict": ...}} (a summary's
+    ``requirements``, a campaign's ``ensemble``)."""
+    statuses = {v.get("verdict") for v in verdicts.values()}
+    return 3 if failed or "not met" in statuses else 4 if "undecided" in statuses else 0
 
 
 def _export(args) -> int:
-    from .export import export_ssp
+    from .export import export
     from .system.parameters import parse_set
 
-    print(export_ssp(args.target, args.out, parse_set(args.set)))
+    print(export(args.target, args.out, parse_set(args.set), args.component, args.accuracy))
     return 0
 
 
@@ -503,8 +570,8 @@ def _generate(args) -> int:
     from ..fmus.build import generated_files
     from .mission.targets import generated_systems
 
-    files = generated_systems()
-    files.update(generated_files())
+    files = generated_files()  # first: the systems build FMUs, which need protocol.h
+    files.update(generated_systems())
     checkout = source_checkout()
     if not checkout and not args.check:
         raise ValueError(

@@ -137,3 +137,33 @@ class Stream(io.StringIO):
 
     def isatty(self):
         return self.tty
+
+
+def pythonfmu_damper(folder: Path) -> Path:
+    """A third party's FMU, made with pythonfmu alone (no units, no agilesat annotations):
+    ``folder/Damper.fmu``, tau_cmd = -gain w_BI_B."""
+    source = folder / "damper.py"
+    source.write_text(
+        "from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real\n"
+        "class Damper(Fmi2Slave):\n"
+        "    def __init__(self, **kw):\n"
+        "        super().__init__(**kw)\n"
+        "        self.gain, self.w = 5.0, [0.0, 0.0, 0.0]\n"
+        "        self.register_variable(Real('gain', causality=Fmi2Causality.parameter,"
+        " variability=Fmi2Variability.fixed))\n"
+        "        for i in range(3):\n"
+        "            self.register_variable(Real(f'w_BI_B[{i + 1}]', causality="
+        "Fmi2Causality.input, getter=lambda i=i: self.w[i], setter=lambda v, i=i:"
+        " self.w.__setitem__(i, v)))\n"
+        "            self.register_variable(Real(f'tau_cmd[{i + 1}]', causality="
+        "Fmi2Causality.output, getter=lambda i=i: -self.gain * self.w[i]))\n"
+        "    def do_step(self, t, dt):\n"
+        "        return True\n"
+    )
+    built = subprocess.run(
+        [sys.executable, "-m", "pythonfmu", "build", "-f", source, "-d", folder],
+        capture_output=True,
+        text=True,
+    )
+    assert built.returncode == 0, built.stderr
+    return folder / "Damper.fmu"

@@ -17,6 +17,7 @@ import pytest
 
 from agilesat.components.variables import UNITS
 from agilesat.fmus import FMUS
+from agilesat.orchestration.system.units import display_factor
 from helpers import ROOT, agilesat
 
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
@@ -80,7 +81,9 @@ def test_each_checked_table_states_its_runs_numbers(command, fmus, tmp_path):
             assert name and name.group(1) in metrics, f"{page}: no metric in {row[0]!r}"
             metric = metrics[name.group(1)]
             unit = metric.get("display_unit") or metric["unit"]
-            scale = UNITS.get(metric["unit"], ({}, {}))[1].get(unit, 1.0)
+            scale = UNITS.get(metric["unit"], ({}, {}))[1].get(unit) or (
+                display_factor(metric["unit"], unit) or 1.0
+            )  # as the summary shows it (arcsec too)
             for column, key in (("ours", "value"), ("paper", "paper")):
                 if column in columns and key in metric:  # no paper value: the paper's words
                     where = f"{page}: {command}: {name.group(1)} ({column})"

@@ -135,6 +135,9 @@ static int python_gone(void) {
 #ifndef AGILESAT_PYTHON_VERSION
 #error "define AGILESAT_PYTHON_VERSION: X.Y of the building Python"
 #endif
+#ifndef AGILESAT_PYTHON_MINIMUM
+#error "define AGILESAT_PYTHON_MINIMUM: X.Y of the oldest Python agilesat runs on"
+#endif
 
 static const char *setting(const char *variable, const char *recorded) {
     const char *value = getenv(variable);
@@ -142,14 +145,86 @@ static const char *setting(const char *variable, const char *recorded) {
 }
 
 /* The one message of every failure to start Python: what failed, then what the FMU needs
- * and both variables that point it at a Python (docs/hosts.md). */
+ * and both variables that point it at a Python (docs/hosts.md).  Any Python from the
+ * oldest agilesat runs on will do, if its libpython and its environment (numpy's compiled
+ * modules) are of one minor version. */
 static int python_missing(char *err, size_t n, const char *problem) {
-    snprintf(err, n, "%s. This FMU runs Python " AGILESAT_PYTHON_VERSION " with numpy (it was "
-             "built with " AGILESAT_PYTHON "): in a host that does not run Python, set "
-             "AGILESAT_LIBPYTHON to the shared libpython of a Python " AGILESAT_PYTHON_VERSION
-             " and AGILESAT_PYTHON to the python of an environment of that version with numpy "
-             "(and sgp4)", problem);
+    snprintf(err, n, "%s. This FMU runs Python " AGILESAT_PYTHON_MINIMUM " or later with numpy "
+             "(it was built with Python " AGILESAT_PYTHON_VERSION ", " AGILESAT_PYTHON "): in a "
+             "host that does not run Python, set AGILESAT_LIBPYTHON to the shared libpython of "
+             "a Python and AGILESAT_PYTHON to the python of an environment of the same minor "
+             "version with numpy (and sgp4)", problem);
     return -1;
+}
+
+/* "X.Y" of a text that starts with a version ("3.12.1 (main, ...)", " = 3.11.7"), into
+ * out; 0 if it does not. */
+static int minor_version(const char *text, char *out, size_t n) {
+    size_t i = 0;
+    int dots = 0;
+    while (*text == ' ' || *text == '=') text++;
+    for (; text[i] && i + 1 < n; i++) {
+        if (text[i] == '.' && ++dots == 2) break;
+        if (text[i] != '.' && (text[i] < '0' || text[i] > '9')) break;
+        out[i] = text[i];
+    }
+    out[i] = 0;
+    return dots >= 1 && i >= 3 && out[i - 1] != '.';
+}
+
+/* The "X.Y" of the environment of ``python`` (ENV/bin/python): the version its
+ * ENV/pyvenv.cfg states; 0 where there is none (not a virtual environment). */
+static int environment_version(const char *python, char *out, size_t n) {
+    char cfg[4200], line[512];
+    snprintf(cfg, sizeof cfg - 16, "%s", python);
+    for (int up = 0; up < 2; up++) {
+        char *slash = strrchr(cfg, '/');
+        if (!slash) return 0;
+        *slash = 0;
+    }
+    strcat(cfg, "/pyvenv.cfg");
+    FILE *file = fopen(cfg, "r");
+    if (!file) return 0;
+    int found = 0;
+    while (!found && fgets(line, sizeof line, file)) {
+        if (strncmp(line, "version", 7) != 0) continue;
+        const char *value = line + 7;
+        while (*value == '_' || (*value >= 'a' && *value <= 'z')) value++;  /* version_info */
+        found = minor_version(value, out, n);
+    }
+    fclose(file);
+    return found;
+}
+
+/* Once Python runs: 0 if it imports numpy, else the one message naming that Python. */
+static int numpy_missing(char *err, size_t n) {
+    int (*ensure)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "PyGILState_Ensure");
+    void (*release)(int) = (void (*)(int))dlsym(RTLD_DEFAULT, "PyGILState_Release");
+    void *(*import)(const char *) = (void *(*)(const char *))dlsym(RTLD_DEFAULT,
+                                                                   "PyImport_ImportModule");
+    void (*decref)(void *) = (void (*)(void *))dlsym(RTLD_DEFAULT, "Py_DecRef");
+    void (*clear)(void) = (void (*)(void))dlsym(RTLD_DEFAULT, "PyErr_Clear");
+    void *(*sys_object)(const char *) = (void *(*)(const char *))dlsym(RTLD_DEFAULT,
+                                                                       "PySys_GetObject");
+    const char *(*utf8)(void *) = (const char *(*)(void *))dlsym(RTLD_DEFAULT,
+                                                                 "PyUnicode_AsUTF8");
+    if (!ensure || !release || !import || !decref || !clear || !sys_object || !utf8) return 0;
+    int gil = ensure();
+    void *numpy = import("numpy");
+    if (numpy) {
+        decref(numpy);
+        release(gil);
+        return 0;
+    }
+    clear();
+    char problem[4400];
+    void *executable = sys_object("executable");  /* borrowed */
+    const char *text = executable ? utf8(executable) : NULL;
+    snprintf(problem, sizeof problem, "the Python it runs in, %.4096s, has no numpy",
+             text && *text ? text : "(unknown)");
+    if (!text) clear();
+    release(gil);
+    return python_missing(err, n, problem);
 }
 
 static int ensure_python(char *err, size_t n) {
@@ -158,8 +233,8 @@ static int ensure_python(char *err, size_t n) {
     python_initialized = is_initialized;
     if (is_initialized && is_initialized()) return 0;   /* the host runs Python */
     void *lib = RTLD_DEFAULT;
+    const char *path = setting("AGILESAT_LIBPYTHON", AGILESAT_LIBPYTHON);
     if (!is_initialized) {
-        const char *path = setting("AGILESAT_LIBPYTHON", AGILESAT_LIBPYTHON);
         if (!*path)
             return python_missing(err, n, "the Python this FMU was built with has no shared "
                                   "libpython");
@@ -190,6 +265,15 @@ static int ensure_python(char *err, size_t n) {
                  "here", python);
         return python_missing(err, n, problem);
     }
+    const char *(*get_version)(void) = (const char *(*)(void))dlsym(lib, "Py_GetVersion");
+    char library[16], environment[16];
+    if (get_version && minor_version(get_version(), library, sizeof library) &&
+        environment_version(python, environment, sizeof environment) &&
+        strcmp(library, environment) != 0) {
+        snprintf(problem, sizeof problem, "the libpython %.2048s is Python %s and the "
+                 "environment of %.2048s is Python %s", path, library, python, environment);
+        return python_missing(err, n, problem);
+    }
     wchar_t *program = decode(python, NULL);   /* kept: must outlive the interpreter */
     if (!program) {
         snprintf(problem, sizeof problem, "cannot decode the path %.4096s", python);
@@ -207,6 +291,7 @@ static int ensure_python(char *err, size_t n) {
 
 static void load_inner(void) {
     if (ensure_python(load_error, sizeof load_error) != 0) return;
+    if (numpy_missing(load_error, sizeof load_error) != 0) return;
     Dl_info info;
     if (!dladdr((void *)&load_inner, &info) || !info.dli_fname) {
         snprintf(load_error, sizeof load_error, "cannot locate the FMU binary (dladdr)");

@@ -15,16 +15,19 @@
  *
  * Fast get/set.  In step mode (STEP_MODE), a fmi2GetReal of Real scalars is served while
  * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: a whole
- * number fmi2Integer holds) and fmi2GetBoolean (KIND_BOOLEAN: 0 or 1); a fmi2SetReal of finite values to Real inputs
- * is written in, a feedthrough input (KIND_FEEDTHROUGH) clearing OUTPUTS_VALID.
+ * number fmi2Integer holds) and fmi2GetBoolean (KIND_BOOLEAN: 0 or 1); a fmi2SetReal of
+ * finite values to Real inputs is written in, a feedthrough input (KIND_FEEDTHROUGH)
+ * clearing OUTPUTS_VALID.
  *
  * The C step path.  Once the model's kernels run compiled, the slave arms (control[C_STEP],
  * control[C_OUTPUT]) the model's C entries (fmus/c_entries.py) in block[], with its state
  * array and a snapshot buffer.  A fmi2DoStep the slave would accept (step mode, a step size
- * positive and finite, the time continuous, its end not after the stop time) is served: the step entry (nothing for a
- * stateless model), the step's end, the outputs invalid.  A get with the outputs invalid
- * evaluates them with the output entry.  An entry returning anything but 0, or non-finite
- * outputs: the arrays are put back from the snapshot and the call forwarded.
+ * positive and finite, the time continuous, its end not after the stop time) is served: the
+ * step entry (nothing for a stateless model), the inputs brought to the step's end (those
+ * whose derivative was set: inputs_to_step_end), the step's end, the outputs invalid.  A
+ * get with the outputs invalid evaluates them with the output entry.  An entry returning
+ * anything but 0, or non-finite outputs: the arrays are put back from the snapshot and the
+ * call forwarded.
  * C_DIRTY tells the slave, at its next call, to take over what was done here. */
 #include <math.h>
 #include <stdlib.h>
@@ -136,6 +139,36 @@ static int continuous(double t, double end) {
            diff <= TIME_ABS_TOL;
 }
 
+/* Model.inputs_to_step_end (components/model.py), operation for operation: the inputs
+ * whose derivative was set moved to the step's end.  Rows of six offsets (value,
+ * derivative, given, rate, the rate's derivative, the rate's given; -1: no rate), checked
+ * against the value array: 0 (nothing changed) if one is outside it. */
+static int inputs_to_step_end(FastPaths *f, double h) {
+    const double *rows = address(f->block[B_STEP_END]);
+    double *v = f->values, n = (double)f->n_values;
+    if (!rows) return f->block[B_N_STEP_END] == 0;
+    if (!(f->block[B_N_STEP_END] > 0 && f->block[B_N_STEP_END] < (double)MAX_VALUES)) return 0;
+    size_t n_rows = (size_t)f->block[B_N_STEP_END];
+    for (size_t i = 0; i < 6 * n_rows; i++) {
+        double least = i % 6 < 3 || rows[i - i % 6 + 3] >= 0 ? 0 : -1;
+        if (!(rows[i] >= least && rows[i] < n)) return 0;
+    }
+    for (size_t i = 0; i < n_rows; i++) {
+        const double *row = rows + 6 * i;
+        size_t x = (size_t)row[0], d = (size_t)row[1], g = (size_t)row[2];
+        if (row[3] >= 0) {
+            size_t r = (size_t)row[3], c = (size_t)row[4], rg = (size_t)row[5];
+            if (v[g] != 0.0 || v[rg] != 0.0) {
+                double slope = v[g] != 0.0 ? v[d] : v[r];
+                v[x] = v[x] + (slope * h + 0.5 * v[c] * h * h);
+            }
+        } else if (v[g] != 0.0) {
+            v[x] = v[x] + v[d] * h;
+        }
+    }
+    return 1;
+}
+
 int fast_do_step(FastPaths *f, double t, double h) {
     int32_t *control = f->control;
     Armed a;
@@ -147,11 +180,14 @@ int fast_do_step(FastPaths *f, double t, double h) {
         if (!a.step) return 0;
         snapshot(f, &a);
         if (a.step(f->values, (int64_t)f->n_values, a.state, (int64_t)a.n_state,
-                   f->block[B_TIME], h) != 0) {
+                   f->block[B_TIME], h) != 0 ||
+            !inputs_to_step_end(f, h)) {
             restore(f, &a);
             f->c_fallbacks++;
             return 0;
         }
+    } else if (!inputs_to_step_end(f, h)) {
+        return 0;
     }
     f->block[B_TIME] = t + h;
     control[OUTPUTS_VALID] = 0;

@@ -85,29 +85,36 @@ def campaign(
     scheduler=None,
     progress=True,
     as_frame=None,
+    until_decided: int | bool | None = None,
 ):
     """Run a campaign; returns the table (a NumPy structured array, or a pandas DataFrame
     when pandas is installed and ``as_frame`` is not False).  ``out_dir`` defaults to
-    ``out/campaign-<target>``; everything is also written there (:mod:`.engine`)."""
-    result = run_campaign(
-        Spec(
-            target,
-            runs,
-            seed,
-            list(vary),
-            [str(f) for f in files],
-            dict(set or {}),
-            list(keep),
-            step,
-            stop,
-            algorithm,
-        ),
-        out_dir,
-        resume,
-        workers,
-        scheduler,
-        progress,
+    ``out/campaign-<target>``; everything is also written there (:mod:`.engine`).
+    ``until_decided``: True, or the most runs, to add runs in looks (``runs`` the first)
+    until every requirement judged over the campaign is decided (:mod:`.sequential`)."""
+    spec = Spec(
+        target,
+        runs,
+        seed,
+        list(vary),
+        [str(f) for f in files],
+        dict(set or {}),
+        list(keep),
+        step,
+        stop,
+        algorithm,
     )
+
+    def look(spec: Spec, resume: bool) -> Campaign:
+        return run_campaign(spec, out_dir, resume, workers, scheduler, progress)
+
+    if until_decided:
+        from .sequential import run_until_decided
+
+        most = None if until_decided is True else int(until_decided)
+        result = run_until_decided(spec, most, out_dir, resume, look)
+    else:
+        result = look(spec, resume)
     if as_frame is False:
         return result.table
     try:
@@ -238,6 +245,8 @@ def finish(
         "versions": versions(),
         "cluster": environment,
         "lost_workers": previous.get("lost_workers", []) + lost,
+        # the looks of a campaign run until decided (:mod:`.sequential`), kept through each
+        **({"until_decided": previous["until_decided"]} if "until_decided" in previous else {}),
         "warm_up": report.warm_ups(records),
         "requirements": metrics.get("requirements", {}),
         "statistics": report.statistics(table, metrics, records),

@@ -1,20 +1,27 @@
 """``agilesat campaign``: the command-line layer on :func:`run_campaign`.
 
-Exit status: 0 every run met every requirement; 3 the campaign finished but some run
-failed, stopped or missed a requirement (campaign.json says which); 1 bad input;
-130 interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
+Exit status: 0 every run met every requirement judged run by run and every requirement
+judged over the campaign is met; 3 the campaign finished but some run failed, stopped or
+missed a requirement, or a requirement judged over the campaign is not met (campaign.json
+says which); 4 nothing of that, but a requirement judged over the campaign is undecided
+(its runs show neither compliance nor a violation at its confidence: the verdict says
+roughly how many runs would settle it; ``--until-decided`` makes them); 1 bad input; 130
+interrupted by SIGINT, 143 by SIGTERM (``--resume`` continues).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import signal
 from pathlib import Path
 
 from ..cli import ALGORITHM
+from ..error_estimate import sample, sample_lines
 from ..output.report import cli as report_cli
 from . import Spec, engine, run_campaign, shipped_files
 from .report import display
+from .sequential import format_until_decided, run_until_decided
 
 
 def add_parser(commands) -> argparse.ArgumentParser:
@@ -27,6 +34,12 @@ def add_parser(commands) -> argparse.ArgumentParser:
         "(3×3 inertia), linspace(lo,hi,n), values(a,b,...) (grids: full factorial); a "
         "leading + or * applies it to the nominal value; SI, 'deg' after a number for "
         "degrees.  Without --vary or --dispersions a scenario's shipped dispersions are used.",
+        epilog="Exit status: 0 every requirement met (run by run, and over the campaign); "
+        "3 a run failed or stopped, or a requirement is not met; 4 none of that, but a "
+        "requirement judged over the campaign is undecided (its runs show neither compliance "
+        "nor a violation at its confidence; the line says roughly how many runs would settle "
+        "it: --until-decided makes them); 1 bad input; 130/143 interrupted (--resume "
+        "continues).",
     )
     p.add_argument("target", help="scenario[:variant] or .ssd/.ssp file")
     p.add_argument("--runs", type=int, default=1, help="runs per grid point (default 1)")
@@ -71,6 +84,29 @@ def add_parser(commands) -> argparse.ArgumentParser:
         metavar="SIGNAL",
         help="keep this output per run (signals.npy, envelope figure); a whole "
         "vector (SatelliteDynamics.w_BO_B) or one element",
+    )
+    p.add_argument(
+        "--until-decided",
+        action="store_true",
+        help="add runs in looks (--runs the first) until every requirement judged over the "
+        "campaign is met or not met (anytime-valid verdicts: looking keeps their risks), "
+        "or --max-runs",
+    )
+    p.add_argument(
+        "--max-runs",
+        type=int,
+        metavar="N",
+        help="with --until-decided, the most runs (default: 5 times the most any such "
+        "requirement needs with none above its bound)",
+    )
+    p.add_argument(
+        "--error-estimate",
+        type=int,
+        metavar="N",
+        default=0,
+        help="rerun the first N runs that succeeded at half and a quarter of the step and "
+        "state each metric's numerical error (Richardson) and the runs a requirement is "
+        "not decided by",
     )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
     p.add_argument(
@@ -125,20 +161,29 @@ def main(args) -> int:
         args.stop,
         args.algorithm,
     )
+    if args.max_runs is not None and not args.until_decided:
+        raise ValueError("--max-runs is the most runs of --until-decided: give it too")
     engine.INTERRUPTS.signals.clear()
     for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
         signal.signal(signum, engine.INTERRUPTS)
-    try:
-        result = run_campaign(
+
+    def look(spec: Spec, resume: bool):
+        return run_campaign(
             spec,
             args.out,
-            args.resume,
+            resume,
             args.workers,
             args.scheduler,
             progress=not args.quiet,
             listen=args.listen,
             dashboard=args.dashboard,
         )
+
+    try:
+        if args.until_decided:
+            result = run_until_decided(spec, args.max_runs, args.out, args.resume, look)
+        else:
+            result = look(spec, args.resume)
     except KeyboardInterrupt:
         # before the cluster started, or while the summary was written
         print(f"interrupted by {_first().name}: the runs made are in runs.jsonl; {RESUME}")
@@ -150,17 +195,52 @@ def main(args) -> int:
             f"{result.out_dir}/ (runs.csv, campaign.json); {RESUME}"
         )
         return 128 + _first()
+    if args.error_estimate:
+        _error_estimate(args, spec, result)
     report_cli.after(args, result.out_dir)
     print(format_campaign(result.summary))
+    if "until_decided" in result.summary:
+        print(format_until_decided(result.summary))
+    if args.error_estimate:
+        print("\n".join(sample_lines(result.summary["numerical_error"])))
     print(f"results in {result.out_dir}/")
     if engine.INTERRUPTS.signals:  # as the cluster closed
         print(f"{_first().name} as the cluster closed: every run was made and written")
         return 128 + _first()
-    runs = result.summary["runs"]
-    unmet = any(r["not_met"] for r in result.summary["pass_rates"].values()) or any(
-        r["verdict"] == "not met" for r in result.summary["ensemble"].values()
-    )
-    return 3 if runs["planned"] != runs["ok"] or unmet else 0
+    return campaign_status(result.summary)
+
+
+def campaign_status(summary: dict) -> int:
+    """The exit status of a campaign's summary (module docstring)."""
+    from ..cli import exit_status
+
+    runs = summary["runs"]
+    unmet = any(r["not_met"] for r in summary["pass_rates"].values())
+    return exit_status(runs["planned"] != runs["ok"] or unmet, summary["ensemble"])
+
+
+def _error_estimate(args, spec, result) -> None:
+    """``--error-estimate N`` (orchestration/error_estimate.py), into campaign.json."""
+    from ..output.recorder import write_text
+    from ..runner import run
+
+    journal = engine.read_journal(result.out_dir / "runs.jsonl")
+    chosen = [r for _, r in sorted(journal.items()) if r["status"] == "ok"][: args.error_estimate]
+    settings = result.summary["settings"]
+
+    def rerun(values, step):
+        parameters = {**spec.set, **values}
+        return run(
+            spec.target,
+            step=step,
+            stop=settings["stop"],
+            algorithm=spec.algorithm,
+            parameters=parameters,
+            figures=False,
+        )[1]
+
+    result.summary["numerical_error"] = sample(chosen, settings["step"], rerun)
+    write_text(result.out_dir / "campaign.json", json.dumps(result.summary, indent=2) + "\n")
 
 
 RESUME = "the same command with --resume continues it"
@@ -219,7 +299,11 @@ def format_campaign(summary: dict) -> str:
     statements = {n: r.get("statement", n) for n, r in summary.get("requirements", {}).items()}
     for name, r in summary["pass_rates"].items():
         low, high = r["ci95"]
-        what = "all requirements" if name == "all" else f"requirement {statements.get(name, name)}"
+        what = (
+            "all requirements judged run by run"
+            if name == "all"
+            else f"requirement {statements.get(name, name)}"
+        )
         others = ", ".join(
             f"{r[k]} {k.replace('_', ' ')}" for k in ("not_met", "not_evaluated", "stopped") if r[k]
         )
@@ -232,9 +316,9 @@ def format_campaign(summary: dict) -> str:
         )
     for name, why in summary.get("not_judged", {}).items():
         lines.append(f"  requirement {statements.get(name, name)}: not judged ({why})")
-    for r in summary.get("ensemble", {}).values():
+    for name, r in summary.get("ensemble", {}).items():
         lines.append(
-            f"  over the campaign: {r.get('text') or r['statement']}"
+            f"  over the campaign: {name}: {r.get('text') or r['statement']}"
             + ("" if r.get("text") else f": {r['verdict']}")
             + (f" ({r['reason']})" if r.get("reason") and not r.get("text") else "")
         )

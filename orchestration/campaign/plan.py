@@ -54,6 +54,20 @@ class Spec:
         ]
 
 
+def over_campaign(scenario, variant) -> list:
+    """The requirements of ``scenario``'s ``variant`` judged over the whole campaign (an
+    ensemble or mixed statistic; a Pointing requirement whose statistic is temporal is
+    judged run by run) that the variant judges; none without a scenario."""
+    if scenario is None:
+        return []
+    exempt = scenario.variant(variant).exempt()
+    return [
+        r
+        for r in scenario.requirements_for(variant)
+        if judged_over_campaign(r) and r.name not in exempt
+    ]
+
+
 class Plan:
     def __init__(self, spec: Spec):
         if spec.runs < 1:
@@ -124,12 +138,7 @@ class Plan:
         #: statistic; a Pointing requirement whose statistic is temporal is judged run by
         #: run: ``over_campaign`` false), and the columns of every run they need, kept
         #: with the others
-        self.ensemble = [
-            r
-            for r in (self.scenario.requirements_for(self.variant) if self.scenario else [])
-            if judged_over_campaign(r)
-            and r.name not in self.scenario.variant(self.variant).exempt()  # type: ignore[union-attr]
-        ]
+        self.ensemble = over_campaign(self.scenario, self.variant)
         for requirement in self.ensemble:
             self.signals += [c for c in requirement.signals if c not in self.signals]
 

@@ -28,9 +28,11 @@ def values(requirement, verdict: dict, t: np.ndarray, m: np.ndarray) -> tuple[np
     """(values, what they are) of ``requirement``'s statistic on magnitudes ``m[run, time]``
     at times ``t``, the worst time that of the ``verdict`` (its details)."""
     index = requirement.index
+    if m.ndim == 3:  # t random in Δt: every window position (the ends weigh half in the verdict)
+        index += " at every window position"
     if requirement.interpretation == "ensemble":
         worst = int(np.argmin(np.abs(t - verdict["worst_time"])))
-        return m[:, worst], f"each run's {index} at t = {t[worst]:g} s (worst time)"
+        return m[:, worst].ravel(), f"each run's {index} at t = {t[worst]:g} s (worst time)"
     if requirement.interpretation == "mixed":
         return m.ravel(), f"{index} of every run at every time"
     raise ValueError(

@@ -47,8 +47,10 @@ def columns(plan, catalog: dict) -> list[tuple[str, str]]:
     cols += [(name, plan.kinds[name]) for name in plan.columns]
     cols += [("status", "s"), ("message", "s")]
     cols += [(name, "f") for name in catalog.get("metrics", {})]
-    for name in catalog.get("requirements", {}):
-        cols += [(f"met_{name}", "b"), (f"verdict_{name}", "s")]
+    for name, requirement in catalog.get("requirements", {}).items():
+        if requirement.get("judged_over") != "campaign":  # else: "judged over the campaign"
+            cols.append((f"met_{name}", "b"))
+        cols.append((f"verdict_{name}", "s"))
     return cols + [("worker", "s"), ("seconds", "f"), ("cpu_seconds", "f")]
 
 
@@ -324,14 +326,20 @@ def _described(meta: dict) -> str:
 
 
 def _save(fig, ax, path: Path) -> Path:
-    """A campaign figure written (grid, layout, the run figures' resolution) and closed."""
+    """A campaign figure written (grid, layout, the run figures' resolution; its title also
+    in the PNG's "Title", for tools and tests that read files) and closed."""
     from ..output.plots import DPI, plt
 
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     try:
         with atomically(path) as temporary:  # an error naming the file, no half PNG
-            fig.savefig(temporary, dpi=DPI, format=Path(path).suffix[1:])
+            fig.savefig(
+                temporary,
+                dpi=DPI,
+                format=Path(path).suffix[1:],
+                metadata={"Title": ax.get_title()},
+            )
     finally:
         plt.close(fig)
     return path

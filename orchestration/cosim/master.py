@@ -288,6 +288,8 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     sequence = _sequence(wiring.steps, nodes)
     init_sequence = _sequence(wiring.init, nodes)
     jacobi_reads = _fed_reads(sequence, wiring.sources)
+    if plan.read_after_step:
+        jacobi_reads = [(node, reads, False) for node, reads, _ in jacobi_reads]
     links = Derivatives(nodes, wiring.sources, layout, plan.algorithm) if plan.derivatives else None
     if links is not None and not links.consumers:
         links = None

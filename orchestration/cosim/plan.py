@@ -59,6 +59,10 @@ class RunPlan:
     record: tuple[str, ...] | None = None
     output_every: int = 1
     outputs: int = 0  # of the FMUs, all recorded unless ``record`` chooses
+    #: Jacobi with the outputs read right after the steps, no input set again first: what a
+    #: host gets that does not bring direct-feedthrough outputs to the communication point
+    #: (libcosim, ECOS; orchestration/coupling_error.py emulates them so)
+    read_after_step: bool = False
 
     @property
     def stop(self) -> float:

@@ -4,11 +4,17 @@ A requirement is an object with a ``name`` and one method, ``evaluate(results, m
 -> :class:`Verdict` (``metrics``: the run's {name: :class:`.metrics.MetricValue`}), and a
 ``statement()`` for people.  Its verdict is one of
 
-- ``met``, ``not met``;
+- ``met``, ``not met``: shown (at the stated confidence, where one is stated: a
+  statistical requirement judged over a campaign; docs/pointing.md);
+- ``undecided``: a statistical requirement whose runs show neither (the verdict says what
+  they show and roughly how many runs would settle it); ``agilesat`` exits 4;
 - ``not evaluated``: the run cannot answer (the metric has no value, the run ended before
   the window); never counted as met, never as a failure of the run;
 - ``not judged``: the variant run is not meant to meet it (:class:`.scenario.Variant`'s
-  ``not_judged``), and says why.
+  ``not_judged``), and says why;
+- ``judged over the campaign``: in a run (and in a campaign's table of runs), a
+  requirement on a campaign's runs together (an ensemble or mixed statistic), which
+  ``agilesat campaign`` judges once over them: one verdict per requirement and scope.
 
 :class:`Bound` bounds a metric (``at_most``, ``at_least``, ``within`` make one, as a
 metric's ``require=``).  :class:`Pointing` states an ECSS pointing requirement
@@ -35,8 +41,15 @@ from ..output.summary import requirement_text
 from ..system.units import CONVERSIONS, quantity, to_si
 from .system import where_written
 
-MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED = "met", "not met", "not evaluated", "not judged"
-VERDICTS = (MET, NOT_MET, NOT_EVALUATED, NOT_JUDGED)
+MET, NOT_MET, UNDECIDED = "met", "not met", "undecided"
+NOT_EVALUATED, NOT_JUDGED = "not evaluated", "not judged"
+OVER_CAMPAIGN = "judged over the campaign"
+VERDICTS = (MET, NOT_MET, UNDECIDED, NOT_EVALUATED, NOT_JUDGED, OVER_CAMPAIGN)
+#: why a requirement judged over a campaign has no verdict in a run
+OVER_CAMPAIGN_REASON = (
+    "a statement about a campaign's runs together (an ensemble or mixed statistic): "
+    "`agilesat campaign` judges it once over them"
+)
 
 
 @dataclass(frozen=True)
@@ -56,7 +69,8 @@ class Verdict:
 
     @property
     def met(self) -> bool | None:
-        """True, False, or None (not evaluated, not judged)."""
+        """True, False, or None (undecided, not evaluated, not judged, judged over the
+        campaign)."""
         return {MET: True, NOT_MET: False}.get(self.status)
 
 
@@ -194,11 +208,11 @@ class Pointing(Requirement):
     ``columns[name]`` an array (..., points), returning (..., points, 4) (a planned attitude
     that no component outputs, scan_pitch's).
 
-    In a run it is evaluated on that run (the temporal interpretation needs no more; an
-    ensemble or mixed one over a single run is as the requirement states it; one with a
-    confidence is not evaluated: a run is not a campaign, and the verdict says what it
-    shows).  In a campaign, :meth:`evaluate_campaign` evaluates it over every run's error
-    history."""
+    A temporal one is judged on each run (its own time).  An ensemble or mixed one is a
+    statement about a campaign's runs together: in a run it is "judged over the campaign"
+    and the run says what it shows (its estimate); :meth:`evaluate_campaign` judges it over
+    every run's error history (met, not met or undecided at its confidence, or on the
+    estimate where it states none)."""
 
     name: str  # type: ignore[misc]
     requirement: object
@@ -246,19 +260,32 @@ class Pointing(Requirement):
             columns, t, self.attitude, self.reference, self.kind, self.start, self.stop
         )
 
-    def _verdict(self, columns, t) -> Verdict:
+    def _verdict(self, columns, t, requirement=None) -> Verdict:
         from ..pointing import NotEvaluable
 
         try:
             error = self.error(columns, t)
         except NotEvaluable as reason:
             return Verdict(NOT_EVALUATED, None, str(reason))
-        result = self.requirement.evaluate(error)  # type: ignore[attr-defined]
-        status = {"met": MET, "not met": NOT_MET}.get(result.status, NOT_EVALUATED)
-        return Verdict(status, result.value, result.reason or "", result.line(), result.to_dict())
+        result = (requirement or self.requirement).evaluate(error)  # type: ignore[attr-defined]
+        status = result.status if result.status in (MET, NOT_MET, UNDECIDED) else NOT_EVALUATED
+        value = result.value if result.value is not None else result.estimate
+        return Verdict(status, value, result.reason or "", result.line(), result.to_dict())
 
     def evaluate(self, results, metrics: dict) -> Verdict:
-        return self._verdict(results, results.time)
+        if not self.over_campaign:
+            return self._verdict(results, results.time)
+        # what the run shows, for people: its estimate (no confidence: one run)
+        shown = self._verdict(results, results.time, replace(self.requirement, confidence=None))  # type: ignore[type-var]
+        from ..pointing import format_angle
+
+        seen = (
+            f"this run: {format_angle(shown.value)}"
+            if shown.value is not None
+            else f"this run: {shown.reason}"
+        )
+        text = f"{self.statement()}: {OVER_CAMPAIGN} ({seen})"
+        return Verdict(OVER_CAMPAIGN, shown.value, OVER_CAMPAIGN_REASON, text)
 
     def evaluate_campaign(self, signals: np.ndarray, t: np.ndarray) -> Verdict:
         """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds

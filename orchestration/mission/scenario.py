@@ -21,7 +21,10 @@ After a run, :meth:`Scenario.evaluate` gives the summary's ``metrics`` (value, u
 display unit, description, the reference value, and its bound where it has one),
 ``requirements`` (each one's verdict, :mod:`.requirements`), ``diagnostics`` (the
 requirements not met, then what the scenario's ``diagnose`` explains) and ``status``
-("failed" when a requirement is not met or a diagnosis is given: ``agilesat run`` exits 3).
+("failed" when a requirement is not met or a diagnosis is given: ``agilesat run`` exits 3;
+an undecided requirement fails nothing, and ``agilesat run`` exits 4).  A requirement
+judged over a campaign (:func:`.requirements.judged_over_campaign`) is "judged over the
+campaign" in a run: one verdict per requirement and scope.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from .requirements import (
     NOT_EVALUATED,
     NOT_JUDGED,
     NOT_MET,
+    OVER_CAMPAIGN,
+    OVER_CAMPAIGN_REASON,
     Bound,
     Requirement,
     Verdict,
@@ -241,15 +246,19 @@ class Scenario:
         verdicts: dict[str, dict] = {}
         problems = []
         for r in self.requirements_for(variant):
+            metric = getattr(r, "metric", None)
+            unit = values[metric].unit if metric in values else None
+            display = entries[metric]["display_unit"] if metric in entries else None
+            statement = r.statement(unit, display) if isinstance(r, Bound) else r.statement()
             verdict = (
                 Verdict(NOT_JUDGED, reason=exempt[r.name])
                 if r.name in exempt
                 else _judged(r, results, values, partial, errors)
             )
-            metric = getattr(r, "metric", None)
-            unit = values[metric].unit if metric in values else None
-            display = entries[metric]["display_unit"] if metric in entries else None
-            statement = r.statement(unit, display) if isinstance(r, Bound) else r.statement()
+            if judged_over_campaign(r) and verdict.status not in (NOT_JUDGED, OVER_CAMPAIGN):
+                # one verdict per requirement and scope: the campaign's
+                text = f"{statement}: {OVER_CAMPAIGN}"
+                verdict = Verdict(OVER_CAMPAIGN, verdict.value, OVER_CAMPAIGN_REASON, text)
             verdicts[r.name] = {
                 "statement": statement,
                 "verdict": verdict.status,

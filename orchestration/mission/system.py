@@ -388,12 +388,22 @@ class System:
         return write_package(system, self.descriptions(), path)
 
 
-def write_package(system: SystemFile, described: dict, path) -> Path:
-    """An SSP package (SSP 1.0 §5): ``SystemStructure.ssd`` and every FMU under
-    ``resources/``, named by relative URI, so it runs wherever it is copied, each FMU
-    configured with the values the system binds to it (:func:`..export.package`);
-    deterministic (the same system gives the same file)."""
+def write_package(system: SystemFile, described: dict, path, say=None) -> Path:
+    """An SSP package (SSP 1.0 §5) of ``system`` written as ``path``: ``SystemStructure.ssd``
+    and every FMU under ``resources/`` (:func:`package_entries`); deterministic (the same
+    system gives the same file)."""
     from ...fmus.build import write_archive
+
+    return write_archive(Path(path), package_entries(system, described, say))
+
+
+def package_entries(
+    system: SystemFile, described: dict, say=None, folder: str = "resources"
+) -> dict[str, bytes]:
+    """The files of the SSP package of ``system``: ``SystemStructure.ssd`` and every FMU
+    under ``folder``, named by relative URI, so it runs wherever it is copied, each FMU
+    configured with the values the system binds to it (:func:`..export.package`, which
+    tells ``say`` of an FMU it packs unconfigured)."""
     from ..export import package
 
     fmus: dict[str, bytes] = {}
@@ -403,7 +413,7 @@ def write_package(system: SystemFile, described: dict, path) -> Path:
         fmus.setdefault(member, Path(ref.source).read_bytes())
         sources[ref.name], files[member] = member, Path(ref.source)
     ssd = render_ssd(system, described, sources)
-    return write_archive(Path(path), package(ssd, files))
+    return package(ssd, files, say, folder)
 
 
 def _member(fmu: Path, entries: dict) -> str:

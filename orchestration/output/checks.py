@@ -107,38 +107,75 @@ def requirement_met(metric: dict) -> bool:
     return (low is None or value >= low) and (high is None or value <= high)
 
 
-def assert_requirements_met(summary: dict, *names: str) -> None:
-    """The named requirements (default: every requirement the run judges) are met: each
-    one's verdict (:mod:`..mission.requirements`) is "met".  A requirement not evaluated
-    (its metric has no value) fails the assertion too, saying why; one the variant does not
-    judge is left out, or fails if named.  A summary without verdicts: each metric with a
-    requirement against it."""
+def assert_requirements_met(summary: dict, *names: str, accept_undecided: bool = False) -> None:
+    """The named requirements (default: every requirement judged) are met: each one's
+    verdict (:mod:`..mission.requirements`) is "met".  ``summary``: a run's (summary.json;
+    a requirement judged over a campaign is left out, or fails if named, saying so) or a
+    campaign's (campaign.json: each requirement judged run by run met in every run, each
+    judged over the campaign met).  Not met fails; undecided (a statistical requirement
+    whose runs show neither compliance nor a violation) fails too unless
+    ``accept_undecided``; not evaluated (a metric without a value) fails, saying why; a
+    requirement the variant does not judge is left out, or fails if named.  A summary
+    without verdicts: each metric with a requirement against it."""
     __tracebackhide__ = True
-    if "requirements" not in summary:
+    if "ensemble" in summary and "pass_rates" in summary:
+        verdicts = _campaign_verdicts(summary)
+    elif "requirements" in summary:
+        verdicts = summary["requirements"]
+    else:
         return _metrics_meet(summary, names)
-    verdicts = summary["requirements"]
     unknown = [n for n in names if n not in verdicts]
     if unknown:
         raise AssertionError(
             f"no requirement {unknown} in the summary; requirements: {', '.join(verdicts)}"
         )
-    chosen = names or [n for n, r in verdicts.items() if r["verdict"] != "not judged"]
-    failed = []
+    skipped = ("not judged", "judged over the campaign")
+    chosen = names or [n for n, r in verdicts.items() if r["verdict"] not in skipped]
+    failed: dict[str, list[str]] = {}
     for name in chosen:
         r = verdicts[name]
-        if r["verdict"] == "met":
+        if r["verdict"] == "met" or (r["verdict"] == "undecided" and accept_undecided):
             continue
-        shown = r.get("text") or r["statement"]
+        shown = r.get("text") or f"{r['statement']}: {r['verdict']}"
         value = ""
         if r.get("value") is not None and r.get("unit"):
             from .summary import format_value
 
             value = f" = {format_value(r['value'], r['unit'], r.get('display_unit'))}"
-        failed.append(
-            f"{shown}: {r['verdict']}{value}" + (f" ({r['reason']})" if r.get("reason") else "")
-        )
+        reason = f" ({r['reason']})" if r.get("reason") and not r.get("text") else ""
+        failed.setdefault(r["verdict"], []).append(f"{shown}{value}{reason}")
     if failed:
-        raise AssertionError("requirement not met: " + "; ".join(failed))
+        hint = {"undecided": " (accept_undecided=True accepts it)"}
+        raise AssertionError(
+            "; ".join(
+                f"requirement {verdict}{hint.get(verdict, '')}: {'; '.join(texts)}"
+                for verdict, texts in failed.items()
+            )
+        )
+
+
+def _campaign_verdicts(summary: dict) -> dict:
+    """A campaign summary's requirements as verdicts: one judged run by run is met when
+    every run meets it (else not met, or not evaluated where no run failed it); one judged
+    over the campaign, its verdict."""
+    statements = {n: r.get("statement", n) for n, r in summary.get("requirements", {}).items()}
+    verdicts = {}
+    for name, rate in summary["pass_rates"].items():
+        if name == "all":
+            continue
+        every = rate["runs"] > 0 and rate["met"] == rate["runs"]
+        verdict = "met" if every else "not met" if rate["not_met"] else "not evaluated"
+        text = f"{statements.get(name, name)}: met in {rate['met']}/{rate['runs']} runs"
+        verdicts[name] = {"verdict": verdict, "text": text}
+    for name, why in summary.get("not_judged", {}).items():
+        verdicts[name] = {
+            "verdict": "not judged",
+            "statement": statements.get(name, name),
+            "reason": why,
+        }
+    for name, entry in summary["ensemble"].items():
+        verdicts[name] = {**entry, "text": entry.get("text") or entry["statement"]}
+    return verdicts
 
 
 def _metrics_meet(summary: dict, names) -> None:
@@ -175,15 +212,17 @@ def assert_pointing(
     reference: str | None = None,
     start: float | None = None,
     stop: float | None = None,
+    accept_undecided: bool = False,
 ):
     """The ECSS pointing index ``index`` (APE … KRE, docs/pointing.md) of ``source`` is
     within ``bound`` (rad) at ``level`` under ``interpretation``: ``source`` is a run
     (:class:`.results.Results` or its directory) or a campaign (its
     :class:`..campaign.Campaign` or directory, the quaternions kept); the error is that of
     ``attitude`` against ``reference`` (:func:`.recorded.evaluate`: a knowledge index
-    defaults to the estimate against the truth).  Fails when it is not met or cannot be
-    shown (a record too short, a campaign too small for the confidence), saying why;
-    returns the :class:`..pointing.PointingResult`."""
+    defaults to the estimate against the truth).  Fails when it is not met, when it is
+    undecided (the runs show neither compliance nor a violation at the ``confidence``;
+    unless ``accept_undecided``) and when it is not evaluated (a record too short), saying
+    which and why; returns the :class:`..pointing.PointingResult`."""
     __tracebackhide__ = True
     from ..pointing import PointingRequirement
     from .recorded import evaluate
@@ -203,6 +242,7 @@ def assert_pointing(
     result = evaluate(
         source, requirement, attitude=attitude, reference=reference, start=start, stop=stop
     )
-    if not result.met:
-        raise AssertionError(result.line("deg"))
+    if not result.met and not (result.status == "undecided" and accept_undecided):
+        hint = " (accept_undecided=True accepts it)" if result.status == "undecided" else ""
+        raise AssertionError(f"{result.status}{hint}: {result.line('deg')}")
     return result

@@ -5,6 +5,7 @@ under the requirement's interpretation).  A campaign's are in :mod:`..campaign.p
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,9 @@ from .results import ColumnError
 
 def run_figures(scenario, variant, results, out_dir) -> list[Path]:
     """The figure of each pointing requirement ``variant`` judges that the run can show
-    (:func:`shown`), from where its window starts."""
+    (:func:`shown`), from where its window starts; one judged over a campaign says so."""
+    from ..mission.requirements import OVER_CAMPAIGN
+
     return [
         profile(
             Path(out_dir) / f"pointing_{r.name}.png",
@@ -25,6 +28,7 @@ def run_figures(scenario, variant, results, out_dir) -> list[Path]:
             t,
             m[0],
             since=float(results.time[0]) if r.start is None else r.start,
+            verdict=OVER_CAMPAIGN if r.over_campaign else None,
         )
         for r, result, t, m in shown(scenario, variant, results)
     ]
@@ -33,39 +37,41 @@ def run_figures(scenario, variant, results, out_dir) -> list[Path]:
 def shown(scenario, variant, results):
     """(requirement, result, times, magnitudes) of each pointing requirement ``variant``
     judges that the run can show (one whose columns were not recorded, or whose index the
-    run is too short for, has none: the summary's verdict says why it was not evaluated)."""
+    run is too short for, has none: the summary's verdict says why it was not evaluated).
+    One judged over a campaign (ensemble, mixed) is a campaign's verdict: the result is
+    what the run shows, its estimate."""
     from ..mission.requirements import Pointing
 
     exempt = scenario.variant(variant).exempt()
     for r in scenario.requirements_for(variant):
         if not isinstance(r, Pointing) or r.name in exempt:
             continue
+        requirement = r.requirement
+        if r.over_campaign:  # one run: its estimate, no confidence
+            requirement = replace(requirement, confidence=None)  # type: ignore[type-var]
         try:
             error = r.error(results, results.time)
-            t, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
+            t, m = requirement.magnitudes(error)  # type: ignore[attr-defined]
         except (ColumnError, NotEvaluable):
             continue
-        yield r, r.requirement.judge(t, m), t, m  # type: ignore[attr-defined]
+        yield r, requirement.judge(t, m), t, m  # type: ignore[attr-defined]
 
 
-def title(requirement, details: dict, unit: str = "deg") -> str:
+def title(requirement, details: dict, unit: str = "deg", verdict: str | None = None) -> str:
     """A figure's title: the quantity (the index in words, and its label), then the
-    verdict in a line (``details``: :meth:`..pointing.PointingResult.to_dict`)."""
+    verdict in a line (``details``: :meth:`..pointing.PointingResult.to_dict`;
+    ``verdict``: said instead of the result's own, "judged over the campaign")."""
     quantity = f"{MEANINGS[requirement.index].capitalize()}, {requirement.label()}"
-    return f"{quantity}\n{verdict_line(requirement, details, unit)}"
+    return f"{quantity}\n{verdict_line(requirement, details, unit, verdict)}"
 
 
-def verdict_line(r, details: dict, unit: str = "deg") -> str:
-    """The verdict in one short line: the status, the value compared (or the estimate)
-    and the bound (the level and interpretation are the statistic's, in the legend); a
-    campaign too small for the confidence says how many runs it has of those needed."""
+def verdict_line(r, details: dict, unit: str = "deg", verdict: str | None = None) -> str:
+    """The verdict in one short line: the verdict in a few words (``details["short"]``:
+    "met (95 % confidence)", "undecided: about 1109 runs", "met on the estimate"), the
+    value compared (or the estimate) and the bound (the level and interpretation are the
+    statistic's, in the legend)."""
     value, estimate = details.get("value"), details.get("estimate")
-    head = details["status"]
-    if value is None and details.get("runs_needed"):
-        head += (
-            f" with {100 * r.confidence:g} % confidence ({details['runs']} of the "
-            f"{details['runs_needed']} runs needed)"
-        )
+    head = verdict or details.get("short") or details["status"]
     if value is None and estimate is None:
         return head
     text = (
@@ -76,11 +82,20 @@ def verdict_line(r, details: dict, unit: str = "deg") -> str:
     return f"{head}: {text}" + ("" if r.bound is None else f", bound {format_angle(r.bound, unit)}")
 
 
-def profile(path: Path, result, t, m, unit: str = "deg", since: float | None = None) -> Path:
-    """The index's magnitude ``m`` at times ``t`` of one run, with the bound (red dashed)
-    and ``result``'s statistic (dash-dotted; the estimate where no value was compared).
-    ``since``: where the window of the requirement starts; the time before its first
-    value, where a windowed index has none, is shaded and drawn empty."""
+def profile(
+    path: Path,
+    result,
+    t,
+    m,
+    unit: str = "deg",
+    since: float | None = None,
+    verdict: str | None = None,
+) -> Path:
+    """The index's magnitude ``m`` at times ``t`` of one run (t random in Δt: its largest
+    over the window's positions), with the bound (red dashed) and ``result``'s statistic
+    (dash-dotted; the estimate where no value was compared).  ``since``: where the window
+    of the requirement starts; the time before its first value, where a windowed index has
+    none, is shaded and drawn empty.  ``verdict``: the title's, instead of the result's."""
     r, stat, scale = result.requirement, result.statistic, ANGLE_UNITS[unit]
     marks: dict = {"bottom": 0.0}
     if r.bound is not None:
@@ -90,10 +105,12 @@ def profile(path: Path, result, t, m, unit: str = "deg", since: float | None = N
     marks["statistic"] = (stat.value / scale, shown)
     if since is not None and since < t[0]:
         marks["empty"] = (since, t[0], "no value yet")
-    series = {r.label(): np.asarray(m) / scale}
+    m = np.asarray(m)
+    label = r.label() + (" (largest over the window's positions)" if m.ndim == 2 else "")
+    series = {label: (m.max(axis=1) if m.ndim == 2 else m) / scale}
     return plots.lines(
         path,
-        title(r, result.to_dict(), unit),
+        title(r, result.to_dict(), unit, verdict),
         t,
         series,
         f"{r.index} [{unit}]",

@@ -2,7 +2,9 @@
 
 With ``--index``, that index (the options of :class:`..pointing.PointingRequirement`);
 without, the pointing requirements the run's or campaign's scenario states
-(:class:`..mission.Pointing`).  Exit 0, or 3 when a requirement is not met.
+(:class:`..mission.Pointing`; in a run, one judged over a campaign says so and what the run
+shows).  Exit 0, 3 when a requirement is not met, 4 when none is but one is undecided
+(neither compliance nor a violation shown at its confidence).
 """
 
 from __future__ import annotations
@@ -35,6 +37,10 @@ def add_parser(commands) -> None:
         help="ECSS-E-ST-60-10C pointing indices (APE, RPE, ... AKE, RKE, ...) of a recorded "
         "run or campaign directory",
         description=__doc__.split("\n\n")[0] + "  See docs/pointing.md.",
+        epilog="Exit status: 0 every requirement met (or computed, without --bound); 3 one "
+        "not met; 4 none not met, but one undecided (its runs show neither compliance nor a "
+        "violation at its confidence; the line says roughly how many runs would settle it); "
+        "1 bad input.",
     )
     p.add_argument("directory", type=Path, help="a run's or a campaign's output directory")
     p.add_argument("--index", choices=list(INDICES), help="default: the scenario's requirements")
@@ -94,6 +100,7 @@ def main(args) -> int:
     from ..mission.requirements import Pointing
     from ..pointing import NotEvaluable, PointingRequirement
     from .recorded import evaluate, load
+    from .results import Results
 
     recorded = load(args.directory)
     what = f"{recorded.runs} run(s)" + (
@@ -129,7 +136,12 @@ def main(args) -> int:
             )
         except NotEvaluable as reason:  # a window its records do not cover
             raise ValueError(f"{args.directory}: {reason}") from None
-        print(f"  {_line(result, args.unit)}")
+        print(f"  {result.line(args.unit)}")
+        if INDICES[args.index][1] == "knowledge" and args.start is None:
+            print(
+                "  (over the whole record: the estimator's start-up included; --start T "
+                "judges it after it, docs/sensing.md)"
+            )
         records.append(result.to_dict())
         results.append((requirement.label(), result))
     else:
@@ -149,9 +161,15 @@ def main(args) -> int:
         if not stated:
             raise ValueError(f"{recorded.target} states no pointing requirement: give --index")
         exempt = target.scenario.variant(target.variant).exempt()
+        a_run = isinstance(recorded.columns, Results)
         for r in stated:
             if r.name in exempt:  # the variant does not judge it: as the run's summary
                 print(f"  {r.name}: not judged ({exempt[r.name]})")
+                continue
+            if a_run and r.over_campaign:  # one verdict per scope: the campaign's
+                verdict = r.evaluate(recorded.columns, {})
+                print(f"  {r.name}: {verdict.text}")
+                records.append({"name": r.name, "status": verdict.status, "text": verdict.text})
                 continue
             try:
                 error = r.error(recorded.columns, recorded.t)  # type: ignore[attr-defined]
@@ -160,25 +178,16 @@ def main(args) -> int:
                 records.append({"name": r.name, "status": "not evaluated", "met": None})
                 continue
             result = r.requirement.evaluate(error)  # type: ignore[attr-defined]
-            print(f"  {r.name}: {_line(result, args.unit)}")
+            print(f"  {r.name}: {result.line(args.unit)}")
             records.append({"name": r.name, **result.to_dict()})
             results.append((r.name, result))
     if args.json:
         args.json.write_text(json.dumps(records, indent=2) + "\n")
     if args.figure:
         print(figure(args.figure, str(args.directory), results, args.unit))
-    return 3 if any(r["met"] is False for r in records) else 0
+    from ..cli import exit_status
 
-
-def _line(result, unit: str) -> str:
-    """The result's line, with the empirical quantile where a confidence made the value
-    compared the order statistic that bounds it."""
-    from ..pointing import format_angle
-
-    line = result.line(unit)
-    if result.value is not None and result.requirement.confidence is not None:
-        line += f" (empirical quantile {format_angle(result.estimate, unit)})"
-    return line
+    return exit_status(False, {str(i): {"verdict": r["status"]} for i, r in enumerate(records)})
 
 
 def figure(path: Path, title: str, results: list, unit: str) -> Path:

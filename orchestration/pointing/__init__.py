@@ -27,7 +27,17 @@ _WHERE = {
         ),
         "errors",
     ),
-    **dict.fromkeys(("IndexSeries", "NotEvaluable", "index_series", "magnitude"), "indices"),
+    **dict.fromkeys(
+        (
+            "IndexSeries",
+            "NotEvaluable",
+            "index_series",
+            "magnitude",
+            "position_weights",
+            "window_positions",
+        ),
+        "indices",
+    ),
     **dict.fromkeys(("PointingRequirement", "PointingResult", "format_angle"), "requirement"),
     **dict.fromkeys(
         (
@@ -39,6 +49,7 @@ _WHERE = {
         ),
         "statistics",
     ),
+    **dict.fromkeys(("Decision", "decide", "decide_counts", "next_look"), "verdicts"),
 }
 
 
@@ -56,6 +67,7 @@ __all__ = [
     "ANGLE_UNITS",
     "INDICES",
     "INTERPRETATIONS",
+    "Decision",
     "ErrorHistory",
     "IndexSeries",
     "NotEvaluable",
@@ -64,14 +76,19 @@ __all__ = [
     "Statistic",
     "allowed_exceedances",
     "confidence_achieved",
+    "decide",
+    "decide_counts",
     "format_angle",
     "index_series",
     "knowledge_error",
     "magnitude",
+    "next_look",
     "performance_error",
+    "position_weights",
     "quaternion_product",
     "rotation_quaternion",
     "rotation_vector",
     "runs_needed",
     "statistic",
+    "window_positions",
 ]

@@ -47,7 +47,8 @@ from .names import INDICES, T_IN_WINDOW
 
 
 class NotEvaluable(ValueError):
-    """The data cannot answer: a record shorter than the windows, a campaign too small."""
+    """The data cannot answer: a record shorter than the windows, no run, or (for a bound
+    at a confidence, :func:`.statistics.statistic`) a campaign too small to show any."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,13 +143,41 @@ def index_series(
         return IndexSeries(index, means[:, shift:] - means[:, :-shift], t[n + shift :])
     if t_in_window == "end":
         return IndexSeries(index, e[:, n:] - means, t[n:])
-    weights = np.ones(n + 1) / n
-    weights[[0, -1]] = 0.5 / n
     samples = np.arange(n, t.size - n)
     rng = np.random.default_rng(seed)
-    starts = samples - rng.choice(n + 1, size=(e.shape[0], samples.size), p=weights)
+    starts = samples - rng.choice(n + 1, size=(e.shape[0], samples.size), p=position_weights(n))
     drawn = np.take_along_axis(means, starts[..., None], axis=1)
     return IndexSeries(index, e[:, samples] - drawn, t[samples])
+
+
+def position_weights(n: int) -> np.ndarray:
+    """The weights (½, 1, …, 1, ½)/n of the n + 1 positions of a window of n sample
+    periods around a time: the discrete form of t uniform in Δt."""
+    weights = np.ones(n + 1) / n
+    weights[[0, -1]] = 0.5 / n
+    return weights
+
+
+def window_positions(error: ErrorHistory, index: str, window: float) -> IndexSeries:
+    """RPE/RKE with t random in Δt, exactly: ``values[run, k, m, component]`` = e_i −
+    ē(the window starting at t_{i − m}), m = 0 … N, at each sample t_i = ``t[k]`` whose
+    every window lies in the record; position m weighs :func:`position_weights` (N)[m].
+    The mixture over the positions is the index's distribution at t_i: what a single draw
+    per time (:func:`index_series`) samples."""
+    operation, _ = check_index(index, window, None, "random")
+    if operation != "relative":
+        raise ValueError(f"{index}: window positions are those of RPE/RKE only")
+    n = samples_in(window, error.dt, "window Δt")
+    e, t = error.values, error.t
+    if t.size <= 2 * n:
+        raise NotEvaluable(
+            f"{index}: the record ({t[-1] - t[0]:g} s) is too short for its windows "
+            f"({2 * n * error.dt:g} s)"
+        )
+    means = window_means(e, n)
+    samples = np.arange(n, t.size - n)
+    starts = samples[:, None] - np.arange(n + 1)  # (k, m)
+    return IndexSeries(index, e[:, samples, None] - means[:, starts], t[samples])
 
 
 def magnitude(series: IndexSeries) -> np.ndarray:

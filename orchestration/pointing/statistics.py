@@ -1,5 +1,5 @@
 """An index at a probability level under a statistical interpretation, and the confidence
-of an ensemble statistic from order statistics.
+of a statistic over the runs from order statistics.
 
 A requirement states a bound that the index's magnitude keeps with probability P.  The
 probability is over time, over the statistical ensemble (the runs), or both: the standard's
@@ -14,13 +14,16 @@ three statistical interpretations ([Ecss 2008], detailed in [Esa 2011]):
 The empirical P-quantile of n values is the ⌈P n⌉-th smallest: the smallest value that at
 least a fraction P of the values do not exceed.
 
-Confidence (ensemble only: its n values at one time come from n independent runs; the
-samples of one run in time are correlated and give no such statement).  If k of n runs may
-exceed a value X, X is the (n − k)-th smallest of the n; it bounds the true P-quantile
-with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  So
+Confidence (over the runs: the n values of an ensemble statistic at one time come from n
+independent runs; the samples of one run in time are correlated and give no such
+statement).  If k of n runs may exceed a value X, X is the (n − k)-th smallest of the n;
+it bounds the true P-quantile with probability Pr[Bin(n, 1 − P) > k] ([Wilks 1941]).  The
+bound :func:`statistic` gives with a confidence takes the most runs k that the verdicts'
+anytime-valid test allows above it (:func:`supported`, :mod:`.verdicts`); a design fixed
+in advance, looked at once, may allow more:
 
-- the bound a campaign supports at P with confidence C is the (n − k)-th smallest value
-  with k the largest count such that Pr[Bin(n, 1 − P) ≤ k] ≤ 1 − C;
+- its bound at P with confidence C is the (n − k)-th smallest value with k the largest
+  count such that Pr[Bin(n, 1 − P) ≤ k] ≤ 1 − C (:func:`allowed_exceedances`);
 - the runs needed with k runs allowed above the bound: the smallest n with
   Pr[Bin(n, 1 − P) ≤ k] = Σ_{i≤k} C(n, i) (1 − P)^i P^(n−i) ≤ 1 − C; for k = 0,
   P^n ≤ 1 − C, n = ⌈ln(1 − C)/ln P⌉: 1109 runs for 99.73 % with 95 % confidence;
@@ -65,10 +68,12 @@ def check_statistic(level: float, interpretation: str, confidence: float | None)
         raise ValueError(f"interpretation {interpretation!r}: expected one of {INTERPRETATIONS}")
     if confidence is not None:
         check_probability(confidence, "confidence")
-        if interpretation != "ensemble":
+        if interpretation == "temporal":
             raise ValueError(
-                "a confidence needs the ensemble interpretation: order statistics need "
-                "independent samples (runs); the samples of one run in time are correlated"
+                "a confidence needs the ensemble or mixed interpretation (a probability "
+                "over independent runs); the temporal one holds each run to the level over "
+                "its own time, whose samples are correlated: a run above the bound is a "
+                "violation, and no number of runs shows that none would be"
             )
 
 
@@ -86,6 +91,29 @@ def order_statistic(x: np.ndarray, rank: int, axis: int | None) -> np.ndarray:
     if axis is None:
         x, axis = x.ravel(), 0
     return np.take(np.partition(x, rank, axis=axis), rank, axis=axis)
+
+
+def upper_value(m: np.ndarray, above: float, axis: int | None, weights=None):
+    """The smallest value of ``m`` along ``axis`` (None: all of it) that has at most
+    ``above`` of the values' weight above it: with each value weighing 1, the (n − k)-th
+    smallest, k = ⌊above⌋.  ``weights``: of ``m``'s last axis (window positions, each
+    (run, time) weighing 1 in all), which is reduced too."""
+    if weights is None:
+        count = m.size if axis is None else m.shape[axis]
+        k = min(count - 1, math.floor(above + 1e-9))
+        return order_statistic(m, count - 1 - k, axis)
+    if axis is None:
+        values = m.reshape(1, -1)
+    else:
+        values = np.moveaxis(m, axis, -2)
+        values = values.reshape(values.shape[:-2] + (-1,))
+    w = np.tile(weights, values.shape[-1] // len(weights))
+    order = np.argsort(values, axis=-1)
+    tail = w.sum() - np.cumsum(w[order], axis=-1)  # the weight after each sorted value
+    first = np.argmax(tail <= above + 1e-9 * max(1.0, above), axis=-1)
+    sorted_values = np.take_along_axis(values, order, axis=-1)
+    result = np.take_along_axis(sorted_values, first[..., None], axis=-1)[..., 0]
+    return float(result[0]) if axis is None else result
 
 
 def _exceeds_at_most(k: int, runs: int, level: float) -> float:
@@ -136,6 +164,23 @@ def allowed_exceedances(runs: int, level: float, confidence: float) -> int:
     return low
 
 
+def supported(runs: int, level: float, confidence: float, whole: bool = True):
+    """The most runs (their weight: ``whole`` False) that may lie above a bound a campaign
+    of ``runs`` shows at ``level`` with ``confidence`` by the anytime-valid test of
+    :mod:`.verdicts`; :class:`NotEvaluable` if even none may (fewer runs than
+    :func:`runs_needed`)."""
+    from .verdicts import allowed_above
+
+    allowed = allowed_above(runs, level, confidence)
+    if allowed is None:
+        raise NotEvaluable(
+            f"the campaign is too small: a bound at {percent(level)} with "
+            f"{percent(confidence)} confidence needs at least "
+            f"{runs_needed(level, confidence)} runs (none above it); it has {runs}"
+        )
+    return math.floor(allowed + 1e-9) if whole else allowed
+
+
 def confidence_achieved(runs: int, exceedances: int, level: float) -> float:
     """Pr[Bin(runs, 1 − level) > exceedances]: the confidence that at least ``level`` of the
     ensemble is within a bound that ``exceedances`` of ``runs`` runs exceed."""
@@ -165,24 +210,41 @@ class Statistic:
     allowed: int | None = None
 
 
+def quantile(m: np.ndarray, level: float, axis: int | None, weights=None):
+    """The empirical ``level``-quantile of ``m`` along ``axis`` (None: all): the ⌈P n⌉-th
+    smallest; with ``weights`` of a last axis of positions, the smallest value with at
+    most 1 − P of the weight above it."""
+    if weights is None:
+        count = m.size if axis is None else m.shape[axis]
+        return order_statistic(m, quantile_rank(count, level), axis)
+    count = m[..., 0].size if axis is None else m.shape[axis]
+    return upper_value(m, count * (1.0 - level), axis, weights)
+
+
 def statistic(
-    magnitudes: np.ndarray, level: float, interpretation: str, confidence: float | None = None
+    magnitudes: np.ndarray,
+    level: float,
+    interpretation: str,
+    confidence: float | None = None,
+    weights=None,
 ) -> Statistic:
-    """The statistic of ``magnitudes[run, time]`` (see the module's docstring)."""
+    """The statistic of ``magnitudes[run, time]`` (see the module's docstring);
+    ``magnitudes[run, time, position]`` with the ``weights`` of the positions (t random in
+    the window: the exact mixture)."""
     check_statistic(level, interpretation, confidence)
     m = np.asarray(magnitudes, dtype=float)
-    if m.ndim != 2 or m.size == 0:
+    if m.ndim != 2 + (weights is not None) or m.size == 0:
         raise ValueError(f"magnitudes: expected a non-empty (runs, times) array, got {m.shape}")
     runs = m.shape[0]
     if interpretation == "mixed":
-        value = float(order_statistic(m, quantile_rank(m.size, level), None))
+        value = float(quantile(m, level, None, weights))
         return Statistic(interpretation, level, value, value, None, None)
     axis = 1 if interpretation == "temporal" else 0
-    estimates = order_statistic(m, quantile_rank(m.shape[axis], level), axis)
+    estimates = quantile(m, level, axis, weights)
     profile, allowed = estimates, None
     if confidence is not None:
-        allowed = allowed_exceedances(runs, level, confidence)
-        profile = order_statistic(m, runs - allowed - 1, 0)
+        allowed = supported(runs, level, confidence, whole=weights is None)
+        profile = upper_value(m, allowed, 0, weights)
     worst = int(np.argmax(profile))
     return Statistic(
         interpretation,

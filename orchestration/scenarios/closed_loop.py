@@ -24,7 +24,7 @@ import numpy as np
 from agilesat.orchestration.mission import NotEvaluable, System
 from agilesat.orchestration.mission import metrics as m
 from agilesat.orchestration.pointing import PointingRequirement, knowledge_error
-from agilesat.orchestration.scenarios.constants import POINTING_LEVEL
+from agilesat.orchestration.scenarios.constants import KNOWLEDGE_START, POINTING_LEVEL
 
 ARCSEC = math.pi / 648_000
 #: figure units: (rad per unit, as printed)
@@ -108,14 +108,23 @@ def close_the_loop(
         system.connect("AttitudeEstimator.w_BI_B_est", target, replace=True)
 
 
+#: how the knowledge metrics and figures say their window
+AFTER_START_UP = f"from t = {KNOWLEDGE_START:g} s, after the estimator's start-up"
+
+
 def knowledge_index(index: str, window: float | None = None) -> m.Metric:
     """The ECSS knowledge index (AKE, RKE, ...) of the 3-axis knowledge error at 99.73 %
-    of the run's time (temporal interpretation; docs/pointing.md), from the first valid
-    estimate on."""
+    of the run's time (temporal interpretation; docs/pointing.md), over the valid
+    estimates from :data:`KNOWLEDGE_START` on (after the estimator's start-up)."""
     requirement = PointingRequirement(index, None, POINTING_LEVEL, "temporal", window=window)
 
     def compute(results):
-        valid = results["AttitudeEstimator.valid"] > 0
+        valid = (results["AttitudeEstimator.valid"] > 0) & (results.time >= KNOWLEDGE_START)
+        if valid.sum() < 2:
+            raise NotEvaluable(
+                f"fewer than 2 valid estimates from t = {KNOWLEDGE_START:g} s on (the run "
+                f"covers {results.time[0]:g} … {results.time[-1]:g} s)"
+            )
         error = knowledge_error(
             results.vector("AttitudeEstimator.q_BI_est")[valid],
             results.vector("SatelliteDynamics.q_BI")[valid],
@@ -132,7 +141,7 @@ def knowledge_index(index: str, window: float | None = None) -> m.Metric:
         compute,
         "rad",
         "arcsec",
-        f"{label} at {100 * POINTING_LEVEL:g} % of the time (knowledge, 3-axis)",
+        f"{label} at {100 * POINTING_LEVEL:g} % of the time (knowledge, 3-axis), " + AFTER_START_UP,
     )
 
 
@@ -143,17 +152,21 @@ KNOWLEDGE_METRICS = [
     m.pointing_error(
         "AttitudeEstimator.q_BI_est",
         "SatelliteDynamics.q_BI",
+        start=KNOWLEDGE_START,
         name="knowledge_error_max",
         display_unit="arcsec",
-        description="max angle of the estimated attitude from the true one (knowledge, 3-axis)",
+        description="max angle of the estimated attitude from the true one (knowledge, "
+        f"3-axis), {AFTER_START_UP}",
     ),
     m.pointing_error(
         "AttitudeEstimator.q_BI_est",
         "SatelliteDynamics.q_BI",
         statistic="rms",
+        start=KNOWLEDGE_START,
         name="knowledge_error_rms",
         display_unit="arcsec",
-        description="RMS angle of the estimated attitude from the true one (knowledge, 3-axis)",
+        description="RMS angle of the estimated attitude from the true one (knowledge, "
+        f"3-axis), {AFTER_START_UP}",
     ),
     m.mean(
         "StarTracker.valid",
@@ -183,11 +196,12 @@ def knowledge_angles(results) -> np.ndarray:
 
 def knowledge_rows(results, unit: str = "arcsec") -> list:
     """Figure rows (:func:`..mission.panels`) of the knowledge error about each body axis,
-    with the filter's own ±3σ, from its first valid estimate on, in ``unit`` ("arcsec" or
+    with the filter's own ±3σ, over the valid estimates from :data:`KNOWLEDGE_START` on
+    (after the estimator's start-up, as the knowledge metrics), in ``unit`` ("arcsec" or
     "urad")."""
     scale, shown = UNITS[unit]
     t = results.time
-    valid = results["AttitudeEstimator.valid"] > 0
+    valid = (results["AttitudeEstimator.valid"] > 0) & (t >= KNOWLEDGE_START)
     knowledge = knowledge_angles(results)[valid] / scale
     sigma = 3 * results.vector("AttitudeEstimator.sigma_att")[valid] / scale
     return [
@@ -198,7 +212,7 @@ def knowledge_rows(results, unit: str = "arcsec") -> list:
                 "filter 3σ": sigma[:, i],
                 "filter −3σ": -sigma[:, i],
             },
-            f"{axis}_B [{shown}]",
+            f"{axis}_B [{shown}], t ≥ {KNOWLEDGE_START:g} s",
         )
         for i, axis in enumerate("xyz")
     ]

@@ -283,18 +283,25 @@ def test_a_hub_step_with_input_derivatives_is_the_inputs_moving():
 # -- the rule for an input whose rate is another input ---------------------------------
 def test_a_derivative_set_for_h_is_the_slope_in_place_of_hdot():
     """hdot_cmg wired (the shipped systems) and the same slope set as the derivative of
-    h_cmg with hdot_cmg left at zero give the same run, bit for bit."""
+    h_cmg with hdot_cmg left at zero give the same run, bit for bit, with a host that sets
+    h_cmg at every communication point (a derivative set moves h_cmg to the step's end
+    itself: the same value)."""
 
     def run(rate_as_derivative):
         model, _, _ = hub()
+        h = model.get("h_cmg")
         for k in range(20):
-            slope = [0.1 * math.sin(0.3 * k), 0.2, -0.05]
+            slope = np.array([0.1 * math.sin(0.3 * k), 0.2, -0.05])
             if rate_as_derivative:
                 model.set("hdot_cmg", [0.0, 0.0, 0.0])
                 model.set_input_rate("h_cmg", slope)
             else:
                 model.set("hdot_cmg", slope)
-            model.advance(0.1 * k, 0.1)
+            model.step(0.1 * k, 0.1)
+            model.inputs_to_step_end(0.1)
+            h = h + slope * 0.1
+            model.set("h_cmg", h)
+            model.output()
         return model.values[: model.layout.n_numeric].copy(), model.warnings
 
     (wired, none), (derived, also_none) = run(False), run(True)
@@ -315,7 +322,8 @@ def test_a_rate_input_that_disagrees_with_a_set_derivative_is_reported_once(make
     model.advance(model.t, 0.1)
     assert model.warnings == []  # agreeing: nothing to say
     model.set_input_rate(angle, np.full(model.layout.by_name[angle].shape, 0.2))
-    model.advance(model.t, 0.1)
+    model.set(rate, np.full(model.layout.by_name[rate].shape, 0.3))  # again: it moved along
+    model.advance(model.t, 0.1)  # its own derivative, where one was set
     assert len(model.warnings) == 1
     assert f"{rate}[1] = 0.3, the derivative of {angle}[1] = 0.2" in model.warnings[0]
     model.advance(model.t, 0.1)
@@ -359,3 +367,50 @@ def test_the_gyro_averages_a_quadratic_rate_exactly_with_its_slope(slopes):
         assert max(errors) < 1e-13  # rounding
     else:
         assert min(errors) > 1e-4
+
+
+# -- the inputs at a step's end ---------------------------------------------------------
+INTERPOLATING = (SatelliteDynamics, CmgCluster, PayloadGimbals, Gyro)
+
+
+@pytest.mark.parametrize("model_class", INTERPOLATING, ids=lambda m: m.__name__)
+def test_outputs_after_a_step_are_those_of_the_inputs_at_its_end(model_class):
+    """A host sets the derivative of every Real input and reads the outputs right after the
+    step: they are the outputs of the inputs the step integrated, bit for bit those a host
+    gets that first sets the inputs again to u + u̇ H (+ ½ ü H² for h_cmg, whose rate input
+    hdot_cmg got a derivative too: its curve), and the inputs read back are those values."""
+    assert {m for m in INTERPOLATING if m.INTERPOLATES_INPUTS} == set(INTERPOLATING)
+    step = 0.05
+
+    def run(again):
+        model = model_class().start(0.0)
+        layout, rows = model.layout, []
+        inputs = [v for v in layout.group("input") if v.name in layout.derivative]
+        rate_of = {v.derivative_of: v.name for v in inputs if v.derivative_of}
+        for k in range(10):
+            rates = {
+                v.name: 1e-3 * np.arange(1 + k, 1 + k + v.size) * (-1) ** i
+                for i, v in enumerate(inputs)
+            }
+            ends = {}
+            for v in inputs:
+                model.set_input_rate(v.name, rates[v.name])
+                u, r = model.get(v.name), rates[v.name]
+                bend = rates[rate_of[v.name]] if v.name in rate_of else None
+                ends[v.name] = (
+                    u + r * step if bend is None else u + (r * step + 0.5 * bend * step * step)
+                )
+            if again:
+                model.step(k * step, step)
+                for name, value in ends.items():
+                    model.set(name, value)
+                model.output()
+            else:
+                model.advance(k * step, step)
+                for name, value in ends.items():
+                    assert np.array_equal(model.get(name), value), name
+            rows.append(model.values[: layout.n_numeric].copy())
+        return np.array(rows)
+
+    after, again = run(False), run(True)
+    assert np.array_equal(after, again)

@@ -8,6 +8,7 @@ must reproduce the master's results bit for bit.
 """
 
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -94,13 +95,14 @@ def scan_pitch_script(fmus, tmp_path):
 
 
 def needs(version: str) -> str:
-    """The part of the message every failure to start Python ends with: the Python the
-    FMU was built for and both variables."""
+    """The part of the message every failure to start Python ends with: what the FMU needs
+    (a Python 3.10 or later, its libpython and environment of one minor version), the
+    Python it was built with and both variables."""
     return (
-        rf"This FMU runs Python {re.escape(version)} with numpy \(it was built with "
-        rf"{re.escape(sys.executable)}\): in a host that does not run Python, set "
-        rf"AGILESAT_LIBPYTHON to the shared libpython of a Python {re.escape(version)} and "
-        rf"AGILESAT_PYTHON to the python of an environment of that version"
+        r"This FMU runs Python 3\.10 or later with numpy \(it was built with Python "
+        rf"{re.escape(version)}, {re.escape(sys.executable)}\): in a host that does not run "
+        r"Python, set AGILESAT_LIBPYTHON to the shared libpython of a Python and "
+        r"AGILESAT_PYTHON to the python of an environment of the same minor version with numpy"
     )
 
 
@@ -116,6 +118,41 @@ def test_a_missing_python_environment_is_named(c_host, scan_pitch_script, tmp_pa
         r"it runs Python as .*gone/bin/python, which does not exist here\. " + needs(VERSION),
         run.stderr,
     )
+
+
+def test_a_python_without_numpy_is_named_once(c_host, scan_pitch_script, tmp_path):
+    """An environment of the building Python without numpy (pythonfmu alone would say
+    'findClass ModuleNotFoundError'): one message naming that Python and what is needed."""
+    subprocess.run(
+        [sys._base_executable, "-m", "venv", "--without-pip", tmp_path / "bare"], check=True
+    )
+    env = {**CLEAN_ENV, "AGILESAT_PYTHON": str(tmp_path / "bare" / "bin" / "python")}
+    run = run_host(c_host, scan_pitch_script, tmp_path / "c.csv", env)
+    assert run.returncode == 2
+    assert "findClass" not in run.stderr and "ModuleNotFoundError" not in run.stderr
+    assert re.search(
+        r"the Python it runs in, .*bare/bin/python, has no numpy\. " + needs(VERSION), run.stderr
+    ), run.stderr
+
+
+def test_a_libpython_and_an_environment_of_two_versions_are_named(
+    c_host, scan_pitch_script, tmp_path
+):
+    """The environment's pyvenv.cfg says another minor version than the libpython: named
+    before Python starts (it would start with the other version's standard library)."""
+    other = f"3.{sys.version_info.minor + 1}"
+    env_dir = tmp_path / "other"
+    (env_dir / "bin").mkdir(parents=True)
+    (env_dir / "bin" / "python").symlink_to(Path(sys.executable).resolve())
+    (env_dir / "pyvenv.cfg").write_text(f"home = /usr/bin\nversion = {other}.0\n")
+    env = {**CLEAN_ENV, "AGILESAT_PYTHON": str(env_dir / "bin" / "python")}
+    run = run_host(c_host, scan_pitch_script, tmp_path / "c.csv", env)
+    assert run.returncode == 2
+    assert re.search(
+        rf"the libpython .* is Python {re.escape(VERSION)} and the environment of "
+        rf".*other/bin/python is Python {re.escape(other)}\. " + needs(VERSION),
+        run.stderr,
+    ), run.stderr
 
 
 def test_a_missing_libpython_is_named(c_host, scan_pitch_script, tmp_path):

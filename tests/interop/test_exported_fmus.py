@@ -115,24 +115,23 @@ def test_components_of_one_fmu_with_other_values_get_files_of_their_own(tmp_path
     assert run.returncode == 0, run.stderr
 
 
-def test_an_fmu_not_built_from_these_sources_is_packed_as_it_is(fmus, tmp_path):
-    """A third party's FMU, or one of ours built from other sources (here: a stale build),
-    cannot be configured: it is packed unchanged, with a warning naming it."""
+def test_an_fmu_of_ours_built_from_other_sources_is_an_error_naming_the_rebuild(fmus, tmp_path):
+    """One of ours built from other sources (here: another content hash, as a build of
+    another version has) may not apply a configuration: an error naming the rebuild, not a
+    package that silently runs other values (a third party's FMU: tests/orchestration/
+    test_export.py)."""
+    from agilesat.fmus.configure import OtherSources
     from agilesat.orchestration.mission import System
 
     stale = tmp_path / "SatelliteDynamics.fmu"
     with zipfile.ZipFile(fmus["SatelliteDynamics"]) as built, zipfile.ZipFile(stale, "w") as out:
-        entry = built.read("resources/slavemodule.txt").decode()
-        for item in built.namelist():  # the entry module of other sources' hash
-            renamed = item.replace(entry, "SatelliteDynamics_0123456789ab")
-            out.writestr(
-                renamed, built.read(item).replace(entry.encode(), b"SatelliteDynamics_0123456789ab")
-            )
+        digest = built.read("resources/slavemodule.txt").decode().rpartition("_")[2]
+        for item in built.namelist():
+            data = built.read(item)
+            if not item.startswith("binaries/"):
+                data = data.replace(digest.encode(), b"0123456789ab")
+            out.writestr(item.replace(digest, "0123456789ab"), data)
     one = System("one", stop=1.0, step=0.05)
     one.add("A", stale, rate0=[0.01, 0.0, 0.0])
-    with pytest.warns(UserWarning, match="not an FMU agilesat built from these sources"):
-        package = one.write(tmp_path / "one.ssp")
-    uri = "resources/SatelliteDynamics.fmu"
-    with zipfile.ZipFile(package) as archive:
-        entries = {item: archive.read(item) for item in archive.namelist()}
-    assert entries[uri] == stale.read_bytes()
+    with pytest.raises(OtherSources, match="built by agilesat from other sources than these"):
+        one.write(tmp_path / "one.ssp")

@@ -42,9 +42,16 @@ def host(*args):
 @pytest.mark.integration
 @pytest.mark.parametrize("name", FMUS)
 def test_fmpy_simulate_fmu_runs_every_fmu_at_its_defaults_without_a_message(fmus, name):
+    """At its DefaultExperiment: FMPy takes its stop time, and its step as the
+    communication step (doubled while more than 1000 steps)."""
     answer = host("defaults", fmus[name])
     assert answer["messages"] == []  # no error, no warning, nothing
-    assert answer["rows"] == 501 and answer["finite"]
+    start, stop, step = answer["experiment"]
+    assert start == 0.0 and stop > 0.0 and 0.0 < step < stop
+    while stop / step > 1000:
+        step *= 2
+    assert answer["rows"] == round(stop / step) + 1 and answer["stop"] == pytest.approx(stop)
+    assert answer["finite"]
 
 
 @pytest.mark.slow

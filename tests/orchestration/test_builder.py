@@ -4,8 +4,6 @@ a variable is a Real; the SSD it writes is the system it checked; a third-party 
 described from its model description alone."""
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +13,7 @@ from agilesat.orchestration.mission import System, deg
 from agilesat.orchestration.system.description import Description
 from agilesat.orchestration.system.ssp import ConnectionRef, SystemFileError, read_system
 from agilesat.orchestration.system.validation import check_system
+from helpers import pythonfmu_damper
 
 HERE = str(Path(__file__).resolve())
 
@@ -193,33 +192,10 @@ def test_a_system_of_one_unconnected_component_writes_and_runs(fmus, tmp_path):
 def test_a_third_party_fmu_is_described_from_its_model_description(fmus, tmp_path):
     """An FMU made with pythonfmu alone (no units, no agilesat annotations): its connectors
     come from its model description, an array connects element by element."""
-    source = tmp_path / "damper.py"
-    source.write_text(
-        "from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real\n"
-        "class Damper(Fmi2Slave):\n"
-        "    def __init__(self, **kw):\n"
-        "        super().__init__(**kw)\n"
-        "        self.gain, self.w = 5.0, [0.0, 0.0, 0.0]\n"
-        "        self.register_variable(Real('gain', causality=Fmi2Causality.parameter,"
-        " variability=Fmi2Variability.fixed))\n"
-        "        for i in range(3):\n"
-        "            self.register_variable(Real(f'w_BI_B[{i + 1}]', causality="
-        "Fmi2Causality.input, getter=lambda i=i: self.w[i], setter=lambda v, i=i:"
-        " self.w.__setitem__(i, v)))\n"
-        "            self.register_variable(Real(f'tau_cmd[{i + 1}]', causality="
-        "Fmi2Causality.output, getter=lambda i=i: -self.gain * self.w[i]))\n"
-        "    def do_step(self, t, dt):\n"
-        "        return True\n"
-    )
-    built = subprocess.run(
-        [sys.executable, "-m", "pythonfmu", "build", "-f", source, "-d", tmp_path],
-        capture_output=True,
-        text=True,
-    )
-    assert built.returncode == 0, built.stderr
+    fmu = pythonfmu_damper(tmp_path)
     system = detumble()
     system.remove("AttitudeController")
-    system.add("Damper", tmp_path / "Damper.fmu", gain=7.0)
+    system.add("Damper", fmu, gain=7.0)
     system.connect("SatelliteDynamics.w_BI_B", "Damper.w_BI_B")
     system.connect("Damper.tau_cmd", "Flywheel.tau_cmd")
     ssd = system.write(tmp_path / "third.ssd")

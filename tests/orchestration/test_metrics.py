@@ -239,7 +239,34 @@ def test_a_requirement_of_ones_own_judged_over_the_campaign_is_marked_so_in_the_
 
     ours = scenario()
     ours.requirements.append(Spread())
-    assert ours.evaluate(DECAY)["requirements"]["spread"]["judged_over"] == "campaign"
+    spread = ours.evaluate(DECAY)["requirements"]["spread"]
+    assert spread["judged_over"] == "campaign" and spread["verdict"] == "judged over the campaign"
+    assert spread["text"] == "spread: judged over the campaign"
+
+
+def test_an_undecided_requirement_fails_no_run_and_exits_4():
+    """A requirement of one's own may be undecided: the run is not failed, `agilesat run`
+    exits 4 (3 if another is not met), and the assertion fails unless told to accept it."""
+    from agilesat.orchestration.cli import exit_status
+    from agilesat.orchestration.mission.requirements import UNDECIDED, Requirement, Verdict
+
+    class Unsure(Requirement):
+        name = "unsure"
+
+        def evaluate(self, results, metrics):
+            return Verdict(UNDECIDED, reason="neither shown")
+
+    ours = scenario()
+    ours.requirements.append(Unsure())
+    summary = ours.evaluate(DECAY)
+    unsure = summary["requirements"]["unsure"]
+    assert unsure["verdict"] == "undecided" and unsure["met"] is None
+    assert not any("unsure" in problem for problem in summary["diagnostics"])
+    assert exit_status(False, {"unsure": unsure}) == 4
+    assert exit_status(False, {"a": {"verdict": "not met"}, "unsure": unsure}) == 3
+    with pytest.raises(AssertionError, match=r"requirement undecided \(accept_undecided"):
+        assert_requirements_met(summary, "unsure")
+    assert_requirements_met(summary, "unsure", accept_undecided=True)
 
 
 def test_settling_time_of_a_vector_norm():

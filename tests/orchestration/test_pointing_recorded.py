@@ -151,8 +151,12 @@ def test_indices_of_a_campaign_directory(campaign_dir, capsys):
     code, text = pointing(
         directory, "--index", "APE", "--confidence", "0.95", "--bound", "1e-4", capsys=capsys
     )
-    assert "needs at least 1109 runs (none above it); it has 30" in text
-    assert "0 of 30 run(s) above it: 7.79 % confidence" in text  # 1 − 0.9973^30
+    assert code == 4 and "undecided (none of the 30 run(s) above it at any time" in text
+    assert "about 1109 runs would settle it" in text  # ⌈ln 0.05 / ln 0.9973⌉
+    code, text = pointing(
+        directory, "--index", "APE", "--confidence", "0.95", "--bound", "1e-6", capsys=capsys
+    )
+    assert code == 3 and "not met (30 of 30 run(s) above it at worst" in text
     code, text = pointing(
         directory, "--index", "APE", "--figure", directory / "a.png", capsys=capsys
     )
@@ -172,10 +176,13 @@ def test_assert_pointing_on_runs_and_campaigns(run_dir, campaign_dir):
     with pytest.raises(AssertionError, match=r"MPE\(10 s\) about \(0, 0, 1\) .*: not met"):
         assert_pointing(run_dir, "MPE", window=10.0, level=0.5, bound=0.99 * BIAS, **common)
     directory = campaign_dir[0]
-    with pytest.raises(AssertionError, match="the campaign is too small"):
-        assert_pointing(
-            directory, "APE", bound=1.0, interpretation="ensemble", confidence=0.95, **common
-        )
+    ensemble = dict(interpretation="ensemble", confidence=0.95, **common)
+    with pytest.raises(AssertionError, match=r"^undecided \(accept_undecided=True accepts it\)"):
+        assert_pointing(directory, "APE", bound=1.0, **ensemble)
+    result = assert_pointing(directory, "APE", bound=1.0, accept_undecided=True, **ensemble)
+    assert result.status == "undecided" and result.runs_to_decide == 1109
+    with pytest.raises(AssertionError, match=r"^not met: APE about \(0, 0, 1\)"):
+        assert_pointing(directory, "APE", bound=1e-6, accept_undecided=True, **ensemble)
     with pytest.raises(KeyError, match="run it again with --keep AttitudeEstimator.q_BI_est"):
         assert_pointing(directory, "AKE", bound=1.0)
     with pytest.raises(ValueError, match="RPE is a performance index: name the reference"):

@@ -88,7 +88,8 @@ def test_one_fmu_at_its_defaults_and_with_set(fmus, tmp_path):
     """A gyro alone for 200 s: its inputs held at their start values (zero rate: it
     measures its bias, +5 °/h on z), or at what --set gives (0.01 rad/s about z, with its
     500 ppm scale factor).  The mean of 4000 samples of its white noise (ARW 0.15 °/√h at
-    20 Hz: σ = 1.95e-4 rad/s per sample) has σ = 3.1e-6 rad/s: within 4σ."""
+    20 Hz: σ = 1.95e-4 rad/s per sample) has σ = 3.1e-6 rad/s: within 4σ.  Given no step
+    and stop, its FMU file runs its DefaultExperiment."""
     common = ("--step", 0.05, "--stop", 200, "--no-figures", "--no-report")
     alone = agilesat("run", "Gyro", *common, "--out", tmp_path / "a")
     assert alone.returncode == 0, alone.stderr
@@ -103,8 +104,12 @@ def test_one_fmu_at_its_defaults_and_with_set(fmus, tmp_path):
     assert abs(measured - (0.01 * (1 + 5e-4) + bias)) < 1.3e-5
     summary = json.loads((tmp_path / "b" / "summary.json").read_text())
     assert summary["parameters"]["Gyro.w_BI_B[3]"] == {"value": 0.01, "type": "Real"}
-    result = agilesat("run", fmus["Gyro"], "--out", tmp_path / "c")
-    assert result.returncode == 1 and "the macro step must be a positive" in result.stderr
+    result = agilesat("run", fmus["Gyro"], "--no-figures", "--no-report", "--out", tmp_path / "c")
+    assert result.returncode == 0, result.stderr  # its DefaultExperiment: 0.05 s, 10 s
+    assert (
+        Results.load(tmp_path / "c").time[-1] == 10.0
+        and len(Results.load(tmp_path / "c").time) == 201
+    )
 
 
 def test_a_run_that_would_write_a_lot_says_so_first(fmus, tmp_path):

@@ -2,10 +2,12 @@
 of every input it can and asks the derivatives of every output there are.
 
     python interpolating_host.py SYSTEM.ssd|.ssp STOP STEP OUT.npz [--no-derivatives]
+        [--read-after-step] [--gauss-seidel]
 
-Run as a script in a fresh process (tests/interop/test_interpolating_host.py).  It knows
-nothing of our FMUs: it reads the system (components, connections, parameter values) and
-drives the FMUs with fmpy's FMU2Slave by their model descriptions alone.
+Run as a script in a fresh process (tests/interop/test_interpolating_host.py,
+tests/interop/test_end_of_step.py).  It knows nothing of our FMUs: it reads the system
+(components, connections, parameter values) and drives the FMUs with fmpy's FMU2Slave by
+their model descriptions alone.
 
 Its algorithm: parameters set after instantiation; in initialisation mode and after every
 step the outputs and inputs are settled by passes over the connections (set every input
@@ -19,6 +21,14 @@ of every FMU declaring them are asked and checked finite.  Columns "time", then
 "Instance.output" of every output of every FMU, a row at the start and after each step;
 with ``--no-derivatives`` nothing is sent or asked.  Exit status 2 with the FMU's message if
 a call fails; the rows so far are saved all the same.
+
+``--read-after-step``: the outputs are read right after the steps, no input set again
+first (as libcosim and ECOS do); every input is set once from them before the next step.
+``--gauss-seidel``: the FMUs step one after the other in the system's order, each right
+after its inputs are set from the newest outputs, its outputs read right after its step
+(or, without ``--read-after-step``, after its inputs are set again from the newest
+outputs); a derivative link from an FMU that already stepped is interpolated, the value
+y_n set with the slope (y_{n+1} − y_n)/H, one from an FMU still to step extrapolated.
 """
 
 import ctypes
@@ -127,9 +137,19 @@ class Wires:
                 return
         raise RuntimeError("the inputs do not settle: an algebraic loop?")
 
+    def feed(self, target=None):
+        """Every input (of ``target``) set once from the outputs as they are now: all read
+        first, then all set (a set of a feedthrough input would change what a later read
+        gives)."""
+        chosen = [g for g in self.groups if target is None or g[1] is target]
+        values = [source.get(type_name, ys) for source, _, type_name, ys, _ in chosen]
+        for (_, to, type_name, _, us), got in zip(chosen, values):
+            to.set(type_name, us, got)
+
 
 def main(path, stop, step, out, *options):
     stop, step, derivatives = float(stop), float(step), "--no-derivatives" not in options
+    after_step, gauss_seidel = "--read-after-step" in options, "--gauss-seidel" in options
     messages: list[str] = []
     system = read_system(path)
     fmus = {c.name: Fmu(c, messages) for c in system.components}
@@ -165,18 +185,47 @@ def main(path, stop, step, out, *options):
                         np.isfinite(fmu.derivatives(fmu.real_outputs))
                     ):
                         raise RuntimeError(f"{fmu.name}: non-finite output derivatives at t={t}")
-                for source, y, target, u in links:
+            if gauss_seidel:
+                _gauss_seidel(fmus, wires, links if derivatives else [], t, step, after_step)
+            else:
+                for source, y, target, u in links if derivatives else []:
                     target.set_derivatives([u], source.derivatives([y]))
-            for fmu in fmus.values():
-                fmu.slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
-            wires.settle()
+                for fmu in fmus.values():
+                    fmu.slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+            if not after_step:
+                if gauss_seidel:
+                    wires.last.clear()  # the inputs were set outside settle()
+                wires.settle()
             rows.append(
                 [start + (k + 1) * step] + [x for f in fmus.values() for x in f.outputs_now()]
             )
+            if after_step and not gauss_seidel:
+                wires.feed()
     finally:
         np.savez(out, names=np.array(names), data=np.array(rows, dtype=float))
         print("\n".join(messages))
     print(f"{len(links)} derivative links")
+
+
+def _gauss_seidel(fmus, wires, links, t, step, after_step):
+    """One macro step of the Gauss-Seidel scheme (module docstring)."""
+    start = {(source, y): source.get("Real", [y])[0] for source, y, _, _ in links}
+    stepped = set()
+    for fmu in fmus.values():
+        wires.feed(fmu)
+        for source, y, target, u in links:
+            if target is not fmu:
+                continue
+            if source in stepped:  # y_n with the slope to y_{n+1}
+                y_n = start[source, y]
+                target.set("Real", [u], [y_n])
+                target.set_derivatives([u], [(source.get("Real", [y])[0] - y_n) / step])
+            else:
+                target.set_derivatives([u], source.derivatives([y]))
+        fmu.slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+        stepped.add(fmu)
+        if not after_step:
+            wires.feed(fmu)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """FMI hosts in the ways third-party tools drive our FMUs, for tests/interop/test_hosts.py.
 
     python late_input_host.py defaults FMU              fmpy.simulate_fmu at its defaults
+                                                        (its DefaultExperiment)
     python late_input_host.py late FMU READ JSON        inputs set only after initialisation
     python late_input_host.py warning FMU RETURN_OK     a warning condition, logging off
 
@@ -39,9 +40,19 @@ def logger_into(messages):
 
 def defaults(path):
     messages = []
+    experiment = read_model_description(path).defaultExperiment
     result = fmpy.simulate_fmu(path, logger=logger_into(messages))
     finite = bool(all(all(abs(x) < float("inf") for x in row) for row in result.tolist()))
-    return {"rows": len(result), "messages": messages, "finite": finite}
+    declared = experiment and [
+        float(x) for x in (experiment.startTime, experiment.stopTime, experiment.stepSize)
+    ]
+    return {
+        "rows": len(result),
+        "stop": float(result["time"][-1]),
+        "experiment": declared,
+        "messages": messages,
+        "finite": finite,
+    }
 
 
 def open_slave(path, messages):

@@ -3,7 +3,9 @@
 (``AGILESAT_JIT_AFTER=0``).  It does not import agilesat.  Run by
 tests/fast_paths/test_shim_step.py in a fresh interpreter:
 ``python shim_step_host.py on|off NAME=FMU...``; prints, per FMU and program, what a host
-sees (statuses, log messages, values, serialized states) and the shim's counters, as JSON."""
+sees (statuses, log messages, values, serialized states) and the shim's counters, as JSON.
+``python shim_step_host.py on|off programs=end_of_step,end_of_step_again NAME=FMU...``
+runs only those programs (tests/interop/test_end_of_step.py)."""
 
 import ctypes
 import json
@@ -24,6 +26,13 @@ H = 0.05
 class Fmu:
     def __init__(self, path, name):
         md = read_model_description(path)
+        self.interpolates = bool(md.coSimulation.canInterpolateInputs)
+        #: input -> the input declared its derivative (FMI 2.0 ``derivative``: hdot_cmg)
+        self.rate_of = {
+            v.derivative.name: v.name
+            for v in md.modelVariables
+            if v.causality == "input" and v.derivative is not None
+        }
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         real = [v for v in md.modelVariables if v.type == "Real"]
         self.outputs = [v.valueReference for v in real if v.causality == "output"]
@@ -208,14 +217,15 @@ def set_derivatives(fmu, names, values):
 
 
 def interpolated(names, rates):
-    """A host interpolating inputs: the derivatives of ``names`` set before every step
-    (``rates(k)``), every step served by the C step path but where the kernel leaves it
-    (a slope conflict's warning)."""
+    """A host interpolating inputs: ``names`` set to zero and their derivatives set before
+    every step (``rates(k)``), every step served by the C step path but where the kernel
+    leaves it (a slope conflict's warning)."""
 
     def program(fmu):
         fmu.initialize()
         record = []
         for k in range(20):
+            fmu.set_real([fmu.vr[name] for name in names], [0.0] * len(names))
             row = [set_derivatives(fmu, names, rates(k)), fmu.step(k * H)]
             record.append(row + [fmu.get_real(fmu.outputs)])
         return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
@@ -233,16 +243,50 @@ def hub_interpolated(fmu):
     """SatelliteDynamics with its momentum, torque and position interpolated."""
     names = [f"{v}[{i}]" for v in ("h_cmg", "hdot_cmg", "tau_ext", "r_I") for i in (1, 2, 3)]
     fmu.initialize()
-    fmu.set_real([fmu.vr[f"hdot_cmg[{i}]"] for i in (1, 2, 3)], [0.0, 0.1, 0.0])
     fmu.set_real([fmu.vr[f"r_I[{i}]"] for i in (1, 2, 3)], [7e6, 1e5, -2e5])
     record = []
-    for k in range(20):
+    for k in range(20):  # hdot_cmg set at every step: it moves along its derivative
+        fmu.set_real([fmu.vr[f"hdot_cmg[{i}]"] for i in (1, 2, 3)], [0.0, 0.1, 0.0])
         row = [set_derivatives(fmu, names, _momentum_rates(k)), fmu.step(k * H)]
         record.append(row + [fmu.get_real(fmu.outputs)])
     return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
 
 
+def end_of_step(again: bool):
+    """A host that sets the derivative of every Real input before every step and reads the
+    outputs right after it, or (``again``) first sets the inputs again to their values at
+    the step's end as it computes them: u + u̇ H (FMI 2.0's derivatives, from the step's
+    start), u + (u̇ H + ½ ü H H) for an input with a declared derivative input whose
+    derivative ü was set too (docs/coupling.md).  None for an FMU that does not
+    interpolate its inputs."""
+
+    def program(fmu):
+        if not fmu.interpolates:
+            return None
+        fmu.initialize()
+        u = fmu.get_real(fmu.inputs)[1]
+        names = [name for name, vr in fmu.vr.items() if vr in fmu.inputs]
+        names.sort(key=lambda name: fmu.inputs.index(fmu.vr[name]))
+        record = []
+        for k in range(12):
+            rates = [1e-3 * (1 + (i + k) % 3) * (-1) ** i for i in range(len(u))]
+            status = [set_derivatives(fmu, names, rates), fmu.step(k * H)]
+            rate = dict(zip(names, rates))
+            u = [
+                x + (r * H + 0.5 * rate[fmu.rate_of[n]] * H * H) if n in fmu.rate_of else x + r * H
+                for n, x, r in zip(names, u, rates)
+            ]
+            if again:
+                status.append(fmu.set_real(fmu.inputs, u))
+            record.append([status, fmu.get_real(fmu.outputs), fmu.get_real(fmu.inputs)])
+        return {"record": record, "messages": fmu.messages, "counts": fmu.counts()}
+
+    return program
+
+
 PROGRAMS = {"run": run, "states": states, "faults": faults, "reset": reset}
+#: chosen with ``programs=NAME,...`` as the first FMU argument
+OPTIONAL = {"end_of_step": end_of_step(False), "end_of_step_again": end_of_step(True)}
 SPECIAL = {
     "CmgCluster": {
         "saturation": saturation,
@@ -255,9 +299,13 @@ SPECIAL = {
 }
 
 results = {}
-for argument in sys.argv[2:]:
+arguments = sys.argv[2:]
+chosen = None
+if arguments and arguments[0].startswith("programs="):
+    chosen = {p: OPTIONAL[p] for p in arguments.pop(0).split("=", 1)[1].split(",")}
+for argument in arguments:
     name, path = argument.split("=", 1)
-    for program, function in {**PROGRAMS, **SPECIAL.get(name, {})}.items():
+    for program, function in (chosen or {**PROGRAMS, **SPECIAL.get(name, {})}).items():
         fmu = Fmu(path, "a")
         results[f"{name}:{program}"] = function(fmu)
         fmu.dll.fmi2FreeInstance(fmu.c)

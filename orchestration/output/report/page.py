@@ -42,6 +42,7 @@ table.sortable th[data-order="desc"]::after { content: " ▼"; }
 .verdict.met, .verdict.ok, .verdict.complete { background: #dcf3e3; color: #17612f; }
 .verdict.not-met, .verdict.failed, .verdict.error, .verdict.lost
   { background: #fbe0e0; color: #8f1d1d; }
+.verdict.undecided { background: #fdf0d5; color: #7a4e00; }
 details { margin: 6px 0; } summary { cursor: pointer; font-weight: 600; padding: 4px 0; }
 .figure { width: 100%; } .note { color: #5a6478; font-size: 12.5px; }
 dl.facts { display: grid; grid-template-columns: max-content auto; gap: 1px 14px;
