@@ -254,8 +254,8 @@ def test_run(agilesat_run):
 
 
 def plugin_failures():
-    """A user's pytest file whose three tests fail: a requirement not met, a signal out of
-    bounds, a run refused."""
+    """A user's pytest file whose three tests fail: a requirement not shown met (the run
+    too short to evaluate it), a signal out of bounds, a run refused."""
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / "test_mission.py").write_text(PLUGIN_TEST)
         result = subprocess.run(
@@ -273,14 +273,14 @@ def plugin_failures():
         ok = (
             result.returncode == 1
             and "3 failed" in result.stdout
-            and "requirement not met" in result.stdout
+            and "requirement not evaluated: imaging_pitch_rate_mean" in result.stdout
             and "SatelliteDynamics.w_BO_B is above" in result.stdout
             and "agilesat_run('scan_pitch'): --set SatelliteDynamics.mu=5 kg" in result.stdout
             and not ours
         )
         return _case(
-            "a user's pytest file with the agilesat plugin: a requirement not met, a signal "
-            "out of its bounds, a run with a value in the wrong unit",
+            "a user's pytest file with the agilesat plugin: a requirement not evaluated (the "
+            "run too short), a signal out of its bounds, a run with a value in the wrong unit",
             "3 failures, each the test's own line and the plugin's message; none of the "
             "plugin's source lines",
             f"exit {result.returncode}; {len(result.stdout.splitlines())} lines of report; "
