@@ -207,3 +207,24 @@ def test_a_crash_of_the_process_of_an_isolated_run_is_said(monkeypatch):
     )
     with pytest.raises(isolated.RunFailed, match="its process was killed by SIGSEGV"):
         isolated.run(target="scan_pitch")
+
+
+def test_a_campaign_until_decided_holds_its_directory_between_its_looks(fmus, tmp_path):
+    """Each look holds --out (run_campaign); between two, the summary is written: the
+    directory stays held through them, so no other campaign takes it meanwhile."""
+    from types import SimpleNamespace
+
+    from agilesat.orchestration.campaign.sequential import run_until_decided
+    from agilesat.orchestration.output import lock
+
+    out, held = tmp_path / "c", []
+
+    def look(spec, resume):
+        held.append(out.resolve() in lock._held)
+        verdict = "undecided" if len(held) == 1 else "met"
+        ensemble = {"pde": {"verdict": verdict, "details": {"runs_to_decide": 4}}}
+        return SimpleNamespace(summary={"status": "complete", "ensemble": ensemble})
+
+    run_until_decided(Spec("scan_pitch", runs=2), 10, out, False, look)
+    assert held == [True, True]
+    assert json.loads((out / "campaign.json").read_text())["until_decided"]["runs"] > 2
