@@ -31,8 +31,8 @@ of attitude error or 0.27 °/s of rate error, and the settling time 4/(ζ ω_n) 
 short against the 300 s pitch envelope of the payload sweep.
 
 Stateless: outputs are a function of the inputs at the communication point.  ``output`` is
-one kernel (components/jit.py) on the value array and a state array of the gains and the
-inertia (``STATE``).
+one kernel (components/runtime/jit.py) on the value array and a state array of the gains and the
+inertia (``S``).
 """
 
 from __future__ import annotations
@@ -41,11 +41,12 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, output_kernel
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, dcm, qmul, rotate
-from .variables import Layout, input_, output, parameter
+from .rotations import IDENTITY_Q, dcm, qmul
+from .runtime.flat import state_table
+from .runtime.jit import floats, output_kernel
+from .variables import input_, output, parameter
+from .vectors import rotate
 
 DESIGN_INERTIA = 150.0  # kg·m² ([Chang 2015] satellite, each axis)
 DESIGN_BANDWIDTH = 0.2  # rad/s
@@ -159,10 +160,10 @@ class AttitudeController(Model):
             raise ModelError(
                 "acceleration_feedforward is on but inertia is zero: set the hub inertia it needs"
             )
-        self.state = STATE.zeros()
-        self.state[S_KP : S_KP + 3], self.state[S_KD : S_KD + 3] = self.p.kp, self.p.kd
-        self.state[INERTIA : INERTIA + 9] = J.reshape(-1)
-        self.state[FEEDFORWARD] = self.p.acceleration_feedforward
+        self.state = S.zeros()
+        self.state[S.kp : S.kp + 3], self.state[S.kd : S.kd + 3] = self.p.kp, self.p.kd
+        self.state[S.inertia : S.inertia + 9] = J.reshape(-1)
+        self.state[S.feedforward] = self.p.acceleration_feedforward
         self.t = t0
 
     def step(self, t, dt):
@@ -177,15 +178,11 @@ class AttitudeController(Model):
             )
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-_AT = Layout(AttitudeController.VARIABLES).offset  # offsets in AttitudeController.values
-U_Q_BI, U_W, U_Q_REF, U_W_REF = _AT["q_BI"], _AT["w_BI_B"], _AT["q_ref"], _AT["w_ref"]
-U_H_FF, U_HDOT_FF, U_DW_REF = _AT["h_ff"], _AT["hdot_ff"], _AT["dw_ref"]
-Y_TAU, Y_ATT, Y_RATE = _AT["tau_cmd"], _AT["att_error"], _AT["rate_error"]
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = AttitudeController.names()
 #: the state array: the gains, the hub inertia (row-major) and 1 with the acceleration
 #: feedforward on
-STATE = StateTable(kp=3, kd=3, inertia=9, feedforward=1)
-S_KP, S_KD, INERTIA, FEEDFORWARD = STATE.offsets
+S = state_table("AttitudeController state", kp=3, kd=3, inertia=9, feedforward=1)
 #: controller_output's status: q_BI or q_ref is not a unit quaternion (nothing written)
 NOT_UNIT = 1
 
@@ -194,8 +191,8 @@ NOT_UNIT = 1
 def controller_output(values, state, t):
     """tau_cmd, att_error and rate_error (module docstring); 0, or NOT_UNIT."""
     v, s = floats(values), floats(state)
-    r0, r1, r2, r3 = v[U_Q_REF], v[U_Q_REF + 1], v[U_Q_REF + 2], v[U_Q_REF + 3]
-    q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), v[U_Q_BI : U_Q_BI + 4])
+    r0, r1, r2, r3 = v[U.q_ref], v[U.q_ref + 1], v[U.q_ref + 2], v[U.q_ref + 3]
+    q0, q1, q2, q3 = qmul((r0, -r1, -r2, -r3), v[U.q_BI : U.q_BI + 4])
     norm2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3
     if not 0.25 < norm2 < 4.0:
         return NOT_UNIT
@@ -206,17 +203,17 @@ def controller_output(values, state, t):
     ex, ey, ez = f * q1, f * q2, f * q3
     k = 1.0 / norm2
     C_BR = dcm((q0, q1, q2, q3))
-    wrx, wry, wrz = rotate(C_BR, v[U_W_REF : U_W_REF + 3])
-    wx, wy, wz = v[U_W], v[U_W + 1], v[U_W + 2]
+    wrx, wry, wrz = rotate(C_BR, v[U.w_ref : U.w_ref + 3])
+    wx, wy, wz = v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]
     rx, ry, rz = wx - k * wrx, wy - k * wry, wz - k * wrz
-    hx, hy, hz = v[U_H_FF], v[U_H_FF + 1], v[U_H_FF + 2]
-    dx, dy, dz = v[U_HDOT_FF], v[U_HDOT_FF + 1], v[U_HDOT_FF + 2]
-    tx = -s[S_KP] * ex - s[S_KD] * rx + dx + (wy * hz - wz * hy)
-    ty = -s[S_KP + 1] * ey - s[S_KD + 1] * ry + dy + (wz * hx - wx * hz)
-    tz = -s[S_KP + 2] * ez - s[S_KD + 2] * rz + dz + (wx * hy - wy * hx)
-    if s[FEEDFORWARD] != 0.0:
-        J = s[INERTIA : INERTIA + 9]
-        ax, ay, az = rotate(C_BR, v[U_DW_REF : U_DW_REF + 3])
+    hx, hy, hz = v[U.h_ff], v[U.h_ff + 1], v[U.h_ff + 2]
+    dx, dy, dz = v[U.hdot_ff], v[U.hdot_ff + 1], v[U.hdot_ff + 2]
+    tx = -s[S.kp] * ex - s[S.kd] * rx + dx + (wy * hz - wz * hy)
+    ty = -s[S.kp + 1] * ey - s[S.kd + 1] * ry + dy + (wz * hx - wx * hz)
+    tz = -s[S.kp + 2] * ez - s[S.kd + 2] * rz + dz + (wx * hy - wy * hx)
+    if s[S.feedforward] != 0.0:
+        J = s[S.inertia : S.inertia + 9]
+        ax, ay, az = rotate(C_BR, v[U.dw_ref : U.dw_ref + 3])
         wrx, wry, wrz = k * wrx, k * wry, k * wrz  # C_BR w_ref
         ux = k * ax - (ry * wrz - rz * wry)  # d/dt (C_BR w_ref), seen in B
         uy = k * ay - (rz * wrx - rx * wrz)
@@ -227,7 +224,7 @@ def controller_output(values, state, t):
         tx += J[0] * ux + J[1] * uy + J[2] * uz + (wy * jz - wz * jy)
         ty += J[3] * ux + J[4] * uy + J[5] * uz + (wz * jx - wx * jz)
         tz += J[6] * ux + J[7] * uy + J[8] * uz + (wx * jy - wy * jx)
-    values[Y_TAU], values[Y_TAU + 1], values[Y_TAU + 2] = tx, ty, tz
-    values[Y_ATT], values[Y_ATT + 1], values[Y_ATT + 2] = ex, ey, ez
-    values[Y_RATE], values[Y_RATE + 1], values[Y_RATE + 2] = rx, ry, rz
+    values[Y.tau_cmd], values[Y.tau_cmd + 1], values[Y.tau_cmd + 2] = tx, ty, tz
+    values[Y.att_error], values[Y.att_error + 1], values[Y.att_error + 2] = ex, ey, ez
+    values[Y.rate_error], values[Y.rate_error + 1], values[Y.rate_error + 2] = rx, ry, rz
     return 0

@@ -35,10 +35,21 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
+from .runtime.flat import state_table
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
+from .vectors import (
+    add,
+    adjugate,
+    det3,
+    gram,
+    mat_add,
+    outer_sum,
+    scale,
+    total,
+    trace_product,
+)
 
 N_GYROS = 6
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
@@ -94,7 +105,7 @@ class ClusterGeometry:
 
     def momentum(self, delta) -> np.ndarray:
         """h = h_rotor Σ σ_i."""
-        return self.h_rotor * np.array(_sum(self.axes(delta)[0]))
+        return self.h_rotor * np.array(total(self.axes(delta)[0]))
 
     def spins(self, delta) -> np.ndarray:
         """σ_i as rows (6×3)."""
@@ -146,48 +157,6 @@ def zero_momentum_angles(
     if not np.linalg.norm(geometry.momentum(d)) < 1e-12 * geometry.h_rotor:
         raise ModelError(f"no zero-momentum gimbal set found near {list(delta)}")
     return d
-
-
-@jitable
-def gram(columns) -> tuple:
-    """Σ a aᵀ over the columns (3×3 rows)."""
-    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    for a0, a1, a2 in columns:
-        m00 += a0 * a0
-        m01 += a0 * a1
-        m02 += a0 * a2
-        m11 += a1 * a1
-        m12 += a1 * a2
-        m22 += a2 * a2
-    return (m00, m01, m02), (m01, m11, m12), (m02, m12, m22)
-
-
-@jitable
-def det3(M) -> float:
-    (a, b, c), (d, e, f), (g, h, i) = M
-    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-
-
-@jitable
-def inv3(M) -> tuple:
-    """Inverse of a 3×3 matrix (rows) by its adjugate."""
-    (a, b, c), (d, e, f), (g, h, i) = M
-    det = det3(M)
-    return (
-        ((e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det),
-        ((f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det),
-        ((d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det),
-    )
-
-
-@jitable
-def _sum(vectors) -> tuple:
-    x = y = z = 0.0
-    for v in vectors:
-        x += v[0]
-        y += v[1]
-        z += v[2]
-    return x, y, z
 
 
 @jitable
@@ -326,20 +295,24 @@ class CmgCluster(Model):
                 f"rate_limit ({p.rate_limit}) and accel_limit ({p.accel_limit}) must be positive"
             )
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.state = STATE.zeros()
-        self.state[ST : ST + 6 * N_GYROS] = self.geometry.st
-        self.state[[H_ROTOR, RATE_LIMIT, ACCEL_LIMIT]] = p.h_rotor, p.rate_limit, p.accel_limit
-        self.state[DELTA : DELTA + N_GYROS] = p.delta0
+        self.state = S.zeros()
+        self.state[S.st : S.st + 6 * N_GYROS] = self.geometry.st
+        self.state[[S.h_rotor, S.rate_limit, S.accel_limit]] = (
+            p.h_rotor,
+            p.rate_limit,
+            p.accel_limit,
+        )
+        self.state[S.delta : S.delta + N_GYROS] = p.delta0
         self.t = t0
 
     def step(self, t, dt):
         gimbal = cluster_step(self.values, self.state, self.t, dt)
         if gimbal:
-            command = float(self.values[Y_CMD + gimbal - 1])
+            command = float(self.values[U.delta_dot_cmd + gimbal - 1])
             self.warnings.append(
                 f"t={t:.3f} s: gimbal {gimbal} rate command {command:.3f} rad/s "
-                f"exceeds the rate limit {float(self.state[RATE_LIMIT])} rad/s (the cluster cannot "
-                "deliver the commanded torque)"
+                f"exceeds the rate limit {float(self.state[S.rate_limit])} rad/s (the cluster "
+                "cannot deliver the commanded torque)"
             )
         self.t = t + dt
 
@@ -347,43 +320,20 @@ class CmgCluster(Model):
         cluster_output(self.values, self.state, self.t)
 
     def output_derivatives(self):
-        """See the module docstring: d/dt of δ, δ̇, h, ḣ and Q at ``self.t``."""
-        s, rates = self.state, self.state[RATE : RATE + N_GYROS].tolist()
-        limit, accel, h_rotor = float(s[RATE_LIMIT]), float(s[ACCEL_LIMIT]), float(s[H_ROTOR])
-        command, slope = self.u.delta_dot_cmd.tolist(), self.input_rate("delta_dot_cmd").tolist()
-        accels = [servo_accel(r, c, m, limit, accel) for r, c, m in zip(rates, command, slope)]
-        spins, columns = (np.array(x) for x in self.geometry.axes(s[DELTA : DELTA + N_GYROS]))
-        a_dot = -spins * np.array(rates)[:, None]  # ȧ_i = −σ_i δ̇_i
-        gram_ = columns.T @ columns
-        gram_dot = a_dot.T @ columns + columns.T @ a_dot
-        adjugate = np.array(
-            [[np.linalg.det(np.delete(np.delete(gram_, i, 0), j, 1)) * (-1) ** (i + j)
-              for i in range(3)] for j in range(3)]
-        )  # fmt: skip
-        return np.array(
-            [
-                *rates,
-                *accels,
-                *self.values[Y_HDOT : Y_HDOT + 3],
-                *(h_rotor * (columns.T @ accels + a_dot.T @ rates)),
-                float(np.trace(adjugate @ gram_dot)),
-            ]
-        )
+        """See the module docstring: d/dt of δ, δ̇, h, ḣ and Q at ``self.t``
+        (:func:`cluster_rates`, on the kernels' own functions)."""
+        return np.array(cluster_rates(self.values.tolist(), self.state.tolist()))
 
 
-# -- kernels (components/jit.py) ------------------------------------------------------
-_LAYOUT = CmgCluster.table_layout()
-_AT = _LAYOUT.offset  # offsets in CmgCluster.values
-Y_CMD = _AT["delta_dot_cmd"]  # input
-D_CMD = _LAYOUT.derivative["delta_dot_cmd"]  # its derivative, as a host set it
-Y_DELTA, Y_RATE, Y_H, Y_HDOT = _AT["delta"], _AT["delta_dot"], _AT["h"], _AT["hdot"]
-Y_Q = _AT["singularity"]
+# -- kernels (components/runtime/jit.py) ----------------------------------------------
+P, U, Y = CmgCluster.names()
+DU, _ = CmgCluster.derivative_names()  # DU.delta_dot_cmd: the command's slope a host set
 #: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
 #: and 1 while a rate command exceeds the rate limit (saturated)
-STATE = StateTable(
-    delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1, st=6 * N_GYROS, saturated=1
-)
-DELTA, RATE, RATE_LIMIT, ACCEL_LIMIT, H_ROTOR, ST, SATURATED = STATE.offsets
+S = state_table(
+    "CmgCluster state", delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1,
+    st=6 * N_GYROS, saturated=1,
+)  # fmt: skip
 
 
 @step_kernel(CmgCluster)
@@ -393,25 +343,25 @@ def cluster_step(values, state, t, dt):
     saturated while the largest |command| at the step's start exceeds the rate limit (it
     cannot deliver the commanded torque): returns 1 + the gimbal with the largest |command|
     (the first of equals) when it becomes saturated (step() warns), else 0."""
-    command, s = floats(values[Y_CMD : Y_CMD + N_GYROS]), floats(state[:ST])
-    slope = floats(values[D_CMD : D_CMD + N_GYROS])
-    delta, rate = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
-    limit, accel = s[RATE_LIMIT], s[ACCEL_LIMIT]
+    command, s = floats(values[U.delta_dot_cmd : U.delta_dot_cmd + N_GYROS]), floats(state[: S.st])
+    slope = floats(values[DU.delta_dot_cmd : DU.delta_dot_cmd + N_GYROS])
+    delta, rate = s[S.delta : S.delta + N_GYROS], s[S.rate : S.rate + N_GYROS]
+    limit, accel = s[S.rate_limit], s[S.accel_limit]
     angles, rates = servo_step(delta, rate, command, dt, limit, accel)
     for i in range(N_GYROS):
         if slope[i] != 0.0:
             angles[i], rates[i] = servo_ramp(
                 delta[i], rate[i], command[i], slope[i], dt, limit, accel
             )
-    state[DELTA : DELTA + N_GYROS] = angles
-    state[RATE : RATE + N_GYROS] = rates
+    state[S.delta : S.delta + N_GYROS] = angles
+    state[S.rate : S.rate + N_GYROS] = rates
     worst, largest = 0, abs(command[0])
     for i in range(N_GYROS):
         if abs(command[i]) > largest:
             worst, largest = i, abs(command[i])
-    saturated = largest > s[RATE_LIMIT]
-    started = saturated and state[SATURATED] == 0.0
-    state[SATURATED] = 1.0 if saturated else 0.0
+    saturated = largest > s[S.rate_limit]
+    started = saturated and state[S.saturated] == 0.0
+    state[S.saturated] = 1.0 if saturated else 0.0
     return worst + 1 if started else 0
 
 
@@ -419,14 +369,40 @@ def cluster_step(values, state, t, dt):
 def cluster_output(values, state, t):
     """δ, δ̇, h = h_rotor Σ σ_i, hdot = h_rotor Σ a_i δ̇_i and Q = det(A Aᵀ) (module doc)."""
     s = floats(state)
-    delta, rates = s[DELTA : DELTA + N_GYROS], s[RATE : RATE + N_GYROS]
-    spins, columns = axes(delta, s[ST : ST + 6 * N_GYROS])
-    h = _sum(spins)
-    hdot = _sum([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
-    h_rotor = s[H_ROTOR]
-    values[Y_DELTA : Y_DELTA + N_GYROS] = delta
-    values[Y_RATE : Y_RATE + N_GYROS] = rates
+    delta, rates = s[S.delta : S.delta + N_GYROS], s[S.rate : S.rate + N_GYROS]
+    spins, columns = axes(delta, s[S.st : S.st + 6 * N_GYROS])
+    h = total(spins)
+    hdot = total([(a[0] * r, a[1] * r, a[2] * r) for a, r in zip(columns, rates)])
+    h_rotor = s[S.h_rotor]
+    values[Y.delta : Y.delta + N_GYROS] = delta
+    values[Y.delta_dot : Y.delta_dot + N_GYROS] = rates
     for k in range(3):
-        values[Y_H + k], values[Y_HDOT + k] = h_rotor * h[k], h_rotor * hdot[k]
-    values[Y_Q] = det3(gram(columns))
+        values[Y.h + k], values[Y.hdot + k] = h_rotor * h[k], h_rotor * hdot[k]
+    values[Y.singularity] = det3(gram(columns))
     return 0
+
+
+@jitable
+def cluster_rates(v, s) -> list:
+    """d/dt of the outputs δ, δ̇, h, ḣ and Q at the model's time, in the table's order
+    (module docstring): δ̇; δ̈ (:func:`servo_accel`); ḣ as :func:`cluster_output` wrote it;
+    ḧ = h_rotor Σ (a_i δ̈_i + ȧ_i δ̇_i) with ȧ_i = −σ_i δ̇_i; Q̇ = tr(adj(G) Ġ) with
+    G = Σ a_i a_iᵀ, the Gram matrix of Q = det G, and Ġ = Σ (ȧ_i a_iᵀ + a_i ȧ_iᵀ)."""
+    rates = s[S.rate : S.rate + N_GYROS]
+    limit, accel, h_rotor = s[S.rate_limit], s[S.accel_limit], s[S.h_rotor]
+    accels = [
+        servo_accel(rates[i], v[U.delta_dot_cmd + i], v[DU.delta_dot_cmd + i], limit, accel)
+        for i in range(N_GYROS)
+    ]
+    spins, columns = axes(s[S.delta : S.delta + N_GYROS], s[S.st : S.st + 6 * N_GYROS])
+    a_dots = [scale(-rates[i], spins[i]) for i in range(N_GYROS)]
+    hddot = scale(
+        h_rotor,
+        add(
+            total([scale(accels[i], columns[i]) for i in range(N_GYROS)]),
+            total([scale(rates[i], a_dots[i]) for i in range(N_GYROS)]),
+        ),
+    )
+    gram_dot = mat_add(outer_sum(a_dots, columns), outer_sum(columns, a_dots))
+    q_dot = trace_product(adjugate(gram(columns)), gram_dot)
+    return [*rates, *accels, v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2], *hddot, q_dot]

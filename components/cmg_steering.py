@@ -38,15 +38,12 @@ from .cmg_cluster import (
     ClusterGeometry,
     CmgCluster,
     axes,
-    det3,
-    gram,
-    inv3,
 )
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .rotations import dot, rotate
-from .variables import Layout, choice, input_, output, parameter
+from .runtime.flat import relative, state_table
+from .runtime.jit import floats, jitable, output_kernel
+from .variables import choice, input_, output, parameter
+from .vectors import det3, dot, gram, inv3, rotate
 
 #: values of the ``law`` parameter, named in the variable table by LAW_CHOICES
 PSEUDO_INVERSE, SR_INVERSE = 0, 1
@@ -126,9 +123,9 @@ class CmgSteering(Model):
         if p.h_rotor == 0:
             raise ModelError("h_rotor must be non-zero")
         self.geometry = ClusterGeometry(p.h_rotor, p.gimbal_axis, p.spin_ref)
-        self.state = STATE.zeros()
-        self.state[ST:H_ROTOR] = self.geometry.st
-        self.state[H_ROTOR : SR_MU + 1] = p.h_rotor, p.law, p.null_gain, p.sr_lambda0, p.sr_mu
+        self.state = S.zeros()
+        self.state[S.st : S.h_rotor] = self.geometry.st
+        self.state[S.h_rotor : S.sr_mu + 1] = p.h_rotor, p.law, p.null_gain, p.sr_lambda0, p.sr_mu
         self.t = t0
 
     def step(self, t, dt):
@@ -138,7 +135,7 @@ class CmgSteering(Model):
         status = steering_output(self.values, self.state, self.t)
         if status & PSEUDO_INVERSE_SINGULAR:
             _, columns = self.geometry.axes(self.u.delta.tolist())
-            h_dot = wanted_hdot(self.values[U_0:U_1].tolist())
+            h_dot = wanted_hdot(self.values[U.tau_cmd : U.h + 3].tolist())
             rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
             self.y.delta_dot_cmd[:] = rates
         if status & BECAME_SINGULAR:
@@ -149,16 +146,16 @@ class CmgSteering(Model):
             )
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-_AT = Layout(CmgSteering.VARIABLES).offset  # offsets in CmgSteering.values
-Y_RATES, Y_Q = _AT["delta_dot_cmd"], _AT["singularity"]
-#: the inputs, values[U_0:U_1], and the offsets of each in them
-U_0, U_1 = _AT["tau_cmd"], _AT["h"] + 3
-TAU, DELTA, W, H = (_AT[name] - U_0 for name in ("tau_cmd", "delta", "w_BI_B", "h"))
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = CmgSteering.names()
+#: the inputs' places in the slice of them the kernel reads, values[U.tau_cmd : U.h + 3]
+UI = relative(U, U.tau_cmd)
 #: the state array: s_i, t_i of each gyro (ClusterGeometry.st), the law's constants, and 1
 #: while the configuration is singular (Q ≤ SINGULAR_Q)
-STATE = StateTable(st=6 * N_GYROS, h_rotor=1, law=1, null_gain=1, sr_lambda0=1, sr_mu=1, singular=1)
-ST, H_ROTOR, LAW, NULL_GAIN, SR_LAMBDA0, SR_MU, SINGULAR = STATE.offsets
+S = state_table(
+    "CmgSteering state", st=6 * N_GYROS, h_rotor=1, law=1, null_gain=1, sr_lambda0=1, sr_mu=1,
+    singular=1,
+)  # fmt: skip
 #: steering_output's status, bits: the pseudo-inverse at a singularity, left to the SVD;
 #: the configuration became singular (output() warns)
 PSEUDO_INVERSE_SINGULAR, BECAME_SINGULAR = 1, 2
@@ -170,17 +167,17 @@ def steering_output(values, state, t):
     or only Q and returns PSEUDO_INVERSE_SINGULAR where the law is the pseudo-inverse and
     Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's); keeps whether the
     configuration is singular (Q ≤ SINGULAR_Q) and adds BECAME_SINGULAR when it becomes so."""
-    u, s = floats(values[U_0:U_1]), floats(state)
-    spins, columns = axes(u[DELTA : DELTA + N_GYROS], s[ST:H_ROTOR])
+    u, s = floats(values[U.tau_cmd : U.h + 3]), floats(state)  # the inputs alone
+    spins, columns = axes(u[UI.delta : UI.delta + N_GYROS], s[S.st : S.h_rotor])
     M = gram(columns)
     Q = det3(M)
-    values[Y_Q] = Q
+    values[Y.singularity] = Q
     singular = Q <= SINGULAR_Q
-    became = BECAME_SINGULAR if singular and state[SINGULAR] == 0.0 else 0
-    state[SINGULAR] = 1.0 if singular else 0.0
-    law = s[LAW]
+    became = BECAME_SINGULAR if singular and state[S.singular] == 0.0 else 0
+    state[S.singular] = 1.0 if singular else 0.0
+    law = s[S.law]
     if law == SR_INVERSE:
-        lam = s[SR_LAMBDA0] * math.exp(-s[SR_MU] * Q)
+        lam = s[S.sr_lambda0] * math.exp(-s[S.sr_mu] * Q)
         M = (
             (M[0][0] + lam, M[0][1], M[0][2]),
             (M[1][0], M[1][1] + lam, M[1][2]),
@@ -190,21 +187,22 @@ def steering_output(values, state, t):
         return PSEUDO_INVERSE_SINGULAR | became
     M_inv = inv3(M)
     x = rotate(M_inv, wanted_hdot(u))
-    rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / s[H_ROTOR] for a in columns]
-    null_gain = s[NULL_GAIN]
+    h_rotor = s[S.h_rotor]
+    rates = [(a[0] * x[0] + a[1] * x[1] + a[2] * x[2]) / h_rotor for a in columns]
+    null_gain = s[S.null_gain]
     if law == PSEUDO_INVERSE and null_gain != 0.0:
         moves = _null_motion(columns, M_inv, Q, spins)
         rates = [r + null_gain * n for r, n in zip(rates, moves)]
-    values[Y_RATES : Y_RATES + N_GYROS] = rates
+    values[Y.delta_dot_cmd : Y.delta_dot_cmd + N_GYROS] = rates
     return became
 
 
 @jitable
 def wanted_hdot(u) -> tuple:
-    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U_0:U_1])."""
-    wx, wy, wz = u[W], u[W + 1], u[W + 2]
-    hx, hy, hz = u[H], u[H + 1], u[H + 2]
-    tx, ty, tz = u[TAU], u[TAU + 1], u[TAU + 2]
+    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U.tau_cmd : U.h + 3])."""
+    wx, wy, wz = u[UI.w_BI_B], u[UI.w_BI_B + 1], u[UI.w_BI_B + 2]
+    hx, hy, hz = u[UI.h], u[UI.h + 1], u[UI.h + 2]
+    tx, ty, tz = u[UI.tau_cmd], u[UI.tau_cmd + 1], u[UI.tau_cmd + 2]
     return (-tx - (wy * hz - wz * hy), -ty - (wz * hx - wx * hz), -tz - (wx * hy - wy * hx))
 
 

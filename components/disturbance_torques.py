@@ -3,7 +3,7 @@
 The surface is a table of flat facets i (unused rows: zero area): area A_i, outward unit
 normal n_i and centre of pressure c_i (from the centre of mass), in B.  Facets do not
 shadow each other.  Stateless: the outputs are functions of the inputs at each time, by one
-kernel (components/jit.py) reading the parameters and inputs from the value array.
+kernel (components/runtime/jit.py) reading the parameters and inputs from the value array.
 
 Aerodynamics ([Vallado 2013] ch. 8, [Wertz 1978] ch. 17; free-molecular flat plates).  The
 atmosphere co-rotates with the Earth; the flow seen by facet i, in B::
@@ -55,11 +55,12 @@ import math
 
 import numpy as np
 
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .rotations import IDENTITY_Q, cross, dcm, dot, norm, rotate
+from .rotations import IDENTITY_Q, dcm
+from .runtime.jit import floats, jitable, output_kernel
 from .sensing import EARTH_RADIUS, EARTH_RATE
-from .variables import Layout, choice, input_, output, parameter
+from .variables import choice, input_, output, parameter
+from .vectors import cross, dot, norm, rotate
 
 N_FACETS = 10
 #: [Vallado 2013] Table 8-4: base height (km), density at it (kg/m³), scale height (km)
@@ -257,21 +258,8 @@ class DisturbanceTorques(Model):
             raise ModelError("sun_I is zero: the Sun direction is needed for the srp torque")
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-_AT = Layout(DisturbanceTorques.VARIABLES).offset  # offsets in DisturbanceTorques.values
-P_AERO, P_SRP, P_MAGNETIC = _AT["aero"], _AT["srp"], _AT["magnetic"]
-P_AREA, P_NORMAL, P_CP = _AT["facet_area"], _AT["facet_normal_B"], _AT["facet_cp_B"]
-P_SPECULAR, P_DIFFUSE, P_CD = _AT["facet_specular"], _AT["facet_diffuse"], _AT["cd"]
-P_ATMOSPHERE, P_RHO0, P_H0, P_SCALE = (
-    _AT["atmosphere"], _AT["rho0"], _AT["h0"], _AT["scale_height"]
-)  # fmt: skip
-P_PRESSURE, P_DIPOLE = _AT["solar_pressure"], _AT["dipole_B"]
-P_G10, P_G11, P_H11 = _AT["igrf_g10"], _AT["igrf_g11"], _AT["igrf_h11"]
-U_Q, U_W, U_R, U_V, U_SUN, U_EARTH = (
-    _AT["q_BI"], _AT["w_BI_B"], _AT["r_I"], _AT["v_I"], _AT["sun_I"], _AT["earth_angle"]
-)  # fmt: skip
-Y_EXT, Y_AERO, Y_SRP, Y_MAG = (_AT[name] for name in ("tau_ext_B",) + _TORQUES)
-Y_ECLIPSE, Y_DENSITY, Y_FIELD = _AT["in_eclipse"], _AT["density"], _AT["mag_field_B"]
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = DisturbanceTorques.names()
 #: torques_output's statuses: r_I is zero; sun_I is zero while the srp torque is on
 NO_POSITION, NO_SUN = 1, 2
 _TABLE = np.array(ATMOSPHERE_TABLE)
@@ -281,11 +269,11 @@ _TABLE = np.array(ATMOSPHERE_TABLE)
 def torques_output(values, state, t):
     """The three torques, their sum, the eclipse flag, the density and the field."""
     v = floats(values)
-    r = (v[U_R], v[U_R + 1], v[U_R + 2])
+    r = (v[U.r_I], v[U.r_I + 1], v[U.r_I + 2])
     radius = norm(r)
     if radius == 0.0:
         return NO_POSITION
-    q = v[U_Q : U_Q + 4]
+    q = v[U.q_BI : U.q_BI + 4]
     k = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])  # C(q) scales by |q|²
     (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = dcm(q)
     C_BI = (
@@ -293,23 +281,27 @@ def torques_output(values, state, t):
     )  # fmt: skip
     zero = (0.0, 0.0, 0.0)
     rho = density(v, radius - EARTH_RADIUS)
-    aero = _aero(v, C_BI, r, rho) if v[P_AERO] != 0.0 else zero
-    sun = (v[U_SUN], v[U_SUN + 1], v[U_SUN + 2])
+    aero = _aero(v, C_BI, r, rho) if v[P.aero] != 0.0 else zero
+    sun = (v[U.sun_I], v[U.sun_I + 1], v[U.sun_I + 2])
     eclipse = in_shadow(r, sun)
     srp = zero
-    if v[P_SRP] != 0.0 and not eclipse:
+    if v[P.srp] != 0.0 and not eclipse:
         sun_B = rotate(C_BI, sun)
         if norm(sun_B) == 0.0:
             return NO_SUN
         srp = _srp(v, sun_B)
-    field = rotate(C_BI, field_I(v, r, v[U_EARTH]))
-    mag = cross(v[P_DIPOLE : P_DIPOLE + 3], field) if v[P_MAGNETIC] != 0.0 else zero
+    field = rotate(C_BI, field_I(v, r, v[U.earth_angle]))
+    mag = cross(v[P.dipole_B : P.dipole_B + 3], field) if v[P.magnetic] != 0.0 else zero
     for i in range(3):
-        values[Y_AERO + i], values[Y_SRP + i], values[Y_MAG + i] = aero[i], srp[i], mag[i]
-        values[Y_EXT + i] = aero[i] + srp[i] + mag[i]
-        values[Y_FIELD + i] = field[i]
-    values[Y_ECLIPSE] = 1.0 if eclipse else 0.0
-    values[Y_DENSITY] = rho
+        values[Y.tau_aero_B + i], values[Y.tau_srp_B + i], values[Y.tau_mag_B + i] = (
+            aero[i],
+            srp[i],
+            mag[i],
+        )
+        values[Y.tau_ext_B + i] = aero[i] + srp[i] + mag[i]
+        values[Y.mag_field_B + i] = field[i]
+    values[Y.in_eclipse] = 1.0 if eclipse else 0.0
+    values[Y.density] = rho
     return 0
 
 
@@ -319,8 +311,8 @@ def density(v, height: float) -> float:
     """Atmospheric density (kg/m³) at ``height`` (m) above the sphere (below 0 m: the
     density at 0 m), with the parameters in the value array ``v``."""
     height = max(height, 0.0)
-    if v[P_ATMOSPHERE] == 1:
-        return v[P_RHO0] * math.exp(-(height - v[P_H0]) / v[P_SCALE])
+    if v[P.atmosphere] == 1:
+        return v[P.rho0] * math.exp(-(height - v[P.h0]) / v[P.scale_height])
     km = height / 1000.0
     row = 0
     for i in range(len(ATMOSPHERE_TABLE)):
@@ -336,7 +328,7 @@ def field_I(v, r, earth_angle: float) -> tuple:
     r_E = (c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])  # R3(θ) r_I
     radius = norm(r_E)
     x, y_, z = r_E[0] / radius, r_E[1] / radius, r_E[2] / radius
-    g = (v[P_G11], v[P_H11], v[P_G10])
+    g = (v[P.igrf_g11], v[P.igrf_h11], v[P.igrf_g10])
     k = math.pow(IGRF_RADIUS / radius, 3.0)
     gr = g[0] * x + g[1] * y_ + g[2] * z
     bx = k * (3.0 * gr * x - g[0])
@@ -348,20 +340,20 @@ def field_I(v, r, earth_angle: float) -> tuple:
 @jitable
 def _facet(v, i: int) -> tuple:
     """(area, normal, centre of pressure, specular, diffuse) of facet i."""
-    normal = (v[P_NORMAL + 3 * i], v[P_NORMAL + 3 * i + 1], v[P_NORMAL + 3 * i + 2])
-    cp = (v[P_CP + 3 * i], v[P_CP + 3 * i + 1], v[P_CP + 3 * i + 2])
-    return v[P_AREA + i], normal, cp, v[P_SPECULAR + i], v[P_DIFFUSE + i]
+    n, c = P.facet_normal_B + 3 * i, P.facet_cp_B + 3 * i
+    normal, cp = (v[n], v[n + 1], v[n + 2]), (v[c], v[c + 1], v[c + 2])
+    return v[P.facet_area + i], normal, cp, v[P.facet_specular + i], v[P.facet_diffuse + i]
 
 
 @jitable
 def _aero(v, C_BI, r, rho: float) -> tuple:
     flow_I = (
-        v[U_V] + EARTH_RATE * r[1],
-        v[U_V + 1] - EARTH_RATE * r[0],
-        v[U_V + 2],
+        v[U.v_I] + EARTH_RATE * r[1],
+        v[U.v_I + 1] - EARTH_RATE * r[0],
+        v[U.v_I + 2],
     )  # v − ω_E ẑ × r
     flow = rotate(C_BI, flow_I)
-    w = (v[U_W], v[U_W + 1], v[U_W + 2])
+    w = (v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2])
     tx = ty = tz = 0.0
     for i in range(N_FACETS):
         area, normal, cp, _, _ = _facet(v, i)
@@ -374,7 +366,7 @@ def _aero(v, C_BI, r, rho: float) -> tuple:
             continue
         cos = dot(normal, relative) / speed
         if cos > 0.0:
-            f = -0.5 * rho * v[P_CD] * area * speed * cos  # times v = speed v̂
+            f = -0.5 * rho * v[P.cd] * area * speed * cos  # times v = speed v̂
             t = cross(cp, (f * relative[0], f * relative[1], f * relative[2]))
             tx, ty, tz = tx + t[0], ty + t[1], tz + t[2]
     return tx, ty, tz
@@ -384,7 +376,7 @@ def _aero(v, C_BI, r, rho: float) -> tuple:
 def _srp(v, sun_B) -> tuple:
     size = norm(sun_B)
     s = (sun_B[0] / size, sun_B[1] / size, sun_B[2] / size)
-    pressure = v[P_PRESSURE]
+    pressure = v[P.solar_pressure]
     tx = ty = tz = 0.0
     for i in range(N_FACETS):
         area, normal, cp, specular, diffuse = _facet(v, i)

@@ -33,9 +33,9 @@ import re
 
 import numpy as np
 
-from .flat import fmod
-from .jit import compiled_twin, jitable
 from .model import ModelError
+from .runtime.flat import fmod
+from .runtime.jit import compiled_twin, jitable
 
 TWO_PI = 2.0 * math.pi
 DAY = 86400.0  # s

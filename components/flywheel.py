@@ -58,9 +58,9 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
+from .runtime.flat import state_table
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
 
 N_WHEELS = 4
@@ -227,22 +227,22 @@ class Flywheel(Model):
         for i in range(N_WHEELS):
             if i not in self.wheels and p.speed0[i] != 0.0:
                 self.warnings.append(f"speed0[{i + 1}] ignored: wheel {i + 1} has no axis")
-        self.state = STATE.zeros()
+        self.state = state = S.zeros()
         n = len(self.wheels)
-        self.state[N], self.state[WHEEL : WHEEL + n] = n, self.wheels
-        self.state[AXES : AXES + 3 * n] = A.T.reshape(-1)
-        self.state[DISTRIBUTION : DISTRIBUTION + 3 * n] = distribution.reshape(-1)
-        self.state[S_INERTIA : SPEED_LIMIT + 1] = (
+        state[S.n], state[S.wheel : S.wheel + n] = n, self.wheels
+        state[S.axes : S.axes + 3 * n] = A.T.reshape(-1)
+        state[S.distribution : S.distribution + 3 * n] = distribution.reshape(-1)
+        state[S.inertia : S.speed_limit + 1] = (
             p.J_wheel, p.viscous_friction, p.coulomb_friction, p.torque_limit,
             p.momentum_limit / p.J_wheel,
         )  # fmt: skip
-        self.state[OMEGA : OMEGA + n] = [p.speed0[i] for i in self.wheels]
+        state[S.omega : S.omega + n] = [p.speed0[i] for i in self.wheels]
         self.t = t0
 
     def step(self, t, dt):
-        before = self.state[LIMITED : LIMITED + 2 * N_WHEELS].copy()
+        before = self.state[S.limited : S.limited + 2 * N_WHEELS].copy()
         if flywheel_step(self.values, self.state, self.t, dt) == NEW_LIMIT:
-            new = (self.state[LIMITED : LIMITED + 2 * N_WHEELS] != 0) & (before == 0)
+            new = (self.state[S.limited : S.limited + 2 * N_WHEELS] != 0) & (before == 0)
             self.warnings.append(
                 f"t={t:.3f} s: "
                 + "; ".join(
@@ -259,7 +259,7 @@ class Flywheel(Model):
     def state_problem(cls, attributes, reference):
         """The kernels index the value array with the wheels' places: the rows before the
         speeds are those the parameters make."""
-        if not np.array_equal(attributes["state"][:OMEGA], reference["state"][:OMEGA]):
+        if not np.array_equal(attributes["state"][: S.omega], reference["state"][: S.omega]):
             return "wheel constants (places, axes, distribution) are not its parameters'"
         return ""
 
@@ -268,30 +268,26 @@ class Flywheel(Model):
         s = self.state
         _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist())
         speed_rate = [0.0] * N_WHEELS
-        for k in range(int(s[N])):
-            speed_rate[int(s[WHEEL + k])] = accel_torques[k] / s[S_INERTIA]
+        for k in range(int(s[S.n])):
+            speed_rate[int(s[S.wheel + k])] = accel_torques[k] / s[S.inertia]
         hdot = self.y.hdot.tolist()
-        k = s[S_VISCOUS] / s[S_INERTIA]
+        k = s[S.viscous] / s[S.inertia]
         return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
 
 
-# -- kernels (components/jit.py) ------------------------------------------------------
-_AT = Flywheel.table_layout().offset  # offsets in Flywheel.values
-U_TAU, U_W = _AT["tau_cmd"], _AT["w_BI_B"]
-Y_H, Y_HDOT, Y_SPEED, Y_MOTOR, Y_SATURATED = (
-    _AT["h"], _AT["hdot"], _AT["speed"], _AT["motor_torque"], _AT["saturated"]
-)  # fmt: skip
+# -- kernels (components/runtime/jit.py) ----------------------------------------------
+#: the value array's offsets by the table's names: parameters, inputs, outputs
+P, U, Y = Flywheel.names()
 #: the state array: the number n of wheels, their places (rows of ``axis``), their unit axes
 #: and the rows of the pseudo-inverse distributing ḣ among them (the first n of each), the
 #: wheels' constants,
 #: their speeds Ω and, per wheel, 1 while it is held at the momentum limit and 1 while its
 #: motor torque is at the limit (_LIMITS)
-STATE = StateTable(
-    n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS, inertia=1, viscous=1,
-    coulomb=1, torque_limit=1, speed_limit=1, omega=N_WHEELS, limited=2 * N_WHEELS,
+S = state_table(
+    "Flywheel state", n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS,
+    inertia=1, viscous=1, coulomb=1, torque_limit=1, speed_limit=1, omega=N_WHEELS,
+    limited=2 * N_WHEELS,
 )  # fmt: skip
-N, WHEEL, AXES, DISTRIBUTION, S_INERTIA, S_VISCOUS, S_COULOMB = STATE.offsets[:7]
-TORQUE_LIMIT, SPEED_LIMIT, OMEGA, LIMITED = STATE.offsets[7:]
 _LIMITS = ("held at the momentum limit", "motor torque at the limit")
 #: flywheel_step's status: a wheel reached a limit (step() warns)
 NEW_LIMIT = 1
@@ -301,8 +297,9 @@ NEW_LIMIT = 1
 def _along_axes(s, values) -> tuple:
     """Σ a_i v_i over the wheels, in B (v_i: speeds for h, J Ω̇_i for ḣ)."""
     x = y = z = 0.0
-    for i in range(int(s[N])):
-        ax, ay, az = s[AXES + 3 * i], s[AXES + 3 * i + 1], s[AXES + 3 * i + 2]
+    for i in range(int(s[S.n])):
+        at = S.axes + 3 * i
+        ax, ay, az = s[at], s[at + 1], s[at + 2]
         x += ax * values[i]
         y += ay * values[i]
         z += az * values[i]
@@ -312,8 +309,8 @@ def _along_axes(s, values) -> tuple:
 @jitable
 def _momentum(s) -> tuple:
     """h = J Σ a_i Ω_i: the assembly's momentum relative to the body, in B."""
-    hx, hy, hz = _along_axes(s, s[OMEGA : OMEGA + N_WHEELS])
-    J = s[S_INERTIA]
+    hx, hy, hz = _along_axes(s, s[S.omega : S.omega + N_WHEELS])
+    J = s[S.inertia]
     return J * hx, J * hy, J * hz
 
 
@@ -325,24 +322,21 @@ def _drive(v, s):
     Each wheel is asked for its share (least squares over the axes) of
     ḣ_req = −τ_cmd − w × h; :func:`_wheel` applies its friction and limits.
     """
-    tx, ty, tz = v[U_TAU], v[U_TAU + 1], v[U_TAU + 2]
-    wx, wy, wz = v[U_W], v[U_W + 1], v[U_W + 2]
+    tx, ty, tz = v[U.tau_cmd], v[U.tau_cmd + 1], v[U.tau_cmd + 2]
+    wx, wy, wz = v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]
     hx, hy, hz = _momentum(s)
     rx = -tx - (wy * hz - wz * hy)  # hdot_req = −τ_cmd − w × h
     ry = -ty - (wz * hx - wx * hz)
     rz = -tz - (wx * hy - wy * hx)
     torques, net = [0.0] * N_WHEELS, [0.0] * N_WHEELS
     held, momentum, torque = [False] * N_WHEELS, [False] * N_WHEELS, [False] * N_WHEELS
-    for k in range(int(s[N])):
-        px, py, pz = (
-            s[DISTRIBUTION + 3 * k],
-            s[DISTRIBUTION + 3 * k + 1],
-            s[DISTRIBUTION + 3 * k + 2],
-        )
+    cv, cc, tau_max, speed_max = s[S.viscous], s[S.coulomb], s[S.torque_limit], s[S.speed_limit]
+    for k in range(int(s[S.n])):
+        at = S.distribution + 3 * k
+        px, py, pz = s[at], s[at + 1], s[at + 2]
         torques[k], net[k], held[k], momentum[k], torque[k] = _wheel(
-            s[OMEGA + k], px * rx + py * ry + pz * rz, s[S_VISCOUS], s[S_COULOMB], s[TORQUE_LIMIT],
-            s[SPEED_LIMIT],
-        )  # fmt: skip
+            s[S.omega + k], px * rx + py * ry + pz * rz, cv, cc, tau_max, speed_max
+        )
     return torques, net, held, momentum, torque
 
 
@@ -390,16 +384,16 @@ def flywheel_step(values, state, t, dt):
     v, s = floats(values), floats(state)
     torques, _, held, momentum, torque = _drive(v, s)
     status = 0
-    for k in range(int(s[N])):
+    J, cv, cc, speed_max = s[S.inertia], s[S.viscous], s[S.coulomb], s[S.speed_limit]
+    for k in range(int(s[S.n])):
         for j, limited in ((0, momentum[k]), (1, torque[k])):
-            if limited and s[LIMITED + 2 * k + j] == 0.0:
+            at = S.limited + 2 * k + j
+            if limited and s[at] == 0.0:
                 status = NEW_LIMIT
-            state[LIMITED + 2 * k + j] = 1.0 if limited else 0.0
+            state[at] = 1.0 if limited else 0.0
         if not held[k]:
-            state[OMEGA + k] = wheel_step(
-                s[OMEGA + k], torques[k], dt, s[S_INERTIA], s[S_VISCOUS], s[S_COULOMB],
-                s[SPEED_LIMIT],
-            )  # fmt: skip
+            at = S.omega + k
+            state[at] = wheel_step(s[at], torques[k], dt, J, cv, cc, speed_max)
     return status
 
 
@@ -412,13 +406,13 @@ def flywheel_output(values, state, t):
     hdot = _along_axes(s, net)
     saturated = False
     for k in range(N_WHEELS):
-        values[Y_SPEED + k] = 0.0
-        values[Y_MOTOR + k] = 0.0
-    for k in range(int(s[N])):
-        wheel = int(s[WHEEL + k])
-        values[Y_SPEED + wheel], values[Y_MOTOR + wheel] = s[OMEGA + k], torques[k]
+        values[Y.speed + k] = 0.0
+        values[Y.motor_torque + k] = 0.0
+    for k in range(int(s[S.n])):
+        wheel = int(s[S.wheel + k])
+        values[Y.speed + wheel], values[Y.motor_torque + wheel] = s[S.omega + k], torques[k]
         saturated = saturated or momentum[k] or torque[k]
     for k in range(3):
-        values[Y_H + k], values[Y_HDOT + k] = h[k], hdot[k]
-    values[Y_SATURATED] = 1.0 if saturated else 0.0
+        values[Y.h + k], values[Y.hdot + k] = h[k], hdot[k]
+    values[Y.saturated] = 1.0 if saturated else 0.0
     return 0

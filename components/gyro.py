@@ -66,10 +66,10 @@ from __future__ import annotations
 
 import math
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key
+from .runtime.flat import state_table
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import tick, tick_time
 from .variables import input_, output, parameter
 
@@ -198,15 +198,15 @@ class Gyro(Model):
             for j in range(3)
         ]
         keys = [half for s in range(9) for half in key_halves(stream_key(p.seed, s))]
-        self.state = STATE.zeros()
-        self.state[:COMMITTED] = (
+        self.state = S.zeros()
+        self.state[: S.committed] = (
             t0, p.rate, T, *matrix, math.sqrt(p.arw**2 / T + p.rrw**2 * T / 12.0),
             p.arw / math.sqrt(T), p.rrw * math.sqrt(T), sigma_gm, phi,
             sigma_gm * math.sqrt(1.0 - phi * phi), *keys,
         )  # fmt: skip
         # committed state: the latest sample k (none yet) and what sample k + 1 needs
-        self.state[COMMITTED + K] = -1
-        self.state[COMMITTED + B_RW : COMMITTED + B_RW + 3] = p.bias0
+        self.state[COMMITTED.k] = -1
+        self.state[COMMITTED.b_rw : COMMITTED.b_rw + 3] = p.bias0
         self.t = t0
 
     def step(self, t, dt):
@@ -217,7 +217,7 @@ class Gyro(Model):
             advance(self.values, self.state, self.t, notes)
             commit(self.state)
             self.warnings.extend(
-                f"t={tick_time(j, self.state[T0], self.state[RATE]):.6g} s: axis {i + 1} "
+                f"t={tick_time(j, self.state[S.t0], self.state[S.rate]):.6g} s: axis {i + 1} "
                 f"saturated at +-{self.p.saturation} rad/s (the measurement is clipped)"
                 for j, i in notes
             )
@@ -227,34 +227,28 @@ class Gyro(Model):
         gyro_output(self.values, self.state, self.t)
 
 
-# -- kernels (components/jit.py) ------------------------------------------------------
-_LAYOUT = Gyro.table_layout()
-_AT = _LAYOUT.offset  # offsets in Gyro.values
-P_QUANTUM, P_LIMIT = _AT["quantization"], _AT["saturation"]
-U_W, Y_W, Y_BIAS = _AT["w_BI_B"], _AT["w_meas_B"], _AT["bias_B"]
+# -- kernels (components/runtime/jit.py) ----------------------------------------------
+P, U, Y = Gyro.names()
 #: the derivative a host set for w_BI_B and whether it set it (per axis)
-D_W, G_W = _LAYOUT.derivative["w_BI_B"], _LAYOUT.given["w_BI_B"]
+DU, GIVEN = Gyro.derivative_names()
 #: a sample's state (after :func:`advance`): the latest sample k, whether a communication
 #: point was seen and its time and true rate, the rate's slope set for the step from it and
 #: 1 where one was set (per axis), the integral of the true rate since t_k, the bias terms,
 #: the quantiser's remainder, the axes saturated, the measured rate
-SAMPLED = StateTable(
-    k=1, seen=1, t_last=1, w_last=3, slope=3, sloped=3, integral=3, b_rw=3, b_gm=3,
-    residual=3, saturated=3, w_meas=3,
+SAMPLED = state_table(
+    "Gyro sample state", k=1, seen=1, t_last=1, w_last=3, slope=3, sloped=3, integral=3,
+    b_rw=3, b_gm=3, residual=3, saturated=3, w_meas=3,
 )  # fmt: skip
-K, SEEN, T_LAST, W_LAST, SLOPE, SLOPED, INTEGRAL = SAMPLED.offsets[:7]
-B_RW, B_GM, RESIDUAL, SATURATED_AXES, W_MEAS = SAMPLED.offsets[7:]
-N_SAMPLED = SAMPLED.size
 #: the state array: t0, the rate and period, the error matrix I + diag(scale_factor) + M
 #: (row-major), the white-noise sigmas (of a sample, of sample 0), the random walk's step,
 #: the Gauss-Markov sigma, φ and drive, the 9 stream keys (key_halves), then the committed
 #: sample state and the one advanced to the output's time (SAMPLED each)
-STATE = StateTable(
-    t0=1, rate=1, period=1, matrix=9, white=1, white0=1, walk=1, sigma_gm=1, phi=1, drive=1,
-    keys=18, committed=SAMPLED.size, advanced=SAMPLED.size,
+S = state_table(
+    "Gyro state", t0=1, rate=1, period=1, matrix=9, white=1, white0=1, walk=1, sigma_gm=1,
+    phi=1, drive=1, keys=18, committed=SAMPLED.size, advanced=SAMPLED.size,
 )  # fmt: skip
-T0, RATE, PERIOD, MATRIX, WHITE, WHITE0, WALK, SIGMA_GM, PHI, DRIVE, KEYS = STATE.offsets[:11]
-COMMITTED, ADVANCED = STATE.offsets[11:]
+#: the rows of the committed and of the advanced sample state
+COMMITTED, ADVANCED = SAMPLED.at(S.committed), SAMPLED.at(S.advanced)
 #: gyro_step's status: an axis became saturated (nothing committed: step() warns)
 SATURATED = 1
 
@@ -279,18 +273,17 @@ def gyro_output(values, state, t):
     notes = [(0, 0)]
     notes.pop()
     advance(values, state, t, notes)
-    a = ADVANCED
     for i in range(3):
-        values[Y_W + i] = state[a + W_MEAS + i]
-        values[Y_BIAS + i] = state[a + B_RW + i] + state[a + B_GM + i]
+        values[Y.w_meas_B + i] = state[ADVANCED.w_meas + i]
+        values[Y.bias_B + i] = state[ADVANCED.b_rw + i] + state[ADVANCED.b_gm + i]
     return 0
 
 
 @jitable
 def commit(state) -> None:
     """The advanced sample state becomes the committed one."""
-    for i in range(N_SAMPLED):
-        state[COMMITTED + i] = state[ADVANCED + i]
+    for i in range(SAMPLED.size):
+        state[S.committed + i] = state[S.advanced + i]
 
 
 @jitable
@@ -301,18 +294,25 @@ def advance(values, state, now: float, notes) -> None:
     (constant before t0); (sample, axis) of each axis becoming saturated appended to
     ``notes``."""
     s, v = floats(state), floats(values)
-    t0, rate, T, c = s[T0], s[RATE], s[PERIOD], COMMITTED
-    w_now = (v[U_W], v[U_W + 1], v[U_W + 2])
-    k = int(s[c + K])
-    slope = (s[c + SLOPE], s[c + SLOPE + 1], s[c + SLOPE + 2])
-    sloped = (s[c + SLOPED] != 0.0, s[c + SLOPED + 1] != 0.0, s[c + SLOPED + 2] != 0.0)
-    if s[c + SEEN] == 0.0:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
+    t0, rate, T = s[S.t0], s[S.rate], s[S.period]
+    w_now = (v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2])
+    k = int(s[COMMITTED.k])
+    slope = (s[COMMITTED.slope], s[COMMITTED.slope + 1], s[COMMITTED.slope + 2])
+    sloped = (
+        s[COMMITTED.sloped] != 0.0,
+        s[COMMITTED.sloped + 1] != 0.0,
+        s[COMMITTED.sloped + 2] != 0.0,
+    )
+    if s[COMMITTED.seen] == 0.0:  # nothing seen yet: the rate was w_now over (t0 − T, t0]
         t_last, w_last, sloped = t0 - T, w_now, (False, False, False)
     else:
-        t_last, w_last = s[c + T_LAST], (s[c + W_LAST], s[c + W_LAST + 1], s[c + W_LAST + 2])
-    integral = (s[c + INTEGRAL], s[c + INTEGRAL + 1], s[c + INTEGRAL + 2])
-    for i in range(c + B_RW, c + N_SAMPLED):  # the bias terms and what follows
-        state[ADVANCED + i - c] = s[i]
+        t_last, w_last = (
+            s[COMMITTED.t_last],
+            (s[COMMITTED.w_last], s[COMMITTED.w_last + 1], s[COMMITTED.w_last + 2]),
+        )
+    integral = (s[COMMITTED.integral], s[COMMITTED.integral + 1], s[COMMITTED.integral + 2])
+    for i in range(COMMITTED.b_rw, S.committed + SAMPLED.size):  # the bias terms and on
+        state[S.advanced + i - S.committed] = s[i]
     span = now - t_last
     segment = t_last  # start of the part of (t_last, now] not yet integrated
     for j in range(k + 1, tick(now, t0, rate) + 1):
@@ -321,45 +321,44 @@ def advance(values, state, now: float, notes) -> None:
         _sample(values, state, j, (integral[0] / T, integral[1] / T, integral[2] / T), notes)
         integral, segment, k = (0.0, 0.0, 0.0), end, j
     integral = _add_rate(integral, segment, now, t_last, span, w_last, w_now, slope, sloped)
-    a = ADVANCED
-    state[a + K], state[a + SEEN], state[a + T_LAST] = k, 1.0, now
+    state[ADVANCED.k], state[ADVANCED.seen], state[ADVANCED.t_last] = k, 1.0, now
     for i in range(3):
-        state[a + W_LAST + i], state[a + INTEGRAL + i] = w_now[i], integral[i]
-        given = v[G_W + i] != 0.0  # the slope set for the step from now
-        state[a + SLOPE + i] = v[D_W + i] if given else 0.0
-        state[a + SLOPED + i] = 1.0 if given else 0.0
+        state[ADVANCED.w_last + i], state[ADVANCED.integral + i] = w_now[i], integral[i]
+        given = v[GIVEN.w_BI_B + i] != 0.0  # the slope set for the step from now
+        state[ADVANCED.slope + i] = v[DU.w_BI_B + i] if given else 0.0
+        state[ADVANCED.sloped + i] = 1.0 if given else 0.0
 
 
 @jitable
 def _sample(values, state, j: int, w_true, notes) -> None:
     """Sample j from the true average rate over its interval, on the advanced state."""
-    s, a = floats(state), ADVANCED
-    b_rw = (s[a + B_RW], s[a + B_RW + 1], s[a + B_RW + 2])
-    b_gm = (s[a + B_GM], s[a + B_GM + 1], s[a + B_GM + 2])
+    s = floats(state)
+    b_rw = (s[ADVANCED.b_rw], s[ADVANCED.b_rw + 1], s[ADVANCED.b_rw + 2])
+    b_gm = (s[ADVANCED.b_gm], s[ADVANCED.b_gm + 1], s[ADVANCED.b_gm + 2])
     if j == 0:
         gm = (
-            s[SIGMA_GM] * normal(_key(s, GM), 0),
-            s[SIGMA_GM] * normal(_key(s, GM + 1), 0),
-            s[SIGMA_GM] * normal(_key(s, GM + 2), 0),
+            s[S.sigma_gm] * normal(_key(s, GM), 0),
+            s[S.sigma_gm] * normal(_key(s, GM + 1), 0),
+            s[S.sigma_gm] * normal(_key(s, GM + 2), 0),
         )
-        bias_mean, gm_mean, white, b_gm = b_rw, gm, s[WHITE0], gm
+        bias_mean, gm_mean, white, b_gm = b_rw, gm, s[S.white0], gm
     else:
         rw = (
-            b_rw[0] + s[WALK] * normal(_key(s, RRW), j),
-            b_rw[1] + s[WALK] * normal(_key(s, RRW + 1), j),
-            b_rw[2] + s[WALK] * normal(_key(s, RRW + 2), j),
+            b_rw[0] + s[S.walk] * normal(_key(s, RRW), j),
+            b_rw[1] + s[S.walk] * normal(_key(s, RRW + 1), j),
+            b_rw[2] + s[S.walk] * normal(_key(s, RRW + 2), j),
         )
         gm = (
-            s[PHI] * b_gm[0] + s[DRIVE] * normal(_key(s, GM), j),
-            s[PHI] * b_gm[1] + s[DRIVE] * normal(_key(s, GM + 1), j),
-            s[PHI] * b_gm[2] + s[DRIVE] * normal(_key(s, GM + 2), j),
+            s[S.phi] * b_gm[0] + s[S.drive] * normal(_key(s, GM), j),
+            s[S.phi] * b_gm[1] + s[S.drive] * normal(_key(s, GM + 1), j),
+            s[S.phi] * b_gm[2] + s[S.drive] * normal(_key(s, GM + 2), j),
         )
         bias_mean = (0.5 * (b_rw[0] + rw[0]), 0.5 * (b_rw[1] + rw[1]), 0.5 * (b_rw[2] + rw[2]))
         gm_mean = (0.5 * (b_gm[0] + gm[0]), 0.5 * (b_gm[1] + gm[1]), 0.5 * (b_gm[2] + gm[2]))
-        white, b_rw, b_gm = s[WHITE], rw, gm
-    quantum, limit = values[P_QUANTUM], values[P_LIMIT]
+        white, b_rw, b_gm = s[S.white], rw, gm
+    quantum, limit = values[P.quantization], values[P.saturation]
     for i in range(3):
-        m = MATRIX + 3 * i
+        m = S.matrix + 3 * i
         raw = (
             s[m] * w_true[0] + s[m + 1] * w_true[1] + s[m + 2] * w_true[2]
             + bias_mean[i] + gm_mean[i] + white * normal(_key(s, ARW + i), j)
@@ -367,22 +366,22 @@ def _sample(values, state, j: int, w_true, notes) -> None:
         saturated = raw >= limit or raw <= -limit
         if saturated:
             measured, residual = limit if raw > 0.0 else -limit, 0.0
-            if s[a + SATURATED_AXES + i] == 0.0:
+            if s[ADVANCED.saturated + i] == 0.0:
                 notes.append((j, i))
         elif quantum > 0.0:
-            carried = s[a + RESIDUAL + i] + raw
+            carried = s[ADVANCED.residual + i] + raw
             measured = math.floor(carried / quantum + 0.5) * quantum
             residual = carried - measured
         else:
             measured, residual = raw, 0.0
-        state[a + W_MEAS + i], state[a + RESIDUAL + i] = measured, residual
-        state[a + SATURATED_AXES + i] = 1.0 if saturated else 0.0
-        state[a + B_RW + i], state[a + B_GM + i] = b_rw[i], b_gm[i]
+        state[ADVANCED.w_meas + i], state[ADVANCED.residual + i] = measured, residual
+        state[ADVANCED.saturated + i] = 1.0 if saturated else 0.0
+        state[ADVANCED.b_rw + i], state[ADVANCED.b_gm + i] = b_rw[i], b_gm[i]
 
 
 @jitable
 def _key(s, stream: int) -> int:
-    return joined_key(s[KEYS + 2 * stream], s[KEYS + 2 * stream + 1])
+    return joined_key(s[S.keys + 2 * stream], s[S.keys + 2 * stream + 1])
 
 
 @jitable

@@ -53,11 +53,13 @@ The same object runs in-process (tests, references) and inside the FMU wrapper.
 from __future__ import annotations
 
 import copy
+from types import ModuleType
 from typing import TypeVar
 
 import numpy as np
 
-from .variables import Bus, Layout, Var, parameter
+from .runtime.flat import offsets
+from .variables import CAUSALITIES, Bus, Layout, Var, parameter
 
 #: parameters of every model, appended to each table
 COMMON_VARIABLES = (
@@ -105,6 +107,31 @@ class Model:
         if cls not in Model._layouts:
             Model._layouts[cls] = Layout(cls.VARIABLES, cls.INTERPOLATES_INPUTS)
         return Model._layouts[cls]
+
+    @classmethod
+    def names(cls) -> tuple[ModuleType, ModuleType, ModuleType]:
+        """(P, U, Y): the offsets of the parameters, inputs and outputs in the value array,
+        by the table's names, one namespace each (components/runtime/flat.py): what a
+        kernel indexes ``values`` with, ``values[U.tau_cmd + 1]`` for ``tau_cmd[2]``."""
+        layout = cls.table_layout()
+        p, u, y = (
+            offsets(
+                f"{cls.__name__} {c}s",
+                {v.name: layout.offset[v.name] for v in layout.group(c) if v.type != "String"},
+            )
+            for c in CAUSALITIES
+        )
+        return p, u, y
+
+    @classmethod
+    def derivative_names(cls) -> tuple[ModuleType, ModuleType]:
+        """(DU, GIVEN) of a model that interpolates its inputs: where the value array holds,
+        by input name, the derivative a host set and 1.0 where it set one (Layout)."""
+        layout = cls.table_layout()
+        return (
+            offsets(f"{cls.__name__} input derivatives", layout.derivative),
+            offsets(f"{cls.__name__} input derivatives given", layout.given),
+        )
 
     def __init__(self, **parameters):
         self.layout = type(self).table_layout()

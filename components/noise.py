@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 
-from .jit import jitable
+from .runtime.jit import jitable
 
 MASK = 0xFFFFFFFFFFFFFFFF
 _SIGNED = 1 << 64  # the constants below are the signed (two's complement) forms, so that

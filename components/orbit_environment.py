@@ -117,12 +117,12 @@ from .ephemeris import (
     tle_epoch,
     wrap_2pi,
 )
-from .flat import StateTable, remainder
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
 from .rotations import quat_of_rows
+from .runtime.flat import remainder, state_table
+from .runtime.jit import floats, jitable, output_kernel
 from .sun import sun_direction
-from .variables import Layout, output, parameter
+from .variables import output, parameter
 
 # WGS-84 defining parameters: NIMA TR8350.2, 3rd ed. (2000), Table 3.1
 WGS84_A = 6378137.0  # m, semi-major axis
@@ -377,28 +377,29 @@ class OrbitEnvironment(Model):
             )
         self.earth_angle0 = p.earth_angle0
         self.r_T_E = geodetic_to_ecef(p.target_lat, p.target_lon, p.target_alt)
-        self.state = STATE.zeros()
-        self.state[GIVEN_AT] = math.nan  # no SGP4 samples yet
+        self.state = S.zeros()
+        self.state[S.given_at] = math.nan  # no SGP4 samples yet
         if self._satrec is None:
-            self.state[A : MU_KEPLER + 1] = (
+            self.state[S.a : S.mu_kepler + 1] = (
                 self.a, self.e, self.b, self.M0, self.mean_motion, self.raan_rate,
                 self.argp_rate, self.raan0, self.argp0, self.cos_i, self.sin_i, self.mu_kepler,
             )  # fmt: skip
-        self.state[EARTH_ANGLE0] = self.earth_angle0
-        self.state[R_T_E : R_T_E + 3] = self.r_T_E
-        self.state[[GIVEN_ORBIT, GIVEN_EARTH]] = self._satrec is not None, self._gmst0 is not None
-        self.state[GMST0 : GMST0 + 2] = self._gmst0 or (0.0, 0.0)
-        self.state[EPOCH : EPOCH + 2] = self._epoch or (0, 0.0)
+        self.state[S.earth_angle0] = self.earth_angle0
+        self.state[S.r_T_E : S.r_T_E + 3] = self.r_T_E
+        self.state[S.given_orbit] = self._satrec is not None
+        self.state[S.given_earth] = self._gmst0 is not None
+        self.state[S.gmst0 : S.gmst0 + 2] = self._gmst0 or (0.0, 0.0)
+        self.state[S.epoch : S.epoch + 2] = self._epoch or (0, 0.0)
         self.t = t0
         if self._satrec is not None:
-            self.state[TSINCE0] = self._tsince0
+            self.state[S.tsince0] = self._tsince0
             self._point_at_sgp4()
             self._sgp4(t0)  # SGP4 errors at the start: fail here
 
     def _point_at_sgp4(self) -> None:
         """The addresses the kernel calls SGP4 at: this instance's record, never a saved
         state's (set_state)."""
-        self.state[SGP4 : SGP4 + 2] = getattr(self, "_sgp4_entry", (0, 0))
+        self.state[S.sgp4 : S.sgp4 + 2] = getattr(self, "_sgp4_entry", (0, 0))
 
     def set_state(self, state) -> None:
         super().set_state(state)
@@ -457,31 +458,26 @@ class OrbitEnvironment(Model):
         if status == NOT_GIVEN:  # SGP4 the kernel does not call, or an SGP4 error
             for k, offset in enumerate(SAMPLE_OFFSETS):
                 r, v = self._sgp4(t + offset)  # raises its ModelError
-                self.state[SAMPLES + 6 * k : SAMPLES + 6 * k + 6] = (*r, *v)
-            self.state[GIVEN_AT] = t
+                self.state[S.samples + 6 * k : S.samples + 6 * k + 6] = (*r, *v)
+            self.state[S.given_at] = t
             status = orbit_output(self.values, self.state, t)
         if status == KEPLER_DIVERGED:
             solve_kepler(elements(self.state.tolist(), t)[2], self.e)  # raises its ModelError
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-_AT = Layout(OrbitEnvironment.VARIABLES).offset  # offsets in OrbitEnvironment.values
-Y_R, Y_V, Y_Q, Y_W = _AT["r_I"], _AT["v_I"], _AT["q_OI"], _AT["w_OI_O"]
-Y_R_T, Y_V_T, Y_EARTH, Y_SUN = _AT["r_T_I"], _AT["v_T_I"], _AT["earth_angle"], _AT["sun_I"]
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = OrbitEnvironment.names()
 #: the state array: the Kepler/J2 constants (initialize), the Earth's and the target's,
 #: whether the orbit is SGP4's (a TLE) and whether θ_E is GMST, SGP4's r, v (km, km/s) at
 #: t + SAMPLE_OFFSETS and the t they are of, the addresses of the SGP4 call
 #: (ephemeris.sgp4_entry; 0: output() samples it), the TLE's minutes to t = 0, GMST's base
 #: (g0, T0: ephemeris.sidereal_base) and the epoch (whole days, seconds since J2000.0; 0
 #: without one) for the Sun
-STATE = StateTable(
-    a=1, e=1, b=1, M0=1, mean_motion=1, raan_rate=1, argp_rate=1, raan0=1, argp0=1, cos_i=1,
-    sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1, given_earth=1, samples=30,
-    given_at=1, sgp4=2, tsince0=1, gmst0=2, epoch=2,
+S = state_table(
+    "OrbitEnvironment state", a=1, e=1, b=1, M0=1, mean_motion=1, raan_rate=1, argp_rate=1,
+    raan0=1, argp0=1, cos_i=1, sin_i=1, mu_kepler=1, earth_angle0=1, r_T_E=3, given_orbit=1,
+    given_earth=1, samples=30, given_at=1, sgp4=2, tsince0=1, gmst0=2, epoch=2,
 )  # fmt: skip
-A, ECC, B, M0, MEAN_MOTION, RAAN_RATE, ARGP_RATE, RAAN0, ARGP0 = STATE.offsets[:9]
-COS_I, SIN_I, MU_KEPLER, EARTH_ANGLE0, R_T_E = STATE.offsets[9:14]
-GIVEN_ORBIT, GIVEN_EARTH, SAMPLES, GIVEN_AT, SGP4, TSINCE0, GMST0, EPOCH = STATE.offsets[14:]
 #: the times of SGP4's samples relative to t: t and the central differences' (module doc)
 SAMPLE_OFFSETS = (0.0, SGP4_STEP, -SGP4_STEP, 2 * SGP4_STEP, -2 * SGP4_STEP)
 #: orbit_output's status: Kepler's equation did not converge (nothing written); SGP4's
@@ -497,16 +493,16 @@ def orbit_output(values, state, t):
     GMST), the target and the Sun (components/sun.py).  Returns 0,
     KEPLER_DIVERGED or NOT_GIVEN (nothing written)."""
     s = floats(state)
-    if s[GIVEN_ORBIT]:
-        if s[GIVEN_AT] != t:
-            if s[SGP4] == 0.0:
+    if s[S.given_orbit]:
+        if s[S.given_at] != t:
+            if s[S.sgp4] == 0.0:
                 return NOT_GIVEN
             for k in range(5):  # in this order: the deep-space integrator keeps its state
-                tsince = s[TSINCE0] + (t + SAMPLE_OFFSETS[k]) / 60.0
-                if not sgp4_at(s[SGP4], s[SGP4 + 1], tsince, state, SAMPLES + 6 * k):
+                tsince = s[S.tsince0] + (t + SAMPLE_OFFSETS[k]) / 60.0
+                if not sgp4_at(s[S.sgp4], s[S.sgp4 + 1], tsince, state, S.samples + 6 * k):
                     return NOT_GIVEN
-            state[GIVEN_AT] = t
-        r, v, w = sgp4_frame(state[SAMPLES : SAMPLES + 30])
+            state[S.given_at] = t
+        r, v, w = sgp4_frame(state[S.samples : S.samples + 30])
     else:
         r, v, w, converged = kepler_state(s, t)
         if not converged:
@@ -523,23 +519,23 @@ def orbit_output(values, state, t):
         ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux, -nx, -ny, -nz, -ux, -uy, -uz
     )
     for k in range(3):
-        values[Y_R + k], values[Y_V + k], values[Y_W + k] = r[k], v[k], w[k]
+        values[Y.r_I + k], values[Y.v_I + k], values[Y.w_OI_O + k] = r[k], v[k], w[k]
     for k in range(4):
-        values[Y_Q + k] = q[k]
+        values[Y.q_OI + k] = q[k]
 
-    if s[GIVEN_EARTH]:
-        theta, rate = sidereal_time(s[GMST0], s[GMST0 + 1], t)
+    if s[S.given_earth]:
+        theta, rate = sidereal_time(s[S.gmst0], s[S.gmst0 + 1], t)
     else:
-        theta, rate = s[EARTH_ANGLE0] + EARTH_RATE * t, EARTH_RATE
+        theta, rate = s[S.earth_angle0] + EARTH_RATE * t, EARTH_RATE
     cT, sT = math.cos(theta), math.sin(theta)
-    xE, yE, zE = s[R_T_E], s[R_T_E + 1], s[R_T_E + 2]
+    xE, yE, zE = s[S.r_T_E], s[S.r_T_E + 1], s[S.r_T_E + 2]
     xT, yT = cT * xE - sT * yE, sT * xE + cT * yE
-    values[Y_R_T], values[Y_R_T + 1], values[Y_R_T + 2] = xT, yT, zE
-    values[Y_V_T], values[Y_V_T + 1], values[Y_V_T + 2] = -rate * yT, rate * xT, 0.0
-    values[Y_EARTH] = wrap_2pi(theta)
-    sun = sun_direction(s[EPOCH], s[EPOCH + 1] + t)
+    values[Y.r_T_I], values[Y.r_T_I + 1], values[Y.r_T_I + 2] = xT, yT, zE
+    values[Y.v_T_I], values[Y.v_T_I + 1], values[Y.v_T_I + 2] = -rate * yT, rate * xT, 0.0
+    values[Y.earth_angle] = wrap_2pi(theta)
+    sun = sun_direction(s[S.epoch], s[S.epoch + 1] + t)
     for k in range(3):
-        values[Y_SUN + k] = sun[k]
+        values[Y.sun_I + k] = sun[k]
     return 0
 
 
@@ -582,9 +578,9 @@ def sgp4_frame(samples) -> tuple:
 def elements(s, t: float) -> tuple[float, float, float]:
     """(Ω, ω, M) at time t: the secular model's drifting angles (classical elements)."""
     return (
-        s[RAAN0] + s[RAAN_RATE] * t,
-        s[ARGP0] + s[ARGP_RATE] * t,
-        s[M0] + s[MEAN_MOTION] * t,
+        s[S.raan0] + s[S.raan_rate] * t,
+        s[S.argp0] + s[S.argp_rate] * t,
+        s[S.M0] + s[S.mean_motion] * t,
     )
 
 
@@ -592,16 +588,16 @@ def elements(s, t: float) -> tuple[float, float, float]:
 def kepler_state(s, t):
     """r_I, v_I and w_OI_O = (0, w_y, w_z) of the Kepler/J2 model at t (module docstring)
     from the constants in the state ``s``, and whether Kepler's equation converged."""
-    a, e, b = s[A], s[ECC], s[B]
+    a, e, b = s[S.a], s[S.e], s[S.b]
     raan, argp, M = elements(s, t)
-    Wr, wr = s[RAAN_RATE], s[ARGP_RATE]
+    Wr, wr = s[S.raan_rate], s[S.argp_rate]
 
     # perifocal position, velocity
     E, converged = eccentric_anomaly(M, e) if e > 0.0 else (M, True)
     cE, sE = math.cos(E), math.sin(E)
     one_e = 1.0 - e * cE
     r = a * one_e
-    Edot = s[MEAN_MOTION] / one_e
+    Edot = s[S.mean_motion] / one_e
     xp, yp = a * (cE - e), b * sE
     vxp, vyp = -a * sE * Edot, b * cE * Edot
 
@@ -611,8 +607,8 @@ def kepler_state(s, t):
         math.sin(raan),
         math.cos(argp),
         math.sin(argp),
-        s[COS_I],
-        s[SIN_I],
+        s[S.cos_i],
+        s[S.sin_i],
     )
     Px, Py, Pz = cO * cw - sO * sw * ci, sO * cw + cO * sw * ci, sw * si
     Qx, Qy, Qz = -cO * sw - sO * cw * ci, -sO * sw + cO * cw * ci, cw * si
@@ -620,7 +616,7 @@ def kepler_state(s, t):
     rx, ry, rz = xp * Px + yp * Qx, xp * Py + yp * Qy, xp * Pz + yp * Qz
     kx, ky, kz = vxp * Px + vyp * Qx, vxp * Py + vyp * Qy, vxp * Pz + vyp * Qz  # R ṙ_P
 
-    g = -s[MU_KEPLER] / (r * r * r)
+    g = -s[S.mu_kepler] / (r * r * r)
     if Wr != 0.0 or wr != 0.0:  # frame rate Ω_R = Ω̇ ẑ + ω̇ Ŵ
         ox, oy, oz = wr * Wx, wr * Wy, Wr + wr * Wz
         vx, vy, vz = (kx + oy * rz - oz * ry, ky + oz * rx - ox * rz, kz + ox * ry - oy * rx)

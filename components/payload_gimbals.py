@@ -96,9 +96,9 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
+from .runtime.flat import state_table
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
 
 _COMMANDS = ("roll_cmd", "pitch_cmd", "roll_rate_cmd", "pitch_rate_cmd")
@@ -352,15 +352,15 @@ class PayloadGimbals(Model):
             raise ModelError(f"bandwidth must be >= 0 (0 = ideal tracking), got {p.bandwidth}")
         if not (math.isfinite(p.damping) and p.damping > 0):
             raise ModelError(f"damping must be > 0, got {p.damping}")
-        self.state = STATE.zeros()
-        self.state[J_PAYLOAD : J_PAYLOAD + 3] = J
-        self.state[[OMEGA, ZETA, IDEAL, ACCEL_INPUTS]] = (
+        self.state = S.zeros()
+        self.state[S.J_payload : S.J_payload + 3] = J
+        self.state[[S.omega, S.zeta, S.ideal, S.accel_inputs]] = (
             p.bandwidth,
             p.damping,
             p.bandwidth == 0.0,
             p.accel_inputs,
         )
-        self.state[ANGLES : ANGLES + 8] = self.values[U_COMMANDS : U_COMMANDS + 8]
+        self.state[S.angles : S.angles + 8] = self.values[U.roll_cmd : U.roll_cmd + 8]
         self.t = t0
         if p.bandwidth != 0.0:  # ideal tracking: the state is the commands, no initial state
             self.remember_initial_inputs()
@@ -409,49 +409,49 @@ class PayloadGimbals(Model):
     def output_derivatives(self):
         """See the module docstring: d/dt of the outputs at ``self.t``."""
         s = self.state
-        commands = self.values[U_COMMANDS : U_COMMANDS + 12].tolist()
+        commands = self.values[U.roll_cmd : U.roll_cmd + 12].tolist()
         angles, rates, accels = _motion(commands, s.tolist())
-        if s[IDEAL] != 0.0:
+        if s[S.ideal] != 0.0:
             jerks = [0.0] * 4
-            if s[ACCEL_INPUTS] != 0.0:
+            if s[S.accel_inputs] != 0.0:
                 jerks = [*self.input_rate("roll_accel_cmd"), *self.input_rate("pitch_accel_cmd")]
         else:
             slopes, rate_slopes = self._command_rates()
-            w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
+            w2, d = s[S.omega] * s[S.omega], 2.0 * s[S.zeta] * s[S.omega]
             jerks = [
                 w2 * ((commands[4 + i] if slopes[i] is None else slopes[i]) - rates[i])
                 + d * (rate_slopes[i] - accels[i])
                 for i in range(4)
             ]
-        J = s[J_PAYLOAD : J_PAYLOAD + 3].tolist()
+        J = s[S.J_payload : S.J_payload + 3].tolist()
         pair = [(k, k + 2) for k in (0, 1)]  # (roll, pitch) of payloads 1 and 2
         moved = [
             payload_momentum_rate(J, *([x[i], x[j]] for x in (angles, rates, accels, jerks)))
             for i, j in pair
         ]
-        hdot = self.values[Y_OUTPUTS + 11 : Y_OUTPUTS + 14]
+        hdot = self.values[Y.hdot : Y.hdot + 3]
         return np.array(
             [*rates, *accels, *hdot, *np.add(moved[0][0], moved[1][0]), *moved[0][1], *moved[1][1]]
         )
 
 
-# -- kernels (components/jit.py) ------------------------------------------------------
-_LAYOUT = PayloadGimbals.table_layout()  # offsets in PayloadGimbals.values
-#: the inputs in table order: angle, rate and acceleration commands, each (roll 1, roll 2,
-#: pitch 1, pitch 2); the outputs in table order; the derivatives a host set for the
-#: inputs (in the same order) and 1 where it set one
-U_COMMANDS, Y_OUTPUTS = _LAYOUT.range["input"].start, _LAYOUT.range["output"].start
-D_COMMANDS, G_COMMANDS = _LAYOUT.derivative["roll_cmd"], _LAYOUT.given["roll_cmd"]
+# -- kernels (components/runtime/jit.py) ----------------------------------------------
+P, U, Y = PayloadGimbals.names()
+DU, GIVEN = PayloadGimbals.derivative_names()
+#: the commands the kernels read, from U.roll_cmd on: angles, rates and accelerations, each
+#: roll 1, roll 2, pitch 1, pitch 2 (the table lays them out so, one after the other; so do
+#: their derivatives a host set, from DU.roll_cmd on, and whether it did, GIVEN.roll_cmd)
+_INPUT_ORDER = _COMMANDS + _ACCELERATIONS
+if [getattr(U, name) for name in _INPUT_ORDER] != [U.roll_cmd + 2 * k for k in range(6)]:
+    raise AssertionError(f"PayloadGimbals' inputs are not laid out as {_INPUT_ORDER}")
 #: the state array: the servo's angles and rates (as the commands), the rate commands at
 #: the last step and its length (ideal tracking; 1 once stepped), the payload inertia, ωn,
 #: ζ, 1 for ideal tracking, 1 with accel_inputs, 1 once a rate command differing from a
 #: derivative set for its angle command was reported
-STATE = StateTable(
-    angles=4, rates=4, last_rate_cmd=4, last_dt=1, stepped=1, J_payload=3, omega=1, zeta=1,
-    ideal=1, accel_inputs=1, slope_reported=1,
+S = state_table(
+    "PayloadGimbals state", angles=4, rates=4, last_rate_cmd=4, last_dt=1, stepped=1,
+    J_payload=3, omega=1, zeta=1, ideal=1, accel_inputs=1, slope_reported=1,
 )  # fmt: skip
-ANGLES, RATES, LAST_RATE_CMD, LAST_DT, STEPPED, J_PAYLOAD = STATE.offsets[:6]
-OMEGA, ZETA, IDEAL, ACCEL_INPUTS, SLOPE_REPORTED = STATE.offsets[6:]
 #: gimbals_step's status: the step done, a slope conflict to report (step() warns)
 SLOPE_CONFLICT = 1
 
@@ -464,25 +464,25 @@ def gimbals_step(values, state, t, dt):
     derivative.  SLOPE_CONFLICT (the step done) the first time a non-zero rate command
     differs from a derivative set for its angle command."""
     v, s = floats(values), floats(state)
-    commands = v[U_COMMANDS : U_COMMANDS + 8]
-    if s[IDEAL] != 0.0:
+    commands = v[U.roll_cmd : U.roll_cmd + 8]
+    if s[S.ideal] != 0.0:
         for i in range(8):
-            state[ANGLES + i] = commands[i]
+            state[S.angles + i] = commands[i]
         for i in range(4):
-            state[LAST_RATE_CMD + i] = commands[4 + i]
-        state[LAST_DT], state[STEPPED] = dt, 1.0
+            state[S.last_rate_cmd + i] = commands[4 + i]
+        state[S.last_dt], state[S.stepped] = dt, 1.0
         return 0
-    conflict = False
+    conflict, omega, zeta = False, s[S.omega], s[S.zeta]
     for i in range(4):
-        rate_command, given = commands[4 + i], v[G_COMMANDS + i] != 0.0
-        a = v[D_COMMANDS + i] if given else rate_command
+        rate_command, given = commands[4 + i], v[GIVEN.roll_cmd + i] != 0.0
+        a = v[DU.roll_cmd + i] if given else rate_command
         conflict = conflict or given and rate_command != 0.0 and rate_command != a
-        state[ANGLES + i], state[RATES + i] = servo_move(
-            s[ANGLES + i], s[RATES + i], commands[i], rate_command, dt, s[OMEGA], s[ZETA], a,
-            v[D_COMMANDS + 4 + i],
+        state[S.angles + i], state[S.rates + i] = servo_move(
+            s[S.angles + i], s[S.rates + i], commands[i], rate_command, dt, omega, zeta, a,
+            v[DU.roll_rate_cmd + i],
         )  # fmt: skip
-    if conflict and s[SLOPE_REPORTED] == 0.0:
-        state[SLOPE_REPORTED] = 1.0
+    if conflict and s[S.slope_reported] == 0.0:
+        state[S.slope_reported] = 1.0
         return SLOPE_CONFLICT
     return 0
 
@@ -490,18 +490,18 @@ def gimbals_step(values, state, t, dt):
 @jitable
 def _motion(commands, s) -> tuple:
     """(angles, rates, accelerations), each roll 1, roll 2, pitch 1, pitch 2, now."""
-    if s[IDEAL] != 0.0:
+    if s[S.ideal] != 0.0:
         angles, rates = commands[:4], commands[4:8]
-        if s[ACCEL_INPUTS] != 0.0:
+        if s[S.accel_inputs] != 0.0:
             accels = [commands[8 + i] for i in range(4)]
-        elif s[STEPPED] == 0.0:
+        elif s[S.stepped] == 0.0:
             accels = [0.0, 0.0, 0.0, 0.0]
         else:
-            k = 1.0 / s[LAST_DT]
-            accels = [(rates[i] - s[LAST_RATE_CMD + i]) * k for i in range(4)]
+            k = 1.0 / s[S.last_dt]
+            accels = [(rates[i] - s[S.last_rate_cmd + i]) * k for i in range(4)]
     else:
-        angles, rates = s[ANGLES : ANGLES + 4], s[RATES : RATES + 4]
-        w2, d = s[OMEGA] * s[OMEGA], 2.0 * s[ZETA] * s[OMEGA]
+        angles, rates = s[S.angles : S.angles + 4], s[S.rates : S.rates + 4]
+        w2, d = s[S.omega] * s[S.omega], 2.0 * s[S.zeta] * s[S.omega]
         accels = [
             w2 * (commands[i] - angles[i]) + d * (commands[4 + i] - rates[i]) for i in range(4)
         ]
@@ -511,15 +511,16 @@ def _motion(commands, s) -> tuple:
 @output_kernel(PayloadGimbals)
 def gimbals_output(values, state, t):
     """Angles and rates, h, ḣ (eq. 3: the sums over the two payloads) and the boresights."""
-    commands, s = floats(values[U_COMMANDS : U_COMMANDS + 12]), floats(state)
+    commands, s = floats(values[U.roll_cmd : U.roll_cmd + 12]), floats(state)
     angles, rates, accels = _motion(commands, s)
-    J = (s[J_PAYLOAD], s[J_PAYLOAD + 1], s[J_PAYLOAD + 2])
+    J = (s[S.J_payload], s[S.J_payload + 1], s[S.J_payload + 2])
     h1, d1, l1 = payload_momentum(J, angles[0], angles[2], rates[0], rates[2], accels[0], accels[2])
     h2, d2, l2 = payload_momentum(J, angles[1], angles[3], rates[1], rates[3], accels[1], accels[3])
-    for i in range(4):
-        values[Y_OUTPUTS + i], values[Y_OUTPUTS + 4 + i] = angles[i], rates[i]
+    for i in range(2):
+        values[Y.roll + i], values[Y.pitch + i] = angles[i], angles[2 + i]
+        values[Y.roll_rate + i], values[Y.pitch_rate + i] = rates[i], rates[2 + i]
     for k in range(3):
-        values[Y_OUTPUTS + 8 + k] = h1[k] + h2[k]
-        values[Y_OUTPUTS + 11 + k] = d1[k] + d2[k]
-        values[Y_OUTPUTS + 14 + k], values[Y_OUTPUTS + 17 + k] = l1[k], l2[k]
+        values[Y.h + k] = h1[k] + h2[k]
+        values[Y.hdot + k] = d1[k] + d2[k]
+        values[Y.los_B + k], values[Y.los_B + 3 + k] = l1[k], l2[k]
     return 0

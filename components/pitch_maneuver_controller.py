@@ -28,12 +28,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from .flat import StateTable, hypot
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .variables import Layout, input_, output, parameter
+from .runtime.flat import hypot, state_table
+from .runtime.jit import floats, jitable, output_kernel
+from .variables import input_, output, parameter
 
 DEG = math.pi / 180.0
 PHASE_TIME_TOLERANCE = 1e-9  # s
@@ -159,10 +157,14 @@ class PitchManeuverController(Model):
         profile = PitchProfile(
             p.pitch0, p.pitch_final, p.duration, p.scan_rate, p.cruise_fraction, p.imaging_fraction
         )
-        self.state = np.array(
-            [*profile.times, profile.accel, profile.rate_max, profile.scan_rate, profile.theta0]
-            + [profile.theta_f, p.inertia, p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw]
-        )
+        self.state = state = S.zeros()
+        state[S.times : S.times + 5] = profile.times
+        state[S.accel : S.theta_f + 1] = (
+            profile.accel, profile.rate_max, profile.scan_rate, profile.theta0, profile.theta_f
+        )  # fmt: skip
+        state[S.inertia : S.kd_yaw + 1] = (
+            p.inertia, p.kp, p.kd, p.kp_roll, p.kd_roll, p.kp_yaw, p.kd_yaw
+        )  # fmt: skip
         self.t = t0
 
     def step(self, t, dt):
@@ -172,19 +174,13 @@ class PitchManeuverController(Model):
         pitch_output(self.values, self.state, self.t)
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-_AT = Layout(PitchManeuverController.VARIABLES).offset  # offsets in PitchManeuverController.values
-U_Q, U_W = _AT["q_BO"], _AT["w_BO_B"]
-Y_TAU, Y_PHASE, Y_PITCH, Y_PITCH_RATE = (
-    _AT["tau_cmd"], _AT["phase"], _AT["pitch_ref"], _AT["pitch_rate_ref"]
-)  # fmt: skip
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = PitchManeuverController.names()
 #: the state array: the profile (t1..t5, θ̈m, θ̇m, θ̇0, θ0, θf), the inertia and the gains
-STATE = StateTable(
-    times=5, accel=1, rate_max=1, scan_rate=1, theta0=1, theta_f=1, inertia=1, kp=1, kd=1,
-    kp_roll=1, kd_roll=1, kp_yaw=1, kd_yaw=1,
+S = state_table(
+    "PitchManeuverController state", times=5, accel=1, rate_max=1, scan_rate=1, theta0=1,
+    theta_f=1, inertia=1, kp=1, kd=1, kp_roll=1, kd_roll=1, kp_yaw=1, kd_yaw=1,
 )  # fmt: skip
-TIMES, ACCEL, RATE_MAX, SCAN_RATE, THETA0, THETA_F = STATE.offsets[:6]
-INERTIA, KP, KD, KP_ROLL, KD_ROLL, KP_YAW, KD_YAW = STATE.offsets[6:]
 
 
 @output_kernel(PitchManeuverController)
@@ -192,26 +188,26 @@ def pitch_output(values, state, t):
     """τ_cmd (eq. 11 corrected, roll/yaw hold), phase and the planned pitch and rate at
     time t (module docstring)."""
     s = floats(state)
-    q0, q1, q2, q3 = floats(values[U_Q : U_Q + 4])
+    q0, q1, q2, q3 = floats(values[U.q_BO : U.q_BO + 4])
     if not q0 >= 0:
         q0, q1, q2, q3 = -q0, -q1, -q2, -q3
-    n = hypot(q0, q2)  # CPython's math.hypot, bit for bit (components/flat.py)
-    wx, wy, wz = floats(values[U_W : U_W + 3])
+    n = hypot(q0, q2)  # CPython's math.hypot, bit for bit (components/runtime/flat.py)
+    wx, wy, wz = floats(values[U.w_BO_B : U.w_BO_B + 3])
     c, sn = q0 / n, q2 / n
     pitch = 2.0 * math.atan2(q2, q0)
     roll_error, yaw_error = 2.0 * (c * q1 - sn * q3), 2.0 * (c * q3 + sn * q1)
-    times = s[TIMES : TIMES + 5]
+    times = s[S.times : S.times + 5]
     phase = phase_at(times, t)
     if phase == 5:
-        torque_y = s[KP] * (s[THETA_F] - pitch) + s[KD] * (0.0 - wy)
+        torque_y = s[S.kp] * (s[S.theta_f] - pitch) + s[S.kd] * (0.0 - wy)
     else:
         sign = 1.0 if phase == 1 else -1.0 if phase == 3 else 0.0
-        torque_y = sign * s[INERTIA] * s[ACCEL]
-    values[Y_TAU] = -s[KP_ROLL] * roll_error - s[KD_ROLL] * wx
-    values[Y_TAU + 1] = torque_y
-    values[Y_TAU + 2] = -s[KP_YAW] * yaw_error - s[KD_YAW] * wz
-    values[Y_PHASE] = phase
-    values[Y_PITCH], values[Y_PITCH_RATE] = reference_at(
-        s[THETA0], s[THETA_F], times, s[ACCEL], s[RATE_MAX], s[SCAN_RATE], t
+        torque_y = sign * s[S.inertia] * s[S.accel]
+    values[Y.tau_cmd] = -s[S.kp_roll] * roll_error - s[S.kd_roll] * wx
+    values[Y.tau_cmd + 1] = torque_y
+    values[Y.tau_cmd + 2] = -s[S.kp_yaw] * yaw_error - s[S.kd_yaw] * wz
+    values[Y.phase] = phase
+    values[Y.pitch_ref], values[Y.pitch_rate_ref] = reference_at(
+        s[S.theta0], s[S.theta_f], times, s[S.accel], s[S.rate_max], s[S.scan_rate], t
     )
     return 0

@@ -18,10 +18,9 @@ are eq. (13): ``w = (φ̇ cψ cθ + θ̇ sψ, −φ̇ sψ cθ + θ̇ cψ, ψ̇ +
 
 The functions take any sequence and compute on Python floats: models call them once or
 several times per co-simulation step on 3- and 4-vectors, where NumPy's per-call cost
-would dominate.  The tuple primitives (``dcm``, ``rotate``, ``rotate_back``, ``qmul``, and
-the vectors' ``dot``, ``cross``, ``norm``, ``quat_dot`` and ``quat_norm``) return tuples or
-floats for such hot loops, compiled in kernels (:mod:`.jit`), the one copy of each every
-model uses; the rest return NumPy arrays.
+would dominate.  The tuple primitives (``dcm``, ``qmul``, ``euler123``, ...) return tuples
+for such hot loops, compiled in kernels (:mod:`.runtime.jit`), on the small-vector algebra
+of :mod:`.vectors` (``rotate`` is M v); the rest return NumPy arrays.
 """
 
 from __future__ import annotations
@@ -30,8 +29,8 @@ import math
 
 import numpy as np
 
-from .jit import floats as _floats
-from .jit import jitable
+from .runtime.jit import floats as _floats
+from .runtime.jit import jitable
 
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 #: below this |cos θ| the 1-2-3 angles are in gimbal lock and only φ ± ψ is defined
@@ -53,28 +52,6 @@ def dcm(q) -> tuple:
 
 
 @jitable
-def rotate(M, v) -> tuple:
-    """M v for a 3×3 M given as rows (e.g. ``dcm(q)``)."""
-    v0, v1, v2 = _floats(v)
-    return (
-        M[0][0] * v0 + M[0][1] * v1 + M[0][2] * v2,
-        M[1][0] * v0 + M[1][1] * v1 + M[1][2] * v2,
-        M[2][0] * v0 + M[2][1] * v1 + M[2][2] * v2,
-    )
-
-
-@jitable
-def rotate_back(M, v) -> tuple:
-    """Mᵀ v for a 3×3 M given as rows."""
-    v0, v1, v2 = _floats(v)
-    return (
-        M[0][0] * v0 + M[1][0] * v1 + M[2][0] * v2,
-        M[0][1] * v0 + M[1][1] * v1 + M[2][1] * v2,
-        M[0][2] * v0 + M[1][2] * v1 + M[2][2] * v2,
-    )
-
-
-@jitable
 def qmul(p, q) -> tuple:
     """Hamilton product p ⊗ q."""
     p0, p1, p2, p3 = _floats(p)
@@ -85,37 +62,6 @@ def qmul(p, q) -> tuple:
         p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
         p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
     )
-
-
-@jitable
-def dot(a, b) -> float:
-    """a · b of 3-vectors, summed in order (a₀b₀ + a₁b₁) + a₂b₂."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@jitable
-def cross(a, b) -> tuple:
-    """a × b of 3-vectors (np.cross is ten times slower on tiny arrays)."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-@jitable
-def norm(v) -> float:
-    """|v| of a 3-vector: √(v · v)."""
-    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-
-
-@jitable
-def quat_dot(p, q) -> float:
-    """p · q of quaternions (any 4-vectors), summed in order: negative where q is nearer
-    −p than p (its sign, flipped, keeps a quaternion continuous in time)."""
-    return p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3]
-
-
-@jitable
-def quat_norm(q) -> float:
-    """|q| of a quaternion (any 4-vector)."""
-    return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
 
 
 # -- array API ---------------------------------------------------------------------------

@@ -30,11 +30,11 @@ q̇_BO = ½ q_BO ⊗ (0, w_BO_B), ẇ_BO_B = ẇ_BI_B + w_BO_B × C_BO w_OI_O �
 the derivative set for w_OI_O), the Euler angles' first and second derivatives
 (rotations.euler123_ddot).
 
-``step`` and ``output`` are each one kernel (components/jit.py: their Python in short
+``step`` and ``output`` are each one kernel (components/runtime/jit.py: their Python in short
 runs, compiled by numba in long ones, bit for bit the same) on the model's value array,
 read and written at the offsets of the variable table, and on ``self.state``: q_BI, H_I,
 the last q_BO and euler_BO, and the constants ``initialize`` derives (the state table
-``STATE``).  A kernel returns a status code; the methods raise its ModelError.
+``S``).  A kernel returns a status code; the methods raise its ModelError.
 """
 
 from __future__ import annotations
@@ -43,8 +43,6 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import DEFAULT_SEMI_MAJOR_AXIS
 from .rotations import (
@@ -55,13 +53,12 @@ from .rotations import (
     euler123_ddot,
     euler123_dot,
     qmul,
-    quat_dot,
     quat_from_dcm,
-    quat_norm,
-    rotate,
-    rotate_back,
 )
+from .runtime.flat import matrix, put, quaternion, state_table, vector
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
+from .vectors import quat_dot, quat_norm, rotate, rotate_back
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
@@ -227,16 +224,16 @@ class SatelliteDynamics(Model):
         H_B = rotate(J.tolist(), w_BI_B)
         h = (u.h_cmg + u.h_wheel + u.h_payload).tolist()
         #: the state and the constants of the step and output kernels (STATE)
-        self.state = state = STATE.zeros()
-        state[S_Q_BI : S_Q_BI + 4] = q_BI
-        state[S_H_I : S_H_I + 3] = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
-        state[S_Q_BO : S_Q_BO + 4] = q_BO
-        state[S_EULER : S_EULER + 3] = p.attitude0
-        state[S_J : S_J + 9] = J.reshape(-1)
-        state[S_J_INV : S_J_INV + 9] = np.linalg.inv(J).reshape(-1)
-        state[S_MU] = p.mu
-        state[S_GRAVITY_GRADIENT] = p.gravity_gradient and not isotropic
-        state[S_NEEDS_POSITION] = p.gravity_gradient
+        self.state = state = S.zeros()
+        state[S.q_BI : S.q_BI + 4] = q_BI
+        state[S.H_I : S.H_I + 3] = rotate_back(dcm(q_BI), [H_B[i] + h[i] for i in range(3)])
+        state[S.q_BO : S.q_BO + 4] = q_BO
+        state[S.euler : S.euler + 3] = p.attitude0
+        state[S.J : S.J + 9] = J.reshape(-1)
+        state[S.J_inv : S.J_inv + 9] = np.linalg.inv(J).reshape(-1)
+        state[S.mu] = p.mu
+        state[S.gravity_gradient] = p.gravity_gradient and not isotropic
+        state[S.needs_position] = p.gravity_gradient
         self.t = t0
         self.remember_initial_inputs()
 
@@ -276,13 +273,13 @@ class SatelliteDynamics(Model):
     def output_derivatives(self):
         """See the module docstring: d/dt of the outputs at ``self.t``."""
         v, s, y = floats(self.values), floats(self.state), self.y
-        q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
-        J, J_inv = _matrix(s, S_J), _matrix(s, S_J_INV)
+        q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
+        J, J_inv = matrix(s, S.J), matrix(s, S.J_inv)
         slope, _, _, r_rate, tau_rate = _rates(v)
-        torque = (_vector(v, TAU_EXT), _vector(v, R_I), tau_rate, r_rate)
+        torque = (vector(v, U.tau_ext), vector(v, U.r_I), tau_rate, r_rate)
         q_dot_H_dot = _derivative(
-            q_BI + H_I, 0.0, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), slope, (0.0,) * 3,
-            torque, J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0, (False, False, False),
+            q_BI + H_I, 0.0, _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload), slope, (0.0,) * 3,
+            torque, J, J_inv, s[S.mu], s[S.gravity_gradient] != 0.0, (False, False, False),
         )  # fmt: skip
         C_BI = dcm(q_BI)
         w, H_B = y.w_BI_B.tolist(), rotate(C_BI, H_I)
@@ -331,32 +328,19 @@ class SatelliteDynamics(Model):
         return jumps
 
 
-# -- step and output: kernels on the value array (compiled in long runs, components/jit.py) --
-_LAYOUT = SatelliteDynamics.table_layout()
-_OFFSET = _LAYOUT.offset  # offsets in SatelliteDynamics.values
-H_CMG, H_WHEEL, H_PAYLOAD = (_OFFSET[f"h_{d}"] for d in DEVICES)
-HDOT_CMG, HDOT_WHEEL, HDOT_PAYLOAD = (_OFFSET[f"hdot_{d}"] for d in DEVICES)
-TAU_EXT, R_I, Q_OI, W_OI_O = (_OFFSET[n] for n in ("tau_ext", "r_I", "q_OI", "w_OI_O"))
-#: the derivatives a host set (components/variables.py, Layout): of h_*, whether set, of
-#: hdot_*, of tau_ext and r_I
-D_H_CMG, D_H_WHEEL, D_H_PAYLOAD = (_LAYOUT.derivative[f"h_{d}"] for d in DEVICES)
-G_H_CMG, G_H_WHEEL, G_H_PAYLOAD = (_LAYOUT.given[f"h_{d}"] for d in DEVICES)
-D_HDOT_CMG, D_HDOT_WHEEL, D_HDOT_PAYLOAD = (_LAYOUT.derivative[f"hdot_{d}"] for d in DEVICES)
-D_TAU_EXT, D_R_I = _LAYOUT.derivative["tau_ext"], _LAYOUT.derivative["r_I"]
-Y_Q_BI, Y_W_BI_B, Y_Q_BO, Y_EULER_BO, Y_EULER_RATE_BO, Y_W_BO_B, Y_H_I = (
-    _OFFSET[n] for n in ("q_BI", "w_BI_B", "q_BO", "euler_BO", "euler_rate_BO", "w_BO_B", "H_I")
-)
+# -- step and output: kernels on the value array (components/runtime/jit.py) -------------
+P, U, Y = SatelliteDynamics.names()
+#: the derivatives a host set for the inputs, and 1 where it set one (of h_*)
+DU, GIVEN = SatelliteDynamics.derivative_names()
 #: SatelliteDynamics.state: the state (q_BI, H_I), the last output's q_BO and euler_BO
 #: (their sign and branch are kept continuous), and constants set by initialize: the hub
 #: inertia and its inverse (row-major), μ, whether to apply the gravity-gradient torque
 #: (gravity_gradient on and J not ∝ 1) and whether r_I must not be zero (gravity_gradient on);
 #: 1 once a conflict of hdot_* with a derivative set for h_* was reported
-STATE = StateTable(
-    q_BI=4, H_I=3, q_BO=4, euler=3, J=9, J_inv=9, mu=1, gravity_gradient=1, needs_position=1,
-    slope_conflict=1,
+S = state_table(
+    "SatelliteDynamics state", q_BI=4, H_I=3, q_BO=4, euler=3, J=9, J_inv=9, mu=1,
+    gravity_gradient=1, needs_position=1, slope_conflict=1,
 )  # fmt: skip
-S_Q_BI, S_H_I, S_Q_BO, S_EULER, S_J, S_J_INV, S_MU = STATE.offsets[:7]
-S_GRAVITY_GRADIENT, S_NEEDS_POSITION, S_SLOPE_CONFLICT = STATE.offsets[7:]
 #: the kernels' status codes (the Python wrapper raises the message, or warns: a step
 #: returning SLOPE_CONFLICT is done)
 OK, NO_POSITION, TOO_MANY_SUBSTEPS, NON_FINITE, NOT_UNIT, SLOPE_CONFLICT = range(6)
@@ -370,13 +354,13 @@ def _step(values, state, t, dt):
     SLOPE_CONFLICT (the step done) the first time an hdot_* input differs from a
     derivative set for its h_*."""
     v, s = floats(values), floats(state)
-    h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
+    h0 = _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload)
     hdot, conflict, curvature, r_rate, tau_rate = _rates(v)
-    tau, r_I = _vector(v, TAU_EXT), _vector(v, R_I)
-    if s[S_NEEDS_POSITION] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
+    tau, r_I = vector(v, U.tau_ext), vector(v, U.r_I)
+    if s[S.needs_position] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
         return NO_POSITION
-    q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
-    J, J_inv = _matrix(s, S_J), _matrix(s, S_J_INV)
+    q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
+    J, J_inv = matrix(s, S.J), matrix(s, S.J_inv)
     needed = _substeps(v, s, dt)[1]
     if not needed <= MAX_SUBSTEPS:
         return TOO_MANY_SUBSTEPS
@@ -384,16 +368,16 @@ def _step(values, state, t, dt):
     moving = (_nonzero(curvature), _nonzero(tau_rate), _nonzero(r_rate))
     x = _integrate(
         q_BI + H_I, n, dt / n, h0, hdot, curvature, (tau, r_I, tau_rate, r_rate),
-        J, J_inv, s[S_MU], s[S_GRAVITY_GRADIENT] != 0.0, moving,
+        J, J_inv, s[S.mu], s[S.gravity_gradient] != 0.0, moving,
     )  # fmt: skip
     for xi in x:
         if not math.isfinite(xi):
             return NON_FINITE
     norm = quat_norm(x)
-    _put(state, S_Q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
-    _put(state, S_H_I, x[4:])
-    if conflict and s[S_SLOPE_CONFLICT] == 0.0:
-        state[S_SLOPE_CONFLICT] = 1.0
+    put(state, S.q_BI, (x[0] / norm, x[1] / norm, x[2] / norm, x[3] / norm))
+    put(state, S.H_I, x[4:])
+    if conflict and s[S.slope_conflict] == 0.0:
+        state[S.slope_conflict] = 1.0
         return SLOPE_CONFLICT
     return OK
 
@@ -406,8 +390,8 @@ def _rates(v):
     slope = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     conflict = False
     for k, (d, g, stated) in enumerate(
-        ((D_H_CMG, G_H_CMG, HDOT_CMG), (D_H_WHEEL, G_H_WHEEL, HDOT_WHEEL),
-         (D_H_PAYLOAD, G_H_PAYLOAD, HDOT_PAYLOAD))
+        ((DU.h_cmg, GIVEN.h_cmg, U.hdot_cmg), (DU.h_wheel, GIVEN.h_wheel, U.hdot_wheel),
+         (DU.h_payload, GIVEN.h_payload, U.hdot_payload))
     ):  # fmt: skip
         for i in range(3):
             slope[3 * k + i] = v[d + i] if v[g + i] != 0.0 else v[stated + i]
@@ -418,8 +402,8 @@ def _rates(v):
         (slope[1] + slope[4]) + slope[7],
         (slope[2] + slope[5]) + slope[8],
     )
-    curvature = _device_sum(v, D_HDOT_CMG, D_HDOT_WHEEL, D_HDOT_PAYLOAD)
-    return hdot, conflict, curvature, _vector(v, D_R_I), _vector(v, D_TAU_EXT)
+    curvature = _device_sum(v, DU.hdot_cmg, DU.hdot_wheel, DU.hdot_payload)
+    return hdot, conflict, curvature, vector(v, DU.r_I), vector(v, DU.tau_ext)
 
 
 @jitable
@@ -430,8 +414,8 @@ def _nonzero(x):
 @jitable
 def _substeps(v, s, dt):
     """(max|w_BI_B| at the step's start, the RK4 sub-steps of ``dt`` it needs, unrounded)."""
-    h0 = _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD)
-    w = _rate(_quaternion(s, S_Q_BI), _vector(s, S_H_I), h0, _matrix(s, S_J_INV))
+    h0 = _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload)
+    w = _rate(quaternion(s, S.q_BI), vector(s, S.H_I), h0, matrix(s, S.J_inv))
     rate = abs(w[0])
     if abs(w[1]) > rate:
         rate = abs(w[1])
@@ -446,30 +430,30 @@ def _output(values, state, t):
     and euler_BO's branch in ``state``.  Returns the status: NOT_UNIT (nothing written) if
     q_OI is not a unit quaternion."""
     v, s = floats(values), floats(state)
-    q0, q1, q2, q3 = q = _quaternion(v, Q_OI)
+    q0, q1, q2, q3 = q = quaternion(v, U.q_OI)
     norm = quat_norm(q)
     if not _is_unit(norm):
         return NOT_UNIT
     q_OI = (q0 / norm, q1 / norm, q2 / norm, q3 / norm)
-    q_BI, H_I = _quaternion(s, S_Q_BI), _vector(s, S_H_I)
-    w_BI_B = _rate(q_BI, H_I, _device_sum(v, H_CMG, H_WHEEL, H_PAYLOAD), _matrix(s, S_J_INV))
+    q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
+    w_BI_B = _rate(q_BI, H_I, _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload), matrix(s, S.J_inv))
     q_BO = qmul((q_OI[0], -q_OI[1], -q_OI[2], -q_OI[3]), q_BI)
-    last = _quaternion(s, S_Q_BO)
+    last = quaternion(s, S.q_BO)
     if quat_dot(q_BO, last) < 0:
         q_BO = (-q_BO[0], -q_BO[1], -q_BO[2], -q_BO[3])  # keep the sign continuous
     C_BO = dcm(q_BO)
-    euler = euler123(q_BO, C_BO, _vector(s, S_EULER), True)
-    w_OI_B = rotate(C_BO, _vector(v, W_OI_O))
+    euler = euler123(q_BO, C_BO, vector(s, S.euler), True)
+    w_OI_B = rotate(C_BO, vector(v, U.w_OI_O))
     w_BO_B = (w_BI_B[0] - w_OI_B[0], w_BI_B[1] - w_OI_B[1], w_BI_B[2] - w_OI_B[2])
-    _put(state, S_Q_BO, q_BO)
-    _put(state, S_EULER, euler)
-    _put(values, Y_Q_BI, q_BI)
-    _put(values, Y_W_BI_B, w_BI_B)
-    _put(values, Y_Q_BO, q_BO)
-    _put(values, Y_EULER_BO, euler)
-    _put(values, Y_EULER_RATE_BO, euler123_dot(euler, w_BO_B))
-    _put(values, Y_W_BO_B, w_BO_B)
-    _put(values, Y_H_I, H_I)
+    put(state, S.q_BO, q_BO)
+    put(state, S.euler, euler)
+    put(values, Y.q_BI, q_BI)
+    put(values, Y.w_BI_B, w_BI_B)
+    put(values, Y.q_BO, q_BO)
+    put(values, Y.euler_BO, euler)
+    put(values, Y.euler_rate_BO, euler123_dot(euler, w_BO_B))
+    put(values, Y.w_BO_B, w_BO_B)
+    put(values, Y.H_I, H_I)
     return OK
 
 
@@ -570,33 +554,10 @@ def _derivative(x, s, h0, hdot, curvature, torque, J, J_inv, mu, gravity_gradien
 
 
 @jitable
-def _vector(a, at):
-    return a[at], a[at + 1], a[at + 2]
-
-
-@jitable
-def _quaternion(a, at):
-    return a[at], a[at + 1], a[at + 2], a[at + 3]
-
-
-@jitable
-def _matrix(a, at):
-    """A row-major 3×3 as a tuple of rows."""
-    return _vector(a, at), _vector(a, at + 3), _vector(a, at + 6)
-
-
-@jitable
 def _device_sum(a, cmg, wheel, payload):
     """(cmg + wheel) + payload of three 3-vectors at these offsets."""
-    c, w, p = _vector(a, cmg), _vector(a, wheel), _vector(a, payload)
+    c, w, p = vector(a, cmg), vector(a, wheel), vector(a, payload)
     return (c[0] + w[0]) + p[0], (c[1] + w[1]) + p[1], (c[2] + w[2]) + p[2]
-
-
-@jitable
-def _put(array, at, x):
-    """array[at : at + len(x)] = x."""
-    for i in range(len(x)):
-        array[at + i] = x[i]
 
 
 @jitable

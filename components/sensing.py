@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import math
 
-from .jit import jitable
-from .rotations import cross, dot, norm, qmul, quat_norm
+from .rotations import qmul
+from .runtime.jit import jitable
+from .vectors import cross, dot, norm, quat_norm
 
 #: fraction of a sample period by which a time may fall short of a tick and still be it
 TICK_TOLERANCE = 1e-6

@@ -45,11 +45,11 @@ import math
 
 import numpy as np
 
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel, step_kernel
 from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key, uniform
-from .rotations import IDENTITY_Q, dcm, norm, qmul, quat_norm, rotate_back
+from .rotations import IDENTITY_Q, dcm, qmul
+from .runtime.flat import matrix, state_table
+from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .sensing import (
     EARTH_RADIUS,
     TICK_TOLERANCE,
@@ -61,7 +61,8 @@ from .sensing import (
     tick,
     tick_time,
 )
-from .variables import Layout, input_, output, parameter
+from .variables import input_, output, parameter
+from .vectors import norm, quat_norm, rotate_back
 
 ARCSEC = math.pi / 180.0 / 3600.0
 RIGEL_NEA_CROSS = 3.0 * ARCSEC
@@ -202,11 +203,11 @@ class StarTracker(Model):
                 f"for their release, more than the {MAX_WAITING} a star tracker holds"
             )
         rows = dcm(normalized(p.q_SB.tolist()))
-        self.state = np.zeros(SECTIONS + 2 * (WAITING.size + capacity * ROW))
-        self.state[:SECTIONS] = (
-            t0, capacity, WAITING.size + capacity * ROW, *rows[0], *rows[1], *rows[2], *keys,
-            *phase,
-        )  # fmt: skip
+        section = WAITING.size + capacity * SAMPLE.size
+        self.state = state = np.zeros(SECTIONS + 2 * section)
+        state[S.t0], state[S.capacity], state[S.section] = t0, capacity, section
+        state[S.C_SB : S.C_SB + 9] = (*rows[0], *rows[1], *rows[2])
+        state[S.keys : S.keys + 6], state[S.phase : S.phase + 3] = keys, phase
         self.t = t0
 
     def step(self, t, dt):
@@ -227,36 +228,28 @@ class StarTracker(Model):
         state, constants = attributes["state"], reference["state"][:SECTIONS]
         if not np.array_equal(state[:SECTIONS], constants):
             return "constants (capacity, section length, mounting, keys) are not its parameters'"
-        for at in (SECTIONS, SECTIONS + int(constants[SECTION])):
-            n = float(state[at + N])
-            if not (n == int(n) and 0 <= n <= constants[CAPACITY]):
+        for at in (SECTIONS, SECTIONS + int(constants[S.section])):
+            n = float(state[at + WAITING.n])
+            if not (n == int(n) and 0 <= n <= constants[S.capacity]):
                 return f"count of samples waiting {n!r} is not a whole number in [0, capacity]"
         return ""
 
 
 _FULL = "internal error: more samples wait for their release than the state holds"
 
-# -- kernels (components/jit.py) ------------------------------------------------------
-_AT = Layout(StarTracker.VARIABLES).offset  # offsets in StarTracker.values
-P_NEA_CROSS, P_NEA_BORESIGHT, P_BIAS_LF = _AT["nea_cross"], _AT["nea_boresight"], _AT["bias_lf"]
-P_LF_PERIOD, P_RATE, P_LATENCY, P_SUN = (
-    _AT["lf_period"], _AT["rate"], _AT["latency"], _AT["sun_exclusion"]
-)  # fmt: skip
-P_EARTH, P_MAX_RATE = _AT["earth_exclusion"], _AT["max_rate"]
-U_Q, U_W, U_SUN, U_R = (_AT[name] for name in _INPUTS)
-Y_Q, Y_VALID, Y_ERROR, Y_T = _AT["q_BI_meas"], _AT["valid"], _AT["error_B"], _AT["t_meas"]
+# -- kernels (components/runtime/jit.py) ----------------------------------------------
+P, U, Y = StarTracker.names()
 #: the state array: t0, the capacity of the pipeline, the length of a section, C_SB
 #: (row-major), the noise keys (key_halves) and the low-frequency phases; then two sections
 #: (WAITING and the pipeline): the committed one, and the one advanced to the output's time
-CONSTANTS = StateTable(t0=1, capacity=1, section=1, C_SB=9, keys=6, phase=3)
-T0, CAPACITY, SECTION, MOUNT, KEYS, PHASE_ = CONSTANTS.offsets
-SECTIONS = CONSTANTS.size  # where the committed section starts
+S = state_table("StarTracker constants", t0=1, capacity=1, section=1, C_SB=9, keys=6, phase=3)
+SECTIONS = S.size  # where the committed section starts
 #: a section: whether a communication point was seen, its time and inputs (q_BI, w_BI_B,
-#: sun_I, r_I), the last sample taken and the number of samples waiting, then those (ROW
-#: each: j, t_j, q_BI_meas, error_B, valid), oldest first
-WAITING = StateTable(seen=1, t_last=1, inputs=13, k=1, n=1)
-SEEN, T_LAST, INPUTS, K, N = WAITING.offsets
-ROW = 10
+#: sun_I, r_I), the last sample taken and the number of samples waiting, then those
+#: (SAMPLE each), oldest first
+WAITING = state_table("StarTracker section", seen=1, t_last=1, inputs=13, k=1, n=1)
+#: a sample waiting for its release: its index j and time t_j, q_BI_meas, error_B, valid
+SAMPLE = state_table("StarTracker sample", j=1, t=1, q=4, error=3, valid=1)
 #: the statuses: more samples wait than the pipeline holds (an internal error)
 FULL = 1
 
@@ -266,7 +259,7 @@ def tracker_step(values, state, t, dt):
     """Every sample up to the model's time t taken, those released kept: committed."""
     status = advance(values, state, t)
     if status == 0:
-        size = int(state[SECTION])
+        size = int(state[S.section])
         for i in range(size):
             state[SECTIONS + i] = state[SECTIONS + size + i]
     return status
@@ -277,12 +270,12 @@ def tracker_output(values, state, t):
     """The sample released at t (the committed state advanced to t, not committed)."""
     status = advance(values, state, t)
     if status == 0:
-        row = SECTIONS + int(state[SECTION]) + N + 1  # the oldest sample waiting
+        row = SECTIONS + int(state[S.section]) + WAITING.size  # the oldest sample waiting
         for i in range(4):
-            values[Y_Q + i] = state[row + 2 + i]
+            values[Y.q_BI_meas + i] = state[row + SAMPLE.q + i]
         for i in range(3):
-            values[Y_ERROR + i] = state[row + 6 + i]
-        values[Y_VALID], values[Y_T] = state[row + 9], state[row + 1]
+            values[Y.error_B + i] = state[row + SAMPLE.error + i]
+        values[Y.valid], values[Y.t_meas] = state[row + SAMPLE.valid], state[row + SAMPLE.t]
     return status
 
 
@@ -293,33 +286,36 @@ def advance(values, state, now: float) -> int:
     communication points the truth is interpolated (slerp, lerp), before the first the
     attitude turned at its rate."""
     v, s = floats(values), floats(state)
-    c, a = SECTIONS, SECTIONS + int(s[SECTION])
-    t0, rate = s[T0], v[P_RATE]
-    released, newest = tick(now - v[P_LATENCY], t0, rate), tick(now, t0, rate)
-    q_now = normalized(v[U_Q : U_Q + 4])
-    w_now, sun_now = (v[U_W], v[U_W + 1], v[U_W + 2]), (v[U_SUN], v[U_SUN + 1], v[U_SUN + 2])
-    r_now = (v[U_R], v[U_R + 1], v[U_R + 2])
+    c, a = SECTIONS, SECTIONS + int(s[S.section])
+    t0, rate = s[S.t0], v[P.rate]
+    released, newest = tick(now - v[P.latency], t0, rate), tick(now, t0, rate)
+    q_now = normalized(v[U.q_BI : U.q_BI + 4])
+    w_now, sun_now = (
+        (v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]),
+        (v[U.sun_I], v[U.sun_I + 1], v[U.sun_I + 2]),
+    )
+    r_now = (v[U.r_I], v[U.r_I + 1], v[U.r_I + 2])
     n = 0
-    for i in range(int(s[c + N])):  # the samples still waiting
-        row = c + N + 1 + ROW * i
-        if s[row] >= released:
-            for x in range(ROW):
-                state[a + N + 1 + ROW * n + x] = s[row + x]
+    for i in range(int(s[c + WAITING.n])):  # the samples still waiting
+        row = c + WAITING.size + SAMPLE.size * i
+        if s[row + SAMPLE.j] >= released:
+            for x in range(SAMPLE.size):
+                state[a + WAITING.size + SAMPLE.size * n + x] = s[row + x]
             n += 1
-    k = int(s[c + K])
-    if s[c + SEEN] == 0.0:  # the start: the attitude turned at w_now before
+    k = int(s[c + WAITING.k])
+    if s[c + WAITING.seen] == 0.0:  # the start: the attitude turned at w_now before
         first = min(released, newest)
     else:
         first = max(k + 1, released)  # those before are not kept
-        t_last, last = s[c + T_LAST], s[c + INPUTS : c + INPUTS + 13]
+        t_last, last = s[c + WAITING.t_last], s[c + WAITING.inputs : c + WAITING.inputs + 13]
         q_last = (last[0], last[1], last[2], last[3])
         w_last, sun_last = (last[4], last[5], last[6]), (last[7], last[8], last[9])
         r_last = (last[10], last[11], last[12])
     for j in range(first, newest + 1):
-        if n == int(s[CAPACITY]):
+        if n == int(s[S.capacity]):
             return FULL
         t_j = tick_time(j, t0, rate)
-        if s[c + SEEN] == 0.0:
+        if s[c + WAITING.seen] == 0.0:
             dt = t_j - now
             q = qmul(q_now, quat_exp((w_now[0] * dt, w_now[1] * dt, w_now[2] * dt)))
             truth = (q, w_now, sun_now, r_now)
@@ -331,12 +327,17 @@ def advance(values, state, now: float) -> int:
                 lerp(sun_last, sun_now, f),
                 lerp(r_last, r_now, f),
             )
-        _sample(values, state, j, t_j, truth, a + N + 1 + ROW * n)
+        _sample(values, state, j, t_j, truth, a + WAITING.size + SAMPLE.size * n)
         n += 1
-    state[a + SEEN], state[a + T_LAST], state[a + K], state[a + N] = 1.0, now, max(newest, k), n
+    (
+        state[a + WAITING.seen],
+        state[a + WAITING.t_last],
+        state[a + WAITING.k],
+        state[a + WAITING.n],
+    ) = 1.0, now, max(newest, k), n
     inputs = (*q_now, *w_now, *sun_now, *r_now)
     for i in range(13):
-        state[a + INPUTS + i] = inputs[i]
+        state[a + WAITING.inputs + i] = inputs[i]
     return 0
 
 
@@ -345,48 +346,43 @@ def _sample(values, state, j: int, t_j: float, truth, row: int) -> None:
     """Sample j (time t_j) of the true state ``truth`` into state[row : row + ROW]."""
     v, s = floats(values), floats(state)
     q, w, sun, r = truth
-    sigma = (v[P_NEA_CROSS], v[P_NEA_CROSS], v[P_NEA_BORESIGHT])
-    omega = 2.0 * math.pi / v[P_LF_PERIOD]
+    sigma = (v[P.nea_cross], v[P.nea_cross], v[P.nea_boresight])
+    omega = 2.0 * math.pi / v[P.lf_period]
     error_S = (
-        sigma[0] * normal(_key(s, 0), j) + v[P_BIAS_LF] * math.sin(omega * t_j + s[PHASE_]),
-        sigma[1] * normal(_key(s, 1), j) + v[P_BIAS_LF + 1] * math.sin(omega * t_j + s[PHASE_ + 1]),
-        sigma[2] * normal(_key(s, 2), j) + v[P_BIAS_LF + 2] * math.sin(omega * t_j + s[PHASE_ + 2]),
+        sigma[0] * normal(_key(s, 0), j) + v[P.bias_lf] * math.sin(omega * t_j + s[S.phase]),
+        sigma[1] * normal(_key(s, 1), j)
+        + v[P.bias_lf + 1] * math.sin(omega * t_j + s[S.phase + 1]),
+        sigma[2] * normal(_key(s, 2), j)
+        + v[P.bias_lf + 2] * math.sin(omega * t_j + s[S.phase + 2]),
     )
-    C_SB = _rows(s, MOUNT)
+    C_SB = matrix(s, S.C_SB)
     error_B = rotate_back(C_SB, error_S)
     q_meas = normalized(qmul(q, quat_exp(error_B)))
     valid = _valid(v, C_SB, q, w, sun, r)
-    state[row], state[row + 1], state[row + 9] = j, t_j, 1.0 if valid else 0.0
+    state[row + SAMPLE.j], state[row + SAMPLE.t] = j, t_j
+    state[row + SAMPLE.valid] = 1.0 if valid else 0.0
     for i in range(4):
-        state[row + 2 + i] = q_meas[i]
+        state[row + SAMPLE.q + i] = q_meas[i]
     for i in range(3):
-        state[row + 6 + i] = error_B[i]
-
-
-@jitable
-def _rows(s, at: int) -> tuple:
-    return (
-        (s[at], s[at + 1], s[at + 2]), (s[at + 3], s[at + 4], s[at + 5]),
-        (s[at + 6], s[at + 7], s[at + 8]),
-    )  # fmt: skip
+        state[row + SAMPLE.error + i] = error_B[i]
 
 
 @jitable
 def _key(s, stream: int) -> int:
-    return joined_key(s[KEYS + 2 * stream], s[KEYS + 2 * stream + 1])
+    return joined_key(s[S.keys + 2 * stream], s[S.keys + 2 * stream + 1])
 
 
 @jitable
 def _valid(v, C_SB, q, w, sun, r) -> bool:
     boresight = rotate_back(dcm(q), C_SB[2])  # C_BIᵀ C_SBᵀ ẑ
-    if norm(w) > v[P_MAX_RATE]:
+    if norm(w) > v[P.max_rate]:
         return False
-    if norm(sun) > 0.0 and angle_between(boresight, sun) < v[P_SUN]:
+    if norm(sun) > 0.0 and angle_between(boresight, sun) < v[P.sun_exclusion]:
         return False
     radius = norm(r)
     if radius > 0.0:
         limb = math.asin(min(1.0, EARTH_RADIUS / radius))
         nadir = (-r[0], -r[1], -r[2])
-        if angle_between(boresight, nadir) < limb + v[P_EARTH]:
+        if angle_between(boresight, nadir) < limb + v[P.earth_exclusion]:
             return False
     return True

@@ -81,7 +81,7 @@ I and E z axes coincide; :mod:`.orbit`; with an epoch the orbit model turns the 
 the GMST rate, 8.6e-12 rad/s faster: 2e-9 rad over a 200-s stare, neglected); μ = MU_EARTH;
 q_OI must be the orbit frame built from r_I, v_I (checked to 1e-6 rad).
 
-``step`` and ``output`` are each one kernel (components/jit.py) on the value array and the
+``step`` and ``output`` are each one kernel (components/runtime/jit.py) on the value array and the
 state array ``STATE`` (the mount, the captured g, the anchors of the angle branches), on
 tuples of floats; the sums of products are taken in the order written (the NumPy version
 before them summed the dot products as the CPU's BLAS kernel does, with fused
@@ -94,25 +94,26 @@ import math
 
 import numpy as np
 
-from .flat import StateTable, hypot
-from .jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
 from .model import Model, ModelError
 from .orbit_environment import EARTH_RATE, MU_EARTH, WGS84_A, WGS84_E2
-from .rotations import (
-    _unwrap3,
+from .rotations import _unwrap3, dcm, euler123, quat_from_dcm, quat_of_rows, wrap_pi
+from .runtime.flat import hypot, state_table
+from .runtime.jit import expect_rows, floats, jitable, kernel, output_kernel, step_kernel
+from .variables import input_, output, parameter
+from .vectors import (
+    add,
+    combine,
     cross,
-    dcm,
+    divide,
     dot,
-    euler123,
+    matmul,
     norm,
     quat_dot,
-    quat_from_dcm,
-    quat_of_rows,
     rotate,
     rotate_back,
-    wrap_pi,
+    scale,
+    sub,
 )
-from .variables import Layout, input_, output, parameter
 
 CAPTURE_TOLERANCE = 1e-9  # s per s of max(1, |reference_time|): "t >= reference_time"
 Q_OI_TOLERANCE = 1e-6  # rad (max element of C_OI error): q_OI vs r_I, v_I
@@ -138,39 +139,6 @@ _Z = (0.0, 0.0, 1.0)
     OK, NOT_FINITE, NO_ORBIT_FRAME, Q_OI_MISMATCH, NO_LINE_OF_SIGHT, ALONG_X_O, ALONG_G, AT_POLE,
     GRAZING,
 ) = range(9)  # fmt: skip
-
-
-# -- tuple vectors -------------------------------------------------------------------------
-@jitable
-def _scaled(k: float, a) -> tuple:
-    return (k * a[0], k * a[1], k * a[2])
-
-
-@jitable
-def _sum(a, b) -> tuple:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-@jitable
-def _difference(a, b) -> tuple:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-@jitable
-def _divided(a, k: float) -> tuple:
-    return (a[0] / k, a[1] / k, a[2] / k)
-
-
-@jitable
-def _combination(a, x, b, y) -> tuple:
-    """a x + b y."""
-    return (a * x[0] + b * y[0], a * x[1] + b * y[1], a * x[2] + b * y[2])
-
-
-@jitable
-def _rows_product(A, B) -> tuple:
-    """A B for 3×3 matrices given as rows (row i of A B is Bᵀ applied to row i of A)."""
-    return (rotate_back(B, A[0]), rotate_back(B, A[1]), rotate_back(B, A[2]))
 
 
 # -- geometry (module docstring) -----------------------------------------------------------
@@ -228,7 +196,7 @@ def _at_pole(r_T) -> str:
 def ground_line(beam, axis, up) -> tuple:
     """Direction of the line in which the plane of ``beam`` and ``axis`` meets the plane
     ⊥ ``up``, oriented along ``axis``: d = beam (axis·up) − axis (beam·up) (not normalised)."""
-    return _combination(dot(axis, up), beam, -dot(beam, up), axis)
+    return combine(dot(axis, up), beam, -dot(beam, up), axis)
 
 
 @jitable
@@ -249,7 +217,7 @@ def footprint_azimuth(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> float:
 def footprint_azimuths(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> np.ndarray:
     """:func:`footprint_azimuth` of each row of q_BI (N, 4) and r_T_I (N, 3), in one
     kernel call (a run's history: the kernel runs compiled where that pays,
-    components/jit.py); ModelError at the first row where it is undefined."""
+    components/runtime/jit.py); ModelError at the first row where it is undefined."""
     b = np.asarray(boresight_B, dtype=float)
     a_B = tuple(footprint_axis(b).tolist())
     beam_B = tuple((b / math.sqrt(float(b @ b))).tolist())
@@ -292,12 +260,12 @@ def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
 def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
     """(û, u̇, ü) in I for the slant range s = |r_T − r| > 0: Earth-fixed target,
     two-body satellite (module docstring)."""
-    rho, drho = _difference(r_T, r), _difference(v_T, v)
+    rho, drho = sub(r_T, r), sub(v_T, v)
     r_norm = norm(r)
-    ddrho = _combination(EARTH_RATE, cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
-    u = _divided(rho, s)
+    ddrho = combine(EARTH_RATE, cross(_Z, v_T), MU_EARTH / (r_norm * r_norm * r_norm), r)
+    u = divide(rho, s)
     ds = dot(drho, u)
-    du = _divided(_combination(1.0, drho, -ds, u), s)
+    du = divide(combine(1.0, drho, -ds, u), s)
     dds = dot(ddrho, u) + dot(drho, du)
     ddu = (
         (ddrho[0] - dds * u[0] - 2.0 * ds * du[0]) / s,
@@ -315,7 +283,7 @@ def _aligned_axes(u, a) -> tuple:
     m = norm(n)
     if not m > PARALLEL_TOLERANCE:
         return False, n, n, n, m
-    y = _divided(n, m)
+    y = divide(n, m)
     return True, cross(y, u), y, n, m
 
 
@@ -325,11 +293,11 @@ def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
     ok, x, y, n, m = _aligned_axes(u, a)
     if not ok:
         return False, (n, n, n), n, n
-    dn = _sum(cross(du, a), cross(u, da))
-    ddn = _sum(_sum(cross(ddu, a), _scaled(2.0, cross(du, da))), cross(u, dda))
+    dn = add(cross(du, a), cross(u, da))
+    ddn = add(add(cross(ddu, a), scale(2.0, cross(du, da))), cross(u, dda))
     dnx = dot(dn, x)
     w = (-dot(y, du), dot(x, du), -dnx / m)
-    w_I = _sum(_combination(w[0], x, w[1], y), _scaled(w[2], u))
+    w_I = add(combine(w[0], x, w[1], y), scale(w[2], u))
     dx, dy = cross(w_I, x), cross(w_I, y)
     dw = (
         -dot(dy, du) - dot(y, ddu),
@@ -443,12 +411,12 @@ class StaringGuidance(Model):
         a_B = footprint_axis(b)
         b = b / math.sqrt(float(b @ b))
         C_RP = np.column_stack((a_B, cross(b, a_B), b))
-        self.state = STATE.zeros()
-        self.state[MOUNTED] = not np.array_equal(C_RP, np.eye(3))  # else R = P
-        self.state[C_RP_ : C_RP_ + 9] = C_RP.reshape(-1)
-        self.state[COMPENSATE] = p.yaw_compensation
-        self.state[REFERENCE_TIME] = p.reference_time
-        self.state[TOLERANCE] = CAPTURE_TOLERANCE * max(1.0, abs(p.reference_time))
+        self.state = S.zeros()
+        self.state[S.mounted] = not np.array_equal(C_RP, np.eye(3))  # else R = P
+        self.state[S.C_RP : S.C_RP + 9] = C_RP.reshape(-1)
+        self.state[S.compensate] = p.yaw_compensation
+        self.state[S.reference_time] = p.reference_time
+        self.state[S.tolerance] = CAPTURE_TOLERANCE * max(1.0, abs(p.reference_time))
         self.t = t0
 
     def step(self, t, dt):
@@ -462,7 +430,7 @@ class StaringGuidance(Model):
 
     def _why(self, status: int) -> str:
         """The message of a kernel's status (the condition at time t)."""
-        t, u_in, detail = self.t, self.u, float(self.state[DETAIL])
+        t, u_in, detail = self.t, self.u, float(self.state[S.detail])
         if status == NOT_FINITE:
             bad = [name for name in _INPUTS if not np.all(np.isfinite(getattr(u_in, name)))]
             return f"t={t:.6g} s: inputs {bad} are not finite"
@@ -488,31 +456,25 @@ _GRAZING = (
     "(grazing view): footprint direction undefined"
 )
 
-# -- kernels (components/jit.py) --------------------------------------------------------
-_AT = Layout(StaringGuidance.VARIABLES).offset  # offsets in StaringGuidance.values
-U_R, U_V, U_R_T, U_V_T, U_Q_OI = (_AT[name] for name in _INPUTS)
-Y_Q, Y_W, Y_DW, Y_EULER = _AT["q_ref"], _AT["w_ref"], _AT["dw_ref"], _AT["euler_ref_BO"]
-Y_LOOK, Y_RANGE, Y_ROTATION = _AT["look_angle"], _AT["slant_range"], _AT["footprint_rotation"]
+# -- kernels (components/runtime/jit.py) ------------------------------------------------
+P, U, Y = StaringGuidance.names()
 #: the state array: 1 when the boresight mount C_RP is not the identity, C_RP (row-major),
 #: 1 with yaw compensation, reference_time and its capture tolerance; 1 once captured, t_cap,
 #: g (I, at t_cap), the azimuth and the target's latitude at t_cap; (1 when set, q_ref,
 #: euler_ref_BO) at the previous communication point (the anchor) and at the last output;
 #: the number a failing status reports
-STATE = StateTable(
-    mounted=1, C_RP=9, compensate=1, reference_time=1, tolerance=1, captured=1, capture_time=1,
-    g_ref=3, azimuth_ref=1, latitude=1, anchored=1, anchor_q=4, anchor_euler=3, lasted=1,
-    last_q=4, last_euler=3, detail=1,
+S = state_table(
+    "StaringGuidance state", mounted=1, C_RP=9, compensate=1, reference_time=1, tolerance=1,
+    captured=1, capture_time=1, g_ref=3, azimuth_ref=1, latitude=1, anchored=1, anchor_q=4,
+    anchor_euler=3, lasted=1, last_q=4, last_euler=3, detail=1,
 )  # fmt: skip
-MOUNTED, C_RP_, COMPENSATE, REFERENCE_TIME, TOLERANCE, CAPTURED, CAPTURE_TIME = STATE.offsets[:7]
-G_REF, AZIMUTH_REF, LATITUDE, ANCHORED, ANCHOR_Q, ANCHOR_EULER, LASTED = STATE.offsets[7:14]
-LAST_Q, LAST_EULER, DETAIL = STATE.offsets[14:]
 
 
 @step_kernel(StaringGuidance)
 def guidance_step(values, state, t, dt):
     """The outputs at t become the anchors of the angle branches for t + dt."""
     for k in range(8):  # (set, q_ref, euler_ref_BO)
-        state[ANCHORED + k] = state[LASTED + k]
+        state[S.anchored + k] = state[S.lasted + k]
     return OK
 
 
@@ -521,12 +483,15 @@ def guidance_output(values, state, t):
     """Every output at time t (module docstring); OK, or the status of the condition the
     model cannot continue from (then :meth:`StaringGuidance.output` raises)."""
     v, s = floats(values), floats(state)
-    for k in range(U_R, U_Q_OI + 4):
+    for k in range(U.r_I, U.q_OI + 4):
         if not math.isfinite(v[k]):
             return NOT_FINITE
-    r, vel = (v[U_R], v[U_R + 1], v[U_R + 2]), (v[U_V], v[U_V + 1], v[U_V + 2])
-    r_T, v_T = (v[U_R_T], v[U_R_T + 1], v[U_R_T + 2]), (v[U_V_T], v[U_V_T + 1], v[U_V_T + 2])
-    C_OI = dcm(v[U_Q_OI : U_Q_OI + 4])
+    r, vel = (v[U.r_I], v[U.r_I + 1], v[U.r_I + 2]), (v[U.v_I], v[U.v_I + 1], v[U.v_I + 2])
+    r_T, v_T = (
+        (v[U.r_T_I], v[U.r_T_I + 1], v[U.r_T_I + 2]),
+        (v[U.v_T_I], v[U.v_T_I + 1], v[U.v_T_I + 2]),
+    )
+    C_OI = dcm(v[U.q_OI : U.q_OI + 4])
 
     # the two-body orbit frame of r, v, checked against q_OI
     r_norm = norm(r)
@@ -534,37 +499,37 @@ def guidance_output(values, state, t):
     h = norm(h_vec)
     if not h > 1e-12 * r_norm * max(norm(vel), 1.0):
         return NO_ORBIT_FRAME
-    r_hat, h_hat = _divided(r, r_norm), _divided(h_vec, h)
-    expected = (cross(h_hat, r_hat), _scaled(-1.0, h_hat), _scaled(-1.0, r_hat))
+    r_hat, h_hat = divide(r, r_norm), divide(h_vec, h)
+    expected = (cross(h_hat, r_hat), scale(-1.0, h_hat), scale(-1.0, r_hat))
     mismatch = 0.0
     for i in range(3):
         for j in range(3):
             mismatch = max(mismatch, abs(C_OI[i][j] - expected[i][j]))
     if mismatch > Q_OI_TOLERANCE:
-        state[DETAIL] = mismatch
+        state[S.detail] = mismatch
         return Q_OI_MISMATCH
     x_O = C_OI[0]
 
-    s_range = norm(_difference(r_T, r))
+    s_range = norm(sub(r_T, r))
     if not s_range > MIN_SLANT_RANGE:
-        state[DETAIL] = s_range
+        state[S.detail] = s_range
         return NO_LINE_OF_SIGHT
     u, du, ddu = _line_of_sight(r, vel, r_T, v_T, s_range)
 
     # the pointing frame P: P0 = F(û, x_O), or with yaw compensation F(û, g) after the
     # capture (made here at t_cap; re-made when evaluated at t_cap again)
-    captured = s[CAPTURED] != 0.0
-    capturing = (not captured and t >= s[REFERENCE_TIME] - s[TOLERANCE]) or (
-        captured and s[CAPTURE_TIME] == t
+    captured = s[S.captured] != 0.0
+    capturing = (not captured and t >= s[S.reference_time] - s[S.tolerance]) or (
+        captured and s[S.capture_time] == t
     )
-    compensating = s[COMPENSATE] != 0.0 and (capturing or captured)
+    compensating = s[S.compensate] != 0.0 and (capturing or captured)
     if compensating:  # only the axes of the yaw-0 frame P0
         ok, x0, y0, _, _ = _aligned_axes(u, x_O)
         C_PI, w_P, dw_P = (x0, y0, u), x0, y0  # P: after the capture below
     else:  # P0 = F(û, x_O) is the reference
         r2 = r_norm * r_norm
-        dx_O = _scaled(-(h / r2), r_hat)
-        ddx_O = _combination(
+        dx_O = scale(-(h / r2), r_hat)
+        ddx_O = combine(
             2.0 * h * dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
         )
         ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
@@ -580,33 +545,33 @@ def guidance_output(values, state, t):
         defined, azimuth = _azimuth(d, east, north)
         if not defined:
             return GRAZING
-        g = _divided(d, norm(d))
-        state[CAPTURED], state[CAPTURE_TIME], state[AZIMUTH_REF] = 1.0, t, azimuth
-        state[LATITUDE] = latitude
+        g = divide(d, norm(d))
+        state[S.captured], state[S.capture_time], state[S.azimuth_ref] = 1.0, t, azimuth
+        state[S.latitude] = latitude
         for k in range(3):
-            state[G_REF + k] = g[k]
+            state[S.g_ref + k] = g[k]
     if compensating:
-        angle = EARTH_RATE * (t - state[CAPTURE_TIME])
+        angle = EARTH_RATE * (t - state[S.capture_time])
         c, sn = math.cos(angle), math.sin(angle)
-        gx, gy, gz = state[G_REF], state[G_REF + 1], state[G_REF + 2]
+        gx, gy, gz = state[S.g_ref], state[S.g_ref + 1], state[S.g_ref + 2]
         g = (c * gx - sn * gy, sn * gx + c * gy, gz)
-        dg = _scaled(EARTH_RATE, cross(_Z, g))
-        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, _scaled(EARTH_RATE, cross(_Z, dg)))
+        dg = scale(EARTH_RATE, cross(_Z, g))
+        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, scale(EARTH_RATE, cross(_Z, dg)))
         if not ok:
             return ALONG_G
     C_RI, w, dw = C_PI, w_P, dw_P
-    mounted = s[MOUNTED] != 0.0
+    mounted = s[S.mounted] != 0.0
     if mounted:
-        C_RP = s[C_RP_ : C_RP_ + 9]
+        C_RP = s[S.C_RP : S.C_RP + 9]
         M = ((C_RP[0], C_RP[1], C_RP[2]), (C_RP[3], C_RP[4], C_RP[5]), (C_RP[6], C_RP[7], C_RP[8]))
-        C_RI, w, dw = _rows_product(M, C_PI), rotate(M, w_P), rotate(M, dw_P)
+        C_RI, w, dw = matmul(M, C_PI), rotate(M, w_P), rotate(M, dw_P)
 
     # q_RI with its sign continued; the 1-2-3 angles relative to O on the anchor's branch
     (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C_RI
     q = quat_of_rows(c00, c01, c02, c10, c11, c12, c20, c21, c22)
-    anchored = s[ANCHORED] != 0.0
-    anchor_euler = (s[ANCHOR_EULER], s[ANCHOR_EULER + 1], s[ANCHOR_EULER + 2])
-    if anchored and quat_dot(q, s[ANCHOR_Q : ANCHOR_Q + 4]) < 0.0:
+    anchored = s[S.anchored] != 0.0
+    anchor_euler = (s[S.anchor_euler], s[S.anchor_euler + 1], s[S.anchor_euler + 2])
+    if anchored and quat_dot(q, s[S.anchor_q : S.anchor_q + 4]) < 0.0:
         q = (-q[0], -q[1], -q[2], -q[3])
     if not mounted:  # eq (11) and the yaw of eq (12), continued from the anchor
         x, y_, z = rotate(C_OI, u)
@@ -622,20 +587,24 @@ def guidance_output(values, state, t):
         euler = euler123(q_RO, dcm(q_RO), anchor_euler, anchored)
 
     rotation = 0.0
-    if state[CAPTURED] != 0.0:
-        up, east, north = _tangent_frame(r_T, state[LATITUDE])
+    if state[S.captured] != 0.0:
+        up, east, north = _tangent_frame(r_T, state[S.latitude])
         defined, azimuth = _azimuth(ground_line(u, C_PI[0], up), east, north)
         if not defined:
             return GRAZING
-        rotation = wrap_pi(azimuth - state[AZIMUTH_REF])
+        rotation = wrap_pi(azimuth - state[S.azimuth_ref])
     for k in range(3):
-        values[Y_W + k], values[Y_DW + k], values[Y_EULER + k] = w[k], dw[k], euler[k]
-        state[LAST_EULER + k] = euler[k]
+        values[Y.w_ref + k], values[Y.dw_ref + k], values[Y.euler_ref_BO + k] = (
+            w[k],
+            dw[k],
+            euler[k],
+        )
+        state[S.last_euler + k] = euler[k]
     for k in range(4):
-        values[Y_Q + k] = q[k]
-        state[LAST_Q + k] = q[k]
-    state[LASTED] = 1.0
-    values[Y_LOOK] = math.atan2(norm(cross(u, r_hat)), -dot(u, r_hat))
-    values[Y_RANGE] = s_range
-    values[Y_ROTATION] = rotation
+        values[Y.q_ref + k] = q[k]
+        state[S.last_q + k] = q[k]
+    state[S.lasted] = 1.0
+    values[Y.look_angle] = math.atan2(norm(cross(u, r_hat)), -dot(u, r_hat))
+    values[Y.slant_range] = s_range
+    values[Y.footprint_rotation] = rotation
     return OK

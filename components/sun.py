@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 
-from .jit import jitable
+from .runtime.jit import jitable
 
 DAY = 86400.0
 _DEG = math.pi / 180.0

@@ -49,12 +49,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from .flat import StateTable
-from .jit import floats, jitable, output_kernel
 from .model import Model, ModelError
-from .variables import Layout, output, parameter
+from .runtime.flat import state_table
+from .runtime.jit import floats, jitable, output_kernel
+from .variables import output, parameter
 
 DEG = math.pi / 180.0
 DEFAULT_TURNAROUND = 1.0  # s; see the module docstring
@@ -222,11 +220,10 @@ class SweepPlanner(Model):
         p = self.p
         self.roll = roll = SweepAxis(p.roll_amplitude, p.roll_rate, p.turnaround_time, "roll")
         self.pitch = pitch = SweepAxis(p.pitch_amplitude, p.pitch_rate, p.turnaround_time, "pitch")
-        self.state = np.array(
-            [roll.amplitude, roll.rate, roll.turnaround, roll.period]
-            + [pitch.amplitude, pitch.rate, pitch.turnaround, pitch.period]
-            + [-1.0 if p.symmetric else 1.0]
-        )
+        self.state = state = S.zeros()
+        state[S.roll : S.roll + 4] = roll.amplitude, roll.rate, roll.turnaround, roll.period
+        state[S.pitch : S.pitch + 4] = pitch.amplitude, pitch.rate, pitch.turnaround, pitch.period
+        state[S.sign2] = -1.0 if p.symmetric else 1.0
         self.t = t0
 
     def step(self, t, dt):
@@ -236,22 +233,27 @@ class SweepPlanner(Model):
         sweep_output(self.values, self.state, self.t)
 
 
-# -- kernel (components/jit.py) -------------------------------------------------------
-Y_OUTPUTS = Layout(SweepPlanner.VARIABLES).range["output"].start  # the outputs, in order
+# -- kernel (components/runtime/jit.py) -----------------------------------------------
+P, U, Y = SweepPlanner.names()
 #: the state array: each axis's (A, r, τ, P), and the sign of payload 2 (−1: symmetric)
-STATE = StateTable(roll=4, pitch=4, sign2=1)
-ROLL, PITCH, SIGN2 = STATE.offsets
+S = state_table("SweepPlanner state", roll=4, pitch=4, sign2=1)
 
 
 @output_kernel(SweepPlanner)
 def sweep_output(values, state, t):
     """Both payloads' commands at time t: payload 2 = sign2 × payload 1."""
     s = floats(state)
-    roll, roll_rate, roll_accel = sweep_at(s[ROLL], s[ROLL + 1], s[ROLL + 2], s[ROLL + 3], t)
-    pitch, pitch_rate, pitch_accel = sweep_at(s[PITCH], s[PITCH + 1], s[PITCH + 2], s[PITCH + 3], t)
-    k = s[SIGN2]
-    commands = (roll, pitch, roll_rate, pitch_rate, roll_accel, pitch_accel)
-    for i in range(6):  # the outputs in table order: (payload 1, payload 2) of each
-        values[Y_OUTPUTS + 2 * i] = commands[i]
-        values[Y_OUTPUTS + 2 * i + 1] = k * commands[i]
+    roll, roll_rate, roll_accel = sweep_at(
+        s[S.roll], s[S.roll + 1], s[S.roll + 2], s[S.roll + 3], t
+    )
+    pitch, pitch_rate, pitch_accel = sweep_at(
+        s[S.pitch], s[S.pitch + 1], s[S.pitch + 2], s[S.pitch + 3], t
+    )
+    k = s[S.sign2]
+    values[Y.roll_cmd], values[Y.roll_cmd + 1] = roll, k * roll
+    values[Y.pitch_cmd], values[Y.pitch_cmd + 1] = pitch, k * pitch
+    values[Y.roll_rate_cmd], values[Y.roll_rate_cmd + 1] = roll_rate, k * roll_rate
+    values[Y.pitch_rate_cmd], values[Y.pitch_rate_cmd + 1] = pitch_rate, k * pitch_rate
+    values[Y.roll_accel_cmd], values[Y.roll_accel_cmd + 1] = roll_accel, k * roll_accel
+    values[Y.pitch_accel_cmd], values[Y.pitch_accel_cmd + 1] = pitch_accel, k * pitch_accel
     return 0

@@ -24,18 +24,17 @@ import functools
 import hashlib
 import io
 import os
-import shutil
 import subprocess
 import sys
 import sysconfig
-import uuid
 import zipfile
 from collections.abc import Callable
 from html import escape
 from importlib import metadata
 from pathlib import Path
 
-from ..components import jit
+from ..components.runtime import jit
+from ..components.runtime.toolchain import c_compiler, replacing
 from . import FMUS, model_class, protocol
 from .model_description import model_description
 from .source_facts import facts
@@ -128,7 +127,7 @@ with tempfile.TemporaryDirectory() as folder:
 
 
 def compile_kernels(fmu: Path, name: str, package: str) -> None:
-    """Fill the compile cache of the FMU's kernels (components/jit.py): load its code from
+    """Fill the compile cache of the FMU's kernels (components/runtime/jit.py): load its code from
     an extraction, as a host does, in a fresh process of this Python, and run its model at
     the defaults for one step.  The cache is keyed on content, so any later extraction of
     this FMU loads the compiled kernels instead of compiling them."""
@@ -158,12 +157,8 @@ def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -
 def write_archive(target: Path, entries: dict[str, bytes]) -> Path:
     """A deterministic zip (sorted entries, fixed timestamps), written atomically (under a
     name unique to this writer, then renamed: parallel builds never share a file)."""
-    partial = _partial(target)
-    try:
+    with replacing(target) as partial:
         partial.write_bytes(archive_bytes(entries))
-        os.replace(partial, target)
-    finally:
-        partial.unlink(missing_ok=True)
     return target
 
 
@@ -225,7 +220,8 @@ def _sources(name: str, modules=None) -> tuple[dict[str, Path], str]:
         path = FMUS_DIR.parent / relative
         files[relative] = path
         pending += _relative_imports(relative, path)
-        pending.append(f"{relative.split('/')[0]}/__init__.py")
+        parts = relative.split("/")
+        pending += [f"{'/'.join(parts[:k])}/__init__.py" for k in range(1, len(parts))]
     digest = hashlib.sha256()
     for relative, path in sorted(files.items()):
         digest.update(relative.encode() + b"\0" + path.read_bytes() + b"\0")
@@ -322,17 +318,13 @@ def _shim_library(out_dir: Path) -> Path:
         raise BuildError(
             "building FMUs needs a C compiler (cc or gcc, or set CC) for the FMI shim fmus/shim/"
         )
-    partial = _partial(library)
-    command = [compiler, "-O2", *flags, "-o", str(partial)]
-    try:
+    with replacing(library) as partial:
+        command = [compiler, "-O2", *flags, "-o", str(partial)]
         result = subprocess.run(command, capture_output=True, text=True)
         if result.returncode != 0:
             raise BuildError(
                 f"compiling the FMI shim failed:\n{' '.join(command)}\n{result.stderr}"
             )
-        os.replace(partial, library)
-    finally:
-        partial.unlink(missing_ok=True)
     return library
 
 
@@ -375,16 +367,6 @@ def generated_files() -> dict[Path, Callable[[], bytes]]:
         FMUS_DIR / "INTERFACES.md": lambda: interfaces_markdown().encode(),
         PROTOCOL_HEADER: lambda: protocol.header().encode(),
     }
-
-
-def c_compiler() -> str | None:
-    """The C compiler: $CC, else cc or gcc on the PATH (None: none found)."""
-    return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-
-
-def _partial(target: Path) -> Path:
-    """A temporary name beside target, unique to this process and call."""
-    return target.with_name(f".{target.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.partial")
 
 
 def _c_string(text: str) -> str:

@@ -1,4 +1,4 @@
-"""A model's C entries: its step and output kernels (components/jit.py, "The kernel
+"""A model's C entries: its step and output kernels (components/runtime/jit.py, "The kernel
 convention") as C functions, for the shim's C step path (``fast_paths.py``).
 
 A step entry is ``int32 (double *values, int64 n_values, double *state, int64 n_state,
@@ -21,7 +21,7 @@ import functools
 import warnings
 from typing import NamedTuple
 
-from ..components import jit
+from ..components.runtime import jit
 
 
 class CEntry:

@@ -1,8 +1,8 @@
 """The slave's half of the shim's fast paths (the C half: ``shim/fast_paths.c``; what both
 share: ``protocol.py``).  Everything here only saves entries into Python: with it or
 without it (AGILESAT_SHIM_FAST=0, AGILESAT_SHIM_STEP=0) a host sees the same values,
-statuses, messages and FMU states, bit for bit (tests/test_shim_fast.py,
-tests/test_shim_step.py).
+statuses, messages and FMU states, bit for bit (tests/fast_paths/test_shim_fast.py,
+tests/fast_paths/test_shim_step.py).
 
 Fast get/set.  At instantiation (and after fmi2Reset, which makes pythonfmu create a new
 slave) the shim asks for the addresses of the model's value array and of ``kind``,
@@ -14,7 +14,7 @@ shim answers gets of Real, Integer and Boolean scalars itself while the outputs 
 and writes sets of finite Real inputs itself (a feedthrough input invalidates the
 outputs).  Every other call reaches the slave.
 
-The C step path.  A model whose kernels follow the kernel convention (components/jit.py)
+The C step path.  A model whose kernels follow the kernel convention (components/runtime/jit.py)
 has C entries (``c_entries.py``): once its kernels run compiled, the shim also takes
 ``fmi2DoStep`` and evaluates the outputs at a get, in C.  ``leave`` (at the end of every
 call the slave answers) arms it with what it may do until the next call: the step
@@ -40,8 +40,8 @@ import math
 
 import numpy as np
 
-from ..components import jit
-from ..components.switches import value
+from ..components.runtime import jit
+from ..components.runtime.switches import value
 from . import c_entries
 from .protocol import (
     B_N_SAVED,

@@ -54,9 +54,9 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
-from ..components import jit
 from ..components.model import ModelError
-from ..components.switches import SwitchError
+from ..components.runtime import jit
+from ..components.runtime.switches import SwitchError
 from . import CONFIGURATION, configuration_key, fmu_state, state_layout
 from .fast_paths import FastPaths, kind
 from .protocol import (

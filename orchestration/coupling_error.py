@@ -224,7 +224,7 @@ def _attitude(results, reference) -> float | None:
 
 
 def _cache() -> Path:
-    from ..components.jit import cache_root
+    from ..components.runtime.cache import cache_root
 
     return cache_root() / "coupling"
 

@@ -1,5 +1,6 @@
-"""The layers point one way: components/ (physics, plain NumPy) imports neither the FMI
-wrappers, the FMI libraries nor the orchestration; the scenarios' constants live in
+"""The layers point one way: the runtime (components/runtime/) under the physics
+(components/, plain NumPy) under the FMU layer (fmus/) under the orchestration; the physics
+imports neither the FMI libraries nor anything above it; the scenarios' constants live in
 orchestration/scenarios/; the generic master (orchestration/system/, cosim/) knows no model
 of ours."""
 
@@ -46,15 +47,54 @@ def test_no_scenario_constant_is_defined_in_components():
     assert not defined, defined
 
 
-#: what the generic master (orchestration/system/, cosim/) may take from outside the
-#: orchestration: the cache's root and its checked entries, the switches, the C compiler
-#: the FMU build uses
-MASTER_MAY_IMPORT = {
-    "components.jit",
-    "components.cache_files",
-    "components.switches",
-    "fmus.build",
-}
+#: the layers, lowest first: each module imports only from its own layer and those below
+#: (the runtime: jit, flat arrays, the cache, switches, the C toolchain; the physics; the
+#: FMU layer; the orchestration)
+LAYERS = ("components/runtime", "components", "fmus", "orchestration")
+#: imports that point up, each with its reason (none)
+UPWARD_ALLOWED: dict[tuple[str, str], str] = {}
+SOURCES = sorted(
+    path
+    for layer in ("components", "fmus", "orchestration")
+    for path in (ROOT / layer).rglob("*.py")
+    if "build" not in path.relative_to(ROOT).parts
+)
+
+
+def layer(relative: str) -> int | None:
+    """The layer of a module or package given as a path ('fmus/build.py', 'components'),
+    None outside the package (pythonfmu, numpy, ...)."""
+    for rank, prefix in enumerate(LAYERS):
+        if relative == prefix or relative.startswith(prefix + "/"):
+            return rank
+    return None
+
+
+def target(path, module: str) -> str:
+    """The package path an import names ('..components.runtime.jit' from fmus/x.py ->
+    'components/runtime/jit'), '' for a module outside agilesat."""
+    if module.startswith("."):
+        level = len(module) - len(module.lstrip("."))
+        package = path.relative_to(ROOT).parent.parts
+        base = package[: len(package) - level + 1]
+        return "/".join([*base, *filter(None, module.lstrip(".").split("."))])
+    parts = module.split(".")
+    return "/".join(parts[1:]) if parts[0] == "agilesat" else ""
+
+
+def test_no_import_points_up():
+    """components/runtime/ < components/ < fmus/ < orchestration/: the runtime knows no
+    model, the models no FMU, the FMU layer no master."""
+    bad = [
+        f"{relative}:{line}: imports {module}"
+        for path in SOURCES
+        for line, module in imports(path)
+        if (relative := path.relative_to(ROOT).as_posix())
+        and (to := target(path, module))
+        and layer(to) > layer(relative)
+        and (relative, to) not in UPWARD_ALLOWED
+    ]
+    assert not bad, bad
 
 
 @pytest.mark.parametrize(
@@ -66,13 +106,13 @@ MASTER_MAY_IMPORT = {
 def test_the_generic_master_knows_no_model(path):
     """Reading, checking and running a system reads what the FMUs' model descriptions say,
     never our model registry (fmus.FMUS, model_class) or the components' variable tables:
-    a third-party FMU is treated as ours."""
+    a third-party FMU is treated as ours.  Below the orchestration it uses the runtime
+    alone (the cache, the switches, the C compiler)."""
     bad = [
         f"{path.relative_to(ROOT)}:{line}: imports {module}"
         for line, module in imports(path)
-        if module.startswith("...")
-        and module.lstrip(".") not in MASTER_MAY_IMPORT
-        or module.split(".")[0] == "agilesat"
-        and module.split(".")[1] != "orchestration"
+        if (to := target(path, module))
+        and layer(to) != LAYERS.index("orchestration")
+        and layer(to) != LAYERS.index("components/runtime")
     ]
     assert not bad, bad

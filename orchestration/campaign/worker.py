@@ -140,7 +140,7 @@ def warm_up_steps(steps: int, share: int) -> int:
     is more than :data:`WARM_UP_FRACTION` of a run (then the first run decides for itself,
     as without a warm-up); and at least :data:`WARM_UP_STEPS` (or the whole run, if it is
     shorter), which load the FMUs and the modules every run uses."""
-    from ...components.jit import PAYS_AFTER
+    from ...components.runtime.jit import PAYS_AFTER
 
     needed = max(WARM_UP_STEPS, math.ceil(PAYS_AFTER / max(1, share)))
     if needed > WARM_UP_FRACTION * steps:
@@ -187,7 +187,7 @@ def run_batch(
     """Several runs in one Dask task (one round trip through the scheduler for all), each
     with its own record: ``runs`` is [(index, parameters), ...].  ``share``: the runs this
     worker is expected to make, which, from its first run, lets the models' kernels run
-    compiled where that pays (AGILESAT_JIT_RUNS, components/jit.py; read as the FMUs load,
+    compiled where that pays (AGILESAT_JIT_RUNS, components/runtime/jit.py; read as the FMUs load,
     unless set).  The process's first batch of ``target`` starts with its warm-up (module
     docstring), on the parameters of the batch's first run."""
     warmed = None

@@ -9,7 +9,7 @@ said.
 Each FMU is unpacked and its binary loaded once per process, keyed by the content of the
 file (SHA-256; a rebuilt FMU is a new one, a copy of the same file is the same one), and
 every run instantiates its instances on it.  It is unpacked into agilesat's cache
-(``fmus/<SHA-256>/`` under :func:`components.jit.cache_root`) once per content, its Python
+(``fmus/<SHA-256>/`` under :func:`components.runtime.cache.cache_root`) once per content, its Python
 compiled there at once (``__pycache__``), so that a new process takes the unpacked files
 and the compiled code instead of unpacking and compiling them again: about 0.3 s of a
 scan_pitch run (:func:`_extraction`).  Unpacking it again for each run would map
@@ -46,8 +46,7 @@ from fmpy.fmi2 import (
     free,
 )
 
-from ...components.cache_files import damage_of_tree, digest, warn, write_manifest
-from ...components.jit import cache_root
+from ...components.runtime.cache import cache_root, damage_of_tree, digest, warn, write_manifest
 from ..system.description import Description, content_key
 
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")

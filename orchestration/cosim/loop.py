@@ -10,11 +10,12 @@ between chunks, and raises the same :class:`FmiCallError` as the Python loop (th
 Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
 
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
-(:func:`fmus.build.c_compiler`) into a cache keyed by the source, the compiler, its flags,
-the machine and the Python version (in ``loop/`` of :func:`components.jit.cache_root`;
+(:func:`components.runtime.toolchain.c_compiler`) into a cache keyed by the source, the
+compiler, its flags, the machine and the Python version (in ``loop/`` of
+:func:`components.runtime.cache.cache_root`;
 written under a temporary name and renamed, so that processes may compile at once, with its
 SHA-256 beside it, checked before it is loaded: a damaged one is compiled again with a
-warning, ``components/cache_files.py``), and loaded with ``ctypes.PyDLL``, holding the GIL:
+warning, ``components/runtime/cache.py``), and loaded with ``ctypes.PyDLL``, holding the GIL:
 the loop measured the same as through ``CDLL`` (tests/tools/benchmark_master_loop.py;
 pythonfmu takes the GIL at every call into a slave either way), and :func:`csv_text` needs
 it (it formats the CSV lines with CPython's own ``repr`` of a float, a third faster than in
@@ -28,7 +29,6 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
 import platform
 import subprocess
 import sys
@@ -37,9 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.cache_files import damage_of_file, warn, write_digest
-from ...components.jit import cache_root
-from ...components.switches import value as switch
+from ...components.runtime.cache import cache_root, damage_of_file, warn, write_digest
+from ...components.runtime.switches import value as switch
+from ...components.runtime.toolchain import c_compiler, replacing
 from .fmu import Log
 
 LOOPS = ("auto", "compiled", "python")
@@ -107,8 +107,6 @@ _lock = threading.Lock()
 
 def library(source: Path = SOURCE) -> ctypes.CDLL:
     """The compiled loop (compiled into the cache at first use), or LoopUnavailable."""
-    from ...fmus.build import c_compiler  # the FMU build's: $CC, cc or gcc
-
     compiler = c_compiler()
     if not compiler:
         raise LoopUnavailable("no C compiler (cc or gcc on the PATH, or set CC)")
@@ -149,21 +147,15 @@ def library(source: Path = SOURCE) -> ctypes.CDLL:
 
 
 def _compile(compiler: str, source: Path, path: Path) -> None:
-    from ...fmus.build import _partial  # a temporary name unique to this process and call
-
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = _partial(path)
-        try:
+        with replacing(path) as partial:
             command = [compiler, *FLAGS, "-o", str(partial), str(source)]
             result = subprocess.run(command, capture_output=True, text=True)
             if result.returncode != 0:
                 said = (result.stderr.strip().splitlines() or ["no message"])[-1]
                 raise LoopUnavailable(f"compiling {source} with {compiler} failed: {said}")
             write_digest(path, partial)  # checked before every load
-            os.replace(partial, path)
-        finally:
-            partial.unlink(missing_ok=True)
     except OSError as exc:
         raise LoopUnavailable(f"cannot compile {source} into {path.parent}: {exc}") from None
 

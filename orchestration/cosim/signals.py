@@ -39,7 +39,7 @@ import os
 import signal
 import threading
 
-from ...components.switches import SwitchError, value
+from ...components.runtime.switches import SwitchError, value
 
 
 class Interruption(KeyboardInterrupt):

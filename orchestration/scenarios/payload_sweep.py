@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from agilesat.components.orbit_environment import WGS84_A
-from agilesat.components.rotations import dcm, rotate_back
+from agilesat.components.rotations import dcm
+from agilesat.components.vectors import rotate_back
 from agilesat.orchestration.mission import (
     Metric,
     Pointing,

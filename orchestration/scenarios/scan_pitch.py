@@ -24,7 +24,8 @@ from agilesat.components.cmg_cluster import GIMBAL_AXES, five_pyramid
 from agilesat.components.cmg_steering import PSEUDO_INVERSE
 from agilesat.components.orbit_environment import WGS84_A
 from agilesat.components.pitch_maneuver_controller import PitchProfile
-from agilesat.components.rotations import dcm, qmul, rotate
+from agilesat.components.rotations import dcm, qmul
+from agilesat.components.vectors import rotate
 from agilesat.orchestration.mission import (
     Metric,
     NotEvaluable,

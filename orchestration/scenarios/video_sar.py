@@ -41,8 +41,9 @@ import numpy as np
 from agilesat.components.cmg_steering import PSEUDO_INVERSE
 from agilesat.components.ephemeris import J2000, parse_epoch
 from agilesat.components.orbit_environment import OrbitEnvironment
-from agilesat.components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul, rotate_back
+from agilesat.components.rotations import dcm, dcm_from_quat, quat_conj, quat_mul
 from agilesat.components.staring_guidance import StaringGuidance, footprint_azimuths
+from agilesat.components.vectors import rotate_back
 from agilesat.orchestration.mission import (
     Metric,
     Pointing,

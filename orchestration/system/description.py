@@ -18,7 +18,7 @@ from pathlib import Path
 from fmpy import read_model_description
 from lxml import etree
 
-from ...components.cache_files import digest
+from ...components.runtime.cache import digest
 
 AGILESAT_TOOL = "agilesat"
 BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it

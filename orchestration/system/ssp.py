@@ -31,7 +31,7 @@ from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
-from ...components.switches import value as switch
+from ...components.runtime.switches import value as switch
 from .steps import read_step, write_step
 
 NS = {

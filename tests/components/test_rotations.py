@@ -11,7 +11,6 @@ from agilesat.components.rotations import (
     euler123_from_quat,
     euler123_rates,
     quat_conj,
-    quat_dot,
     quat_from_axis_angle,
     quat_from_dcm,
     quat_from_euler123,
@@ -19,9 +18,8 @@ from agilesat.components.rotations import (
     rot1,
     rot2,
     rot3,
-    rotate,
-    rotate_back,
 )
+from agilesat.components.vectors import quat_dot, rotate, rotate_back
 
 RNG = np.random.default_rng(7)
 

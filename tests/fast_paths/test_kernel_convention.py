@@ -1,22 +1,25 @@
-"""The kernel convention (components/jit.py) that the FMU's C step path relies on: a declared
-step or output kernel returning 0 did everything its method does but advance ``t``, so the
-shim may call the kernel alone; a STATELESS model's step changes nothing but ``t``.  Checked
-for every model, on random operating points and through the states that used to keep
-the C path off (a saturated cluster, a singular steering, a given orbit)."""
+"""The lane "kernel against its method": the kernel convention (components/runtime/jit.py)
+the FMU's C step path relies on.  A model's step and output are each one call of its
+declared kernel; a kernel returning 0 did everything its method does but advance ``t``, so
+the shim may call the kernel alone; a STATELESS model's step changes nothing but ``t``.
+Checked for every model's cases (tests/fast_paths/kernel_cases.py) and through the states
+that used to keep the C path off (a saturated cluster, a singular steering, a given orbit)."""
 
 import math
 import pickle
 
 import numpy as np
 import pytest
+from kernel_cases import CASES
 
-from agilesat.components import jit
 from agilesat.components.model import Model
+from agilesat.components.runtime import jit
 from agilesat.fmus import FMUS, c_entries, model_class
-from helpers import ISS_TLE, operating_point
+from helpers import ISS_TLE
 
 STEP = 0.05
 DECLARING = [name for name in FMUS if c_entries.of(model_class(name)).any]
+CALLS: list = []
 
 
 def twins(model):
@@ -58,7 +61,9 @@ def check(model, t, cases: dict):
         assert (after[0].tobytes(), after[1]) == (values.tobytes(), strings)
         changed = {k for k in after[2] if pickle.dumps(after[2][k]) != pickle.dumps(before[k])}
         assert changed <= {"t"} and method.t == t + STEP
+    made = len(CALLS)
     model.step(t, STEP)
+    assert len(CALLS) - made == (step is not None)  # one call of the kernel, or none
     alone, method = twins(model)
     if output is not None:
         status = output(alone.values, alone.state, model.t)
@@ -67,7 +72,9 @@ def check(model, t, cases: dict):
         if status == 0:
             same(alone, method)
             assert method.warnings == model.warnings
+    made = len(CALLS)
     model.output()
+    assert len(CALLS) - made == (output is not None)
 
 
 def run(model, inputs, steps: int) -> dict:
@@ -79,28 +86,46 @@ def run(model, inputs, steps: int) -> dict:
     return cases
 
 
+@pytest.fixture(autouse=True)
+def counted(monkeypatch):
+    """Every call of a declared kernel appended to CALLS."""
+    CALLS.clear()
+    for model in map(model_class, DECLARING):
+        for kernel in filter(None, jit.declared(model)):
+            run_ = kernel._run
+            monkeypatch.setattr(kernel, "_run", lambda *a, run_=run_: CALLS.append(1) or run_(*a))
+
+
 def test_the_models_with_kernels():
-    assert DECLARING == [
+    assert set(DECLARING) >= {
         "AttitudeController", "AttitudeEstimator", "CmgCluster", "CmgSteering",
         "DisturbanceTorques", "Flywheel", "Gyro", "OrbitEnvironment", "PayloadGimbals",
         "PitchManeuverController", "SatelliteDynamics", "StarTracker", "StaringGuidance",
         "SweepPlanner",
-    ]  # fmt: skip
+    }  # fmt: skip
+    assert {CASES[case][0].__name__ for case in CASES} >= set(DECLARING)  # every lane: all
 
 
-@pytest.mark.parametrize("name", DECLARING)
-@pytest.mark.parametrize("seed", [1, 2])
-def test_a_kernel_returning_zero_did_what_its_method_does(name, seed):
-    rng = np.random.default_rng(seed)
-    model = model_class(name)()
-    point = operating_point(name, rng)
-    for variable, value in point.items():
-        model.set(variable, value)
-    model.start(0.0)
-    cases = run(model, lambda k: point, 20)
-    step, output = jit.declared(type(model))
-    assert cases.get(("step", True), 0) == (20 if step else 0)
-    assert cases.get(("output", True), 0) == (20 if output else 0)
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_step_and_an_output_are_one_kernel_call_each_that_does_what_its_method_does(case):
+    """The lane "kernel against its method", over every model's cases (random inputs, the
+    input derivatives a host sets): each step and each output of the model is one call of
+    its declared kernel (a stateless model's step none, and it changes only t), and a
+    kernel returning 0 leaves the values, the state and the warnings its method leaves."""
+    cls, parameters, *feeds = CASES[case]
+    inputs, rates = ((*feeds, None, None)[i] for i in (0, 1))
+    inputs, rates = inputs and inputs(1, 0.8), rates and rates(1, 0.8)
+    model, rng = cls(**parameters).start(0.0), np.random.default_rng(1)
+    cases: dict = {}
+    for k in range(20):
+        for v in model.layout.group("input"):
+            model.set(v.name, inputs(k, v) if inputs else rng.uniform(-0.8, 0.8, v.size))
+        for name, rate in (rates(k) if rates else {}).items():
+            model.set_input_rate(name, rate)
+        check(model, k * STEP, cases)
+    step, output = jit.declared(cls)
+    assert cases.get(("step", True), 0) >= (5 if step else 0)  # compared: the kernel alone
+    assert cases.get(("output", True), 0) >= (5 if output else 0)
 
 
 def test_a_saturated_cluster_warns_once_and_its_kernel_steps_alone_after():

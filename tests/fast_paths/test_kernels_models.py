@@ -1,60 +1,42 @@
-"""The models' whole step/output kernels (components/jit.py, components/flat.py): compiled
-and Python give the same values, warnings, errors and saved states bit for bit, each step
-and output is one kernel call, and the helpers numba lacks match CPython's."""
+"""The lane "compiled kernel against its Python" (components/runtime/jit.py): over every
+model's cases (tests/fast_paths/kernel_cases.py) compiled and Python give the same values,
+warnings, errors and saved states bit for bit; the paths only the compiled tier can take
+(its warnings and errors, a singular steering, SGP4's direct call); and the helpers numba
+lacks (components/runtime/flat.py) match CPython's."""
 
 import math
 import re
+import sys
 
 import numpy as np
 import pytest
+from kernel_cases import CASES, STEP, random_run, run_case, snapshot
 
 from agilesat.components import (
-    attitude_controller,
-    attitude_estimator,
-    cmg_cluster,
     cmg_steering,
-    disturbance_torques,
-    flat,
-    flywheel,
-    gyro,
-    jit,
     orbit_environment,
-    payload_gimbals,
     pitch_maneuver_controller,
-    star_tracker,
     staring_guidance,
-    sweep_planner,
 )
-from agilesat.components.attitude_controller import AttitudeController
-from agilesat.components.attitude_estimator import AttitudeEstimator
 from agilesat.components.cmg_cluster import DEFAULT_SPINS, GIMBAL_AXES, ClusterGeometry, CmgCluster
 from agilesat.components.cmg_steering import SR_INVERSE, CmgSteering
-from agilesat.components.disturbance_torques import DisturbanceTorques
-from agilesat.components.flywheel import Flywheel
-from agilesat.components.gyro import Gyro
 from agilesat.components.model import ModelError
 from agilesat.components.orbit_environment import OrbitEnvironment
-from agilesat.components.payload_gimbals import PayloadGimbals
 from agilesat.components.pitch_maneuver_controller import PitchManeuverController
 from agilesat.components.rotations import dcm, quat_of_rows
+from agilesat.components.runtime import flat, jit
 from agilesat.components.satellite_dynamics import SatelliteDynamics
-from agilesat.components.sensing import quat_exp
-from agilesat.components.star_tracker import StarTracker
-from agilesat.components.staring_guidance import StaringGuidance
 from agilesat.components.sweep_planner import SweepPlanner
+from agilesat.fmus import FMUS, model_class
 from agilesat.orchestration.scenarios import scan_pitch, video_sar
 from helpers import ISS_TLE
 
 needs_numba = pytest.mark.skipif(
     jit._numba() is None, reason="numba not installed or AGILESAT_JIT=0"
 )
-MODULES = (
-    attitude_controller, attitude_estimator, cmg_cluster, cmg_steering, disturbance_torques,
-    flywheel, gyro, orbit_environment, payload_gimbals, pitch_maneuver_controller,
-    staring_guidance, star_tracker, sweep_planner,
-)  # fmt: skip
+#: every model's module
+MODULES = [sys.modules[model_class(name).__module__] for name in FMUS]
 ALL_KERNELS = [k for module in MODULES for k in jit.kernels(module).values()]
-STEP = 0.05
 
 
 @pytest.fixture(params=[pytest.param("compiled", marks=pytest.mark.slow), "py_func"])
@@ -79,13 +61,6 @@ def both(run):
             for kernel, run_ in saved:
                 kernel._run = run_
     return results
-
-
-def snapshot(model):
-    state = model.state.copy()
-    if isinstance(model, OrbitEnvironment):  # the addresses of its own SGP4 record
-        state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = 0.0
-    return model.values.tobytes(), state.tobytes(), list(model.warnings)
 
 
 # -- scan_pitch in-process: the five models, Jacobi coupling --------------------------------
@@ -127,190 +102,31 @@ def test_a_scan_pitch_run_is_the_same_compiled_and_in_python():
     steps = round(150.0 / STEP)  # the whole maneuver: every phase, the terminal PD
     compiled, readable = both(lambda: scan_pitch_run(steps))
     assert compiled == readable
-    phases = {np.frombuffer(row[3][0])[pitch_maneuver_controller.Y_PHASE] for row in compiled}
+    phases = {np.frombuffer(row[3][0])[pitch_maneuver_controller.Y.phase] for row in compiled}
     assert phases == {1.0, 2.0, 3.0, 4.0, 5.0}
 
 
-# -- each model alone on random inputs ---------------------------------------------------
-def random_run(model, steps: int, seed: int, scale: float, inputs=None):
-    """The model started, then random inputs (or ``inputs(k)``) before each step."""
-    rng = np.random.default_rng(seed)
-    model.start(0.0)
-    record = [snapshot(model)]
-    for k in range(steps):
-        for v in model.layout.group("input"):
-            value = inputs(k, v) if inputs else rng.uniform(-scale, scale, size=v.size)
-            model.set(v.name, value)
-        model.advance(k * STEP, STEP)
-        record.append(snapshot(model))
-    return record
-
-
-def unit_quaternions(seed: int, scale: float):
-    """Random inputs in (−scale, scale), the quaternions made unit (a function of k)."""
-
-    def inputs(k, v):
-        rng = np.random.default_rng([seed, k, sum(map(ord, v.name))])
-        x = rng.uniform(-scale, scale, size=v.size)
-        return x / np.linalg.norm(x) if v.name.startswith("q_") else x
-
-    return inputs
-
-
-def in_orbit(seed: int, scale: float):
-    """:func:`unit_quaternions`, with r_I and v_I of a low orbit (any direction)."""
-    random = unit_quaternions(seed, scale)
-
-    def inputs(k, v):
-        x = random(k, v)
-        size = {"r_I": 7.0e6, "v_I": 7.5e3}.get(v.name)
-        return size * x / np.linalg.norm(x) if size else x
-
-    return inputs
-
-
-def tracked(seed: int, scale: float):
-    """An estimator's inputs: a gyro reading of a body turning at a constant rate, and a
-    star tracker's samples at 4 Hz, 0.2 s late, slightly wrong (one in seven invalid); the
-    orbit frame turning at a constant rate."""
-    rng = np.random.default_rng(seed)
-    rate, errors = rng.uniform(-scale, scale, 3) * 0.1, rng.normal(0.0, 1e-4, (2000, 3))
-    orbit_rate = 1.1e-3 * scale
-
-    def inputs(k, v):
-        t = k * STEP
-        sample = max(0, int((t - 0.2) * 4.0))  # the latest released
-        t_meas = sample / 4.0
-        return {
-            "w_meas_B": rate + errors[k] * 10.0,
-            "q_BI_meas": quat_exp(tuple(rate * t_meas + errors[sample])),
-            "meas_valid": sample % 7 != 3,
-            "t_meas": t_meas,
-            "q_OI": quat_exp((0.0, orbit_rate * t, 0.0)),  # an orbit frame turning about y
-            "w_OI_O": (0.0, -orbit_rate, 0.0),
-        }[v.name]
-
-    return inputs
-
-
-def video_sar_pass(seed: int, scale: float):
-    """The video_sar pass (OrbitEnvironment) at each step's time, the target moved a few km
-    in each run (the inputs StaringGuidance checks must be an orbit and its frame)."""
-    orbit = OrbitEnvironment(**video_sar.ORBIT)
-    orbit.set("target_lat", video_sar.ORBIT["target_lat"] + 1e-3 * scale)
-    orbit.start(0.0)
-    at = {}
-
-    def inputs(k, v):
-        if k not in at:
-            orbit.t = k * STEP  # the outputs are functions of time
-            orbit.output()
-            at[k] = {name: orbit.get(name) for name in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}
-        return at[k][v.name]
-
-    return inputs
-
-
-CASES = {
-    "controller": (AttitudeController, {}, unit_quaternions),
-    "controller_feedforward": (
-        AttitudeController,
-        {"acceleration_feedforward": True, "inertia": [[950, 3, -2], [3, 900, 1], [-2, 1, 800]]},
-        unit_quaternions,
-    ),
-    "guidance": (StaringGuidance, {"reference_time": 2.0}, video_sar_pass),
-    "guidance_yaw_0_tilted": (
-        StaringGuidance,
-        {"yaw_compensation": False, "boresight_B": [0.2, -0.1, 1.0]},
-        video_sar_pass,
-    ),
-    "guidance_tilted": (StaringGuidance, {"boresight_B": [0.0, 0.3, 1.0]}, video_sar_pass),
-    "sweep": (SweepPlanner, {}),
-    "gyro": (Gyro, {}),
-    "gyro_saturating_slow_no_quantisation": (
-        Gyro,
-        {"saturation": 0.3, "rate": 7.0, "quantization": 0.0},
-    ),
-    "tracker": (StarTracker, {}, unit_quaternions),
-    "tracker_late_fast": (StarTracker, {"latency": 0.6, "rate": 10.0}, unit_quaternions),
-    "estimator_random": (AttitudeEstimator, {}, unit_quaternions),
-    "estimator": (AttitudeEstimator, {"history": 0.5}, tracked),
-    "torques": (DisturbanceTorques, {}, in_orbit),
-    "torques_exponential_no_srp": (
-        DisturbanceTorques,
-        {"atmosphere": "EXPONENTIAL", "srp": False, "facet_area": [1.0] * 8 + [0.0] * 2},
-        in_orbit,
-    ),
-    "wheels": (Flywheel, {}),
-    "wheels_limited_skewed": (
-        Flywheel,
-        {
-            "torque_limit": 0.05,
-            "momentum_limit": 0.005,
-            "coulomb_friction": 0.01,
-            "axis": [[1, 0, 0], [0, 1, 0], [0, 0, 0], [0.6, 0.6, 0.5]],
-        },
-    ),
-    "wheels_coasting": (Flywheel, {"torque_limit": 0.0, "speed0": [5.0, -3.0, 0.0, 0.0]}),
-    "payloads": (PayloadGimbals, {}),
-    "payloads_accel_inputs": (PayloadGimbals, {"accel_inputs": True}),
-    "payloads_underdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 0.5}),
-    "payloads_critical": (PayloadGimbals, {"bandwidth": 3.0, "damping": 1.0}),
-    "payloads_overdamped": (PayloadGimbals, {"bandwidth": 3.0, "damping": 4.0}),
-    "sweep_triangle": (SweepPlanner, {"turnaround_time": 0.0, "symmetric": False}),
-    "cluster": (CmgCluster, {}),
-    "cluster_slow_gimbals": (CmgCluster, {"rate_limit": 0.05, "accel_limit": 0.02}),
-    "steering": (CmgSteering, {}),
-    "steering_null_motion": (CmgSteering, {"null_gain": 0.5}),
-    "steering_sr_inverse": (CmgSteering, {"law": SR_INVERSE, "sr_lambda0": 0.2}),
-    "pitch": (PitchManeuverController, {}),
-    "orbit_circular": (OrbitEnvironment, {}),
-    "orbit_j2_eccentric_epoch": (
-        OrbitEnvironment,
-        {
-            "semi_major_axis": 1.0e7,  # perigee 7000 km: above the ground
-            "eccentricity": 0.3,
-            "j2": True,
-            "raan": 1.0,
-            "arg_perigee": 2.0,
-            "true_anomaly0": 0.5,
-            "epoch": "2024-03-01T10:00:00",
-            "target_lat": 0.5,
-            "target_lon": -1.0,
-            "target_alt": 100.0,
-        },
-    ),
-    "orbit_very_eccentric": (
-        OrbitEnvironment,
-        {"semi_major_axis": 7.0e7, "eccentricity": 0.9, "earth_angle0": 1.0},
-    ),
-    "orbit_tle": (OrbitEnvironment, {"tle_line1": ISS_TLE[0], "tle_line2": ISS_TLE[1]}),
-}
-
-
+# -- each model alone on random inputs (tests/fast_paths/kernel_cases.py) -----------------
 @pytest.mark.slow
 @needs_numba
 @pytest.mark.parametrize("case", list(CASES))
-@pytest.mark.parametrize("seed, scale", [(1, 0.8), (2, 3.0)])
-def test_each_model_on_random_inputs_is_the_same_compiled_and_in_python(case, seed, scale):
-    cls, parameters, *inputs = CASES[case]
+def test_every_kernel_compiled_gives_its_python_bit_for_bit(case):
+    """The lane "compiled kernel against its Python", over every model's cases: the
+    values, states and warnings after each step, of small and of large random inputs."""
+    cls = CASES[case][0]
     steps = 2400 if cls in (PitchManeuverController, SweepPlanner) else 300  # every phase
-
-    def run():
-        feed = inputs[0](seed, scale) if inputs else None  # the same inputs in each run
-        return random_run(cls(**parameters), steps, seed, scale, feed)
-
-    compiled, readable = both(run)
-    assert compiled == readable
-    outputs = np.array([np.frombuffer(values) for values, _, _ in compiled])
-    varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
-    # orbit: w_OI_O x, target z, v_z; the sweep over 120 s: no pitch reversal (pitch rate
-    # and acceleration), the triangle wave no acceleration at all
-    # and coasting wheels no motor torque, saturation, third wheel or z momentum; the
-    # estimators valid, the random one's updates and NIS (each measurement is late)
-    constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}
-    constant.update(estimator=1, estimator_random=7)
-    assert np.count_nonzero(varying) >= varying.size - constant.get(case, 3)
+    for seed, scale in ((1, 0.8), (2, 3.0)):
+        compiled, readable = both(lambda: run_case(case, seed, scale, steps))
+        assert compiled == readable
+        outputs = np.array([np.frombuffer(values) for values, _, _ in compiled])
+        varying = np.ptp(outputs[:, cls().layout.range["output"]], axis=0) > 0
+        # orbit: w_OI_O x, target z, v_z; the sweep over 120 s: no pitch reversal (pitch
+        # rate and acceleration), the triangle wave no acceleration at all and coasting
+        # wheels no motor torque, saturation, third wheel or z momentum; the estimators
+        # valid, the random one's updates and NIS (each measurement is late)
+        constant = {"sweep": 4, "sweep_triangle": 6, "wheels_coasting": 9}
+        constant.update(estimator=1, estimator_random=7)
+        assert np.count_nonzero(varying) >= varying.size - constant.get(case, 3)
 
 
 @needs_numba
@@ -357,8 +173,8 @@ def test_a_singular_configuration_is_the_same_compiled_and_in_python(law):
     compiled, readable = both(run)
     assert compiled == readable
     values = np.frombuffer(compiled[0])
-    assert values[cmg_steering.Y_Q] < cmg_steering.SINGULAR_Q
-    rates = values[cmg_steering.Y_RATES : cmg_steering.Y_RATES + 6]
+    assert values[cmg_steering.Y.singularity] < cmg_steering.SINGULAR_Q
+    rates = values[cmg_steering.Y.delta_dot_cmd : cmg_steering.Y.delta_dot_cmd + 6]
     assert np.all(np.isfinite(rates)) and np.any(rates != 0)
     assert len(compiled[2]) == 1
     assert re.fullmatch(
@@ -385,7 +201,7 @@ def test_the_pseudo_inverse_at_a_singularity_leaves_the_singular_direction_undel
 @needs_numba
 def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(path):
     model = OrbitEnvironment(semi_major_axis=1.0e7, eccentricity=0.3).start(0.0)
-    model.state[orbit_environment.M0] = math.nan  # no finite input makes Newton fail
+    model.state[orbit_environment.S.M0] = math.nan  # no finite input makes Newton fail
     before = model.values.copy()
     with pytest.raises(
         ModelError, match=re.escape("Kepler's equation did not converge (M = nan, e = 0.3)")
@@ -416,7 +232,7 @@ def test_a_saved_state_restored_continues_bit_for_bit(case, path):
     cls, parameters, *inputs = CASES[case]
     rng = np.random.default_rng(5)
     values = {k: rng.uniform(-0.8, 0.8, size=32) for k in range(60)}
-    feed = inputs[0](5, 0.8) if inputs else lambda k, v: values[k][: v.size]
+    feed = inputs[0](5, 0.8) if inputs and inputs[0] else lambda k, v: values[k][: v.size]
 
     model = cls(**parameters)
     random_run(model, 30, 0, 0.0, inputs=feed)
@@ -438,21 +254,6 @@ def test_a_saved_state_restored_continues_bit_for_bit(case, path):
     other = cls(**parameters).start(0.0)
     other.set_state(saved)
     assert first == again == continue_(other)
-
-
-@needs_numba
-@pytest.mark.parametrize("case", list(CASES))
-def test_step_and_output_are_at_most_one_kernel_call_each(case, path, monkeypatch):
-    cls, parameters, *_ = CASES[case]
-    model = cls(**parameters).start(0.0)
-    calls = []
-    for kernel in ALL_KERNELS:
-        run = kernel._run
-        monkeypatch.setattr(kernel, "_run", lambda *a, run=run: calls.append(run) or run(*a))
-    model.step(0.0, STEP)
-    stepped = len(calls)
-    model.output()
-    assert stepped <= 1 and len(calls) - stepped == 1
 
 
 # -- helpers numba lacks, against CPython's ------------------------------------------------
@@ -496,14 +297,14 @@ def test_quat_of_rows_compiled_is_the_python_bit_for_bit():
 
 @needs_numba
 def test_every_model_kernel_compiles():
-    names = sorted(k.__name__ for k in ALL_KERNELS)
-    assert names == [
-        "_footprint_azimuths", "cluster_output", "cluster_step", "controller_output",
-        "estimator_output", "estimator_step", "flywheel_output", "flywheel_step",
-        "gimbals_output", "gimbals_step", "guidance_output", "guidance_step", "gyro_output",
-        "gyro_step", "orbit_output", "pitch_output", "steering_output", "sweep_output",
-        "torques_output", "tracker_output", "tracker_step",
-    ]  # fmt: skip
+    names = {k.__name__ for k in ALL_KERNELS}
+    assert names >= {
+        "_footprint_azimuths", "_output", "_step", "cluster_output", "cluster_step",
+        "controller_output", "estimator_output", "estimator_step", "flywheel_output",
+        "flywheel_step", "gimbals_output", "gimbals_step", "guidance_output", "guidance_step",
+        "gyro_output", "gyro_step", "orbit_output", "pitch_output", "steering_output",
+        "sweep_output", "torques_output", "tracker_output", "tracker_step",
+    }  # fmt: skip
     for kernel in ALL_KERNELS:
         assert kernel.compiled is not kernel.py_func
         assert type(kernel.compiled).__module__.startswith("numba")
@@ -582,9 +383,9 @@ def test_a_restored_state_calls_sgp4_on_its_own_record():
     other = OrbitEnvironment(tle_line1=ISS_TLE[0], tle_line2=ISS_TLE[1]).start(0.0)
     state = one.get_state()
     state[0][:] = 0.0  # the value array
-    state[2]["state"][orbit_environment.SGP4 : orbit_environment.SGP4 + 2] = (8.0, 16.0)
+    state[2]["state"][orbit_environment.S.sgp4 : orbit_environment.S.sgp4 + 2] = (8.0, 16.0)
     other.set_state(state)
-    assert tuple(other.state[orbit_environment.SGP4 : orbit_environment.SGP4 + 2]) == tuple(
+    assert tuple(other.state[orbit_environment.S.sgp4 : orbit_environment.S.sgp4 + 2]) == tuple(
         map(float, other._sgp4_entry)
     )
     assert "_sgp4_entry" not in state[2]

@@ -1,6 +1,7 @@
-"""The shim's C step path (fmus/shim/fast_paths.c, fmus/fast_paths.py, fmus/c_entries.py):
-with the kernels compiled, fmi2DoStep and the
-evaluation of the outputs run in C, calling the models' compiled kernels.  Driven through
+"""The lane "C step against Python step": the shim's C step path (fmus/shim/fast_paths.c,
+fmus/fast_paths.py, fmus/c_entries.py): with the kernels compiled, fmi2DoStep and the
+evaluation of the outputs run in C, calling the models' compiled kernels, for every model
+with kernels.  Driven through
 the built FMUs in clean processes (tests/tools/shim_step_host.py), with the path on and off
 (AGILESAT_SHIM_STEP=0): the path is taken (the shim's counters), and everything a host sees
 is the same bit for bit: values, statuses, messages, FMU states (serialized bytes), the run
@@ -14,20 +15,17 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.components import jit
-from agilesat.fmus import c_entries
+from agilesat.components.runtime import jit
+from agilesat.fmus import FMUS, c_entries, model_class
 from helpers import TOOLS, run_python
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 HOST = (TOOLS / "shim_step_host.py").read_text()
-#: the FMUs with C entries (scan_pitch's five)
-NAMES = (
-    "SatelliteDynamics",
-    "CmgCluster",
-    "CmgSteering",
-    "PitchManeuverController",
-    "OrbitEnvironment",
-)
+#: every FMU with C entries
+NAMES = [name for name in FMUS if c_entries.of(model_class(name)).any]
+#: the FMUs whose first step after initialisation is the Python's (it checks the inputs
+#: the initial state was computed from, Model.check_initial_inputs)
+CHECKS_INITIAL_INPUTS = ("SatelliteDynamics",)
 OK, WARNING, ERROR = 0, 1, 3
 
 
@@ -48,30 +46,28 @@ def same(on, off, *keys):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_steps_are_served_in_c_and_give_the_same_answers(hosts, name):
+def test_the_c_step_path_is_the_python_step_path(hosts, name):
+    """The lane "C step against Python step", over every model with kernels: a run, FMU
+    states (get, set, serialize, deserialize mid-run), bad steps and a reset give the same
+    values, statuses, messages and serialized states with the path on and off, and the
+    path is taken: every step in C but those the Python must take (a step kernel's first
+    call, which switches it to the compiled tier; a first step that checks the initial
+    inputs); a step that changes only the time is C's once the output kernel has run."""
+    first = jit.declared(model_class(name))[0] is not None
+    checks = name in CHECKS_INITIAL_INPUTS
     on, off = hosts["on"][f"{name}:run"], hosts["off"][f"{name}:run"]
     same(on, off, "record")
     assert {row[0] for row in on["record"]} == {OK}
     enabled, steps, outputs, fallbacks = on["counts"]
-    # every step in C but, where the step is a kernel, the first (its first call switches
-    # it to the compiled tier; SatelliteDynamics checks its initial inputs there); a step
-    # that changes only the time is C's once the output kernel has run (the first get)
-    first_in_python = name in ("SatelliteDynamics", "CmgCluster")
-    assert (enabled, steps, fallbacks) == (1, 30 - first_in_python, 0)
+    assert (enabled, steps, fallbacks) == (1, 30 - first, 0)
     assert outputs >= 29
     assert off["counts"] == [-1, 0, 0, 0]
 
-
-@pytest.mark.parametrize("name", NAMES)
-def test_fmu_states_after_c_steps_are_those_of_the_python(hosts, name):
     on, off = hosts["on"][f"{name}:states"], hosts["off"][f"{name}:states"]
     same(on, off, "state", "after", "restored", "deserialized")
     assert on["restored"] == on["after"] and on["deserialized"] == on["after"]
-    assert on["counts"][1] > 20
+    assert on["counts"][1] == 26 - checks  # the kernels compiled by the run before
 
-
-@pytest.mark.parametrize("name", NAMES)
-def test_bad_steps_after_c_steps_get_the_slaves_status_and_message(hosts, name):
     on, off = hosts["on"][f"{name}:faults"], hosts["off"][f"{name}:faults"]
     same(on, off, "calls", "messages", "record")
     calls = on["calls"]
@@ -81,17 +77,12 @@ def test_bad_steps_after_c_steps_get_the_slaves_status_and_message(hosts, name):
     assert "time discontinuity: the last step ended at t=0.25, doStep starts at t=0.55" in text
     assert "step size must be positive and finite, got 0.0" in text
     assert "not allowed in mode 'terminated'" in text
-    assert on["counts"][1] >= 4 + 3  # the steps before and after the bad ones
+    assert on["counts"][1] == 9 - checks  # the steps before and after the bad ones
 
-
-@pytest.mark.parametrize("name", NAMES)
-def test_reset_hands_the_new_slaves_arrays_over(hosts, name):
     on, off = hosts["on"][f"{name}:reset"], hosts["off"][f"{name}:reset"]
     same(on, off, "first", "again")
     assert on["again"] == on["first"]
-    # the kernels are compiled by then (in this process): every step in C but
-    # SatelliteDynamics' first (its initial inputs are checked)
-    assert on["after"][1] - on["before"][1] == 6 - (name == "SatelliteDynamics")
+    assert on["after"][1] - on["before"][1] == 6 - checks
 
 
 def test_a_warning_from_the_step_falls_back_to_the_slave(hosts):
@@ -197,7 +188,8 @@ def test_an_exception_in_a_c_entry_returns_minus_one(tmp_path, monkeypatch):
 def test_scan_pitch_never_enters_python_in_a_macro_step(monkeypatch):
     """With the kernels compiled, a macro step of scan_pitch (five FMUs, the master's Jacobi
     passes) does not enter Python: every step and output is a C entry (the pitch
-    controller's CPython math.hypot too: components/flat.py), every get and set the shim's."""
+    controller's CPython math.hypot too: components/runtime/flat.py), every get and set
+    the shim's."""
     from count_python_entries import count
 
     monkeypatch.setenv("AGILESAT_JIT_AFTER", "0")

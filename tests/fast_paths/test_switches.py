@@ -1,4 +1,4 @@
-"""Every AGILESAT_* environment variable is in one table (components/switches.py) and on
+"""Every AGILESAT_* environment variable is in one table (components/runtime/switches.py) and on
 one page (docs/fast_paths.md), and a value it cannot take is a one-line message naming the
 variable and what it accepts."""
 
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from agilesat.components.switches import SWITCHES, SwitchError, value
+from agilesat.components.runtime.switches import SWITCHES, SwitchError, value
 from helpers import ROOT, logged, slave
 
 #: AGILESAT_* names that are not environment variables: include guards, a tool's name

@@ -149,7 +149,8 @@ def doubled(fmu, out, rename: bool):
     digest = package.removeprefix("agilesat_")
     cmg = f"resources/{package}/components/cmg_cluster.py"
     entries[cmg] = entries[cmg].replace(
-        b"values[Y_Q] = det3(gram(columns))", b"values[Y_Q] = 2.0 * det3(gram(columns))"
+        b"values[Y.singularity] = det3(gram(columns))",
+        b"values[Y.singularity] = 2.0 * det3(gram(columns))",
     )
     assert b"2.0 * det3" in entries[cmg]
     if rename:

@@ -115,12 +115,20 @@ def _set(at: int, x: float):
     [
         ("Flywheel", _set(1, 40.0), "wheel constants (places, axes, distribution) are not"),
         ("Flywheel", _set(0, 4.0), "wheel constants"),
-        ("StarTracker", _set(st.SECTION, 1e6), "constants (capacity, section length"),
-        ("StarTracker", _set(st.SECTIONS + st.N, 1e6), "count of samples waiting 1000000.0"),
-        ("StarTracker", _set(st.SECTIONS + st.N, -1.0), "count of samples waiting -1.0"),
-        ("AttitudeEstimator", _set(ae.CAPACITY, 1e6), "constants (capacity, section length, R)"),
-        ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 2.5), "count of records 2.5"),
-        ("AttitudeEstimator", _set(ae.SECTIONS + ae.N_RECORDS, 1e6), "count of records 1000000.0"),
+        ("StarTracker", _set(st.S.section, 1e6), "constants (capacity, section length"),
+        (
+            "StarTracker",
+            _set(st.SECTIONS + st.WAITING.n, 1e6),
+            "count of samples waiting 1000000.0",
+        ),
+        ("StarTracker", _set(st.SECTIONS + st.WAITING.n, -1.0), "count of samples waiting -1.0"),
+        ("AttitudeEstimator", _set(ae.S.capacity, 1e6), "constants (capacity, section length, R)"),
+        ("AttitudeEstimator", _set(ae.SECTIONS + ae.FILTER.n_records, 2.5), "count of records 2.5"),
+        (
+            "AttitudeEstimator",
+            _set(ae.SECTIONS + ae.FILTER.n_records, 1e6),
+            "count of records 1000000.0",
+        ),
     ],
 )
 def test_the_rows_the_kernels_index_with_are_those_the_model_could_hold(name, tamper, message):
@@ -138,13 +146,13 @@ def test_an_estimator_whose_records_would_overflow_raises_instead_of_writing_pas
     model = model_class("AttitudeEstimator")().start(0.0)
     model.advance(0.0, 0.1)
     state, c = model.state, ae.SECTIONS
-    capacity = int(state[ae.CAPACITY])
-    state[c + ae.N_RECORDS] = capacity - 1  # one over what the state check lets through
+    capacity = int(state[ae.S.capacity])
+    state[c + ae.FILTER.n_records] = capacity - 1  # one over what the state check lets through
     before = state.copy()
     with pytest.raises(Exception, match="more records than the history holds"):
         model.advance(0.1, 0.1)
     assert np.array_equal(
-        state[: c + int(state[ae.SECTION])], before[: c + int(before[ae.SECTION])]
+        state[: c + int(state[ae.S.section])], before[: c + int(before[ae.S.section])]
     )
 
 

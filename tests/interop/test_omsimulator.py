@@ -2,7 +2,7 @@
 ``OMSimulator --stopTime=T --resultFile=R.csv PACKAGE.ssp``), as a user runs a package.
 
 OMSimulator is on no package registry (it builds from source): give its executable in
-``AGILESAT_OMSIMULATOR`` (components/switches.py); without it these tests are skipped, and
+``AGILESAT_OMSIMULATOR`` (components/runtime/switches.py); without it these tests are skipped, and
 say so.  It is a host without Python: the FMUs start the Python they were built with.
 
 - Each scenario runs to its end (exit 0, no error, the last row at the stop time), and the
@@ -27,7 +27,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from agilesat.components.switches import value
+from agilesat.components.runtime.switches import value
 from agilesat.orchestration.cosim.master import simulate
 from agilesat.orchestration.scenarios import NAMES
 from helpers import HOST_CASES, export_elsewhere

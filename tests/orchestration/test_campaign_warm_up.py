@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from agilesat.components.jit import PAYS_AFTER
+from agilesat.components.runtime.jit import PAYS_AFTER
 from agilesat.orchestration.campaign.report import warm_ups
 from agilesat.orchestration.campaign.worker import (
     WARM_UP_FRACTION,

@@ -1,4 +1,4 @@
-"""What the kernels' tier decision (components/jit.py: expect, PAYS_AFTER) trades: prints a
+"""What the kernels' tier decision (components/runtime/jit.py: expect, PAYS_AFTER) trades: prints a
 report (not a test; timings on shared machines vary: compare the ratios, measured in one
 run).
 
@@ -24,7 +24,7 @@ import statistics
 import subprocess
 import sys
 
-from agilesat.components import jit
+from agilesat.components.runtime import jit
 from agilesat.orchestration.scenarios import NAMES
 
 RUN = """
@@ -81,7 +81,7 @@ def main() -> None:
             f"{name:>14} {steps:>6} {load:6.2f} | {m['compiled']:8.2f} {m['python']:8.2f} "
             f"{m['default']:8.2f} | {gain * 1e6:7.0f} us {load / gain:10,.0f}"
         )
-    print(f"PAYS_AFTER = {jit.PAYS_AFTER:,} steps (components/jit.py)")
+    print(f"PAYS_AFTER = {jit.PAYS_AFTER:,} steps (components/runtime/jit.py)")
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 
 

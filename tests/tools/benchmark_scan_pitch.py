@@ -13,7 +13,7 @@ process, see best()):
   loaded FMUs, the shim's C step path kept: ctypes, our shim, and pythonfmu and our slave
   where a call enters Python; less the master) and master (that run again with every FMI
   call of the compiled loop a C no-op: the loop, its rows and their CSV text);
-- the previous design in the same run: the kernels (components/jit.py) running their
+- the previous design in the same run: the kernels (components/runtime/jit.py) running their
   readable Python (AGILESAT_JIT=0), the shim's get/set through pythonfmu and the slave
   (AGILESAT_SHIM_FAST=0) and the Python master loop (loop="python"), split into model
   compute, FMI layer and master (the Python loop with every FMI call a Python no-op), and
@@ -152,7 +152,7 @@ def readable_kernels():
     """Every compiled kernel of the loaded FMUs running its readable Python."""
     changes = []
     for _, module in _fmu_modules():
-        if module.__name__.endswith(".components.jit"):
+        if module.__name__.endswith(".components.runtime.jit"):
             for other_name, other in _fmu_modules():
                 if other_name.startswith(module.__name__.split(".")[0] + ".components."):
                     for kernel in module.kernels(other).values():
@@ -228,7 +228,7 @@ def models_report(repeat: int) -> None:
     """Each model of the scenarios alone (in-process, at its defaults, 500 steps of 0.05 s
     with step + output): us per step with its kernels compiled and with their Python,
     alternated, best of ``repeat`` (less noisy than the co-simulation's split)."""
-    from agilesat.components import jit
+    from agilesat.components.runtime import jit
     from agilesat.fmus import FMUS, model_class
 
     print("\nmodels alone, us per step + output (compiled kernels / their Python):")

@@ -82,9 +82,9 @@ SWITCHES = {
             "AGILESAT_JIT",
             True,
             _flag,
-            "1: the model kernels run compiled when a run pays for it (components/jit.py); "
+            "1: the model kernels run compiled when a run pays for it (components/runtime/jit.py); "
             "0: their Python",
-            "components/jit.py, at import",
+            "components/runtime/jit.py, at import",
         ),
         Switch(
             "AGILESAT_JIT_AFTER",
@@ -92,7 +92,7 @@ SWITCHES = {
             _count,
             "the calls of a kernel before it runs compiled, fewer where a run's length says "
             "it pays; 0: from the first call",
-            "components/jit.py, at import",
+            "components/runtime/jit.py, at import",
         ),
         Switch(
             "AGILESAT_JIT_RUNS",
@@ -100,7 +100,7 @@ SWITCHES = {
             _count,
             "the runs a process expects to make of each model (a campaign worker's share): "
             "with a run's steps, it decides whether the kernels run compiled from the start",
-            "components/jit.py, at import",
+            "components/runtime/jit.py, at import",
         ),
         Switch(
             "AGILESAT_CACHE_DIR",
@@ -108,7 +108,7 @@ SWITCHES = {
             _path,
             "the compile cache: kernels, C entries, the master's loop, unpacked FMUs; "
             "default $XDG_CACHE_HOME/agilesat or ~/.cache/agilesat",
-            "components/jit.py cache_root()",
+            "components/runtime/cache.py cache_root()",
         ),
         Switch(
             "AGILESAT_SHIM_FAST",

@@ -1,14 +1,15 @@
-"""Entries of agilesat's compile cache that a damaged file can never pass for.
+"""agilesat's cache directory, and its entries sealed so that a damaged file never passes.
 
-Everything in the cache (:func:`.jit.cache_root`: unpacked FMUs and their compiled Python,
-the compiled master loop, numba's compiled kernels) is written under a temporary name and
-renamed, so a process killed while writing never leaves a torn entry.  A file damaged
+Everything in the cache (:func:`cache_root`: unpacked FMUs and their compiled Python, the
+compiled master loop, numba's compiled kernels) is written under a temporary name and
+renamed (:func:`.toolchain.replacing`), so a process killed while writing never leaves a
+torn entry.  A file damaged
 afterwards (a disk error, a truncation, an edit) would still be loaded, and loading bad
 machine code or bytecode crashes the process.  So each entry carries the SHA-256 of what
 was written, checked before anything is loaded from it:
 
 - a file: ``seal`` puts the digest in front of the bytes, ``unseal`` gives them back only
-  if they match (numba's index and data files, jit.py);
+  if they match (numba's index and data files, :mod:`.jit`);
 - a file that must stay as it is (a shared library): its digest beside it, in
   ``<name>.sha256`` (:func:`write_digest`, :func:`damage_of_file`);
 - a directory (an unpacked FMU): a manifest of every file's digest, ``MANIFEST``
@@ -25,8 +26,22 @@ import os
 import warnings
 from pathlib import Path
 
+from .switches import value
+from .toolchain import replacing
+
 MANIFEST = ".agilesat-manifest.json"
 _DIGEST = 32
+
+
+def cache_root() -> Path:
+    """agilesat's cache: $AGILESAT_CACHE_DIR, else $XDG_CACHE_HOME/agilesat, else
+    ~/.cache/agilesat (kernels in ``numba/``, the master's loop in ``loop/``, unpacked FMUs
+    in ``fmus/``)."""
+    root = value("AGILESAT_CACHE_DIR")
+    if root:
+        return Path(root)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base, "agilesat")
 
 
 def digest(path) -> str:
@@ -52,10 +67,8 @@ def unseal(data: bytes) -> bytes | None:
 def write_digest(path: Path, content: Path) -> None:
     """``<path>.sha256``: the digest of the file ``content`` (written atomically, before
     ``content`` is renamed to ``path``)."""
-    side = Path(f"{path}.sha256")
-    partial = side.with_name(f".{side.name}.{os.getpid()}")
-    partial.write_text(digest(content) + "\n")
-    os.replace(partial, side)
+    with replacing(Path(f"{path}.sha256")) as partial:
+        partial.write_text(digest(content) + "\n")
 
 
 def damage_of_file(path: Path) -> str:

@@ -5,31 +5,34 @@ the model's module, with its equations; ``@kernel`` marks it and ``@jitable`` th
 functions it calls.  A kernel runs that Python for its first ``AGILESAT_JIT_AFTER`` calls
 (default 50,000), then the same function compiled by numba in nopython
 mode without fastmath: IEEE double arithmetic in the order written, the same libm, so the
-results are those of the Python bit for bit (tests/test_kernels.py) and switching midway
+results are those of the Python bit for bit (tests/fast_paths/test_kernels_models.py) and
+switching midway
 changes nothing.  The threshold is measured, not guessed: importing numba and loading the
 compiled kernels costs about a second per process, which the kernels win back only after
-tens of thousands of calls (README, "Benchmark"); short runs never import numba, long runs
+tens of thousands of calls (docs/performance.md); short runs never import numba, long runs
 and campaign workers do.  ``AGILESAT_JIT=0`` (or numba not installed) keeps the Python;
 ``AGILESAT_JIT_AFTER=0`` compiles at the first call.  ``kernel.py_func`` is the Python,
 ``kernel.compiled`` the compiled function (the Python without numba, or where numba cannot
 compile the kernel: it then says so in a warning at the switch).
 
-A kernel may work on a model's whole value array (SatelliteDynamics): it reads through
-:func:`floats` (in its Python a list of Python floats, which index and compute several
-times faster than NumPy scalars; compiled, the array itself) at offsets named after the
-variable table, and writes into the array.
+A kernel works on a model's whole value array and a state array of its own: it reads them
+through :func:`floats` (in its Python a list of Python floats, which index and compute
+several times faster than NumPy scalars; compiled, the array itself) at the offsets the
+tables name (:mod:`.flat`: ``values[U.tau_cmd]``, ``state[S.omega + k]``), and writes
+into them.
 
 Compile cache.  numba's own cache (``cache=True``) is keyed on the source file's path and
 modification time (numba/core/caching.py, ``_SourceFileBackedLocatorMixin``,
 ``get_suitable_cache_subpath``), and FMI hosts unpack an FMU into a new temporary folder
 each time: every load would compile again (seconds per FMU).  Our locator keys it on
 content instead: ``<root>/numba/<key>/``, key = SHA-256 of the module's name and of every
-``.py`` file beside its source (the kernel and everything it calls from its package),
+``.py`` file beside its source and below (the kernel and everything it calls from its
+package and the runtime),
 root = :func:`cache_root` (the master's compiled loop is kept there too).  Inside
 an FMU the module is ``agilesat_<content hash>.components.<name>``, so a rebuilt FMU gets
 new entries and two extractions of one FMU share them; ``agilesat build`` fills the cache
 by loading each built FMU once (``fmus/build.py``).  Every index and data file carries
-its SHA-256 (:mod:`.cache_files`): a damaged one is compiled again, with a warning,
+its SHA-256 (:mod:`.cache`): a damaged one is compiled again, with a warning,
 instead of being unpickled or loaded.  numba's index key adds the
 signature, the CPU and the bytecode.  An unwritable cache directory costs a compile per
 process, nothing else (a warning says so).
@@ -52,7 +55,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import io
-import os
 import pickle
 import sys
 import warnings
@@ -60,7 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cache_files import seal, unseal, warn
+from .cache import cache_root, seal, unseal, warn
 from .switches import value
 
 ENABLED = value("AGILESAT_JIT")
@@ -82,22 +84,15 @@ _SET_UP = False  # numba imported (then a function declared later is registered 
 compiled_tier = False
 
 
-def cache_root() -> Path:
-    """agilesat's compile cache: $AGILESAT_CACHE_DIR, else $XDG_CACHE_HOME/agilesat, else
-    ~/.cache/agilesat (kernels in ``numba/``, the master's loop in ``loop/``)."""
-    root = value("AGILESAT_CACHE_DIR")
-    if root:
-        return Path(root)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base, "agilesat")
-
-
 @functools.cache
 def content_key(module: str, source: str) -> str:
-    """SHA-256 of the module name and of the ``.py`` files in the source's directory."""
+    """SHA-256 of the module name and of the ``.py`` files in the source's directory and
+    below it (the models' package and the runtime their kernels call)."""
     digest = hashlib.sha256(module.encode() + b"\0")
-    for path in sorted(Path(source).resolve().parent.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    folder = Path(source).resolve().parent
+    for path in sorted(folder.rglob("*.py")):
+        name = path.relative_to(folder).as_posix()
+        digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()[:24]
 
 
@@ -364,7 +359,7 @@ def _content_cache_class():
         _locator_classes = [ContentLocator]
 
     class SealedCacheFile(caching.IndexDataCacheFile):
-        """numba's index and data files, each sealed with its SHA-256 (cache_files): a
+        """numba's index and data files, each sealed with its SHA-256 (:mod:`.cache`): a
         damaged one is compiled again with a warning, never unpickled or loaded."""
 
         def _load_index(self):

@@ -1,41 +1,99 @@
-"""The flat arrays of the models' step/output kernels (components/jit.py), and compilable
+"""The flat arrays of the models' kernels (:mod:`.jit`), reached by name, and compilable
 equivalents of CPython functions numba lacks or computes otherwise, bit for bit
 (tests/fast_paths/test_kernels_models.py): ``math.remainder``, ``math.fmod``,
 ``math.hypot``.
 
-Those kernels are one function each on the model's value array (:mod:`.variables`:
-parameters, inputs, outputs at the offsets of its table, named by module constants) and a
-small float64 state array of the model, laid out by a :class:`StateTable`; they read both
-through :func:`.jit.floats`, write outputs and state by index and return a status code,
-from which the model's Python wrapper raises its ModelError or issues its warning, so that
-the messages are those of the readable code.
+A kernel is one function on the model's value array (parameters, inputs and outputs at the
+offsets of its variable table, components/variables.py) and a small float64 state array of
+the model; it reads both through :func:`.jit.floats`, writes outputs and state by index and
+returns a status code, from which the model's Python wrapper raises its ModelError or
+issues its warning, so that the messages are those of the readable code.
+
+It reaches every place by name, as the Modelica Reference-FMUs' ``M(x)`` macro does: the
+offsets are integer constants generated from the tables, one namespace per table
+(:func:`offsets`): ``values[U.tau_cmd + 1]`` is input ``tau_cmd[2]``, ``state[S.omega + k]``
+row ``omega`` of the state table, element k.  A namespace is a module object: numba reads
+a module's attribute as a constant (``U.tau_cmd`` compiles to the same machine code as the
+literal offset), CPython with one specialised module attribute access more than a global
+(the kernels' Python within a few percent of hand-written constants:
+docs/performance-log.md).  :func:`state_table` lays out a state array as the variable table
+lays out the value array: named rows, one after the other.
 """
 
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 
 from .jit import jitable
 
 
-class StateTable:
-    """A kernel's state array: named rows of given sizes, one after the other, as the
-    variable table lays out the value array.  ``offsets`` in row order (the kernels' module
-    constants), ``offset[name]``, ``size``; ``zeros()`` a state array."""
+def offsets(label: str, at: dict[str, int]) -> types.ModuleType:
+    """A namespace of integer constants, ``at``'s names (module docstring); ``label`` says
+    whose in messages ('Flywheel inputs')."""
+    namespace = types.ModuleType(label)
+    for name, offset in at.items():
+        if not name.isidentifier() or hasattr(namespace, name):
+            raise ValueError(f"{label}: {name!r} cannot be a name of an offset")
+        setattr(namespace, name, int(offset))
+    return namespace
 
-    def __init__(self, **sizes: int):
-        self.offset: dict[str, int] = {}
-        at = 0
-        for name, size in sizes.items():
-            self.offset[name] = at
-            at += size
-        self.offsets = tuple(self.offset.values())
-        self.size = at
 
-    def zeros(self) -> np.ndarray:
-        return np.zeros(self.size)
+def relative(namespace: types.ModuleType, origin: int) -> types.ModuleType:
+    """``namespace``'s offsets less ``origin``: the places in a slice of the array that
+    starts there (a kernel that converts only its inputs, ``values[U.tau_cmd : ...]``)."""
+    return offsets(
+        f"{namespace.__name__} from {origin}",
+        {name: at - origin for name, at in vars(namespace).items() if type(at) is int},
+    )
+
+
+def state_table(label: str, **sizes: int) -> types.ModuleType:
+    """A kernel's state array: named rows of the given sizes, one after the other; the
+    namespace of their offsets (:func:`offsets`), with ``size`` the array's length,
+    ``zeros()`` a new state array and ``at(base)`` the namespace of the same rows in a copy
+    of the table that starts at ``base`` of a larger one (so no row may be called ``size``,
+    ``zeros`` or ``at``)."""
+    if {"size", "zeros", "at"} & set(sizes):
+        raise ValueError(f"{label}: a state row cannot be called size, zeros or at")
+    start, rows = 0, {}
+    for name, size in sizes.items():
+        rows[name] = start
+        start += size
+    size = start
+    table = offsets(label, {**rows, "size": size})
+    vars(table).update(
+        zeros=lambda: np.zeros(size),
+        at=lambda base: offsets(f"{label} at {base}", {n: base + r for n, r in rows.items()}),
+    )
+    return table
+
+
+@jitable
+def vector(a, at: int) -> tuple:
+    """The 3-vector at ``at`` of a flat array (``vector(v, U.w_BI_B)``)."""
+    return a[at], a[at + 1], a[at + 2]
+
+
+@jitable
+def quaternion(a, at: int) -> tuple:
+    """The 4-vector at ``at`` of a flat array."""
+    return a[at], a[at + 1], a[at + 2], a[at + 3]
+
+
+@jitable
+def matrix(a, at: int) -> tuple:
+    """The row-major 3×3 at ``at`` of a flat array, as a tuple of rows."""
+    return vector(a, at), vector(a, at + 3), vector(a, at + 6)
+
+
+@jitable
+def put(array, at: int, x) -> None:
+    """array[at : at + len(x)] = x."""
+    for i in range(len(x)):
+        array[at + i] = x[i]
 
 
 @jitable
