@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .runtime import choices as runtime_choices
+
 CAUSALITIES = ("parameter", "input", "output")
 TYPES = ("Real", "Integer", "Boolean", "String")
 
@@ -123,22 +125,12 @@ class Var:
 
     def choice_value(self, value) -> int:
         """The value of a choice given by its name (any case) or its number; ValueError
-        listing the choices for anything else."""
-        names = [name for name, _ in self.choices]
-        text = str(value).strip()
-        if text.upper() in names:
-            return names.index(text.upper())
-        number = value if isinstance(value, int) and not isinstance(value, bool) else None
-        if number is None and text.isdigit():
-            number = int(text)
-        if number is None or number not in range(len(names)):
-            raise ValueError(self.choice_error(value))
-        return number
+        listing the choices for anything else (:func:`.runtime.choices.value`)."""
+        return runtime_choices.value(self.name, [name for name, _ in self.choices], value)
 
     def choice_error(self, value) -> str:
         """'law must be one of 0 (PSEUDO_INVERSE), 1 (SR_INVERSE), got 2'."""
-        listing = ", ".join(f"{i} ({name})" for i, (name, _) in enumerate(self.choices))
-        return f"{self.name} must be one of {listing}, got {value!r}"
+        return runtime_choices.error(self.name, [name for name, _ in self.choices], value)
 
     @property
     def required(self) -> bool:
@@ -193,11 +185,9 @@ def choice(name, start: int, description, choices) -> Var:
     ((NAME, meaning) pairs); the description lists them ("steering law: 0 = PSEUDO_INVERSE
     (pseudo-inverse with null motion), 1 = …"), so the model description, the docs and the
     command line (``--set CmgSteering.law=SR_INVERSE``) all read them from this one row."""
-    choices = tuple((str(name_), str(meaning)) for name_, meaning in choices)
-    listing = ", ".join(f"{i} = {n} ({meaning})" for i, (n, meaning) in enumerate(choices))
-    return Var(
-        name, "parameter", "1", f"{description}: {listing}", start, type="Integer", choices=choices
-    )
+    named = tuple((str(name_), str(meaning)) for name_, meaning in choices)
+    listed = f"{description}: {runtime_choices.listing(named)}"
+    return Var(name, "parameter", "1", listed, start, type="Integer", choices=named)
 
 
 def input_(name, unit, description, start=0.0, *, optional: str = "", **kw) -> Var:

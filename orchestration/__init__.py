@@ -12,6 +12,8 @@ Python API::
     results, summary = run("scan_pitch", out_dir="out/scan_pitch")   # a shipped scenario
     results, summary = run("path/to/mission.py:variant")            # a mission of yours
     results = simulate("my_system.ssd", step=0.05, stop=100.0)       # any SSP system
+    options = RunOptions(stop=100.0, record=["SatelliteDynamics.*"])  # what both take
+    results, summary = run("scan_pitch", options)
     results["SatelliteDynamics.w_BI_B[2]"], results.vector("CmgCluster.delta")
     assert_within(results, "SatelliteDynamics.w_BI_B[2]", -0.02, 0.02)  # and the other checks
     assert_pointing(results, "RPE", window=1.0, bound=1.7e-5, reference="StaringGuidance.q_ref")
@@ -25,15 +27,16 @@ import importlib
 _WHERE = {
     "run": "runner",
     "simulate": "cosim.master",
+    "RunOptions": "cosim.options",
     "SimulationError": "cosim.master",
     "read_system": "system.ssp",
     "SystemFileError": "system.ssp",
     "Results": "output.results",
-    "assert_within": "output.checks",
-    "assert_settles": "output.checks",
-    "assert_momentum_conserved": "output.checks",
-    "assert_requirements_met": "output.checks",
-    "assert_pointing": "output.checks",
+    "assert_within": "postprocess.checks",
+    "assert_settles": "postprocess.checks",
+    "assert_momentum_conserved": "postprocess.checks",
+    "assert_requirements_met": "postprocess.checks",
+    "assert_pointing": "postprocess.checks",
     "System": "mission",
     "Scenario": "mission",
     "Variant": "mission",

@@ -1,7 +1,8 @@
 """Run a scenario (shipped or your own), a system built in Python, a system file or one FMU
 end to end: build what is stale, plan the run (:mod:`.cosim.plan`), simulate, write
 results, summary (:mod:`.output.summary`) and figures.  The CLI's ``agilesat run`` is a thin
-layer on this.
+layer on this; a campaign's worker plans a batch of runs once (:func:`planned`) and swaps
+each run's values (:meth:`Planned.swapped`).
 """
 
 from __future__ import annotations
@@ -13,15 +14,17 @@ import signal
 import time
 import warnings
 from contextlib import nullcontext
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
 from .cosim.master import Interrupted, SimulationError, execute
-from .cosim.plan import plan_run
+from .cosim.options import RunOptions
+from .cosim.plan import RunPlan, plan_run
 from .cosim.signals import signal_at, stop_on_signals
 from .mission import reads
 from .mission.scenario import defined_at
-from .mission.targets import resolve
+from .mission.targets import Target, resolve
 from .output.lock import holding
 from .output.progress import Progress
 from .output.recorder import make_directory, write_text
@@ -33,32 +36,12 @@ from .provenance import provenance
 LARGE_OUTPUT = 2**30
 
 
-def run(
-    target,
-    *,
-    step=None,
-    stop=None,
-    start=None,
-    algorithm=None,
-    parameters=None,
-    out_dir=None,
-    figures: bool = True,
-    svg: bool = False,
-    echo=None,
-    build: bool = True,
-    progress=None,
-    derivatives: bool | None = None,
-    record=None,
-    output_interval: float | None = None,
-    notice=None,
-) -> tuple[Results, dict]:
+def run(target, options: RunOptions | None = None, /, **keywords) -> tuple[Results, dict]:
     """Run a target (see :func:`.mission.targets.resolve`: "scan_pitch:literal_spin", a
     mission file "path/mission.py[:variant]", a :class:`~.mission.Scenario` or
-    :class:`~.mission.System`, an .ssd/.ssp file, an .fmu); returns (results, summary).
-    ``parameters``: {"Instance.variable": value}, whole arrays or elements, with units
-    where the variable is a Real (:mod:`.system.parameters`); ``start``, ``record``,
-    ``output_interval``, ``progress`` and ``derivatives``: see
-    :func:`.cosim.master.simulate`.
+    :class:`~.mission.System`, an .ssd/.ssp file, an .fmu) with ``options``
+    (:class:`.cosim.options.RunOptions`, or its fields as keywords: ``step``, ``stop``,
+    ``parameters``, ``out_dir``, ``figures``, ...); returns (results, summary).
 
     With ``out_dir``: results.csv (row by row), results.npz, log.txt and summary.json, also
     when the run fails (``status: "error"``) or is interrupted by SIGINT/SIGTERM
@@ -73,32 +56,45 @@ def run(
     ``figures``: the scenario's figures (any other system's: an overview of its outputs)
     as 200-dpi PNGs, with ``svg`` an SVG beside each (~25 % more figure time).
     """
-    found = resolve(target)
-    scenario, variant = found.scenario, found.variant
     wall = time.perf_counter()
-    system = found.system_file(build)
-    if scenario is not None:  # what its metrics and requirements read: outputs
-        reads.check(scenario, variant, build)
-    plan = plan_run(
-        system,
-        step=step,
-        stop=stop,
-        start=start,
-        algorithm=algorithm,
-        parameters=dict(parameters or {}),
-        derivatives=derivatives,
-        out_dir=out_dir,
-        progress=progress,
-        echo=echo,
-        record=record,
-        output_interval=output_interval,
-    )
-    if isinstance(progress, Progress):
-        progress.simulating(plan.step)  # a person's bar counts simulated seconds
+    return planned(target, RunOptions.given(options, keywords)).run(wall)
+
+
+def planned(target, options: RunOptions) -> Planned:
+    """``target`` resolved and its run planned (the FMUs built first if ``options.build``)."""
+    found = resolve(target)
+    system = found.system_file(options.build)
+    if found.scenario is not None:  # what its metrics and requirements read: outputs
+        reads.check(found.scenario, found.variant, options.build)
+    return Planned(found, plan_run(system, options))
+
+
+@dataclass(frozen=True)
+class Planned:
+    """A target (:class:`.mission.targets.Target`) and the plan of its run."""
+
+    target: Target
+    plan: RunPlan
+
+    def swapped(self, parameters: dict) -> Planned:
+        """The same run with other values of parameters it was planned with
+        (:meth:`.cosim.plan.RunPlan.swapped`)."""
+        return Planned(self.target, self.plan.swapped(parameters))
+
+    def run(self, wall: float | None = None) -> tuple[Results, dict]:
+        """Run it (see :func:`run`); ``wall``: when the run began (``time.perf_counter``),
+        for its summary's wall time."""
+        return _run(self.target, self.plan, time.perf_counter() if wall is None else wall)
+
+
+def _run(found: Target, plan: RunPlan, wall: float) -> tuple[Results, dict]:
+    scenario, variant, options, system = found.scenario, found.variant, plan.options, plan.system
+    if isinstance(options.progress, Progress):
+        options.progress.simulating(plan.step)  # a person's bar counts simulated seconds
     out_dir = plan.out_dir
     if out_dir is not None:
         make_directory(out_dir)
-        _say_size(plan, out_dir, notice)
+        _say_size(plan, out_dir, options.notice)
     summary = {
         **provenance(),
         "scenario": scenario.name if scenario else None,
@@ -107,7 +103,7 @@ def run(
         "system": str(system.path),
         "parameters": {k: {"value": p.value, "type": p.type} for k, p in plan.overrides.items()},
     }
-    figures = figures and out_dir is not None
+    figures = options.figures and out_dir is not None
     with stop_on_signals() as signals, holding(out_dir) if out_dir else nullcontext():
         if out_dir is not None:
             _drop_previous_figures(out_dir)
@@ -130,7 +126,7 @@ def run(
             raise
         summary.update(facts(results, time.perf_counter() - wall))
         if scenario is not None:
-            summary.update(scenario.evaluate(results, variant, partial=record is not None))
+            summary.update(scenario.evaluate(results, variant, partial=plan.record is not None))
         else:
             summary.update(generic_summary(results))
         stopped = False  # the figures, by a signal
@@ -139,12 +135,14 @@ def run(
             if figures and signals.signal is None:
                 failed = len(summary.get("errors", ()))
                 summary["figures"], stopped = _figures(
-                    scenario, variant, results, out_dir, svg, summary, signals
+                    scenario, variant, results, out_dir, options.svg, summary, signals
                 )
                 if len(summary.get("errors", ())) > failed:  # log.txt says it too
                     write_records(results, summary, out_dir)
                 else:
                     write_text(out_dir / "summary.json", summary_text(summary))
+            if options.mat:
+                results.to_mat(out_dir / "results.mat")
         if signals.signal is not None:  # after the last macro step: said, and exit 130/143
             during = "the figures" if stopped else "the results"
             _interruption(summary, signals.signal, during, [], figures)
@@ -188,7 +186,8 @@ def _figures(
     function that raises is said in the summary's ``errors`` (status "error") and the
     others are drawn; figures that need outputs not recorded (``--record``) are not
     drawn, and the summary says why."""
-    from .output import plots, pointing_figures
+    from .mission import pointing_figures
+    from .output import plots
 
     hook, started = signal_at("figure"), [0]
 

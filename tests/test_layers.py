@@ -116,3 +116,72 @@ def test_the_generic_master_knows_no_model(path):
         and layer(to) != LAYERS.index("components/runtime")
     ]
     assert not bad, bad
+
+
+#: orchestration/'s own layers, lowest first (docs/architecture.md): reading and checking
+#: a system; the pointing indices; what a run leaves; running it; a mission in Python, the
+#: shipped scenarios on it; what runs left read back (report, indices, ephemerides,
+#: assertions); a target run, exported (with its coupling error) or described end to end,
+#: a run's numerical error; campaigns; the papers' studies; the command line.  A module
+#: imports from its own layer and those below it only.
+ORCHESTRATION = (
+    ("system", "provenance.py"),
+    ("pointing",),
+    ("output",),
+    ("cosim",),
+    ("mission",),
+    ("scenarios",),
+    ("postprocess",),
+    ("runner.py", "export.py", "info.py", "coupling_error.py", "error_estimate.py"),
+    ("campaign",),
+    ("studies",),
+    ("cli", "__main__.py", "__init__.py"),
+)
+#: the imports inside orchestration/ that point up, each with its reason
+ORCHESTRATION_UPWARD = {
+    ("output/pytest_plugin.py", "runner.py"): "the pytest plugin's fixture runs a target; "
+    "the plugin's entry point (pytest11, pyproject.toml) names this module",
+    ("output/pytest_plugin.py", "postprocess"): "the plugin re-exports the assertions",
+}
+
+
+def _orchestration_rank(relative: str) -> int:
+    """The layer of a path under orchestration/ ('cosim/plan.py', 'runner.py')."""
+    first = relative.split("/")[0]
+    for rank, members in enumerate(ORCHESTRATION):
+        if first in members:
+            return rank
+    raise AssertionError(f"orchestration/{relative} is in no layer of ORCHESTRATION")
+
+
+def _orchestration_imports(path):
+    """(line, path under orchestration/ of the module imported) of every relative import
+    of ``path`` into orchestration/."""
+    package = path.relative_to(ROOT / "orchestration").parent.parts
+    for line, module in imports(path):
+        level = len(module) - len(module.lstrip("."))
+        if not level or level > len(package) + 1:
+            continue  # absolute, or above orchestration/ (components, fmus)
+        parts = [*package[: len(package) - level + 1], *filter(None, module[level:].split("."))]
+        if not parts:
+            continue  # the package itself (its lazy names)
+        folder = ROOT / "orchestration" / parts[0]
+        yield line, parts[0] if folder.is_dir() else f"{parts[0]}.py"
+
+
+def test_orchestration_imports_point_down():
+    """No module of orchestration/ imports from a layer above its own, outside
+    ORCHESTRATION_UPWARD (and each of those is still there)."""
+    up, used = [], set()
+    for path in sorted((ROOT / "orchestration").rglob("*.py")):
+        relative = path.relative_to(ROOT / "orchestration").as_posix()
+        rank = _orchestration_rank(relative)
+        for line, target in _orchestration_imports(path):
+            if _orchestration_rank(target) <= rank:
+                continue
+            if (relative, target) in ORCHESTRATION_UPWARD:
+                used.add((relative, target))
+            else:
+                up.append(f"orchestration/{relative}:{line}: imports {target}, a layer above")
+    assert not up, up
+    assert used == set(ORCHESTRATION_UPWARD)

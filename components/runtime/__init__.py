@@ -11,4 +11,5 @@ package (tests/test_layers.py), and everything above may import it.
 - :mod:`.cache` — agilesat's cache directory and its entries sealed with their SHA-256;
 - :mod:`.switches` — every ``AGILESAT_*`` environment variable, read and checked;
 - :mod:`.toolchain` — the C compiler and files written atomically.
+- :mod:`.choices` — named choices: how a description lists them, and their one parser.
 """

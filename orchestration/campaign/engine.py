@@ -298,6 +298,7 @@ def execute(
     timed = [0.0, 0]  # seconds and number of the runs made here, for the batch size
     token = uuid.uuid4().hex[:8]  # keys unique on a shared scheduler
     hook = signal_at("run")
+    options = plan.run_options()  # each run's values on top (worker.run_batch)
 
     def submit():
         workers = len(watcher.workers)
@@ -309,11 +310,9 @@ def execute(
             values[index] = plan.run_values(index)
         future = client.submit(
             run_batch,
-            [(index, {**plan.spec.set, **values[index]}) for index in batch],
+            [(index, values[index]) for index in batch],
             plan.target,
-            plan.step,
-            plan.stop,
-            plan.spec.algorithm,
+            options,
             plan.signals,
             plan.points,
             -(-plan.total // max(1, workers)),  # the runs each worker makes

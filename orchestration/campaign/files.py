@@ -1,7 +1,8 @@
-"""Reading a campaign's own files back (``--resume``, the summary): what is not what the
-campaign wrote is an error naming the file (and line) and what was expected, never a
-traceback; and the content hash of the system a campaign runs and of the code it runs
-(the modules the mission imports, the toolkit's own sources), which a resume must match.
+"""A campaign's files: its own read back (``--resume``, the summary), where what is not
+what the campaign wrote is an error naming the file (and line) and what was expected,
+never a traceback; the content hash of the system a campaign runs and of the code it runs
+(the modules the mission imports, the toolkit's own sources), which a resume must match;
+and the shipped dispersion files of the scenarios (``shipped/``).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import sysconfig
 from importlib import metadata
 from pathlib import Path
 
+SHIPPED_DIR = Path(__file__).resolve().parent / "shipped"
 #: the entry of :func:`code_content` for the toolkit itself
 TOOLKIT = "agilesat's own sources"
 _SOURCES = (".py", ".c", ".h", ".toml", ".ssd")
@@ -144,3 +146,23 @@ def _installation() -> set[Path]:
 def changed(recorded: dict, now: dict) -> list[str]:
     """The files whose content (or presence) differs between two :func:`system_content`."""
     return sorted(f for f in set(recorded) | set(now) if recorded.get(f) != now.get(f))
+
+
+def shipped(name: str) -> Path:
+    """The shipped dispersion file of a scenario (``shipped/<name>.toml``)."""
+    path = SHIPPED_DIR / f"{name}.toml"
+    if not path.exists():
+        raise KeyError(
+            f"no shipped campaign {name!r}; shipped: "
+            f"{', '.join(p.stem for p in sorted(SHIPPED_DIR.glob('*.toml')))}"
+        )
+    return path
+
+
+def shipped_files(target: str) -> list[Path]:
+    """The shipped dispersion files of a scenario[:variant]: the scenario's, then the
+    variant's additions where it has some (``shipped/<name>.<variant>.toml``: the sensed
+    variants' sensor noise)."""
+    name, _, variant = target.partition(":")
+    extra = SHIPPED_DIR / f"{name}.{variant}.toml"
+    return [shipped(name), *([extra] if variant and extra.exists() else [])]

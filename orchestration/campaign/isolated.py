@@ -2,9 +2,9 @@
 process of its own: an FMU that crashes (a segfault in a model's native code) kills that
 process, not the campaign, which says so and keeps every run it made.
 
-The child is ``python -c`` :data:`CHILD` given :func:`..runner.run`'s keyword arguments
-(pickled on its stdin, by this process) and answering one JSON line: the run's summary,
-or why it has none.
+The child is ``python -c`` :data:`CHILD` given :func:`..runner.run`'s target and
+:class:`..cosim.options.RunOptions` (pickled on its stdin, by this process) and answering
+one JSON line: the run's summary, or why it has none.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ import json, pickle, sys
 from agilesat.orchestration.cosim.master import Interrupted
 from agilesat.orchestration.runner import run
 
-kwargs = pickle.load(sys.stdin.buffer)
+target, options = pickle.load(sys.stdin.buffer)
 try:
-    answer = {"summary": run(**kwargs)[1]}
+    answer = {"summary": run(target, options)[1]}
 except Interrupted as exc:
     answer = {"signal": int(exc.signal), "reason": str(exc)}
 except Exception as exc:
@@ -37,13 +37,13 @@ class RunFailed(RuntimeError):
     """The run made no summary (the message says why)."""
 
 
-def run(**kwargs) -> dict:
-    """:func:`..runner.run` ``(**kwargs)`` in a fresh process: its summary; RunFailed when
-    it failed or its process died (naming the signal that killed it), Interrupted when a
-    signal stopped it."""
+def run(target: str, options) -> dict:
+    """:func:`..runner.run` ``(target, options)`` in a fresh process: its summary;
+    RunFailed when it failed or its process died (naming the signal that killed it),
+    Interrupted when a signal stopped it."""
     child = subprocess.run(
         [sys.executable, "-c", CHILD],
-        input=pickle.dumps(kwargs),
+        input=pickle.dumps((target, options)),
         capture_output=True,
     )
     lines = child.stdout.decode(errors="replace").splitlines()

@@ -12,35 +12,70 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from ...fmus import FMUS, model_class
+from ..cosim.options import ALGORITHM, STEP, STOP, RunOptions, flag, setting
 from ..mission import reads
 from ..mission.requirements import judged_over_campaign
 from ..mission.targets import resolve
 from ..system.description import Description
-from ..system.parameters import did_you_mean, typed_parameters
+from ..system.parameters import (
+    ArrayVariable,
+    choice_names,
+    choice_value,
+    did_you_mean,
+    typed_parameters,
+    variables,
+)
 from . import dispersion as dispersions
 
 
 @dataclass
 class Spec:
     """What the user asked for (``campaign.json``'s ``spec``; a resumed campaign must match
-    it in everything but ``runs``)."""
+    it in everything but ``runs``): ``agilesat campaign``'s options, each with its flag
+    (:func:`..cosim.options.flag`)."""
 
     target: str
-    runs: int = 1  # per grid point
-    seed: int = 0
-    vary: list[str] = field(default_factory=list)  # "A.x=DIST", as written
-    files: list[str] = field(default_factory=list)  # dispersion files they came from
-    set: dict = field(default_factory=dict)  # "A.x" -> value (as for `run --set`)
-    keep: list[str] = field(default_factory=list)  # signals to keep per run
-    step: float | None = None
-    stop: float | None = None
-    algorithm: str | None = None
+    runs: int = flag("--runs", default=1, type=int, help="runs per grid point (default 1)")
+    seed: int = flag("--seed", default=0, type=int, help="campaign seed (default 0)")
+    vary: list[str] = flag(  # "A.x=DIST", as written
+        "--vary",
+        action="append",
+        metavar="INSTANCE.VAR=DIST",
+        help="disperse a parameter (DIST above); repeat for more",
+    )
+    files: list[str] = flag(  # dispersion files they came from
+        "--dispersions",
+        action="append",
+        metavar="FILE",
+        help='TOML/JSON file with a [vary] table of "Instance.var" = "DIST"',
+    )
+    set: dict = flag(  # "A.x" -> value (as for `run --set`)
+        "--set",
+        action="append",
+        type=setting,
+        metavar="INSTANCE.VAR=VALUE",
+        help="a parameter value of every run (as `agilesat run --set`)",
+    )
+    keep: list[str] = flag(  # signals to keep per run
+        "--keep",
+        action="append",
+        metavar="SIGNAL",
+        help="keep this output per run (signals.npy, envelope figure); a whole "
+        "vector (SatelliteDynamics.w_BO_B) or one element",
+    )
+    step: float | None = flag("--step", **STEP)
+    stop: float | None = flag("--stop", **STOP)
+    algorithm: str | None = flag("--algorithm", **ALGORITHM)
+
+    def __post_init__(self):
+        self.vary, self.keep = list(self.vary or ()), list(self.keep or ())
+        self.files = [str(f) for f in self.files or ()]
+        self.set = dict(self.set or {})  # the command line gives (key, value) pairs
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -91,10 +126,13 @@ class Plan:
             raise ValueError(f"{self.system.path}: give --step and --stop (the system sets none)")
         self.points = int(round((self.stop - self.start) / self.step)) + 1
         self.fmus = {c.name: Path(c.source).stem for c in self.system.components}
+        #: what each component's model description says (any FMU, ours or not), and its
+        #: variables by whole name (shapes, types, starts, named choices)
+        self.described = {c.name: Description(c.name, c.source) for c in self.system.components}
+        self.tables = {name: variables(d) for name, d in self.described.items()}
         self.values = {f"{p.component}.{p.name}": p.value for p in self.system.parameters}
         self.values.update(spec.set)
-        described = {c.name: Description(c.name, c.source) for c in self.system.components}
-        typed_parameters(described, spec.set)  # a bad value: here, not in every run
+        typed_parameters(self.described, spec.set)  # a bad value: here, not in every run
         self.dispersions = [dispersions.parse(text) for text in spec.vary]
         keys = [d.key for d in self.dispersions]
         twice = sorted({k for k in keys if keys.count(k) > 1})
@@ -129,7 +167,7 @@ class Plan:
                 "have (its journal and table are held in memory): split it"
             )
         self.grid = list(itertools.product(*(d.grid() for d in grids))) or [()]
-        self.units = {}  # of the kept signals, where the variable table says
+        self.units = {}  # of the kept signals, as their model descriptions say
         #: the signals kept of every run: those asked for (``kept``), then those the
         #: requirements judged over the campaign need
         self.kept = [name for key in spec.keep for name in self._signal(key)]
@@ -164,83 +202,84 @@ class Plan:
                     result[name] = int(x) if d.key in self.integers else x.item()
         return result
 
+    def run_options(self, parameters: dict | None = None) -> RunOptions:
+        """The options of a run of the campaign: its step, stop and algorithm, ``--set``
+        and ``parameters`` on top; no figures, the FMUs built already."""
+        return RunOptions(
+            step=self.step,
+            stop=self.stop,
+            algorithm=self.spec.algorithm,
+            parameters={**self.spec.set, **(parameters or {})},
+            figures=False,
+            build=False,
+        )
+
     def parameters(self, index: int) -> dict:
         """Everything run ``index`` sets on top of the system: ``--set`` and its values."""
         return {**self.spec.set, **self.run_values(index)}
 
-    def _variable(self, key: str, what: str):
+    def _variable(self, key: str, what: str) -> ArrayVariable:
+        """The variable ``key`` ("A.x", or an element "A.x[i]") names, from its FMU's model
+        description; a ValueError naming what there is for a name that is none."""
         instance, _, rest = key.partition(".")
         name = rest.partition("[")[0]
-        if instance not in self.fmus:
+        if instance not in self.tables:
             raise ValueError(
                 f"{what} {key}: no component {instance!r} in {self.system.path}; "
                 f"components: {', '.join(self.fmus)}" + did_you_mean(instance, self.fmus)
             )
-        if self.fmus[instance] not in FMUS:
-            return None  # not one of ours: the master checks the name when it runs
-        for var in model_class(self.fmus[instance]).VARIABLES:
-            if var.name == name:
-                if "[" in rest and rest not in var.scalar_names():
-                    raise ValueError(
-                        f"{what} {key}: {instance}.{name} has shape {var.shape}; "
-                        f"elements are {var.scalar_names()[0]} .. "
-                        f"{var.scalar_names()[-1]}"
-                    )
-                return var
-        known = [v.name for v in model_class(self.fmus[instance]).VARIABLES]
-        raise ValueError(
-            f"{what} {key}: {self.fmus[instance]} has no variable {name!r}"
-            + did_you_mean(name, known)
-        )
+        table = self.tables[instance]
+        if name not in table:
+            raise ValueError(
+                f"{what} {key}: {self.fmus[instance]} has no variable {name!r}"
+                + did_you_mean(name, table)
+            )
+        var = table[name]
+        if "[" in rest and rest not in _names(var):
+            raise ValueError(
+                f"{what} {key}: {instance}.{name} has shape {var.shape}; "
+                f"elements are {var.first.name} .. {var.scalars[-1].name}"
+            )
+        return var
 
     def _check(self, d) -> tuple:
         """(the dispersion, named choices resolved to their values; the nominal value of
         the dispersed variable), after checking that the dispersion fits it."""
         var = self._variable(d.key, "--vary")
+        kind, causality = var.first.type, var.first.causality
+        names = choice_names(var.first)
         whole = "[" not in d.key
-        named = any(isinstance(a, str) for a in d.args)
-        if named and (var is None or not var.choices):
+        if any(isinstance(a, str) for a in d.args) and names is None:
             raise ValueError(
                 f"--vary {d.text}: names are for a named-choice parameter, "
                 f"{d.instance}.{d.variable} has none: give numbers"
             )
-        if var is None:
-            if d.kind in ("rotate", "inertia") or whole and d.mode:
-                raise ValueError(
-                    f"--vary {d.text}: whole-variable dispersions need one of "
-                    f"our FMUs, {self.fmus[d.instance]} is not"
-                )
-            return d, np.asarray(float(self.values.get(d.key, 0.0)))
-        if var.causality != "parameter" or var.type == "String":
+        if causality != "parameter" or kind == "String":
             raise ValueError(
-                f"--vary {d.text}: {d.instance}.{var.name} is a {var.type} "
-                f"{var.causality}; only numeric parameters can be dispersed"
+                f"--vary {d.text}: {d.instance}.{var.name} is a {kind} "
+                f"{causality}; only numeric parameters can be dispersed"
             )
-        if var.type != "Real" and d.kind not in ("choice", "values", "integers"):
+        if kind != "Real" and d.kind not in ("choice", "values", "integers"):
             raise ValueError(
-                f"--vary {d.text}: {var.type} parameter: use choice(), values() or integers()"
+                f"--vary {d.text}: {kind} parameter: use choice(), values() or integers()"
             )
-        if var.choices:
-            d = self._named(d, var)
-        elif var.type == "Integer":
+        if names is not None:
+            d = self._named(d, var.name, names)
+        elif kind == "Integer":
             self.integers.add(d.key)
-        names = var.scalar_names()
-        start = var.start_array()
         flat = np.array(
             [
-                var.choice_value(self.values.get(f"{d.instance}.{n}", s))
-                if var.choices
-                else float(self.values.get(f"{d.instance}.{n}", s))
-                for n, s in zip(names, start)
+                self._number(f"{d.instance}.{scalar.name}", names, start)
+                for scalar, start in zip(var.scalars, np.ravel(np.array(var.start(), object)))
             ],
             dtype=float,
         )
         if not whole:
-            return d, np.asarray(flat[names.index(d.key.partition(".")[2])])
+            return d, np.asarray(flat[_names(var).index(d.key.partition(".")[2])])
         shape = var.shape
         if d.is_grid and shape:
             raise ValueError(
-                f"--vary {d.text}: grids take scalar names, e.g. {d.instance}.{names[0]}"
+                f"--vary {d.text}: grids take scalar names, e.g. {d.instance}.{var.first.name}"
             )
         if d.kind == "rotate" and not (shape == (3,) or len(shape) == 2 and shape[1] == 3):
             raise ValueError(
@@ -268,19 +307,29 @@ class Plan:
             )
         return d, nominal
 
-    def _named(self, d, var):
+    def _number(self, key: str, names, start) -> float:
+        """The nominal value of scalar ``key``: the system's or ``--set``'s, else its start;
+        a named choice's by its number."""
+        value = self.values.get(key, start)
+        return float(value if names is None else choice_value(key, names, value, key))
+
+    def _named(self, d, variable: str, names):
         """choice()/values() of a named-choice parameter, its names (any case) or numbers
         resolved to the values 0, 1, ... (the draws then are those of the numbers)."""
         if d.mode:
             raise ValueError(f"--vary {d.text}: a named choice cannot be added or multiplied")
-        try:
-            args = tuple(
-                float(var.choice_value(int(a) if isinstance(a, float) and a.is_integer() else a))
-                for a in d.args
+        args = tuple(
+            float(
+                choice_value(
+                    variable,
+                    names,
+                    int(a) if isinstance(a, float) and a.is_integer() else a,
+                    f"--vary {d.text}",
+                )
             )
-        except ValueError as exc:
-            raise ValueError(f"--vary {d.text}: {exc}") from None
-        self.choices[d.key] = [name for name, _ in var.choices]
+            for a in d.args
+        )
+        self.choices[d.key] = list(names)
         return replace(d, args=args)
 
     def _signal(self, key: str) -> list[str]:
@@ -290,8 +339,7 @@ class Plan:
         instance, _, name = key.partition(".")
         if instance not in self.fmus:
             self._variable(key, "--keep")  # raises, naming the components there are
-        component = next(c for c in self.system.components if c.name == instance)
-        described = Description(instance, component.source)
+        described = self.described[instance]
         base = name.partition("[")[0]
         columns = [o for o in described.outputs if o.partition("[")[0] == base]
         if not columns:
@@ -316,9 +364,7 @@ class Plan:
                     f"{columns[0]} .. {columns[-1]}"
                 )
             columns = [name]
-        var = self._variable(key, "--keep")
-        if var is not None:
-            self.units.update({f"{instance}.{n}": var.unit for n in var.scalar_names()})
+        self.units.update({f"{instance}.{n}": described.variables[n].unit for n in columns})
         return [f"{instance}.{n}" for n in columns]
 
 
@@ -330,6 +376,11 @@ def _absolute(target: str) -> str:
     name, _, variant = target.rpartition(":") if ".py:" in target else (target, "", "")
     path = str(Path(name).resolve())
     return f"{path}:{variant}" if variant else path
+
+
+def _names(var: ArrayVariable) -> list[str]:
+    """The scalar names of a variable ("inertia[1,1]", ...; its name if a scalar)."""
+    return [scalar.name for scalar in var.scalars]
 
 
 def _scalar_names(key: str, shape) -> list[str]:

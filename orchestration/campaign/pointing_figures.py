@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..output.kept import reached_the_end
-from ..output.pointing_figures import title as figure_title
+from ..mission.pointing_figures import title as figure_title
+from ..output.kept_signals import reached_the_end
 from ..pointing import ANGLE_UNITS, format_angle
 
 

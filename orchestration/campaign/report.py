@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.variables import UNITS
 from ..output.recorder import atomically
 from ..system.units import display_factor, pretty
 
@@ -231,7 +230,7 @@ def grid_pass_rates(plan, array: np.ndarray, catalog: dict) -> list[dict]:
 def display(meta: dict) -> tuple[float, str]:
     """(factor, unit as people write it) of a metric's display unit."""
     unit, shown = meta["unit"], meta.get("display_unit") or meta["unit"]
-    factor = UNITS.get(unit, ({}, {}))[1].get(shown) or display_factor(unit, shown)
+    factor = display_factor(unit, shown)
     return (1.0, pretty(unit)) if factor is None else (factor, pretty(shown))
 
 

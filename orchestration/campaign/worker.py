@@ -18,6 +18,8 @@ CPU of the thread that ran it, which other processes on the machine do not infla
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import logging
 import math
 import os
@@ -68,18 +70,18 @@ def quiet_closed_connections() -> None:
             handler.addFilter(_ClosedConnection())
 
 
-def run_one(
-    index: int,
-    target: str,
-    parameters: dict,
-    step,
-    stop,
-    algorithm,
-    signals: list[str],
-    points: int,
-) -> dict:
+def run_one(index: int, target: str, options, signals: list[str], points: int) -> dict:
+    """Run ``index`` of a campaign, ``target`` with ``options``
+    (:class:`..cosim.options.RunOptions`), as ``agilesat run`` would make it; its record."""
+    from ..runner import planned
+
+    return _made(index, lambda: planned(target, options), signals, points)
+
+
+def _made(index: int, planned, signals: list[str], points: int) -> dict:
+    """The record of run ``index``: ``planned`` is a function that gives its
+    :class:`..runner.Planned` run (or raises the error that is its outcome)."""
     from ..cosim.master import SimulationError
-    from ..runner import run
 
     global _started
     _started += 1
@@ -96,15 +98,7 @@ def run_one(
     }
     results = None
     try:
-        results, summary = run(
-            target,
-            step=step,
-            stop=stop,
-            algorithm=algorithm,
-            parameters=parameters,
-            figures=False,
-            build=False,
-        )
+        results, summary = planned().run(began)
         record["metrics"] = summary.get("metrics", {})
         record["requirements"] = summary.get("requirements", {})
         if summary.get("status") == "error":  # a metric or requirement raised
@@ -148,57 +142,46 @@ def warm_up_steps(steps: int, share: int) -> int:
     return max(1, min(needed, steps))
 
 
-def warm_up(target: str, parameters: dict, step, stop, algorithm, points: int, share: int):
+def warm_up(target: str, options, points: int, share: int):
     """The first macro steps of a run (:func:`warm_up_steps`) of ``target`` with
-    ``parameters``, nothing kept: (wall seconds, CPU seconds of this thread, the error it
-    raised or None)."""
-    from ..runner import run
+    ``options`` (:class:`..cosim.options.RunOptions`), nothing kept: (wall seconds, CPU
+    seconds of this thread, the error it raised or None)."""
+    from ..runner import planned
 
     _hook()
     began, cpu = time.perf_counter(), time.thread_time()
     error = None
     try:
         steps = points - 1
-        start = stop - steps * step
-        run(
-            target,
-            step=step,
-            stop=start + warm_up_steps(steps, share) * step,
-            algorithm=algorithm,
-            parameters=parameters,
-            figures=False,
-            build=False,
-        )
+        start = options.stop - steps * options.step
+        stop = start + warm_up_steps(steps, share) * options.step
+        planned(target, dataclasses.replace(options, stop=stop)).run()
     except Exception as exc:  # the batch's first run makes its own outcome
         error = f"{type(exc).__name__}: {exc}"
     return time.perf_counter() - began, time.thread_time() - cpu, error
 
 
 def run_batch(
-    runs: list[tuple[int, dict]],
-    target: str,
-    step,
-    stop,
-    algorithm,
-    signals,
-    points,
-    share: int = 1,
+    runs: list[tuple[int, dict]], target: str, options, signals, points, share: int = 1
 ) -> list[dict]:
     """Several runs in one Dask task (one round trip through the scheduler for all), each
-    with its own record: ``runs`` is [(index, parameters), ...].  ``share``: the runs this
-    worker is expected to make, which, from its first run, lets the models' kernels run
-    compiled where that pays (AGILESAT_JIT_RUNS, components/runtime/jit.py; read as the FMUs load,
-    unless set).  The process's first batch of ``target`` starts with its warm-up (module
-    docstring), on the parameters of the batch's first run."""
+    with its own record: ``runs`` is [(index, its dispersed values), ...], on top of
+    ``options`` (:class:`..cosim.options.RunOptions`: the campaign's settings and
+    ``--set``).  The batch plans its runs once (:class:`Batch`).  ``share``: the runs
+    this worker is expected to make, which, from its first run, lets the models' kernels
+    run compiled where that pays (AGILESAT_JIT_RUNS, components/runtime/jit.py; read as
+    the FMUs load, unless set).  The process's first batch of ``target`` starts with its
+    warm-up (module docstring), with the values of the batch's first run."""
     warmed = None
     if not _started:
         os.environ.setdefault("AGILESAT_JIT_RUNS", str(max(1, share)))
     if target not in _warmed and runs:
         _warmed.add(target)
-        warmed = warm_up(target, runs[0][1], step, stop, algorithm, points, share)
+        warmed = warm_up(target, _with(options, runs[0][1]), points, share)
+    batch = Batch(target, options)
     records = [
-        run_one(index, target, parameters, step, stop, algorithm, signals, points)
-        for index, parameters in runs
+        _made(index, functools.partial(batch.planned, values), signals, points)
+        for index, values in runs
     ]
     if warmed is not None:
         seconds, cpu, error = warmed
@@ -206,6 +189,34 @@ def run_batch(
         if error is not None:
             records[0]["warm_up_error"] = error
     return records
+
+
+class Batch:
+    """The runs of a batch, planned once: the target resolved and the run planned with the
+    values of the first run that plans, then the values of each run that sets the same
+    parameters (every run of a campaign does) swapped in
+    (:meth:`..runner.Planned.swapped`); a run that sets others is planned on its own.  A
+    run whose values do not plan fails alone."""
+
+    def __init__(self, target: str, options):
+        self.target, self.options = target, options
+        self.base = None  # (the planned run, its values)
+
+    def planned(self, values: dict):
+        """The :class:`..runner.Planned` run of ``values``."""
+        from ..runner import planned
+
+        if self.base is not None and self.base[1].keys() == values.keys():
+            return self.base[0].swapped(values)
+        made = planned(self.target, _with(self.options, values))
+        if self.base is None:
+            self.base = (made, values)
+        return made
+
+
+def _with(options, values: dict):
+    """``options`` with ``values`` set on top of its parameters."""
+    return dataclasses.replace(options, parameters={**options.parameters, **values})
 
 
 def _signals(results, names, points) -> np.ndarray | None:

@@ -76,15 +76,6 @@ class Derivatives:
         for source in self.sources:
             source.read(self.slopes)
 
-    def couple(self, node, values: np.ndarray, step: float):
-        """Before ``node`` steps: the derivatives of its linked inputs and, where
-        interpolated, their values at t_n; then the links to set back to t_{n+1} after the
-        step (:meth:`_InputSlopes.restore`), or None."""
-        consumer = self.consumers.get(node.instance.name)
-        if consumer is not None and consumer.write(values, self.previous, self.slopes, step):
-            return consumer
-        return None
-
 
 class _OutputSlopes:
     """fmi2GetRealOutputDerivatives (order 1) of some outputs of one FMU."""
@@ -115,27 +106,8 @@ class _InputSlopes:
         self.index = np.array([layout[(a, y)] for _, a, y, _ in entries], dtype=np.intp)
         self.interpolated = np.array([after for *_, after in entries], dtype=bool)
         self.buffer = np.zeros(self.n)
-        self.ptr = self.buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
         chosen = [u for u, *_, after in entries if after]
         self.at_start = (ctypes.c_uint * len(chosen))(
             *(instance.variables[u].valueReference for u in chosen)
         )
         self.start_buffer = np.zeros(len(chosen))
-        self.start_ptr = self.start_buffer.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-
-    def write(self, values, previous, slopes, step: float) -> bool:
-        index, inner = self.index, self.interpolated
-        self.buffer[:] = slopes[index]
-        moved = bool(inner.any())
-        if moved:
-            start, end = previous[index[inner]], values[index[inner]]
-            self.buffer[inner] = (end - start) / step
-            self.start_buffer[:] = start
-            self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)
-        self.instance.call("fmi2SetRealInputDerivatives", self.vrs, self.n, self.orders, self.ptr)
-        return moved
-
-    def restore(self, values) -> None:
-        """The interpolated inputs back at their newest values (after the step)."""
-        self.start_buffer[:] = values[self.index[self.interpolated]]
-        self.instance.call("fmi2SetReal", self.at_start, len(self.start_buffer), self.start_ptr)

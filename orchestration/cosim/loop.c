@@ -1,8 +1,8 @@
 /* The master's macro-step loop, compiled (orchestration/cosim/loop.py builds and loads it).
 
    One macro step n (t_n = start + n * step) is a fixed program of operations that
-   orchestration/cosim/loop.py derives from the schedule, in the order the Python loop of
-   orchestration/cosim/master.py makes the same FMI calls:
+   orchestration/cosim/loop.py derives from the schedule once (its Python loop runs the
+   same program where this one cannot be compiled, with the same arithmetic):
 
      SET_*    gather buffer[i] = values[index[i]], then fmi2Set*(component, vrs, n, buffer)
      GET_*    fmi2Get*(component, vrs, n, buffer), then scatter values[index[i]] = buffer[i]

@@ -1,13 +1,14 @@
-"""The master's macro-step loop compiled (``loop.c``), with the Python loop as fall-back.
+"""The master's macro-step loop: one program of FMI calls, run by C (``loop.c``) or Python.
 
-:class:`Program` turns a run's schedule into the FMI calls of one macro step, in the order
-the Python loop of :mod:`.master` makes them (fmpy's bound functions, the component
-pointers, value references, buffers and places in the value vector); :func:`run` has the
-C loop run them chunk by chunk (at most :data:`BUDGET` seconds or up to the next progress
-report each), records each chunk's rows, reports progress and looks at the signal flag
-between chunks, and raises the same :class:`FmiCallError` as the Python loop (through
-``Instance.check``) after recording the rows before the failing step.  The results are the
-Python loop's bit for bit (same calls, same arithmetic, no FMA contraction).
+:class:`Program` turns a run's schedule into the operations of one macro step (fmpy's bound
+FMI functions, the component pointers, value references, buffers and places in the value
+vector; :mod:`.master`'s docstring, step 3), once; ``loop.c`` runs them, and where it
+cannot, the Python loop runs the same operations (:meth:`Op.python`: ``loop.c``'s
+arithmetic, the results bit for bit).  :func:`run` has either run them chunk by chunk (at
+most :data:`BUDGET` seconds or up to the next progress report each), records each chunk's
+rows, reports progress and looks at the signal flag between chunks, and raises the
+failing call's :class:`FmiCallError` (through ``Instance.check``) after recording the rows
+before the failing step.
 
 ``loop.c`` is compiled at first use with the C compiler the FMU build uses
 (:func:`components.runtime.toolchain.c_compiler`) into a cache keyed by the source, the
@@ -28,11 +29,13 @@ note in the run's log when the compiled one is not available; ``"compiled"`` rai
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import platform
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -46,10 +49,13 @@ LOOPS = ("auto", "compiled", "python")
 SOURCE = Path(__file__).with_name("loop.c")
 FLAGS = ("-shared", "-fPIC", "-O2", "-ffp-contract=off")
 BUDGET = 0.005  # seconds of one chunk: Ctrl-C, progress and the CSV stay this close
-_KINDS = {"SetReal": 0, "GetReal": 1, "SetInteger": 2, "GetInteger": 3}
-_KINDS.update(SetBoolean=2, GetBoolean=3)  # fmi2Boolean is an int, as fmi2Integer
-SET_REAL, DO_STEP, AT_STEP, AT_READ = 0, 4, 1, 2
+#: the operations (loop.c's enum) and when an operation of a multi-rate component is due
+SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP = 0, 1, 2, 3, 4
 GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS = 5, 6, 7, 8
+AT_STEP, AT_READ = 1, 2
+_KINDS = {"SetReal": SET_REAL, "GetReal": GET_REAL, "SetInteger": SET_INTEGER}
+_KINDS.update(GetInteger=GET_INTEGER)
+_KINDS.update(SetBoolean=SET_INTEGER, GetBoolean=GET_INTEGER)  # an fmi2Boolean is an int
 
 
 class LoopUnavailable(RuntimeError):
@@ -174,54 +180,183 @@ def select(loop: str, log: Log):
         return None
 
 
-class Program:
-    """The FMI calls of one macro step (:mod:`.master`'s loop, step 3), for ``loop.c``;
-    ``calls[k]`` is (instance, FMI call) of operation k, to raise its error.  ``links``:
-    the run's :class:`.derivatives.Derivatives`, or None."""
+class Op:
+    """One operation of a macro step: the fields of ``loop.c``'s ``struct operation``, as
+    Python objects (the buffers and value-reference arrays it points into), and the
+    instance and FMI call it is (to raise its error)."""
 
-    def __init__(
-        self, algorithm: str, nodes: dict, sequence: list, reads: list, step: float, links=None
-    ):
-        entries: list[dict] = []  # the fields of each Operation, with instance and call
+    def __init__(self, kind: int, every: int = 1, when: int = AT_STEP | AT_READ, **fields):
+        self.kind, self.every, self.when = kind, every, when
+        self.instance = fields.pop("instance", None)
+        self.call: str | None = fields.pop("call", None)
+        self.function = fields.pop("function", None)
+        self.vrs = fields.pop("vrs", None)  # ctypes array of value references
+        index = fields.pop("index", None)  # places in the value vector
+        self.index = None if index is None else np.ascontiguousarray(index, dtype=np.int64)
+        self.buffer: np.ndarray | None = fields.pop("buffer", None)
+        self.h: float = fields.pop("h", 0.0)
+        self.orders = fields.pop("orders", None)
+        self.slopes: np.ndarray | None = fields.pop("slopes", None)
+        self.previous: np.ndarray | None = fields.pop("previous", None)
+        interpolated = fields.pop("interpolated", None)
+        self.interpolated = (
+            None if interpolated is None else np.ascontiguousarray(interpolated, dtype=np.uint8)
+        )
+        self.n: int = fields.pop("n", 0 if self.index is None else len(self.index))
+        assert not fields, fields
+
+    def due(self, n: int) -> bool:
+        """Whether it runs at step n (``loop.c``'s ``due``)."""
+        if self.every == 1:
+            return True
+        stepping = bool(self.when & AT_STEP) and n % self.every == 0
+        return stepping or bool(self.when & AT_READ) and (n + 1) % self.every == 0
+
+    def struct(self) -> dict:
+        """Its ``struct operation`` fields (addresses of what it points into; those it has
+        not stay null)."""
+        fields: dict[str, object] = dict(
+            kind=self.kind, when=self.when, every=self.every, n=self.n, h=self.h
+        )
+        if self.instance is not None:
+            fields.update(component=self.instance.component, function=_address(self.function))
+        for name in ("vrs", "orders"):
+            if getattr(self, name) is not None:
+                fields[name] = ctypes.addressof(getattr(self, name))
+        for name in ("index", "buffer", "slopes", "previous", "interpolated"):
+            if getattr(self, name) is not None:
+                fields[name] = getattr(self, name).ctypes.data
+        return fields
+
+    def python(self):
+        """The operation in Python: a function (values, t) -> its FMI status, with
+        ``loop.c``'s ``run`` arithmetic (the same results, bit for bit)."""
+        kind, function, vrs, n, index = self.kind, self.function, self.vrs, self.n, self.index
+        component = None if self.instance is None else self.instance.component
+        buffer, slopes, previous, h = self.buffer, self.slopes, self.previous, self.h
+        if kind == KEEP_PREVIOUS:
+            assert previous is not None
+
+            def keep(values, t):
+                previous[:n] = values[:n]
+                return 0
+
+            return keep
+        if kind == DO_STEP:
+            return lambda values, t: function(component, t, h, 1)
+        assert buffer is not None
+        pointer = buffer.ctypes.data_as(ctypes.POINTER(_CTYPES[buffer.dtype.char]))
+        where = _where(index)
+        if kind in (SET_REAL, SET_INTEGER, SET_PREVIOUS):
+            source = previous if kind == SET_PREVIOUS else None
+
+            def put(values, t):
+                np.take(values if source is None else source, index, out=buffer)
+                return function(component, vrs, n, pointer)
+
+            return put
+        if kind in (GET_REAL, GET_INTEGER):
+
+            def get(values, t):
+                status = function(component, vrs, n, pointer)
+                if status <= 1:
+                    values[where] = buffer
+                return status
+
+            return get
+        orders = self.orders
+        assert slopes is not None
+        if kind == GET_DERIVATIVES:
+
+            def get_slopes(values, t):
+                status = function(component, vrs, n, orders, pointer)
+                if status <= 1:
+                    slopes[where] = buffer
+                return status
+
+            return get_slopes
+        assert kind == SET_DERIVATIVES and previous is not None
+        assert index is not None and self.interpolated is not None
+        inner = self.interpolated.astype(bool)
+        moved = index[inner] if inner.any() else None
+
+        def set_slopes(values, t):
+            np.take(slopes, index, out=buffer)
+            if moved is not None:
+                buffer[inner] = (values[moved] - previous[moved]) / h
+            return function(component, vrs, n, orders, pointer)
+
+        return set_slopes
+
+
+_CTYPES = {"d": ctypes.c_double, "i": ctypes.c_int}
+
+
+def _where(index: np.ndarray):
+    """A slice for contiguous places (a faster scatter), else the places."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
+def _address(function) -> int | None:
+    return ctypes.cast(function, ctypes.c_void_p).value
+
+
+class Program:
+    """The FMI calls of one macro step (:mod:`.master`'s docstring, step 3), written once:
+    ``loop.c`` runs them (``ops``, a ``struct operation`` array) and so does the Python
+    loop (:meth:`python_chunk`).  ``steps``: each :class:`Op`, whose instance and call
+    name an error.  :meth:`macro_step` builds it from a run's schedule."""
+
+    def __init__(self, steps: list[Op]):
+        self.steps = steps
+
+    @functools.cached_property
+    def ops(self) -> ctypes.Array:
+        """The operations as ``loop.c``'s ``struct operation`` array."""
+        ops = (Operation * len(self.steps))()
+        for op, step in zip(ops, self.steps):
+            for field, value in step.struct().items():
+                setattr(op, field, value)
+        return ops
+
+    @classmethod
+    def macro_step(
+        cls, algorithm: str, nodes: dict, sequence: list, reads: list, step: float, links=None
+    ) -> Program:
+        """Gauss-Seidel: block by block in ``sequence``, each FMU stepping at its first
+        block; Jacobi: every FMU steps (in ``nodes``' order), then the blocks of ``reads``
+        are read.  ``links``: the run's :class:`.derivatives.Derivatives`, or None."""
+        steps: list[Op] = []
 
         def ports(node, chosen, when):
-            for port in chosen:
-                entries.append(
-                    dict(_port(port), kind=_KINDS[port.call[4:]], when=when, every=node.every)
-                )
+            steps.extend(_port(port, node.every, when) for port in chosen)
 
-        def do_step(node):
-            entries.append(
-                dict(
-                    kind=DO_STEP,
-                    when=AT_STEP,
-                    every=node.every,
+        def step_linked(node, when):
+            """The input derivatives, the step, the interpolated inputs set back to
+            t_{n+1} (:mod:`.derivatives`; every == 1)."""
+            consumer = None if links is None else links.consumers.get(node.instance.name)
+            if consumer is not None and consumer.interpolated.any():
+                steps.append(_previous(consumer, SET_PREVIOUS, links))
+            if consumer is not None:
+                steps.append(_derivatives(consumer, SET_DERIVATIVES, links, step))
+            steps.append(
+                Op(
+                    DO_STEP,
+                    node.every,
+                    AT_STEP,
                     instance=node.instance,
                     call="fmi2DoStep",
+                    function=node.instance.fmi2DoStep,
                     h=step * node.every,
                 )
             )
-
-        def step_linked(node, when):
-            """couple(), the step, restore() (:mod:`.derivatives`; every == 1)."""
-            consumer = None if links is None else links.consumers.get(node.instance.name)
-            if consumer is not None and consumer.interpolated.any():
-                entries.append(_previous(consumer, SET_PREVIOUS, links))
-            if consumer is not None:
-                entries.append(_derivatives(consumer, SET_DERIVATIVES, links, step))
-            do_step(node)
             if consumer is not None and consumer.interpolated.any() and when & AT_READ:
-                entries.append(_previous(consumer, SET_REAL, links))
+                steps.append(_previous(consumer, SET_REAL, links))
 
         if links is not None and links.interpolating:
-            entries.append(
-                dict(
-                    kind=KEEP_PREVIOUS,
-                    every=1,
-                    n=len(links.previous),
-                    previous=links.previous.ctypes.data,
-                )
-            )
+            steps.append(Op(KEEP_PREVIOUS, n=len(links.previous), previous=links.previous))
         if algorithm == "jacobi":
             for node in nodes.values():
                 ports(node, node.inputs, AT_STEP)
@@ -238,102 +373,118 @@ class Program:
                     step_linked(node, when)
                 ports(node, chosen, AT_READ)
         for source in [] if links is None else links.sources:
-            entries.append(_derivatives(source, GET_DERIVATIVES, links))
-        self.ops = (Operation * len(entries))()
-        self.calls = [(entry.get("instance"), entry.get("call")) for entry in entries]
-        self._keep = [entry.pop("keep", None) for entry in entries]  # arrays pointed into
-        for op, entry in zip(self.ops, entries):
-            instance = entry.pop("instance", None)
-            if instance is not None:
-                op.component = instance.component
-                op.function = _address(
-                    entry.pop("function", None) or getattr(instance, entry["call"])
-                )
-            entry.pop("call", None)
-            for field, value in entry.items():
-                setattr(op, field, value)
+            steps.append(_derivatives(source, GET_DERIVATIVES, links))
+        return cls(steps)
+
+    @functools.cached_property
+    def _python(self) -> list:
+        """(the operation in Python, due at every step?, the operation) of each (made when
+        the Python loop first runs the program)."""
+        return [(step.python(), step.every == 1, step) for step in self.steps]
+
+    def python(self, values: np.ndarray, n: int, t: float) -> tuple[int, int]:
+        """Run step n (at t) in Python: (-1, 0), or at the first call that returns more
+        than fmi2Warning (the index of its operation, its status)."""
+        for k, (action, always, op) in enumerate(self._python):
+            if always or op.due(n):
+                status = action(values, t)
+                if status > 1:
+                    return k, status
+        return -1, 0
+
+    def python_chunk(
+        self, start: float, step: float, first: int, last: int, budget: float, rows, values, log
+    ):
+        """``loop.c``'s ``agilesat_loop`` in Python: steps first .. last - 1, their rows
+        into ``rows``; (steps completed, failure: (operation, status) or None)."""
+        began = time.perf_counter()
+        for n in range(first, last):
+            t = start + n * step
+            log.time = t
+            k, status = self.python(values, n, t)
+            if k >= 0:
+                return n - first, (k, status)
+            row = rows[n - first]
+            row[0] = start + (n + 1) * step
+            row[1:] = values
+            if time.perf_counter() - began >= budget:
+                return n + 1 - first, None
+        return last - first, None
+
+    def raise_failure(self, k: int, status: int) -> None:
+        """The FmiCallError of operation k's ``status`` (:meth:`Instance.check`)."""
+        op = self.steps[k]
+        assert op.instance is not None  # only KEEP_PREVIOUS has none, and it cannot fail
+        op.instance.check(status, op.call)
 
 
-def _address(function) -> int | None:
-    return ctypes.cast(function, ctypes.c_void_p).value
-
-
-def _port(port) -> dict:
-    index = np.ascontiguousarray(port.index, dtype=np.int64)
-    return dict(
+def _port(port, every: int, when: int) -> Op:
+    return Op(
+        _KINDS[port.call[4:]],
+        every,
+        when,
         instance=port.instance,
         call=port.call,
         function=port.function,
-        vrs=ctypes.addressof(port.vrs),
-        n=port.n,
-        index=index.ctypes.data,
-        buffer=port.buffer.ctypes.data,
-        keep=index,
+        vrs=port.vrs,
+        index=port.index,
+        buffer=port.buffer,
     )
 
 
-def _derivatives(slopes, kind: int, links, step: float = 0.0) -> dict:
+def _derivatives(slopes, kind: int, links, step: float = 0.0) -> Op:
     """Get (an :class:`.derivatives._OutputSlopes`) or set (an ``_InputSlopes``) of
     output/input derivatives."""
-    index = np.ascontiguousarray(slopes.index, dtype=np.int64)
-    interpolated = np.ascontiguousarray(getattr(slopes, "interpolated", []), dtype=np.uint8)
     call = (
         "fmi2GetRealOutputDerivatives" if kind == GET_DERIVATIVES else "fmi2SetRealInputDerivatives"
     )
-    return dict(
-        kind=kind,
-        every=1,
+    return Op(
+        kind,
         instance=slopes.instance,
         call=call,
         function=getattr(slopes.instance.slave.dll, call),
-        vrs=ctypes.addressof(slopes.vrs),
-        n=slopes.n,
-        index=index.ctypes.data,
-        buffer=slopes.buffer.ctypes.data,
+        vrs=slopes.vrs,
+        index=slopes.index,
+        buffer=slopes.buffer,
         h=step,
-        orders=ctypes.addressof(slopes.orders),
-        slopes=links.slopes.ctypes.data,
-        previous=links.previous.ctypes.data,
-        interpolated=interpolated.ctypes.data,
-        keep=(index, interpolated),
+        orders=slopes.orders,
+        slopes=links.slopes,
+        previous=links.previous,
+        interpolated=getattr(slopes, "interpolated", ()),
     )
 
 
-def _previous(consumer, kind: int, links) -> dict:
+def _previous(consumer, kind: int, links) -> Op:
     """fmi2SetReal of a consumer's interpolated inputs: their values at t_n (SET_PREVIOUS,
     before the step) or their newest (SET_REAL, after it)."""
-    index = np.ascontiguousarray(consumer.index[consumer.interpolated], dtype=np.int64)
-    return dict(
-        kind=kind,
-        every=1,
+    return Op(
+        kind,
         instance=consumer.instance,
         call="fmi2SetReal",
         function=consumer.instance.slave.dll.fmi2SetReal,
-        vrs=ctypes.addressof(consumer.at_start),
-        n=len(index),
-        index=index.ctypes.data,
-        buffer=consumer.start_buffer.ctypes.data,
-        previous=links.previous.ctypes.data,
-        keep=index,
+        vrs=consumer.at_start,
+        index=consumer.index[consumer.interpolated],
+        buffer=consumer.start_buffer,
+        previous=links.previous,
     )
 
 
 def run(dll, program: Program, plan, values, recorder, signals, log: ClockLog) -> None:
-    """Steps 0 .. n_steps - 1 of a :class:`.plan.RunPlan` in chunks, as the Python loop of
-    :mod:`.master` runs them."""
+    """Steps 0 .. n_steps - 1 of a :class:`.plan.RunPlan` in chunks: by ``loop.c`` (``dll``),
+    or by the Python loop (``dll`` None: :meth:`Program.python_chunk`)."""
     start, step, n_steps, progress = plan.start, plan.step, plan.n_steps, plan.progress
     report_every = max(1, n_steps // 100) if progress else n_steps  # a chunk ends there
     width = len(values) + 1
     rows = np.empty((max(1, min(report_every, 1024, (1 << 22) // (8 * width))), width))
+    compiled = dll is not None
+    text = ctypes.create_string_buffer(rows.size * 25) if recorder.out_dir and compiled else None
     failure = (ctypes.c_int64 * 2)()
-    text = ctypes.create_string_buffer(rows.size * 25) if recorder.out_dir is not None else None
     pointers = [ctypes.addressof(program.ops), values.ctypes.data, rows.ctypes.data]
     clock = ctypes.addressof(log.clock)
-    n = 0
-    while n < n_steps:
-        if signals.signal is not None:
-            return
-        last = min(n_steps, n + len(rows), (n // report_every + 1) * report_every)
+
+    def chunk(n: int, last: int):
+        if not compiled:
+            return program.python_chunk(start, step, n, last, BUDGET, rows, values, log)
         failure[0] = -1
         done = dll.agilesat_loop(
             pointers[0],
@@ -349,14 +500,19 @@ def run(dll, program: Program, plan, values, recorder, signals, log: ClockLog) -
             clock,
             failure,
         )
+        return done, None if failure[0] < 0 else (failure[0], failure[1])
+
+    n = 0
+    while n < n_steps:
+        if signals.signal is not None:
+            return
+        done, failed = chunk(n, min(n_steps, n + len(rows), (n // report_every + 1) * report_every))
         if done:
             lines = None if text is None else csv_text(dll, rows[:done], text)
             recorder.append_block(rows[:done], lines)
         n += done
-        if failure[0] >= 0:
-            instance, call = program.calls[failure[0]]
-            assert instance is not None  # only KEEP_PREVIOUS has none, and it cannot fail
-            instance.check(int(failure[1]), call)
+        if failed is not None:
+            program.raise_failure(int(failed[0]), int(failed[1]))
         if progress and n % report_every == 0:
             progress(n, n_steps)
     log.time = start + n_steps * step

@@ -36,8 +36,8 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
    second run on it is refused before it writes anything.
 5. SIGINT (Ctrl-C) and SIGTERM only set a flag while a run goes
    (:func:`.signals.stop_on_signals`):
-   the run stops between two macro steps (the compiled loop: between two chunks of a few
-   milliseconds), terminates and frees the FMUs, keeps its rows and raises
+   the run stops between two macro steps (between two chunks of a few milliseconds of
+   the loop), terminates and frees the FMUs, keeps its rows and raises
    :class:`Interrupted`.  A KeyboardInterrupt is raised inside an FMU only by the
    watchdog, in a call that did not return within its grace of the signal
    (:mod:`.signals`; pythonfmu answers it fmi2Fatal).
@@ -48,9 +48,9 @@ in ``Results.meta["unconnected_optional_inputs"]``).  The step must be positive 
 the stop time finite and after the start, and the run at most :data:`.plan.MAX_STEPS` macro
 steps.
 
-The macro steps run in C (:mod:`.loop`: the same calls in the same order, the results bit
-for bit), or in the Python loop here: with ``loop="python"``, or where the C loop cannot
-be compiled; ``Results.meta["loop"]`` says which.  ``Results.meta["parameters"]`` holds
+The macro steps are one program of FMI calls (:mod:`.loop`), run in C, or in Python (the
+same operations, the results bit for bit): with ``loop="python"``, or where the C loop
+cannot be compiled; ``Results.meta["loop"]`` says which.  ``Results.meta["parameters"]`` holds
 every Real parameter's value as the run set it (figures draw the limits of the run).
 """
 
@@ -66,9 +66,10 @@ import numpy as np
 from ..output.lock import holding
 from ..output.recorder import Recorder
 from ..output.results import Results
-from . import loop as compiled
+from . import loop
 from .derivatives import Derivatives
 from .fmu import FmiCallError, Instance
+from .options import RunOptions
 from .plan import RunPlan, plan_run, unreadable
 from .signals import at_step, stop_on_signals
 
@@ -187,59 +188,19 @@ class _Node:
             port.read(values)
 
 
-def simulate(
-    system,
-    *,
-    step: float | None = None,
-    stop: float | None = None,
-    algorithm: str | None = None,
-    parameters: dict | None = None,
-    out_dir=None,
-    logging_on: bool = False,
-    echo=None,
-    progress=None,
-    derivatives: bool | None = None,
-    loop: str | None = None,
-    start: float | None = None,
-    record=None,
-    output_interval: float | None = None,
-) -> Results:
-    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`).
+def simulate(system, options: RunOptions | None = None, /, **keywords) -> Results:
+    """Run a system (an ``.ssd``/``.ssp`` path or a :class:`SystemFile`) with ``options``
+    (:class:`.options.RunOptions`, or its fields as keywords: ``step``, ``stop``,
+    ``parameters``, ``out_dir``, ``record``, ...).
 
-    ``parameters`` maps "Instance.variable" (an element, "A.inertia[1,1]", or a whole array,
-    "A.inertia": 3×3) to values that override the system's.  With ``out_dir``,
-    ``results.csv`` is written there row by row and ``results.npz`` at the end, and the
-    Results returned map their rows from disk (memory independent of the run length);
-    without, the rows are held in memory.  ``progress(steps done, steps)`` is called about a
-    hundred times over the run.  ``derivatives=False``: no input/output derivatives (the
-    plain scheme, for comparison; default: as the system says, else on).  ``start``: the
-    start time (default the system's); ``record``: the outputs recorded (columns, whole
-    arrays by base name or patterns such as ``"SatelliteDynamics.*"``; default all);
-    ``output_interval``: record every that many seconds (a multiple of the step).
-    ``loop``: "auto" (default, or $AGILESAT_LOOP), "compiled" or "python" (:mod:`.loop`).
-    Returns :class:`Results` (``meta`` holds the settings, the units of the columns, the
-    FMU log and the open inputs); raises :class:`SimulationError` (:class:`Interrupted` on
-    SIGINT/SIGTERM) with the rows so far.  The same as
-    ``execute(plan_run(system, ...))`` (:mod:`.plan`).
+    With ``out_dir``, ``results.csv`` is written there row by row and ``results.npz`` at
+    the end, and the Results returned map their rows from disk (memory independent of the
+    run length); without, the rows are held in memory.  Returns :class:`Results`
+    (``meta`` holds the settings, the units of the columns, the FMU log and the open
+    inputs); raises :class:`SimulationError` (:class:`Interrupted` on SIGINT/SIGTERM) with
+    the rows so far.  The same as ``execute(plan_run(system, options))`` (:mod:`.plan`).
     """
-    return execute(
-        plan_run(
-            system,
-            step=step,
-            stop=stop,
-            algorithm=algorithm,
-            parameters=parameters,
-            derivatives=derivatives,
-            loop=loop,
-            out_dir=out_dir,
-            progress=progress,
-            echo=echo,
-            logging_on=logging_on,
-            start=start,
-            record=record,
-            output_interval=output_interval,
-        )
-    )
+    return execute(plan_run(system, RunOptions.given(options, keywords)))
 
 
 def execute(plan: RunPlan) -> Results:
@@ -247,10 +208,10 @@ def execute(plan: RunPlan) -> Results:
     :func:`simulate`."""
     hooked = at_step(plan.progress)  # $AGILESAT_TEST_SIGNAL (tests of interruptions)
     if hooked is not plan.progress:
-        plan = dataclasses.replace(plan, progress=hooked)
+        plan = dataclasses.replace(plan, options=dataclasses.replace(plan.options, progress=hooked))
     held = holding(plan.out_dir) if plan.out_dir is not None else contextlib.nullcontext()
     with held, stop_on_signals() as signals:
-        log = compiled.ClockLog(echo=plan.echo)
+        log = loop.ClockLog(echo=plan.options.echo)
         log.time = plan.start
         instances = {}
         try:
@@ -293,7 +254,6 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     links = Derivatives(nodes, wiring.sources, layout, plan.algorithm) if plan.derivatives else None
     if links is not None and not links.consumers:
         links = None
-    couple = None if links is None else links.couple
 
     values = np.zeros(len(layout))
     row = np.zeros(len(layout) + 1)
@@ -316,50 +276,24 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     meta["parameters"] = _parameter_values(plan, instances)
     if links is not None:
         meta["derivatives"] = links.described
-    dll = compiled.select(plan.loop, log)
+    dll = loop.select(plan.loop, log)
     meta["loop"] = "python" if dll is None else "compiled"
     chosen = None if plan.record is None else set(plan.record)
     keep = None if chosen is None else [0] + [k for k, c in enumerate(columns) if c in chosen]
     recorder = Recorder(columns, plan.out_dir, keep, plan.output_every)
     if plan.output_every > 1:
         meta["output_interval"] = plan.output_every * step
-    progress = plan.progress
-    failure, report_every = None, max(1, n_steps // 100)
+    failure = None
     try:
         _initialize(plan, instances, nodes, init_sequence, values, log)
         if links is not None:
             links.read()
         row[0], row[1:] = plan.start, values
         recorder.append(row)
-        if dll is not None:
-            program = compiled.Program(plan.algorithm, nodes, sequence, jacobi_reads, step, links)
-            compiled.run(dll, program, plan, values, recorder, signals, log)
-        else:
-            for n in range(n_steps):
-                if signals.signal is not None:
-                    break
-                t = plan.start + n * step
-                log.time = t
-                if plan.algorithm == "gauss-seidel":
-                    if links is not None and links.interpolating:
-                        links.previous[:] = values
-                    _evaluate(sequence, values, n + 1, t, step, couple)
-                else:
-                    for node in nodes.values():
-                        if n % node.every == 0:
-                            node.set_inputs(values)
-                            if couple is not None:
-                                couple(node, values, step)
-                            _do_step(node.instance, t, step * node.every)
-                    _read_after_steps(jacobi_reads, values, n + 1)
-                if links is not None:
-                    links.read()
-                row[0], row[1:] = plan.start + (n + 1) * step, values
-                recorder.append(row)
-                if progress and (n + 1) % report_every == 0:
-                    progress(n + 1, n_steps)
-            else:
-                log.time = plan.stop
+        program = loop.Program.macro_step(
+            plan.algorithm, nodes, sequence, jacobi_reads, step, links
+        )
+        loop.run(dll, program, plan, values, recorder, signals, log)
         for inst in instances.values():
             inst.call("fmi2Terminate")
     except (FmiCallError, OSError) as exc:
@@ -383,12 +317,6 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     if failure is not None or problems:
         raise SimulationError("\n".join([f"{name}: {failure or 'results lost'}"] + kept), results)
     return results
-
-
-def _do_step(instance: Instance, t: float, step: float) -> None:
-    status = instance.fmi2DoStep(instance.component, t, step, 1)
-    if status > 1:
-        instance.check(status, "fmi2DoStep")
 
 
 def _sequence(schedule, nodes) -> list:
@@ -426,41 +354,6 @@ def _port_names(port: _Port, node: _Node) -> list[str]:
     return [by_place[int(i)] for i in port.index]
 
 
-def _read_after_steps(reads, values, k: int) -> None:
-    """Jacobi: bring every output to communication point k once all FMUs stepped, block
-    by block, setting a block's inputs only if its outputs depend on them directly (the
-    next step sets every input anyway).  As :func:`_evaluate` without a step."""
-    for node, ports, feeds in reads:
-        if k % node.every == 0:
-            if feeds:
-                node.set_inputs(values)
-            for port in ports:
-                port.read(values)
-
-
-def _evaluate(
-    sequence, values, k: int, t: float = 0.0, step: float | None = None, couple=None
-) -> None:
-    """Bring every output to communication point k, block by block; with a step, each FMU
-    first steps from t = t_{k-1} at its first block (Gauss-Seidel; ``couple(node, values,
-    step)`` passes the input derivatives just before).  An FMU with its own
-    step m·H (:mod:`.multirate`) steps only from t_{k-1} with k − 1 a multiple of m, and
-    has its inputs set and outputs read only at k a multiple of m (else they hold)."""
-    for node, reads, first in sequence:
-        stepping = first and step is not None and (k - 1) % node.every == 0
-        reading = k % node.every == 0
-        if stepping or reading:
-            node.set_inputs(values)
-        if stepping:
-            moved = couple(node, values, step) if couple is not None else None
-            _do_step(node.instance, t, step * node.every)
-            if moved is not None and reading:  # inputs set to their t_{k-1} values
-                moved.restore(values)
-        if reading:
-            for port in reads:
-                port.read(values)
-
-
 def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
     """{"Instance.variable[i]": value} of every Real parameter as the run sets it: the
     value the system or the command line gave, else the model description's start."""
@@ -475,16 +368,22 @@ def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
 
 
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
+    """Instantiate, set up, set the parameters; in initialisation mode, bring the outputs
+    to t0 block by block in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set
+    every input once more."""
     log.time = plan.start
     for node in nodes.values():
         inst = node.instance
-        inst.instantiate(plan.logging_on)
+        inst.instantiate(plan.options.logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, plan.start, 1, plan.stop)
     for value in plan.bindings:
         _set_value(instances[value.component], value.name, value.type, value.value)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
-    _evaluate(init_sequence, values, 0)
+    for node, reads, _ in init_sequence:
+        node.set_inputs(values)
+        for port in reads:
+            port.read(values)
     for node in nodes.values():
         node.set_inputs(values)
     for inst in instances.values():

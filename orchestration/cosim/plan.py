@@ -1,22 +1,24 @@
 """A run, planned and checked before any FMU is loaded: :class:`RunPlan`.
 
-:func:`plan_run` reads what a run needs from the system file and the FMUs' model
-descriptions alone: the time grid (start, step, number of macro steps; each component's
-own step, :mod:`.multirate`), the algorithm, the parameter values (the system's, then the
-overrides typed once: :func:`..system.parameters.typed_parameters`) and the checked wiring
+:func:`plan_run` reads what a run needs from its options (:class:`.options.RunOptions`),
+the system file and the FMUs' model descriptions alone: the time grid (start, step, number
+of macro steps; each component's own step, :mod:`.multirate`), the algorithm, the
+parameter values (the system's, then the overrides typed once:
+:func:`..system.parameters.typed_parameters`) and the checked wiring
 (:func:`..system.validation.check_system`: sources of the inputs, schedules, open inputs).
 Every error names the file, component or variable before anything is instantiated.
-:func:`.master.execute` runs the plan.
+:func:`.master.execute` runs the plan; :meth:`RunPlan.swapped` is the plan of a run that
+only gives some parameters other values (a campaign's runs of one batch).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import fnmatch
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from ..system.description import Description
 from ..system.parameters import did_you_mean, typed_parameters
@@ -24,8 +26,8 @@ from ..system.ssp import ParameterValue, SystemFile, SystemFileError, read_syste
 from ..system.validation import Wiring, check_system
 from . import multirate
 from .loop import choose as choose_loop
+from .options import ALGORITHMS, RunOptions
 
-ALGORITHMS = ("gauss-seidel", "jacobi")
 MAX_STEPS = 10_000_000  # macro steps of one run (about 15 GB of CSV for scan_pitch)
 #: bytes a recorded value takes in results.csv (CPython's repr and a comma; measured: a
 #: 100 MB CSV of 90 columns for 54,800 rows) and in results.npz (float64)
@@ -34,15 +36,16 @@ CSV_BYTES, NPZ_BYTES = 20, 8
 
 @dataclass(frozen=True)
 class RunPlan:
-    """Everything one run needs, checked: what to run (``system``, the ``overrides`` on
-    top of its own parameter values, the ``wiring``), on which time
-    grid and how (``loop``: "auto", "compiled" or "python"; ``derivatives``: couple
-    through FMI input/output derivatives where declared), and where its rows go
-    (``out_dir``; ``progress(steps done, steps)``, ``echo(log entry)``, ``logging_on``:
-    the FMUs' debug logging), which outputs are recorded (``record``: their columns, None
-    for all) and at which communication points (every ``output_every``-th)."""
+    """Everything one run needs, checked: what it was asked (``options``), what to run
+    (``system``, its FMUs' ``descriptions``, the ``overrides`` on top of its own parameter
+    values, the ``wiring``), on which time grid and how (``loop``: "auto", "compiled" or
+    "python"; ``derivatives``: couple through FMI input/output derivatives where
+    declared), which outputs are recorded (``record``: their columns, None for all) and at
+    which communication points (every ``output_every``-th)."""
 
     system: SystemFile
+    options: RunOptions
+    descriptions: dict[str, Description]
     overrides: dict[str, ParameterValue]  # "A.x[i]" -> typed value, on top of the system's
     wiring: Wiring
     start: float
@@ -52,10 +55,6 @@ class RunPlan:
     every: dict[str, int]  # component -> its step in base steps (multirate)
     derivatives: bool = True
     loop: str = "auto"
-    out_dir: Path | None = None
-    progress: Callable[[int, int], None] | None = None
-    echo: Callable[[Any], None] | None = None
-    logging_on: bool = False
     record: tuple[str, ...] | None = None
     output_every: int = 1
     outputs: int = 0  # of the FMUs, all recorded unless ``record`` chooses
@@ -68,6 +67,14 @@ class RunPlan:
     def stop(self) -> float:
         return self.start + self.n_steps * self.step
 
+    @property
+    def out_dir(self) -> Path | None:
+        return self.options.out_dir
+
+    @property
+    def progress(self) -> Callable[[int, int], None] | None:
+        return self.options.progress
+
     def output_bytes(self) -> tuple[int, int]:
         """(bytes of results.csv, of results.npz) the run will write, about."""
         rows = self.n_steps // self.output_every + 1
@@ -79,44 +86,49 @@ class RunPlan:
         """Every parameter value set before initialisation, in the order set."""
         return self.system.parameters + list(self.overrides.values())
 
+    def swapped(self, parameters: dict) -> RunPlan:
+        """The plan with other values of parameters it was planned with (a campaign's
+        dispersed values), typed and swapped in, in their order.  The check holds: what it
+        found depends on which parameters a run sets, not on their values (a value set at
+        run time is typed against its variable here, and not held to agree with another
+        FMU's, :mod:`..system.agreement`).  A parameter it was not planned with is a
+        ValueError."""
+        typed = typed_parameters(self.descriptions, parameters)
+        new = sorted(set(typed) - set(self.overrides))
+        if new:
+            raise ValueError(f"not planned with {', '.join(new)}: plan the run again")
+        options = dataclasses.replace(
+            self.options, parameters={**self.options.parameters, **parameters}
+        )
+        return dataclasses.replace(self, options=options, overrides={**self.overrides, **typed})
 
-def plan_run(
-    system,
-    *,
-    step: float | None = None,
-    stop: float | None = None,
-    algorithm: str | None = None,
-    parameters: dict | None = None,
-    derivatives: bool | None = None,
-    loop: str | None = None,
-    out_dir=None,
-    progress=None,
-    echo=None,
-    logging_on: bool = False,
-    start: float | None = None,
-    record=None,
-    output_interval: float | None = None,
-) -> RunPlan:
+
+def plan_run(system, options: RunOptions | None = None, /, **keywords) -> RunPlan:
     """The plan of a run of ``system`` (an ``.ssd``/``.ssp`` path or a
-    :class:`SystemFile`); the keywords as :func:`.master.simulate` takes them.  Raises
-    ValueError (SystemFileError for the system and its FMUs) saying what is wrong."""
+    :class:`SystemFile`) with ``options`` (:class:`.options.RunOptions`, or its fields as
+    keywords).  Raises ValueError (SystemFileError for the system and its FMUs) saying
+    what is wrong."""
+    options = RunOptions.given(options, keywords)
     system = system if isinstance(system, SystemFile) else read_system(system)
-    start = system.start_time if start is None else start
-    step = system.step_size if step is None else step
-    stop = system.stop_time if stop is None else stop
-    algorithm = algorithm or system.algorithm or "gauss-seidel"
+    start = system.start_time if options.start is None else options.start
+    step = system.step_size if options.step is None else options.step
+    stop = system.stop_time if options.stop is None else options.stop
+    algorithm = options.algorithm or system.algorithm or "gauss-seidel"
+    derivatives = options.derivatives
     derivatives = system.derivatives is not False if derivatives is None else derivatives
     n_steps = _steps(system.path, start, step, stop)
     every = multirate.multiples(system, step, n_steps)
     if algorithm not in ALGORITHMS:
         raise ValueError(f"algorithm must be one of {ALGORITHMS}, got {algorithm!r}")
-    chosen = choose_loop(loop)
+    chosen = choose_loop(options.loop)
     descriptions = {ref.name: _describe(system, ref) for ref in system.components}
-    overrides = typed_parameters(descriptions, parameters or {})
+    overrides = typed_parameters(descriptions, options.parameters)
     wiring = check_system(system, descriptions, system.parameters + list(overrides.values()))
     columns = [f"{name}.{y}" for name, d in descriptions.items() for y in d.outputs]
     return RunPlan(
         system,
+        options,
+        descriptions,
         overrides,
         wiring,
         start,
@@ -126,12 +138,8 @@ def plan_run(
         every,
         derivatives=derivatives,
         loop=chosen,
-        out_dir=None if out_dir is None else Path(out_dir),
-        progress=progress,
-        echo=echo,
-        logging_on=logging_on,
-        record=None if record is None else recorded(columns, record),
-        output_every=_output_every(output_interval, step, n_steps),
+        record=None if options.record is None else recorded(columns, options.record),
+        output_every=_output_every(options.output_interval, step, n_steps),
         outputs=len(columns),
     )
 

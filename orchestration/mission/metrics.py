@@ -31,10 +31,9 @@ import numpy as np
 
 from ..output.results import ColumnError
 from ..output.summary import format_value, relative_drift
-from ..pointing.errors import performance_error
+from ..pointing.errors import not_covered, performance_error
 from ..pointing.indices import NotEvaluable
 from ..system.units import quantity, to_degrees, to_si
-from .requirements import not_covered
 from .system import where_written
 
 __all__ = [

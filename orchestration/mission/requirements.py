@@ -36,8 +36,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..output.kept import reached_the_end
+from ..output.kept_signals import reached_the_end
 from ..output.summary import requirement_text
+from ..pointing.errors import quaternion_columns, recorded_error
 from ..system.units import CONVERSIONS, quantity, to_si
 from .system import where_written
 
@@ -237,8 +238,8 @@ class Pointing(Requirement):
                 "a reference function needs reference_signals (the columns it reads), "
                 "a recorded reference quaternion none"
             )
-        columns = _quaternion(self.attitude)
-        columns += tuple(self.reference_signals) or _quaternion(self.reference)  # type: ignore[arg-type]
+        columns = quaternion_columns(self.attitude)
+        columns += tuple(self.reference_signals) or quaternion_columns(self.reference)  # type: ignore[arg-type]
         object.__setattr__(self, "signals", columns)
 
     @property
@@ -255,7 +256,7 @@ class Pointing(Requirement):
 
     def error(self, columns, t: np.ndarray):
         """The error history over [start, stop] of the recorded ``columns``
-        (:func:`recorded_error`)."""
+        (:func:`..pointing.errors.recorded_error`)."""
         return recorded_error(
             columns, t, self.attitude, self.reference, self.kind, self.start, self.stop
         )
@@ -307,60 +308,3 @@ def judged_over_campaign(requirement) -> bool:
     """Does a campaign judge ``requirement`` over all its runs (an ``evaluate_campaign``
     and, where it says, ``over_campaign``), not run by run?"""
     return hasattr(requirement, "evaluate_campaign") and getattr(requirement, "over_campaign", True)
-
-
-def _quaternion(name: str) -> tuple[str, ...]:
-    """The four recorded columns of a quaternion output."""
-    return tuple(f"{name}[{i}]" for i in range(1, 5))
-
-
-def recorded_error(
-    columns,
-    t: np.ndarray,
-    attitude: str,
-    reference,
-    kind: str = "performance",
-    start=None,
-    stop=None,
-):
-    """The :class:`..pointing.ErrorHistory` of the recorded quaternion ``attitude`` against
-    ``reference`` (a recorded quaternion, or a function of the columns: :class:`Pointing`)
-    over [``start``, ``stop``]: ``columns[name]`` is (points,) for a run, (runs, points) for
-    a campaign, at times ``t``; :class:`..pointing.NotEvaluable` with fewer than 2 samples,
-    or a window the records do not cover (to the nearest sample: :func:`not_covered`)."""
-    from ..pointing import NotEvaluable, knowledge_error, performance_error
-
-    gap = not_covered(t, start, stop)
-    if gap:
-        raise NotEvaluable(gap)
-    rows = np.ones(len(t), bool)
-    if start is not None:
-        rows &= t >= start - 1e-12
-    if stop is not None:
-        rows &= t <= stop + 1e-12
-    if rows.sum() < 2:
-        raise NotEvaluable(f"fewer than 2 samples in [{start}, {stop}] s")
-    q_x = np.stack([columns[c] for c in _quaternion(attitude)], axis=-1)
-    if callable(reference):
-        q_y = np.asarray(reference(columns))
-    else:
-        q_y = np.stack([columns[c] for c in _quaternion(reference)], axis=-1)
-    return (performance_error if kind == "performance" else knowledge_error)(
-        q_x[..., rows, :], q_y[..., rows, :], t[rows]
-    )
-
-
-def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:
-    """Why records at times ``t`` do not cover ``what``, [``start``, ``stop``] (None: the
-    records' own end), to the nearest sample; "" if they do."""
-    if not len(t):
-        return "no records"
-    half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
-    first, last = float(t[0]), float(t[-1])
-    if start is not None and start > last + half:
-        return f"the records end at {last:g} s, before {what}'s start {start:g} s"
-    if start is not None and start < first - half:
-        return f"the records begin at {first:g} s, after {what}'s start {start:g} s"
-    if stop is not None and stop > last + half:
-        return f"the records end at {last:g} s, before {what}'s end {stop:g} s"
-    return ""

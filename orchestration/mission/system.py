@@ -385,45 +385,9 @@ class System:
             }
             path.write_bytes(self.ssd(sources))
             return path
+        from .package import write_package
+
         return write_package(system, self.descriptions(), path)
-
-
-def write_package(system: SystemFile, described: dict, path, say=None) -> Path:
-    """An SSP package (SSP 1.0 §5) of ``system`` written as ``path``: ``SystemStructure.ssd``
-    and every FMU under ``resources/`` (:func:`package_entries`); deterministic (the same
-    system gives the same file)."""
-    from ...fmus.build import write_archive
-
-    return write_archive(Path(path), package_entries(system, described, say))
-
-
-def package_entries(
-    system: SystemFile, described: dict, say=None, folder: str = "resources"
-) -> dict[str, bytes]:
-    """The files of the SSP package of ``system``: ``SystemStructure.ssd`` and every FMU
-    under ``folder``, named by relative URI, so it runs wherever it is copied, each FMU
-    configured with the values the system binds to it (:func:`..export.package`, which
-    tells ``say`` of an FMU it packs unconfigured)."""
-    from ..export import package
-
-    fmus: dict[str, bytes] = {}
-    sources, files = {}, {}
-    for ref in system.components:
-        member = _member(Path(ref.source), fmus)
-        fmus.setdefault(member, Path(ref.source).read_bytes())
-        sources[ref.name], files[member] = member, Path(ref.source)
-    ssd = render_ssd(system, described, sources)
-    return package(ssd, files, say, folder)
-
-
-def _member(fmu: Path, entries: dict) -> str:
-    """The package member of an FMU: ``resources/<file name>``, numbered if another FMU
-    has that name."""
-    member, k = f"resources/{fmu.name}", 1
-    while member in entries and entries[member] != fmu.read_bytes():
-        k += 1
-        member = f"resources/{fmu.stem}_{k}{fmu.suffix}"
-    return member
 
 
 def _shape(shape) -> str:

@@ -27,6 +27,7 @@ from importlib import metadata
 from pathlib import Path
 
 from ..system.parameters import did_you_mean
+from ..system.ssp import read_system
 from .scenario import Scenario
 from .system import System
 
@@ -51,14 +52,12 @@ class Target:
     source: Path | None = None
 
     def system_file(self, build: bool = True):
-        """The :class:`..system.ssp.SystemFile` it runs (a file read once per content)."""
+        """The :class:`..system.ssp.SystemFile` it runs."""
         if self.scenario is not None:
             return self.scenario.system_file(self.variant, build)
         if self.system is not None:
             return self.system.system_file(build)
-        from ..system.cached import system_file
-
-        return system_file(self.path)
+        return read_system(self.path)
 
     @property
     def label(self) -> str:

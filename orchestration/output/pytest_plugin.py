@@ -10,7 +10,7 @@ Fixtures:
   the run's files are in ``summary["out_dir"]``.  A run that fails (or bad input) fails
   the test with its message, as ``agilesat run`` prints it.
 
-Assertions (:mod:`agilesat.orchestration.output.checks`, re-exported here): ``assert_within``,
+Assertions (:mod:`agilesat.orchestration.postprocess.checks`, re-exported here): ``assert_within``,
 ``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``,
 ``assert_pointing`` (an ECSS index of a run or a campaign).
 """
@@ -21,7 +21,7 @@ import json
 
 import pytest
 
-from .checks import (  # noqa: F401
+from ..postprocess.checks import (  # noqa: F401
     assert_momentum_conserved,
     assert_pointing,
     assert_requirements_met,

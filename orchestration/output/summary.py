@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...components.variables import UNITS
 from ..provenance import header
 from ..system.units import display_factor, join, pretty
 from .recorder import write_text
@@ -105,7 +104,7 @@ def generic_summary(results: Results) -> dict:
 def _display(value, unit, display_unit):
     """(value in the display unit, the display unit as people write it); in ``unit`` when
     the display unit does not convert (never a value under another unit's name)."""
-    scale = UNITS.get(unit, ({}, {}))[1].get(display_unit) or display_factor(unit, display_unit)
+    scale = display_factor(unit, display_unit)
     if scale is None:
         return value, pretty(unit)
     return value * scale, pretty(display_unit or unit)

@@ -234,3 +234,61 @@ def _line_of_sight(phi: np.ndarray, b: np.ndarray) -> np.ndarray:
         np.arctan2(sine, cosine[..., None]), sine, out=np.ones_like(sine), where=sine > 0.0
     )
     return scale * normal
+
+
+def quaternion_columns(name: str) -> tuple[str, ...]:
+    """The four recorded columns of a quaternion output."""
+    return tuple(f"{name}[{i}]" for i in range(1, 5))
+
+
+def recorded_error(
+    columns,
+    t: np.ndarray,
+    attitude: str,
+    reference,
+    kind: str = "performance",
+    start=None,
+    stop=None,
+):
+    """The :class:`ErrorHistory` of the recorded quaternion ``attitude`` against ``reference``
+    (a recorded quaternion, or a function of the columns: a scenario's
+    :class:`..mission.requirements.Pointing`) over [``start``, ``stop``]: ``columns[name]``
+    is (points,) for a run, (runs, points) for a campaign, at times ``t``;
+    :class:`.indices.NotEvaluable` with fewer than 2 samples, or a window the records do
+    not cover (to the nearest sample: :func:`not_covered`)."""
+    from .indices import NotEvaluable
+
+    gap = not_covered(t, start, stop)
+    if gap:
+        raise NotEvaluable(gap)
+    rows = np.ones(len(t), bool)
+    if start is not None:
+        rows &= t >= start - 1e-12
+    if stop is not None:
+        rows &= t <= stop + 1e-12
+    if rows.sum() < 2:
+        raise NotEvaluable(f"fewer than 2 samples in [{start}, {stop}] s")
+    q_x = np.stack([columns[c] for c in quaternion_columns(attitude)], axis=-1)
+    if callable(reference):
+        q_y = np.asarray(reference(columns))
+    else:
+        q_y = np.stack([columns[c] for c in quaternion_columns(reference)], axis=-1)
+    return (performance_error if kind == "performance" else knowledge_error)(
+        q_x[..., rows, :], q_y[..., rows, :], t[rows]
+    )
+
+
+def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:
+    """Why records at times ``t`` do not cover ``what``, [``start``, ``stop``] (None: the
+    records' own end), to the nearest sample; "" if they do."""
+    if not len(t):
+        return "no records"
+    half = float(t[1] - t[0]) / 2 if len(t) > 1 else 0.0
+    first, last = float(t[0]), float(t[-1])
+    if start is not None and start > last + half:
+        return f"the records end at {last:g} s, before {what}'s start {start:g} s"
+    if start is not None and start < first - half:
+        return f"the records begin at {first:g} s, after {what}'s start {start:g} s"
+    if stop is not None and stop > last + half:
+        return f"the records end at {last:g} s, before {what}'s end {stop:g} s"
+    return ""

@@ -32,7 +32,7 @@ VIDEO_SAR_TARGET_LON = 129.72 * DEG
 VIDEO_SAR_MAX_INCIDENCE = 65.0 * DEG  # β of §3
 VIDEO_SAR_STARE = 200.0  # s, 08:08:03–08:11:23
 
-#: :func:`~agilesat.orchestration.studies.mission.overlap_ratio`'s paper case (§1, Fig. 3)
+#: :func:`~agilesat.orchestration.studies.mission_analysis.overlap_ratio`'s paper case (§1, Fig. 3)
 VIDEO_SAR_OVERLAP = dict(
     carrier_frequency=VIDEO_SAR_CARRIER,
     look_angle=VIDEO_SAR_LOOK_ANGLE,

@@ -81,7 +81,7 @@ PAPER = {
 
 # The system: five of our FMUs.  Jacobi coupling (the System's default): the hub
 # extrapolates the devices' momentum over the step with their hdot, a coupling error of
-# second order (tests/orchestration/test_coupling.py, docs/coupling.md).
+# second order (tests/orchestration/cosim/test_coupling.py, docs/coupling.md).
 SYSTEM = System("scan_pitch", step=0.05, stop=150.0)
 SYSTEM.add(
     "OrbitEnvironment",

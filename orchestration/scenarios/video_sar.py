@@ -100,7 +100,7 @@ def real_epoch(orbit: dict) -> dict:
 
 #: The pass, frozen: ``design_pass(VIDEO_SAR_ALTITUDE, *TARGET, ZERO_DOPPLER,
 #: VIDEO_SAR_LOOK_ANGLE, "right", "ascending", t0=HALF_STARE)`` rounded to 12 digits
-#: (tests/orchestration/test_passes.py solves it again and compares).
+#: (tests/orchestration/studies/test_passes.py solves it again and compares).
 PASS = {
     "semi_major_axis": 6945137.0,
     "eccentricity": 0.0,
@@ -138,11 +138,11 @@ def initial_state(orbit: dict, guidance: dict) -> tuple[list, list]:
 
 #: the cluster starts empty (no stored momentum), at the best-conditioned such gimbal set,
 #: frozen: ``zero_momentum_angles(ClusterGeometry(H_ROTOR, GIMBAL_AXES, DEFAULT_SPINS),
-#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/orchestration/test_passes.py solves
+#: scan_pitch.PAPER_DELTA0)`` rounded to 9 digits (tests/orchestration/studies/test_passes.py solves
 #: it again)
 DELTA0 = [0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566]
 #: (attitude0, rate0) on the reference at t = 0, frozen: ``initial_state(ORBIT, GUIDANCE)``
-#: and with yaw 0 (tests/orchestration/test_passes.py computes them again)
+#: and with yaw 0 (tests/orchestration/studies/test_passes.py computes them again)
 ON_REFERENCE = (
     [-0.446370651122, 0.804885764925, 0.0],
     [-0.000684611902, -0.004466724288, -0.000198845573],

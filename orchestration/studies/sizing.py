@@ -21,6 +21,7 @@ from pathlib import Path
 
 from ..campaign.engine import cluster
 from ..campaign.worker import run_one
+from ..cosim.options import RunOptions
 from ..output import plots
 from ..scenarios import payload_sweep
 
@@ -61,14 +62,17 @@ def evaluate(
             run_one,
             i,
             "payload_sweep",
-            {
-                "Flywheel.torque_limit": torque,
-                "Flywheel.momentum_limit": 100.0,
-                "SweepPlanner.turnaround_time": turnaround,
-            },
-            step,
-            stop,
-            None,
+            RunOptions(
+                step=step,
+                stop=stop,
+                parameters={
+                    "Flywheel.torque_limit": torque,
+                    "Flywheel.momentum_limit": 100.0,
+                    "SweepPlanner.turnaround_time": turnaround,
+                },
+                figures=False,
+                build=False,
+            ),
             [],
             0,
             pure=False,

@@ -8,7 +8,8 @@ element.
 Two instances are paired by the connection that makes them work together (the steering
 reads the cluster's ``h``; the controller reads the satellite's rates).
 
-The shipped scenarios produce each such value once (:mod:`.scenarios.common`);
+The shipped scenarios give each such value once, one name of the scenario's module for both
+FMUs (``H_ROTOR`` in :mod:`agilesat.orchestration.scenarios.scan_pitch`);
 :func:`disagreements` checks any system against :data:`RULES` with the values the run will
 use (bound in the system file, else the FMU's start value).  A value given at run time
 (``--set``, a variant, a campaign's overrides) is a deliberate choice of the user and is not

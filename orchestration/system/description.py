@@ -19,6 +19,7 @@ from fmpy import read_model_description
 from lxml import etree
 
 from ...components.runtime.cache import digest
+from .units import declare
 
 AGILESAT_TOOL = "agilesat"
 BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it
@@ -42,6 +43,7 @@ class Description:
         )
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
+        declare(self.md.unitDefinitions)  # its display units, for the summaries
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
         self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)

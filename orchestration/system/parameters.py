@@ -35,12 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...components.runtime import choices
 from .ssp import INTEGER_RANGE, ParameterValue, SystemFileError
 from .units import Quantity, is_unit, pretty, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
-#: one value of a named choice in a description: "0 = PSEUDO_INVERSE (", "1 = SR_INVERSE ("
-_CHOICE = re.compile(r"(?:^|[:,] )(\d+) = ([A-Za-z_][A-Za-z0-9_]*) \(")
 
 
 @dataclass
@@ -255,28 +254,20 @@ _READERS = {"Real": _real, "Integer": _integer, "Boolean": _boolean}
 def choice_names(variable) -> tuple[str, ...] | None:
     """The names of the values 0, 1, … of an Integer parameter whose model-description
     ``description`` lists them ("steering law: 0 = PSEUDO_INVERSE (pseudo-inverse with
-    null motion), 1 = SR_INVERSE (…)"), or None."""
+    null motion), 1 = SR_INVERSE (…)", :mod:`agilesat.components.runtime.choices`), or
+    None."""
     if variable.type != "Integer" or variable.causality != "parameter":
         return None
-    found = _CHOICE.findall(variable.description or "")
-    if len(found) < 2 or [int(number) for number, _ in found] != list(range(len(found))):
-        return None
-    return tuple(name for _, name in found)
+    return choices.names_in(variable.description)
 
 
 def choice_value(variable: str, names, value, where: str) -> int:
     """The value of a choice given by its name (any case) or its number; a SystemFileError
     listing the choices for anything else."""
-    text = str(value).strip()
-    if text.upper() in names:
-        return names.index(text.upper())
-    number = value if isinstance(value, int) and not isinstance(value, bool) else None
-    if number is None and text.isdigit():
-        number = int(text)
-    if number is None or number not in range(len(names)):
-        listing = ", ".join(f"{i} ({name})" for i, name in enumerate(names))
-        raise SystemFileError(f"{where}: {variable} must be one of {listing}, got {value!r}")
-    return number
+    try:
+        return choices.value(variable, names, value)
+    except ValueError as exc:
+        raise SystemFileError(f"{where}: {exc}") from None
 
 
 def _literal(array) -> str:
@@ -313,15 +304,3 @@ def _element(name: str) -> re.Match:
     if match is None:
         raise ValueError(f"{name!r} is not an array element name")
     return match
-
-
-def parse_set(items) -> dict[str, str]:
-    """``--set INSTANCE.VARIABLE=VALUE`` options -> {"INSTANCE.VARIABLE": "VALUE"} (the values
-    are typed later, against the FMU's variable: :func:`typed_parameters`)."""
-    overrides = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise ValueError(f"--set {item}: expected INSTANCE.VARIABLE=VALUE")
-        overrides[key.strip()] = value.strip()
-    return overrides

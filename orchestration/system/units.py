@@ -93,12 +93,30 @@ def to_degrees(unit: str | None) -> tuple[float, str | None]:
     return 1.0, unit
 
 
+#: {unit: {display unit: factor}} of the FMI display units (shown value = factor · value)
+#: the model descriptions read in this process define (:func:`declare`)
+DECLARED: dict[str, dict[str, float]] = {}
+
+
+def declare(unit_definitions) -> None:
+    """Take the display units of a model description's ``UnitDefinitions`` (fmpy's), for
+    :func:`display_factor`: any FMU's, ours or not (one with an offset, which a factor
+    cannot convert, is left out)."""
+    for unit in unit_definitions or ():
+        for display in unit.displayUnits:
+            if not display.offset:
+                DECLARED.setdefault(unit.name, {}).setdefault(display.name, display.factor)
+
+
 def display_factor(unit: str | None, display_unit: str | None) -> float | None:
     """The factor that turns a value in ``unit`` (SI) into ``display_unit``: 1 for the
-    same unit, 180/π from rad to deg (and their rates), 1/f for a unit of
-    :data:`CONVERSIONS`; None when they do not convert."""
+    same unit, a display unit's a model description defines (:data:`DECLARED`), 180/π from
+    rad to deg (and their rates), 1/f for a unit of :data:`CONVERSIONS`; None when they do
+    not convert."""
     if not display_unit or display_unit == unit:
         return 1.0
+    if display_unit in DECLARED.get(unit or "", {}):
+        return DECLARED[unit or ""][display_unit]
     if DEGREES.get(unit or "") == display_unit:
         return 180 / math.pi
     if display_unit in CONVERSIONS and CONVERSIONS[display_unit][0] == unit:

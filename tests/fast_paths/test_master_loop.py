@@ -4,6 +4,7 @@ when no compiler or cache is available, the content-keyed compile cache."""
 
 import ctypes
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -244,6 +245,20 @@ def test_a_signal_during_a_compiled_chunk_stops_the_run_and_keeps_its_rows(fmus,
     assert len((tmp_path / "results.csv").read_text().splitlines()) == len(kept) + 1
     again = simulate(get("scan_pitch").ssd, stop=float(kept.time[-1]), loop="python")
     assert again.data.tobytes() == np.asarray(kept.data).tobytes()
+
+
+def test_the_operations_are_numbered_as_in_loop_c():
+    """loop.py builds the program, loop.c and Python run it: one numbering of the
+    operations and of when they are due."""
+    source = loop.SOURCE.read_text()
+    enums = [
+        [name.strip().split("=")[0].strip() for name in body.split(",")]
+        for body in re.findall(r"enum \{([^}]*)\};", source)
+    ]
+    kinds, whens = enums
+    assert [getattr(loop, name) for name in kinds] == list(range(len(kinds)))
+    assert re.search(r"AT_STEP = 1, AT_READ = 2", source)
+    assert (loop.AT_STEP, loop.AT_READ) == (1, 2) and whens == ["AT_STEP", "AT_READ"]
 
 
 # -- building the loop ------------------------------------------------------------------

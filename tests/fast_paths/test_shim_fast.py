@@ -6,7 +6,7 @@ processes through FMPy's ctypes bindings: the path is taken (the shim's counters
 with AGILESAT_SHIM_FAST=0, the answers and the results are the same either way, and FMU
 states and fmi2Reset leave no stale pointer or flag in the shim.  The statuses and messages
 of invalid calls are those of tests/fmus/test_faults_fmu.py and
-tests/orchestration/test_faults_master.py, which run on the same built FMUs, fast path on."""
+tests/orchestration/cosim/test_faults_master.py, which run on the same built FMUs, fast path on."""
 
 import json
 

@@ -257,7 +257,7 @@ def test_stare_reports_a_bad_tle(tmp_path):
 
 def test_mission_analysis_commands_print_the_functions_results(tmp_path):
     from agilesat.orchestration.scenarios import constants as c
-    from agilesat.orchestration.studies.mission import overlap_ratio, walker_sizing
+    from agilesat.orchestration.studies.mission_analysis import overlap_ratio, walker_sizing
 
     result = agilesat("mission", "overlap", "--frame-rates", "5", "25", "--out", tmp_path)
     assert result.returncode == 0, result.stderr

@@ -37,6 +37,7 @@ import numpy as np
 from agilesat.orchestration.campaign import engine, report
 from agilesat.orchestration.campaign.plan import Plan, Spec
 from agilesat.orchestration.campaign.worker import run_one
+from agilesat.orchestration.cosim.options import RunOptions
 
 TARGET = "scan_pitch"
 VARY = ["SatelliteDynamics.inertia=inertia(0.03, 1deg)", "CmgCluster.delta0=+normal(0, 0.5deg)"]
@@ -58,10 +59,10 @@ loops = {
     "simulate_system": lambda i: simulate(system, stop=stop, parameters=plan.parameters(i)),
     "run": lambda i: run(target, stop=stop, parameters=plan.parameters(i), figures=False,
                          build=False),
-    "run_one": lambda i: run_one(i, target, plan.parameters(i), plan.step, plan.stop, None,
+    "run_one": lambda i: run_one(i, target, plan.run_options(plan.run_values(i)),
                                  plan.signals, plan.points),
 }
-run_one(-1, target, {}, None, stop, None, [], 0)  # warm up: imports, FMU loads
+run_one(-1, target, plan.run_options(), [], 0)  # warm up: imports, FMU loads
 best = {}
 for _ in range(repeat):
     for name, loop in loops.items():
@@ -105,12 +106,12 @@ from agilesat.orchestration.campaign.worker import run_one
 target, first, runs, stop = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
 vary, keep = json.loads(sys.argv[5]), json.loads(sys.argv[6])
 plan = Plan(Spec(target, first + runs, 1, vary, keep=keep, stop=stop))
-run_one(-1, target, {}, None, stop, None, [], 0)  # warm up
+run_one(-1, target, plan.run_options(), [], 0)  # warm up
 print("ready", flush=True)
 sys.stdin.readline()
 began = time.perf_counter()
 for i in range(first, first + runs):
-    run_one(i, target, plan.parameters(i), plan.step, plan.stop, None, plan.signals, plan.points)
+    run_one(i, target, plan.run_options(plan.run_values(i)), plan.signals, plan.points)
 print(time.perf_counter() - began, flush=True)
 """
 
@@ -205,7 +206,7 @@ def _roles(client, processes, nannies, me) -> dict[str, float]:
 
 
 def _warm(stop):
-    run_one(-1, TARGET, {}, None, stop, None, [], 0)
+    run_one(-1, TARGET, RunOptions(stop=stop), [], 0)
 
 
 def memory(runs: int, stop: float, every: int) -> list[tuple[int, float]]:
@@ -225,7 +226,7 @@ def memory(runs: int, stop: float, every: int) -> list[tuple[int, float]]:
         for start in range(0, runs, every):
             futures = [
                 client.submit(
-                    run_one, i, TARGET, plan.parameters(i), None, stop, None, [], 0, pure=False
+                    run_one, i, TARGET, plan.run_options(plan.run_values(i)), [], 0, pure=False
                 )
                 for i in range(start, min(runs, start + every))
             ]
@@ -241,10 +242,7 @@ def memory(runs: int, stop: float, every: int) -> list[tuple[int, float]]:
             run_one,
             0,
             TARGET,
-            plan.parameters(0),
-            None,
-            stop,
-            None,
+            plan.run_options(plan.run_values(0)),
             KEEP,
             int(round(stop / 0.05)) + 1,
             pure=False,
@@ -259,7 +257,7 @@ from agilesat.orchestration.campaign.plan import Plan, Spec
 from agilesat.orchestration.campaign.worker import run_one
 plan = Plan(Spec({TARGET!r}, 1, 1, {VARY!r}, stop={stop}))
 rows = {int(round(stop / 0.05)) + 1}
-r = run_one(0, {TARGET!r}, plan.parameters(0), None, {stop}, None, {KEEP!r}, rows)
+r = run_one(0, {TARGET!r}, plan.run_options(plan.run_values(0)), {KEEP!r}, rows)
 np.save(sys.argv[1], r["signals"])
 """,
             str(Path(tempfile.gettempdir()) / "agilesat_fresh.npy"),

@@ -50,12 +50,13 @@ from pathlib import Path
 BARE = """
 import json, os, sys, time
 os.environ["AGILESAT_JIT_RUNS"] = sys.argv[1]
-from agilesat.orchestration import run, simulate
+from agilesat.orchestration import RunOptions, run, simulate
 from agilesat.orchestration.campaign import worker
 from agilesat.orchestration.mission.targets import resolve
 system = resolve("video_sar").system_file(build=False)
 points = int(round((system.stop_time - system.start_time) / system.step_size)) + 1
-worker.warm_up("video_sar", {}, system.step_size, system.stop_time, None, points, int(sys.argv[1]))
+options = RunOptions(step=system.step_size, stop=system.stop_time, figures=False, build=False)
+worker.warm_up("video_sar", options, points, int(sys.argv[1]))
 out = {}
 for name, once in (
     ("simulate", lambda: simulate(system)),  # the system file read once
@@ -82,12 +83,14 @@ out["runner"] = timed(lambda: __import__("agilesat.orchestration.runner"))
 out["numba"] = timed(lambda: __import__("numba"))
 out["scipy.special"] = timed(lambda: __import__("scipy.special"))
 from numba.core.registry import cpu_target
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign import worker
 from agilesat.orchestration.cosim.fmu import Instance, Log
 from agilesat.orchestration.mission.targets import resolve
 out["scenario"] = timed(lambda: out.update(system=resolve("video_sar").system_file(build=False)))
 system = out.pop("system")
 step, stop = system.step_size, system.stop_time
+options = RunOptions(step=step, stop=stop, figures=False, build=False)
 points = int(round((stop - system.start_time) / step)) + 1
 out["numba context"] = timed(lambda: cpu_target.target_context.refresh())
 def load():
@@ -96,12 +99,12 @@ def load():
 out["FMU loads"] = timed(load)
 warm = {}
 out["warm-up"] = timed(lambda: warm.update(r=worker.warm_up(
-    "video_sar", {}, step, stop, None, points, int(sys.argv[1]))))
+    "video_sar", options, points, int(sys.argv[1]))))
 out["warm-up error"] = warm["r"][2]
 out["warm-up steps"] = worker.warm_up_steps(points - 1, int(sys.argv[1]))
 out["runs"] = [
     (r["seconds"], r["cpu_seconds"])
-    for r in (worker.run_one(k, "video_sar", {}, step, stop, None, [], 0) for k in range(10))
+    for r in (worker.run_one(k, "video_sar", options, [], 0) for k in range(10))
 ]
 print(json.dumps(out))
 """

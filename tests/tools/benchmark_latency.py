@@ -48,7 +48,7 @@ import json, sys, time
 marks = {"start": time.time()}
 from pathlib import Path
 from agilesat.orchestration import cli, runner
-if (Path(cli.__file__).parent / "cosim").is_dir():
+if (Path(runner.__file__).parent / "cosim").is_dir():
     from agilesat.orchestration.cosim import master
     from agilesat.orchestration.output import recorder
 else:  # a --baseline revision from before orchestration/ had folders

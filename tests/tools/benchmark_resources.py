@@ -28,16 +28,17 @@ from helpers import run_python  # noqa: E402
 
 FAULTS = """
 import json, os, resource, sys
+from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign import engine
 from agilesat.orchestration.campaign.worker import run_one
 
 runs, trim = int(sys.argv[1]), sys.argv[2] == "1"
 
 def faults():
-    run_one(0, "scan_pitch", {}, None, 20.0, None, [], 0)  # warm: FMUs loaded, kernels
+    run_one(0, "scan_pitch", RunOptions(stop=20.0), [], 0)  # warm: FMUs loaded, kernels
     before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
     for i in range(runs):
-        run_one(i, "scan_pitch", {}, None, 20.0, None, [], 0)
+        run_one(i, "scan_pitch", RunOptions(stop=20.0), [], 0)
     return (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before) / runs
 
 config = dict(engine.LOCAL_CLUSTER_CONFIG)

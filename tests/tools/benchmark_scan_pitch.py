@@ -45,7 +45,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from agilesat.fmus.build import build_all
 from agilesat.orchestration import simulate
-from agilesat.orchestration.cosim import master
 from agilesat.orchestration.scenarios import get
 from reference import scan_pitch as reference
 
@@ -172,13 +171,19 @@ def stub_fmi_c():
 
 
 def stub_fmi():
-    """The master's FMI calls in the loop (get/set/doStep) replaced by Python no-ops."""
-    return patched(
-        [
-            (master._Port, "transfer", lambda self: None),
-            (master, "_do_step", lambda instance, t, step: None),
-        ]
-    )
+    """The Python loop's FMI calls (each operation's get/set/doStep) made to a Python no-op."""
+    from agilesat.orchestration.cosim import loop
+
+    real = loop.Op.python
+
+    def python(op):
+        function, op.function = op.function, lambda *args: 0
+        try:
+            return real(op)
+        finally:
+            op.function = function
+
+    return patched([(loop.Op, "python", python)])
 
 
 @contextlib.contextmanager

@@ -1,4 +1,4 @@
-"""The coupling-error harness of tests/orchestration/test_coupling.py and
+"""The coupling-error harness of tests/orchestration/cosim/test_coupling.py and
 tests/tools/benchmark_coupling.py.
 
 For each scenario: which components are the digital ones (sampled at the control period P,

@@ -2,8 +2,8 @@
 
 ``CASES`` lists functions; each injects one fault, runs the ``agilesat`` command (or a
 script) in a separate process and returns ``{"fault", "expected", "observed", "ok"}``.
-``tests/orchestration/test_faults_master.py`` asserts every case; ``tests/tools/fault_matrix.py``
-prints them.
+``tests/orchestration/cosim/test_faults_master.py`` asserts every case;
+``tests/tools/fault_matrix.py`` prints them.
 A case that cannot run here (disk full needs root for a tmpfs) returns ``"skipped"``.
 """
 

@@ -34,7 +34,7 @@ def save(png: bytes, path: Path) -> Path:
 
 
 def report(directory: Path) -> Path:
-    from agilesat.orchestration.output.report import write_report
+    from agilesat.orchestration.postprocess.report import write_report
 
     page = directory / "report.html"
     return page if page.exists() else write_report(directory)

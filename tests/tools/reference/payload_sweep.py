@@ -32,7 +32,7 @@ through its centre of mass) has, with ``R_mb = R2(θ) R1(φ)`` (B → payload ax
 
 and h_p = h_b1 + h_b2, computed here for each payload with the matrices; the symmetric pair's
 closed form h_p = (0, 0, 2 [Jy θ̇ sin φ + (Jz − Jx) φ̇ sin θ cos θ cos φ]) is a check
-(tests/orchestration/test_coupling.py).
+(tests/orchestration/cosim/test_coupling.py).
 
 Wheels (three, spin axes x, y, z; HR12: J_w = 12/(200π) kg m², c_v = 1e-5 N m s/rad,
 c_c = 5e-4 N m, motor limit 0.2 N m, start at rest)

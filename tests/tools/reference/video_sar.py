@@ -76,7 +76,7 @@ BANDWIDTH, DAMPING = 0.5, 0.7
 KP = J_HUB * BANDWIDTH**2
 KD = 2.0 * DAMPING * BANDWIDTH * J_HUB
 #: the scenario's frozen initial state (orchestration/scenarios/video_sar.py ON_REFERENCE,
-#: DELTA0; tests/orchestration/test_coupling.py checks that they are still the scenario's)
+#: DELTA0; tests/orchestration/cosim/test_coupling.py checks that they are still the scenario's)
 ATTITUDE0 = (-0.446370651122, 0.804885764925, 0.0)
 RATE0 = (-0.000684611902, -0.004466724288, -0.000198845573)
 DELTA0 = (0.629541998, 1.095833318, -3.137358127, 1.108768403, 2.362250577, -1.073359566)
