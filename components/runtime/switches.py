@@ -203,3 +203,11 @@ def value(name: str, environ=None):
         raise SwitchError(
             f"{name}={text!r}: expected {expected} ({name}: {switch.meaning})"
         ) from None
+
+
+def check_all(environ=None) -> None:
+    """Every switch's value checked (:class:`SwitchError` on the first that cannot be
+    taken): ``agilesat`` checks them before a command runs, so that a bad value is one
+    line up front, not an FMU's failure inside a run."""
+    for name in SWITCHES:
+        value(name, environ)

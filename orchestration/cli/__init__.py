@@ -25,6 +25,7 @@ import signal
 import sys
 from contextlib import nullcontext
 
+from ...components.runtime.switches import check_all
 from ..cosim.signals import interruptible
 from ..provenance import version
 from . import ephemeris, pointing, report, studies, system
@@ -67,6 +68,7 @@ def _main(argv: list, program: bool) -> int:
     # a campaign handles its own (cli/campaign.py)
     with nullcontext() if campaign else interruptible(restore=not program) as signals:
         try:
+            check_all()
             code = commands[args.command](args)
         except KeyboardInterrupt as exc:
             print(f"agilesat {args.command}: {exc or 'interrupted'}", file=sys.stderr)

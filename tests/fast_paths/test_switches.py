@@ -77,9 +77,14 @@ def test_unset_or_empty_is_the_default(name):
     assert value(name, {}) == value(name, {name: ""}) == SWITCHES[name].default
 
 
-def test_the_command_line_says_it_in_one_line():
+# a scenario by name imports the kernels (which read the switch); a system file's FMUs read
+# it only as they are instantiated: the command line checks every switch before either
+@pytest.mark.parametrize("target", ["scan_pitch", "orchestration/systems/scan_pitch.ssd"])
+def test_the_command_line_says_it_in_one_line_before_anything_runs(target, tmp_path):
+    out = tmp_path / "out"
     result = subprocess.run(
-        [sys.executable, "-m", "agilesat.orchestration", "run", "scan_pitch", "--stop", "0.1"],
+        [sys.executable, "-m", "agilesat.orchestration", "run", target, "--stop", "0.1"]
+        + ["--no-figures", "--no-report", "--out", str(out)],
         capture_output=True,
         text=True,
         env={**os.environ, "AGILESAT_JIT_AFTER": "soon"},
@@ -91,6 +96,7 @@ def test_the_command_line_says_it_in_one_line():
         "(AGILESAT_JIT_AFTER: the calls of a kernel before it runs compiled, fewer where a "
         "run's length says it pays; 0: from the first call)"
     ]
+    assert not out.exists()
 
 
 def test_an_fmu_checks_the_shims_switches_at_the_handshake(monkeypatch):
