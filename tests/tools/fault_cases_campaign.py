@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from fault_cases_master import CLI, _case, system_copy
+from fault_cases_master import CLI, _case, _refused, system_copy
 
 from helpers import ROOT
 
@@ -337,11 +337,7 @@ def damaged_campaign_files():
             out = shutil.copytree(clean, Path(tmp) / f"c{k}")
             damage(out)
             result = _campaign("scan_pitch", out, "--runs", "3", "--workers", "1", "--resume")
-            good = (
-                result.returncode == 1
-                and f"{out / file}" in result.stderr
-                and "Traceback" not in result.stderr
-            )
+            good = _refused(result, f"{out / file}")
             ok &= good
             observed.append(
                 f"{label}: exit {result.returncode}: {_last(result)[:150]}"

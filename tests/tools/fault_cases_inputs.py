@@ -10,7 +10,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from fault_cases_master import CLI, SCAN_PITCH, _case, _stderr_line, system_copy
+from fault_cases_master import CLI, SCAN_PITCH, _case, _refused, _stderr_line, system_copy
 
 from helpers import ROOT
 
@@ -275,11 +275,7 @@ def bad_fmu_files():
         observed, ok = [], True
         for label, (path, message) in trials.items():
             result = _run(path, "--step", "0.05")
-            good = (
-                result.returncode == 1
-                and f"{path}: {message}" in result.stderr
-                and "Traceback" not in result.stderr
-            )
+            good = _refused(result, f"{path}: {message}")
             ok &= good
             observed.append(
                 f"{label}: exit {result.returncode}: {_stderr_line(result, 'error')}"

@@ -13,7 +13,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
-from fault_cases_master import CLI, _case, _stderr_line
+from fault_cases_master import CLI, _case, _refused, _stderr_line
 
 #: a mission of one SatelliteDynamics, 1 s at 0.1 s; {lines}: the scenario's own
 MISSION = """
@@ -65,11 +65,7 @@ def import_faults():
         observed, ok = [], True
         for label, (path, message) in trials.items():
             result = _run(path, Path(tmp) / "out")
-            good = (
-                result.returncode == 1
-                and f"{path}: importing it {message}" in result.stderr
-                and "Traceback" not in result.stderr
-            )
+            good = _refused(result, f"{path}: importing it {message}")
             ok &= good
             observed.append(
                 f"{label}: exit {result.returncode}: {_stderr_line(result, 'error')}"
@@ -112,13 +108,7 @@ def value_messages():
             result = _run(path, Path(tmp) / f"out{k}")
             n = _line(path, line)
             where = f"{path}:{n}" in result.stderr or f"(line {n}:" in result.stderr
-            good = (
-                result.returncode == 1
-                and message in result.stderr
-                and where
-                and "is no unit" not in result.stderr
-                and "Traceback" not in result.stderr
-            )
+            good = _refused(result, message) and where and "is no unit" not in result.stderr
             ok &= good
             observed.append(
                 f"{line}: exit {result.returncode}: {_stderr_line(result, message[:12])}"
