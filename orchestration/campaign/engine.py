@@ -27,6 +27,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import sys
 import time
 import uuid
@@ -245,21 +246,38 @@ def cluster(
             with Client(scheduler, timeout="30s") as client:
                 yield client
             return
-        with (
-            dask.config.set(LOCAL_CLUSTER_CONFIG),
-            LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                host=listen,
-                dashboard_address=dashboard,
-                silence_logs=logging.ERROR,
-            ) as local,
-            Client(local) as client,
-        ):
-            yield client
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            with _sigint_held():
+                local = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    host=listen,
+                    dashboard_address=dashboard,
+                    silence_logs=logging.ERROR,
+                )
+            with local, Client(local) as client:
+                yield client
     finally:
         INTERRUPTS.deferred = False
+
+
+@contextmanager
+def _sigint_held():
+    """SIGINT blocked in this thread while a LocalCluster starts: the threads and the
+    worker processes it starts inherit the block, so a terminal's Ctrl-C as a worker's
+    Python starts (before its preload ignores SIGINT) is no KeyboardInterrupt traceback of
+    that worker; this process takes one that came meanwhile as it unblocks it.
+    multiprocessing's resource tracker is started first: starting it unblocks SIGINT in
+    the thread that does (the cluster's, which starts the workers)."""
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:

@@ -660,8 +660,10 @@ def resume_changed_module():
 
 
 def ctrl_c_while_the_cluster_starts():
-    """SIGINT to the campaign's process group (a terminal's Ctrl-C) as soon as its
-    LocalCluster's first processes exist (the nannies starting their workers)."""
+    """SIGINT to the campaign's process group (a terminal's Ctrl-C) 0.1 s after its
+    LocalCluster's first processes exist: as the workers' Pythons start (their imports,
+    before their preload ignores SIGINT: each printed its KeyboardInterrupt's traceback
+    until they inherited SIGINT blocked)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
         process = _started(out, "--workers", "2")
@@ -670,6 +672,7 @@ def ctrl_c_while_the_cluster_starts():
             if len(_children(process.pid)) >= 2:
                 break
             time.sleep(0.005)
+        time.sleep(0.1)
         starting = len(_children(process.pid))
         os.killpg(process.pid, signal.SIGINT)
         stdout, stderr = process.communicate(timeout=300)
@@ -682,10 +685,11 @@ def ctrl_c_while_the_cluster_starts():
         )
         return _case(
             "Ctrl-C (SIGINT to the process group) to `agilesat campaign scan_pitch --workers "
-            "2` while its LocalCluster starts",
+            "2` while its LocalCluster starts (0.1 s after its first processes exist: the "
+            "workers' Pythons starting)",
             "exit 130 saying it was interrupted and how to resume; campaign.json "
             "'interrupted' (not Dask's 'Nanny failed to start', exit 1, campaign.json "
-            "'running'); no traceback",
+            "'running'); no traceback (not a worker's KeyboardInterrupt as its Python starts)",
             f"signalled with {starting} processes of the cluster up: exit {process.returncode}; "
             f"campaign.json {summary.get('status')}; {_last_line(stdout + stderr)[:140]}",
             ok,
