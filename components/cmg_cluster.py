@@ -22,6 +22,12 @@ Output derivatives at the current time: δ̇; δ̈ (±accel_limit toward the tar
 target's own slope once on it); ḣ; ḧ = h_rotor Σ (a_i δ̈_i − σ_i δ̇_i²) (ȧ_i = −σ_i δ̇_i);
 Q̇ = tr(adj(A Aᵀ) d(A Aᵀ)/dt).
 
+Faults (DESIGN.md §3.2): gyro i's gimbal locks at ``fail_time[i]`` (inf: never) at the
+angle it has then — the step that contains the time moves it until then — and holds it;
+``healthy[i]`` is false from then on.  A locked gyro keeps its rotor's momentum in h; its
+column leaves the torque Jacobian, so Q (and its rate) is that of the healthy gyros, the
+measure of what the cluster can still deliver (CmgSteering steers the healthy ones).
+
 Default geometry: the paper's five-pyramid cluster (α0 = 63.4°; gimbals 1–5 at azimuths
 90°, 162°, 234°, 306°, 18°; gimbal 6 along z, reference spin x) with the rotor spin
 *reversed* with respect to the printed A_s0: the paper's eq. (14) delivers +ḣ to the
@@ -278,6 +284,13 @@ class CmgCluster(Model):
         ),
         parameter("rate_limit", 0.6, "rad/s", "gimbal rate limit", display_unit="deg/s"),
         parameter("accel_limit", 0.5, "rad/s2", "gimbal acceleration limit", display_unit="deg/s2"),
+        parameter(
+            "fail_time",
+            math.inf,
+            "s",
+            "time each gimbal locks at its angle (inf: never)",
+            shape=(N_GYROS,),
+        ),
         input_(
             "delta_dot_cmd", "rad/s", "commanded gimbal rates", shape=(6,), display_unit="deg/s"
         ),
@@ -285,7 +298,10 @@ class CmgCluster(Model):
         output("delta_dot", "rad/s", "gimbal rates", shape=(6,), display_unit="deg/s"),
         output("h", "N.m.s", "cluster angular momentum relative to the body, in B", shape=(3,)),
         output("hdot", "N.m", "time derivative of h as seen in B", shape=(3,), derivative_of="h"),
-        output("singularity", "1", "singularity measure Q = det(A A^T)"),
+        output("singularity", "1", "singularity measure Q = det(A A^T) of the healthy gyros"),
+        output(
+            "healthy", "1", "each gimbal is free (not locked)", shape=(N_GYROS,), type="Boolean"
+        ),
     )
 
     def initialize(self, t0):
@@ -303,6 +319,9 @@ class CmgCluster(Model):
             p.accel_limit,
         )
         self.state[S.delta : S.delta + N_GYROS] = p.delta0
+        if np.any(np.isnan(p.fail_time)):
+            raise ModelError(f"fail_time must be a time or inf, got {p.fail_time.tolist()}")
+        self.state[S.fail : S.fail + N_GYROS] = p.fail_time
         self.t = t0
 
     def step(self, t, dt):
@@ -329,10 +348,11 @@ class CmgCluster(Model):
 P, U, Y = CmgCluster.names()
 DU, _ = CmgCluster.derivative_names()  # DU.delta_dot_cmd: the command's slope a host set
 #: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
-#: and 1 while a rate command exceeds the rate limit (saturated)
+#: 1 while a rate command exceeds the rate limit (saturated); the gimbals' fail times before
+#: the axes
 S = state_table(
     "CmgCluster state", delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1,
-    st=6 * N_GYROS, saturated=1,
+    fail=N_GYROS, st=6 * N_GYROS, saturated=1,
 )  # fmt: skip
 
 
@@ -342,7 +362,8 @@ def cluster_step(values, state, t, dt):
     :func:`servo_ramp` where a host set the command's derivative.  The cluster is
     saturated while the largest |command| at the step's start exceeds the rate limit (it
     cannot deliver the commanded torque): returns 1 + the gimbal with the largest |command|
-    (the first of equals) when it becomes saturated (step() warns), else 0."""
+    (the first of equals) when it becomes saturated (step() warns), else 0.  A gimbal whose
+    fail time falls in the step moves until then and is locked after (zero rate)."""
     command, s = floats(values[U.delta_dot_cmd : U.delta_dot_cmd + N_GYROS]), floats(state[: S.st])
     slope = floats(values[DU.delta_dot_cmd : DU.delta_dot_cmd + N_GYROS])
     delta, rate = s[S.delta : S.delta + N_GYROS], s[S.rate : S.rate + N_GYROS]
@@ -353,11 +374,19 @@ def cluster_step(values, state, t, dt):
             angles[i], rates[i] = servo_ramp(
                 delta[i], rate[i], command[i], slope[i], dt, limit, accel
             )
+        fail = s[S.fail + i]
+        if fail < t + dt:  # locked at its angle at fail_time (moving until then)
+            moving = min(dt, max(0.0, fail - t))
+            if slope[i] != 0.0:
+                angle = servo_ramp(delta[i], rate[i], command[i], slope[i], moving, limit, accel)
+            else:
+                angle = servo1(delta[i], rate[i], command[i], moving, limit, accel)
+            angles[i], rates[i] = angle[0], 0.0
     state[S.delta : S.delta + N_GYROS] = angles
     state[S.rate : S.rate + N_GYROS] = rates
-    worst, largest = 0, abs(command[0])
+    worst, largest = 0, -1.0  # over the gimbals free throughout the step
     for i in range(N_GYROS):
-        if abs(command[i]) > largest:
+        if abs(command[i]) > largest and s[S.fail + i] >= t + dt:
             worst, largest = i, abs(command[i])
     saturated = largest > s[S.rate_limit]
     started = saturated and state[S.saturated] == 0.0
@@ -378,13 +407,22 @@ def cluster_output(values, state, t):
     values[Y.delta_dot : Y.delta_dot + N_GYROS] = rates
     for k in range(3):
         values[Y.h + k], values[Y.hdot + k] = h_rotor * h[k], h_rotor * hdot[k]
-    values[Y.singularity] = det3(gram(columns))
+    for i in range(N_GYROS):
+        values[Y.healthy + i] = 1.0 if t < s[S.fail + i] else 0.0
+    free = healthy_columns(columns, values[Y.healthy : Y.healthy + N_GYROS])
+    values[Y.singularity] = det3(gram(free))
     return 0
 
 
 @jitable
+def healthy_columns(columns, healthy) -> list:
+    """The Jacobian columns a_i of the healthy gyros, zero for the others."""
+    return [a if healthy[i] != 0.0 else (0.0, 0.0, 0.0) for i, a in enumerate(columns)]
+
+
+@jitable
 def cluster_rates(v, s) -> list:
-    """d/dt of the outputs δ, δ̇, h, ḣ and Q at the model's time, in the table's order
+    """d/dt of the outputs δ, δ̇, h, ḣ, Q and healthy at the model's time, in the table's order
     (module docstring): δ̇; δ̈ (:func:`servo_accel`); ḣ as :func:`cluster_output` wrote it;
     ḧ = h_rotor Σ (a_i δ̈_i + ȧ_i δ̇_i) with ȧ_i = −σ_i δ̇_i; Q̇ = tr(adj(G) Ġ) with
     G = Σ a_i a_iᵀ, the Gram matrix of Q = det G, and Ġ = Σ (ȧ_i a_iᵀ + a_i ȧ_iᵀ)."""
@@ -392,6 +430,8 @@ def cluster_rates(v, s) -> list:
     limit, accel, h_rotor = s[S.rate_limit], s[S.accel_limit], s[S.h_rotor]
     accels = [
         servo_accel(rates[i], v[U.delta_dot_cmd + i], v[DU.delta_dot_cmd + i], limit, accel)
+        if v[Y.healthy + i] != 0.0
+        else 0.0
         for i in range(N_GYROS)
     ]
     spins, columns = axes(s[S.delta : S.delta + N_GYROS], s[S.st : S.st + 6 * N_GYROS])
@@ -403,6 +443,8 @@ def cluster_rates(v, s) -> list:
             total([scale(rates[i], a_dots[i]) for i in range(N_GYROS)]),
         ),
     )
-    gram_dot = mat_add(outer_sum(a_dots, columns), outer_sum(columns, a_dots))
-    q_dot = trace_product(adjugate(gram(columns)), gram_dot)
-    return [*rates, *accels, v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2], *hddot, q_dot]
+    free = healthy_columns(columns, v[Y.healthy : Y.healthy + N_GYROS])
+    gram_dot = mat_add(outer_sum(a_dots, free), outer_sum(free, a_dots))
+    q_dot = trace_product(adjugate(gram(free)), gram_dot)
+    hdot = (v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2])
+    return [*rates, *accels, *hdot, *hddot, q_dot, *[0.0] * N_GYROS]  # healthy: held

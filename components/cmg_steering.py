@@ -23,6 +23,15 @@ open) and libcosim does not read them (open-simulation-platform/libcosim#246):
     δ̇ = Aᵀ(AAᵀ + λ1)⁻¹ ḣ / h_rotor,   λ = λ0 exp(−μ Q)
 
   which trades a small torque error near singularities for bounded gimbal rates.
+
+Healthy gimbals (DESIGN.md §3.2): a gimbal whose input ``healthy`` is false (locked:
+CmgCluster.healthy) has its column taken out of A — zero rate commanded, Q the measure of
+the healthy gyros, the null motion among them — so the law steers the five (or fewer)
+that move.  Its rotor's momentum stays in h, hence in the −w × h the law accounts for.
+With one of the default pyramid's six locked, the envelope of the five shrinks to about
+45 N·m·s in its worst direction (74 N·m·s with six) and internal singular surfaces come
+within 1.6–3.7 N·m·s of where the lock leaves the momentum (10.8 N·m·s with six): see
+orchestration/studies/cmg_envelope.py and docs/missions.md.
 """
 
 from __future__ import annotations
@@ -38,6 +47,7 @@ from .cmg_cluster import (
     ClusterGeometry,
     CmgCluster,
     axes,
+    healthy_columns,
 )
 from .model import Model, ModelError
 from .runtime.flat import relative, state_table
@@ -53,7 +63,7 @@ LAW_CHOICES = (
 )
 
 SINGULAR_Q = 1e-12
-_INPUTS = ("tau_cmd", "delta", "w_BI_B", "h")
+_INPUTS = ("tau_cmd", "delta", "w_BI_B", "h", "healthy")
 H_ROTOR = 16.65
 #: start values of the delta and h inputs: the cluster's default (CmgCluster.delta0, the
 #: paper's δ0, Q = 1.10) and its momentum there, so that the FMU at its defaults is the
@@ -103,6 +113,15 @@ class CmgSteering(Model):
             H_START,
             shape=(3,),
         ),
+        input_(
+            "healthy",
+            "1",
+            "each gimbal is free (CmgCluster.healthy): only those are steered",
+            True,
+            shape=(N_GYROS,),
+            type="Boolean",
+            optional="true: every gimbal steers",
+        ),
         output(
             "delta_dot_cmd",
             "rad/s",
@@ -111,7 +130,12 @@ class CmgSteering(Model):
             depends=_INPUTS,
             display_unit="deg/s",
         ),
-        output("singularity", "1", "singularity measure Q = det(A A^T)", depends=("delta",)),
+        output(
+            "singularity",
+            "1",
+            "singularity measure Q = det(A A^T) of the healthy gyros",
+            depends=("delta", "healthy"),
+        ),
     )
     #: step() only advances t (stateless between communication points)
     STATELESS = True
@@ -135,7 +159,8 @@ class CmgSteering(Model):
         status = steering_output(self.values, self.state, self.t)
         if status & PSEUDO_INVERSE_SINGULAR:
             _, columns = self.geometry.axes(self.u.delta.tolist())
-            h_dot = wanted_hdot(self.values[U.tau_cmd : U.h + 3].tolist())
+            columns = healthy_columns(columns, self.u.healthy.tolist())
+            h_dot = wanted_hdot(self.values[U.tau_cmd : U.healthy + N_GYROS].tolist())
             rates = np.linalg.pinv(np.array(columns).T, rcond=1e-6) @ h_dot / self.geometry.h_rotor
             self.y.delta_dot_cmd[:] = rates
         if status & BECAME_SINGULAR:
@@ -148,7 +173,7 @@ class CmgSteering(Model):
 
 # -- kernel (components/runtime/jit.py) -----------------------------------------------
 P, U, Y = CmgSteering.names()
-#: the inputs' places in the slice of them the kernel reads, values[U.tau_cmd : U.h + 3]
+#: the inputs' places in the slice of them the kernel reads, values[U.tau_cmd : U.healthy + 6]
 UI = relative(U, U.tau_cmd)
 #: the state array: s_i, t_i of each gyro (ClusterGeometry.st), the law's constants, and 1
 #: while the configuration is singular (Q ≤ SINGULAR_Q)
@@ -167,8 +192,9 @@ def steering_output(values, state, t):
     or only Q and returns PSEUDO_INVERSE_SINGULAR where the law is the pseudo-inverse and
     Q ≤ SINGULAR_Q (the SVD pseudo-inverse is then the caller's); keeps whether the
     configuration is singular (Q ≤ SINGULAR_Q) and adds BECAME_SINGULAR when it becomes so."""
-    u, s = floats(values[U.tau_cmd : U.h + 3]), floats(state)  # the inputs alone
+    u, s = floats(values[U.tau_cmd : U.healthy + N_GYROS]), floats(state)  # the inputs alone
     spins, columns = axes(u[UI.delta : UI.delta + N_GYROS], s[S.st : S.h_rotor])
+    columns = healthy_columns(columns, u[UI.healthy : UI.healthy + N_GYROS])
     M = gram(columns)
     Q = det3(M)
     values[Y.singularity] = Q
@@ -199,7 +225,7 @@ def steering_output(values, state, t):
 
 @jitable
 def wanted_hdot(u) -> tuple:
-    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U.tau_cmd : U.h + 3])."""
+    """ḣ = −τ_cmd − w × h from the inputs ``u`` (values[U.tau_cmd : U.healthy + 6])."""
     wx, wy, wz = u[UI.w_BI_B], u[UI.w_BI_B + 1], u[UI.w_BI_B + 2]
     hx, hy, hz = u[UI.h], u[UI.h + 1], u[UI.h + 2]
     tx, ty, tz = u[UI.tau_cmd], u[UI.tau_cmd + 1], u[UI.tau_cmd + 2]

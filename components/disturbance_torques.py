@@ -30,15 +30,11 @@ Shadow: a cylinder of radius R behind the Earth (no penumbra): ``in_eclipse`` wh
 r_I · ŝ_I < 0 and |r_I − (r_I · ŝ_I) ŝ_I| < R.  The Sun distance is taken as 1 AU
 (its ±1.7 % annual change, ±3.4 % in pressure, is neglected).
 
-Magnetic ([Wertz 1978] ch. 17 and appendix H; the degree-1 terms of IGRF-13
-[Alken 2021]).  The tilted centred dipole of the Gauss coefficients g₁⁰, g₁¹, h₁¹ at the
-reference radius a, in the Earth-fixed frame E (C_EI = R3(earth_angle), as
-OrbitEnvironment's)::
+Magnetic: the field B_E of components/geomagnetic.py (the tilted dipole of IGRF-13's
+degree-1 terms, the toolkit's one field model), output in B as ``b_B`` for the
+magnetorquers and their unloading law::
 
-    B_E = (a/r)³ [3 (g · r̂) r̂ − g],   g = (g₁¹, h₁¹, g₁⁰),   r̂ = r_E / |r_E|
     τ_mag = m × C_BI C_IE B_E          (m = dipole_B, the residual dipole, A·m²)
-
-(−∇ of the degree-1 potential a (a/r)² (g · r̂)).
 
 Defaults.  IGRF-13 coefficients of 2020.0 (g₁⁰ = −29404.8, g₁¹ = −1450.9,
 h₁¹ = 4652.5 nT, a = 6371.2 km).  P = 1361 W/m² / c = 4.54e-6 N/m² (total solar
@@ -55,6 +51,7 @@ import math
 
 import numpy as np
 
+from .geomagnetic import IGRF13_2020, dipole_field_I
 from .model import Model, ModelError
 from .rotations import IDENTITY_Q, dcm
 from .runtime.jit import floats, jitable, output_kernel
@@ -76,9 +73,6 @@ ATMOSPHERE_TABLE = (
     (700.0, 3.614e-14, 88.667), (800.0, 1.170e-14, 124.64), (900.0, 5.245e-15, 181.05),
     (1000.0, 3.019e-15, 268.00),
 )  # fmt: skip
-NANOTESLA = 1e-9
-IGRF13_2020 = (-29404.8 * NANOTESLA, -1450.9 * NANOTESLA, 4652.5 * NANOTESLA)  # g10 g11 h11
-IGRF_RADIUS = 6371200.0  # m
 SPEED_OF_LIGHT = 299792458.0  # m/s
 SOLAR_PRESSURE = 1361.0 / SPEED_OF_LIGHT  # N/m² at 1 AU
 
@@ -208,7 +202,7 @@ class DisturbanceTorques(Model):
         ),
         output("density", "kg/m3", "atmospheric density", depends=("r_I",)),
         output(
-            "mag_field_B",
+            "b_B",
             "T",
             "geomagnetic field (tilted dipole), in B",
             shape=(3,),
@@ -290,7 +284,8 @@ def torques_output(values, state, t):
         if norm(sun_B) == 0.0:
             return NO_SUN
         srp = _srp(v, sun_B)
-    field = rotate(C_BI, field_I(v, r, v[U.earth_angle]))
+    g10, g11, h11 = v[P.igrf_g10], v[P.igrf_g11], v[P.igrf_h11]
+    field = rotate(C_BI, dipole_field_I(g10, g11, h11, r, v[U.earth_angle]))
     mag = cross(v[P.dipole_B : P.dipole_B + 3], field) if v[P.magnetic] != 0.0 else zero
     for i in range(3):
         values[Y.tau_aero_B + i], values[Y.tau_srp_B + i], values[Y.tau_mag_B + i] = (
@@ -299,7 +294,7 @@ def torques_output(values, state, t):
             mag[i],
         )
         values[Y.tau_ext_B + i] = aero[i] + srp[i] + mag[i]
-        values[Y.mag_field_B + i] = field[i]
+        values[Y.b_B + i] = field[i]
     values[Y.in_eclipse] = 1.0 if eclipse else 0.0
     values[Y.density] = rho
     return 0
@@ -319,22 +314,6 @@ def density(v, height: float) -> float:
         if _TABLE[i, 0] <= km:
             row = i
     return _TABLE[row, 1] * math.exp(-(km - _TABLE[row, 0]) / _TABLE[row, 2])
-
-
-@jitable
-def field_I(v, r, earth_angle: float) -> tuple:
-    """Tilted-dipole geomagnetic field (T) at r_I, in I (module docstring)."""
-    c, s = math.cos(earth_angle), math.sin(earth_angle)
-    r_E = (c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2])  # R3(θ) r_I
-    radius = norm(r_E)
-    x, y_, z = r_E[0] / radius, r_E[1] / radius, r_E[2] / radius
-    g = (v[P.igrf_g11], v[P.igrf_h11], v[P.igrf_g10])
-    k = math.pow(IGRF_RADIUS / radius, 3.0)
-    gr = g[0] * x + g[1] * y_ + g[2] * z
-    bx = k * (3.0 * gr * x - g[0])
-    by = k * (3.0 * gr * y_ - g[1])
-    bz = k * (3.0 * gr * z - g[2])
-    return (c * bx - s * by, s * bx + c * by, bz)  # R3(θ)ᵀ B_E
 
 
 @jitable

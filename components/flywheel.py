@@ -39,6 +39,13 @@ restarts the other way.  A speed limiter in the drive clamps Ω at the momentum 
 (J_w |Ω| ≤ max(momentum_limit, J_w |Ω| at the step's start)) if it is reached within
 the step.
 
+Faults (DESIGN.md §3.2), per wheel place i, from the first communication point at or
+after the time (the drive samples and holds): from ``fail_time[i]`` the motor gives no
+torque (the wheel coasts down on its friction; the drive does not share its torque out
+among the others: that is the FDIR's reconfiguration); from ``friction_change_time[i]``
+the bearing friction is ``friction_factor[i]`` times c_v and c_c, while the drive keeps
+compensating the nominal friction it knows (the increase is a torque it does not deliver).
+
 Output derivatives at the current time, along the step's motion with the motor torque
 held: Ω̇_i = (J Ω̇_i) / J_w as the drive delivers it, ḣ, ḧ = −(c_v / J_w) ḣ (J_w Ω̈_i = −c_v Ω̇_i
 between zero crossings; zero for a wheel at rest or held), and zero for the motor torques
@@ -159,6 +166,27 @@ class Flywheel(Model):
             shape=(N_WHEELS,),
             display_unit="rpm",
         ),
+        parameter(
+            "fail_time",
+            math.inf,
+            "s",
+            "time each wheel's motor stops giving torque (inf: never)",
+            shape=(N_WHEELS,),
+        ),
+        parameter(
+            "friction_factor",
+            1.0,
+            "1",
+            "each wheel's bearing friction from friction_change_time on, times the nominal",
+            shape=(N_WHEELS,),
+        ),
+        parameter(
+            "friction_change_time",
+            math.inf,
+            "s",
+            "time each wheel's friction becomes friction_factor times the nominal (inf: never)",
+            shape=(N_WHEELS,),
+        ),
         input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
         input_(
             "w_BI_B",
@@ -237,6 +265,14 @@ class Flywheel(Model):
             p.momentum_limit / p.J_wheel,
         )  # fmt: skip
         state[S.omega : S.omega + n] = [p.speed0[i] for i in self.wheels]
+        for name in ("fail_time", "friction_change_time"):
+            if np.any(np.isnan(getattr(p, name))):
+                raise ModelError(f"{name} must be times or inf, got {getattr(p, name).tolist()}")
+        if not np.all(p.friction_factor >= 0.0) or not np.all(np.isfinite(p.friction_factor)):
+            raise ModelError(f"friction_factor must be >= 0, got {p.friction_factor.tolist()}")
+        state[S.fail : S.fail + n] = [p.fail_time[i] for i in self.wheels]
+        state[S.factor : S.factor + n] = [p.friction_factor[i] for i in self.wheels]
+        state[S.change : S.change + n] = [p.friction_change_time[i] for i in self.wheels]
         self.t = t0
 
     def step(self, t, dt):
@@ -266,12 +302,12 @@ class Flywheel(Model):
     def output_derivatives(self):
         """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
         s = self.state
-        _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist())
+        _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist(), self.t)
         speed_rate = [0.0] * N_WHEELS
         for k in range(int(s[S.n])):
             speed_rate[int(s[S.wheel + k])] = accel_torques[k] / s[S.inertia]
         hdot = self.y.hdot.tolist()
-        k = s[S.viscous] / s[S.inertia]
+        k = s[S.viscous] / s[S.inertia]  # nominal friction: ḧ's viscous decay
         return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
 
 
@@ -280,13 +316,13 @@ class Flywheel(Model):
 P, U, Y = Flywheel.names()
 #: the state array: the number n of wheels, their places (rows of ``axis``), their unit axes
 #: and the rows of the pseudo-inverse distributing ḣ among them (the first n of each), the
-#: wheels' constants,
+#: wheels' constants, each wheel's fail time, friction factor and its time,
 #: their speeds Ω and, per wheel, 1 while it is held at the momentum limit and 1 while its
 #: motor torque is at the limit (_LIMITS)
 S = state_table(
     "Flywheel state", n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS,
-    inertia=1, viscous=1, coulomb=1, torque_limit=1, speed_limit=1, omega=N_WHEELS,
-    limited=2 * N_WHEELS,
+    inertia=1, viscous=1, coulomb=1, torque_limit=1, speed_limit=1, fail=N_WHEELS,
+    factor=N_WHEELS, change=N_WHEELS, omega=N_WHEELS, limited=2 * N_WHEELS,
 )  # fmt: skip
 _LIMITS = ("held at the momentum limit", "motor torque at the limit")
 #: flywheel_step's status: a wheel reached a limit (step() warns)
@@ -315,12 +351,13 @@ def _momentum(s) -> tuple:
 
 
 @jitable
-def _drive(v, s):
+def _drive(v, s, t: float):
     """(motor torques m_i, J Ω̇_i at the communication point, held, at the momentum limit,
-    at the torque limit), per wheel.
+    at the torque limit), per wheel, at time t.
 
     Each wheel is asked for its share (least squares over the axes) of
-    ḣ_req = −τ_cmd − w × h; :func:`_wheel` applies its friction and limits.
+    ḣ_req = −τ_cmd − w × h; :func:`_wheel` applies its friction and limits (and its
+    faults at t).
     """
     tx, ty, tz = v[U.tau_cmd], v[U.tau_cmd + 1], v[U.tau_cmd + 2]
     wx, wy, wz = v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]
@@ -335,13 +372,29 @@ def _drive(v, s):
         at = S.distribution + 3 * k
         px, py, pz = s[at], s[at + 1], s[at + 2]
         torques[k], net[k], held[k], momentum[k], torque[k] = _wheel(
-            s[S.omega + k], px * rx + py * ry + pz * rz, cv, cc, tau_max, speed_max
-        )
+            s[S.omega + k], px * rx + py * ry + pz * rz, cv, cc, tau_max, speed_max,
+            t >= s[S.fail + k], friction(s, k, t),
+        )  # fmt: skip
     return torques, net, held, momentum, torque
 
 
 @jitable
-def _wheel(w: float, n: float, cv: float, cc: float, tau_max: float, speed_max: float) -> tuple:
+def friction(s, k: int, t: float) -> float:
+    """Wheel k's friction factor at t (1 before its change)."""
+    return s[S.factor + k] if t >= s[S.change + k] else 1.0
+
+
+@jitable
+def _wheel(
+    w: float,
+    n: float,
+    cv: float,
+    cc: float,
+    tau_max: float,
+    speed_max: float,
+    failed: bool,
+    factor: float,
+) -> tuple:
     """One wheel at speed Ω = ``w`` asked for J Ω̇ = ``n``: (motor torque m, delivered
     J Ω̇, held, at the momentum limit, at the torque limit).
 
@@ -349,8 +402,11 @@ def _wheel(w: float, n: float, cv: float, cc: float, tau_max: float, speed_max: 
     of n), clipped to ±torque_limit; J Ω̇ = m − friction (at rest: 0 while |m| ≤ cc).
     A held wheel (at the momentum limit, friction compensated within the torque limit)
     keeps its speed exactly: J Ω̇ = 0 by construction, not up to rounding, so that the
-    limit does not toggle from one step to the next.
+    limit does not toggle from one step to the next.  A ``failed`` wheel's m is 0; the
+    friction acting is ``factor`` times the nominal cv, cc the drive compensates.
     """
+    if failed:
+        return 0.0, _net(0.0, w, factor * cv, factor * cc), False, False, False
     at_momentum = at_torque = held = False
     if (w >= speed_max and n > 0.0) or (w <= -speed_max and n < 0.0):
         n = 0.0
@@ -364,17 +420,22 @@ def _wheel(w: float, n: float, cv: float, cc: float, tau_max: float, speed_max: 
     if m > tau_max or m < -tau_max:
         m = tau_max if m > tau_max else -tau_max
         at_torque, held = True, False
-    if held:
+    if held and factor == 1.0:
         return m, 0.0, True, at_momentum, at_torque
+    return m, _net(m, w, factor * cv, factor * cc), False, at_momentum, at_torque
+
+
+@jitable
+def _net(m: float, w: float, cv: float, cc: float) -> float:
+    """J Ω̇ of a wheel at speed Ω = ``w`` under the motor torque m and the friction cv, cc
+    (at rest: 0 while |m| ≤ cc)."""
     if w > 0.0:
-        net = m - cv * w - cc
-    elif w < 0.0:
-        net = m - cv * w + cc
-    elif abs(m) <= cc:
-        net = 0.0
-    else:
-        net = m - cc if m > 0.0 else m + cc
-    return m, net, False, at_momentum, at_torque
+        return m - cv * w - cc
+    if w < 0.0:
+        return m - cv * w + cc
+    if abs(m) <= cc:
+        return 0.0
+    return m - cc if m > 0.0 else m + cc
 
 
 @step_kernel(Flywheel)
@@ -382,7 +443,7 @@ def flywheel_step(values, state, t, dt):
     """Each wheel over ``dt`` with its motor torque held (:func:`wheel_step`; a held wheel
     keeps its speed); returns NEW_LIMIT when a wheel reaches a limit it was not at."""
     v, s = floats(values), floats(state)
-    torques, _, held, momentum, torque = _drive(v, s)
+    torques, _, held, momentum, torque = _drive(v, s, t)
     status = 0
     J, cv, cc, speed_max = s[S.inertia], s[S.viscous], s[S.coulomb], s[S.speed_limit]
     for k in range(int(s[S.n])):
@@ -392,8 +453,8 @@ def flywheel_step(values, state, t, dt):
                 status = NEW_LIMIT
             state[at] = 1.0 if limited else 0.0
         if not held[k]:
-            at = S.omega + k
-            state[at] = wheel_step(s[at], torques[k], dt, J, cv, cc, speed_max)
+            at, f = S.omega + k, friction(s, k, t)
+            state[at] = wheel_step(s[at], torques[k], dt, J, f * cv, f * cc, speed_max)
     return status
 
 
@@ -401,7 +462,7 @@ def flywheel_step(values, state, t, dt):
 def flywheel_output(values, state, t):
     """h, ḣ, the speeds and motor torques (at the wheels' places) and whether saturated."""
     v, s = floats(values), floats(state)
-    torques, net, _, momentum, torque = _drive(v, s)
+    torques, net, _, momentum, torque = _drive(v, s, t)
     h = _momentum(s)
     hdot = _along_axes(s, net)
     saturated = False

@@ -33,6 +33,11 @@ Over one sample interval, exactly for the white noises and the random walk
 (N independent standard normals; σ_v = arw in rad/√s; the β average is the trapezoid,
 error O(T/T_c), 5e-5 at the defaults; β_0 is drawn from its stationary N(0, σ_β²)).
 
+Bias step (a fault on the timeline, DESIGN.md §3.2): from ``bias_step_time`` on the bias
+is b + ``bias_step``; a sample whose interval contains the step averages it over the part
+after it, bias_step · (t_k − bias_step_time)/T, and ``bias_B`` includes it from the first
+sample at or after it.
+
 Bias instability.  Datasheets quote it as the floor of the Allan deviation (IEEE Std 952
 Annex C).  It is modelled here as the Gauss–Markov β, whose Allan variance is
 (IEEE Std 952 Annex C; x = τ/T_c)::
@@ -157,6 +162,14 @@ class Gyro(Model):
         ),
         parameter("saturation", STIM300_RANGE, "rad/s", "measurement range +-saturation per axis"),
         parameter("rate", DEFAULT_RATE, "Hz", "sample rate (the output is held between samples)"),
+        parameter("bias_step_time", math.inf, "s", "time of a step of the bias (inf: none)"),
+        parameter(
+            "bias_step",
+            0.0,
+            "rad/s",
+            "the step of the bias from bias_step_time on, per axis",
+            shape=(3,),
+        ),
         parameter("seed", 1, "1", "seed of the noise (components/noise.py)", type="Integer"),
         input_(
             "w_BI_B",
@@ -189,6 +202,11 @@ class Gyro(Model):
         for name in ("bias_correlation_time", "saturation", "rate"):
             if not getattr(p, name) > 0.0:
                 raise ModelError(f"{name} must be > 0, got {getattr(p, name)}")
+        if math.isnan(p.bias_step_time) or not all(map(math.isfinite, p.bias_step.tolist())):
+            raise ModelError(
+                f"bias_step_time must be a time or inf and bias_step finite, got "
+                f"{p.bias_step_time} and {p.bias_step.tolist()}"
+            )
         T = 1.0 / p.rate
         phi = math.exp(-T / p.bias_correlation_time)
         sigma_gm = p.bias_instability / GAUSS_MARKOV_ALLAN_PEAK
@@ -273,9 +291,13 @@ def gyro_output(values, state, t):
     notes = [(0, 0)]
     notes.pop()
     advance(values, state, t, notes)
+    t_k = tick_time(int(state[ADVANCED.k]), state[S.t0], state[S.rate])
+    stepped = t_k >= values[P.bias_step_time]
     for i in range(3):
         values[Y.w_meas_B + i] = state[ADVANCED.w_meas + i]
         values[Y.bias_B + i] = state[ADVANCED.b_rw + i] + state[ADVANCED.b_gm + i]
+        if stepped:
+            values[Y.bias_B + i] += values[P.bias_step + i]
     return 0
 
 
@@ -357,12 +379,16 @@ def _sample(values, state, j: int, w_true, notes) -> None:
         gm_mean = (0.5 * (b_gm[0] + gm[0]), 0.5 * (b_gm[1] + gm[1]), 0.5 * (b_gm[2] + gm[2]))
         white, b_rw, b_gm = s[S.white], rw, gm
     quantum, limit = values[P.quantization], values[P.saturation]
+    # the part of the sample's interval (t_j − T, t_j] after the bias step
+    after = min(1.0, (tick_time(j, s[S.t0], s[S.rate]) - values[P.bias_step_time]) / s[S.period])
     for i in range(3):
         m = S.matrix + 3 * i
         raw = (
             s[m] * w_true[0] + s[m + 1] * w_true[1] + s[m + 2] * w_true[2]
             + bias_mean[i] + gm_mean[i] + white * normal(_key(s, ARW + i), j)
         )  # fmt: skip
+        if after > 0.0:
+            raw += after * values[P.bias_step + i]
         saturated = raw >= limit or raw <= -limit
         if saturated:
             measured, residual = limit if raw > 0.0 else -limit, 0.0

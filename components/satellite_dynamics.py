@@ -2,7 +2,8 @@
 
 States: the attitude q_BI and the *total* angular momentum H_I (hub + devices, inertial
 axes).  With J the hub inertia, h the devices' momentum relative to the body (in B) and
-τ the external torque on the body (in B)::
+τ the external torque on the body (in B: ``tau_ext``, the environment's, plus
+``tau_ctrl``, that of external-torque actuators such as magnetorquers)::
 
     w_BI_B = J⁻¹ (C_BI H_I − h)                       (eq. 2 solved for w)
     q̇_BI  = ½ q_BI ⊗ (0, w_BI_B)
@@ -14,7 +15,7 @@ co-simulation step.  Across a step the inputs the model integrates follow their
 derivatives (FMI 2.0 input interpolation, components/model.py): the devices' momentum
 h(t_c + s) = h + ḣ s + ½ ḧ s², with ḣ its slope (the derivative a host set for ``h_*``,
 else the input ``hdot_*``: :meth:`Model.slope`) and ḧ the derivative set for ``hdot_*``;
-τ_ext + τ̇ s and r_I + ṙ s likewise (never set: zero, the input held).  q_OI and w_OI_O
+τ + τ̇ s and r_I + ṙ s likewise (never set: zero, the input held).  q_OI and w_OI_O
 enter only the outputs, at communication points.  Integration: classical RK4 with
 sub-steps of at most 0.02 rad of rotation.  The gravity-gradient torque is skipped when
 J ∝ 1, where it vanishes identically.
@@ -58,7 +59,7 @@ from .rotations import (
 from .runtime.flat import matrix, put, quaternion, state_table, vector
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
-from .vectors import quat_dot, quat_norm, rotate, rotate_back
+from .vectors import add, quat_dot, quat_norm, rotate, rotate_back
 
 MAX_ROTATION_PER_SUBSTEP = 0.02  # rad
 MAX_SUBSTEPS = 10000
@@ -135,6 +136,14 @@ class SatelliteDynamics(Model):
             "other external torque on the body, in B",
             shape=(3,),
             optional="zero: no other external torque",
+        ),
+        input_(
+            "tau_ctrl",
+            "N.m",
+            "torque of external-torque actuators (magnetorquers, thrusters) on the body, in "
+            "B; added to tau_ext",
+            shape=(3,),
+            optional="zero: no such actuator",
         ),
         input_(
             "r_I",
@@ -276,7 +285,7 @@ class SatelliteDynamics(Model):
         q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
         J, J_inv = matrix(s, S.J), matrix(s, S.J_inv)
         slope, _, _, r_rate, tau_rate = _rates(v)
-        torque = (vector(v, U.tau_ext), vector(v, U.r_I), tau_rate, r_rate)
+        torque = (external(v), vector(v, U.r_I), tau_rate, r_rate)
         q_dot_H_dot = _derivative(
             q_BI + H_I, 0.0, _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload), slope, (0.0,) * 3,
             torque, J, J_inv, s[S.mu], s[S.gravity_gradient] != 0.0, (False, False, False),
@@ -356,7 +365,7 @@ def _step(values, state, t, dt):
     v, s = floats(values), floats(state)
     h0 = _device_sum(v, U.h_cmg, U.h_wheel, U.h_payload)
     hdot, conflict, curvature, r_rate, tau_rate = _rates(v)
-    tau, r_I = vector(v, U.tau_ext), vector(v, U.r_I)
+    tau, r_I = external(v), vector(v, U.r_I)
     if s[S.needs_position] != 0.0 and r_I[0] == 0.0 and r_I[1] == 0.0 and r_I[2] == 0.0:
         return NO_POSITION
     q_BI, H_I = quaternion(s, S.q_BI), vector(s, S.H_I)
@@ -403,7 +412,14 @@ def _rates(v):
         (slope[2] + slope[5]) + slope[8],
     )
     curvature = _device_sum(v, DU.hdot_cmg, DU.hdot_wheel, DU.hdot_payload)
-    return hdot, conflict, curvature, vector(v, DU.r_I), vector(v, DU.tau_ext)
+    tau_rate = add(vector(v, DU.tau_ext), vector(v, DU.tau_ctrl))
+    return hdot, conflict, curvature, vector(v, DU.r_I), tau_rate
+
+
+@jitable
+def external(v) -> tuple:
+    """τ = tau_ext + tau_ctrl, the external torque on the body (in B)."""
+    return add(vector(v, U.tau_ext), vector(v, U.tau_ctrl))
 
 
 @jitable

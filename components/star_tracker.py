@@ -27,7 +27,9 @@ Validity at t_k (``valid`` false otherwise; the sample is output all the same):
 - Earth: the angle between b_I and the nadir −r_I is ≥ ρ + earth_exclusion, where
   ρ = asin(R / |r_I|) is the Earth's apparent radius (a sphere of the WGS-84 equatorial
   radius R): ``earth_exclusion`` is counted from the limb;
-- rate: |w_BI_B| ≤ max_rate.
+- rate: |w_BI_B| ≤ max_rate;
+- no outage: t_k is not in [``outage_start``, ``outage_stop``) (a fault on the timeline,
+  DESIGN.md §3.2: blinding, a reset; inf: none).
 
 A zero sun_I or r_I (the inputs unconnected) skips that test.  Angles are atan2(|a×b|, a·b),
 exact at the boundaries.
@@ -134,6 +136,8 @@ class StarTracker(Model):
             "largest body rate |w_BI_B| with a valid solution",
             display_unit="deg/s",
         ),
+        parameter("outage_start", math.inf, "s", "start of an outage: no valid sample (inf: none)"),
+        parameter("outage_stop", math.inf, "s", "end of the outage (samples valid again)"),
         parameter("seed", 2, "1", "seed of the noise (components/noise.py)", type="Integer"),
         input_("q_BI", "1", "true attitude of B relative to I", IDENTITY_Q, shape=(4,)),
         input_(
@@ -190,6 +194,11 @@ class StarTracker(Model):
         for name in ("rate", "lf_period", "max_rate"):
             if not getattr(p, name) > 0.0:
                 raise ModelError(f"{name} must be > 0, got {getattr(p, name)}")
+        if not p.outage_start <= p.outage_stop:
+            raise ModelError(
+                f"outage_start must not be after outage_stop, got {p.outage_start} and "
+                f"{p.outage_stop}"
+            )
         if abs(quat_norm(p.q_SB) - 1.0) > 1e-6:
             raise ModelError(f"q_SB must be a unit quaternion, got {p.q_SB.tolist()}")
         keys = [half for i in range(3) for half in key_halves(stream_key(p.seed, NOISE + i))]
@@ -358,7 +367,7 @@ def _sample(values, state, j: int, t_j: float, truth, row: int) -> None:
     C_SB = matrix(s, S.C_SB)
     error_B = rotate_back(C_SB, error_S)
     q_meas = normalized(qmul(q, quat_exp(error_B)))
-    valid = _valid(v, C_SB, q, w, sun, r)
+    valid = _valid(v, C_SB, q, w, sun, r) and not v[P.outage_start] <= t_j < v[P.outage_stop]
     state[row + SAMPLE.j], state[row + SAMPLE.t] = j, t_j
     state[row + SAMPLE.valid] = 1.0 if valid else 0.0
     for i in range(4):

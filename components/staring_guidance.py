@@ -123,11 +123,11 @@ _INPUTS = ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")
 # Start values of the inputs: a consistent geometry (circular 567-km orbit over the
 # equator, the target below it at longitude 0, seen at nadir), so that the FMU can be
 # evaluated at its start values in Initialization Mode, before a master sets the inputs.
-_START_R = (WGS84_A + 567e3, 0.0, 0.0)
-_START_V = (0.0, math.sqrt(MU_EARTH / _START_R[0]), 0.0)
-_START_T = (WGS84_A, 0.0, 0.0)
-_START_VT = (0.0, EARTH_RATE * WGS84_A, 0.0)
-_START_Q_OI = tuple(
+START_R = (WGS84_A + 567e3, 0.0, 0.0)
+START_V = (0.0, math.sqrt(MU_EARTH / START_R[0]), 0.0)
+START_T = (WGS84_A, 0.0, 0.0)
+START_VT = (0.0, EARTH_RATE * WGS84_A, 0.0)
+START_Q_OI = tuple(
     quat_from_dcm(((0.0, 1.0, 0.0), (0.0, 0.0, -1.0), (-1.0, 0.0, 0.0))).tolist()
 )  # rows x_O, y_O, z_O
 _GEOMETRY = ("r_I", "r_T_I")
@@ -158,7 +158,7 @@ def footprint_axis(boresight_B) -> np.ndarray:
 
 
 @jitable
-def _latitude(r_T) -> tuple:
+def geodetic_latitude(r_T) -> tuple:
     """(off the polar axis, WGS-84 geodetic latitude) of a point (I or E axes), by the
     fixed-point iteration tan φ = (z + e² N sin φ)/p (~4 iterations near the ground)."""
     x, y, z = r_T
@@ -176,7 +176,7 @@ def _latitude(r_T) -> tuple:
 
 
 @jitable
-def _tangent_frame(r_T, latitude: float) -> tuple:
+def tangent_frame(r_T, latitude: float) -> tuple:
     """(up, east, north) unit vectors at a point off the polar axis, in the axes of r_T (I
     or E: both share the polar axis ẑ); up = the WGS-84 ellipsoid normal at ``latitude``."""
     x, y, _ = r_T
@@ -232,7 +232,7 @@ def footprint_azimuths(q_BI, r_T_I, boresight_B=(0.0, 0.0, 1.0)) -> np.ndarray:
     failed = _footprint_azimuths(q_unit, r_T, beam_B, a_B, azimuth)
     if failed >= 0:
         row = tuple(r_T[failed].tolist())
-        raise ModelError(_at_pole(row) if not _latitude(row)[0] else _GRAZING)
+        raise ModelError(_at_pole(row) if not geodetic_latitude(row)[0] else _GRAZING)
     return azimuth
 
 
@@ -244,10 +244,10 @@ def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
     q, r = floats(q_BI), floats(r_T_I)
     for k in range(len(azimuth)):
         r_T = (r[k][0], r[k][1], r[k][2])
-        ok, latitude = _latitude(r_T)
+        ok, latitude = geodetic_latitude(r_T)
         if not ok:
             return k
-        up, east, north = _tangent_frame(r_T, latitude)
+        up, east, north = tangent_frame(r_T, latitude)
         C_BI = dcm(q[k])
         beam, axis = rotate_back(C_BI, beam_B), rotate_back(C_BI, axis_B)
         ok, azimuth[k] = _azimuth(ground_line(beam, axis, up), east, north)
@@ -257,7 +257,7 @@ def _footprint_azimuths(q_BI, r_T_I, beam_B, axis_B, azimuth) -> int:
 
 
 @jitable
-def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
+def line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
     """(û, u̇, ü) in I for the slant range s = |r_T − r| > 0: Earth-fixed target,
     two-body satellite (module docstring)."""
     rho, drho = sub(r_T, r), sub(v_T, v)
@@ -276,7 +276,7 @@ def _line_of_sight(r, v, r_T, v_T, s: float) -> tuple:
 
 
 @jitable
-def _aligned_axes(u, a) -> tuple:
+def aligned_axes(u, a) -> tuple:
     """(defined, x, y, n = û × a, |n|) of F(û, a) (module docstring); undefined for a
     reference direction within PARALLEL_TOLERANCE of û."""
     n = cross(u, a)
@@ -288,9 +288,9 @@ def _aligned_axes(u, a) -> tuple:
 
 
 @jitable
-def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
+def aligned_frame(u, du, ddu, a, da, dda) -> tuple:
     """(defined, F(û, a) as rows (x, y, z), ω and ω̇ in its own axes) (module docstring)."""
-    ok, x, y, n, m = _aligned_axes(u, a)
+    ok, x, y, n, m = aligned_axes(u, a)
     if not ok:
         return False, (n, n, n), n, n
     dn = add(cross(du, a), cross(u, da))
@@ -305,6 +305,74 @@ def _aligned_frame(u, du, ddu, a, da, dda) -> tuple:
         -(dot(ddn, x) + dot(dn, dx)) / m + dnx * dot(dn, y) / (m * m),
     )
     return ok, (x, y, u), w, dw
+
+
+@jitable
+def orbit_axes(r, vel) -> tuple:
+    """(defined, the two-body orbit frame's axes (x_O, y_O, z_O) in I, |r|, r̂, |h|) of r,
+    v (DESIGN.md §2: z = −r̂, y = −ĥ, x = ĥ × r̂); undefined for r ∥ v or zero."""
+    r_norm = norm(r)
+    h_vec = cross(r, vel)
+    h = norm(h_vec)
+    if not h > 1e-12 * r_norm * max(norm(vel), 1.0):
+        return False, (r, r, r), r_norm, r, h
+    r_hat, h_hat = divide(r, r_norm), divide(h_vec, h)
+    return True, (cross(h_hat, r_hat), scale(-1.0, h_hat), scale(-1.0, r_hat)), r_norm, r_hat, h
+
+
+@jitable
+def mismatch(C, D) -> float:
+    """The largest |C_ij − D_ij| of two 3×3 matrices (rows)."""
+    largest = 0.0
+    for i in range(3):
+        for j in range(3):
+            largest = max(largest, abs(C[i][j] - D[i][j]))
+    return largest
+
+
+@jitable
+def x_axis_rates(x_O, r_hat, r_norm: float, h: float, vel) -> tuple:
+    """(ẋ_O, ẍ_O) of the orbit frame's x axis along the two-body orbit (module docstring):
+    ẋ_O = −(|h|/r²) r̂,  ẍ_O = (2|h| ṙ/r³) r̂ − (|h|²/r⁴) x_O."""
+    r2 = r_norm * r_norm
+    dx_O = scale(-(h / r2), r_hat)
+    ddx_O = combine(2.0 * h * dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O)
+    return dx_O, ddx_O
+
+
+@jitable
+def ground_fixed(g, angle: float) -> tuple:
+    """(g turned by ``angle`` about ẑ, its first and second derivatives as the Earth turns
+    it at ω_E): an Earth-fixed direction or point seen in I (g in E and the Earth angle)."""
+    c, sn = math.cos(angle), math.sin(angle)
+    turned = (c * g[0] - sn * g[1], sn * g[0] + c * g[1], g[2])
+    rate = scale(EARTH_RATE, cross(_Z, turned))
+    return turned, rate, scale(EARTH_RATE, cross(_Z, rate))
+
+
+@jitable
+def frozen_direction(u, x0, r_T) -> tuple:
+    """(status, g, its azimuth, the target's latitude): the unit ground line of the frame
+    with footprint axis x0 looking along û at the target r_T (module docstring, yaw
+    compensation); status AT_POLE or GRAZING where it is undefined."""
+    found, latitude = geodetic_latitude(r_T)
+    if not found:
+        return AT_POLE, x0, 0.0, 0.0
+    up, east, north = tangent_frame(r_T, latitude)
+    d = ground_line(u, x0, up)
+    defined, azimuth = _azimuth(d, east, north)
+    if not defined:
+        return GRAZING, x0, 0.0, 0.0
+    return OK, divide(d, norm(d)), azimuth, latitude
+
+
+def mount(boresight_B) -> np.ndarray:
+    """C_RP = [a_B, b × a_B, b] (columns): the frame the body carries for a boresight b
+    and its footprint axis a_B (module docstring); the identity for b = +z."""
+    b = np.asarray(boresight_B, dtype=float)
+    a_B = footprint_axis(b)
+    b = b / math.sqrt(float(b @ b))
+    return np.column_stack((a_B, cross(b, a_B), b))
 
 
 class StaringGuidance(Model):
@@ -335,15 +403,15 @@ class StaringGuidance(Model):
             "t_ref: the footprint direction of the yaw-0 "
             "attitude is frozen on the ground at the first communication point >= it",
         ),
-        input_("r_I", "m", "satellite position in I", _START_R, shape=(3,)),
-        input_("v_I", "m/s", "satellite velocity in I", _START_V, shape=(3,)),
-        input_("r_T_I", "m", "ground target position in I", _START_T, shape=(3,)),
-        input_("v_T_I", "m/s", "ground target velocity in I", _START_VT, shape=(3,)),
+        input_("r_I", "m", "satellite position in I", START_R, shape=(3,)),
+        input_("v_I", "m/s", "satellite velocity in I", START_V, shape=(3,)),
+        input_("r_T_I", "m", "ground target position in I", START_T, shape=(3,)),
+        input_("v_T_I", "m/s", "ground target velocity in I", START_VT, shape=(3,)),
         input_(
             "q_OI",
             "1",
             "attitude of the orbit frame O relative to I (must match r_I, v_I)",
-            _START_Q_OI,
+            START_Q_OI,
             shape=(4,),
         ),
         output(
@@ -407,10 +475,7 @@ class StaringGuidance(Model):
         p = self.p
         if not math.isfinite(p.reference_time):
             raise ModelError(f"reference_time must be finite, got {p.reference_time}")
-        b = np.array(p.boresight_B)
-        a_B = footprint_axis(b)
-        b = b / math.sqrt(float(b @ b))
-        C_RP = np.column_stack((a_B, cross(b, a_B), b))
+        C_RP = mount(p.boresight_B)
         self.state = S.zeros()
         self.state[S.mounted] = not np.array_equal(C_RP, np.eye(3))  # else R = P
         self.state[S.C_RP : S.C_RP + 9] = C_RP.reshape(-1)
@@ -494,19 +559,12 @@ def guidance_output(values, state, t):
     C_OI = dcm(v[U.q_OI : U.q_OI + 4])
 
     # the two-body orbit frame of r, v, checked against q_OI
-    r_norm = norm(r)
-    h_vec = cross(r, vel)
-    h = norm(h_vec)
-    if not h > 1e-12 * r_norm * max(norm(vel), 1.0):
+    defined, expected, r_norm, r_hat, h = orbit_axes(r, vel)
+    if not defined:
         return NO_ORBIT_FRAME
-    r_hat, h_hat = divide(r, r_norm), divide(h_vec, h)
-    expected = (cross(h_hat, r_hat), scale(-1.0, h_hat), scale(-1.0, r_hat))
-    mismatch = 0.0
-    for i in range(3):
-        for j in range(3):
-            mismatch = max(mismatch, abs(C_OI[i][j] - expected[i][j]))
-    if mismatch > Q_OI_TOLERANCE:
-        state[S.detail] = mismatch
+    error = mismatch(C_OI, expected)
+    if error > Q_OI_TOLERANCE:
+        state[S.detail] = error
         return Q_OI_MISMATCH
     x_O = C_OI[0]
 
@@ -514,7 +572,7 @@ def guidance_output(values, state, t):
     if not s_range > MIN_SLANT_RANGE:
         state[S.detail] = s_range
         return NO_LINE_OF_SIGHT
-    u, du, ddu = _line_of_sight(r, vel, r_T, v_T, s_range)
+    u, du, ddu = line_of_sight(r, vel, r_T, v_T, s_range)
 
     # the pointing frame P: P0 = F(û, x_O), or with yaw compensation F(û, g) after the
     # capture (made here at t_cap; re-made when evaluated at t_cap again)
@@ -524,39 +582,26 @@ def guidance_output(values, state, t):
     )
     compensating = s[S.compensate] != 0.0 and (capturing or captured)
     if compensating:  # only the axes of the yaw-0 frame P0
-        ok, x0, y0, _, _ = _aligned_axes(u, x_O)
+        ok, x0, y0, _, _ = aligned_axes(u, x_O)
         C_PI, w_P, dw_P = (x0, y0, u), x0, y0  # P: after the capture below
     else:  # P0 = F(û, x_O) is the reference
-        r2 = r_norm * r_norm
-        dx_O = scale(-(h / r2), r_hat)
-        ddx_O = combine(
-            2.0 * h * dot(vel, r_hat) / (r2 * r_norm), r_hat, -((h / r2) * (h / r2)), x_O
-        )
-        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
+        dx_O, ddx_O = x_axis_rates(x_O, r_hat, r_norm, h, vel)
+        ok, C_PI, w_P, dw_P = aligned_frame(u, du, ddu, x_O, dx_O, ddx_O)
         x0, y0 = C_PI[0], C_PI[1]
     if not ok:
         return ALONG_X_O
     if capturing:
-        found, latitude = _latitude(r_T)
-        if not found:
-            return AT_POLE
-        up, east, north = _tangent_frame(r_T, latitude)
-        d = ground_line(u, x0, up)
-        defined, azimuth = _azimuth(d, east, north)
-        if not defined:
-            return GRAZING
-        g = divide(d, norm(d))
+        status, g, azimuth, latitude = frozen_direction(u, x0, r_T)
+        if status != OK:
+            return status
         state[S.captured], state[S.capture_time], state[S.azimuth_ref] = 1.0, t, azimuth
         state[S.latitude] = latitude
         for k in range(3):
             state[S.g_ref + k] = g[k]
     if compensating:
         angle = EARTH_RATE * (t - state[S.capture_time])
-        c, sn = math.cos(angle), math.sin(angle)
-        gx, gy, gz = state[S.g_ref], state[S.g_ref + 1], state[S.g_ref + 2]
-        g = (c * gx - sn * gy, sn * gx + c * gy, gz)
-        dg = scale(EARTH_RATE, cross(_Z, g))
-        ok, C_PI, w_P, dw_P = _aligned_frame(u, du, ddu, g, dg, scale(EARTH_RATE, cross(_Z, dg)))
+        g, dg, ddg = ground_fixed(state[S.g_ref : S.g_ref + 3], angle)
+        ok, C_PI, w_P, dw_P = aligned_frame(u, du, ddu, g, dg, ddg)
         if not ok:
             return ALONG_G
     C_RI, w, dw = C_PI, w_P, dw_P
@@ -588,7 +633,7 @@ def guidance_output(values, state, t):
 
     rotation = 0.0
     if state[S.captured] != 0.0:
-        up, east, north = _tangent_frame(r_T, state[S.latitude])
+        up, east, north = tangent_frame(r_T, state[S.latitude])
         defined, azimuth = _azimuth(ground_line(u, C_PI[0], up), east, north)
         if not defined:
             return GRAZING

@@ -21,6 +21,7 @@ capability.
 from __future__ import annotations
 
 import hashlib
+import math
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from ..components.variables import UNITS, Layout
@@ -199,7 +200,13 @@ def start_text(type_name: str, value) -> str:
         return "true" if value else "false"
     if type_name == "Integer":
         return str(int(value))
-    return repr(float(value))
+    return xs_double(float(value))
+
+
+def xs_double(x: float) -> str:
+    """x as XML Schema's xs:double writes it: ``repr`` (which reads back the same), and
+    INF, -INF, NaN for the values that are not numbers of Python's spelling."""
+    return repr(x) if math.isfinite(x) else "NaN" if math.isnan(x) else "INF" if x > 0 else "-INF"
 
 
 def _model_structure(root, layout, initial_state_depends):

@@ -12,11 +12,13 @@ values.  Refused, with the attribute and what was expected:
   (for a state taken after initialisation) one that is missing;
 - an array whose dtype or shape is not the reference's (the compiled kernels and the
   shim's C step path index the arrays without bounds checks), or with a non-finite value
-  where the reference's array is finite;
+  where the reference's array has a finite one;
 - an object of another class than the reference's, or with other attributes (checked
   recursively), a container of arrays or objects of another length;
 - a number where the reference holds another kind of scalar (a string for ``t``);
-- in the value array: a parameter or input that is not finite, a Boolean that is not 0 or
+- in the value array: an input that is not finite, a parameter that is NaN (a Real one may
+  be ±inf: a fault time "never", a limit "none"; the model's initialize judges it), a
+  Boolean that is not 0 or
   1, an Integer that is not a whole number of fmi2Integer's range, and, where the state
   says its outputs are valid (the host would read them as they are), a non-finite output.
 
@@ -127,15 +129,16 @@ def _check_values(model_class, values: np.ndarray, outputs_valid: bool) -> None:
         if v.type == "String" or v.causality == "output" and not outputs_valid:
             continue
         x = values[layout.slice(v.name)]
+        infinite = v.causality == "parameter" and v.type == "Real"  # may be ±inf, never NaN
         bad = (
-            ~np.isfinite(x)
+            (np.isnan(x) if infinite else ~np.isfinite(x))
             | (v.type == "Boolean") & ~np.isin(x, (0.0, 1.0))
             | (v.type == "Integer") & ((x != np.round(x)) | (x < _INT32[0]) | (x > _INT32[1]))
         )
         if bad.any():
             element = v.scalar_names()[int(np.argmax(bad))]
             expected = {
-                "Real": "a finite Real",
+                "Real": "a number" if infinite else "a finite Real",
                 "Boolean": "a Boolean (0 or 1)",
                 "Integer": "a whole number of fmi2Integer's range",
             }[v.type]
@@ -171,8 +174,8 @@ def _mismatch(value, ref, path: str) -> str:
                 else f"a {type(value).__name__}"
             )
             return f"{path} is {what}, not a {ref.dtype} array of shape {ref.shape}"
-        if ref.dtype.kind in "fc" and np.isfinite(ref).all() and not np.isfinite(value).all():
-            return f"{path} has non-finite values (the model keeps it finite)"
+        if ref.dtype.kind in "fc" and not np.isfinite(value[np.isfinite(ref)]).all():
+            return f"{path} has non-finite values (the model keeps them finite)"
         return ""
     if isinstance(ref, (list, tuple)):
         if value is None:

@@ -63,7 +63,7 @@ def logged(instance, status: str = "error") -> list[str]:
 
 def operating_point(name: str, rng) -> dict:
     """Real input values (by variable) away from zero: quaternions unit, the staring
-    guidance fed a real orbit and target and the disturbance torques a real orbit (from
+    and slew guidance fed a real orbit and target and the disturbance torques a real orbit (from
     OrbitEnvironment's defaults), the wheels' torque within their limit; Boolean and
     Integer inputs keep their start values."""
     import numpy as np
@@ -73,6 +73,9 @@ def operating_point(name: str, rng) -> dict:
     orbit = _model_class("OrbitEnvironment")().start(0.0)
     if name == "StaringGuidance":
         return {v: orbit.get(v) for v in ("r_I", "v_I", "r_T_I", "v_T_I", "q_OI")}
+    if name == "SlewGuidance":
+        names = ("r_I", "v_I", "q_OI", "w_OI_O", "earth_angle")
+        return {v: np.atleast_1d(orbit.get(v)) for v in names}
     values = {}
     for v in _model_class(name).VARIABLES:
         if v.causality == "input" and v.type == "Real":

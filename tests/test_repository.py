@@ -95,6 +95,8 @@ def test_references_resolve_inside_the_repository():
         "Hoeffding 1963",
         "Berger 1982",
         "Alken 2021",
+        "Biagiotti 2008",
+        "Camillo 1980",
         "Crassidis 2012",
         "Farrenkopf 1978",
         "Kopp 2011",

@@ -227,6 +227,47 @@ def grid_pass_rates(plan, array: np.ndarray, catalog: dict) -> list[dict]:
     ]
 
 
+def group_pass_rates(array: np.ndarray, catalog: dict, key: str, edges=()) -> list[dict]:
+    """The pass rates of the runs grouped by the dispersed column ``key`` (a fault's time,
+    which unit fails, ...): one group per value, or with ``edges`` e₀ < e₁ < … one per
+    interval [e_k, e_k+1), the values below e₀ and from the last edge on in groups of
+    their own; an infinite value ("never") is always its own group.  Each group:
+    {"group": its label, "runs": n, "pass_rates": as :func:`pass_rates`}."""
+    if key not in (array.dtype.names or ()):
+        raise ValueError(f"--group-by {key}: not a column of the campaign's table")
+    column = array[key]
+    if column.dtype.kind != "f":
+        labels = column.astype(str)
+    else:
+        labels = np.array([_interval(x, edges) for x in column.tolist()], dtype=object)
+    order = sorted(set(labels.tolist()), key=lambda label: _order(label, column, labels))
+    return [
+        {
+            "group": label,
+            "runs": int(np.sum(labels == label)),
+            "pass_rates": pass_rates(array, catalog, labels == label),
+        }
+        for label in order
+    ]
+
+
+def _interval(x: float, edges) -> str:
+    """The label of x's group: its value, 'inf', or its interval of ``edges``."""
+    if math.isinf(x) or not edges:
+        return "inf" if x == math.inf else "-inf" if x == -math.inf else f"{x:.6g}"
+    if x < edges[0]:
+        return f"< {edges[0]:g}"
+    for low, high in zip(edges, edges[1:]):
+        if x < high:
+            return f"[{low:g}, {high:g})"
+    return f">= {edges[-1]:g}"
+
+
+def _order(label: str, column: np.ndarray, labels: np.ndarray):
+    """Groups in the order of their smallest value (an infinite one last)."""
+    return float(np.min(column[labels == label])) if column.dtype.kind == "f" else label
+
+
 def display(meta: dict) -> tuple[float, str]:
     """(factor, unit as people write it) of a metric's display unit."""
     unit, shown = meta["unit"], meta.get("display_unit") or meta["unit"]

@@ -16,7 +16,7 @@ import signal
 from pathlib import Path
 
 from ..campaign import Spec, engine, run_campaign, shipped_files
-from ..campaign.report import display
+from ..campaign.report import display, group_pass_rates
 from ..campaign.sequential import format_until_decided, run_until_decided
 from ..cosim.options import RunOptions, add_flags, from_arguments
 from ..error_estimate import sample, sample_lines
@@ -83,6 +83,15 @@ def add_parsers(commands, quiet) -> None:
         "state each metric's numerical error (Richardson) and the runs a requirement is "
         "not decided by",
     )
+    p.add_argument(
+        "--group-by",
+        action="append",
+        default=[],
+        metavar="INSTANCE.VAR[=EDGES]",
+        help="pass rates per group of runs by a dispersed parameter: per value, or with "
+        "EDGES 'a,b,c' per interval [a, b), [b, c) (a fault time: inf, 'never', is its own "
+        "group); repeat for more",
+    )
     p.add_argument("--out", type=Path, help="output directory (default out/campaign-TARGET)")
     p.add_argument(
         "--resume",
@@ -112,6 +121,7 @@ def main(args) -> int:
         print(f"dispersions: {', '.join(spec.files)} (the shipped campaign)")
     if args.max_runs is not None and not args.until_decided:
         raise ValueError("--max-runs is the most runs of --until-decided: give it too")
+    groups = [_grouping(text) for text in args.group_by]  # before any run is made
     engine.INTERRUPTS.signals.clear()
     for signum in (signal.SIGINT, signal.SIGTERM):  # a batch system's stop: as Ctrl-C
         signal.signal(signum, engine.INTERRUPTS)
@@ -146,6 +156,8 @@ def main(args) -> int:
         return 128 + _first()
     if args.error_estimate:
         _error_estimate(args, spec, result)
+    if groups:
+        _group(groups, result)
     report.after(args, result.out_dir)
     print(format_campaign(result.summary))
     if "until_decided" in result.summary:
@@ -188,6 +200,29 @@ def _error_estimate(args, spec, result) -> None:
         return run(spec.target, again)[1]
 
     result.summary["numerical_error"] = sample(chosen, settings["step"], rerun)
+    write_text(result.out_dir / "campaign.json", json.dumps(result.summary, indent=2) + "\n")
+
+
+def _grouping(text: str) -> tuple[str, list[float]]:
+    """``--group-by KEY[=EDGES]``: (KEY, the increasing edges)."""
+    key, _, edges = text.partition("=")
+    try:
+        bounds = [float(x) for x in edges.split(",")] if edges.strip() else []
+    except ValueError:
+        raise ValueError(f"--group-by {text}: the edges are numbers, '10,27.5,40'") from None
+    if not all(a < b for a, b in zip(bounds, bounds[1:])):
+        raise ValueError(f"--group-by {text}: the edges must increase")
+    return key.strip(), bounds
+
+
+def _group(groups: list[tuple[str, list[float]]], result) -> None:
+    """Each ``--group-by``'s pass rates per group of runs, into campaign.json."""
+    from ..output.recorder import write_text
+
+    metrics = {"requirements": result.summary.get("requirements", {})}
+    result.summary["group_pass_rates"] = {
+        key: group_pass_rates(result.table, metrics, key, edges) for key, edges in groups
+    }
     write_text(result.out_dir / "campaign.json", json.dumps(result.summary, indent=2) + "\n")
 
 
@@ -279,6 +314,17 @@ def format_campaign(summary: dict) -> str:
                 for k, v in point["values"].items()
             )
             lines.append(f"  {values}: {met['met']}/{met['runs']} met")
+    for key, groups in summary.get("group_pass_rates", {}).items():
+        for group in groups:
+            rates = group["pass_rates"]
+            met = rates.get("all") or next(iter(rates.values()), None)
+            if met and met["runs"]:
+                low, high = met["ci95"]
+                lines.append(
+                    f"  runs with {key} {_grouped(group['group'])}: met in {met['met']}/"
+                    f"{met['runs']}, {100 * met['rate']:.1f} % (95 % CI {100 * low:.1f}–"
+                    f"{100 * high:.1f} %)"
+                )
     for failure in summary["failures"][:SHOWN]:
         lines.append(f"  run {failure['index']} {failure['status']}: {failure['message'][:200]}")
     failed = runs["made"] - runs["ok"]
@@ -287,6 +333,13 @@ def format_campaign(summary: dict) -> str:
     if summary["failures"]:
         lines.append('  (campaign.json "failures" has the `agilesat run` command replaying each)')
     return "\n".join(lines)
+
+
+def _grouped(label: str) -> str:
+    """'= 15', 'in [10, 28)', '= inf (never)' for a group's label."""
+    if label.startswith(("[", "<", ">")):
+        return ("in " if label.startswith("[") else "") + label
+    return f"= {label}" + (" (never)" if label == "inf" else "")
 
 
 COMMANDS = {"campaign": main}

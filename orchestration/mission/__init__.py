@@ -15,6 +15,8 @@
   pointing requirements (:class:`Pointing`), and the protocol any requirement follows.
 - :func:`lines`, :func:`panels`: figures for a report (:mod:`..output.plots`).
 - :func:`deg`, :func:`arcsec`, :class:`Quantity`: values with units.
+- :func:`timeline` of :func:`inertial`, :func:`nadir`, :func:`stare` segments
+  (:mod:`.timeline`): SlewGuidance's segment table.
 """
 
 from ..output.plots import lines, panels
@@ -33,6 +35,7 @@ from .requirements import (
 from .scenario import Scenario, SignalBound, Variant
 from .system import System
 from .targets import resolve
+from .timeline import inertial, nadir, stare, timeline
 
 __all__ = [
     "Bound",
@@ -50,9 +53,13 @@ __all__ = [
     "at_least",
     "at_most",
     "deg",
+    "inertial",
     "lines",
     "metrics",
+    "nadir",
     "panels",
     "resolve",
+    "stare",
+    "timeline",
     "within",
 ]

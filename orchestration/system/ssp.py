@@ -579,9 +579,10 @@ def _write_component(
 
 def _text(value: ParameterValue) -> str:
     """A typed parameter value as SSV writes it (a Real by ``repr``: it reads back the
-    same)."""
+    same; an infinite one as xs:double spells it, INF or -INF)."""
     if value.type == "Real":
-        return repr(float(value.value))  # type: ignore[arg-type]
+        x = float(value.value)  # type: ignore[arg-type]
+        return repr(x) if math.isfinite(x) else "INF" if x > 0 else "-INF"
     if value.type == "Integer":
         return str(int(value.value))  # type: ignore[call-overload]
     if value.type == "Boolean":

@@ -178,7 +178,7 @@ def test_dipole_torque_is_m_cross_b_of_the_igrf_dipole(lat, lon, earth_angle):
     model.start(0.0)
     B_E = igrf_dipole_field(r_E, p.igrf_g10, p.igrf_g11, p.igrf_h11)
     B_B = dcm_from_quat(q) @ rot3(earth_angle).T @ B_E
-    assert model.get("mag_field_B") == pytest.approx(B_B, rel=1e-7, abs=1e-13)
+    assert model.get("b_B") == pytest.approx(B_B, rel=1e-7, abs=1e-13)
     assert model.get("tau_mag_B") == pytest.approx(np.cross(p.dipole_B, B_B), rel=1e-7, abs=1e-15)
     assert model.get("tau_ext_B").tolist() == model.get("tau_mag_B").tolist()
 
@@ -191,7 +191,7 @@ def test_the_dipole_field_is_about_30_microtesla_at_the_surface_equator():
     g = np.array([p.igrf_g11, p.igrf_h11, p.igrf_g10])
     equator = np.cross(g, [0.0, 1.0, 0.0])
     model.set("r_I", 6371200.0 * equator / np.linalg.norm(equator))
-    field = model.start(0.0).get("mag_field_B")
+    field = model.start(0.0).get("b_B")
     assert np.linalg.norm(field) == pytest.approx(np.linalg.norm(g), rel=1e-12)
     assert np.linalg.norm(g) == pytest.approx(29.8e-6, rel=1e-3)
 

@@ -58,10 +58,16 @@ def random_run(model, steps: int, seed: int, scale: float, inputs=None, rates=No
 
 
 def unit_quaternions(seed: int, scale: float):
-    """Random inputs in (−scale, scale), the quaternions made unit (a function of k)."""
+    """Random inputs in (−scale, scale), the quaternions made unit (a function of k); an
+    Integer input (a controller's mode) a whole number 0 to 7, a Boolean one (a gimbal's
+    health) mostly true."""
 
     def inputs(k, v):
         rng = np.random.default_rng([seed, k, sum(map(ord, v.name))])
+        if v.type == "Integer":
+            return rng.integers(0, 8, size=v.size).astype(float)
+        if v.type == "Boolean":
+            return (rng.random(size=v.size) < 0.8).astype(float)
         x = rng.uniform(-scale, scale, size=v.size)
         return x / np.linalg.norm(x) if v.name.startswith("q_") else x
 

@@ -3,8 +3,9 @@ with exactly the inputs its modelDescription.xml declares as dependencies.
 
 Each model runs in-process behind its FMU wrapper (``ModelSlave``), addressed by the value
 references of the built FMU's modelDescription.xml.  After one step from a generic operating
-point, each input variable is perturbed in turn and the outputs are read again at the same
-time: an output that moves depends on that input, one that stays does not.
+point, each input variable is perturbed in turn (a Real one slightly, an Integer one by one,
+a Boolean one flipped) and the outputs are read again at the same time: an output that
+moves depends on that input, one that stays does not.
 """
 
 import re
@@ -23,8 +24,16 @@ PATHS_ON = {
     "AttitudeController": {
         "acceleration_feedforward": [True],  # tau <- dw_ref
         **{f"inertia[{i},{i}]": [150.0] for i in (1, 2, 3)},
+        "kp_modes[2,1]": [10.0],  # mode 1 has its own gains (bumpless: CONSERVATIVE)
     },
     "StaringGuidance": {"yaw_compensation": [False]},  # q_ref <- q_OI after the capture
+    # a slew from nadir into a stare (at lat 0, lon 0) under way at t = STEP
+    "SlewGuidance": {
+        "segment_count": [2],
+        "segment_kind[1]": [2],
+        "segment_kind[2]": [3],
+        "segment_start[2]": [STEP / 2],
+    },
     "StarTracker": {"latency": [0.0], "rate": [10.0]},  # a sample at t = STEP, released
     "Gyro": {"quantization": [0.0]},  # a perturbation far below one LSB moves nothing
 }
@@ -38,6 +47,12 @@ CONSERVATIVE = {
         for out in ("q_ref", "euler_ref_BO", "footprint_rotation")
         for v in ("v_I", "v_T_I")
     },
+    # a change of mode is bumpless: the command stays where it was at that instant (the
+    # declaration keeps a master from reading it before the mode is set)
+    "AttitudeController": {("tau_cmd", "mode")},
+    # the orbit frame's rate enters a slew's attitude only through its plan (the limits'
+    # margins, none at this point)
+    "SlewGuidance": {("q_ref", "w_OI_O")},
     # the rate turns the attitude only of the samples before t0
     "StarTracker": {("q_BI_meas", "w_BI_B")},
     # the position switches the solar pressure only on entering or leaving the shadow
@@ -103,6 +118,16 @@ def test_outputs_move_with_exactly_the_declared_inputs(fmus, name):
         measured |= {(base_name(out), var) for out, m in zip(outputs, moved) if m}
         fmu.set_real([vr[n] for n in scalars[var]], value.tolist())
         assert np.array_equal(read_outputs(), reference)  # back where it was
+    for scalar in (u.name for u in md.modelVariables if u.causality == "input"):
+        kind = variables[scalar].type  # an Integer input one up, a Boolean one flipped
+        if kind != "Real":
+            get, set_ = getattr(fmu, _GET[kind]), getattr(fmu, _SET[kind])
+            value = get([vr[scalar]])[0]
+            set_([vr[scalar]], [not value if kind == "Boolean" else value + 1])
+            moved = read_outputs() != reference
+            measured |= {(base_name(out), base_name(scalar)) for out, m in zip(outputs, moved) if m}
+            set_([vr[scalar]], [value])
+            assert np.array_equal(read_outputs(), reference)
     assert logged(fmu) == []
     assert measured - declared == set(), "feedthrough not declared in modelDescription.xml"
     # a small perturbation moves a Boolean or Integer output only at a threshold

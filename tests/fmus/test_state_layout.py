@@ -159,7 +159,7 @@ def test_an_estimator_whose_records_would_overflow_raises_instead_of_writing_pas
 @pytest.mark.parametrize(
     "variable, value, message",
     [
-        ("h_rotor", np.nan, "parameter h_rotor is nan, not a finite Real"),
+        ("h_rotor", np.nan, "parameter h_rotor is nan, not a number"),
         ("warnings_return_ok", 0.5, "warnings_return_ok is 0.5, not a Boolean"),
         ("delta_dot_cmd[2]", np.inf, "input delta_dot_cmd[2] is inf"),
     ],

@@ -8,7 +8,9 @@ Each run is the scenario's system at its own step, to its own stop time (or T); 
 comparison prints, per run, "bit-identical" or the largest relative difference
 |a - b| / (the largest |value| of that column in either run) over every recorded output
 and time (so a sign flip of a value near zero is not a difference of 2), and exits 1 if a run's
-columns or rows differ, or if any difference exceeds --rtol (default 0: bit for bit).
+rows differ, a baseline column is missing, or any difference exceeds --rtol (default 0: bit
+for bit).  Outputs a change added (new columns) are listed and not compared; a renamed
+output is compared under its new name with ``--renamed Instance.old=Instance.new``.
 """
 
 from __future__ import annotations
@@ -41,7 +43,9 @@ def main(argv=None) -> int:
     parser.add_argument("dir", type=Path)
     parser.add_argument("--stop", type=float, default=None)
     parser.add_argument("--rtol", type=float, default=0.0)
+    parser.add_argument("--renamed", action="append", default=[], metavar="OLD=NEW")
     args = parser.parse_args(argv)
+    renamed = dict(pair.split("=", 1) for pair in args.renamed)
     args.dir.mkdir(parents=True, exist_ok=True)
     worst = 0.0
     failed = False
@@ -56,22 +60,34 @@ def main(argv=None) -> int:
             print(f"{label:32s} saved {data.shape}")
             continue
         old = np.load(path)
-        if old["names"].tolist() != names.tolist() or old["data"].shape != data.shape:
-            print(f"{label:32s} DIFFERENT columns or rows: {old['data'].shape} -> {data.shape}")
+        old_names = [_renamed(name, renamed) for name in old["names"].tolist()]
+        column = {name: j for j, name in enumerate(names.tolist())}
+        missing = [name for name in old_names if name not in column]
+        added = sorted(set(column) - set(old_names))
+        if missing or old["data"].shape[0] != data.shape[0]:
+            print(f"{label:32s} DIFFERENT rows or missing columns {missing[:5]}")
             failed = True
             continue
-        if np.array_equal(old["data"], data):
-            print(f"{label:32s} bit-identical")
+        new = data[:, [column[name] for name in old_names]]
+        note = f" (added, not compared: {', '.join(added)})" if added else ""
+        if np.array_equal(old["data"], new):
+            print(f"{label:32s} bit-identical{note}")
             continue
-        scale = np.maximum(abs(old["data"]).max(axis=0), abs(data).max(axis=0))
+        scale = np.maximum(abs(old["data"]).max(axis=0), abs(new).max(axis=0))
         scale[scale == 0] = 1.0
-        rel = abs(old["data"] - data) / scale
+        rel = abs(old["data"] - new) / scale
         i, j = np.unravel_index(np.argmax(rel), rel.shape)
         worst = max(worst, rel[i, j])
-        print(f"{label:32s} max relative difference {rel[i, j]:.3g} ({names[j]}, row {i})")
+        print(f"{label:32s} max relative difference {rel[i, j]:.3g} ({old_names[j]}, row {i})")
     if args.mode == "compare":
         print(f"worst relative difference {worst:.3g} (tolerance {args.rtol:g})")
     return 1 if failed or worst > args.rtol else 0
+
+
+def _renamed(name: str, renamed: dict) -> str:
+    """``name`` (a column, ``Instance.var[i]``) under the new name of its variable."""
+    base, bracket, index = name.partition("[")
+    return renamed.get(base, base) + bracket + index
 
 
 if __name__ == "__main__":

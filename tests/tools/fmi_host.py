@@ -75,7 +75,7 @@ class Fmu:
 def orbit_geometry(k):
     """A consistent orbit geometry, changing with k: an equatorial circular orbit at angle
     0.01 k, its orbit frame q_OI (DESIGN.md §2: z = −r̂, y = −ĥ), a target below it on an
-    Earth turning at 7.292e-5 rad/s."""
+    Earth turning at 7.292e-5 rad/s, a geomagnetic field of 30 µT turning with it."""
     a, mu, earth_rate, radius = 6.945e6, 3.986004418e14, 7.292115e-5, 6.378e6
     u = 0.01 * k
     c, s = math.cos(u), math.sin(u)
@@ -94,6 +94,7 @@ def orbit_geometry(k):
         "q_OI": q,
         "r_T_I": [radius * c, radius * s, 1.0e5],
         "v_T_I": [-earth_rate * radius * s, earth_rate * radius * c, 0.0],
+        "b_B": [1.5e-5 * c, 1.5e-5 * s, -2.6e-5],
     }
 
 
