@@ -56,7 +56,8 @@ class Recorder:
                 _checked(old, partial(old.unlink, missing_ok=True))
             header = (",".join(map(_csv_field, self.columns)) + "\n").encode()
             self.csv = _File(self.out_dir / "results.csv", header)
-            self.raw = _File(self.out_dir / RAW, b"")
+            # its errors name the file a person knows: results.csv, whose rows it holds
+            self.raw = _File(self.out_dir / RAW, b"", self.out_dir / "results.csv")
             self._files = [self.raw, self.csv]
 
     def append(self, row: np.ndarray) -> None:
@@ -143,10 +144,12 @@ class Recorder:
 
 
 class _File:
-    """An append-only file written in whole records with os.write."""
+    """An append-only file written in whole records with os.write; its errors name
+    ``said`` (default ``path``), and ``path`` after it if they differ."""
 
-    def __init__(self, path: Path, header: bytes):
+    def __init__(self, path: Path, header: bytes, said: Path | None = None):
         self.path = path
+        self.said = said or path
         self.fd = _checked(
             path, lambda: os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         )
@@ -162,8 +165,9 @@ class _File:
                 view = view[os.write(self.fd, view) :]
         except OSError as exc:
             self.truncate()
+            also = "" if self.said == self.path else f" (writing its rows to {self.path.name})"
             raise file_error(
-                self.path, exc, f"; kept the {rows} complete rows written before"
+                self.said, exc, f"{also}; kept the {rows} complete rows written before"
             ) from None
 
     def commit(self) -> None:

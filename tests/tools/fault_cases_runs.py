@@ -349,7 +349,7 @@ def killed_run_leftovers():
 
 def unwritable_out():
     """--out on a read-only file system (a directory to make, and one that exists), and on
-    a full one (a 400 KiB tmpfs: the figures fill it)."""
+    a full one (a 640 KiB tmpfs, its records fit: the figures fill it)."""
     if os.geteuid() != 0:
         return _case(
             "a read-only and a full --out",
@@ -362,7 +362,7 @@ def unwritable_out():
     with tempfile.TemporaryDirectory() as tmp:
         mount = Path(tmp) / "small"
         mount.mkdir()
-        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(mount)], check=True)
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=640k", "tmpfs", str(mount)], check=True)
         try:
             (mount / "exists").mkdir()
             subprocess.run(["mount", "-o", "remount,ro", str(mount)], check=True)
@@ -418,7 +418,7 @@ def unwritable_out():
             subprocess.run(["umount", str(mount)], check=True)
     return _case(
         "`agilesat run` and `agilesat campaign` on a read-only --out (one to make, one that "
-        "exists); `agilesat run scan_pitch` whose figures fill its --out (400 KiB)",
+        "exists); `agilesat run scan_pitch` whose figures fill its --out (640 KiB)",
         "exit 1 naming the directory or file and the reason (no bare OS error, no .partial "
         "name); a figure that does not fit is not left half-written",
         "; ".join(observed),
