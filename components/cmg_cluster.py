@@ -18,9 +18,18 @@ command a host interpolates with its derivative ċ (FMI 2.0 input derivatives,
 components/model.py), c + ċ s, is followed in closed form too, piece by piece between the
 moments the rate reaches the target or the command crosses a limit (:func:`servo_ramp`).
 
+Rotor microvibration (DESIGN.md §3.2, components/imbalance.py): rotor i spins at
+``rotor_speed`` Ω about σ_i with static and dynamic imbalance U_s,i, U_d,i, centred at
+``rotor_position_B`` r_i, at angle φ_i = ``imbalance_phase0``_i + Ω t from its gimbal axis
+g_i (u_i = g_i, v_i = σ_i × g_i; the gimbal carries them: ν_i = δ̇_i g_i).  The cluster
+outputs the sums ``f_jitter_B`` = Σ U_s Ω² e_i, ``tau_jitter_B`` = Σ (U_d Ω² e_i + r_i × F_i)
+and the imbalances' momentum ``h_jitter_B`` with its rate ``hdot_jitter_B``, all at the one
+frequency ``jitter_frequency`` = Ω: a hub row for them (SatelliteDynamics ``h_extra``,
+``h_extra_frequency``).  All zero without imbalance.
+
 Output derivatives at the current time: δ̇; δ̈ (±accel_limit toward the target, or the
 target's own slope once on it); ḣ; ḧ = h_rotor Σ (a_i δ̈_i − σ_i δ̇_i²) (ȧ_i = −σ_i δ̇_i);
-Q̇ = tr(adj(A Aᵀ) d(A Aᵀ)/dt).
+Q̇ = tr(adj(A Aᵀ) d(A Aᵀ)/dt); the jitter's Ḟ, τ̇, ḣ_u, ḧ_u (components/imbalance.py).
 
 Faults (DESIGN.md §3.2): gyro i's gimbal locks at ``fail_time[i]`` (inf: never) at the
 angle it has then — the step that contains the time moves it until then — and holds it;
@@ -41,8 +50,9 @@ import math
 
 import numpy as np
 
+from .imbalance import rotor_imbalance
 from .model import Model, ModelError
-from .runtime.flat import state_table
+from .runtime.flat import put, state_table
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
 from .vectors import (
@@ -58,6 +68,8 @@ from .vectors import (
 )
 
 N_GYROS = 6
+#: rad/s: 6000 rpm, the speed of the Honeywell HR12 class of wheels (components/flywheel.py)
+ROTOR_SPEED = 200.0 * math.pi
 PYRAMID_HALF_ANGLE = math.radians(63.4)  # α0
 PYRAMID_AZIMUTHS = np.radians([90.0, 162.0, 234.0, 306.0, 18.0])
 
@@ -291,6 +303,28 @@ class CmgCluster(Model):
             "time each gimbal locks at its angle (inf: never)",
             shape=(N_GYROS,),
         ),
+        parameter(
+            "static_imbalance", 0.0, "kg.m", "static imbalance U_s of each rotor", shape=(6,)
+        ),
+        parameter(
+            "dynamic_imbalance", 0.0, "kg.m2", "dynamic imbalance U_d of each rotor", shape=(6,)
+        ),
+        parameter(
+            "rotor_position_B",
+            0.0,
+            "m",
+            "centre of each rotor from the centre of mass, in B (rows)",
+            shape=(6, 3),
+        ),
+        parameter("rotor_speed", ROTOR_SPEED, "rad/s", "rotor spin rate", display_unit="rpm"),
+        parameter(
+            "imbalance_phase0",
+            0.0,
+            "rad",
+            "angle of each rotor's imbalance from its gimbal axis at t = 0",
+            shape=(6,),
+            display_unit="deg",
+        ),
         input_(
             "delta_dot_cmd", "rad/s", "commanded gimbal rates", shape=(6,), display_unit="deg/s"
         ),
@@ -302,6 +336,27 @@ class CmgCluster(Model):
         output(
             "healthy", "1", "each gimbal is free (not locked)", shape=(N_GYROS,), type="Boolean"
         ),
+        output("f_jitter_B", "N", "force of the rotors' imbalances on the body, in B", shape=(3,)),
+        output(
+            "tau_jitter_B",
+            "N.m",
+            "torque of the rotors' imbalances on the body about the centre of mass, in B",
+            shape=(3,),
+        ),
+        output(
+            "h_jitter_B",
+            "N.m.s",
+            "angular momentum of the rotors' imbalances relative to the body, in B",
+            shape=(3,),
+        ),
+        output(
+            "hdot_jitter_B",
+            "N.m",
+            "time derivative of h_jitter_B as seen in B",
+            shape=(3,),
+            derivative_of="h_jitter_B",
+        ),
+        output("jitter_frequency", "rad/s", "frequency of the jitter outputs (the rotor speed)"),
     )
 
     def initialize(self, t0):
@@ -322,6 +377,14 @@ class CmgCluster(Model):
         if np.any(np.isnan(p.fail_time)):
             raise ModelError(f"fail_time must be a time or inf, got {p.fail_time.tolist()}")
         self.state[S.fail : S.fail + N_GYROS] = p.fail_time
+        if np.any(p.static_imbalance != 0.0) or np.any(p.dynamic_imbalance != 0.0):
+            self.state[S.jitter] = 1.0
+            put(self.state, S.us, p.static_imbalance)
+            put(self.state, S.ud, p.dynamic_imbalance)
+            put(self.state, S.r, p.rotor_position_B.reshape(-1))
+            put(self.state, S.phase0, p.imbalance_phase0)
+            put(self.state, S.g, self.geometry.G.reshape(-1))
+        self.state[S.speed] = p.rotor_speed
         self.t = t0
 
     def step(self, t, dt):
@@ -341,7 +404,7 @@ class CmgCluster(Model):
     def output_derivatives(self):
         """See the module docstring: d/dt of δ, δ̇, h, ḣ and Q at ``self.t``
         (:func:`cluster_rates`, on the kernels' own functions)."""
-        return np.array(cluster_rates(self.values.tolist(), self.state.tolist()))
+        return np.array(cluster_rates(self.values.tolist(), self.state.tolist(), self.t))
 
 
 # -- kernels (components/runtime/jit.py) ----------------------------------------------
@@ -349,10 +412,12 @@ P, U, Y = CmgCluster.names()
 DU, _ = CmgCluster.derivative_names()  # DU.delta_dot_cmd: the command's slope a host set
 #: the state array: δ and δ̇, the constants, s_i and t_i of each gyro (ClusterGeometry.st),
 #: 1 while a rate command exceeds the rate limit (saturated); the gimbals' fail times before
-#: the axes
+#: the axes; for the rotors' imbalance: Ω, 1 if any, and (read only then) U_s, U_d, r (rows),
+#: φ0 and the gimbal axes
 S = state_table(
     "CmgCluster state", delta=N_GYROS, rate=N_GYROS, rate_limit=1, accel_limit=1, h_rotor=1,
-    fail=N_GYROS, st=6 * N_GYROS, saturated=1,
+    fail=N_GYROS, speed=1, jitter=1, st=6 * N_GYROS, saturated=1, us=N_GYROS, ud=N_GYROS,
+    r=3 * N_GYROS, phase0=N_GYROS, g=3 * N_GYROS,
 )  # fmt: skip
 
 
@@ -397,7 +462,7 @@ def cluster_step(values, state, t, dt):
 @output_kernel(CmgCluster)
 def cluster_output(values, state, t):
     """δ, δ̇, h = h_rotor Σ σ_i, hdot = h_rotor Σ a_i δ̇_i and Q = det(A Aᵀ) (module doc)."""
-    s = floats(state)
+    s = floats(state[: S.us])
     delta, rates = s[S.delta : S.delta + N_GYROS], s[S.rate : S.rate + N_GYROS]
     spins, columns = axes(delta, s[S.st : S.st + 6 * N_GYROS])
     h = total(spins)
@@ -411,7 +476,31 @@ def cluster_output(values, state, t):
         values[Y.healthy + i] = 1.0 if t < s[S.fail + i] else 0.0
     free = healthy_columns(columns, values[Y.healthy : Y.healthy + N_GYROS])
     values[Y.singularity] = det3(gram(free))
+    values[Y.jitter_frequency] = s[S.speed]
+    if s[S.jitter] != 0.0:
+        jitter = _jitter(floats(state), t, spins, rates, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+        for k in range(3):
+            values[Y.f_jitter_B + k], values[Y.tau_jitter_B + k] = jitter[3][k], jitter[5][k]
+            values[Y.h_jitter_B + k], values[Y.hdot_jitter_B + k] = jitter[0][k], jitter[1][k]
     return 0
+
+
+@jitable
+def _jitter(s, t, spins, rates, accels) -> list:
+    """Σ over the rotors of :func:`.imbalance.rotor_imbalance` (h_u, ḣ_u, ḧ_u, F, Ḟ, τ, τ̇)
+    at time t, the gimbals at spins σ_i, rates δ̇_i and accelerations δ̈_i."""
+    speed = s[S.speed]
+    sums = [(0.0, 0.0, 0.0) for _ in range(7)]
+    for i in range(N_GYROS):
+        g = (s[S.g + 3 * i], s[S.g + 3 * i + 1], s[S.g + 3 * i + 2])
+        r = (s[S.r + 3 * i], s[S.r + 3 * i + 1], s[S.r + 3 * i + 2])
+        parts = rotor_imbalance(
+            s[S.us + i], s[S.ud + i], r, spins[i], g, speed, 0.0, s[S.phase0 + i] + speed * t,
+            scale(rates[i], g), scale(accels[i], g),
+        )  # fmt: skip
+        for k in range(7):
+            sums[k] = add(sums[k], parts[k])
+    return sums
 
 
 @jitable
@@ -421,11 +510,12 @@ def healthy_columns(columns, healthy) -> list:
 
 
 @jitable
-def cluster_rates(v, s) -> list:
-    """d/dt of the outputs δ, δ̇, h, ḣ, Q and healthy at the model's time, in the table's order
-    (module docstring): δ̇; δ̈ (:func:`servo_accel`); ḣ as :func:`cluster_output` wrote it;
+def cluster_rates(v, s, t) -> list:
+    """d/dt of the outputs at the model's time ``t``, in the table's order (module
+    docstring): δ̇; δ̈ (:func:`servo_accel`); ḣ as :func:`cluster_output` wrote it;
     ḧ = h_rotor Σ (a_i δ̈_i + ȧ_i δ̇_i) with ȧ_i = −σ_i δ̇_i; Q̇ = tr(adj(G) Ġ) with
-    G = Σ a_i a_iᵀ, the Gram matrix of Q = det G, and Ġ = Σ (ȧ_i a_iᵀ + a_i ȧ_iᵀ)."""
+    G = Σ a_i a_iᵀ, the Gram matrix of Q = det G, and Ġ = Σ (ȧ_i a_iᵀ + a_i ȧ_iᵀ); the
+    jitter's Ḟ, τ̇, ḣ_u and ḧ_u (:func:`_jitter`), and 0 for its constant frequency."""
     rates = s[S.rate : S.rate + N_GYROS]
     limit, accel, h_rotor = s[S.rate_limit], s[S.accel_limit], s[S.h_rotor]
     accels = [
@@ -447,4 +537,10 @@ def cluster_rates(v, s) -> list:
     gram_dot = mat_add(outer_sum(a_dots, free), outer_sum(free, a_dots))
     q_dot = trace_product(adjugate(gram(free)), gram_dot)
     hdot = (v[Y.hdot], v[Y.hdot + 1], v[Y.hdot + 2])
-    return [*rates, *accels, *hdot, *hddot, q_dot, *[0.0] * N_GYROS]  # healthy: held
+    jitter = [(0.0, 0.0, 0.0) for _ in range(7)]
+    if s[S.jitter] != 0.0:
+        jitter = _jitter(s, t, spins, rates, accels)
+    return [
+        *rates, *accels, *hdot, *hddot, q_dot, *[0.0] * N_GYROS,  # healthy: held
+        *jitter[4], *jitter[6], *jitter[1], *jitter[2], 0.0,
+    ]  # fmt: skip

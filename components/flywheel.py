@@ -52,6 +52,17 @@ between zero crossings; zero for a wheel at rest or held), and zero for the moto
 (held over the step).  The inputs are sampled by the drive at communication points, not
 integrated: the model does not interpolate them (no canInterpolateInputs).
 
+Rotor microvibration (DESIGN.md §3.2, components/imbalance.py): wheel i with static and
+dynamic imbalance U_s,i, U_d,i, centred at ``rotor_position_B`` r_i, turns its imbalance
+through φ_i = ``imbalance_phase0``_i + ∫ Ω_i dt (the trapezoidal rule over each step: exact
+at constant acceleration; a wheel stopping within a step is off by less than Ω̇ dt² / 8)
+from its reference direction u_i (:func:`.imbalance.reference_direction`: y for a wheel on
+x, x for one on y or z), e_i = u_i cos φ_i + (a_i × u_i) sin φ_i.  The assembly outputs the
+sums ``f_jitter_B`` = Σ U_s Ω_i² e_i and ``tau_jitter_B`` = Σ (U_d Ω_i² e_i + r_i × F_i),
+and each wheel's imbalance momentum as a row of ``h_jitter_B`` with its rate (at Ω_i: the
+``speed`` output) for a hub row each (SatelliteDynamics ``h_extra``, ``h_extra_frequency``).
+All zero without imbalance.
+
 Default wheel: Honeywell HR12 (Constellation series, 12 N·m·s option), the 0.2 N·m class
 of [Chang 2015]: 0.2 N·m, 12 N·m·s at 6000 rpm, so J_w = 12 / (200π) = 0.0191 kg·m²; Coulomb
 friction 0.5 mN·m (the figure Basilisk's ``simIncludeRW.Honeywell_HR12`` uses); viscous
@@ -65,10 +76,12 @@ import math
 
 import numpy as np
 
+from .imbalance import reference_direction, rotor_imbalance
 from .model import Model, ModelError
-from .runtime.flat import state_table
+from .runtime.flat import put, relative, state_table
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
 from .variables import input_, output, parameter
+from .vectors import total
 
 N_WHEELS = 4
 RPM = 2.0 * math.pi / 60.0
@@ -187,6 +200,35 @@ class Flywheel(Model):
             "time each wheel's friction becomes friction_factor times the nominal (inf: never)",
             shape=(N_WHEELS,),
         ),
+        parameter(
+            "static_imbalance",
+            0.0,
+            "kg.m",
+            "static imbalance U_s of each wheel",
+            shape=(N_WHEELS,),
+        ),
+        parameter(
+            "dynamic_imbalance",
+            0.0,
+            "kg.m2",
+            "dynamic imbalance U_d of each wheel",
+            shape=(N_WHEELS,),
+        ),
+        parameter(
+            "rotor_position_B",
+            0.0,
+            "m",
+            "centre of each wheel from the centre of mass, in B (rows)",
+            shape=(N_WHEELS, 3),
+        ),
+        parameter(
+            "imbalance_phase0",
+            0.0,
+            "rad",
+            "angle of each wheel's imbalance from its reference direction at t = 0",
+            shape=(N_WHEELS,),
+            display_unit="deg",
+        ),
         input_("tau_cmd", "N.m", "torque wanted on the body, in B", shape=(3,)),
         input_(
             "w_BI_B",
@@ -224,6 +266,27 @@ class Flywheel(Model):
             "a motor torque is clipped or a wheel is held at the momentum limit",
             type="Boolean",
             depends=_INPUTS,
+        ),
+        output("f_jitter_B", "N", "force of the wheels' imbalances on the body, in B", shape=(3,)),
+        output(
+            "tau_jitter_B",
+            "N.m",
+            "torque of the wheels' imbalances on the body about the centre of mass, in B",
+            shape=(3,),
+        ),
+        output(
+            "h_jitter_B",
+            "N.m.s",
+            "angular momentum of each wheel's imbalance relative to the body, in B (rows)",
+            shape=(N_WHEELS, 3),
+        ),
+        output(
+            "hdot_jitter_B",
+            "N.m",
+            "time derivative of h_jitter_B as seen in B",
+            shape=(N_WHEELS, 3),
+            depends=_INPUTS,
+            derivative_of="h_jitter_B",
         ),
     )
 
@@ -273,6 +336,13 @@ class Flywheel(Model):
         state[S.fail : S.fail + n] = [p.fail_time[i] for i in self.wheels]
         state[S.factor : S.factor + n] = [p.friction_factor[i] for i in self.wheels]
         state[S.change : S.change + n] = [p.friction_change_time[i] for i in self.wheels]
+        if np.any(p.static_imbalance != 0.0) or np.any(p.dynamic_imbalance != 0.0):
+            state[S.jitter] = 1.0
+            for k, i in enumerate(self.wheels):
+                state[S.us + k], state[S.ud + k] = p.static_imbalance[i], p.dynamic_imbalance[i]
+                state[S.angle + k] = p.imbalance_phase0[i]
+                put(state, S.r + 3 * k, p.rotor_position_B[i])
+                put(state, S.u + 3 * k, reference_direction(A[:, k].tolist()))
         self.t = t0
 
     def step(self, t, dt):
@@ -294,21 +364,38 @@ class Flywheel(Model):
     @classmethod
     def state_problem(cls, attributes, reference):
         """The kernels index the value array with the wheels' places: the rows before the
-        speeds are those the parameters make."""
-        if not np.array_equal(attributes["state"][: S.omega], reference["state"][: S.omega]):
-            return "wheel constants (places, axes, distribution) are not its parameters'"
+        speeds (places, axes, constants, imbalances) are those the parameters make."""
+        rows = np.r_[0 : S.omega, S.us : S.size]
+        if not np.array_equal(attributes["state"][rows], reference["state"][rows]):
+            return (
+                "wheel constants (places, axes, distribution, imbalances) are not its parameters'"
+            )
         return ""
 
     def output_derivatives(self):
         """See the module docstring: d/dt of h, ḣ, the speeds and motor torques now."""
         s = self.state
-        _, accel_torques, _, _, _ = _drive(self.values.tolist(), s.tolist(), self.t)
+        inputs = self.values[U.tau_cmd : U.w_BI_B + 3].tolist()
+        _, accel_torques, _, _, _ = _drive(inputs, s.tolist(), self.t)
         speed_rate = [0.0] * N_WHEELS
         for k in range(int(s[S.n])):
             speed_rate[int(s[S.wheel + k])] = accel_torques[k] / s[S.inertia]
         hdot = self.y.hdot.tolist()
         k = s[S.viscous] / s[S.inertia]  # nominal friction: ḧ's viscous decay
-        return np.array([*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0])
+        jitter = np.zeros((2, N_WHEELS, 3))
+        forces = np.zeros((2, 3))
+        if s[S.jitter] != 0.0:
+            rows = _jitter(s.tolist(), accel_torques)
+            for k_, row in enumerate(rows):
+                jitter[:, int(s[S.wheel + k_])] = row[1], row[2]
+            forces[:] = (
+                np.sum([row[4] for row in rows], axis=0),
+                np.sum([row[6] for row in rows], axis=0),
+            )
+        return np.array(
+            [*hdot, *(-k * x for x in hdot), *speed_rate, *[0.0] * N_WHEELS, 0.0,
+             *forces.reshape(-1), *jitter.reshape(-1)]
+        )  # fmt: skip
 
 
 # -- kernels (components/runtime/jit.py) ----------------------------------------------
@@ -319,11 +406,16 @@ P, U, Y = Flywheel.names()
 #: wheels' constants, each wheel's fail time, friction factor and its time,
 #: their speeds Ω and, per wheel, 1 while it is held at the momentum limit and 1 while its
 #: motor torque is at the limit (_LIMITS)
+#: and, for the wheels' imbalance: 1 if any, the angle φ of each wheel and (read only then)
+#: its U_s, U_d, r and u (rows)
 S = state_table(
     "Flywheel state", n=1, wheel=N_WHEELS, axes=3 * N_WHEELS, distribution=3 * N_WHEELS,
     inertia=1, viscous=1, coulomb=1, torque_limit=1, speed_limit=1, fail=N_WHEELS,
-    factor=N_WHEELS, change=N_WHEELS, omega=N_WHEELS, limited=2 * N_WHEELS,
+    factor=N_WHEELS, change=N_WHEELS, jitter=1, omega=N_WHEELS, limited=2 * N_WHEELS,
+    angle=N_WHEELS, us=N_WHEELS, ud=N_WHEELS, r=3 * N_WHEELS, u=3 * N_WHEELS,
 )  # fmt: skip
+#: the inputs' places in the slice of them the kernels read (tau_cmd, w_BI_B)
+UI = relative(U, U.tau_cmd)
 _LIMITS = ("held at the momentum limit", "motor torque at the limit")
 #: flywheel_step's status: a wheel reached a limit (step() warns)
 NEW_LIMIT = 1
@@ -351,7 +443,7 @@ def _momentum(s) -> tuple:
 
 
 @jitable
-def _drive(v, s, t: float):
+def _drive(u, s, t: float):
     """(motor torques m_i, J Ω̇_i at the communication point, held, at the momentum limit,
     at the torque limit), per wheel, at time t.
 
@@ -359,8 +451,8 @@ def _drive(v, s, t: float):
     ḣ_req = −τ_cmd − w × h; :func:`_wheel` applies its friction and limits (and its
     faults at t).
     """
-    tx, ty, tz = v[U.tau_cmd], v[U.tau_cmd + 1], v[U.tau_cmd + 2]
-    wx, wy, wz = v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2]
+    tx, ty, tz = u[UI.tau_cmd], u[UI.tau_cmd + 1], u[UI.tau_cmd + 2]
+    wx, wy, wz = u[UI.w_BI_B], u[UI.w_BI_B + 1], u[UI.w_BI_B + 2]
     hx, hy, hz = _momentum(s)
     rx = -tx - (wy * hz - wz * hy)  # hdot_req = −τ_cmd − w × h
     ry = -ty - (wz * hx - wx * hz)
@@ -442,8 +534,8 @@ def _net(m: float, w: float, cv: float, cc: float) -> float:
 def flywheel_step(values, state, t, dt):
     """Each wheel over ``dt`` with its motor torque held (:func:`wheel_step`; a held wheel
     keeps its speed); returns NEW_LIMIT when a wheel reaches a limit it was not at."""
-    v, s = floats(values), floats(state)
-    torques, _, held, momentum, torque = _drive(v, s, t)
+    u, s = floats(values[U.tau_cmd : U.w_BI_B + 3]), floats(state[: S.us])
+    torques, _, held, momentum, torque = _drive(u, s, t)
     status = 0
     J, cv, cc, speed_max = s[S.inertia], s[S.viscous], s[S.coulomb], s[S.speed_limit]
     for k in range(int(s[S.n])):
@@ -452,17 +544,21 @@ def flywheel_step(values, state, t, dt):
             if limited and s[at] == 0.0:
                 status = NEW_LIMIT
             state[at] = 1.0 if limited else 0.0
+        at = S.omega + k
+        before = s[at]  # (compiled, s is state itself)
         if not held[k]:
-            at, f = S.omega + k, friction(s, k, t)
-            state[at] = wheel_step(s[at], torques[k], dt, J, f * cv, f * cc, speed_max)
+            f = friction(s, k, t)
+            state[at] = wheel_step(before, torques[k], dt, J, f * cv, f * cc, speed_max)
+        if s[S.jitter] != 0.0:  # the trapezoidal rule (module docstring)
+            state[S.angle + k] = s[S.angle + k] + 0.5 * (before + state[at]) * dt
     return status
 
 
 @output_kernel(Flywheel)
 def flywheel_output(values, state, t):
     """h, ḣ, the speeds and motor torques (at the wheels' places) and whether saturated."""
-    v, s = floats(values), floats(state)
-    torques, net, _, momentum, torque = _drive(v, s, t)
+    u, s = floats(values[U.tau_cmd : U.w_BI_B + 3]), floats(state[: S.us])
+    torques, net, _, momentum, torque = _drive(u, s, t)
     h = _momentum(s)
     hdot = _along_axes(s, net)
     saturated = False
@@ -476,4 +572,32 @@ def flywheel_output(values, state, t):
     for k in range(3):
         values[Y.h + k], values[Y.hdot + k] = h[k], hdot[k]
     values[Y.saturated] = 1.0 if saturated else 0.0
+    if s[S.jitter] != 0.0:
+        rows = _jitter(floats(state), net)
+        force, torque = total([r[3] for r in rows]), total([r[5] for r in rows])
+        for k in range(int(s[S.n])):
+            at = 3 * int(s[S.wheel + k])
+            put(values, Y.h_jitter_B + at, rows[k][0])
+            put(values, Y.hdot_jitter_B + at, rows[k][1])
+        put(values, Y.f_jitter_B, force)
+        put(values, Y.tau_jitter_B, torque)
     return 0
+
+
+@jitable
+def _jitter(s, net) -> list:
+    """Each wheel's :func:`.imbalance.rotor_imbalance` (h_u, ḣ_u, ḧ_u, F, Ḟ, τ, τ̇) now,
+    its speed changing at the delivered J Ω̇ = ``net``."""
+    rows = []
+    J = s[S.inertia]
+    for k in range(int(s[S.n])):
+        axis = (s[S.axes + 3 * k], s[S.axes + 3 * k + 1], s[S.axes + 3 * k + 2])
+        u = (s[S.u + 3 * k], s[S.u + 3 * k + 1], s[S.u + 3 * k + 2])
+        r = (s[S.r + 3 * k], s[S.r + 3 * k + 1], s[S.r + 3 * k + 2])
+        rows.append(
+            rotor_imbalance(
+                s[S.us + k], s[S.ud + k], r, axis, u, s[S.omega + k], net[k] / J,
+                s[S.angle + k], (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+            )
+        )  # fmt: skip
+    return rows

@@ -38,6 +38,8 @@ UNITS = {
     "rad/s2": ({"rad": 1, "s": -2}, {"deg/s2": 180 / math.pi}),
     "rad/s3": ({"rad": 1, "s": -3}, {"deg/s3": 180 / math.pi}),
     "kg": ({"kg": 1}, {}),
+    "kg.m": ({"kg": 1, "m": 1}, {}),
+    "N": ({"kg": 1, "m": 1, "s": -2}, {}),
     "kg.m2": ({"kg": 1, "m": 2}, {}),
     "N.m": ({"kg": 1, "m": 2, "s": -2}, {}),
     "N.m.s": ({"kg": 1, "m": 2, "s": -1}, {}),
@@ -52,9 +54,12 @@ UNITS = {
     "A.m2": ({"A": 1, "m": 2}, {}),
     "T": ({"kg": 1, "s": -2, "A": -1}, {"nT": 1e9}),
     # gyro noise densities (IEEE Std 952-1997): FMI 2.0 base-unit exponents are integers,
-    # so these two carry their dimension in the name only (an empty BaseUnit)
+    # so these carry their dimension in the name only (an empty BaseUnit)
     "rad/s0.5": ({}, {"deg/h0.5": 180 / math.pi * 60}),
     "rad/s1.5": ({}, {"deg/h1.5": 180 / math.pi * 3600 * 60}),
+    # mass-normalised modal coordinates and participation factors (kg^½·m), likewise
+    "kg0.5.m": ({}, {}),
+    "kg0.5.m/s": ({}, {}),
 }
 
 

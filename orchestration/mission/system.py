@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import copy
 import os
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,22 +171,29 @@ class System:
         return self
 
     def connect(self, source: str, target: str, *, replace: bool = False) -> System:
-        """Connect output ``source`` ("A.y", a whole vector or matrix by its base name, or
-        one element "A.y[2]") to input ``target`` ("B.u").  ``replace``: the target is
-        already connected, and this connection takes its place."""
+        """Connect output ``source`` ("A.y", a whole vector or matrix by its base name, one
+        row of a matrix "A.y[2]", or one element "A.y[2]", "A.y[2,1]") to input ``target``
+        ("B.u", likewise).  A table of slots (an optional input of shape (n, k), the hub's
+        ``tau_extra``, ``h_extra``) takes a k-vector, or an (m, k) table, into its first
+        rows that nothing else feeds: ``connect("Magnetorquer.tau_B",
+        "SatelliteDynamics.tau_extra")`` adds a torque to the hub whatever feeds it already;
+        name the row ("SatelliteDynamics.h_extra[2]") where one device feeds several
+        tables, so that its rows line up.  ``replace``: the target is already connected,
+        and this connection takes its place."""
         file, line = _origin(self.file)
         for end in (source, target):
             component, _ = _split(end, f"{file}:{line}: connect")
             self._component(component, f"{file}:{line}: connect {source} -> {target}:")
         existing = [c for c in self._connections if c[1] == target]
-        if existing and not replace:
+        if existing and not replace and not self._may_take_several(target):
             raise ValueError(
                 f"{file}:{line}: {target} is already connected (to {existing[0][0]}, line "
                 f"{existing[0][2]}): connect(..., replace=True) to rewire it"
             )
         if replace and not existing:
             raise ValueError(f"{file}:{line}: replace=True, but {target} is not connected")
-        self._connections = [c for c in self._connections if c[1] != target]
+        if replace:
+            self._connections = [c for c in self._connections if c[1] != target]
         self._connections.append((source, target, line))
         self._resolved.clear()
         return self
@@ -223,6 +231,22 @@ class System:
         twin._resolved = {}
         twin.name = name or self.name
         return twin
+
+    def _may_take_several(self, target: str) -> bool:
+        """Whether ``target`` may be fed by several connections: a table of slots of one of
+        our FMUs (its model description says), or any input whose connections are checked
+        only when the system is (the master's check of an input driven twice): of an FMU
+        file, of a model of yours, of one of ours not built yet."""
+        component, variable = _split(target, "connect")
+        fmu = self._components[component].fmu
+        if fmu.endswith(".fmu") or ".py" in fmu:
+            return True
+        try:
+            d = Description(component, fmu_file(fmu, build=False))
+        except FileNotFoundError:
+            return True
+        array = variables(d).get(variable)
+        return array is not None and _is_slot_table(d, array.shape, array.scalars)
 
     def _component(self, name: str, what: str) -> _Component:
         if name not in self._components:
@@ -323,43 +347,56 @@ class System:
     def _expanded(self, described: dict, problems: list) -> list[ConnectionRef]:
         """The connections element by element, after the whole-variable checks: components,
         variables (with the closest names), shapes, then causality, type and unit (the
-        master's own messages, :func:`..system.validation.variable_pair_problems`)."""
+        master's own messages, :func:`..system.validation.variable_pair_problems`).  A
+        table of slots named whole takes the first rows nothing else feeds (explicit rows
+        first, then in the order of the connections)."""
         tables = {name: variables(d) for name, d in described.items()}
-        result = []
+        ends, fed = [], set()
         for source, target, line in self._connections:
             at = f"{self.file}:{line}: connection {source} -> {target}"
-            ends = []
-            for end in (source, target):
-                component, variable = _split(end, at)
-                if component not in described:
-                    problems.append(f"{at}: unknown component '{component}'")
-                    break
-                d = described[component]
-                if variable in d.variables:
-                    ends.append((d, variable, (), [d.variables[variable]]))
-                elif variable in tables[component]:
-                    array = tables[component][variable]
-                    ends.append((d, variable, array.shape, array.scalars))
-                else:
-                    problems.append(
-                        f"{at}: {component} ({d.path.name}) has no variable '{variable}'"
-                        + did_you_mean(variable, tables[component])
-                    )
-                    break
-            if len(ends) < 2:
+            pair = [_end(end, described, tables, at, problems) for end in (source, target)]
+            if None in pair:
                 continue
-            (a, x, sa, xs), (b, y, sb, ys) = ends
+            (a, x, sa, xs), (b, y, sb, ys) = pair
+            table = _slots(b, y, sb, ys, len(xs))
+            if table is None:
+                fed.update((b.name, v.name) for v in ys)
+            ends.append((at, line, pair, table))
+        result, seen = [], {}
+        for at, line, ((a, x, sa, xs), (b, y, sb, ys)), table in ends:
+            if table is not None:
+                rows = _free_rows(b.name, ys, sb, len(xs) // sb[1], fed)
+                if rows is None:
+                    problems.append(
+                        f"{at}: every row of {b.name}.{y} ({sb[0]}) is fed already: name a "
+                        "row to rewire it, connect(..., replace=True)"
+                    )
+                    continue
+                first, ys = rows
+                count = len(ys) // sb[1]
+                y = f"{y}[{first + 1}]" if count == 1 else f"{y}[{first + 1}..{first + count}]"
+                fed.update((b.name, v.name) for v in ys)
             if len(xs) != len(ys):
                 problems.append(
                     f"{at}: shapes differ: {a.name}.{x} is {_shape(sa)}, {b.name}.{y} is "
                     f"{_shape(sb)}"
                 )
                 continue
+            twice = [v.name for v in ys if (b.name, v.name) in seen]
+            if twice and table is None:
+                first = seen[(b.name, twice[0])]
+                problems.append(
+                    f"{at}: {b.name}.{y} is already connected (to {first[0]}, line "
+                    f"{first[1]}): connect(..., replace=True) to rewire it"
+                )
+                continue
             found = variable_pair_problems(at, a, _whole(x, xs), b, _whole(y, ys))
             if found:
                 problems += found
                 continue
-            result += [ConnectionRef(a.name, u.name, b.name, v.name, line) for u, v in zip(xs, ys)]
+            for u, v in zip(xs, ys):
+                seen[(b.name, v.name)] = (f"{a.name}.{x}", line)
+                result.append(ConnectionRef(a.name, u.name, b.name, v.name, line))
         return result
 
     # -- written ----------------------------------------------------------------------
@@ -388,6 +425,61 @@ class System:
         from .package import write_package
 
         return write_package(system, self.descriptions(), path)
+
+
+def _end(end: str, described: dict, tables: dict, at: str, problems: list):
+    """(description, variable, shape, scalars) of one end of a connection: a scalar by its
+    FMI name, a whole array by its base name, or a row of a matrix, "y[2]"; None (the
+    problem appended) if there is no such variable."""
+    component, variable = _split(end, at)
+    if component not in described:
+        problems.append(f"{at}: unknown component '{component}'")
+        return None
+    d, table = described[component], tables[component]
+    if variable in d.variables:
+        return d, variable, (), [d.variables[variable]]
+    if variable in table:
+        return d, variable, table[variable].shape, table[variable].scalars
+    row = _ROW.match(variable)
+    array = table.get(row.group(1)) if row else None
+    if array is not None and len(array.shape) == 2 and 1 <= int(row.group(2)) <= array.shape[0]:
+        k, i = array.shape[1], int(row.group(2)) - 1
+        return d, variable, (k,), array.scalars[i * k : (i + 1) * k]
+    problems.append(
+        f"{at}: {component} ({d.path.name}) has no variable '{variable}'"
+        + did_you_mean(variable, table)
+    )
+    return None
+
+
+_ROW = re.compile(r"^(.*)\[([0-9]+)\]$")
+
+
+def _is_slot_table(d, shape: tuple, scalars: list) -> bool:
+    """Whether a variable of ``d`` is a table of slots: an optional input of shape (n, k),
+    one source a row."""
+    first = scalars[0]
+    optional = d.optional_inputs is not None and first.name in d.optional_inputs
+    return first.causality == "input" and len(shape) == 2 and optional
+
+
+def _slots(d, name: str, shape: tuple, scalars: list, size: int):
+    """The slot table ``name`` (shape) when a connection of ``size`` scalars names it whole
+    and fills whole rows of it, else None."""
+    if not _is_slot_table(d, shape, scalars) or size == len(scalars):
+        return None
+    return shape if size % shape[1] == 0 and size < len(scalars) else None
+
+
+def _free_rows(component: str, scalars: list, shape: tuple, count: int, fed: set):
+    """(first row, its scalars) of the first ``count`` consecutive rows of a slot table
+    none of whose scalars is ``fed``; None if there are none."""
+    k = shape[1]
+    for first in range(shape[0] - count + 1):
+        rows = scalars[first * k : (first + count) * k]
+        if not any((component, v.name) in fed for v in rows):
+            return first, rows
+    return None
 
 
 def _shape(shape) -> str:

@@ -44,6 +44,7 @@ from agilesat.orchestration.pointing import (
     performance_error,
     quaternion_product,
 )
+from agilesat.orchestration.scenarios import flexible
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
     close_the_loop,
@@ -170,29 +171,37 @@ def attitude_error(results) -> np.ndarray:
     return np.linalg.norm(error.values[0], axis=1)
 
 
-#: the imaging-rate band as a contract states it ([Ecss 2008], docs/pointing.md): over the
-#: imaging phase, the pitch error from the plan (a scan at exactly the scan rate) drifts by
-#: at most the band's half-width in a second from one 1 s mean to the next (the mean scan
-#: rate over a second within ±0.02 °/s of −0.8 °/s), at every time for 99.73 % of the runs,
-#: with 95 % confidence
-REQUIREMENTS = [
-    Pointing(
-        "imaging_rate_pde",
+def _over_imaging(name: str, index: str, bound: float, **window) -> Pointing:
+    """A pointing requirement about the pitch axis over the imaging phase, from the plan."""
+    return Pointing(
+        name,
         PointingRequirement(
-            "PDE",
-            SCAN_RATE_TOLERANCE * 1.0,  # rad/s over Δt_s = 1 s
+            index,
+            bound,
             POINTING_LEVEL,
             "ensemble",
-            window=1.0,
-            separation=1.0,
             axis=(0.0, 1.0, 0.0),
             confidence=POINTING_CONFIDENCE,
+            **window,
         ),
         reference=planned_attitude,
         reference_signals=PLAN_SIGNALS,
         start=PROFILE.times[2],
         stop=PROFILE.times[3],
     )
+
+
+#: the imaging-rate band as a contract states it ([Ecss 2008], docs/pointing.md): over the
+#: imaging phase, the pitch error from the plan (a scan at exactly the scan rate) drifts by
+#: at most the band's half-width in a second from one 1 s mean to the next (the mean scan
+#: rate over a second within ±0.02 °/s of −0.8 °/s), at every time for 99.73 % of the runs,
+#: with 95 % confidence; and the scan's stability within a second: a pitch error drifting at
+#: the band's edge, 0.02 °/s, moves from its 1 s mean by half of 0.02° at the window's end
+REQUIREMENTS = [
+    _over_imaging(
+        "imaging_rate_pde", "PDE", SCAN_RATE_TOLERANCE * 1.0, window=1.0, separation=1.0
+    ),  # rad/s over Δt_s = 1 s
+    _over_imaging("imaging_rpe", "RPE", SCAN_RATE_TOLERANCE * 1.0 / 2, window=1.0),
 ]
 
 
@@ -228,7 +237,18 @@ def sensed_figure(results, out_dir):
     )
 
 
+def imaging_error(results):
+    """The performance error of the body from the planned attitude about the pitch axis,
+    the scan's (the requirements' axis)."""
+    return performance_error(
+        results.vector("SatelliteDynamics.q_BI"), planned_attitude(results), results.time
+    ).about((0.0, 1.0, 0.0))
+
+
+IMAGING = PROFILE.times[2], PROFILE.times[3]
+
 VARIANTS = {
+    "flexible": flexible.variant(imaging_error, *IMAGING, "from the plan"),
     "literal_spin": Variant(
         "rotor spin as printed in the paper's A_s0 (momentum bias along +y)",
         parameters={"CmgCluster.spin_ref": PAPER_SPINS, "CmgSteering.spin_ref": PAPER_SPINS},
@@ -402,6 +422,9 @@ METRICS = [
     m.momentum_drift(
         description="max |H_I(t) − H_I(0)| / |H_I(0)|: 0 on the isotropic hub (a conservation "
         "check); with an anisotropic inertia (a campaign's), the gravity-gradient torque's effect"
+    ),
+    *flexible.stability_metrics(
+        lambda results: imaging_error(results), *IMAGING, "the pitch from the plan"
     ),
 ]
 

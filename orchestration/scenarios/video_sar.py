@@ -55,7 +55,8 @@ from agilesat.orchestration.mission import (
     panels,
 )
 from agilesat.orchestration.mission import metrics as m
-from agilesat.orchestration.pointing import PointingRequirement
+from agilesat.orchestration.pointing import PointingRequirement, performance_error
+from agilesat.orchestration.scenarios import flexible
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
     close_the_loop,
@@ -235,7 +236,20 @@ def sensed_figure(results, out_dir):
     )
 
 
+def beam_error(results):
+    """The performance error of the radar's line of sight from the guidance's (half cone)."""
+    error = performance_error(
+        results.vector("SatelliteDynamics.q_BI"),
+        results.vector("StaringGuidance.q_ref"),
+        results.time,
+    )
+    return error.line_of_sight(GUIDANCE["boresight_B"])
+
+
+STARE = 0.0, 2 * HALF_STARE
+
 VARIANTS = {
+    "flexible": flexible.variant(beam_error, *STARE, "line of sight"),
     "no_yaw_compensation": Variant(
         "yaw 0 (eq 11 only): the footprint turns on the ground",
         parameters={
@@ -380,6 +394,9 @@ METRICS = [
         description="max |H_I(t) − H_I(0)| / |H_I(0)|: 0 on the isotropic hub (a conservation "
         "check); with an anisotropic inertia (a campaign's), the gravity-gradient torque's effect"
     ),
+    *flexible.stability_metrics(
+        lambda results: beam_error(results), *STARE, "the radar's line of sight"
+    ),
 ]
 
 
@@ -476,7 +493,21 @@ REQUIREMENTS = [
             confidence=POINTING_CONFIDENCE,
         ),
         reference="StaringGuidance.q_ref",
-    )
+    ),
+    # its stability within a second (ours): a tenth of the accuracy bound
+    Pointing(
+        "pointing_rpe",
+        PointingRequirement(
+            "RPE",
+            POINTING_REQUIREMENT / 10,
+            POINTING_LEVEL,
+            "ensemble",
+            window=1.0,
+            boresight=GUIDANCE["boresight_B"],
+            confidence=POINTING_CONFIDENCE,
+        ),
+        reference="StaringGuidance.q_ref",
+    ),
 ]
 
 

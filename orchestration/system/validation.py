@@ -192,22 +192,38 @@ def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
                 )
         for variable, names in groups.items():
             members = [v.name for v in inputs if v.name.partition("[")[0] == variable]
-            if len(names) < len(members):
+            rows = {variable: names} if len(names) == len(members) else _open_rows(names, members)
+            if rows is None:
                 given_ = [m for m in members if m not in names]
                 problems.append(
                     f"{at}: input {inst.name}.{variable} is partly connected: "
                     f"{', '.join(names)} open, {', '.join(given_)} connected or "
-                    "set (connect all of it or none)"
+                    "set (connect all of it or none"
+                    + (", or whole rows of it)" if "," in members[0] else ")")
                 )
-            else:
-                result.append(
-                    {
-                        "input": f"{inst.name}.{variable}",
-                        "declared": True,
-                        "meaning": inst.optional_inputs[names[0]],
-                    }
-                )
+                continue
+            result += [
+                {
+                    "input": f"{inst.name}.{part}",
+                    "declared": True,
+                    "meaning": inst.optional_inputs[open_part[0]],
+                }
+                for part, open_part in rows.items()
+            ]
     return result
+
+
+def _open_rows(names: list[str], members: list[str]) -> dict[str, list[str]] | None:
+    """{"x[2]": its open scalars} of a matrix input ``members`` whose open scalars
+    ``names`` make whole rows (a table of slots is fed row by row); None otherwise."""
+    if "," not in members[0]:
+        return None
+    rows: dict[str, list[str]] = {}
+    for member in members:
+        rows.setdefault(member.partition(",")[0] + "]", []).append(member)
+    open_rows = {row: scalars for row, scalars in rows.items() if scalars[0] in names}
+    whole = all(set(scalars) <= set(names) for scalars in open_rows.values())
+    return open_rows if whole and sum(map(len, open_rows.values())) == len(names) else None
 
 
 def _connector_problems(system, instances) -> list[str]:

@@ -142,9 +142,47 @@ def ramps(sizes: dict, size: float = 1.0):
     return rates
 
 
+def fixed_devices(seed: int, scale: float):
+    """:func:`in_orbit` with the hub's rows of further devices and torques unconnected (the
+    hub's own path of the three fixed devices)."""
+    random = in_orbit(seed, scale)
+    extra = ("h_extra", "hdot_extra", "h_extra_frequency", "tau_extra")
+    return lambda k, v: np.zeros(v.size) if v.name in extra else random(k, v)
+
+
+#: a hub with four appendage modes on all axes
+MODES = {
+    "modal_frequency": [2.0, 3.1, 5.5, 7.7, 0.0, 0.0],
+    "modal_damping": [0.01, 0.0, 0.02, 0.05, 0.0, 0.0],
+    "modal_coupling": [[5.0, -2.0, 1.0], [0.0, 4.0, 3.0], [-2.0, 1.0, 6.0], [1.0, 1.0, 1.0]]
+    + [[0.0, 0.0, 0.0]] * 2,
+    "eta0": [0.01, -0.02, 0.0, 0.005, 0.0, 0.0],
+}
+#: imbalanced rotors
+IMBALANCE = {
+    "static_imbalance": [2.4e-6, 1.0e-6, 0.0, 3.0e-6],
+    "dynamic_imbalance": [4.6e-7, 0.0, 2.0e-7, 1.0e-7],
+    "rotor_position_B": [[0.5, 0.1, -0.4], [0.0, 0.3, 0.2], [-0.2, -0.3, 0.1], [0.1, 0.0, 0.0]],
+    "imbalance_phase0": [0.1, 1.2, 2.3, 3.4],
+}
+
+
 #: name: (model class, parameters[, inputs(seed, scale)[, input derivatives(seed, scale)]])
 CASES = {
     "hub": (SatelliteDynamics, {}, in_orbit),
+    "hub_fixed_devices": (SatelliteDynamics, {}, fixed_devices),
+    "hub_modes": (SatelliteDynamics, {"gravity_gradient": True, **MODES}, fixed_devices),
+    "hub_modes_rows": (
+        SatelliteDynamics,
+        MODES,
+        in_orbit,
+        ramps({"h_extra": 18, "hdot_extra": 18, "tau_extra": 12, "h_cmg": 3}),
+    ),
+    "cluster_jitter": (
+        CmgCluster,
+        {k: v + v[:2] for k, v in IMBALANCE.items()},
+    ),
+    "wheels_jitter": (Flywheel, {**IMBALANCE, "speed0": [600.0, -300.0, 50.0, 0.0]}),
     "hub_gravity_gradient_spinning": (
         SatelliteDynamics,
         {

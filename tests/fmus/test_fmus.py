@@ -9,6 +9,7 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 from lxml import etree
 
+from agilesat.components.satellite_dynamics import N_EXTRA
 from agilesat.fmus import FMUS
 from helpers import TOOLS, run_python
 
@@ -45,11 +46,18 @@ def test_model_structure_declares_the_dependencies_of_the_variable_tables(fmus):
     """What the built modelDescription.xml declares (measured: tests/fmus/test_feedthrough.py)."""
     md = read_model_description(str(fmus["SatelliteDynamics"]))
     deps = {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
-    assert deps["q_BI[1]"] == set() and deps["H_I[2]"] == set()  # states
-    assert deps["w_BI_B[1]"] == {
-        f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)
-    }
-    assert deps["q_BO[1]"] == {f"q_OI[{i}]" for i in (1, 2, 3, 4)}
+    rows = range(1, N_EXTRA + 1)
+    frequency = {f"h_extra_frequency[{r},1]" for r in rows}
+    # the states, and the rotating rows' steady response (θ̃ from ḣ, Ω) on the attitude
+    jitter = {f"hdot_extra[{r},{i}]" for r in rows for i in (1, 2, 3)} | frequency
+    assert deps["q_BI[1]"] == jitter and deps["H_I[2]"] == set()
+    assert (
+        deps["w_BI_B[1]"]
+        == {f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)}
+        | {f"h_extra[{r},{i}]" for r in rows for i in (1, 2, 3)}
+        | frequency
+    )
+    assert deps["q_BO[1]"] == {f"q_OI[{i}]" for i in (1, 2, 3, 4)} | jitter
     cluster = read_model_description(str(fmus["CmgCluster"]))
     assert all(not u.dependencies for u in cluster.outputs)  # no feedthrough
     initial = {u.variable.name: {d.name for d in u.dependencies} for u in md.initialUnknowns}

@@ -113,7 +113,7 @@ def _set(at: int, x: float):
 @pytest.mark.parametrize(
     "name, tamper, message",
     [
-        ("Flywheel", _set(1, 40.0), "wheel constants (places, axes, distribution) are not"),
+        ("Flywheel", _set(1, 40.0), "wheel constants (places, axes, distribution, imbalances)"),
         ("Flywheel", _set(0, 4.0), "wheel constants"),
         ("StarTracker", _set(st.S.section, 1e6), "constants (capacity, section length"),
         (
