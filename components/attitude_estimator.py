@@ -264,6 +264,12 @@ class AttitudeEstimator(Model):
         # records: the one at or before the horizon, the cycles after it, a measurement's
         # own, the cycle appended before the oldest are dropped, and one for rounding
         capacity = math.floor(p.history * p.rate + TICK_TOLERANCE) + 5
+        if capacity > MAX_RECORDS:
+            raise ModelError(
+                f"history {p.history:g} s at rate {p.rate:g} Hz is {capacity} filter records, "
+                f"more than the {MAX_RECORDS} it keeps: history need only exceed the star "
+                "tracker's latency"
+            )
         section = FILTER.size + capacity * RECORD.size
         self.state = np.zeros(SECTIONS + 2 * section)
         self.state[:SECTIONS] = (t0, capacity, section, *R.reshape(-1))
@@ -352,6 +358,8 @@ RECORD = state_table("AttitudeEstimator record", t=1, w=3, initialised=1, q=4, b
 #: q_OI not a unit quaternion (output() raises)
 LATE, FULL, NOT_UNIT = 1, 2, 3
 _FULL = "internal error: more records than the history holds"
+#: the most cycles the filter's history holds (each record 48 values, twice: ~8 MB)
+MAX_RECORDS = 10_000
 
 
 @step_kernel(AttitudeEstimator)

@@ -418,8 +418,10 @@ class OrbitEnvironment(Model):
         if not mu > 0.0:
             raise ModelError(f"mu must be > 0 m3/s2, got {mu}")
         if a * (1.0 - e) < WGS84_B:
-            self.warnings.append(
-                f"perigee radius {a * (1.0 - e):.0f} m is below the Earth's surface"
+            raise ModelError(
+                f"the orbit passes inside the Earth: its perigee radius semi_major_axis (1 - "
+                f"eccentricity) = {a * (1.0 - e):.0f} m is below the Earth's polar radius "
+                f"{WGS84_B:.0f} m"
             )
 
         E0 = 2.0 * math.atan2(

@@ -327,8 +327,15 @@ class SatelliteDynamics(Model):
         J = np.array(p.inertia)
         if not np.allclose(J, J.T, rtol=1e-12, atol=1e-12 * np.abs(J).max()):
             raise ModelError(f"inertia must be symmetric, got {J.tolist()}")
-        if np.any(np.linalg.eigvalsh(J) <= 0):
+        moments = np.linalg.eigvalsh(J)  # ascending
+        if np.any(moments <= 0):
             raise ModelError(f"inertia must be positive definite, got {J.tolist()}")
+        if moments[2] > (moments[0] + moments[1]) * (1 + 1e-12):
+            raise ModelError(
+                f"inertia {J.tolist()}: no rigid body has it: its largest principal moment "
+                f"{moments[2]:.6g} exceeds the sum of the other two ({moments[0]:.6g} + "
+                f"{moments[1]:.6g}; the triangle inequality of principal moments)"
+            )
         # the gravity-gradient torque r × J r vanishes identically for J ∝ 1
         isotropic = np.allclose(J, J[0, 0] * np.eye(3), rtol=1e-15, atol=0.0)
         modes, L, M = self._modes(J)

@@ -73,6 +73,8 @@ RIGEL_RATE = 4.0  # Hz
 DEFAULT_LATENCY = 0.2  # s
 DEFAULT_BIAS_LF = (1.0 * ARCSEC, 1.0 * ARCSEC, 5.0 * ARCSEC)
 DEFAULT_LF_PERIOD = 5900.0  # s
+#: the most samples waiting for their release a star tracker holds (latency × rate)
+MAX_WAITING = 10_000
 #: noise streams: N₁, N₂, N₃ and the phases of the low-frequency error
 NOISE, PHASE = 0, 3
 _INPUTS = ("q_BI", "w_BI_B", "sun_I", "r_I")
@@ -204,6 +206,11 @@ class StarTracker(Model):
         # at most floor(latency rate) + 2 samples wait for their release (ticks in
         # [t − latency, t]); one more for the rounding of the ticks
         capacity = math.floor(p.latency * p.rate + TICK_TOLERANCE) + 3
+        if capacity > MAX_WAITING:
+            raise ModelError(
+                f"latency {p.latency:g} s at rate {p.rate:g} Hz is {capacity} samples waiting "
+                f"for their release, more than the {MAX_WAITING} a star tracker holds"
+            )
         rows = dcm(normalized(p.q_SB.tolist()))
         section = WAITING.size + capacity * SAMPLE.size
         self.state = state = np.zeros(SECTIONS + 2 * section)

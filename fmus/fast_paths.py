@@ -54,6 +54,7 @@ from .protocol import (
     B_STATE,
     B_STEP,
     B_STEP_END,
+    B_STOP,
     B_TIME,
     C_DIRTY,
     C_OUTPUT,
@@ -99,6 +100,7 @@ class FastPaths:
         self.control = np.zeros(N_CONTROL, dtype=np.int32)  # never replaced
         self.block = np.zeros(N_BLOCK)  # never replaced
         self.block[B_TIME] = math.nan
+        self.block[B_STOP] = math.inf
         #: the rows that bring the inputs to a step's end (Model.inputs_to_step_end)
         self.step_end = np.array(slave.model.layout.step_end, dtype=np.float64).reshape(-1, 6)
         self.block[B_STEP_END] = _address(self.step_end) if self.step_end.size else 0.0

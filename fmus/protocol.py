@@ -27,7 +27,7 @@ import uuid
 
 DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
 
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 5.0
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 6.0
 
 #: per scalar: a String (or anything the shim leaves alone), a Real parameter, output,
 #: input, input some output depends on directly (feedthrough), an Integer, a Boolean
@@ -47,10 +47,11 @@ C_STEP_PYTHON, C_STEP_ENTRY, C_STEP_TIME = range(3)
 #: known), the C entries' addresses, the model's state array (address, length), the
 #: snapshot buffer (address, length: values then state), the outputs values[start:stop],
 #: the rows that bring the inputs to a step's end (address, count: components/variables.py
-#: Layout.step_end, six offsets a row, as float64)
+#: Layout.step_end, six offsets a row, as float64), the stop time of fmi2SetupExperiment
+#: (inf when not defined: no step may end after it)
 B_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED = range(7)
-B_OUTPUTS_START, B_OUTPUTS_STOP, B_STEP_END, B_N_STEP_END = 7, 8, 9, 10
-N_BLOCK = 11
+B_OUTPUTS_START, B_OUTPUTS_STOP, B_STEP_END, B_N_STEP_END, B_STOP = 7, 8, 9, 10, 11
+N_BLOCK = 12
 
 TIME_REL_TOL, TIME_ABS_TOL = 1e-9, 1e-12
 
@@ -71,7 +72,8 @@ SECTIONS = (
     (
         "block[] (float64)",
         ("B_TIME", "B_STEP", "B_OUTPUT", "B_STATE", "B_N_STATE", "B_SAVED", "B_N_SAVED")
-        + ("B_OUTPUTS_START", "B_OUTPUTS_STOP", "B_STEP_END", "B_N_STEP_END", "N_BLOCK"),
+        + ("B_OUTPUTS_START", "B_OUTPUTS_STOP", "B_STEP_END", "B_N_STEP_END", "B_STOP")
+        + ("N_BLOCK",),
     ),
     ("time continuity (math.isclose)", ("TIME_REL_TOL", "TIME_ABS_TOL")),
 )

@@ -9,10 +9,13 @@ so no exception leaves this class: a bad call is *logged* at ``fmi2Error`` and a
 with a harmless value, and the FMU's C shim (``shim/agilesat_fmi2.c``) returns the worst
 status logged during the call.  Checked here: unknown value reference or wrong type,
 setting an output or a fixed parameter after initialisation, non-finite values,
-non-positive or non-finite step size, a time discontinuity between steps, calls in the
-wrong mode (FMI 2.0 section 4.2.4: setup and entering initialisation only after
-instantiation, setting nothing after terminate, ...), and exceptions or non-finite outputs
-from the model.  FMU states are data (``fmu_state``), never pickles.
+non-positive or non-finite step size, a time discontinuity between steps, a step past the
+stop time fmi2SetupExperiment defined (section 4.2.1), calls in the wrong mode (FMI 2.0
+section 4.2.4: setup and entering initialisation only after instantiation, getting nothing
+before initialisation mode, setting nothing after terminate, ...), and exceptions,
+non-finite outputs, Integer outputs that are not whole numbers of fmi2Integer's range and
+Boolean outputs that are not 0 or 1 from the model.  FMU states are data (``fmu_state``),
+never pickles.
 
 Input and output derivatives (FMI 2.0 section 4.2.1).  pythonfmu 0.7 answers
 ``fmi2SetRealInputDerivatives`` and ``fmi2GetRealOutputDerivatives`` "not supported"; the
@@ -57,6 +60,7 @@ from ..components.runtime.switches import SwitchError
 from . import CONFIGURATION, configuration_key, fmu_state, state_layout
 from .fast_paths import FastPaths, kind
 from .protocol import (
+    B_STOP,
     B_TIME,
     C_DIRTY,
     DERIVATIVE_BASE,
@@ -77,6 +81,7 @@ _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 #: the handshake's value reference as pythonfmu 0.7.0 passes it (a C int) and as unsigned
 _HANDSHAKE = (FAST_PATH_VR - (1 << 32), FAST_PATH_VR)
+_INT32 = (-(2**31), 2**31 - 1)  # fmi2Integer
 
 
 def _guarded(default):
@@ -216,6 +221,7 @@ class ModelSlave(Fmi2Slave):
         self._start_time = float(start_time)
         stop = None if stop_time is None else float(stop_time)
         self._stop_time = stop if stop is not None and math.isfinite(stop) else None
+        self._fast.block[B_STOP] = math.inf if self._stop_time is None else self._stop_time
 
     @_guarded(None)
     def enter_initialization_mode(self):
@@ -238,6 +244,12 @@ class ModelSlave(Fmi2Slave):
             raise _CallRejected(
                 f"time discontinuity: the last step ended at "
                 f"t={self._next_time!r}, doStep starts at t={current_time!r}"
+            )
+        stop, end = float(self._fast.block[B_STOP]), current_time + step_size
+        if not (end <= stop or continuous(end, stop)):
+            raise _CallRejected(
+                f"the step to t={end!r} ends after the stop time {stop!r} of "
+                "fmi2SetupExperiment (FMI 2.0 section 4.2.1: no step past a defined stop time)"
             )
         if self._stop_time is not None:  # the first step: the run's length decides the tier
             steps, self._stop_time = (self._stop_time - current_time) / step_size, None
@@ -267,11 +279,32 @@ class ModelSlave(Fmi2Slave):
 
     @_guarded(_zeros)
     def get_integer(self, vrs):
-        return [int(x) for x in self._read(vrs, "Integer")]
+        values = self._read(vrs, "Integer")
+        fits = (values == np.trunc(values)) & (values >= _INT32[0]) & (values <= _INT32[1])
+        if not fits.all():
+            self._unfit(vrs, values, fits, "Integer", "whole numbers of fmi2Integer's range")
+        return [int(x) for x in values]
 
     @_guarded(_zeros)
     def get_boolean(self, vrs):
-        return [bool(x) for x in self._read(vrs, "Boolean")]
+        values = self._read(vrs, "Boolean")
+        fits = (values == 0.0) | (values == 1.0)
+        if not fits.all():
+            self._unfit(vrs, values, fits, "Boolean", "0 (false) or 1 (true)")
+        return [bool(x) for x in values]
+
+    def _unfit(self, vrs, values, fits, type_name: str, expected: str):
+        """The values a model left in Integer or Boolean variables that their FMI type
+        cannot hold (an output of a model of a user): refused, never wrapped or rounded."""
+        bad = [
+            f"{self._scalar_names[vr]}={x!r}"
+            for vr, x, ok in zip(vrs, values.tolist(), fits.tolist())
+            if not ok
+        ]
+        raise _CallRejected(
+            f"the model produced {type_name} values {', '.join(bad)} at t={self.model.t!r}: "
+            f"{type_name} variables hold {expected}"
+        )
 
     @_guarded(lambda vrs: [""] * len(vrs))
     def get_string(self, vrs):
@@ -279,6 +312,7 @@ class ModelSlave(Fmi2Slave):
             digest = _PACKAGE.partition("_")[2]  # "" outside an FMU: nothing to compare
             guid = fmu_guid(type(self).__name__, digest, self._configuration_key)
             return ["{" + guid + "}" if digest else ""]  # as modelDescription.xml has it
+        self._require_readable()
         self._plan(vrs, "String")
         return [self.model.strings[self._scalar_names[vr]] for vr in vrs]
 
@@ -521,7 +555,16 @@ class ModelSlave(Fmi2Slave):
             index = slice(vrs[0], vrs[0] + len(vrs))  # one range: a view, not a gather
         return index, touches_parameters
 
+    def _require_readable(self):
+        """FMI 2.0 section 4.2.4: no fmi2Get* before initialisation mode."""
+        if self._mode == "instantiated":
+            raise _CallRejected(
+                "not allowed in mode 'instantiated' (only from fmi2EnterInitializationMode "
+                "on: FMI 2.0 section 4.2.4)"
+            )
+
     def _read(self, vrs, type_name):
+        self._require_readable()
         index = self._plan(vrs, type_name)
         values = self.model.values
         if not self._outputs_valid:

@@ -27,7 +27,7 @@ from .mission.scenario import defined_at
 from .mission.targets import Target, resolve
 from .output.lock import holding
 from .output.progress import Progress
-from .output.recorder import write_text
+from .output.recorder import make_directory, write_text
 from .output.results import ColumnError, Results
 from .output.summary import facts, generic_summary, summary_text, write_records
 from .provenance import provenance
@@ -93,7 +93,7 @@ def _run(found: Target, plan: RunPlan, wall: float) -> tuple[Results, dict]:
         options.progress.simulating(plan.step)  # a person's bar counts simulated seconds
     out_dir = plan.out_dir
     if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        make_directory(out_dir)
         _say_size(plan, out_dir, options.notice)
     summary = {
         **provenance(),

@@ -43,6 +43,16 @@ def _path(text: str) -> str:
     return text
 
 
+def _seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = float("nan")
+    if not 0.0 < seconds < float("inf"):
+        raise ValueError("a positive, finite number of seconds")
+    return seconds
+
+
 def _test_signal(text: str) -> tuple[str, str, int]:
     """'SIGTERM@run:3' -> ('SIGTERM', 'run', 3)."""
     name, _, where = text.partition("@")
@@ -157,6 +167,14 @@ SWITCHES = {
             _path,
             "the OMSimulator executable the OMSimulator tests run (not on the package registries)",
             "tests/interop/test_omsimulator.py",
+        ),
+        Switch(
+            "AGILESAT_STEP_GRACE",
+            5.0,
+            _seconds,
+            "seconds an FMU call may take to return after SIGINT/SIGTERM stopped a run before "
+            "the watchdog stops it inside the call",
+            "orchestration/cosim/signals.py",
         ),
         Switch(
             "AGILESAT_TEST_SIGNAL",

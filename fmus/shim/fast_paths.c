@@ -14,18 +14,20 @@
  * AGILESAT_SHIM_STEP=0 the C step path only.
  *
  * Fast get/set.  In step mode (STEP_MODE), a fmi2GetReal of Real scalars is served while
- * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: int(x))
- * and fmi2GetBoolean (KIND_BOOLEAN: x != 0); a fmi2SetReal of finite values to Real inputs
- * is written in, a feedthrough input (KIND_FEEDTHROUGH) clearing OUTPUTS_VALID.
+ * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: a whole
+ * number fmi2Integer holds) and fmi2GetBoolean (KIND_BOOLEAN: 0 or 1); a fmi2SetReal of
+ * finite values to Real inputs is written in, a feedthrough input (KIND_FEEDTHROUGH)
+ * clearing OUTPUTS_VALID.
  *
  * The C step path.  Once the model's kernels run compiled, the slave arms (control[C_STEP],
  * control[C_OUTPUT]) the model's C entries (fmus/c_entries.py) in block[], with its state
  * array and a snapshot buffer.  A fmi2DoStep the slave would accept (step mode, a step size
- * positive and finite, the time continuous) is served: the step entry (nothing for a
- * stateless model), the inputs brought to the step's end (those whose derivative was set:
- * inputs_to_step_end), the step's end, the outputs invalid.  A get with the outputs invalid
- * evaluates them with the output entry.  An entry returning anything but 0, or non-finite
- * outputs: the arrays are put back from the snapshot and the call forwarded.
+ * positive and finite, the time continuous, its end not after the stop time) is served: the
+ * step entry (nothing for a stateless model), the inputs brought to the step's end (those
+ * whose derivative was set: inputs_to_step_end), the step's end, the outputs invalid.  A
+ * get with the outputs invalid evaluates them with the output entry.  An entry returning
+ * anything but 0, or non-finite outputs: the arrays are put back from the snapshot and the
+ * call forwarded.
  * C_DIRTY tells the slave, at its next call, to take over what was done here. */
 #include <math.h>
 #include <stdlib.h>
@@ -181,6 +183,7 @@ int fast_do_step(FastPaths *f, double t, double h) {
     if (!f->values || !f->step_path || !control[STEP_MODE] || control[C_STEP] == C_STEP_PYTHON)
         return 0;
     if (!(isfinite(h) && h > 0.0) || !continuous(t, f->block[B_TIME]) || !armed(f, &a)) return 0;
+    if (!(t + h <= f->block[B_STOP] || continuous(t + h, f->block[B_STOP]))) return 0;
     if (control[C_STEP] == C_STEP_ENTRY) {
         if (!a.step) return 0;
         snapshot(f, &a);
@@ -226,21 +229,26 @@ static int outputs_ready(FastPaths *f) {
     return 1;
 }
 
-/* As the slave's int(x) (truncation; values a C int cannot hold are forwarded). */
+/* As the slave's int(x) of a whole number fmi2Integer holds (anything else is forwarded:
+ * the slave refuses it, naming the variable). */
 int fast_get_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                      fmi2Integer value[]) {
     if (!gettable(f, vr, n, 1, 0) || !outputs_ready(f)) return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!(f->values[vr[i]] > -2147483649.0 && f->values[vr[i]] < 2147483648.0)) return 0;
+    for (size_t i = 0; i < n; i++) {
+        double x = f->values[vr[i]];
+        if (!(x >= -2147483648.0 && x <= 2147483647.0 && x == trunc(x))) return 0;
+    }
     for (size_t i = 0; i < n; i++) value[i] = (fmi2Integer)f->values[vr[i]];
     f->served++;
     return 1;
 }
 
-/* As the slave's bool(x): x != 0. */
+/* As the slave's bool(x) of 0 or 1 (anything else is forwarded, as above). */
 int fast_get_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                      fmi2Boolean value[]) {
     if (!gettable(f, vr, n, 0, 1) || !outputs_ready(f)) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!(f->values[vr[i]] == 0.0 || f->values[vr[i]] == 1.0)) return 0;
     for (size_t i = 0; i < n; i++) value[i] = f->values[vr[i]] != 0.0;
     f->served++;
     return 1;

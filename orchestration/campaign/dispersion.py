@@ -214,6 +214,9 @@ def load(path) -> tuple[list[Dispersion], dict]:
         _KEY.match(k) and isinstance(v, (int, float, bool)) for k, v in fixed.items()
     ):
         raise ValueError(f"{path}: 'set' must map \"Instance.variable\" to numbers")
+    for key, value in fixed.items():
+        if not math.isfinite(value):  # TOML's nan and inf, JSON's NaN
+            raise ValueError(f"{path}: set.{key} = {value}: a value must be a finite number")
     return result, fixed
 
 

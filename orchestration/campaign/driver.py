@@ -8,6 +8,7 @@ import collections
 import sys
 from pathlib import Path
 
+from ..output.lock import holding
 from . import dispersion, engine, report
 from .files import CampaignFileError, read_object
 from .plan import Plan, Spec
@@ -26,13 +27,22 @@ def run_campaign(
     dashboard: str | None = None,
 ) -> Campaign:
     """:func:`campaign` returning a :class:`Campaign` (table, summary, directory).
-    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`)."""
+    ``listen``, ``dashboard``: of the LocalCluster (:func:`.engine.cluster`).  The campaign
+    holds ``out_dir`` from before it writes anything to its end (:mod:`..output.lock`):
+    another campaign or run on it, ``--resume`` included, is refused meanwhile."""
     for path in spec.files:
         loaded, fixed = dispersion.load(path)
         spec.vary += [d.text for d in loaded]
         spec.set = {**fixed, **spec.set}
     plan = Plan(spec)  # builds the FMUs the target needs: their content is recorded
     out = Path(out_dir or Path("out") / f"campaign-{spec.target.replace(':', '-')}")
+    with holding(out):
+        return _held(plan, out, resume, workers, scheduler, progress, listen, dashboard)
+
+
+def _held(plan: Plan, out: Path, resume, workers, scheduler, progress, listen, dashboard):
+    """:func:`run_campaign` in its directory, which it holds."""
+    spec = plan.spec
     done = engine.open_directory(plan, out, resume)
     metrics: dict = {}
     if done and (out / "metrics.json").exists():
@@ -60,6 +70,11 @@ def run_campaign(
         pass
     except engine.SchedulerLost as exc:
         lost_scheduler = exc
+    except Exception:
+        # a terminal's Ctrl-C reaches the worker processes Dask is starting too, which
+        # then fail to start ("Nanny failed to start"): the signal stopped the campaign
+        if not engine.INTERRUPTS.signals:
+            raise
     finally:
         bar.close()
     # the summary is the journal's: a run written there just as a signal came is in it

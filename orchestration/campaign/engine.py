@@ -27,6 +27,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import sys
 import time
 import uuid
@@ -37,8 +38,16 @@ from pathlib import Path
 import numpy as np
 
 from ..cosim.signals import signal_at
-from ..output.recorder import write_text
-from .files import CampaignFileError, changed, journal_record, read_object, system_content
+from ..output.recorder import file_error, write_text
+from .files import (
+    CampaignFileError,
+    changed,
+    code_changed,
+    code_content,
+    journal_record,
+    read_object,
+    system_content,
+)
 from .plan import Plan, Spec
 from .worker import quiet_closed_connections, run_batch
 
@@ -102,63 +111,83 @@ class SchedulerLost(RuntimeError):
 
 def read_journal(path: Path) -> dict[int, dict]:
     """Finished runs by index; a last line cut short by a kill is dropped, any other line
-    that is not a run record is an error naming it (:func:`.files.journal_record`)."""
-    records = {}
+    that is not a run record (:func:`.files.journal_record`), or records a run again, is an
+    error naming it."""
+    records, lines = {}, {}
     if path.exists():
         for number, line in enumerate(path.read_text().splitlines(keepends=True), start=1):
             if not line.endswith("\n"):
                 break
             record = journal_record(path, number, line)
-            records[record["index"]] = record
+            index = record["index"]
+            if index in records:  # two outcomes of one run: which is it?
+                raise CampaignFileError(
+                    f"{path}:{number}: run {index} is recorded again (first on line "
+                    f"{lines[index]}); a campaign journals each run once"
+                )
+            records[index], lines[index] = record, number
     return records
 
 
 def open_directory(plan: Plan, out: Path, resume: bool) -> dict[int, dict]:
-    """Check ``out`` against the plan (the spec, and the content of the system and its
-    FMUs, ``system_sha256``); the runs already finished there."""
-    journal = out / "runs.jsonl"
+    """Check ``out`` against the plan (the spec, the content of the system and its FMUs,
+    ``system_sha256``, and of the code the runs execute, ``code_sha256``: the modules the
+    mission imports and the toolkit's sources); the runs already finished there.  A
+    directory that holds a campaign (its campaign.json or journal) is opened only to
+    resume it."""
+    journal, summary = out / "runs.jsonl", out / "campaign.json"
     content = system_content(plan)
-    if not journal.exists():
+    if not journal.exists() and not summary.exists():
         out.mkdir(parents=True, exist_ok=True)
         # the spec first: a campaign killed before it finishes can still be resumed
-        first = {"status": "running", "spec": plan.spec.to_dict(), "system_sha256": content}
-        write_text(out / "campaign.json", json.dumps(first, indent=2) + "\n")
+        first = {
+            "status": "running",
+            "spec": plan.spec.to_dict(),
+            "system_sha256": content,
+            "code_sha256": code_content(),
+        }
+        write_text(summary, json.dumps(first, indent=2) + "\n")
         return {}
     if not resume:
         raise CampaignExistsError(
-            f"{out} already holds a campaign (runs.jsonl): --resume to "
-            "finish or extend it, or choose another --out"
+            f"{out} already holds a campaign ({(journal if journal.exists() else summary).name}):"
+            " --resume to finish or extend it, or choose another --out"
         )
-    saved = read_object(out / "campaign.json", "a campaign's summary", ("spec",))
+    saved = read_object(summary, "a campaign's summary", ("spec",))
     try:
         spec = Spec(**saved["spec"])
     except TypeError as exc:
-        raise CampaignFileError(f"{out / 'campaign.json'}: its spec is not one: {exc}") from None
+        raise CampaignFileError(f"{summary}: its spec is not one: {exc}") from None
     differences = plan.spec.differences(spec)
     if differences:
         raise CampaignExistsError(
             f"--resume {out}: the campaign there differs: " + "; ".join(differences)
         )
     edited = changed(saved.get("system_sha256") or content, content)
+    code = saved.get("code_sha256")
+    if isinstance(code, dict):
+        edited += code_changed(code)
     if edited:
         raise CampaignExistsError(
             f"--resume {out}: {', '.join(edited)} changed since the campaign began (its "
             "content hash is in campaign.json): its runs and new ones would mix two systems; "
             "choose another --out"
         )
-    if "system_sha256" not in saved:
-        print(
-            f"campaign: {out / 'campaign.json'} records no content hash of the system "
-            "(an older campaign): not checked",
-            file=sys.stderr,
-        )
+    for key, what in (("system_sha256", "the system"), ("code_sha256", "the code it runs")):
+        if key not in saved:
+            print(
+                f"campaign: {summary} records no content hash of {what} (an older "
+                "campaign): not checked",
+                file=sys.stderr,
+            )
     saved["system_sha256"] = content
+    saved.setdefault("code_sha256", code_content())
     # running again (the rest of the last summary, lost workers included, is kept)
     saved.update(status="running", spec=plan.spec.to_dict())
-    write_text(out / "campaign.json", json.dumps(saved, indent=2) + "\n")
+    write_text(summary, json.dumps(saved, indent=2) + "\n")
     # a truncated last line would be glued to the next record: rewrite the journal clean
     records = read_journal(journal)
-    journal.write_text("".join(json.dumps(r) + "\n" for r in records.values()))
+    write_text(journal, "".join(json.dumps(r) + "\n" for r in records.values()))
     return {i: r for i, r in records.items() if i < plan.total}
 
 
@@ -217,21 +246,38 @@ def cluster(
             with Client(scheduler, timeout="30s") as client:
                 yield client
             return
-        with (
-            dask.config.set(LOCAL_CLUSTER_CONFIG),
-            LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                host=listen,
-                dashboard_address=dashboard,
-                silence_logs=logging.ERROR,
-            ) as local,
-            Client(local) as client,
-        ):
-            yield client
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            with _sigint_held():
+                local = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    host=listen,
+                    dashboard_address=dashboard,
+                    silence_logs=logging.ERROR,
+                )
+            with local, Client(local) as client:
+                yield client
     finally:
         INTERRUPTS.deferred = False
+
+
+@contextmanager
+def _sigint_held():
+    """SIGINT blocked in this thread while a LocalCluster starts: the threads and the
+    worker processes it starts inherit the block, so a terminal's Ctrl-C as a worker's
+    Python starts (before its preload ignores SIGINT) is no KeyboardInterrupt traceback of
+    that worker; this process takes one that came meanwhile as it unblocks it.
+    multiprocessing's resource tracker is started first: starting it unblocks SIGINT in
+    the thread that does (the cluster's, which starts the workers)."""
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def batch_size(run_seconds: float | None, remaining: int, workers: int) -> int:
@@ -348,10 +394,10 @@ def execute(
                     record["requirements"] = {
                         k: r["verdict"] for k, r in record.get("requirements", {}).items()
                     }
-                    journal.write(json.dumps(record) + "\n")
+                    journaled(journal, json.dumps(record) + "\n")
                     records[index] = record
                     progress.update(record["status"])
-                journal.flush()
+                journaled(journal, "")
                 if hook is not None and len(records) - len(done) >= hook[1]:
                     os.kill(os.getpid(), hook[0])  # $AGILESAT_TEST_SIGNAL=SIGNAL@run:K
                     hook = None
@@ -370,6 +416,16 @@ def execute(
         if signals is not None:
             signals.flush()
     return records, watcher.lost, status
+
+
+def journaled(journal, line: str) -> None:
+    """``line`` appended to the open journal and flushed; an OSError (a full disk) names
+    the file."""
+    try:
+        journal.write(line)
+        journal.flush()
+    except OSError as exc:
+        raise file_error(Path(journal.name), exc, "; the runs journaled before are kept") from None
 
 
 def _completed(pending):
@@ -437,8 +493,10 @@ class WorkerWatch:
             held = sorted(i for k in self.processing.get(address, ()) for i in keys.get(k, ()))
             self.lost.append({"worker": address, "runs_in_flight": held})
             print(
-                f"campaign: worker {address} left; Dask re-runs the runs it held "
-                f"({held or 'none'}) on the others",
+                f"campaign: worker {address} left; Dask re-runs the runs it held ({held}) "
+                "on the others"
+                if held
+                else f"campaign: worker {address} left with no run in flight",
                 file=sys.stderr,
             )
         self.workers = workers

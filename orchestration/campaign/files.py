@@ -1,16 +1,24 @@
 """A campaign's files: its own read back (``--resume``, the summary), where what is not
 what the campaign wrote is an error naming the file (and line) and what was expected,
-never a traceback; the content hash of the system a campaign runs, which a resume must
-match; and the shipped dispersion files of the scenarios (``shipped/``).
+never a traceback; the content hash of the system a campaign runs and of the code it runs
+(the modules the mission imports, the toolkit's own sources), which a resume must match;
+and the shipped dispersion files of the scenarios (``shipped/``).
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import site
+import sys
+import sysconfig
+from importlib import metadata
 from pathlib import Path
 
 SHIPPED_DIR = Path(__file__).resolve().parent / "shipped"
+#: the entry of :func:`code_content` for the toolkit itself
+TOOLKIT = "agilesat's own sources"
+_SOURCES = (".py", ".c", ".h", ".toml", ".ssd")
 
 
 class CampaignFileError(ValueError):
@@ -63,6 +71,76 @@ def system_content(plan) -> dict[str, str]:
 
 def _sha256(path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def code_content() -> dict[str, str]:
+    """{file: SHA-256} of the code a campaign's runs execute besides the system file and
+    the FMUs: every module this process has loaded from outside the Python installation
+    and the toolkit (a mission's own imports, ``from mission_constants import RATE``), and
+    the toolkit's own sources as one entry (:data:`TOOLKIT`: its version and a digest of
+    its files).  Taken after the mission is imported (:class:`.plan.Plan`)."""
+    content = {TOOLKIT: toolkit_digest()}
+    outside = [*_installation(), *_toolkit_dirs()]
+    for module in list(sys.modules.values()):
+        file = getattr(module, "__file__", None)
+        if not isinstance(file, str):
+            continue
+        path = Path(file).resolve()
+        if path.is_file() and not any(path.is_relative_to(d) for d in outside):
+            content[str(path)] = _sha256(path)
+    return dict(sorted(content.items()))
+
+
+def code_changed(recorded: dict) -> list[str]:
+    """The entries of a :func:`code_content` taken earlier whose file differs now (or is
+    gone): what a resume would run differently.  Modules loaded since are not compared:
+    they come from what the process did, and a file that imports a new one changed."""
+    result = []
+    for key, digest in recorded.items():
+        try:
+            now = toolkit_digest() if key == TOOLKIT else _sha256(key)
+        except OSError:
+            now = None
+        if now != digest:
+            result.append(key)
+    return sorted(result)
+
+
+def toolkit_digest() -> str:
+    """'VERSION SHA-256': the toolkit's version and a digest of its source files."""
+    digest = hashlib.sha256()
+    for root in _toolkit_dirs():
+        build = root / "build"
+        for path in sorted(root.rglob("*")):
+            if (
+                path.suffix in _SOURCES
+                and "__pycache__" not in path.parts
+                and not path.is_relative_to(build)
+            ):
+                digest.update(f"{path.relative_to(root.parent)}\0".encode())
+                digest.update(hashlib.sha256(path.read_bytes()).digest())
+    try:
+        version = metadata.version("agilesat")
+    except metadata.PackageNotFoundError:
+        version = "(not installed)"
+    return f"{version} {digest.hexdigest()}"
+
+
+def _toolkit_dirs() -> list[Path]:
+    import agilesat.components
+    import agilesat.fmus
+    import agilesat.orchestration
+
+    packages = (agilesat.components, agilesat.fmus, agilesat.orchestration)
+    return [Path(p).resolve() for package in packages for p in package.__path__]
+
+
+def _installation() -> set[Path]:
+    """The directories of the Python installation and its packages."""
+    places = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
+    places |= set(sysconfig.get_paths().values()) | set(site.getsitepackages())
+    places.add(site.getusersitepackages())
+    return {Path(p).resolve() for p in places if p}
 
 
 def changed(recorded: dict, now: dict) -> list[str]:

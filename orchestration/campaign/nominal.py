@@ -7,7 +7,7 @@ import math
 import shlex
 import sys
 
-from . import engine
+from . import engine, isolated
 from .plan import Plan
 from .replay import run_arguments, versions
 
@@ -16,8 +16,9 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     """The run at the nominal values (every random dispersion at the system's value, the
     spec's ``--set`` and the grid point's values applied), whose metrics the histograms
     mark: {"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
-    the reason it has none (said on stderr too).  A signal during it is recorded for the
-    command's exit status (130/143) as one while the cluster closes.
+    the reason it has none (said on stderr too).  It runs in a process of its own
+    (:mod:`.isolated`).  A signal during it is recorded for the command's exit status
+    (130/143) as one while the cluster closes.
 
     ``before``: campaign.json as the campaign found it (a resumed one's).  Its nominal run
     is kept, not made again, when it has metrics, the same command and the same
@@ -25,7 +26,6 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     content, :func:`.engine.open_directory`); otherwise it is made again, and stderr says
     why."""
     from ..cosim.master import Interrupted
-    from ..runner import run
 
     spec = plan.spec
     grid = {
@@ -47,8 +47,8 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
             return {"command": command, "metrics": held["metrics"]}
         print(f"campaign: the nominal run in campaign.json {differs}: made again", file=sys.stderr)
     print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
-    try:
-        _, summary = run(spec.target, plan.run_options(grid))
+    try:  # in a process of its own: an FMU crashing there does not end the campaign
+        summary = isolated.run(spec.target, plan.run_options(grid))
     except (Exception, KeyboardInterrupt) as failure:  # the runs are made: not worth failing
         if isinstance(failure, Interrupted):
             engine.INTERRUPTS.signals.append(failure.signal)

@@ -27,6 +27,7 @@ from ..system.parameters import (
     choice_names,
     choice_value,
     did_you_mean,
+    typed_parameters,
     variables,
 )
 from . import dispersion as dispersions
@@ -131,6 +132,7 @@ class Plan:
         self.tables = {name: variables(d) for name, d in self.described.items()}
         self.values = {f"{p.component}.{p.name}": p.value for p in self.system.parameters}
         self.values.update(spec.set)
+        typed_parameters(self.described, spec.set)  # a bad value: here, not in every run
         self.dispersions = [dispersions.parse(text) for text in spec.vary]
         keys = [d.key for d in self.dispersions]
         twice = sorted({k for k in keys if keys.count(k) > 1})
@@ -296,6 +298,7 @@ class Plan:
                 f"{d.instance}.{var.name} has shape {shape}"
             )
         nominal = flat.reshape(shape)
+        _elementwise_on_a_symmetric_matrix(d, nominal)
         if d.kind == "inertia" and not (
             np.allclose(nominal, nominal.T) and np.linalg.eigvalsh(nominal).min() > 0
         ):
@@ -388,3 +391,27 @@ def _scalar_names(key: str, shape) -> list[str]:
 
 def time_axis(plan: Plan) -> np.ndarray:
     return plan.start + plan.step * np.arange(plan.points)
+
+
+def _elementwise_on_a_symmetric_matrix(d, nominal: np.ndarray) -> None:
+    """A random draw per element of a whole symmetric positive definite matrix (an
+    inertia) would make no run's matrix symmetric: every run would fail ("inertia must be
+    symmetric").  Refused up front, saying what disperses one."""
+    square = nominal.ndim == 2 and nominal.shape[0] == nominal.shape[1] > 1
+    if not (square and d.kind in ("normal", "uniform", "choice", "integers")):
+        return
+    if not (np.allclose(nominal, nominal.T) and np.linalg.eigvalsh(nominal).min() > 0):
+        return  # not an inertia-like matrix (a misalignment's draws are free)
+    expression = d.text.partition("=")[2].lstrip("+*")
+    hint = ""
+    if not d.mode and np.abs(nominal).max() > 10 * max(map(abs, d.args)):
+        hint = (
+            f" (and it draws them around {d.args[0]:g}, the nominal's are up to "
+            f"{np.abs(nominal).max():g}: a leading * multiplies the nominal)"
+        )
+    raise ValueError(
+        f"--vary {d.text}: draws each of the {nominal.size} elements of {d.key} on its own"
+        f"{hint}, so no run's matrix would be symmetric as the nominal is: inertia(sd_rel, "
+        f"sd_angle) disperses an inertia (its principal moments by sd_rel, its axes by "
+        f"sd_angle), or disperse elements one by one ({d.key}[1,1]=*{expression})"
+    )

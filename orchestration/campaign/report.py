@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output.recorder import atomically
 from ..system.units import display_factor, pretty
 
 PERCENTILES = (1, 5, 50, 95, 99)
@@ -106,7 +107,7 @@ def write_table(array: np.ndarray, out: Path) -> list[Path]:
     """runs.csv (floats written exactly: repr round-trips; no value: an empty cell), and
     runs.parquet with pyarrow."""
     path = out / "runs.csv"
-    with path.open("w", newline="") as stream:
+    with atomically(path) as temporary, temporary.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(array.dtype.names)
         for row in array.tolist():
@@ -117,7 +118,8 @@ def write_table(array: np.ndarray, out: Path) -> list[Path]:
         import pyarrow.parquet as pq
     except ImportError:
         return written
-    pq.write_table(pa.table({n: array[n] for n in array.dtype.names}), out / "runs.parquet")
+    with atomically(out / "runs.parquet") as temporary:
+        pq.write_table(pa.table({n: array[n] for n in array.dtype.names}), temporary)
     return written + [out / "runs.parquet"]
 
 
@@ -370,8 +372,16 @@ def _save(fig, ax, path: Path) -> Path:
 
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=DPI, metadata={"Title": ax.get_title()})
-    plt.close(fig)
+    try:
+        with atomically(path) as temporary:  # an error naming the file, no half PNG
+            fig.savefig(
+                temporary,
+                dpi=DPI,
+                format=Path(path).suffix[1:],
+                metadata={"Title": ax.get_title()},
+            )
+    finally:
+        plt.close(fig)
     return path
 
 

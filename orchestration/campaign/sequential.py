@@ -19,6 +19,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from ..output.lock import holding
 from ..output.recorder import write_text
 from . import dispersion
 from .files import read_object
@@ -44,7 +45,6 @@ def run_until_decided(spec: Spec, max_runs: int | None, out_dir, resume: bool, r
     ``run(spec, resume)`` makes one look (:func:`.run_campaign` with the cluster's
     options) and returns its :class:`.Campaign`.  ``spec.runs`` is the first look."""
     from ..mission.targets import resolve
-    from ..pointing.verdicts import next_look
 
     found = resolve(spec.target)
     requirements = over_campaign(found.scenario, found.variant)
@@ -69,6 +69,14 @@ def run_until_decided(spec: Spec, max_runs: int | None, out_dir, resume: bool, r
         runs = max(runs, int(saved.get("spec", {}).get("runs", runs)))  # the look being made
     if runs > max_runs:
         raise ValueError(f"--until-decided: --runs {runs} is more than --max-runs {max_runs}")
+    with holding(out):  # between the looks too: no other campaign takes the directory
+        return _looks(spec, runs, looks, max_runs, out, resume, run)
+
+
+def _looks(spec: Spec, runs: int, looks: list, max_runs: int, out: Path, resume: bool, run):
+    """The looks of :func:`run_until_decided`, from one of ``runs`` on."""
+    from ..pointing.verdicts import next_look
+
     while True:
         result = run(replace(spec, runs=runs, vary=list(spec.vary), set=dict(spec.set)), resume)
         resume = True  # the next looks extend it

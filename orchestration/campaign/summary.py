@@ -60,6 +60,7 @@ def finish(
         "grid": {"keys": plan.grid_keys, "points": len(plan.grid)},
         "system": str(plan.system.path),
         "system_sha256": previous.get("system_sha256"),
+        "code_sha256": previous.get("code_sha256"),
         "settings": {
             "start": plan.start,
             "stop": plan.stop,

@@ -51,15 +51,19 @@ def dask_setup(worker) -> None:
 
 class _ClosedConnection(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
+        from asyncio import CancelledError
+
         from distributed.comm.core import CommClosedError
 
         error = record.exc_info[1] if record.exc_info else None
-        return not isinstance(error, CommClosedError)
+        return not isinstance(error, (CommClosedError, CancelledError))
 
 
 def quiet_closed_connections() -> None:
     """Dask logs a traceback of every connection a closing cluster cuts while a worker,
-    nanny or client still used it (a heartbeat, CommClosedError): those log records are
+    nanny or client still used it (a heartbeat, CommClosedError), and of the client's
+    attempts to reconnect to a scheduler that is gone, cancelled as the campaign closes it
+    (CancelledError; the campaign says the scheduler was lost): those log records are
     dropped by Dask's log handlers in this process (any other is printed)."""
     for handler in logging.getLogger("distributed").handlers:
         if not any(isinstance(f, _ClosedConnection) for f in handler.filters):

@@ -42,7 +42,20 @@ def main(argv=None) -> int:
     """The command line.  Nothing heavy is imported here: each command imports what it
     uses (``agilesat --help`` and ``agilesat run --no-figures`` load no matplotlib)."""
     program = argv is None  # the process ends with the command
-    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        return _main(sys.argv[1:] if program else list(argv), program)
+    except KeyboardInterrupt:  # before a command took the signals (arguments, imports)
+        print("agilesat: interrupted by SIGINT", file=sys.stderr)
+        return 128 + signal.SIGINT
+    finally:
+        if program:
+            # the exit status is decided: a signal while the process exits changes nothing
+            # (Python's finalisation would restore the default handlers: killed by it)
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(signum, signal.SIG_IGN)
+
+
+def _main(argv: list, program: bool) -> int:
     campaign = bool(argv) and argv[0] == "campaign"
     commands = {**system.COMMANDS, **studies.COMMANDS, **pointing.COMMANDS}
     commands.update(report.COMMANDS, **ephemeris.COMMANDS)
@@ -68,6 +81,8 @@ def main(argv=None) -> int:
                 print(f"agilesat {args.command}: {exc}", file=sys.stderr)
                 return 128 + exc.signal
             message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+            if isinstance(exc, OSError) and exc.filename and exc.strerror:  # not [Errno 30]
+                message = f"{exc.filename}: {exc.strerror}"
             print(f"agilesat {args.command}: error: {message}", file=sys.stderr)
             return 1
         if signals is not None and signals.signal is not None:  # at the very end

@@ -245,8 +245,11 @@ def format_campaign(summary: dict) -> str:
         f"{runs['lost']} lost with their workers"
     ]
     for lost in summary["lost_workers"]:
+        held = lost["runs_in_flight"]
         lines.append(
-            f"  worker {lost['worker']} died; Dask re-ran runs {lost['runs_in_flight']} elsewhere"
+            f"  worker {lost['worker']} died; Dask re-ran runs {held} elsewhere"
+            if held
+            else f"  worker {lost['worker']} left with no run in flight: nothing was re-run"
         )
     warm = summary.get("warm_up")
     if warm and warm["processes"]:

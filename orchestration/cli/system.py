@@ -141,29 +141,38 @@ def _info(args) -> int:
 
 def _build(args) -> int:
     from ...fmus import FMUS
-    from ...fmus.build import BUILD_DIR, build_fmu
-    from ..output.progress import Progress
+    from ...fmus.build import BUILD_DIR
 
     models = [n for n in args.names if n.endswith(".py") or ".py:" in n]
-    if models:
-        return _build_models(models, args)
-    names = args.names or list(FMUS)
+    try:
+        if models:
+            return _build_models(models, args)
+        return _build_fmus(args.names or list(FMUS), args.out or BUILD_DIR, args)
+    except OSError as exc:  # a read-only or full --out: say where, not a scratch file's name
+        where = args.out or ("build/ beside each model" if models else BUILD_DIR)
+        raise OSError(
+            f"the FMUs cannot be written into {where}: {exc.strerror or exc}"
+            + (f" ({exc.filename})" if exc.filename else "")
+        ) from None
+
+
+def _build_fmus(names: list[str], out: Path, args) -> int:
+    from ...fmus.build import build_fmu
+    from ..output.progress import Progress
+
     built = []
     with Progress("build", unit="FMU", quiet=args.quiet) as progress:
         for k, name in enumerate(names):
-            target = (args.out or BUILD_DIR) / f"{name}.fmu"
+            target = out / f"{name}.fmu"
             before = target.stat().st_mtime_ns if target.exists() else None
-            path = build_fmu(name, args.out or BUILD_DIR, force=args.force)
+            path = build_fmu(name, out, force=args.force)
             if path.stat().st_mtime_ns != before:
                 built.append(path)
             progress(k + 1, len(names))
     for path in built:
         print(path)
     if not built:
-        print(
-            f"all {len(names)} FMUs up to date in {args.out or BUILD_DIR} (nothing to do; "
-            "--force rebuilds)"
-        )
+        print(f"all {len(names)} FMUs up to date in {out} (nothing to do; --force rebuilds)")
     return 0
 
 
@@ -206,7 +215,10 @@ def _validate(args) -> int:
         return 1
     bad = 0
     for path in paths:
-        problems = validate_fmu(str(path))
+        try:
+            problems = validate_fmu(str(path))
+        except Exception as exc:  # noqa: BLE001 - fmpy's, on a file that is no FMU
+            problems = [f"not a valid FMU: {type(exc).__name__}: {exc}"]
         print(f"{path}: {'OK' if not problems else f'{len(problems)} problem(s)'}")
         for problem in problems:
             print(f"  {problem}")

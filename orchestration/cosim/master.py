@@ -38,7 +38,9 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
    (:func:`.signals.stop_on_signals`):
    the run stops between two macro steps (between two chunks of a few milliseconds of
    the loop), terminates and frees the FMUs, keeps its rows and raises
-   :class:`Interrupted`.  No KeyboardInterrupt is ever raised inside an FMU.
+   :class:`Interrupted`.  A KeyboardInterrupt is raised inside an FMU only by the
+   watchdog, in a call that did not return within its grace of the signal
+   (:mod:`.signals`; pythonfmu answers it fmi2Fatal).
 
 The system is checked against the model descriptions before any FMU is instantiated; open
 inputs follow the rule of :mod:`..system.validation` and the allowed ones are logged (and listed
@@ -222,7 +224,8 @@ def execute(plan: RunPlan) -> Results:
                     "master",
                     f"input {entry['input']} is not connected: {entry['meaning']}",
                 )
-            return _run(plan, instances, log, signals)
+            with signals.watching():
+                return _run(plan, instances, log, signals)
         finally:
             for instance in instances.values():
                 instance.free()
@@ -302,15 +305,16 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
         + (f" in {recorder.csv.path}" if plan.out_dir is not None else "")
     ] + problems
     name = plan.system.path.name
-    if failure is None and signals.signal is not None and recorder.rows < n_steps + 1:
+    stuck = failure is not None and signals.overdue is not None  # the watchdog's doing
+    if (failure is None or stuck) and signals.signal is not None and recorder.rows < n_steps + 1:
         signame = signal.Signals(signals.signal).name
-        raise Interrupted(
-            "\n".join(
-                [f"{name}: interrupted by {signame} after t={results.time[-1]:.6g} s"] + kept
-            ),
-            results,
-            signals.signal,
-        )
+        said = [f"{name}: interrupted by {signame} after t={results.time[-1]:.6g} s"]
+        if stuck:
+            said.append(
+                f"an FMU call did not return within {signals.overdue:g} s of the signal "
+                f"(AGILESAT_STEP_GRACE): stopped inside it; {failure}"
+            )
+        raise Interrupted("\n".join(said + kept), results, signals.signal)
     if failure is not None or problems:
         raise SimulationError("\n".join([f"{name}: {failure or 'results lost'}"] + kept), results)
     return results

@@ -8,6 +8,16 @@ the first and any later one, is a flag until the command ends, so that a second 
 while the results, summary or figures are written changes nothing but the status said.
 The command exits 128 + the first signal's number: 130 for SIGINT, 143 for SIGTERM.
 
+A watchdog keeps a run interruptible when an FMU call does not return (a model stuck in
+its step): once a signal has set the flag while a run's FMUs are being called
+(:meth:`_Stop.watching`), a timer waits ``$AGILESAT_STEP_GRACE`` seconds (default 5) for
+the master to reach the flag; if the run is still inside an FMU's code then, the signal is
+delivered again and its handler raises :class:`StepOverdue` there.  pythonfmu answers that
+call fmi2Fatal, the master calls nothing more on that FMU and stops with every row so far,
+as for any interruption (:class:`.master.Interrupted`).  Code that never returns to the
+interpreter (a compiled kernel in an endless loop that holds it) cannot be stopped from
+inside: SIGKILL then, which leaves what a killed run leaves (docs/reliability.md).
+
 ``$AGILESAT_TEST_SIGNAL`` delivers a signal at a chosen point of a run or a campaign, for
 tests of interruptions that must not race the run on a loaded machine
 (:func:`signal_at`):
@@ -40,15 +50,59 @@ class Interruption(KeyboardInterrupt):
         self.signal = signum
 
 
+class StepOverdue(KeyboardInterrupt):
+    """Raised by the watchdog inside an FMU call that did not return within the grace of
+    the signal that stopped the run (module docstring)."""
+
+
 class _Stop:
     signal: int | None = None  # the first signal
     deferring = True  # a signal is a flag (else: Interruption, the first time)
+    watched = False  # a run's FMUs are being called (the watchdog may stop one)
+    overdue: float | None = None  # the grace after which the watchdog stopped a call
 
-    def handler(self, signum, _frame):
+    def handler(self, signum, frame):
         first = self.signal is None
         self.signal = self.signal or signum
         if first and not self.deferring:
             raise Interruption(signum)
+        if first and self.watched:
+            timer = threading.Timer(self.grace, self._overdue, (self.grace,))
+            timer.daemon = True
+            timer.start()
+        elif self._kick and self.watched and _inside_an_fmu(frame):
+            self._kick = self.watched = False  # once, for the watchdog's own signal
+            raise StepOverdue(f"no return within {self.overdue:g} s of the signal")
+
+    _kick = False  # the watchdog's signal is on its way
+
+    def _overdue(self, grace: float) -> None:
+        """The watchdog (a timer thread): the run has not reached the flag."""
+        if self.watched and self.overdue is None:
+            self.overdue, self._kick = grace, True
+            main = threading.main_thread().ident
+            assert main is not None  # the main thread has started
+            signal.pthread_kill(main, self.signal or signal.SIGINT)
+
+    grace = 5.0  # AGILESAT_STEP_GRACE's, read as the run starts watching
+
+    @contextlib.contextmanager
+    def watching(self):
+        """While inside, the run calls its FMUs: the watchdog may stop a call that does
+        not return after a signal (module docstring)."""
+        self.grace = value("AGILESAT_STEP_GRACE")  # a bad value: said here, not in a handler
+        self.watched = True
+        try:
+            yield self
+        finally:
+            self.watched = False
+
+
+def _inside_an_fmu(frame) -> bool:
+    """The main thread is running code that is not the master's (an FMU's model)."""
+    return frame is not None and not str(frame.f_globals.get("__name__", "")).startswith(
+        __package__.rpartition(".")[0]
+    )
 
 
 _active: _Stop | None = None

@@ -115,8 +115,9 @@ class Metric:
         if value is None:
             return MetricValue(None, unit, "no value")
         value = float(value)
-        if math.isnan(value):
-            return MetricValue(None, unit, "not a number")
+        if not math.isfinite(value):  # a value JSON cannot hold, nor a histogram
+            why = "not a number" if math.isnan(value) else f"{value} (not a finite number)"
+            return MetricValue(None, unit, why)
         return MetricValue(value, unit)
 
     def raised(self, exc: Exception) -> str:
@@ -180,31 +181,36 @@ def settling_time(
     bound,
     *,
     after: float | None = None,
+    norm: bool = False,
     name: str = "settling_time",
     display_unit: str | None = "s",
     description: str | None = None,
     require=None,
     paper: float | None = None,
 ) -> Metric:
-    """The time from which |signal| ≤ ``bound`` (every element) to the end of the run: the
-    first sample after the last one outside, or ``after`` (the run's start if None) when
-    none is outside from then on.  No value ("not settled") when the last sample is
-    outside; not evaluable when the run ends before ``after``."""
+    """The time from which the signal is within ``bound`` to the end of the run: every
+    element, |x_i| ≤ bound (per axis, the default), or with ``norm`` the vector's
+    Euclidean norm, ‖x‖ ≤ bound (a 3-axis rate or pointing error as one).  The first
+    sample after the last one outside, or ``after`` (the run's start if None) when none is
+    outside from then on.  No value ("not settled") when the last sample is outside; not
+    evaluable when the run ends before ``after``."""
+    label = f"‖{_label(signal)}‖" if norm else f"|{_label(signal)}|"
 
     def compute(results):
         t, x, unit = _signal(results, signal, after)
         limit = _si(bound, unit)
-        outside = np.flatnonzero((np.abs(x) > limit).any(axis=1))
+        size = np.linalg.norm(x, axis=1, keepdims=True) if norm else np.abs(x)
+        outside = np.flatnonzero((size > limit).any(axis=1))
         if not len(outside):
             return (after if after is not None else float(t[0])), "s"
         if outside[-1] == len(t) - 1:
             shown = format_value(limit, unit, to_degrees(unit)[1])  # 0.01 °/s, not 1.745e-4
             raise NotEvaluable(
-                f"not settled: |{_label(signal)}| > {shown} at the end of the run (t = {t[-1]:g} s)"
+                f"not settled: {label} > {shown} at the end of the run (t = {t[-1]:g} s)"
             )
         return float(t[outside[-1] + 1]), "s"
 
-    text = description or f"from then on |{_label(signal)}| ≤ {bound}"
+    text = description or f"from then on {label} ≤ {bound}"
     return _metric(name, compute, "s", display_unit, text, require, paper)
 
 

@@ -39,7 +39,7 @@ import numpy as np
 from ..output.kept_signals import reached_the_end
 from ..output.summary import requirement_text
 from ..pointing.errors import quaternion_columns, recorded_error
-from ..system.units import quantity, to_si
+from ..system.units import CONVERSIONS, quantity, to_si
 from .system import where_written
 
 MET, NOT_MET, UNDECIDED = "met", "not met", "undecided"
@@ -102,6 +102,22 @@ class Bound(Requirement):
     def __post_init__(self):
         if self.min is None and self.max is None:
             raise ValueError("a bound needs min, max or both")
+        given = {
+            k: _bound_si(k, getattr(self, k))
+            for k in ("min", "max")
+            if getattr(self, k) is not None
+        }
+        if len(given) == 2:
+            (low, low_unit), (high, high_unit) = given["min"], given["max"]
+            if None not in (low_unit, high_unit) and low_unit != high_unit:
+                raise ValueError(
+                    f"a bound in [{self.min}, {self.max}]: its ends are not in one unit"
+                )
+            if low > high:
+                raise ValueError(
+                    f"a bound in [{self.min}, {self.max}]: its lower end is above its upper "
+                    "end, so no value meets it"
+                )
         if not self.name and self.metric:
             object.__setattr__(self, "name", self.metric)
         if not self.origin:
@@ -144,6 +160,26 @@ class Bound(Requirement):
         limits = self.limits(m.unit)
         ok = limits.get("min", -math.inf) <= m.value <= limits.get("max", math.inf)
         return Verdict(MET if ok else NOT_MET, m.value)
+
+
+def _bound_si(key: str, value) -> tuple[float, str | None]:
+    """(the SI number, its SI unit or None for a bare number) of a bound's ``min`` or
+    ``max``; a ValueError unless it is a finite number (SI, or with a unit)."""
+    given = quantity(value)
+    number = value if given is None else given.value
+    try:
+        finite = isinstance(number, (int, float, np.number)) and math.isfinite(number)
+    except TypeError:
+        finite = False
+    if not finite or isinstance(number, bool):
+        raise ValueError(
+            f"a bound's {key} must be a finite number (SI, or with a unit such as "
+            f'"0.5 deg"), got {value!r}'
+        )
+    if given is None:
+        return float(number), None
+    unit = CONVERSIONS[given.unit][0] if given.unit in CONVERSIONS else given.unit
+    return float(to_si(given, unit)), unit
 
 
 def at_most(value) -> Bound:

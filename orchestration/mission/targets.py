@@ -276,10 +276,38 @@ def load_file(path: Path) -> Scenario:
         sys.modules[module_name] = module
         try:
             spec.loader.exec_module(module)  # type: ignore[union-attr]
+        except SystemExit as exc:  # not the end of agilesat's command: no scenario to run
+            del sys.modules[module_name]
+            raise MissionError(
+                f"{path}: importing it called sys.exit({exc.code!r}), so it defines no scenario "
+                "to run (a mission file defines SCENARIO; run code only under "
+                "`if __name__ == '__main__':`)"
+            ) from None
+        except Exception as exc:
+            del sys.modules[module_name]
+            raise MissionError(f"{path}: importing it raised {_where(exc, path)}") from exc
         except BaseException:
             del sys.modules[module_name]
             raise
     return _scenario_of(module, str(path))
+
+
+class MissionError(ValueError):
+    """A mission file that could not be imported (the message names it and the line)."""
+
+
+def _where(exc: BaseException, path: Path) -> str:
+    """'ValueError: ... (line 12: the line's code)' at the mission file's last line in the
+    traceback (the user's mistake is there, not in the toolkit below it)."""
+    import traceback
+
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if Path(f.filename) == path]
+    if isinstance(exc, SyntaxError) and exc.lineno and Path(str(exc.filename)) == path:
+        return f"SyntaxError: {exc.msg} (line {exc.lineno}: {(exc.text or '').strip()})"
+    text = f"{type(exc).__name__}: {exc}"
+    if frames:
+        text += f" (line {frames[-1].lineno}: {frames[-1].line})"
+    return text
 
 
 def _scenario_of(module, where: str) -> Scenario:

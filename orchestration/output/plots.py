@@ -35,6 +35,7 @@ from pathlib import Path
 from ..system.units import label as unit_label
 from ..system.units import to_degrees
 from . import figure_layout
+from .recorder import atomically
 
 DPI = 200
 #: the formats a figure can be written in: the PNG (the path given) and its vector twin
@@ -460,9 +461,11 @@ def _save(fig, axes, path: Path, title: str, xlabel: str, title_pad=None, title_
     canvas = FigureCanvasAgg(fig)
     figure_layout.draw(fig, axes, canvas)
     png, *others = formats(path)
-    imsave(png, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)  # as savefig
+    with atomically(png) as temporary:  # a full disk: an error naming the file, no half PNG
+        imsave(temporary, canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)
     for target in others:
-        fig.savefig(target, dpi=DPI)
+        with atomically(target) as temporary:
+            fig.savefig(temporary, dpi=DPI, format=Path(target).suffix[1:])
     if watched is not None:
         watched[0].extend([png, *others])
     if _figure_objects.get() is not None:

@@ -7,7 +7,8 @@ Fixtures:
   a mission file ``path/to/mission.py[:variant]`` or an ``.ssd``/``.ssp`` file once per
   session for each distinct set of options (those of :func:`agilesat.orchestration.run`:
   ``step``, ``stop``, ``parameters``, ``figures``, ...) and returns ``(results, summary)``;
-  the run's files are in ``summary["out_dir"]``.
+  the run's files are in ``summary["out_dir"]``.  A run that fails (or bad input) fails
+  the test with its message, as ``agilesat run`` prints it.
 
 Assertions (:mod:`agilesat.orchestration.postprocess.checks`, re-exported here): ``assert_within``,
 ``assert_settles``, ``assert_momentum_conserved``, ``assert_requirements_met``,
@@ -36,11 +37,18 @@ def agilesat_run(tmp_path_factory):
     cache = {}
 
     def run_once(target, **options):
+        __tracebackhide__ = True  # a failure is the test's line and the message
         key = json.dumps([str(target), options], sort_keys=True, default=repr)
         if key not in cache:
             out = tmp_path_factory.mktemp(str(target).replace(":", "-").replace("/", "_")[-40:])
             options = {"figures": False, **options}
-            results, summary = run(target, out_dir=out, **options)
+            failure = None
+            try:
+                results, summary = run(target, out_dir=out, **options)
+            except (KeyError, ValueError, RuntimeError, OSError) as exc:  # as `agilesat run`
+                failure = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+            if failure is not None:
+                pytest.fail(f"agilesat_run({target!r}): {failure}", pytrace=False)
             summary["out_dir"] = str(out)
             cache[key] = results, summary
         return cache[key]

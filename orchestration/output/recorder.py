@@ -26,6 +26,7 @@ the rows offered are numbered from 0, and row n is recorded when n is a multiple
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import zipfile
@@ -60,7 +61,8 @@ class Recorder:
                 _checked(old, partial(old.unlink, missing_ok=True))
             header = (",".join(map(_csv_field, self.columns)) + "\n").encode()
             self.csv = _File(self.out_dir / "results.csv", header)
-            self.raw = _File(self.out_dir / RAW, b"")
+            # its errors name the file a person knows: results.csv, whose rows it holds
+            self.raw = _File(self.out_dir / RAW, b"", self.out_dir / "results.csv")
             self._files = [self.raw, self.csv]
 
     def append(self, row: np.ndarray) -> None:
@@ -149,10 +151,12 @@ class Recorder:
 
 
 class _File:
-    """An append-only file written in whole records with os.write."""
+    """An append-only file written in whole records with os.write; its errors name
+    ``said`` (default ``path``), and ``path`` after it if they differ."""
 
-    def __init__(self, path: Path, header: bytes):
+    def __init__(self, path: Path, header: bytes, said: Path | None = None):
         self.path = path
+        self.said = said or path
         self.fd = _checked(
             path, lambda: os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         )
@@ -168,8 +172,9 @@ class _File:
                 view = view[os.write(self.fd, view) :]
         except OSError as exc:
             self.truncate()
+            also = "" if self.said == self.path else f" (writing its rows to {self.path.name})"
             raise file_error(
-                self.path, exc, f"; kept the {rows} complete rows written before"
+                self.said, exc, f"{also}; kept the {rows} complete rows written before"
             ) from None
 
     def commit(self) -> None:
@@ -197,15 +202,34 @@ def file_error(path, exc: OSError, note: str = "") -> OSError:
 
 
 def write_text(path: Path, text: str) -> None:
-    """Write under a temporary name, then rename (a kill leaves the old file or the new,
-    never half of one); an OSError names the file."""
+    """Write under a temporary name, then rename (:func:`atomically`)."""
+    with atomically(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
+
+
+@contextlib.contextmanager
+def atomically(path: Path):
+    """A temporary name beside ``path`` to write, renamed to ``path`` when the block ends
+    (a kill leaves the old file or the new, never half of one); on an OSError (a full
+    disk, a read-only directory) the temporary is removed and the error names ``path``."""
+    path = Path(path)
     temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
     try:
-        temporary.write_text(text, encoding="utf-8")
+        yield temporary
         os.replace(temporary, path)
     except OSError as exc:
-        temporary.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            temporary.unlink(missing_ok=True)
         raise file_error(path, exc, "; not written") from None
+
+
+def make_directory(path: Path) -> Path:
+    """``path`` created (with its parents) if need be; an OSError names it."""
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise file_error(path, exc, " (the output directory: it cannot be created)") from None
+    return Path(path)
 
 
 def _checked(path, action):
@@ -232,9 +256,8 @@ def write_npz(
     """results.npz (``names``, ``data``, ``units`` as :meth:`Results.to_npz` writes them) from
     the raw float64 rows in ``raw``, copied in chunks; written to a temporary name, then
     renamed."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.partial")
     n = len(names)
-    try:
+    with atomically(path) as temporary:
         with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
             with archive.open("names.npy", "w") as stream:
                 np.lib.format.write_array(stream, np.array(names))
@@ -254,7 +277,3 @@ def write_npz(
                         raise OSError(errno.EIO, f"{raw}: shorter than {rows} rows")
                     stream.write(block)
                     left -= len(block)
-        os.replace(temporary, path)
-    except OSError as exc:
-        temporary.unlink(missing_ok=True)
-        raise file_error(path, exc, "; not written") from None

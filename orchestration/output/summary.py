@@ -36,7 +36,19 @@ def facts(results: Results, wall: float) -> dict:
 
 
 def summary_text(summary: dict) -> str:
-    return json.dumps(summary, indent=2, default=str, ensure_ascii=False) + "\n"
+    """summary.json's text: JSON, which has no Infinity or NaN (a value that is not a
+    finite number is null; a metric's says why in its ``reason``)."""
+    return json.dumps(_finite(summary), indent=2, default=str, ensure_ascii=False) + "\n"
+
+
+def _finite(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
 
 
 def write_records(results: Results, summary: dict, out_dir: Path) -> None:

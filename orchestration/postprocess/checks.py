@@ -2,6 +2,8 @@
 
 Each raises ``AssertionError`` with what failed, where (time) and by how much; values are
 in the signal's unit (SI) unless ``deg=True`` (the bound then in degrees, for angles).
+pytest shows the failing test's line and this message, not the code here
+(``__tracebackhide__``).
 A signal is a column (``SatelliteDynamics.w_BI_B[2]``) or a whole array by base name
 (``AttitudeController.att_error``: every element must hold).
 """
@@ -14,6 +16,7 @@ from ..system.units import join, pretty, to_degrees
 
 
 def _signal(results, name, start, stop, deg):
+    __tracebackhide__ = True
     t = results.time
     rows = np.ones(len(t), bool)
     if start is not None:
@@ -41,6 +44,7 @@ def assert_within(
     deg: bool = False,
 ) -> None:
     """Every element of ``name`` in [low, high] (either may be None) over [start, stop]."""
+    __tracebackhide__ = True
     t, values, unit = _signal(results, name, start, stop, deg)
     for bound, bad, word in (
         (low, values < low if low is not None else None, "below"),
@@ -60,6 +64,7 @@ def assert_within(
 def assert_settles(results, name: str, bound: float, after: float, *, deg: bool = False) -> None:
     """|name| ≤ bound (every element) from t = ``after`` to the end: e.g. the pointing error
     below 0.01° after a 60-s settling time."""
+    __tracebackhide__ = True
     t, values, unit = _signal(results, name, after, None, deg)
     magnitude = np.abs(values)
     if (magnitude > bound).any():
@@ -74,6 +79,7 @@ def assert_momentum_conserved(
     results, rtol: float = 1e-9, name: str = "SatelliteDynamics.H_I"
 ) -> None:
     """max |H(t) − H(0)| / |H(0)| ≤ rtol for the recorded inertial momentum ``name``."""
+    __tracebackhide__ = True
     H = results.vector(name)
     drift = np.linalg.norm(H - H[0], axis=1) / max(np.linalg.norm(H[0]), 1e-300)
     if drift.max() > rtol:
@@ -111,6 +117,7 @@ def assert_requirements_met(summary: dict, *names: str, accept_undecided: bool =
     ``accept_undecided``; not evaluated (a metric without a value) fails, saying why; a
     requirement the variant does not judge is left out, or fails if named.  A summary
     without verdicts: each metric with a requirement against it."""
+    __tracebackhide__ = True
     if "ensemble" in summary and "pass_rates" in summary:
         verdicts = _campaign_verdicts(summary)
     elif "requirements" in summary:
@@ -172,6 +179,7 @@ def _campaign_verdicts(summary: dict) -> dict:
 
 
 def _metrics_meet(summary: dict, names) -> None:
+    __tracebackhide__ = True
     metrics = summary["metrics"]
     unknown = [n for n in names if n not in metrics]
     if unknown:
@@ -215,6 +223,7 @@ def assert_pointing(
     undecided (the runs show neither compliance nor a violation at the ``confidence``;
     unless ``accept_undecided``) and when it is not evaluated (a record too short), saying
     which and why; returns the :class:`..pointing.PointingResult`."""
+    __tracebackhide__ = True
     from ..pointing import PointingRequirement
     from .recorded import evaluate
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from agilesat.components.cmg_cluster import N_GYROS, PYRAMID_AZIMUTHS
 from agilesat.components.satellite_dynamics import N_MODES
-from agilesat.orchestration.mission import Metric, Variant, panels
+from agilesat.orchestration.mission import Metric, NotEvaluable, Variant, panels
 from agilesat.orchestration.pointing import ErrorHistory, index_series, magnitude
 
 DEG = math.pi / 180
@@ -126,6 +126,11 @@ def stability(error, start: float, stop: float) -> dict:
     """{"RPE": (t, |RPE|), "PDE": (t, |PDE|)} of ``error(results)`` (an ErrorHistory) over
     [start, stop] (module docstring)."""
     t = error.t
+    if not len(t) or t[-1] < stop - 1e-9:  # a run ended (--stop, a signal) before its end
+        end = f"t = {t[-1]:g} s" if len(t) else "no record"
+        raise NotEvaluable(
+            f"the records end at {end}, before the imaging window [{start:g}, {stop:g}] s ends"
+        )
     inside = (t >= start - 1e-9) & (t <= stop + 1e-9)
     window = ErrorHistory(error.values[:, inside], t[inside], error.kind, error.signal)
     return {

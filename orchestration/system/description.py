@@ -93,15 +93,49 @@ def _described(key: str, path: str):
     with _lock:
         described = _descriptions.get(key)
     if described is None:
-        with zipfile.ZipFile(path) as archive:
-            root = etree.fromstring(archive.read("modelDescription.xml"))
-        md = read_model_description(path)
+        root = _root(path)
+        try:
+            md = read_model_description(path)
+        except Exception as exc:  # noqa: BLE001 - fmpy's validation: say what, not a traceback
+            said = " ".join(str(exc).split())
+            raise FMUFileError(
+                f"{path}: its modelDescription.xml is not an FMI 2.0 model description: "
+                f"{said[:300]}{'...' * (len(said) > 300)}"
+            ) from None
         described = (md, _optional_inputs(root), _base_units(root), _binaries(root), _Read(md))
         with _lock:
             if len(_descriptions) >= _KEYS_KEPT:
                 _descriptions.pop(next(iter(_descriptions)))
             _descriptions[key] = described
     return described
+
+
+class FMUFileError(ValueError):
+    """A file that is not an FMU this toolkit runs (the message names it and says why)."""
+
+
+def _root(path: str):
+    """The root element of the FMU's modelDescription.xml, of an FMI 2.0 FMU."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            text = archive.read("modelDescription.xml")
+        root = etree.fromstring(text)
+    except (zipfile.BadZipFile, EOFError) as exc:
+        raise FMUFileError(
+            f"{path}: not an FMU: {exc} (an FMU is a zip archive holding modelDescription.xml; "
+            "a cut or damaged file?)"
+        ) from None
+    except KeyError:
+        raise FMUFileError(f"{path}: not an FMU: it holds no modelDescription.xml") from None
+    except etree.XMLSyntaxError as exc:
+        raise FMUFileError(f"{path}: its modelDescription.xml is not XML: {exc}") from None
+    version = root.get("fmiVersion")
+    if version != "2.0":
+        raise FMUFileError(
+            f"{path}: an FMU of FMI {version or '(no fmiVersion)'}: agilesat runs FMI 2.0 "
+            "co-simulation FMUs"
+        )
+    return root
 
 
 def _dependencies(unknowns) -> dict[str, set[str] | None]:

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...components.runtime import choices
-from .ssp import ParameterValue, SystemFileError
+from .ssp import INTEGER_RANGE, ParameterValue, SystemFileError
 from .units import Quantity, is_unit, pretty, quantity, to_si
 
 _ELEMENT = re.compile(r"^(.*)\[([0-9,]+)\]$")
@@ -178,23 +178,25 @@ def typed_value(description, key: str, value, origin: str | None = None) -> Para
     kind = declared.type
     names = choice_names(declared)
     with_unit = quantity(value) if kind == "Real" else None
+    # "--set A.x=v", or where it was given and what: "mission.py:12: A.x=v"
+    given = f"{origin}={value}" if origin == f"--set {key}" else f"{origin}: {key}={value}"
     if names is not None:
-        value = choice_value(variable, names, value, f"{origin}={value}")
+        value = choice_value(variable, names, value, given)
     elif with_unit is not None:
         display = _display_units(description, declared)
-        if with_unit.unit != declared.unit and not is_unit(with_unit.unit, display):
-            raise SystemFileError(
-                f"{origin}={value}: expected a finite Real number (like 0.01 or 1e-3), or one "
-                f"with a unit: {with_unit.unit!r} is no unit"
-            )
         try:
             value = float(to_si(with_unit, declared.unit, display))
         except ValueError as exc:
-            raise SystemFileError(f"{origin}: {name}.{variable}: {exc}") from None
+            said = str(exc)
+            if not is_unit(with_unit.unit, display):  # 0x10, "5 apples"
+                said = (
+                    f"expected a finite Real number (like 0.01 or 1e-3), or one with a unit: {said}"
+                )
+            raise SystemFileError(f"{given}: {said}") from None
     elif kind in _READERS:
         if isinstance(value, Quantity):
             raise SystemFileError(f"{origin}: {name}.{variable} is an {kind}, not {value}")
-        value = _READERS[kind](value, f"{origin}={value}")
+        value = _READERS[kind](value, given)
     return ParameterValue(name, variable, kind, value, origin)
 
 
@@ -212,8 +214,6 @@ def _display_units(description, variable) -> list[tuple[str, float, float]]:
 _REAL = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 _INTEGER = re.compile(r"^[+-]?\d+$")
 _BOOLEANS = {"true": True, "false": False, "1": True, "0": False}
-#: fmi2Integer is a 32-bit int (FMI 2.0 section 2.1.2)
-INTEGER_RANGE = (-(2**31), 2**31 - 1)
 
 
 def _real(value, where: str) -> float:

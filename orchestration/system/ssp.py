@@ -11,8 +11,9 @@ declared connectors) is :func:`validation.check_system`, which needs the model d
 An ``.ssp`` package is unpacked into a temporary directory, refusing members with absolute
 paths or ``..`` and more than ``max_unpacked`` bytes in total, counting what its FMUs unpack
 to when they run (default :data:`MAX_UNPACKED_BYTES`, 256 MiB, or the environment variable
-``AGILESAT_SSP_MAX_BYTES``); its component and parameter-binding sources must resolve
-inside the package.  A parameter bound twice in one parameter set is refused.
+``AGILESAT_SSP_MAX_BYTES``) or more than :data:`MAX_MEMBERS` members (in it or in an FMU
+in it); its component and parameter-binding sources must resolve inside the package.  A
+parameter bound twice in one parameter set is refused.
 
 Write: :func:`render_ssd` writes a :class:`SystemFile` (read from a file, or made in Python
 by :class:`..mission.System`) as an SSD: each component's connectors, types and units as its
@@ -46,7 +47,11 @@ OMS_ANNOTATION = "org.openmodelica"
 OMS_NAMESPACE = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 _PREFIXES = {**NS, "agilesat": MASTER_NAMESPACE, "osp": OSP_NAMESPACE, "oms": OMS_NAMESPACE}
 _TYPES = ("Real", "Integer", "Boolean", "String")
+#: fmi2Integer is a 32-bit int (FMI 2.0 section 2.1.2)
+INTEGER_RANGE = (-(2**31), 2**31 - 1)
 MAX_UNPACKED_BYTES = 256 * 2**20
+#: the most members an .ssp package, or an FMU inside it, may have
+MAX_MEMBERS = 10_000
 
 
 class SystemFileError(ValueError):
@@ -139,6 +144,7 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
     """Unpack an SSP package into root: no member outside it, at most limit bytes."""
     if limit is None:
         limit = switch("AGILESAT_SSP_MAX_BYTES") or MAX_UNPACKED_BYTES
+    _count_members(path, path)
     try:
         with zipfile.ZipFile(path) as archive:
             members = archive.infolist()
@@ -180,11 +186,42 @@ def _unpack(path: Path, root: Path, limit: int | None) -> None:
     _nested_fmus(path, root, total, limit)
 
 
+def _count_members(path: Path, what) -> None:
+    """At most :data:`MAX_MEMBERS` members in the zip archive ``path``, counted from its end
+    of central directory record before anything reads the directory (zipfile holds an
+    object of some hundred bytes per member: a million empty members would take a
+    gigabyte before the size limit is looked at).  Not a zip: left to zipfile to say."""
+    try:
+        with open(path, "rb") as file:
+            file.seek(0, 2)
+            size = file.tell()
+            file.seek(max(0, size - (1 << 16) - 22))
+            tail = file.read()
+            at = tail.rfind(b"PK\x05\x06")
+            if at < 0 or len(tail) < at + 22:
+                return
+            count = int.from_bytes(tail[at + 10 : at + 12], "little")
+            locator = at - 20
+            if count == 0xFFFF and locator >= 0 and tail[locator : locator + 4] == b"PK\x06\x07":
+                file.seek(int.from_bytes(tail[locator + 8 : locator + 16], "little"))
+                record = file.read(56)
+                if record[:4] == b"PK\x06\x06":
+                    count = int.from_bytes(record[32:40], "little")
+    except OSError:
+        return
+    if count > MAX_MEMBERS:
+        raise SystemFileError(
+            f"{what}: a zip archive of {count} members, more than the {MAX_MEMBERS} a "
+            "package (or an FMU in it) may have: refused before unpacking"
+        )
+
+
 def _nested_fmus(path: Path, root: Path, total: int, limit: int) -> None:
     """The bound covers what the package's FMUs unpack to when they are run (each one is
     unpacked by the master: ``cosim/fmu.py``), by their declared sizes, which unpacking
     holds them to (zipfile stops at a member's declared size: its CRC then fails)."""
     for fmu in sorted(root.rglob("*.fmu")):
+        _count_members(fmu, f"{path}: {fmu.relative_to(root)}")
         try:
             with zipfile.ZipFile(fmu) as archive:
                 size = sum(info.file_size for info in archive.infolist())
@@ -397,7 +434,12 @@ def _parse_value(kind, element, origin):
                 raise ValueError("not finite")
             return value
         if kind == "Integer":
-            return int(text)
+            value = int(text)
+            if not INTEGER_RANGE[0] <= value <= INTEGER_RANGE[1]:  # it would wrap
+                raise ValueError(
+                    f"an Integer is from {INTEGER_RANGE[0]} to {INTEGER_RANGE[1]} (32 bits)"
+                )
+            return value
         if kind == "Boolean":
             if text not in ("true", "false", "1", "0"):
                 raise ValueError("expected true or false")

@@ -57,6 +57,7 @@ _KINDS = {
     "1": "a number without unit",
 }
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+_PLAIN = re.compile(rf"^\s*{_NUMBER}\s*$")
 _WITH_UNIT = re.compile(rf"^\s*({_NUMBER}|\[.*\])\s*([A-Za-zµ°][A-Za-z0-9µ°/.·²³]*)\s*$", re.S)
 
 
@@ -163,7 +164,7 @@ def quantity(value) -> Quantity | None:
     if not isinstance(value, str):
         return None
     match = _WITH_UNIT.match(value)
-    if match is None:
+    if match is None or _PLAIN.match(value):  # "2e4" is a number, not 2 in a unit "e4"
         return None
     number, unit = match.groups()
     if number.startswith("["):

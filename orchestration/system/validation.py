@@ -121,8 +121,25 @@ def variable_pair_problems(at: str, a, va, b, vb) -> list[str]:
 
 def _binding_problems(instances, bindings) -> list[str]:
     """Parameter values; the rule: each names a variable of a known component that is a
-    parameter or an input (not a constant), and has that variable's type."""
+    parameter or an input (not a constant), and has that variable's type; two variables
+    that are one in the FMU (the same value reference and type: aliases, FMI 2.0 section
+    2.2.7) are not given two values."""
     problems = []
+    last = {(value.component, value.name): value for value in bindings}  # the value set last
+    aliases: dict[tuple, ParameterValue] = {}
+    for value in last.values():
+        var = getattr(instances.get(value.component), "variables", {}).get(value.name)
+        if var is None:
+            continue
+        key = (value.component, var.type, var.valueReference)
+        other = aliases.setdefault(key, value)
+        if other is not value and other.value != value.value:
+            problems.append(
+                f"{value.origin} and {other.origin}: {value.component}.{value.name}="
+                f"{value.value} and {other.name}={other.value}: the FMU has them as one "
+                f"variable (value reference {var.valueReference}: aliases), which cannot "
+                "take two values"
+            )
     for value in bindings:
         inst = instances.get(value.component)
         if inst is None:

@@ -262,3 +262,9 @@ def test_the_orbit_frame_outputs_are_the_estimate_seen_from_o():
     model.set("q_OI", [1.0, 0.0, 0.0, 0.1])
     with pytest.raises(ModelError, match="q_OI must be a unit quaternion"):
         model.output()
+
+
+def test_a_history_longer_than_it_keeps_is_refused_at_initialisation():
+    """2·10⁴ s at 20 Hz is 400,005 records (it took 3.3 GB): refused, saying why."""
+    with pytest.raises(ModelError, match=r"history 20000 s at rate 20 Hz is 400005 filter records"):
+        AttitudeEstimator(history=2e4).start(0.0)

@@ -391,9 +391,10 @@ def test_bad_parameters_raise(name, value, match):
         model.initialize(0.0)
 
 
-def test_perigee_below_ground_warns():
-    model = OrbitEnvironment(semi_major_axis=7.0e6, eccentricity=0.2).start(0.0)
-    assert any("below the Earth's surface" in w for w in model.warnings)
+def test_an_orbit_through_the_earth_is_refused():
+    """Perigee 5600 km from the centre: below the polar radius (it used to run, warned)."""
+    with pytest.raises(ModelError, match=r"inside the Earth: its perigee radius .* 5600000 m"):
+        OrbitEnvironment(semi_major_axis=7.0e6, eccentricity=0.2).start(0.0)
     assert not OrbitEnvironment().start(0.0).warnings
 
 

@@ -140,9 +140,12 @@ def test_initial_state_relative_to_a_rotating_orbit_frame():
     [
         (np.array([[1.0, 0.5, 0], [0, 1.0, 0], [0, 0, 1.0]]), "symmetric"),
         (np.diag([1.0, -1.0, 1.0]), "positive definite"),
+        (np.diag([100.0, 100.0, 300.0]), "no rigid body has it: its largest principal moment"),
     ],
 )
 def test_bad_inertia_is_rejected(inertia, message):
+    """Symmetric, positive definite and within the triangle inequality of principal
+    moments (a plate, J_z = J_x + J_y, is the limit: test_gravity_gradient_needs_a_position)."""
     with pytest.raises(ModelError, match=message):
         body(inertia=inertia).start()
 

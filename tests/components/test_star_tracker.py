@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from agilesat.components.model import ModelError
 from agilesat.components.rotations import dcm_from_quat, quat_conj, quat_from_axis_angle, quat_mul
 from agilesat.components.sensing import EARTH_RADIUS, quat_exp, rotation_vector
 from agilesat.components.star_tracker import StarTracker
@@ -141,3 +142,8 @@ def test_the_noise_record_does_not_depend_on_the_master_step():
             out[round((n + 1) * h, 9)] = model.y.q_BI_meas.tobytes()
         runs[h] = out
     assert all(runs[0.05][t] == runs[0.25][t] == runs[0.125][t] for t in runs[0.25])
+
+
+def test_a_latency_queue_longer_than_it_holds_is_refused_at_initialisation():
+    with pytest.raises(ModelError, match=r"latency 10000 s at rate 4 Hz is 40003 samples"):
+        StarTracker(latency=1e4).start(0.0)

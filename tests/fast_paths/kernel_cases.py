@@ -261,6 +261,7 @@ CASES = {
     "orbit_j2_eccentric_epoch": (
         OrbitEnvironment,
         {
+            "semi_major_axis": 1.0e7,  # perigee 7000 km: above the ground
             "eccentricity": 0.3,
             "j2": True,
             "raan": 1.0,
@@ -272,7 +273,10 @@ CASES = {
             "target_alt": 100.0,
         },
     ),
-    "orbit_very_eccentric": (OrbitEnvironment, {"eccentricity": 0.9, "earth_angle0": 1.0}),
+    "orbit_very_eccentric": (
+        OrbitEnvironment,
+        {"semi_major_axis": 7.0e7, "eccentricity": 0.9, "earth_angle0": 1.0},
+    ),
     "orbit_tle": (OrbitEnvironment, {"tle_line1": ISS_TLE[0], "tle_line2": ISS_TLE[1]}),
 }
 

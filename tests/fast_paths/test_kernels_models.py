@@ -206,7 +206,7 @@ def test_the_pseudo_inverse_at_a_singularity_leaves_the_singular_direction_undel
 
 @needs_numba
 def test_kepler_not_converging_raises_its_model_error_from_the_compiled_path(path):
-    model = OrbitEnvironment(eccentricity=0.3).start(0.0)
+    model = OrbitEnvironment(semi_major_axis=1.0e7, eccentricity=0.3).start(0.0)
     model.state[orbit_environment.S.M0] = math.nan  # no finite input makes Newton fail
     before = model.values.copy()
     with pytest.raises(

@@ -1,8 +1,6 @@
 """Fault injection on our FMU binary, each case in its own process (tests/tools/fault_cases_fmu.py),
 and the resource figures with a small N (the full N: tests/tools/fault_matrix.py)."""
 
-import re
-
 import pytest
 from fault_cases_fmu import CASES, resource_figures
 
@@ -15,17 +13,14 @@ def test_the_fmu_survives_and_answers(fmus, case):
     assert result["ok"], result
 
 
-def test_repeated_runs_and_instances_do_not_grow_memory_or_mappings(fmus):
-    """N = 150: the raw pythonfmu leak (~1 KB per instantiation) would show as ~0.15 MB per
-    FMU; the simulate() loop without load caching grew ~30 mappings and 1.4 MB per call."""
+def test_repeated_runs_and_instances_do_not_grow_mappings(fmus):
+    """N = 150: the simulate() loop without load caching grew ~30 mappings per call (each
+    run mapped the FMU's binary anew).  A count, not a resident-memory figure: those are
+    printed by tests/tools/benchmark_resources.py (a memory bound is no test on a busy
+    machine)."""
     figures = dict(resource_figures(150))
-    for label, value in figures.items():
-        if "mappings" in label:
-            assert int(value) <= 3, (label, value)
-        elif "raw" not in label and "growth" in label:
-            assert float(value.split()[0]) < 5.0, (label, value)
-    per_instance = next(v for k, v in figures.items() if k.startswith("resident memory per"))
-    assert int(re.match(r"(\d+) KB", per_instance).group(1)) < 2000
+    mappings = {label: value for label, value in figures.items() if "mappings" in label}
+    assert len(mappings) == 3 and all(int(v) <= 3 for v in mappings.values()), mappings
 
 
 def test_runs_on_reused_fmus_are_bit_identical_to_a_fresh_process(fmus, tmp_path):

@@ -7,7 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from agilesat.fmus import FMUS, model_class
+from agilesat.components.model import Model
+from agilesat.components.variables import output, parameter
+from agilesat.fmus import FMUS, model_class, slave_class
+from agilesat.fmus.slave import ModelSlave
 from helpers import logged, operating_point, slave
 
 STEP = 0.05
@@ -168,3 +171,68 @@ def test_every_continuous_input_and_output_takes_its_derivative_or_none_does(nam
     else:
         assert "no output derivatives (maxOutputDerivativeOrder is 0)" in errors.pop(0)
     assert errors == []
+
+
+class _Counts(Model):
+    """An Integer output n and a Boolean output b set from Real parameters, as a user's
+    model might compute them."""
+
+    VARIABLES = (
+        parameter("count", 1.0, "1", "the value of n"),
+        parameter("flag", 1.0, "1", "the value of b"),
+        output("n", "1", "an Integer output", type="Integer"),
+        output("b", "1", "a Boolean output", type="Boolean"),
+    )
+
+    def initialize(self, t0):
+        self.t = t0
+
+    def step(self, t, dt):
+        self.t = t + dt
+
+    def output(self):
+        self.y.n, self.y.b = self.p.count, self.p.flag
+
+
+class _CountsSlave(ModelSlave):
+    model_class = _Counts
+
+
+@pytest.mark.parametrize(
+    "parameter, value, get, message",
+    [
+        ("count", 2.0**40, "get_integer", "Integer values n=1099511627776.0"),
+        ("count", 1.5, "get_integer", "Integer values n=1.5"),
+        ("count", -(2.0**31) - 1, "get_integer", "Integer values n=-2147483649.0"),
+        ("flag", 0.5, "get_boolean", "Boolean values b=0.5"),
+    ],
+)
+def test_an_output_its_fmi_type_cannot_hold_is_an_error_naming_it(parameter, value, get, message):
+    """fmi2GetInteger would have wrapped 2**40 to 0 and truncated 1.5 to 1, fmi2GetBoolean
+    read 0.5 as true: each is fmi2Error naming the model, the variable and the value (the
+    ends of fmi2Integer's range are answered)."""
+    for given, fine in ((value, False), (-(2.0**31) if get == "get_integer" else 1.0, True)):
+        fmu = _CountsSlave(instance_name="counts")
+        fmu.enter_initialization_mode()
+        fmu.set_real([fmu._scalar_names.index(parameter)], [given])
+        fmu.exit_initialization_mode()
+        read = getattr(fmu, get)([fmu._scalar_names.index("n" if get == "get_integer" else "b")])
+        if fine:
+            assert read == [int(given)] and logged(fmu) == []
+        else:
+            assert read == [0] and len(logged(fmu)) == 1
+            assert logged(fmu)[0].startswith("_Counts 'counts': ") and message in logged(fmu)[0]
+
+
+def test_the_state_machine_refuses_a_get_before_initialisation_and_a_step_past_the_stop():
+    """FMI 2.0 section 4.2.4: fmi2Get* only from initialisation mode on; section 4.2.1: no
+    step past a defined stop time (continuous() tolerance: the last step may end on it)."""
+    fmu = slave_class("CmgCluster")(instance_name="machine")
+    assert fmu.get_real([0]) == [0]
+    assert "not allowed in mode 'instantiated'" in logged(fmu)[0]
+    fmu.setup_experiment(0.0, 0.1)
+    fmu.enter_initialization_mode()
+    fmu.exit_initialization_mode()
+    assert fmu.do_step(0.0, STEP) and fmu.do_step(STEP, 0.1 - STEP)
+    assert fmu.do_step(0.1, STEP) is False
+    assert "ends after the stop time 0.1 of fmi2SetupExperiment" in logged(fmu)[-1]

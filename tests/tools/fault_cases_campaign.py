@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from fault_cases_master import CLI, _case, system_copy
+from fault_cases_master import CLI, _case, _refused, system_copy
 
 from helpers import ROOT
 
@@ -119,8 +119,10 @@ def resume_changed_system():
         )
 
 
-def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
-    """Each in a fresh process, its peak memory measured (``_peak_rss``)."""
+def oversized():
+    """Each in a fresh process held to 3 GiB of address space (a grid or journal built
+    would be a MemoryError there); its time and peak memory are printed, not judged (a
+    bound on them fails on a busy machine)."""
     trials = [
         (
             "--vary CmgCluster.h_rotor=linspace(0, 1, 1e9)",
@@ -151,11 +153,10 @@ def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
                 "--no-report",
             ]
             command += ["--out", str(out), *extra]
-            code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", limit_seconds * 2)
+            code, seconds, rss, stderr = _bounded(command, Path(tmp) / "err", 600)
             good = (
                 code == 1
-                and seconds < limit_seconds
-                and rss < limit_mb
+                and "a campaign may have" in stderr
                 and "Traceback" not in stderr
                 and "MemoryError" not in stderr
             )
@@ -169,8 +170,8 @@ def oversized(limit_seconds: float = 60.0, limit_mb: float = 1000.0):
     return _case(
         "`agilesat campaign scan_pitch` with --vary ...=linspace(0, 1, 1e9), with two "
         "10^5-point grids, with --runs 1000000000",
-        f"exit 1 at once (under {limit_seconds:.0f} s and {limit_mb:.0f} MB) saying how "
-        "many runs that is and the most a campaign takes; no MemoryError, no traceback",
+        "exit 1 from the counts, before any grid is built (held to 3 GiB: no MemoryError), "
+        "saying how many runs that is and the most a campaign takes; no traceback",
         "; ".join(observed),
         ok,
     )
@@ -215,19 +216,16 @@ def nonfinite_dispersions():
     ]
     observed, ok = [], True
     with tempfile.TemporaryDirectory() as tmp:
-        for vary in trials:
+        file = Path(tmp) / "nan.toml"  # TOML has nan: a [set] value of it
+        file.write_text(
+            '[vary]\n"SatelliteDynamics.rate0[2]" = "+normal(0, 0.01deg)"\n'
+            '[set]\n"CmgCluster.h_rotor" = nan\n'
+        )
+        for vary in [*trials, f"--dispersions {file.name}"]:
+            given = ["--dispersions", str(file)] if vary.startswith("--") else ["--vary", vary]
             result = subprocess.run(
-                [
-                    *CLI,
-                    "campaign",
-                    "scan_pitch",
-                    "--stop",
-                    "1",
-                    "--vary",
-                    vary,
-                    "--no-progress",
-                    "--no-report",
-                ]
+                [*CLI, "campaign", "scan_pitch", "--stop", "1", *given, "--no-progress"]
+                + ["--no-report"]
                 + ["--out", str(Path(tmp) / "c")],
                 cwd=ROOT,
                 capture_output=True,
@@ -244,8 +242,9 @@ def nonfinite_dispersions():
             observed.append(f"{vary}: exit {result.returncode}" + ("" if good else " (!)"))
     return _case(
         "--vary with a non-finite distribution parameter: normal(1e999, 1), "
-        "*normal(1, 1e999), uniform(0, 1e400), linspace(0, 1e999, 3)",
-        "exit 1 naming the dispersion and that its parameters must be finite; nothing run",
+        "*normal(1, 1e999), uniform(0, 1e400), linspace(0, 1e999, 3); a dispersion file "
+        "setting CmgCluster.h_rotor = nan",
+        "exit 1 naming the dispersion (the file's value) and that it must be finite; nothing run",
         "; ".join(observed),
         ok,
     )
@@ -306,9 +305,18 @@ def _damage_journal_index(out: Path) -> None:
     (out / "runs.jsonl").write_text("".join(lines))
 
 
+def _damage_journal_twice(out: Path) -> None:
+    lines = (out / "runs.jsonl").read_text().splitlines(keepends=True)
+    (out / "runs.jsonl").write_text("".join([*lines, lines[0]]))
+
+
 DAMAGES = {
     "a journal line that is not JSON (line 1)": (_damage_journal_json, "runs.jsonl:1"),
     "a journal line whose index is a string (line 2)": (_damage_journal_index, "runs.jsonl:2"),
+    "a journal recording run 0 twice (line 3 repeats line 1)": (
+        _damage_journal_twice,
+        "runs.jsonl:3",
+    ),
     "metrics.json replaced by []": (
         lambda out: (out / "metrics.json").write_text("[]\n"),
         "metrics.json",
@@ -329,11 +337,7 @@ def damaged_campaign_files():
             out = shutil.copytree(clean, Path(tmp) / f"c{k}")
             damage(out)
             result = _campaign("scan_pitch", out, "--runs", "3", "--workers", "1", "--resume")
-            good = (
-                result.returncode == 1
-                and f"{out / file}" in result.stderr
-                and "Traceback" not in result.stderr
-            )
+            good = _refused(result, f"{out / file}")
             ok &= good
             observed.append(
                 f"{label}: exit {result.returncode}: {_last(result)[:150]}"
@@ -508,8 +512,8 @@ def killed_scheduler():
         said = [l for l in (stdout + stderr).splitlines() if "scheduler" in l and "lost" in l]
         ok = (
             campaign.returncode == 1
-            and seconds < 20
             and said
+            and "Traceback" not in stdout + stderr
             and summary.get("status") == "interrupted"
             and resumed.returncode in (0, 3)
             and after["runs"]["made"] == 200
@@ -517,8 +521,9 @@ def killed_scheduler():
         return _case(
             "`agilesat campaign --scheduler` whose `dask scheduler` is killed (SIGKILL) once "
             "3 runs are journaled; then `--resume` on a LocalCluster",
-            "exit 1 within seconds saying the scheduler was lost; campaign.json status "
-            "'interrupted' with the runs made; the resume finishes the 200 runs",
+            "exit 1 saying the scheduler was lost, no traceback of Dask's before it; "
+            "campaign.json status 'interrupted' with the runs made; the resume finishes the "
+            "200 runs",
             f"exit {campaign.returncode} {seconds:.1f} s after the kill: "
             f"{said[0][:140] if said else _last_line(stdout + stderr)}; "
             f"status {summary.get('status')}, "
@@ -528,7 +533,259 @@ def killed_scheduler():
         )
 
 
+def _started(out: Path, *extra, env=None) -> subprocess.Popen:
+    """`agilesat campaign scan_pitch` of 4 small runs into ``out``, in a session of its
+    own (a signal to its process group is a terminal's Ctrl-C)."""
+    return subprocess.Popen(
+        [*CLI, "campaign", "scan_pitch", *SMALL, "--runs", "4", "--out", str(out), *extra],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, **(env or {})},
+        start_new_session=True,
+    )
+
+
+def _stopped(process, timeout: float = 300) -> bool:
+    """Wait until ``process`` stopped itself (SIGSTOP: state T); False if it ended first."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        if Path(f"/proc/{process.pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "T":
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def two_campaigns_one_out():
+    """Campaign A stops itself (SIGSTOP) once its first run is journaled; B on the same
+    --out, then B with --resume, run while A holds it; then A goes on."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "c"
+        a = _started(out, "--workers", "1", env={"AGILESAT_TEST_SIGNAL": "SIGSTOP@run:1"})
+        held = _stopped(a)
+        before = {p.name: p.read_bytes() for p in out.iterdir()}
+        b = _campaign("scan_pitch", out, "--runs", "4", "--workers", "1", "--seed", "7")
+        resumed = _campaign("scan_pitch", out, "--runs", "4", "--workers", "1", "--resume")
+        untouched = before == {p.name: p.read_bytes() for p in out.iterdir()}
+        os.kill(a.pid, signal.SIGCONT)
+        a.communicate(timeout=600)
+        indices = [
+            json.loads(line)["index"] for line in (out / "runs.jsonl").read_text().splitlines()
+        ]
+        summary = json.loads((out / "campaign.json").read_text())
+        refused = [
+            r.returncode == 1
+            and f"is being written by another run or campaign (process {a.pid}" in r.stderr
+            for r in (b, resumed)
+        ]
+        ok = (
+            held
+            and refused == [True, True]
+            and untouched
+            and a.returncode in (0, 3)
+            and sorted(indices) == [0, 1, 2, 3]
+            and summary.get("status") == "complete"
+            and summary.get("spec", {}).get("seed") == 0
+        )
+        return _case(
+            "a second `agilesat campaign scan_pitch` on the --out of one in mid-campaign (its "
+            "first run journaled), then the same with --resume",
+            "both refused (exit 1) before writing anything, naming the directory and the "
+            "process holding it; the first campaign finishes alone: each run journaled once, "
+            "campaign.json its own",
+            f"second: exit {b.returncode} ({_last(b)[:140]}); --resume: exit "
+            f"{resumed.returncode}; files untouched meanwhile: {untouched}; first: exit "
+            f"{a.returncode}, journal {indices}, {summary.get('status')}",
+            ok,
+        )
+
+
+_CONSTANTS_MISSION = """
+from agilesat.orchestration.mission import Metric, Scenario, System
+from mission_constants import RATE
+
+SYSTEM = System("constants", step=0.1, stop=0.5)
+SYSTEM.add("SatelliteDynamics", rate0=[RATE, 0.0, 0.0])
+SCENARIO = Scenario(
+    "constants",
+    "a mission whose rate comes from a module beside it",
+    SYSTEM,
+    metrics=[Metric("w1", lambda r: float(r["SatelliteDynamics.w_BI_B[1]"][-1]), unit="rad/s")],
+)
+"""
+
+
+def resume_changed_module():
+    """A mission that imports a constant from a module beside it; the module edited
+    between a campaign and its resume."""
+    with tempfile.TemporaryDirectory() as tmp:
+        (Path(tmp) / "mission_constants.py").write_text("RATE = 0.01\n")
+        mission = Path(tmp) / "mission.py"
+        mission.write_text(_CONSTANTS_MISSION)
+        out = Path(tmp) / "c"
+        vary = ["--vary", "SatelliteDynamics.rate0[2]=normal(0, 0.001)", "--workers", "1"]
+
+        def campaign(*extra):
+            return subprocess.run(
+                [*CLI, "campaign", str(mission), *vary, "--out", str(out), "-q", "--no-report"]
+                + list(extra),
+                cwd=tmp,
+                capture_output=True,
+                text=True,
+                timeout=600,
+            )
+
+        first = campaign("--runs", "2")
+        (Path(tmp) / "mission_constants.py").write_text("RATE = 0.02\n")
+        again = campaign("--runs", "4", "--resume")
+        journal = (out / "runs.jsonl").read_text().splitlines() if out.exists() else []
+        named = str((Path(tmp) / "mission_constants.py").resolve())
+        ok = (
+            first.returncode in (0, 3)
+            and again.returncode == 1
+            and f"{named} changed since the campaign began" in again.stderr
+            and len(journal) == 2
+        )
+        return _case(
+            "a campaign of 2 runs of a mission importing RATE from mission_constants.py "
+            "beside it, the module then edited (0.01 -> 0.02), then `--resume --runs 4`",
+            "exit 1 naming mission_constants.py and that it changed since the campaign began "
+            "(the content hash covers the modules the mission imports and the toolkit's "
+            "sources); no run added",
+            f"exits {first.returncode}, {again.returncode}: {_last(again)[:200]}; journal "
+            f"{len(journal)} lines",
+            ok,
+        )
+
+
+def ctrl_c_while_the_cluster_starts():
+    """SIGINT to the campaign's process group (a terminal's Ctrl-C) 0.1 s after its
+    LocalCluster's first processes exist: as the workers' Pythons start (their imports,
+    before their preload ignores SIGINT: each printed its KeyboardInterrupt's traceback
+    until they inherited SIGINT blocked)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "c"
+        process = _started(out, "--workers", "2")
+        deadline = time.monotonic() + 300
+        while process.poll() is None and time.monotonic() < deadline:
+            if len(_children(process.pid)) >= 2:
+                break
+            time.sleep(0.005)
+        time.sleep(0.1)
+        starting = len(_children(process.pid))
+        os.killpg(process.pid, signal.SIGINT)
+        stdout, stderr = process.communicate(timeout=300)
+        summary = json.loads((out / "campaign.json").read_text()) if out.exists() else {}
+        ok = (
+            process.returncode == 130
+            and summary.get("status") == "interrupted"
+            and "Nanny failed" not in stdout + stderr
+            and "Traceback" not in stdout + stderr
+        )
+        return _case(
+            "Ctrl-C (SIGINT to the process group) to `agilesat campaign scan_pitch --workers "
+            "2` while its LocalCluster starts (0.1 s after its first processes exist: the "
+            "workers' Pythons starting)",
+            "exit 130 saying it was interrupted and how to resume; campaign.json "
+            "'interrupted' (not Dask's 'Nanny failed to start', exit 1, campaign.json "
+            "'running'); no traceback (not a worker's KeyboardInterrupt as its Python starts)",
+            f"signalled with {starting} processes of the cluster up: exit {process.returncode}; "
+            f"campaign.json {summary.get('status')}; {_last_line(stdout + stderr)[:140]}",
+            ok,
+        )
+
+
+_CRASHING_MISSION = """
+from agilesat.orchestration.mission import Metric, Scenario, System
+
+SYSTEM = System("crashing", step=0.1, stop=0.5)
+SYSTEM.add("Wild", "{fmu}", crash_at=0.2)
+SCENARIO = Scenario(
+    "crashing",
+    "a model that crashes at its nominal values",
+    SYSTEM,
+    metrics=[Metric("x", lambda r: float(r["Wild.x"][-1]))],
+)
+"""
+
+
+def crashing_nominal_run():
+    """A user's model that segfaults at its nominal crash_at = 0.2 s; the campaign's
+    dispersed runs (crash_at drawn far beyond the stop time) do not crash."""
+    import wild_model
+
+    with tempfile.TemporaryDirectory() as tmp:
+        mission = Path(tmp) / "mission.py"
+        mission.write_text(_CRASHING_MISSION.format(fmu=wild_model.built()))
+        out = Path(tmp) / "c"
+        result = subprocess.run(
+            [*CLI, "campaign", str(mission), "--runs", "2", "--workers", "1", "--vary"]
+            + ["Wild.crash_at=uniform(10, 20)", "--out", str(out), "-q", "--no-report"],
+            cwd=tmp,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        summary = json.loads((out / "campaign.json").read_text()) if out.exists() else {}
+        reason = summary.get("nominal", {}).get("reason", "")
+        ok = (
+            result.returncode == 0
+            and summary.get("status") == "complete"
+            and summary.get("runs", {}).get("ok") == 2
+            and "killed by SIGSEGV" in reason
+            and (out / "runs.csv").exists()
+        )
+        return _case(
+            "a campaign of a user's model that segfaults at its nominal values (the dispersed "
+            "runs do not): the nominal run the histograms mark crashes",
+            "the campaign ends normally (exit 0, its 2 runs ok, runs.csv, campaign.json "
+            "complete) and says the nominal run's process was killed by SIGSEGV; it is not "
+            "killed itself (exit -11)",
+            f"exit {result.returncode}; campaign.json {summary.get('status')}, runs "
+            f"{summary.get('runs', {}).get('ok')} ok; nominal: {reason[:140]}",
+            ok,
+        )
+
+
+def elementwise_inertia():
+    """A new user's dispersion of a whole inertia by an element-wise normal()."""
+    observed, ok = [], True
+    with tempfile.TemporaryDirectory() as tmp:
+        for vary in (
+            "SatelliteDynamics.inertia=normal(1, 0.01)",
+            "SatelliteDynamics.inertia=*normal(1, 0.01)",
+        ):
+            result = _campaign(
+                "scan_pitch", Path(tmp) / "c", "--runs", "2", "--workers", "1", "--vary", vary
+            )
+            good = (
+                result.returncode == 1
+                and "inertia(sd_rel, sd_angle)" in result.stderr
+                and not (Path(tmp) / "c" / "runs.jsonl").exists()
+            )
+            ok &= good
+            observed.append(
+                f"{vary}: exit {result.returncode}: {_last(result)[:160]}"
+                + ("" if good else " (!)")
+            )
+    return _case(
+        "--vary SatelliteDynamics.inertia=normal(1, 0.01) (a forgotten '*') and "
+        "=*normal(1, 0.01): a draw per element of a symmetric inertia",
+        "exit 1 before anything runs, saying no run's matrix would be symmetric and what "
+        "disperses an inertia (inertia(sd_rel, sd_angle), or elements one by one); the "
+        "forgotten '*' pointed out (not: every run failing 'inertia must be symmetric')",
+        "; ".join(observed),
+        ok,
+    )
+
+
 CASES = [
+    two_campaigns_one_out,
+    resume_changed_module,
+    ctrl_c_while_the_cluster_starts,
+    crashing_nominal_run,
+    elementwise_inertia,
     resume_fewer_runs,
     resume_changed_system,
     oversized,

@@ -227,6 +227,68 @@ CASES += [
 ]
 
 
+CASES += [
+    _case(
+        "fmi2GetReal right after fmi2Instantiate; fmi2DoStep ending past the stop time "
+        "fmi2SetupExperiment defined (0.5 s: 10 steps of 0.05 s to it, an 11th past it), "
+        "with the kernels in Python and compiled (the shim's C step path)",
+        "fmi2Error with a message for each (FMI 2.0 sections 4.2.4 and 4.2.1), the steps up "
+        "to the stop time fmi2OK",
+        "state_machine_gaps",
+        {
+            "get_before": [ERROR, ERROR],
+            "steps": [[10, ERROR], [10, ERROR]],
+            "c_path": [False, True],
+            "messages": 4,
+        },
+    ),
+]
+
+
+def user_model_outputs():
+    """A user's model (``wild_model``) whose Integer output n is 2**40 or 1.5 and whose
+    Boolean output b is 0.5, run by `agilesat run Wild.fmu`."""
+    import wild_model
+
+    fmu = wild_model.built()
+    observed, ok = [], True
+    for value, variable in (("count=1099511627776", "n"), ("count=1.5", "n"), ("flag=0.5", "b")):
+        with tempfile.TemporaryDirectory() as tmp:
+            run = subprocess.run(
+                [sys.executable, "-m", "agilesat.orchestration", "run", str(fmu), "--step"]
+                + ["0.1", "--stop", "0.3", "--set", f"Wild.{value}", "--no-figures", "-q"]
+                + ["--no-report"]
+                + ["--out", str(Path(tmp) / "out")],
+                capture_output=True,
+                text=True,
+                timeout=600,
+                cwd=ROOT,
+            )
+        said = [line for line in run.stderr.splitlines() if "error:" in line]
+        good = (
+            run.returncode == 1
+            and "the model produced" in run.stderr
+            and f"{variable}=" in run.stderr
+            and "returned fmi2Error" in run.stderr
+            and "Traceback" not in run.stderr
+        )
+        ok &= good
+        said = (said or [""])[0][:150]
+        observed.append(f"{value}: exit {run.returncode}: {said}" + ("" if good else " (!)"))
+    return {
+        "fault": "a user's model (agilesat build) whose Integer output is 2**40 or 1.5, "
+        "whose Boolean output is 0.5",
+        "expected": "fmi2Error from fmi2GetInteger/fmi2GetBoolean naming the model and the "
+        "variable; the run exits 1 with the message, the rows before kept (never wrapped to "
+        "0, truncated to 1 or read as true)",
+        "observed": "; ".join(observed),
+        "ok": ok,
+    }
+
+
+CASES.append(user_model_outputs)
+
+
 def _warning_case():
     from agilesat.fmus.build import SHIM_C_FILES, SHIM_LIBRARIES, shim_flags
 
@@ -553,6 +615,39 @@ def mode_rules():
         "messages": len(_errors(a, 0)) + len(_errors(fresh, 0)),
         "texts": _errors(a, 0),
     }
+
+
+def state_machine_gaps():
+    """fmi2GetReal of an instance only instantiated; fmi2DoStep past the stop time of
+    fmi2SetupExperiment (stopTimeDefined), with the Python kernels and, in a second child,
+    the compiled ones (AGILESAT_JIT_AFTER=0: the shim's C step path serves the steps)."""
+    if "AGILESAT_JIT_AFTER" not in os.environ:
+        compiled, _ = _child("state_machine_gaps", env={"AGILESAT_JIT_AFTER": "0"})
+        compiled = compiled or {"get_before": [None], "steps": [None], "c_path": [None]}
+    fmi_host = _host()
+    fresh = fmi_host.Fmu(_path(OTHER), "fresh")
+    status, _ = fresh.get_real(fresh.names("output")[:1])
+    a = fmi_host.Fmu(_path(OTHER), "a")
+    assert a.dll.fmi2SetupExperiment(a.c, 0, 0.0, 0.0, 1, ctypes.c_double(0.5)) == 0
+    assert a.dll.fmi2EnterInitializationMode(a.c) == 0
+    assert a.set_real(fmi_host.plausible_inputs(a)) == 0
+    assert a.dll.fmi2ExitInitializationMode(a.c) == 0
+    statuses = [a.step(k * 0.05, 0.05) for k in range(11)]  # the last one to 0.55 s
+    steps = [statuses.count(0), statuses[-1]]
+    served, counters = (ctypes.c_ulonglong * 3)(), a.dll.agilesat_shim_step_counters
+    counters.argtypes, counters.restype = [ctypes.c_void_p, ctypes.c_void_p], ctypes.c_int
+    counters(a.c, served)  # [0]: the steps the shim's C path made
+    mine = {
+        "get_before": [status],
+        "steps": [steps],
+        "c_path": [served[0] > 0],
+        "messages": len(_errors(fresh, 0)) + len(_errors(a, 0)),
+        "texts": _errors(fresh, 0) + _errors(a, 0),
+    }
+    if "AGILESAT_JIT_AFTER" in os.environ:
+        return mine
+    both = {k: mine[k] + compiled.get(k, 0) for k in mine if k != "texts"}
+    return both | {"texts": mine["texts"]}
 
 
 SATELLITE = "SatelliteDynamics"  # interpolates its inputs (h_cmg, ...)

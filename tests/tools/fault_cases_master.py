@@ -67,6 +67,12 @@ def _csv_rows(path: Path) -> tuple[int, bool]:
     return len(body), all(line.count(",") == fields for line in body)
 
 
+def _refused(result, *said: str) -> bool:
+    """The command exited 1 with each of ``said`` on stderr, and no traceback."""
+    stderr = result.stderr
+    return result.returncode == 1 and all(s in stderr for s in said) and "Traceback" not in stderr
+
+
 def _stderr_line(result, key: str = "") -> str:
     """The first line of stderr holding key, else the last one."""
     lines = [line.strip() for line in result.stderr.splitlines() if line.strip()]

@@ -1,8 +1,8 @@
 """Print the fault-injection matrix (fault → expected → observed) of every fault-case
 module (``fault_cases_*.py``: the master and its files, runs and their interruptions,
-inputs, what a run leaves and what reads it back, campaigns, FMU states and what is
-loaded, the FMU binary), the counts of cases that held, failed and were skipped, then the
-resource figures, as Markdown for the docs
+inputs, missions of a user's own, what a run leaves and what reads it back, campaigns, FMU
+states and what is loaded, the FMU binary), the counts of cases that held, failed and were
+skipped, then the resource figures, as Markdown for the docs
 (docs/reliability.md).
 
     .venv/bin/python tests/tools/fault_matrix.py [--n N] [--no-figures] [--brief] [--only MODULE]
@@ -27,6 +27,7 @@ import fault_cases_campaign  # noqa: E402
 import fault_cases_fmu  # noqa: E402
 import fault_cases_inputs  # noqa: E402
 import fault_cases_master  # noqa: E402
+import fault_cases_mission  # noqa: E402
 import fault_cases_records  # noqa: E402
 import fault_cases_runs  # noqa: E402
 import fault_cases_state  # noqa: E402
@@ -35,6 +36,7 @@ MODULES = (
     fault_cases_master,
     fault_cases_runs,
     fault_cases_inputs,
+    fault_cases_mission,
     fault_cases_records,
     fault_cases_campaign,
     fault_cases_state,

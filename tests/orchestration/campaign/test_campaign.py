@@ -141,7 +141,7 @@ def test_resume_after_an_interruption_and_extend(three, tmp_path, monkeypatch):
     assert result.returncode == 1 and "seed: 12 here, 11 in the campaign" in result.stderr
 
 
-@pytest.mark.parametrize("when", ["start", "fresh start", "close"])
+@pytest.mark.parametrize("when", ["start", "fresh start", "close", "nanny"])
 def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     three, tmp_path, monkeypatch, when
 ):
@@ -150,7 +150,9 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     in campaign.json; it used to escape and leave the campaign "running" (CI saw it: a
     fast campaign finished before the test's SIGTERM, which came while the cluster
     closed).  While a resumed campaign runs, campaign.json says "running" (it said the
-    last run's "complete")."""
+    last run's "complete").  "nanny": a terminal's Ctrl-C reaches the worker processes
+    Dask starts too, and Dask says "Nanny failed to start" (a RuntimeError): the signal the
+    campaign's handler took is what stopped it (it exited 1, campaign.json "running")."""
     from agilesat.orchestration import cli
     from agilesat.orchestration.campaign import engine
 
@@ -163,6 +165,10 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
     @contextlib.contextmanager
     def cluster(workers=None, scheduler=None, *settings):
         seen.append(json.loads((out / "campaign.json").read_text())["status"])
+        if when == "nanny":  # as cluster() while the LocalCluster starts: a flag
+            monkeypatch.setattr(engine.INTERRUPTS, "deferred", True)
+            engine.INTERRUPTS(signal.SIGINT, None)
+            raise RuntimeError("Nanny failed to start.")
         if when != "close":
             raise KeyboardInterrupt
         with real(workers, scheduler, *settings) as client:
@@ -178,7 +184,7 @@ def test_an_interrupt_while_the_cluster_starts_or_closes_keeps_the_summary(
         for s, handler in previous.items():
             signal.signal(s, handler)
     summary = json.loads((out / "campaign.json").read_text())
-    made = {"start": 3, "fresh start": 0, "close": 4}[when]
+    made = {"start": 3, "fresh start": 0, "close": 4, "nanny": 3}[when]
     assert seen == ["running"]
     assert summary["runs"]["made"] == len(rows(out)) == made
     assert summary["status"] == ("complete" if when == "close" else "interrupted")
@@ -194,7 +200,8 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
     again.  It is kept when campaign.json has it from the same command and versions, made
     again (and stderr says why) otherwise; either way the files are those of the fresh
     finish, byte for byte."""
-    from agilesat.orchestration import cli, runner
+    from agilesat.orchestration import cli
+    from agilesat.orchestration.campaign import isolated
 
     out = tmp_path / "copy"
     shutil.copytree(three, out)
@@ -207,8 +214,8 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
         del summary["nominal"]
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     made = []
-    real = runner.run
-    monkeypatch.setattr(runner, "run", lambda *a, **k: made.append(a[0]) or real(*a, **k))
+    real = isolated.run
+    monkeypatch.setattr(isolated, "run", lambda *a: made.append(a[0]) or real(*a))
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}  # it sets its own
     try:
         code = cli.main([*COMMAND, "--runs", "3", "--workers", "2", "--out", str(out), "--resume"])

@@ -492,6 +492,25 @@ def test_the_failure_list_says_how_many_more_there_are():
     assert lines[7].startswith("  and 3 more")
 
 
+def test_a_worker_that_left_holding_no_run_is_not_said_to_have_had_runs_re_run():
+    from agilesat.orchestration.cli.campaign import format_campaign
+
+    summary = {
+        "runs": {"planned": 4, "made": 4, "ok": 4, "failed": 0, "error": 0, "lost": 0},
+        "lost_workers": [
+            {"worker": "tcp://a", "runs_in_flight": []},
+            {"worker": "tcp://b", "runs_in_flight": [2, 3]},
+        ],
+        "statistics": {},
+        "pass_rates": {},
+        "grid_pass_rates": [],
+        "failures": [],
+    }
+    lines = format_campaign(summary).splitlines()
+    assert lines[1] == "  worker tcp://a left with no run in flight: nothing was re-run"
+    assert lines[2] == "  worker tcp://b died; Dask re-ran runs [2, 3] elsewhere"
+
+
 def test_a_histogram_says_what_the_metric_is_and_marks_the_requirement_and_the_paper(
     tmp_path, monkeypatch
 ):

@@ -112,10 +112,8 @@ def test_a_worker_reads_the_system_once_per_batch(system_with_ssv):
 
 
 QUIET = """
-import json, os, resource
-from agilesat.orchestration import RunOptions
+import json, os
 from agilesat.orchestration.campaign import engine
-from agilesat.orchestration.campaign.worker import run_one
 
 def facts(dask_worker):
     import dask
@@ -123,17 +121,9 @@ def facts(dask_worker):
     trimmed = "MALLOC_TRIM_THRESHOLD_" in os.environ
     return sorted(dask_worker.periodic_callbacks), tick, trimmed
 
-def faults():
-    run_one(0, "scan_pitch", RunOptions(stop=20.0), [], 0)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-    for i in range(3):
-        run_one(i, "scan_pitch", RunOptions(stop=20.0), [], 0)
-    return (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before) / 3
-
 with engine.cluster(1) as client:
     facts = list(list(client.run(facts).values())[0])
-    facts += [client.submit(faults, pure=False).result(), "MALLOC_TRIM_THRESHOLD_" in os.environ]
-    print(json.dumps(facts))
+    print(json.dumps(facts + ["MALLOC_TRIM_THRESHOLD_" in os.environ]))
 """
 
 
@@ -141,18 +131,17 @@ def test_the_local_cluster_leaves_the_cpu_to_the_runs():
     """The workers of our LocalCluster do not sample their stacks every 10 ms (Dask's
     statistical profiler, for a dashboard page nobody opens) and tick every 1 s rather
     than 20 ms: together about 45 ms of CPU per second per worker at Dask's defaults; and
-    they do not trim malloc's heap (about 500 page faults per scan_pitch run more)."""
+    they do not trim malloc's heap (the page faults per run it costs:
+    tests/tools/benchmark_resources.py; a count of them is no test on a busy machine)."""
     result = run_python(QUIET)
     assert result.returncode == 0, result.stderr
-    facts = json.loads(result.stdout.splitlines()[-1])
-    callbacks, tick, trimmed, faults, client_trimmed = facts
+    callbacks, tick, trimmed, client_trimmed = json.loads(result.stdout.splitlines()[-1])
     assert "heartbeat" in callbacks  # the worker's own callbacks are there
     assert not {"profile", "profile-cycle"} & set(callbacks)
     assert tick == "1s"
     # no MALLOC_TRIM_THRESHOLD_ (in the worker, nor left in the client's environment):
     # glibc keeps its dynamic mmap threshold, a run's arrays are not mapped afresh
     assert not trimmed and not client_trimmed
-    assert faults < 100, f"{faults:.0f} page faults per 20 s run (~250 with the trim)"
 
 
 MEMORY = """

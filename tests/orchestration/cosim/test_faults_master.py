@@ -332,3 +332,39 @@ def test_a_long_problem_report_is_bounded(fmus):
     text = str(error.value)
     assert "30 problem(s)" in text and text.count("is already driven by") == MAX_PROBLEMS_SHOWN
     assert text.endswith(f"... and {30 - MAX_PROBLEMS_SHOWN} more of these kinds")
+
+
+def test_a_file_that_cannot_be_written_is_named_and_no_temporary_is_left(tmp_path, monkeypatch):
+    """A full disk or a read-only directory while a file is written under its temporary
+    name: the error names the file (not the .partial), the temporary is gone and an older
+    file of that name is untouched; an output directory that cannot be made is named."""
+    target = tmp_path / "summary.json"
+    target.write_text("old")
+
+    def full(*args):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(recorder.os, "replace", full)
+    with pytest.raises(OSError, match=rf"^{target}: No space left on device; not written$"):
+        recorder.write_text(target, "new")
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
+    assert target.read_text() == "old"
+    (tmp_path / "a-file").write_text("")
+    with pytest.raises(OSError, match=r"a-file/out: Not a directory \(the output directory"):
+        recorder.make_directory(tmp_path / "a-file" / "out")
+
+
+def test_a_journal_that_cannot_be_written_is_named(tmp_path):
+    from agilesat.orchestration.campaign import engine
+
+    class Full:
+        name = str(tmp_path / "runs.jsonl")
+
+        def write(self, line):
+            raise OSError(28, "No space left on device")
+
+    with pytest.raises(
+        OSError, match=rf"{tmp_path / 'runs.jsonl'}: No space left on device; the runs"
+    ):
+        engine.journaled(Full(), "{}\n")

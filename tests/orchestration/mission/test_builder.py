@@ -92,7 +92,8 @@ def test_variable_shape_and_unit_mistakes_are_reported_together_where_they_were_
         "AttitudeController.hdot_ff: unit mismatch, 'rad/s' -> 'N.m'"
     ) in text
     assert (
-        f"{HERE}:{where['inertia']}: SatelliteDynamics.inertia[1,1]: unit mismatch: 1.0 deg is "
+        f"{HERE}:{where['inertia']}: SatelliteDynamics.inertia[1,1]=1.0 deg: unit mismatch: "
+        "1.0 deg is "
         "an angle [rad], the variable is an inertia [kg.m2]"
     ) in text
 

@@ -267,3 +267,51 @@ def test_an_undecided_requirement_fails_no_run_and_exits_4():
     with pytest.raises(AssertionError, match=r"requirement undecided \(accept_undecided"):
         assert_requirements_met(summary, "unsure")
     assert_requirements_met(summary, "unsure", accept_undecided=True)
+
+
+def test_settling_time_of_a_vector_norm():
+    """x = e^(−t/τ) (1, −0.5): per axis the largest element decides, |x_1| ≤ b from
+    τ ln(1/b); the norm ‖x‖ = e^(−t/τ) √1.25 ≤ b from τ ln(√1.25/b), later."""
+    bound = 0.01
+    axes = m.settling_time("S.w", bound).evaluate(DECAY).value
+    norm = m.settling_time("S.w", bound, norm=True).evaluate(DECAY).value
+    assert axes == T[T > TAU * math.log(1 / bound)][0]
+    assert norm == T[T > TAU * math.log(math.sqrt(1.25) / bound)][0] and norm > axes
+    held = results(**{"S.w": (np.full((len(T), 3), 0.01), "rad/s")})  # each axis inside
+    assert m.settling_time("S.w", 0.015).evaluate(held).value == 0.0
+    said = m.settling_time("S.w", 0.015, norm=True).evaluate(held)
+    assert said.value is None and said.reason.startswith("not settled: ‖S.w‖ > 0.8594 °/s")
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: within(5, 1), r"a bound in \[5, 1\]: its lower end is above its upper end"),
+        (lambda: within("1 deg", "0.5 deg"), "its lower end is above its upper end"),
+        (lambda: within("1 deg", "2 m"), "its ends are not in one unit"),
+        (lambda: at_most(math.nan), "a bound's max must be a finite number"),
+        (lambda: at_least(math.inf), "a bound's min must be a finite number"),
+        (lambda: at_most("nan deg"), "a bound's max must be a finite number"),
+    ],
+)
+def test_a_bound_no_value_can_meet_is_refused(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
+    assert within("-0.82 deg/s", "-0.78 deg/s").limits("rad/s")["min"] < 0
+
+
+def test_an_infinite_metric_is_no_value_and_json_holds_none():
+    """JSON has no Infinity: the metric has no value, its reason says why, and whatever
+    else is not finite is null in summary.json."""
+    import json
+
+    from agilesat.orchestration.output.summary import summary_text
+
+    value = Metric("blows_up", lambda r: math.inf).evaluate(DECAY)
+    assert value.value is None and value.reason == "inf (not a finite number)"
+    text = summary_text({"a": [1.0, -math.inf], "b": {"c": math.nan}})
+
+    def strict(constant):
+        raise ValueError(constant)
+
+    assert json.loads(text, parse_constant=strict) == {"a": [1.0, None], "b": {"c": None}}

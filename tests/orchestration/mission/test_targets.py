@@ -94,3 +94,63 @@ def test_info_of_a_variant_marks_what_it_changes_and_lists_the_outputs(fmus):
     assert " SatelliteDynamics.w_BI_B[3]" in text.split("outputs (recorded")[1]
     with pytest.raises(KeyError, match="did you mean literal_spin"):
         info("scan_pitch:literal")
+
+
+@pytest.mark.parametrize(
+    "source, message",
+    [
+        (
+            "import sys\nsys.exit(0)\n",
+            r"importing it called sys.exit\(0\), so it defines no scenario",
+        ),
+        (
+            "x = 1\ny = x + undefined\n",
+            r"importing it raised NameError: .* \(line 2: y = x \+ undefined\)",
+        ),
+        ("x = (\n", r"importing it raised SyntaxError: .* \(line 1: x = \("),
+    ],
+)
+def test_a_mission_file_that_fails_as_it_is_imported_is_a_message(tmp_path, source, message):
+    """sys.exit(0) at import made `agilesat run` exit 0 with nothing run; an exception was
+    a traceback: each is a MissionError naming the file (and the mission's line)."""
+    path = tmp_path / f"failing{len(source)}.py"
+    path.write_text(source)
+    with pytest.raises(targets.MissionError, match=rf"{path}: {message}"):
+        targets.resolve(str(path))
+    assert not any(
+        name.startswith("agilesat_mission_") and sys.modules[name].__file__ == str(path)
+        for name in list(sys.modules)
+    )
+
+
+def test_a_file_that_is_no_fmi_2_fmu_is_a_message(tmp_path, fmus):
+    """Not a zip, a zip cut short, a model description cut short, an FMI 3.0 one: each
+    a message naming the file (they were library tracebacks)."""
+    import zipfile
+
+    from agilesat.orchestration.system.description import FMUFileError
+
+    gyro = fmus["Gyro"].read_bytes()
+    (tmp_path / "text.fmu").write_text("hello")
+    (tmp_path / "cut.fmu").write_bytes(gyro[: len(gyro) // 2])
+
+    def edited(name, edit):
+        with zipfile.ZipFile(fmus["Gyro"]) as source, zipfile.ZipFile(tmp_path / name, "w") as copy:
+            for info in source.infolist():
+                data = source.read(info)
+                copy.writestr(
+                    info.filename, edit(data) if info.filename == "modelDescription.xml" else data
+                )
+
+    edited("cutmd.fmu", lambda data: data[: len(data) // 2])
+    edited("fmi3.fmu", lambda data: data.replace(b'fmiVersion="2.0"', b'fmiVersion="3.0"'))
+    edited("bad.fmu", lambda data: data.replace(b"causality=", b"causalty="))
+    for name, message in [
+        ("text.fmu", "not an FMU: File is not a zip file"),
+        ("cut.fmu", "not an FMU"),
+        ("cutmd.fmu", "its modelDescription.xml is not XML"),
+        ("fmi3.fmu", "an FMU of FMI 3.0: agilesat runs FMI 2.0 co-simulation FMUs"),
+        ("bad.fmu", "its modelDescription.xml is not an FMI 2.0 model description"),
+    ]:
+        with pytest.raises(FMUFileError, match=f"{tmp_path / name}: {message}"):
+            targets.resolve(str(tmp_path / name))

@@ -252,15 +252,13 @@ def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
 def test_the_nominal_run_of_a_one_point_grid_is_at_that_point(monkeypatch, capsys):
     """A grid of one value is the campaign's setting, not a dispersion: the nominal run
     sets it too (it ran at the system's value), and says so on stderr."""
-    from agilesat.orchestration import runner
+    from agilesat.orchestration.campaign import isolated
     from agilesat.orchestration.campaign.nominal import nominal_run
     from agilesat.orchestration.campaign.plan import Plan, Spec
 
     given = []
     summary = {"metrics": {"m": {"value": 1.0}}}
-    monkeypatch.setattr(
-        runner, "run", lambda target, options: given.append(options) or (None, summary)
-    )
+    monkeypatch.setattr(isolated, "run", lambda target, options: given.append(options) or summary)
     vary = ["CmgCluster.rate_limit=values(0.3)", "CmgCluster.h_rotor=*normal(1, 0.005)"]
     nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, vary=vary, stop=40.0)))
     assert given[0].parameters == {"CmgCluster.rate_limit": 0.3}
@@ -276,8 +274,7 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     and the campaign command exits 143 (the signal in engine.INTERRUPTS)."""
     import signal
 
-    from agilesat.orchestration import runner
-    from agilesat.orchestration.campaign import engine
+    from agilesat.orchestration.campaign import engine, isolated
     from agilesat.orchestration.campaign.nominal import nominal_run
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.cosim.master import Interrupted
@@ -285,7 +282,7 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     def stopped(target, options):
         raise Interrupted("interrupted by SIGTERM at t = 3 s", None, signal.SIGTERM)
 
-    monkeypatch.setattr(runner, "run", stopped)
+    monkeypatch.setattr(isolated, "run", stopped)
     monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
     nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))
     assert nominal["reason"] == "Interrupted: interrupted by SIGTERM at t = 3 s"
@@ -295,7 +292,7 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     def typo(target, options):
         raise KeyboardInterrupt  # not a signal the campaign's handler recorded: not hidden
 
-    monkeypatch.setattr(runner, "run", typo)
+    monkeypatch.setattr(isolated, "run", typo)
     monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
     with pytest.raises(KeyboardInterrupt):
         nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))

@@ -104,3 +104,68 @@ def test_a_run_parses_and_types_each_value_once(fmus, tmp_path, monkeypatch):
     assert planned[0].overrides["SatelliteDynamics.inertia[1,1]"].value == 900.0
     assert planned[0].overrides["CmgSteering.law"].value == 1
     assert planned[0].bindings[-10:] == list(planned[0].overrides.values())
+
+
+def test_a_value_is_said_with_its_parameter_where_it_was_given(fmus):
+    """A mission's value is given at its file and line: the message names the parameter
+    after it (it read 'mission.py:9=1 deg'), a Real with a unit that does not convert says
+    both units (it said "'kg' is no unit"), '2e4' is a number (it read 2 in a unit 'e4')."""
+    from agilesat.orchestration.system.description import Description
+    from agilesat.orchestration.system.parameters import typed_value
+    from agilesat.orchestration.system.units import quantity
+
+    source = get("scan_pitch").system_file().component("SatelliteDynamics").source
+    described = Description("SatelliteDynamics", source)
+    at = "mission.py:9"
+    cases = [
+        (
+            "gravity_gradient",
+            "1 deg",
+            "mission.py:9: SatelliteDynamics.gravity_gradient=1 deg: expected a Boolean",
+        ),
+        ("mu", "5 kg", "mission.py:9: SatelliteDynamics.mu=5 kg: expected a finite Real number"),
+        ("mu", "0x10", "mission.py:9: SatelliteDynamics.mu=0x10: expected a finite Real number"),
+        ("rate0[1]", "1 deg/h", None),
+    ]
+    for name, value, message in cases:
+        if message is None:
+            assert typed_value(described, f"SatelliteDynamics.{name}", value, at).value > 0
+            continue
+        with pytest.raises(SystemFileError) as error:
+            typed_value(described, f"SatelliteDynamics.{name}", value, at)
+        assert str(error.value).startswith(message) and "is no unit" not in str(error.value)
+    with pytest.raises(SystemFileError, match=r"^--set SatelliteDynamics.mu=5 kg: .*\[kg\]"):
+        typed_value(described, "SatelliteDynamics.mu", "5 kg")
+    assert quantity("2e4") is None and quantity("1E-3") is None and quantity("2 km").unit == "km"
+    assert typed_value(described, "SatelliteDynamics.mu", "2e4").value == 2e4
+
+
+def test_two_aliases_given_two_values_are_refused():
+    """Two variables of one FMU at one value reference and type are one variable (FMI 2.0
+    section 2.2.7): two values for them are refused, naming both; one value is fine."""
+    from agilesat.orchestration.system.ssp import ParameterValue
+    from agilesat.orchestration.system.validation import _binding_problems
+
+    def real(vr):
+        return SimpleNamespace(
+            type="Real", valueReference=vr, causality="parameter", variability="fixed"
+        )
+
+    instance = SimpleNamespace(
+        name="G",
+        path=SimpleNamespace(name="G.fmu"),
+        variables={"a": real(0), "b": real(0), "c": real(1)},
+    )
+    given = [
+        ParameterValue("G", "a", "Real", 1.0, "x.ssd:3"),
+        ParameterValue("G", "b", "Real", 2.0, "--set G.b"),
+    ]
+    (problem,) = _binding_problems({"G": instance}, given)
+    assert problem.startswith(
+        "--set G.b and x.ssd:3: G.b=2.0 and a=1.0: the FMU has them as one variable "
+        "(value reference 0"
+    )
+    same = [given[0], ParameterValue("G", "b", "Real", 1.0, "--set G.b")]
+    assert _binding_problems({"G": instance}, same) == []
+    later = [given[0], ParameterValue("G", "a", "Real", 2.0, "--set G.a"), given[1]]
+    assert _binding_problems({"G": instance}, later) == []  # a set again, to b's value

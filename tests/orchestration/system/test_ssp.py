@@ -104,6 +104,13 @@ def test_an_ssv_file_with_a_prefix_inline_values_and_system_level_values(tmp_pat
             "",
             "bad Real value 'inf': not finite",
         ),
+        (
+            "<ssd:ParameterBinding>"
+            + inline('<ssv:Parameter name="n"><ssv:Integer value="4294967296"/></ssv:Parameter>')
+            + "</ssd:ParameterBinding>",
+            "",
+            r"bad Integer value '4294967296': an Integer is from -2147483648 to 2147483647",
+        ),
     ],
 )
 def test_a_bad_binding_names_the_file_and_what_is_wrong(
@@ -172,3 +179,20 @@ def test_the_package_bound_counts_what_its_fmus_unpack_to(tmp_path):
         SystemFileError, match=r"with its FMUs, to more than the limit of 1048576 bytes \(A.fmu"
     ):
         read_system(package, max_unpacked=1 << 20)
+
+
+@pytest.mark.parametrize(
+    "extra", [10_000, pytest.param(70_000, marks=pytest.mark.slow, id="zip64")]
+)
+def test_a_package_of_more_members_than_it_may_have_is_refused_before_reading_them(tmp_path, extra):
+    """Counted from the zip's end record (zip64's beyond 65,535), before zipfile reads its
+    directory: an object per member, a gigabyte for a million empty ones."""
+    import zipfile
+
+    package = tmp_path / "p.ssp"
+    with zipfile.ZipFile(package, "w") as archive:
+        archive.writestr("SystemStructure.ssd", "x")
+        for k in range(extra):
+            archive.writestr(f"e/{k}", b"")
+    with pytest.raises(SystemFileError, match=rf"a zip archive of {extra + 1} members, more"):
+        read_system(package)
