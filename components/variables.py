@@ -14,6 +14,7 @@ parameters follow the numeric ones and are kept in a dict.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -302,6 +303,13 @@ class Layout:
         self.scalars = [(v, s) for v in self.variables for s in v.scalar_names()]
 
     def start_values(self) -> np.ndarray:
+        """A new value array at the variables' start values."""
+        return self._start_values.copy()
+
+    @functools.cached_property
+    def _start_values(self) -> np.ndarray:
+        # made once per layout (a model with many variables spent more on this than on
+        # its initialisation, at every instantiation)
         values = np.zeros(self.n_values)
         for v in self.variables:
             if v.type != "String" and v.causality != "output":

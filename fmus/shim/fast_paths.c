@@ -46,6 +46,8 @@ void fast_paths_disconnect(FastPaths *f) {
     f->control = NULL;
     f->block = NULL;
     f->n_values = 0;
+    f->checked_rows = NULL;
+    f->checked_n_rows = 0;
 }
 
 static int switched_off(const char *variable) {
@@ -142,16 +144,22 @@ static int continuous(double t, double end) {
 /* Model.inputs_to_step_end (components/model.py), operation for operation: the inputs
  * whose derivative was set moved to the step's end.  Rows of six offsets (value,
  * derivative, given, rate, the rate's derivative, the rate's given; -1: no rate), checked
- * against the value array: 0 (nothing changed) if one is outside it. */
+ * against the value array: 0 (nothing changed) if one is outside it.  The slave makes the
+ * rows once (fmus/fast_paths.py) and never changes them, so they are checked once per
+ * address and count (a model with many inputs paid the check at every step). */
 static int inputs_to_step_end(FastPaths *f, double h) {
     const double *rows = address(f->block[B_STEP_END]);
     double *v = f->values, n = (double)f->n_values;
     if (!rows) return f->block[B_N_STEP_END] == 0;
     if (!(f->block[B_N_STEP_END] > 0 && f->block[B_N_STEP_END] < (double)MAX_VALUES)) return 0;
     size_t n_rows = (size_t)f->block[B_N_STEP_END];
-    for (size_t i = 0; i < 6 * n_rows; i++) {
-        double least = i % 6 < 3 || rows[i - i % 6 + 3] >= 0 ? 0 : -1;
-        if (!(rows[i] >= least && rows[i] < n)) return 0;
+    if (rows != f->checked_rows || n_rows != f->checked_n_rows) {
+        for (size_t i = 0; i < 6 * n_rows; i++) {
+            double least = i % 6 < 3 || rows[i - i % 6 + 3] >= 0 ? 0 : -1;
+            if (!(rows[i] >= least && rows[i] < n)) return 0;
+        }
+        f->checked_rows = rows;
+        f->checked_n_rows = n_rows;
     }
     for (size_t i = 0; i < n_rows; i++) {
         const double *row = rows + 6 * i;

@@ -39,6 +39,8 @@ typedef struct {
     int32_t *control;            /* the flags (protocol.h): the slave's */
     double *block;               /* the step's end, the C step path's addresses: the slave's */
     int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
+    const double *checked_rows;  /* the step-end rows found inside the value array ... */
+    size_t checked_n_rows;       /* ... and how many (checked once, not at every step) */
     unsigned long long served, forwarded;           /* fmi2GetReal/fmi2SetReal calls */
     unsigned long long c_steps, c_outputs, c_fallbacks;  /* the C step path's */
 } FastPaths;

@@ -280,7 +280,8 @@ def _run(plan: RunPlan, instances: dict[str, Instance], log, signals) -> Results
     meta["loop"] = "python" if dll is None else "compiled"
     chosen = None if plan.record is None else set(plan.record)
     keep = None if chosen is None else [0] + [k for k, c in enumerate(columns) if c in chosen]
-    recorder = Recorder(columns, plan.out_dir, keep, plan.output_every)
+    expected = n_steps // plan.output_every + 1  # rows 0, every, 2 every, ... <= n_steps
+    recorder = Recorder(columns, plan.out_dir, keep, plan.output_every, expected)
     if plan.output_every > 1:
         meta["output_interval"] = plan.output_every * step
     failure = None

@@ -11,7 +11,9 @@ an interrupt) writes ``results.npz`` from the raw rows in chunks, under a tempor
 renamed when complete, and hands back :class:`Results` that map the raw rows from disk
 (copy-on-write: the caller may modify them) instead of holding them in memory.
 
-Without an output directory the caller gets the rows in memory (a buffer grown by doubling).
+Without an output directory the caller gets the rows in memory: a buffer of the rows
+``expected`` (the run's, from its plan: filled once, handed over without a copy), grown by
+doubling if more come.
 
 A recording replaces an earlier run's records in its directory: as it starts it truncates
 ``results.csv`` and removes the files that describe those rows (:data:`REPLACED`), so a
@@ -42,14 +44,17 @@ REPLACED = ("results.npz", "results.units.json", "summary.json", "log.txt")
 
 
 class Recorder:
-    """Rows of ``columns`` (time first) recorded one communication point at a time."""
+    """Rows of ``columns`` (time first) recorded one communication point at a time
+    (``expected``: how many will be, if known: the memory for them at once)."""
 
-    def __init__(self, columns: list[str], out_dir=None, keep=None, every: int = 1):
+    def __init__(
+        self, columns: list[str], out_dir=None, keep=None, every: int = 1, expected: int = 64
+    ):
         self.keep = None if keep is None else np.asarray(keep, dtype=np.intp)
         self.columns = [columns[k] for k in keep] if keep is not None else list(columns)
         self.every, self.offered, self.rows = every, 0, 0
         self.out_dir = None if out_dir is None else Path(out_dir)
-        self._memory = np.empty((64, len(columns)))
+        self._memory = np.empty((max(1, expected) if out_dir is None else 0, len(self.columns)))
         self._files = []
         if self.out_dir is not None:
             for old in (self.out_dir / name for name in REPLACED):  # none beside these rows
@@ -123,7 +128,9 @@ class Recorder:
     def close(self, meta: dict) -> tuple[Results, list[str]]:
         """(the rows recorded, problems writing the files); writes results.npz."""
         if not self._files:
-            return Results(self.columns, self._memory[: self.rows].copy(), meta), []
+            rows = self._memory[: self.rows]
+            full = self.rows == len(self._memory)  # as ``expected``: the buffer is the rows
+            return Results(self.columns, rows if full else rows.copy(), meta), []
         assert self.out_dir is not None  # files are only written into an output directory
         problems = []
         for f in self._files:

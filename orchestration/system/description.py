@@ -25,7 +25,7 @@ AGILESAT_TOOL = "agilesat"
 BINARIES_TOOL = "agilesat.binaries"  # fmus/model_description.py writes it
 _KEYS_KEPT = 1024
 _lock = threading.Lock()
-#: content key -> (model description, optional inputs, base units, binaries)
+#: content key -> (model description, optional inputs, base units, binaries, _Read)
 _descriptions: dict[str, tuple] = {}
 
 
@@ -38,26 +38,39 @@ class Description:
         #: optional input -> what its default means, as our FMUs declare them
         #: (VendorAnnotations; every other input is required); None: not our FMU.
         #: ``binaries``: {file in the FMU: SHA-256} as our FMUs declare them (or {})
-        self.md, self.optional_inputs, self.base_units, self.binaries = _described(
+        self.md, self.optional_inputs, self.base_units, self.binaries, read = _described(
             content_key(self.path), str(path)
         )
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")
         declare(self.md.unitDefinitions)  # its display units, for the summaries
-        self.variables = {v.name: v for v in self.md.modelVariables}
-        self.feedthrough = _dependencies(self.md.outputs, self.md.modelVariables)
-        self.initial_feedthrough = _dependencies(self.md.initialUnknowns, self.md.modelVariables)
+        # read once per content, shared by every Description of it: not to be changed
+        self.variables = read.variables
+        self.feedthrough = read.feedthrough
+        self.initial_feedthrough = read.initial_feedthrough
         # FMI 2.0 input/output derivatives (orchestration.cosim.derivatives): the capability
         # flags, and {variable: the variable declared its derivative} (``derivative``)
         self.can_interpolate_inputs = bool(self.md.coSimulation.canInterpolateInputs)
         self.max_output_derivative_order = int(self.md.coSimulation.maxOutputDerivativeOrder or 0)
-        self.derivatives = {
-            v.derivative.name: v.name for v in self.md.modelVariables if v.derivative is not None
-        }
+        self.derivatives = read.derivatives
         #: output names in value-reference order
+        self.outputs = read.outputs
+
+
+class _Read:
+    """What a :class:`Description` reads from the model description's variables (once per
+    content: a run of a system with many variables rebuilt it each time)."""
+
+    def __init__(self, md):
+        self.variables = {v.name: v for v in md.modelVariables}
+        self.feedthrough = _dependencies(md.outputs)
+        self.initial_feedthrough = _dependencies(md.initialUnknowns)
+        self.derivatives = {
+            v.derivative.name: v.name for v in md.modelVariables if v.derivative is not None
+        }
         self.outputs = [
             v.name
-            for v in sorted(self.md.modelVariables, key=lambda v: v.valueReference)
+            for v in sorted(md.modelVariables, key=lambda v: v.valueReference)
             if v.causality == "output"
         ]
 
@@ -75,8 +88,8 @@ def content_key(path: Path) -> str:
 
 
 def _described(key: str, path: str):
-    """(model description, optional inputs, base units, binaries) of the FMU with content
-    ``key``."""
+    """(model description, optional inputs, base units, binaries, what is read from its
+    variables) of the FMU with content ``key``."""
     with _lock:
         described = _descriptions.get(key)
     if described is None:
@@ -89,7 +102,7 @@ def _described(key: str, path: str):
                 f"{path}: its modelDescription.xml is not an FMI 2.0 model description: "
                 f"{said[:300]}{'...' * (len(said) > 300)}"
             ) from None
-        described = (md, _optional_inputs(root), _base_units(root), _binaries(root))
+        described = (md, _optional_inputs(root), _base_units(root), _binaries(root), _Read(md))
         with _lock:
             if len(_descriptions) >= _KEYS_KEPT:
                 _descriptions.pop(next(iter(_descriptions)))
@@ -125,7 +138,7 @@ def _root(path: str):
     return root
 
 
-def _dependencies(unknowns, variables) -> dict[str, set[str] | None]:
+def _dependencies(unknowns) -> dict[str, set[str] | None]:
     """Output name -> names of the variables it depends on (None: depends on all)."""
     result = {}
     for unknown in unknowns:

@@ -182,6 +182,9 @@ def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
             ]
             continue
         groups: dict[str, list] = {}
+        members_of: dict[str, list[str]] = {}  # variable -> the names of its scalars
+        for v in inputs:
+            members_of.setdefault(v.name.partition("[")[0], []).append(v.name)
         for v in open_:
             if v.name in inst.optional_inputs:
                 groups.setdefault(v.name.partition("[")[0], []).append(v.name)
@@ -191,7 +194,7 @@ def _open_inputs(system, instances, sources, bindings, problems) -> list[dict]:
                     "(connect it or give it a parameter value)"
                 )
         for variable, names in groups.items():
-            members = [v.name for v in inputs if v.name.partition("[")[0] == variable]
+            members = members_of[variable]
             rows = {variable: names} if len(names) == len(members) else _open_rows(names, members)
             if rows is None:
                 given_ = [m for m in members if m not in names]

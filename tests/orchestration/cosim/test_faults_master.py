@@ -240,6 +240,22 @@ def test_without_an_output_directory_rows_stay_in_memory():
     assert problems == [] and results.data.shape == (200, 2) and results["a"][-1] == -199
 
 
+@pytest.mark.parametrize("expected", [64, 7])
+def test_in_memory_some_columns_kept_row_by_row_and_in_blocks(expected):
+    # the buffer is as wide as the columns kept, not as all offered (was a broadcast error)
+    rows = np.arange(40.0).reshape(8, 5)
+    one = recorder.Recorder(list("tabcd"), keep=[0, 2, 3], every=2, expected=expected)
+    for row in rows:
+        one.append(row)
+    block = recorder.Recorder(list("tabcd"), keep=[0, 2, 3], every=2, expected=expected)
+    block.append_block(rows[:3])
+    block.append_block(rows[3:])
+    for rec in (one, block):
+        results, problems = rec.close({})
+        assert problems == [] and results.names == ["t", "b", "c"]
+        assert np.array_equal(results.data, rows[::2][:, [0, 2, 3]])
+
+
 def test_a_failed_npz_leaves_no_file_under_either_name(tmp_path):
     raw = tmp_path / "raw"
     raw.write_bytes(np.zeros(3).tobytes())
