@@ -157,8 +157,8 @@ def doubled(fmu, out, rename: bool):
     digest = package.removeprefix("agilesat_")
     cmg = f"resources/{package}/components/cmg_cluster.py"
     entries[cmg] = entries[cmg].replace(
-        b"values[Y.singularity] = det3(gram(columns))",
-        b"values[Y.singularity] = 2.0 * det3(gram(columns))",
+        b"values[Y.singularity] = det3(gram(free))",
+        b"values[Y.singularity] = 2.0 * det3(gram(free))",
     )
     assert b"2.0 * det3" in entries[cmg]
     if rename:

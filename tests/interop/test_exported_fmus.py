@@ -30,7 +30,8 @@ slave.enterInitializationMode()
 get = {"Real": slave.getReal, "Integer": slave.getInteger, "Boolean": slave.getBoolean}
 values = {v.name: get[v.type]([v.valueReference])[0]
           for v in md.modelVariables if v.causality == "parameter" and v.type in get}
-values.update((v.name, bool(values[v.name])) for v in md.modelVariables if v.type == "Boolean")
+values.update((v.name, bool(values[v.name])) for v in md.modelVariables
+              if v.type == "Boolean" and v.name in values)  # parameters, not outputs
 print(json.dumps(values))
 """
 

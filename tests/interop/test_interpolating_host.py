@@ -2,8 +2,10 @@
 it sends the first derivative of every input it can (from an FMU declaring output
 derivatives into one declaring canInterpolateInputs) and asks the derivatives of every
 Real output of every FMU declaring them, at every step.  The systems: the three shipped
-scenarios (exported packages, moved out of the repository) and a closed loop through the
-sensing FMUs (tests/tools/sensing_loop.py): all fourteen FMUs.
+scenarios (exported packages, moved out of the repository), a closed loop through the
+sensing FMUs (tests/tools/sensing_loop.py) and the guide's two-target pass
+(examples/two_targets: slew guidance and momentum management, its first 20 s: nadir, then
+the slew into the first stare): every FMU.
 
 Without derivatives the host is our master's Jacobi scheme: its runs are the master's to
 the last bits (the hub's Euler angles follow the branch of their latest evaluation, and this
@@ -30,10 +32,11 @@ from sensing_loop import STEP, STOP, write_ssd
 
 from agilesat.orchestration.cosim.master import simulate
 from agilesat.orchestration.scenarios import NAMES, get
-from helpers import HOST_CASES, TOOLS, export_elsewhere
+from helpers import HOST_CASES, ROOT, TOOLS, agilesat, export_elsewhere
 
 pytestmark = [pytest.mark.slow, pytest.mark.integration]
 ATTITUDE = [f"SatelliteDynamics.q_BI[{i}]" for i in (1, 2, 3, 4)]
+SYSTEMS = [*NAMES, "sensing_loop", "two_targets"]
 
 
 @pytest.fixture(scope="module")
@@ -42,6 +45,12 @@ def systems(fmus, tmp_path_factory):
     packages = export_elsewhere(tmp_path_factory)
     found = {name: (packages[name], HOST_CASES[name][0], get(name).step) for name in NAMES}
     found["sensing_loop"] = (write_ssd(tmp_path_factory.mktemp("loop")), STOP, STEP)
+    package = tmp_path_factory.mktemp("mission") / "two_targets.ssp"
+    exported = agilesat(
+        "export", ROOT / "examples" / "two_targets" / "mission.py", "--out", package
+    )
+    assert exported.returncode == 0, exported.stderr
+    found["two_targets"] = (package, 20.0, 0.05)
     return found
 
 
@@ -83,7 +92,7 @@ def test_every_fmu_is_in_a_system(systems):
     assert used == set(FMUS)
 
 
-@pytest.mark.parametrize("name", [*NAMES, "sensing_loop"])
+@pytest.mark.parametrize("name", SYSTEMS)
 def test_without_derivatives_the_host_is_our_masters_jacobi(name, systems, tmp_path):
     system, stop, step = systems[name]
     names, data, _ = host(system, stop, step, tmp_path / "held.npz", "--no-derivatives")
@@ -99,7 +108,7 @@ def test_without_derivatives_the_host_is_our_masters_jacobi(name, systems, tmp_p
     assert np.all(np.abs(other - mine) <= 1e-14 * scale)
 
 
-@pytest.mark.parametrize("name", [*NAMES, "sensing_loop"])
+@pytest.mark.parametrize("name", SYSTEMS)
 def test_with_every_derivative_sent_and_asked_the_host_runs_to_the_end(name, systems, tmp_path):
     system, stop, step = systems[name]
     names, data, said = host(system, stop, step, tmp_path / "derived.npz")

@@ -305,11 +305,18 @@ def test_model_descriptions_declare_the_derivatives(fmus):
         pairs = {v.name: v.derivative.name for v in md.modelVariables if v.derivative}
         cs = md.coSimulation
         declared[name] = (cs.canInterpolateInputs, cs.maxOutputDerivativeOrder, pairs)
-    device = {f"hdot[{i}]": f"h[{i}]" for i in (1, 2, 3)}
-    for name in ("CmgCluster", "PayloadGimbals"):
-        assert declared[name] == (True, 1, device), name
-    assert declared["Flywheel"] == (False, 1, device)  # its drive samples its inputs
-    hub = {f"hdot_{d}[{i}]": f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in (1, 2, 3)}
+    axes = (1, 2, 3)
+    device = {f"hdot[{i}]": f"h[{i}]" for i in axes}
+    # the rotors' jitter momentum, for the hub's rotating rows (docs/jitter.md)
+    cluster = device | {f"hdot_jitter_B[{i}]": f"h_jitter_B[{i}]" for i in axes}
+    wheels = device | {
+        f"hdot_jitter_B[{w},{i}]": f"h_jitter_B[{w},{i}]" for w in (1, 2, 3, 4) for i in axes
+    }
+    assert declared["CmgCluster"] == (True, 1, cluster)
+    assert declared["PayloadGimbals"] == (True, 1, device)
+    assert declared["Flywheel"] == (False, 1, wheels)  # its drive samples its inputs
+    hub = {f"hdot_{d}[{i}]": f"h_{d}[{i}]" for d in ("cmg", "wheel", "payload") for i in axes}
+    hub |= {f"hdot_extra[{r},{i}]": f"h_extra[{r},{i}]" for r in range(1, 7) for i in axes}
     assert declared["SatelliteDynamics"] == (True, 1, hub)
     assert declared["CmgSteering"] == (False, 0, {})
 
