@@ -493,10 +493,8 @@ class WorkerWatch:
             held = sorted(i for k in self.processing.get(address, ()) for i in keys.get(k, ()))
             self.lost.append({"worker": address, "runs_in_flight": held})
             print(
-                f"campaign: worker {address} left; Dask re-runs the runs it held ({held}) "
-                "on the others"
-                if held
-                else f"campaign: worker {address} left with no run in flight",
+                f"campaign: worker {address} left; Dask re-runs the runs it held "
+                f"({held or 'none seen in flight'}) on the others",
                 file=sys.stderr,
             )
         self.workers = workers

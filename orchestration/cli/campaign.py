@@ -249,7 +249,9 @@ def format_campaign(summary: dict) -> str:
         lines.append(
             f"  worker {lost['worker']} died; Dask re-ran runs {held} elsewhere"
             if held
-            else f"  worker {lost['worker']} left with no run in flight: nothing was re-run"
+            # the watch samples the workers' runs once a second: a run just started is unseen
+            else f"  worker {lost['worker']} left; no run of it was seen in flight (Dask "
+            "re-runs any it held)"
         )
     warm = summary.get("warm_up")
     if warm and warm["processes"]:

@@ -492,7 +492,7 @@ def test_the_failure_list_says_how_many_more_there_are():
     assert lines[7].startswith("  and 3 more")
 
 
-def test_a_worker_that_left_holding_no_run_is_not_said_to_have_had_runs_re_run():
+def test_a_worker_that_left_with_no_run_seen_is_not_said_to_have_had_runs_re_run():
     from agilesat.orchestration.cli.campaign import format_campaign
 
     summary = {
@@ -507,7 +507,9 @@ def test_a_worker_that_left_holding_no_run_is_not_said_to_have_had_runs_re_run()
         "failures": [],
     }
     lines = format_campaign(summary).splitlines()
-    assert lines[1] == "  worker tcp://a left with no run in flight: nothing was re-run"
+    assert lines[1] == (
+        "  worker tcp://a left; no run of it was seen in flight (Dask re-runs any it held)"
+    )
     assert lines[2] == "  worker tcp://b died; Dask re-ran runs [2, 3] elsewhere"
 
 
