@@ -27,6 +27,7 @@ import os
 import subprocess
 import sys
 import sysconfig
+import tempfile
 import zipfile
 from collections.abc import Callable
 from html import escape
@@ -80,9 +81,13 @@ def build_fmu(name: str, out_dir: Path = BUILD_DIR, force: bool = False) -> Path
     package = f"agilesat_{digest}"
     entry = _entry_module(name, package)
     model = model_class(name)
-    write_archive(target, fmu_entries(name, model, digest, sources, entry, out_dir))
+    entries = fmu_entries(name, model, digest, sources, entry, out_dir)
+    write_archive(target, entries)
     if jit.kernels(sys.modules[model.__module__]):
-        compile_kernels(target, name, package)
+        native = compile_kernels(target, name, package)
+        if native:
+            binaries = {f"binaries/{PLATFORM}/{file}": data for file, data in native.items()}
+            write_archive(target, {**entries, **binaries})
     return target
 
 
@@ -111,9 +116,9 @@ def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str,
 
 
 _COMPILE_KERNELS = """
-import importlib, os, sys, tempfile, zipfile
+import importlib, os, pathlib, sys, tempfile, zipfile
 os.environ["AGILESAT_JIT_AFTER"] = "0"
-fmu, name, package, module = sys.argv[1:]
+fmu, name, package, module, out, compiler = sys.argv[1:]
 with tempfile.TemporaryDirectory() as folder:
     zipfile.ZipFile(fmu).extractall(folder)
     sys.path.insert(0, folder + "/resources")
@@ -123,21 +128,32 @@ with tempfile.TemporaryDirectory() as folder:
     for entry in c_entries.of(model)[:2]:  # the C entries of the FMU's C step path
         if entry is not None:
             entry.address
+    if out:
+        native = importlib.import_module(package + ".fmus.native")
+        for file, data in native.build_in([model], compiler).items():
+            pathlib.Path(out, file).write_bytes(data)
 """
 
 
-def compile_kernels(fmu: Path, name: str, package: str) -> None:
+def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
     """Fill the compile cache of the FMU's kernels (components/runtime/jit.py): load its code from
     an extraction, as a host does, in a fresh process of this Python, and run its model at
     the defaults for one step.  The cache is keyed on content, so any later extraction of
-    this FMU loads the compiled kernels instead of compiling them."""
-    result = subprocess.run(
-        [sys.executable, "-c", _COMPILE_KERNELS, str(fmu), name, package, FMUS[name]],
-        capture_output=True,
-        text=True,
-    )
-    if result.returncode != 0:
-        raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
+    this FMU loads the compiled kernels instead of compiling them.  Returns the library of
+    its C entries compiled ahead of time and its manifest (:mod:`.native`), {} without a C
+    compiler."""
+    compiler = c_compiler()
+    with tempfile.TemporaryDirectory() as out:
+        result = subprocess.run(
+            [sys.executable, "-c", _COMPILE_KERNELS, str(fmu), name, package, FMUS[name],
+             out if compiler else "", compiler or ""],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "AGILESAT_NATIVE": "0"},
+        )  # fmt: skip
+        if result.returncode != 0:
+            raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
+        return {path.name: path.read_bytes() for path in sorted(Path(out).iterdir())}
 
 
 def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -> bytes:
@@ -238,6 +254,7 @@ def _toolchain_digest() -> bytes:
     return hashlib.sha256(
         _pythonfmu_binary().read_bytes()
         + metadata.version("pythonfmu").encode()
+        + metadata.version("numba").encode()  # the kernels' library (native.py)
         + "\0".join(python_runtime()).encode()
     ).digest()
 

@@ -22,52 +22,60 @@ import warnings
 from typing import NamedTuple
 
 from ..components.runtime import jit
+from . import native
 
 
 class CEntry:
     """A step or output kernel as a C function (module docstring)."""
 
-    def __init__(self, kernel: jit.Kernel, role: str):
+    def __init__(self, kernel: jit.Kernel, role: str, native: int | None = None):
         self.kernel = kernel
         self.role = role  # "step" or "output"
-        self._address: int | None = None
+        self._address = native  # the FMU's library's (native.py), from the first call
 
     @property
     def address(self) -> int | None:
-        """The C function's address once the kernel runs compiled, else None."""
+        """The C function's address: the FMU's ahead-of-time library's, else numba's once
+        the kernel runs compiled, else None."""
         if self._address is None and jit.runs_compiled(self.kernel):
             self._address = self._cfunc.address
         return self._address
 
     @functools.cached_property
     def _cfunc(self):
-        numba = jit._numba()
-        from numba.core.ccallback import CFunc
+        return cfunc(self.kernel, self.role, self.kernel.compiled, cache=True)
 
-        py_func, name = self.kernel.py_func, self.kernel.__name__ + "_c"
-        template = _step_template if self.role == "step" else _output_template
-        names = {"co_name": name}
-        if hasattr(template.__code__, "co_qualname"):  # Python 3.11 on
-            names["co_qualname"] = self.kernel.__qualname__ + "_c"
-        code = template.__code__.replace(
-            co_filename=py_func.__code__.co_filename,
-            co_firstlineno=py_func.__code__.co_firstlineno,
-            **names,
+
+def cfunc(kernel: jit.Kernel, role: str, compiled, cache: bool):
+    """The numba ``cfunc`` of ``role`` calling ``compiled`` (the kernel's compiled
+    function), compiled now; ``cache``: with the compile cache (jit.py)."""
+    numba = jit._numba()
+    from numba.core.ccallback import CFunc
+
+    py_func, name = kernel.py_func, kernel.__name__ + "_c"
+    template = _step_template if role == "step" else _output_template
+    names = {"co_name": name}
+    if hasattr(template.__code__, "co_qualname"):  # Python 3.11 on
+        names["co_qualname"] = kernel.__qualname__ + "_c"
+    code = template.__code__.replace(
+        co_filename=py_func.__code__.co_filename,
+        co_firstlineno=py_func.__code__.co_firstlineno,
+        **names,
+    )
+    namespace = {"__name__": py_func.__module__, "carray": numba.carray, "kernel": compiled}
+    entry = type(template)(code, namespace, name)
+    entry.__module__ = py_func.__module__
+    compiling = CFunc(entry, signature(numba, role), locals={}, options={})
+    try:
+        if cache:
+            compiling._cache = jit.content_cache(entry)
+    except (OSError, RuntimeError, AttributeError) as exc:
+        warnings.warn(
+            f"agilesat: no compile cache for {name} ({exc}): compiling it in every process",
+            stacklevel=2,
         )
-        namespace = {"__name__": py_func.__module__, "carray": numba.carray}
-        namespace["kernel"] = self.kernel.compiled
-        entry = type(template)(code, namespace, name)
-        entry.__module__ = py_func.__module__
-        cfunc = CFunc(entry, signature(numba, self.role), locals={}, options={})
-        try:
-            cfunc._cache = jit.content_cache(entry)
-        except (OSError, RuntimeError, AttributeError) as exc:
-            warnings.warn(
-                f"agilesat: no compile cache for {name} ({exc}): compiling it in every process",
-                stacklevel=2,
-            )
-        cfunc.compile()
-        return cfunc
+    compiling.compile()
+    return compiling
 
 
 def _step_template(values, n_values, state, n_state, t, dt):
@@ -95,12 +103,14 @@ def signature(numba, role: str) -> tuple:
 
 
 class Entries(NamedTuple):
-    """A model's C entries: step and output (None: the method's), and whether its step
-    changes nothing but ``t`` (``STATELESS``)."""
+    """A model's C entries: step and output (None: the method's), whether its step
+    changes nothing but ``t`` (``STATELESS``), and whether they are the FMU's library's
+    (``native.py``: compiled from the first call)."""
 
     step: CEntry | None
     output: CEntry | None
     stateless: bool
+    native: bool = False
 
     @property
     def any(self) -> bool:
@@ -111,8 +121,10 @@ class Entries(NamedTuple):
 def of(model_class) -> Entries:
     """The C entries of ``model_class`` (one per kernel and process)."""
     step, output = jit.declared(model_class)
+    found = native.entries(model_class) if step or output else {}
     return Entries(
-        CEntry(step, "step") if step else None,
-        CEntry(output, "output") if output else None,
+        CEntry(step, "step", found.get("step")) if step else None,
+        CEntry(output, "output", found.get("output")) if output else None,
         bool(getattr(model_class, "STATELESS", False)),
+        bool(found),
     )

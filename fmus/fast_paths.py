@@ -134,7 +134,8 @@ class FastPaths:
     def leave(self) -> None:
         slave = self.slave
         self.control[STEP_MODE] = slave._mode == "step" and slave.model.values is self.values
-        if self.c_path and jit.compiled_tier:  # before, arming costs what it saves
+        if self.c_path and (jit.compiled_tier or self.entries.native):  # before, arming
+            # costs what it saves
             try:
                 self._arm()
             except Exception as exc:  # noqa: BLE001 - never into pythonfmu (fmi2Fatal)

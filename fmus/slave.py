@@ -253,7 +253,8 @@ class ModelSlave(Fmi2Slave):
             )
         if self._stop_time is not None:  # the first step: the run's length decides the tier
             steps, self._stop_time = (self._stop_time - current_time) / step_size, None
-            jit.expect(sys.modules[type(self.model).__module__], steps)
+            if not self._fast.entries.native:  # the FMU's library steps it, compiled
+                jit.expect(sys.modules[type(self.model).__module__], steps)
         self.model.step(current_time, step_size)
         self.model.inputs_to_step_end(step_size)
         self._flush_warnings()

@@ -103,6 +103,14 @@ SWITCHES = {
             "components/runtime/jit.py, at import",
         ),
         Switch(
+            "AGILESAT_NATIVE",
+            True,
+            _flag,
+            "1: a model's C entries come from its FMU's ahead-of-time library from the first "
+            "step (fmus/native.py); 0: compiled by numba in the process, as a run pays",
+            "fmus/native.py, as an FMU's model is first stepped",
+        ),
+        Switch(
             "AGILESAT_CACHE_DIR",
             None,
             _path,
