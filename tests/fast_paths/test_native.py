@@ -1,0 +1,116 @@
+"""The C entries compiled ahead of time into the FMU (fmus/native.py): every built FMU
+whose model declares kernels carries them; a run steps them from its first step without
+importing numba, bit for bit as the kernels' Python; a library that cannot be used here
+(another numba, a damaged file) is said and left for numba's in-process compile."""
+
+import json
+import zipfile
+
+import pytest
+
+from agilesat.components.runtime import jit
+from agilesat.fmus import FMUS, model_class, native
+from helpers import run_python
+
+LIBRARY = f"binaries/linux64/{native.LIBRARY}"
+MANIFEST = f"binaries/linux64/{native.MANIFEST}"
+
+RUN = """
+import json, sys
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+base, _, variant = sys.argv[1].partition(":")
+results = simulate(get(base).system_file(variant or None), stop=float(sys.argv[2]))
+calls = {}  # the Python calls of each FMU model's declared step and output kernels
+for name, module in sys.modules.items():
+    if name.startswith("agilesat_") and name.endswith(".components.runtime.jit"):
+        for model, roles in module._DECLARED.items():
+            for role, kernel in roles.items():
+                calls[model.__name__ + "." + role] = kernel.calls
+print(json.dumps({"numba": "numba" in sys.modules, "calls": calls,
+                  "data": results.data.tolist(), "names": list(results.names)}))
+"""
+
+
+def _run(system: str, stop: float, **env) -> dict:
+    import os
+
+    saved = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        done = run_python(RUN, system, stop)
+    finally:
+        for k, v in saved.items():
+            os.environ.pop(k) if v is None else os.environ.__setitem__(k, v)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_every_fmu_with_kernels_carries_its_entries(fmus):
+    for name in FMUS:
+        step, output = jit.declared(model_class(name))
+        with zipfile.ZipFile(fmus[name]) as fmu:
+            listed = set(fmu.namelist())
+            if not (step or output):
+                assert LIBRARY not in listed, name
+                continue
+            manifest = json.loads(fmu.read(MANIFEST))
+        roles = {role for role, kernel in (("step", step), ("output", output)) if kernel}
+        assert set(manifest["models"][model_class(name).__qualname__]) == roles, name
+        assert LIBRARY in listed, name
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "system, stop", [("scan_pitch", 3.0), ("payload_sweep", 3.0), ("video_sar:sensed", 3.0)]
+)
+def test_a_run_steps_the_fmus_library_from_its_first_step_bit_for_bit(fmus, system, stop):
+    """Against the kernels' Python (without the library a run this short keeps it): the
+    same rows bit for bit; the library's run calls no kernel's Python after the first step
+    (which checks the inputs in the slave) and never imports numba."""
+    native_run = _run(system, stop)
+    python_run = _run(system, stop, AGILESAT_NATIVE="0")
+    assert native_run["names"] == python_run["names"]
+    assert native_run["data"] == python_run["data"]
+    assert not native_run["numba"]
+    steps = [k for k in native_run["calls"] if k.endswith(".step")]
+    assert steps and all(native_run["calls"][k] <= 1 for k in steps), native_run["calls"]
+    assert any(python_run["calls"][k] > 10 for k in steps)  # the Python did step there
+
+
+@pytest.mark.parametrize(
+    "damage, said",
+    [
+        (lambda m, so: ({**m, "numba": "0.0"}, so), "built with numba 0.0"),
+        (lambda m, so: (m, so[:-1] + bytes([so[-1] ^ 1])), "SHA-256"),
+    ],
+    ids=["another-numba", "damaged-library"],
+)
+def test_a_library_that_cannot_be_used_is_said_and_numba_compiles(
+    fmus, tmp_path, damage, said
+):
+    with zipfile.ZipFile(fmus["CmgCluster"]) as fmu:
+        fmu.extractall(tmp_path)
+    manifest = json.loads((tmp_path / MANIFEST).read_text())
+    manifest, library = damage(manifest, (tmp_path / LIBRARY).read_bytes())
+    (tmp_path / MANIFEST).write_text(json.dumps(manifest))
+    (tmp_path / LIBRARY).write_bytes(library)
+    package = (tmp_path / "resources/slavemodule.txt").read_text().strip().split("_")[-1]
+    done = run_python(
+        """
+import importlib, sys, warnings
+sys.path.insert(0, sys.argv[1])
+package = "agilesat_" + sys.argv[2]
+model = importlib.import_module(package + ".components.cmg_cluster").CmgCluster
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    entries = importlib.import_module(package + ".fmus.c_entries").of(model)
+print(entries.native, entries.step.address, "|".join(str(w.message) for w in caught))
+""",
+        tmp_path / "resources",
+        package,
+    )
+    assert done.returncode == 0, done.stderr
+    used, address, message = done.stdout.strip().split(" ", 2)
+    assert used == "False" and address == "None"  # numba's, once a run pays for it
+    assert said in message and "CmgCluster's kernels are compiled in this process" in message
