@@ -28,6 +28,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import warnings
 import zipfile
 from collections.abc import Callable
 from html import escape
@@ -130,8 +131,11 @@ with tempfile.TemporaryDirectory() as folder:
             entry.address
     if out:
         native = importlib.import_module(package + ".fmus.native")
-        for file, data in native.build_in([model], compiler).items():
-            pathlib.Path(out, file).write_bytes(data)
+        try:
+            for file, data in native.build_in([model], compiler).items():
+                pathlib.Path(out, file).write_bytes(data)
+        except Exception as exc:
+            print(f"{type(exc).__name__}: {exc}".strip().splitlines()[0], file=sys.stderr)
 """
 
 
@@ -153,7 +157,14 @@ def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
         )  # fmt: skip
         if result.returncode != 0:
             raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
-        return {path.name: path.read_bytes() for path in sorted(Path(out).iterdir())}
+        built = {path.name: path.read_bytes() for path in sorted(Path(out).iterdir())}
+        if compiler and not built:
+            warnings.warn(
+                f"agilesat build: {fmu.name} has no ahead-of-time C entries "
+                f"({result.stderr.strip() or 'none made'}): numba compiles them where it runs",
+                stacklevel=2,
+            )
+        return built
 
 
 def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -> bytes:

@@ -11,8 +11,9 @@ array is never replaced (state restore and initialisation copy into it).  The sl
 ``control`` up to date: STEP_MODE at the end of every call (``leave``) and OUTPUTS_VALID
 (the slave's own flag lives there); the step's end lives in ``block``.  In step mode the
 shim answers gets of Real, Integer and Boolean scalars itself while the outputs are valid,
-and writes sets of finite Real inputs itself (a feedthrough input invalidates the
-outputs).  Every other call reaches the slave.
+and writes sets of finite Real inputs and of Integer and Boolean inputs itself (as the
+slave writes them: the integer as a double, a Boolean as 1.0 or 0.0; a feedthrough input
+invalidates the outputs).  Every other call reaches the slave.
 
 The C step path.  A model whose kernels follow the kernel convention (components/runtime/jit.py)
 has C entries (``c_entries.py``): once its kernels run compiled, the shim also takes
@@ -64,9 +65,13 @@ from .protocol import (
     C_STEP_TIME,
     FAST_PATH_VERSION,
     KIND_BOOLEAN,
+    KIND_BOOLEAN_FEEDTHROUGH,
+    KIND_BOOLEAN_INPUT,
     KIND_FEEDTHROUGH,
     KIND_INPUT,
     KIND_INTEGER,
+    KIND_INTEGER_FEEDTHROUGH,
+    KIND_INTEGER_INPUT,
     KIND_OTHER,
     KIND_OUTPUT,
     KIND_PARAMETER,
@@ -80,11 +85,21 @@ def _address(array: np.ndarray) -> int:
     return array.__array_interface__["data"][0]
 
 
+#: Integer and Boolean kinds: (not an input, an input, a feedthrough input)
+_WHOLE = {
+    "Integer": (KIND_INTEGER, KIND_INTEGER_INPUT, KIND_INTEGER_FEEDTHROUGH),
+    "Boolean": (KIND_BOOLEAN, KIND_BOOLEAN_INPUT, KIND_BOOLEAN_FEEDTHROUGH),
+}
+
+
 def kind(causality: str, type_name: str, feeds: bool) -> int:
     """``kind`` of a scalar of this causality and type (the table's names); ``feeds``: some
     output depends on it directly."""
+    if type_name in _WHOLE:
+        other, plain, feeding = _WHOLE[type_name]
+        return (feeding if feeds else plain) if causality == "input" else other
     if type_name != "Real":
-        return {"Integer": KIND_INTEGER, "Boolean": KIND_BOOLEAN}.get(type_name, KIND_OTHER)
+        return KIND_OTHER
     if causality == "input":
         return KIND_FEEDTHROUGH if feeds else KIND_INPUT
     return KIND_OUTPUT if causality == "output" else KIND_PARAMETER

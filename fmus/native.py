@@ -48,16 +48,12 @@ LIBRARY, MANIFEST = "agilesat_kernels.so", "agilesat_kernels.json"
 #: C API's, which the dynamic linker resolves
 LINKED, PYTHON = ("NRT_", "numba_"), ("Py", "_Py")
 _LIBM = ctypes.CDLL(ctypes.util.find_library("m"))
-#: a trampoline and the table's accessor per architecture (GNU assembler): ``{i}`` the
-#: symbol's slot
+#: a trampoline and the table's accessor per architecture (GNU assembler; ``offset``: the
+#: symbol's slot): x86-64 only so far, elsewhere numba compiles the entries in the process
 _JUMPS = {
     "x86_64": (
         "{name}:\n\tjmp *.Llinks+{offset}(%rip)\n",
         "agilesat_links:\n\tleaq .Llinks(%rip), %rax\n\tret\n",
-    ),
-    "aarch64": (
-        "{name}:\n\tadrp x16, .Llinks+{offset}\n\tldr x16, [x16, #:lo12:.Llinks+{offset}]\n\tbr x16\n",
-        "agilesat_links:\n\tadrp x0, .Llinks\n\tadd x0, x0, #:lo12:.Llinks\n\tret\n",
     ),
 }
 

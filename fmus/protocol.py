@@ -27,12 +27,15 @@ import uuid
 
 DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
 
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 6.0
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 7.0
 
 #: per scalar: a String (or anything the shim leaves alone), a Real parameter, output,
-#: input, input some output depends on directly (feedthrough), an Integer, a Boolean
+#: input, input some output depends on directly (feedthrough), an Integer, a Boolean (not
+#: inputs), an Integer input, feedthrough input, a Boolean input, feedthrough input
 KIND_OTHER, KIND_PARAMETER, KIND_OUTPUT, KIND_INPUT, KIND_FEEDTHROUGH = range(5)
 KIND_INTEGER, KIND_BOOLEAN = 5, 6
+KIND_INTEGER_INPUT, KIND_INTEGER_FEEDTHROUGH = 7, 8
+KIND_BOOLEAN_INPUT, KIND_BOOLEAN_FEEDTHROUGH = 9, 10
 
 #: control[]: the slave is in step mode (and its value array is the one shared); the
 #: outputs are those of the current state and inputs; the C step path's step (C_STEP_*) and
@@ -62,7 +65,9 @@ SECTIONS = (
     (
         "kind[]: per scalar",
         ("KIND_OTHER", "KIND_PARAMETER", "KIND_OUTPUT", "KIND_INPUT", "KIND_FEEDTHROUGH")
-        + ("KIND_INTEGER", "KIND_BOOLEAN"),
+        + ("KIND_INTEGER", "KIND_BOOLEAN")
+        + ("KIND_INTEGER_INPUT", "KIND_INTEGER_FEEDTHROUGH")
+        + ("KIND_BOOLEAN_INPUT", "KIND_BOOLEAN_FEEDTHROUGH"),
     ),
     (
         "control[] (int32)",

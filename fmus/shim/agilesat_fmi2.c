@@ -740,8 +740,8 @@ FORWARD_REAL(fmi2SetReal, const fmi2Real, fast_set_real)
 FORWARD_ARRAY(fmi2GetInteger, fmi2Integer, 0, fast_get_integer)
 FORWARD_ARRAY(fmi2GetBoolean, fmi2Boolean, 0, fast_get_boolean)
 FORWARD_ARRAY(fmi2GetString, fmi2String, 0, not_served)
-FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0, not_served)
-FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0, not_served)
+FORWARD_ARRAY(fmi2SetInteger, const fmi2Integer, 0, fast_set_integer)
+FORWARD_ARRAY(fmi2SetBoolean, const fmi2Boolean, 0, fast_set_boolean)
 FORWARD_ARRAY(fmi2SetString, const fmi2String, 1, not_served)
 
 /* ---- FMU states --------------------------------------------------------------------- */

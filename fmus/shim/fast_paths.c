@@ -14,10 +14,11 @@
  * AGILESAT_SHIM_STEP=0 the C step path only.
  *
  * Fast get/set.  In step mode (STEP_MODE), a fmi2GetReal of Real scalars is served while
- * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER: a whole
- * number fmi2Integer holds) and fmi2GetBoolean (KIND_BOOLEAN: 0 or 1); a fmi2SetReal of
- * finite values to Real inputs is written in, a feedthrough input (KIND_FEEDTHROUGH)
- * clearing OUTPUTS_VALID.
+ * the outputs are valid (OUTPUTS_VALID), the same for fmi2GetInteger (KIND_INTEGER*: a whole
+ * number fmi2Integer holds) and fmi2GetBoolean (KIND_BOOLEAN*: 0 or 1); a fmi2SetReal of
+ * finite values to Real inputs is written in, and a fmi2SetInteger/fmi2SetBoolean to Integer
+ * (Boolean) inputs as the slave writes them (the integer as a double, a Boolean as 1.0 or
+ * 0.0), a feedthrough input (KIND_*FEEDTHROUGH) clearing OUTPUTS_VALID.
  *
  * The C step path.  Once the model's kernels run compiled, the slave arms (control[C_STEP],
  * control[C_OUTPUT]) the model's C entries (fmus/c_entries.py) in block[], with its state
@@ -212,8 +213,12 @@ static int gettable(const FastPaths *f, const fmi2ValueReference vr[], size_t n,
     for (size_t i = 0; i < n; i++) {
         if (vr[i] >= f->n_values) return 0;
         unsigned char kind = f->kind[vr[i]];
-        if (integer || boolean ? kind != (integer ? KIND_INTEGER : KIND_BOOLEAN)
-                               : kind == KIND_OTHER || kind >= KIND_INTEGER)
+        int is_integer = kind == KIND_INTEGER || kind == KIND_INTEGER_INPUT ||
+                         kind == KIND_INTEGER_FEEDTHROUGH;
+        int is_boolean = kind == KIND_BOOLEAN || kind == KIND_BOOLEAN_INPUT ||
+                         kind == KIND_BOOLEAN_FEEDTHROUGH;
+        if (integer ? !is_integer : boolean ? !is_boolean
+                    : kind == KIND_OTHER || kind >= KIND_INTEGER)
             return 0;
     }
     return 1;
@@ -280,6 +285,36 @@ int fast_set_real(FastPaths *f, const fmi2ValueReference vr[], size_t n,
     if (feeds) f->control[OUTPUTS_VALID] = 0;
     f->served++;
     return 1;
+}
+
+/* Sets of Integer (Boolean) inputs: as the slave's _write of float(v) (1.0 if v else 0.0). */
+static int set_whole(FastPaths *f, const fmi2ValueReference vr[], size_t n, const int value[],
+                     unsigned char input, unsigned char feedthrough, int boolean) {
+    int ok = f->values && f->control[STEP_MODE], feeds = 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        unsigned char kind = vr[i] < f->n_values ? f->kind[vr[i]] : KIND_OTHER;
+        ok = kind == input || kind == feedthrough;
+        feeds |= kind == feedthrough;
+    }
+    if (!ok) {
+        f->forwarded++;
+        return 0;
+    }
+    for (size_t i = 0; i < n; i++)
+        f->values[vr[i]] = boolean ? (value[i] != 0 ? 1.0 : 0.0) : (double)value[i];
+    if (feeds) f->control[OUTPUTS_VALID] = 0;
+    f->served++;
+    return 1;
+}
+
+int fast_set_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     const fmi2Integer value[]) {
+    return set_whole(f, vr, n, value, KIND_INTEGER_INPUT, KIND_INTEGER_FEEDTHROUGH, 0);
+}
+
+int fast_set_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     const fmi2Boolean value[]) {
+    return set_whole(f, vr, n, value, KIND_BOOLEAN_INPUT, KIND_BOOLEAN_FEEDTHROUGH, 1);
 }
 
 /* ---- counts, for tests and benchmarks ------------------------------------------------- */

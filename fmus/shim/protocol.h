@@ -10,7 +10,7 @@
 /* the handshake */
 #define FAST_PATH_VR 4294967295u
 #define FAST_PATH_N 6
-#define FAST_PATH_VERSION 6.0
+#define FAST_PATH_VERSION 7.0
 
 /* kind[]: per scalar */
 #define KIND_OTHER 0
@@ -20,6 +20,10 @@
 #define KIND_FEEDTHROUGH 4
 #define KIND_INTEGER 5
 #define KIND_BOOLEAN 6
+#define KIND_INTEGER_INPUT 7
+#define KIND_INTEGER_FEEDTHROUGH 8
+#define KIND_BOOLEAN_INPUT 9
+#define KIND_BOOLEAN_FEEDTHROUGH 10
 
 /* control[] (int32) */
 #define STEP_MODE 0

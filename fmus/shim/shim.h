@@ -54,6 +54,10 @@ void fast_paths_disconnect(FastPaths *f);
 int fast_get_real(FastPaths *f, const fmi2ValueReference vr[], size_t n, fmi2Real value[]);
 int fast_set_real(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                   const fmi2Real value[]);
+int fast_set_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     const fmi2Integer value[]);
+int fast_set_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,
+                     const fmi2Boolean value[]);
 int fast_get_integer(FastPaths *f, const fmi2ValueReference vr[], size_t n,
                      fmi2Integer value[]);
 int fast_get_boolean(FastPaths *f, const fmi2ValueReference vr[], size_t n,

@@ -394,6 +394,7 @@ def test_a_models_tier_is_decided_by_its_own_kernels_alone(monkeypatch):
 _TIER = """
 import os, sys
 os.environ["AGILESAT_CACHE_DIR"] = sys.argv[1]
+os.environ["AGILESAT_NATIVE"] = "0"  # the FMUs' own compiled entries decide nothing
 if len(sys.argv) > 3:
     os.environ["AGILESAT_JIT_RUNS"] = sys.argv[3]
 from agilesat.orchestration import simulate
@@ -419,10 +420,11 @@ def _tier(cache, stops: str, runs: str = "") -> list[int]:
 @pytest.mark.integration
 @needs_numba
 def test_the_tier_is_decided_at_the_first_step_from_the_runs_length(fmus, tmp_path):
-    """With the compiled code cached, a run expected to take PAYS_AFTER steps or more runs
-    compiled from its first step; a shorter one runs the Python (no numba import), unless
-    the process made runs before (a notebook) or expects several (AGILESAT_JIT_RUNS, a
-    campaign worker); with nothing cached, only from AFTER steps."""
+    """Without the FMUs' ahead-of-time entries (AGILESAT_NATIVE=0, tests/fast_paths/
+    test_native.py): with the compiled code cached, a run expected to take PAYS_AFTER steps
+    or more runs compiled from its first step; a shorter one runs the Python (no numba
+    import), unless the process made runs before (a notebook) or expects several
+    (AGILESAT_JIT_RUNS, a campaign worker); with nothing cached, only from AFTER steps."""
     cache = str(tmp_path / "cache")
     seconds = jit.PAYS_AFTER * 0.05  # of scan_pitch at its step
     short, long = round(0.6 * seconds), round(1.1 * seconds)

@@ -86,9 +86,7 @@ def test_a_run_steps_the_fmus_library_from_its_first_step_bit_for_bit(fmus, syst
     ],
     ids=["another-numba", "damaged-library"],
 )
-def test_a_library_that_cannot_be_used_is_said_and_numba_compiles(
-    fmus, tmp_path, damage, said
-):
+def test_a_library_that_cannot_be_used_is_said_and_numba_compiles(fmus, tmp_path, damage, said):
     with zipfile.ZipFile(fmus["CmgCluster"]) as fmu:
         fmu.extractall(tmp_path)
     manifest = json.loads((tmp_path / MANIFEST).read_text())
