@@ -1,9 +1,16 @@
 """Basilisk (``bsk`` on PyPI, all-C++ dynamics) as a speed anchor for
-tests/tools/benchmark_scan_pitch.py: a rigid hub (our SatelliteDynamics' inertia and mass) with
-six VSCMGs (balanced model, 16.65 N.m.s rotors) or three reaction wheels (Honeywell HR16),
-RK4, at a given step and duration, no flight software (constant zero commands): the time of
-Basilisk's own dynamics loop alone.  Optional: ``pip install -e '.[basilisk]'`` (bsk pins
-older sgp4, tqdm, pandas, matplotlib; a separate environment keeps ours intact).
+tests/tools/benchmark_scan_pitch.py: a rigid hub of scan_pitch's and video_sar's inertia
+(956 kg.m^2 on each axis; a mass of 750 kg, which Basilisk's hub needs and our attitude-only
+SatelliteDynamics has not) with our CmgCluster's six gyros as Basilisk VSCMGs (balanced
+model): the five-pyramid gimbals (half-angle 63.4 deg, azimuths 90, 162, 234, 306, 18 deg)
+and the sixth along z, the cluster's default rotor spins, 16.65 N.m.s rotors at 6000 rpm,
+scan_pitch's initial gimbal angles (Table 1), so the same h = h_rotor sum(s_i cos d_i +
+t_i sin d_i) at the start; or three reaction wheels (Honeywell HR16).  RK4 at a given step
+and duration, no flight software (constant zero commands): the time of Basilisk's own
+dynamics loop alone.  A VSCMG has more states than our gyro (rotor angle and speed besides
+the gimbal's angle and rate): the same physics and more.  Optional: ``pip install -e
+'.[basilisk]'`` (bsk pins older sgp4, tqdm, pandas, matplotlib; a separate environment
+keeps ours intact).  Checked with bsk 2.12.1.
 
     python tests/tools/benchmark_basilisk.py      # 150 s at 0.05 s, both hubs
     python tests/tools/benchmark_basilisk.py --monte-carlo 40 --stop 200
@@ -27,6 +34,21 @@ from Basilisk.simulation import (
 from Basilisk.utilities import SimulationBaseClass, macros, simIncludeRW
 
 KINDS = ("vscmg", "rw")
+H_ROTOR = 16.65  # N.m.s, scan_pitch's and video_sar's
+ROTOR_SPEED = 200.0 * np.pi  # rad/s, components/cmg_cluster.py's ROTOR_SPEED
+ALPHA0 = np.radians(63.4)
+AZIMUTHS = np.radians([90.0, 162.0, 234.0, 306.0, 18.0])
+DELTA0 = (np.pi / 4, 0.0, -np.pi / 4, np.pi / 2, np.pi / 4, 0.0)
+
+
+def gyros() -> tuple[np.ndarray, np.ndarray]:
+    """Gimbal axes g_i and reference spins s_i (rows): gimbals 1-5 from the pyramid's base
+    to its apex on +z, g = (-sin a0 cos az, -sin a0 sin az, cos a0); gimbal 6 along z;
+    the spins the reverse of (cos a0 cos az, cos a0 sin az, sin a0) and of x."""
+    c, s = np.cos(ALPHA0), np.sin(ALPHA0)
+    g = [[-s * np.cos(a), -s * np.sin(a), c] for a in AZIMUTHS] + [[0.0, 0.0, 1.0]]
+    spin = [[c * np.cos(a), c * np.sin(a), s] for a in AZIMUTHS] + [[1.0, 0.0, 0.0]]
+    return np.array(g), -np.array(spin)
 
 
 def hub_time(kind: str, step: float, stop: float, inertia=None, clock=time.perf_counter) -> float:
@@ -45,19 +67,16 @@ def hub_time(kind: str, step: float, stop: float, inertia=None, clock=time.perf_
     keep = []
     if kind == "vscmg":
         eff = vscmgStateEffector.VSCMGStateEffector()
-        for i in range(6):
+        for g, s, delta0 in zip(*gyros(), DELTA0):
             c = messaging.VSCMGConfigMsgPayload()
             c.VSCMGModel = 0
-            a = np.radians(60.0 * i)
-            g = [np.cos(a) * 0.447, np.sin(a) * 0.447, 0.894]
-            s = np.cross(g, [0, 0, 1.0] if i else [1.0, 0, 0])
-            s = s / np.linalg.norm(s)
             t = np.cross(g, s)
             c.ggHat_B = [[g[0]], [g[1]], [g[2]]]
             c.gsHat0_B = [[s[0]], [s[1]], [s[2]]]
             c.gtHat0_B = [[t[0]], [t[1]], [t[2]]]
-            c.IW1, c.IW2, c.IW3, c.IG1, c.IG2, c.IG3 = 0.1, 0.05, 0.05, 0.1, 0.1, 0.1
-            c.Omega, c.gamma, c.gammaDot = 166.5, 0.1 * i, 0.0
+            c.IW1 = H_ROTOR / ROTOR_SPEED  # about the spin axis: IW1 Omega = h_rotor
+            c.IW2, c.IW3, c.IG1, c.IG2, c.IG3 = 0.5 * c.IW1, 0.5 * c.IW1, 0.1, 0.1, 0.1
+            c.Omega, c.gamma, c.gammaDot = ROTOR_SPEED, delta0, 0.0
             c.u_s_max = c.u_g_max = -1
             c.massW = c.massG = 1.0
             c.rGB_B = [[0.0], [0.0], [0.0]]

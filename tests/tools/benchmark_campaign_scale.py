@@ -28,7 +28,9 @@ test; timings on a shared machine vary, compare the ratios within one run).
   start-up, report);
 - core-seconds per run (wall × workers / runs) and runs per core-second, beside
   Basilisk's Monte Carlo of its VSCMG hub over the same 200 s at 0.05 s (dynamics only, no
-  flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given.
+  flight software; tests/tools/benchmark_basilisk.py) where a Python with bsk is given,
+  and a run's CPU against one of Basilisk's (a short ``--runs`` is start-up and Dask's;
+  the campaign then exits 4, a requirement undecided, which the benchmark accepts).
 Targets (issue 29): N = 1,109 on 2 workers within 5 minutes; a run costs at most 1.2× the
 compiled bare simulate() from each worker's first run (its CPU, which the machine's other
 load does not inflate; the one-time load is the warm-up's, reported apart).
@@ -155,16 +157,21 @@ def children_cpu() -> float:
 
 
 def campaign(runs: int, workers: int, out: Path) -> tuple[float, float, list[dict]]:
-    """(wall, CPU of all its processes: client, scheduler, nannies, workers, records)."""
+    """(wall, CPU of all its processes: client, scheduler, nannies, workers, records).
+    Exit status 4 (a requirement undecided: fewer runs than would settle it, as a short
+    ``--runs`` makes) is a finished campaign; any other but 0 stops the benchmark."""
     cpu = children_cpu()
     began = time.perf_counter()
-    subprocess.run(
+    done = subprocess.run(
         [sys.executable, "-m", "agilesat.orchestration", "campaign", "video_sar"]
         + ["--runs", str(runs), "--workers", str(workers), "--out", str(out), "--no-progress"],
-        check=True,
         capture_output=True,
     )
     wall, cpu = time.perf_counter() - began, children_cpu() - cpu
+    if done.returncode not in (0, 4):
+        raise SystemExit(
+            f"the campaign exited with {done.returncode}:\n{done.stderr.decode()[-2000:]}"
+        )
     records = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     return wall, cpu, records
 
@@ -382,6 +389,12 @@ def main() -> None:
                 f"dynamics), {1 / per_run:.1f} runs per core-second; this campaign / "
                 f"Basilisk: {per_run / core:.2f}x the runs per core-second (wall x "
                 f"workers), {per_run / (cpu / args.runs):.2f}x by the CPU of all its processes"
+            )
+            mean_run = statistics.fmean(r["cpu_seconds"] for r in records)
+            print(
+                f"  a run alone, CPU: this campaign's mean {mean_run:.3f} s (closed loop: "
+                f"guidance, control, steering, metrics) against Basilisk's {per_run:.3f} s "
+                f"(its hub and VSCMGs, zero commands): {per_run / mean_run:.2f}x"
             )
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 
