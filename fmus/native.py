@@ -47,7 +47,6 @@ LIBRARY, MANIFEST = "agilesat_kernels.so", "agilesat_kernels.json"
 #: the prefixes of the symbols the link table resolves (module docstring), and the Python
 #: C API's, which the dynamic linker resolves
 LINKED, PYTHON = ("NRT_", "numba_"), ("Py", "_Py")
-_LIBM = ctypes.CDLL(ctypes.util.find_library("m"))
 #: a trampoline and the table's accessor per architecture (GNU assembler; ``offset``: the
 #: symbol's slot): x86-64 only so far, elsewhere numba compiles the entries in the process
 _JUMPS = {
@@ -98,7 +97,7 @@ def build(models, folder: Path, compiler: str) -> dict[str, bytes]:
     unknown = sorted(n for n in declared - set(links) if not _resolvable(n))
     if unknown:
         raise RuntimeError(f"symbols no library here provides: {', '.join(unknown)}")
-    target = llvm.Target.from_triple(module.triple)
+    target = llvm.Target.from_triple(module.triple)  # cpu "": the architecture's baseline
     machine = target.create_target_machine(opt=3, reloc="pic", codemodel="default")
     (folder / "kernels.o").write_bytes(machine.emit_object(module))
     jump, table = jumps
@@ -185,7 +184,8 @@ def _resolvable(name: str) -> bool:
     """Does the dynamic linker find ``name`` where the library is loaded: the Python C API
     (in every process that runs our slave, as for any extension module), the C and math
     libraries."""
-    return name.startswith(PYTHON) or hasattr(ctypes.CDLL(None), name) or hasattr(_LIBM, name)
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    return name.startswith(PYTHON) or hasattr(ctypes.CDLL(None), name) or hasattr(libm, name)
 
 
 @functools.cache

@@ -112,3 +112,27 @@ print(entries.native, entries.step.address, "|".join(str(w.message) for w in cau
     used, address, message = done.stdout.strip().split(" ", 2)
     assert used == "False" and address == "None"  # numba's, once a run pays for it
     assert said in message and "CmgCluster's kernels are compiled in this process" in message
+
+
+@pytest.mark.slow
+def test_numba_imported_after_the_libraries_shares_its_runtime_with_them(fmus):
+    """The FMUs' libraries loaded numba's runtime extensions alone; numba imported later in
+    the same process (a metric's kernel) initialises its own runtime again: both then
+    allocate and free through it, and a second run gives the first's rows bit for bit."""
+    done = run_python(
+        """
+import sys
+import numpy as np
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+ssd = get("video_sar").system_file("sensed")
+first = np.asarray(simulate(ssd, stop=10.0).data)
+assert "numba" not in sys.modules
+import numba
+total = numba.njit(lambda n: (np.arange(n) * 0.5).sum())(1000)
+again = np.asarray(simulate(ssd, stop=10.0).data)
+print(total, np.array_equal(first, again))
+"""
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["249750.0", "True"]
