@@ -78,21 +78,33 @@ def test_a_run_steps_the_fmus_library_from_its_first_step_bit_for_bit(fmus, syst
     assert any(python_run["calls"][k] > 10 for k in steps)  # the Python did step there
 
 
+def _another_numba(root):
+    manifest = json.loads((root / MANIFEST).read_text())
+    (root / MANIFEST).write_text(json.dumps({**manifest, "numba": "0.0"}))
+
+
+def _damaged_library(root):
+    data = (root / LIBRARY).read_bytes()
+    (root / LIBRARY).write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
+
+
+def _edited_code(root):
+    (source,) = root.glob("resources/agilesat_*/components/cmg_cluster.py")
+    source.write_text(source.read_text() + "\n# edited after the build\n")
+
+
 @pytest.mark.parametrize(
     "damage, said",
     [
-        (lambda m, so: ({**m, "numba": "0.0"}, so), "built with numba 0.0"),
-        (lambda m, so: (m, so[:-1] + bytes([so[-1] ^ 1])), "SHA-256"),
+        (_another_numba, "built with numba 0.0"),
+        (_damaged_library, "SHA-256"),
+        (_edited_code, "not the code it was built from"),
     ],
-    ids=["another-numba", "damaged-library"],
 )
 def test_a_library_that_cannot_be_used_is_said_and_numba_compiles(fmus, tmp_path, damage, said):
     with zipfile.ZipFile(fmus["CmgCluster"]) as fmu:
         fmu.extractall(tmp_path)
-    manifest = json.loads((tmp_path / MANIFEST).read_text())
-    manifest, library = damage(manifest, (tmp_path / LIBRARY).read_bytes())
-    (tmp_path / MANIFEST).write_text(json.dumps(manifest))
-    (tmp_path / LIBRARY).write_bytes(library)
+    damage(tmp_path)
     package = (tmp_path / "resources/slavemodule.txt").read_text().strip().split("_")[-1]
     done = run_python(
         """
