@@ -207,11 +207,11 @@ def test_valid_calls_are_served_by_the_shim_and_give_the_same_answers(fmus):
     on, served, forwarded = zip(*fast["counts"])
     assert set(on) == {1}
     # the set in initialization mode is forwarded.  Then each step the set of h_cmg before
-    # it is served, the first get after it goes to the slave (which evaluates the outputs:
-    # the kernels run their Python in this short run) and the second is served.  From step
-    # 10 on, q_OI, which feeds outputs through, is set between the step and the gets: served
-    assert np.diff(served).tolist() == [2] * 10 + [3] * 10 + [0]
-    assert np.diff(forwarded).tolist() == [1] * 20 + [0] and forwarded[0] == 1
+    # it is served, and both gets (the first evaluates the outputs in C, with the FMU's
+    # compiled output entry: fmus/native.py).  From step 10 on, q_OI, which feeds outputs
+    # through, is set between the step and the gets: served
+    assert np.diff(served).tolist() == [3] * 10 + [4] * 10 + [0]
+    assert np.diff(forwarded).tolist() == [0] * 21 and forwarded[0] == 1
     assert {c[0] for c in slow["counts"]} == {-1} and {c[1] for c in slow["counts"]} == {0}
     assert np.diff([c[2] for c in slow["counts"]]).tolist() == [3] * 10 + [4] * 10 + [0]
 
