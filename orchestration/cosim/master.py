@@ -377,8 +377,8 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         inst = node.instance
         inst.instantiate(plan.options.logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, plan.start, 1, plan.stop)
-    for value in plan.bindings:
-        _set_value(instances[value.component], value.name, value.type, value.value)
+    for inst, type_, vrs, bound in _binding_calls(plan.bindings, instances):
+        _set_values(inst, type_, vrs, bound)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
     for node, reads, _ in init_sequence:
@@ -393,11 +393,28 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         node.get_outputs(values)
 
 
-def _set_value(inst: Instance, name: str, type_: str, value) -> None:
-    vr = (ctypes.c_uint * 1)(inst.variables[name].valueReference)
+def _binding_calls(bindings, instances) -> list[tuple[Instance, str, list[int], list]]:
+    """The parameter values as one set per instance and type: (instance, type, value
+    references ascending, values), each value reference once with the value bound last (as
+    setting them one by one in order leaves it)."""
+    grouped: dict[tuple[str, str], dict[int, object]] = {}
+    for value in bindings:
+        vr = instances[value.component].variables[value.name].valueReference
+        grouped.setdefault((value.component, value.type), {})[vr] = value.value
+    return [
+        (instances[name], type_, sorted(by_vr), [by_vr[vr] for vr in sorted(by_vr)])
+        for (name, type_), by_vr in grouped.items()
+    ]
+
+
+def _set_values(inst: Instance, type_: str, vrs: list[int], values: list) -> None:
+    """One fmi2Set<type_> of ``values`` at value references ``vrs``."""
+    n = len(vrs)
+    refs = (ctypes.c_uint * n)(*vrs)
     if type_ == "Real":
-        inst.call("fmi2SetReal", vr, 1, (ctypes.c_double * 1)(float(value)))
+        inst.call("fmi2SetReal", refs, n, (ctypes.c_double * n)(*map(float, values)))
     elif type_ in ("Integer", "Boolean"):
-        inst.call(f"fmi2Set{type_}", vr, 1, (ctypes.c_int * 1)(int(value)))
+        inst.call(f"fmi2Set{type_}", refs, n, (ctypes.c_int * n)(*map(int, values)))
     else:
-        inst.call("fmi2SetString", vr, 1, (ctypes.c_char_p * 1)(str(value).encode()))
+        encoded = [str(v).encode() for v in values]
+        inst.call("fmi2SetString", refs, n, (ctypes.c_char_p * n)(*encoded))
