@@ -30,8 +30,8 @@ from pathlib import Path
 
 from ..system.description import Description
 from ..system.parameters import did_you_mean, typed_parameters
-from ..system.ssp import ParameterValue, SystemFile, SystemFileError, read_system
 from ..system.schedule import Schedule
+from ..system.ssp import ParameterValue, SystemFile, SystemFileError, read_system
 from ..system.validation import Wiring, check_system
 from . import multirate
 from .loop import choose as choose_loop
