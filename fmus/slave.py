@@ -178,6 +178,12 @@ class _Constants:
         self.kinds = _frozen(kinds, dtype=np.uint8)  # each instance its own copy
 
 
+def _same(held: np.ndarray, values) -> bool:
+    """Are ``values`` bit for bit the ones ``held`` (0.0 and -0.0 differ)?"""
+    given = np.asarray(values, dtype=np.float64)
+    return held.shape == given.shape and bool(np.all(held.view(np.uint64) == given.view(np.uint64)))
+
+
 def _frozen(values, dtype=None) -> np.ndarray:
     array = np.array(values, dtype=dtype)
     array.flags.writeable = False
@@ -626,11 +632,15 @@ class ModelSlave(Fmi2Slave):
                 if not math.isfinite(x)
             ]
             raise _CallRejected(f"non-finite values rejected: {bad}")
-        self.model.values[index] = values
         if self._mode in ("instantiated", "initialization"):
+            if self._state_valid and _same(self.model.values[index], values):
+                return  # the values it holds: the state and outputs made of them stand
+            self.model.values[index] = values
             self._state_valid = False
             self._outputs_valid = False
-        elif self._feeds[index].any():  # else the outputs stay what they are
+            return
+        self.model.values[index] = values
+        if self._feeds[index].any():  # else the outputs stay what they are
             self._outputs_valid = False
 
     def _ensure_state(self):

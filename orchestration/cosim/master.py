@@ -359,13 +359,30 @@ def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
     """{"Instance.variable[i]": value} of every Real parameter as the run sets it: the
     value the system or the command line gave, else the model description's start."""
     values: dict[str, object] = {
-        f"{name}.{v.name}": float(v.start)
+        f"{name}.{variable}": start
         for name, inst in instances.items()
-        for v in inst.variables.values()
-        if v.causality == "parameter" and v.type == "Real" and v.start is not None
+        for variable, start in _real_parameter_starts(inst)
     }
     values.update({f"{p.component}.{p.name}": p.value for p in plan.bindings})
     return values
+
+
+_starts: dict[str, list[tuple[str, float]]] = {}  # content key -> Real parameter starts
+
+
+def _real_parameter_starts(inst: Instance) -> list[tuple[str, float]]:
+    """(name, start) of every Real parameter with a start value of an FMU, in
+    model-description order; read once per FMU content."""
+    starts = _starts.get(inst.key)
+    if starts is None:
+        if len(_starts) >= 256:
+            _starts.pop(next(iter(_starts)), None)
+        starts = _starts[inst.key] = [
+            (v.name, float(v.start))
+            for v in inst.variables.values()
+            if v.causality == "parameter" and v.type == "Real" and v.start is not None
+        ]
+    return starts
 
 
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
