@@ -76,7 +76,7 @@ from .protocol import (
 PARAMETER, INPUT, OUTPUT = 0, 1, 2
 _CAUSALITY_CODE = {"parameter": PARAMETER, "input": INPUT, "output": OUTPUT}
 _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
-_PLAN_CACHE_SIZE = 64
+_PLAN_CACHE_SIZE = 256  # per model class
 _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 #: the handshake's value reference as pythonfmu 0.7.0 passes it (a C int) and as unsigned
@@ -137,7 +137,9 @@ def _rejection(state) -> str:
 class _Constants:
     """What a slave reads from its model's layout, the same for every instance of a model
     class: made once per class and layout (an instance was ~0.1 ms of every fmi2Instantiate
-    and fmi2Reset making them).  Shared: never written (the arrays are read-only)."""
+    and fmi2Reset making them), and the value-reference lists checked (a new instance
+    checked again each list a host passes).  Shared: never written (the arrays are
+    read-only)."""
 
     _made: dict[type, _Constants] = {}
 
@@ -176,6 +178,8 @@ class _Constants:
         kinds = [kind(v.causality, v.type, f) for (v, _), f in zip(layout.scalars, self.feeds)]
         kinds += [KIND_OTHER] * (layout.n_values - len(kinds))  # the derivative block
         self.kinds = _frozen(kinds, dtype=np.uint8)  # each instance its own copy
+        #: checked value-reference lists (``ModelSlave._plan``): they depend on these alone
+        self.plans: dict = {}
 
 
 def _same(held: np.ndarray, values) -> bool:
@@ -209,7 +213,7 @@ class ModelSlave(Fmi2Slave):
         self._n_inputs, self._block = constants.n_inputs, constants.block
         self._feeds = constants.feeds
         self._fast = FastPaths(self, constants.kinds.copy())
-        self._plans: dict = {}
+        self._plans = constants.plans  # of value-reference lists, the same for every instance
         self._mode = "instantiated"
         self._start_time = 0.0
         self._stop_time = None  # setupExperiment's, when defined
@@ -582,7 +586,7 @@ class ModelSlave(Fmi2Slave):
         unknown = [vr for vr in vrs if not 0 <= vr < n]
         if unknown:
             return f"unknown value references {unknown} (this FMU has 0..{n - 1})"
-        index = np.array(vrs, dtype=np.intp)
+        index = _frozen(vrs, dtype=np.intp)  # kept for every instance of the class
         wrong = [self._scalar_names[i] for i in index if self._type[i] != _TYPE_CODE[type_name]]
         if wrong:
             return f"variables {wrong} are not of type {type_name}"
