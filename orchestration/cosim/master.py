@@ -386,9 +386,9 @@ def _real_parameter_starts(inst: Instance) -> list[tuple[str, float]]:
 
 
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
-    """Instantiate, set up, set the parameters; in initialisation mode, bring the outputs
-    to t0 block by block in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set
-    every input once more."""
+    """Instantiate, set up, set the parameters (one call per instance and type,
+    :func:`_binding_calls`); in initialisation mode, bring the outputs to t0 block by block
+    in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set every input once more."""
     log.time = plan.start
     for node in nodes.values():
         inst = node.instance
