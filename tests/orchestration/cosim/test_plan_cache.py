@@ -82,7 +82,8 @@ def test_parameter_values_are_set_once_per_instance_and_type_the_last_bound_winn
         ParameterValue("A", "x", "Real", 4.0, "--set A.x"),
     ]
     calls = master._binding_calls(bindings, instances)
-    made = [(next(k for k, v in instances.items() if v is i), t, vrs, vs) for i, t, vrs, vs in calls]
+    name = {id(v): k for k, v in instances.items()}
+    made = [(name[id(i)], t, vrs, vs) for i, t, vrs, vs in calls]
     assert made == [
         ("A", "Real", [1, 3], [-0.0, 4.0]),
         ("B", "Real", [0], [5.0]),
