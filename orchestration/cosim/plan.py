@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import hashlib
 import math
 import threading
 from collections.abc import Callable
@@ -233,9 +234,11 @@ def _describe(system, ref) -> Description:
 
 
 #: key of a check (:func:`_check_key`) -> its Wiring; at most :data:`_CHECKS_KEPT`, oldest out
-_checks: dict[tuple, Wiring] = {}
+_checks: dict[str, Wiring] = {}
 _checks_lock = threading.Lock()
-_CHECKS_KEPT = 64
+#: few: a process runs a few systems again and again; a campaign's runs planned one by one
+#: (each its own values, each its own check) must not grow a worker's memory for long
+_CHECKS_KEPT = 8
 _SCALARS = (float, int, bool, str)  # whose repr is the value exactly
 
 
@@ -256,20 +259,19 @@ def _checked(system: SystemFile, descriptions: dict, bindings: list) -> Wiring:
     return _fresh(wiring)
 
 
-def _check_key(system: SystemFile, descriptions: dict, bindings: list) -> tuple | None:
+def _check_key(system: SystemFile, descriptions: dict, bindings: list) -> str | None:
     """What a check reads: every field of the system (its dataclass repr: components with
     their FMU paths and connectors, connections, parameter values with their types and
     origins, the experiment), each FMU by instance name, path and content (SHA-256, the key
     its model description is read by) and the values bound (repr: 1, 1.0 and True differ,
-    so do 0.0 and -0.0).  None (not kept) where a value is not a plain scalar, whose repr
+    so do 0.0 and -0.0), kept as the SHA-256 of their text (a few bytes, not the system's
+    text, per check kept).  None (not kept) where a value is not a plain scalar, whose repr
     might not tell two values apart (a long numpy array's elides)."""
     if not all(type(p.value) in _SCALARS for p in (*system.parameters, *bindings)):
         return None
-    return (
-        repr(system),
-        tuple((name, str(d.path), d.key) for name, d in descriptions.items()),
-        repr(bindings),
-    )
+    fmus = tuple((name, str(d.path), d.key) for name, d in descriptions.items())
+    text = "\0".join((repr(system), repr(fmus), repr(bindings)))
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _fresh(wiring: Wiring) -> Wiring:
