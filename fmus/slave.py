@@ -76,7 +76,7 @@ from .protocol import (
 PARAMETER, INPUT, OUTPUT = 0, 1, 2
 _CAUSALITY_CODE = {"parameter": PARAMETER, "input": INPUT, "output": OUTPUT}
 _TYPE_CODE = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
-_PLAN_CACHE_SIZE = 64
+_PLAN_CACHE_SIZE = 256  # per model class
 _PACKAGE = __name__.split(".")[0]  # agilesat_<hash> inside an FMU
 _MODES = ("instantiated", "initialization", "step", "terminated")
 #: the handshake's value reference as pythonfmu 0.7.0 passes it (a C int) and as unsigned
@@ -134,6 +134,66 @@ def _rejection(state) -> str:
     return f"not a state of this FMU (a {type(state).__name__})"
 
 
+class _Constants:
+    """What a slave reads from its model's layout, the same for every instance of a model
+    class: made once per class and layout (an instance was ~0.1 ms of every fmi2Instantiate
+    and fmi2Reset making them), and the value-reference lists checked (a new instance
+    checked again each list a host passes).  Shared: never written (the arrays are
+    read-only)."""
+
+    _made: dict[type, _Constants] = {}
+
+    @classmethod
+    def of(cls, model_class: type, layout) -> _Constants:
+        made = cls._made.get(model_class)
+        if made is None or made.layout is not layout:
+            made = cls._made[model_class] = cls(layout)
+        return made
+
+    def __init__(self, layout):
+        self.layout = layout
+        self.scalar_names = [name for _, name in layout.scalars]
+        self.causality = _frozen([_CAUSALITY_CODE[v.causality] for v, _ in layout.scalars])
+        self.type = _frozen([_TYPE_CODE[v.type] for v, _ in layout.scalars])
+        self.string_names = [v.name for v in layout.variables if v.type == "String"]
+        self.outputs = slice(layout.range["output"].start, layout.range["output"].stop)
+        #: vr of an output with a declared derivative output -> vr of that output
+        self.derivative = {
+            layout.offset[v.derivative_of] + k: layout.offset[v.name] + k
+            for v in layout.group("output")
+            if v.derivative_of
+            for k in range(v.size)
+        }
+        #: input vr + block: its derivative in the value array; + n_inputs more: its flag
+        self.n_inputs = len(layout.range["input"])
+        self.block = layout.n_numeric - layout.range["input"].start
+        #: inputs some output depends on directly (its table row's ``depends``)
+        feeds = {
+            vr
+            for v in layout.variables
+            for name in v.depends
+            for vr in range(layout.offset[name], layout.offset[name] + layout.by_name[name].size)
+        }
+        self.feeds = _frozen([vr in feeds for vr in range(len(layout.scalars))], dtype=bool)
+        kinds = [kind(v.causality, v.type, f) for (v, _), f in zip(layout.scalars, self.feeds)]
+        kinds += [KIND_OTHER] * (layout.n_values - len(kinds))  # the derivative block
+        self.kinds = _frozen(kinds, dtype=np.uint8)  # each instance its own copy
+        #: checked value-reference lists (``ModelSlave._plan``): they depend on these alone
+        self.plans: dict = {}
+
+
+def _same(held: np.ndarray, values) -> bool:
+    """Are ``values`` bit for bit the ones ``held`` (0.0 and -0.0 differ)?"""
+    given = np.asarray(values, dtype=np.float64)
+    return held.shape == given.shape and bool(np.all(held.view(np.uint64) == given.view(np.uint64)))
+
+
+def _frozen(values, dtype=None) -> np.ndarray:
+    array = np.array(values, dtype=dtype)
+    array.flags.writeable = False
+    return array
+
+
 class ModelSlave(Fmi2Slave):
     model_class = None  # set by each FMU wrapper
     _configuration_key = ""  # of the values an exported FMU was configured with
@@ -143,34 +203,17 @@ class ModelSlave(Fmi2Slave):
         self.model = self.model_class()
         layout = self.model.layout
         self._layout = layout
-        self._scalar_names = [name for _, name in layout.scalars]
+        constants = _Constants.of(type(self.model), layout)
+        self._scalar_names = constants.scalar_names
         self._configure(kwargs.get("resources"))
-        self._causality = np.array([_CAUSALITY_CODE[v.causality] for v, _ in layout.scalars])
-        self._type = np.array([_TYPE_CODE[v.type] for v, _ in layout.scalars])
-        self._string_names = [v.name for v in layout.variables if v.type == "String"]
-        self._outputs = slice(layout.range["output"].start, layout.range["output"].stop)
-        #: vr of an output with a declared derivative output -> vr of that output
-        self._derivative = {
-            layout.offset[v.derivative_of] + k: layout.offset[v.name] + k
-            for v in layout.group("output")
-            if v.derivative_of
-            for k in range(v.size)
-        }
-        #: input vr + _block: its derivative in the value array; + _n_inputs more: its flag
-        self._n_inputs = len(layout.range["input"])
-        self._block = layout.n_numeric - layout.range["input"].start
-        #: inputs some output depends on directly (its table row's ``depends``)
-        feeds = {
-            vr
-            for v in layout.variables
-            for name in v.depends
-            for vr in range(layout.offset[name], layout.offset[name] + layout.by_name[name].size)
-        }
-        self._feeds = np.array([vr in feeds for vr in range(len(layout.scalars))], dtype=bool)
-        kinds = [kind(v.causality, v.type, f) for (v, _), f in zip(layout.scalars, self._feeds)]
-        kinds += [KIND_OTHER] * (layout.n_values - len(kinds))  # the derivative block
-        self._fast = FastPaths(self, np.array(kinds, dtype=np.uint8))
-        self._plans: dict = {}
+        self._causality, self._type = constants.causality, constants.type
+        self._string_names = constants.string_names
+        self._outputs = constants.outputs
+        self._derivative = constants.derivative
+        self._n_inputs, self._block = constants.n_inputs, constants.block
+        self._feeds = constants.feeds
+        self._fast = FastPaths(self, constants.kinds.copy())
+        self._plans = constants.plans  # of value-reference lists, the same for every instance
         self._mode = "instantiated"
         self._start_time = 0.0
         self._stop_time = None  # setupExperiment's, when defined
@@ -543,7 +586,7 @@ class ModelSlave(Fmi2Slave):
         unknown = [vr for vr in vrs if not 0 <= vr < n]
         if unknown:
             return f"unknown value references {unknown} (this FMU has 0..{n - 1})"
-        index = np.array(vrs, dtype=np.intp)
+        index = _frozen(vrs, dtype=np.intp)  # kept for every instance of the class
         wrong = [self._scalar_names[i] for i in index if self._type[i] != _TYPE_CODE[type_name]]
         if wrong:
             return f"variables {wrong} are not of type {type_name}"
@@ -593,11 +636,15 @@ class ModelSlave(Fmi2Slave):
                 if not math.isfinite(x)
             ]
             raise _CallRejected(f"non-finite values rejected: {bad}")
-        self.model.values[index] = values
         if self._mode in ("instantiated", "initialization"):
+            if self._state_valid and _same(self.model.values[index], values):
+                return  # the values it holds: the state and outputs made of them stand
+            self.model.values[index] = values
             self._state_valid = False
             self._outputs_valid = False
-        elif self._feeds[index].any():  # else the outputs stay what they are
+            return
+        self.model.values[index] = values
+        if self._feeds[index].any():  # else the outputs stay what they are
             self._outputs_valid = False
 
     def _ensure_state(self):

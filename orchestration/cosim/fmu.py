@@ -47,7 +47,7 @@ from fmpy.fmi2 import (
 )
 
 from ...components.runtime.cache import cache_root, damage_of_tree, digest, warn, write_manifest
-from ..system.description import Description, content_key
+from ..system.description import Description
 
 STATUS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
 
@@ -100,7 +100,7 @@ class Instance(Description):
     def __init__(self, name: str, path: Path, log: Log):
         super().__init__(name, path)
         self.log = log
-        self._key = content_key(self.path)
+        self._key = self.key
         self.unzip_dir = _unpacked(
             self._key, str(path), self.md.coSimulation.modelIdentifier, self.binaries
         )

@@ -359,26 +359,43 @@ def _parameter_values(plan: RunPlan, instances) -> dict[str, object]:
     """{"Instance.variable[i]": value} of every Real parameter as the run sets it: the
     value the system or the command line gave, else the model description's start."""
     values: dict[str, object] = {
-        f"{name}.{v.name}": float(v.start)
+        f"{name}.{variable}": start
         for name, inst in instances.items()
-        for v in inst.variables.values()
-        if v.causality == "parameter" and v.type == "Real" and v.start is not None
+        for variable, start in _real_parameter_starts(inst)
     }
     values.update({f"{p.component}.{p.name}": p.value for p in plan.bindings})
     return values
 
 
+_starts: dict[str, list[tuple[str, float]]] = {}  # content key -> Real parameter starts
+
+
+def _real_parameter_starts(inst: Instance) -> list[tuple[str, float]]:
+    """(name, start) of every Real parameter with a start value of an FMU, in
+    model-description order; read once per FMU content."""
+    starts = _starts.get(inst.key)
+    if starts is None:
+        if len(_starts) >= 256:
+            _starts.pop(next(iter(_starts)), None)
+        starts = _starts[inst.key] = [
+            (v.name, float(v.start))
+            for v in inst.variables.values()
+            if v.causality == "parameter" and v.type == "Real" and v.start is not None
+        ]
+    return starts
+
+
 def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> None:
-    """Instantiate, set up, set the parameters; in initialisation mode, bring the outputs
-    to t0 block by block in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set
-    every input once more."""
+    """Instantiate, set up, set the parameters (one call per instance and type,
+    :func:`_binding_calls`); in initialisation mode, bring the outputs to t0 block by block
+    in ``init_sequence`` (FMI 2.0 ``InitialUnknowns``), then set every input once more."""
     log.time = plan.start
     for node in nodes.values():
         inst = node.instance
         inst.instantiate(plan.options.logging_on)
         inst.call("fmi2SetupExperiment", 0, 0.0, plan.start, 1, plan.stop)
-    for value in plan.bindings:
-        _set_value(instances[value.component], value.name, value.type, value.value)
+    for inst, type_, vrs, bound in _binding_calls(plan.bindings, instances):
+        _set_values(inst, type_, vrs, bound)
     for inst in instances.values():
         inst.call("fmi2EnterInitializationMode")
     for node, reads, _ in init_sequence:
@@ -393,11 +410,28 @@ def _initialize(plan: RunPlan, instances, nodes, init_sequence, values, log) -> 
         node.get_outputs(values)
 
 
-def _set_value(inst: Instance, name: str, type_: str, value) -> None:
-    vr = (ctypes.c_uint * 1)(inst.variables[name].valueReference)
+def _binding_calls(bindings, instances) -> list[tuple[Instance, str, list[int], list]]:
+    """The parameter values as one set per instance and type: (instance, type, value
+    references ascending, values), each value reference once with the value bound last (as
+    setting them one by one in order leaves it)."""
+    grouped: dict[tuple[str, str], dict[int, object]] = {}
+    for value in bindings:
+        vr = instances[value.component].variables[value.name].valueReference
+        grouped.setdefault((value.component, value.type), {})[vr] = value.value
+    return [
+        (instances[name], type_, sorted(by_vr), [by_vr[vr] for vr in sorted(by_vr)])
+        for (name, type_), by_vr in grouped.items()
+    ]
+
+
+def _set_values(inst: Instance, type_: str, vrs: list[int], values: list) -> None:
+    """One fmi2Set<type_> of ``values`` at value references ``vrs``."""
+    n = len(vrs)
+    refs = (ctypes.c_uint * n)(*vrs)
     if type_ == "Real":
-        inst.call("fmi2SetReal", vr, 1, (ctypes.c_double * 1)(float(value)))
+        inst.call("fmi2SetReal", refs, n, (ctypes.c_double * n)(*map(float, values)))
     elif type_ in ("Integer", "Boolean"):
-        inst.call(f"fmi2Set{type_}", vr, 1, (ctypes.c_int * 1)(int(value)))
+        inst.call(f"fmi2Set{type_}", refs, n, (ctypes.c_int * n)(*map(int, values)))
     else:
-        inst.call("fmi2SetString", vr, 1, (ctypes.c_char_p * 1)(str(value).encode()))
+        encoded = [str(v).encode() for v in values]
+        inst.call("fmi2SetString", refs, n, (ctypes.c_char_p * n)(*encoded))

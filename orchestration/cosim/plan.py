@@ -9,19 +9,29 @@ parameter values (the system's, then the overrides typed once:
 Every error names the file, component or variable before anything is instantiated.
 :func:`.master.execute` runs the plan; :meth:`RunPlan.swapped` is the plan of a run that
 only gives some parameters other values (a campaign's runs of one batch).
+
+The check of a system is a function of the system (every field of its
+:class:`..system.ssp.SystemFile`), its FMUs (their content, SHA-256) and the parameter
+values bound: it is made once per process for each such triple and its result (the
+:class:`..system.validation.Wiring`) given again, as fresh containers, to every plan of the
+same one (:func:`_checked`; about 2.5 ms of each run of a sensed system, most of it the
+two schedules).  A changed file, parameter value or FMU is another key: checked again.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import hashlib
 import math
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..system.description import Description
 from ..system.parameters import did_you_mean, typed_parameters
+from ..system.schedule import Schedule
 from ..system.ssp import ParameterValue, SystemFile, SystemFileError, read_system
 from ..system.validation import Wiring, check_system
 from . import multirate
@@ -123,7 +133,7 @@ def plan_run(system, options: RunOptions | None = None, /, **keywords) -> RunPla
     chosen = choose_loop(options.loop)
     descriptions = {ref.name: _describe(system, ref) for ref in system.components}
     overrides = typed_parameters(descriptions, options.parameters)
-    wiring = check_system(system, descriptions, system.parameters + list(overrides.values()))
+    wiring = _checked(system, descriptions, system.parameters + list(overrides.values()))
     columns = [f"{name}.{y}" for name, d in descriptions.items() for y in d.outputs]
     return RunPlan(
         system,
@@ -221,3 +231,55 @@ def _describe(system, ref) -> Description:
         return Description(ref.name, ref.source)
     except Exception as exc:  # noqa: BLE001 - any unreadable file: say which
         raise unreadable(system, ref, exc) from None
+
+
+#: key of a check (:func:`_check_key`) -> its Wiring; at most :data:`_CHECKS_KEPT`, oldest out
+_checks: dict[str, Wiring] = {}
+_checks_lock = threading.Lock()
+#: few: a process runs a few systems again and again; a campaign's runs planned one by one
+#: (each its own values, each its own check) must not grow a worker's memory for long
+_CHECKS_KEPT = 8
+_SCALARS = (float, int, bool, str)  # whose repr is the value exactly
+
+
+def _checked(system: SystemFile, descriptions: dict, bindings: list) -> Wiring:
+    """:func:`..system.validation.check_system` of these, made once per process for each
+    key (:func:`_check_key`); a check that finds problems raises each time (not kept)."""
+    key = _check_key(system, descriptions, bindings)
+    if key is None:
+        return check_system(system, descriptions, bindings)
+    with _checks_lock:
+        wiring = _checks.get(key)
+    if wiring is None:
+        wiring = check_system(system, descriptions, bindings)
+        with _checks_lock:
+            if len(_checks) >= _CHECKS_KEPT:
+                _checks.pop(next(iter(_checks)))
+            _checks[key] = wiring
+    return _fresh(wiring)
+
+
+def _check_key(system: SystemFile, descriptions: dict, bindings: list) -> str | None:
+    """What a check reads: every field of the system (its dataclass repr: components with
+    their FMU paths and connectors, connections, parameter values with their types and
+    origins, the experiment), each FMU by instance name, path and content (SHA-256, the key
+    its model description is read by) and the values bound (repr: 1, 1.0 and True differ,
+    so do 0.0 and -0.0), kept as the SHA-256 of their text (a few bytes, not the system's
+    text, per check kept).  None (not kept) where a value is not a plain scalar, whose repr
+    might not tell two values apart (a long numpy array's elides)."""
+    if not all(type(p.value) in _SCALARS for p in (*system.parameters, *bindings)):
+        return None
+    fmus = tuple((name, str(d.path), d.key) for name, d in descriptions.items())
+    text = "\0".join((repr(system), repr(fmus), repr(bindings)))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _fresh(wiring: Wiring) -> Wiring:
+    """A copy of a kept Wiring in new containers (a run's results hold its lists): what it
+    shares is immutable (tuples, strings)."""
+    return Wiring(
+        Schedule(list(wiring.steps.step_order), list(wiring.steps.blocks)),
+        Schedule(list(wiring.init.step_order), list(wiring.init.blocks)),
+        dict(wiring.sources),
+        [dict(entry) for entry in wiring.open_inputs],
+    )

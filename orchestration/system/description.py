@@ -35,11 +35,13 @@ class Description:
 
     def __init__(self, name: str, path: Path):
         self.name, self.path = name, Path(path)
+        #: the SHA-256 of the file (:func:`content_key`): what everything read from it is keyed by
+        self.key = content_key(self.path)
         #: optional input -> what its default means, as our FMUs declare them
         #: (VendorAnnotations; every other input is required); None: not our FMU.
         #: ``binaries``: {file in the FMU: SHA-256} as our FMUs declare them (or {})
         self.md, self.optional_inputs, self.base_units, self.binaries, read = _described(
-            content_key(self.path), str(path)
+            self.key, str(path)
         )
         if self.md.coSimulation is None:
             raise ValueError(f"{path}: not a co-simulation FMU")

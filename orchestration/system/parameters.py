@@ -31,6 +31,7 @@ import ast
 import difflib
 import math
 import re
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,6 +84,29 @@ def variables(description) -> dict[str, ArrayVariable]:
     return result
 
 
+#: content key of an FMU (:attr:`.description.Description.key`) -> its :func:`variables`,
+#: read only here (a campaign's runs each type their values against the same tables)
+_tables: dict[str, dict[str, ArrayVariable]] = {}
+_TABLES_KEPT = 256
+_tables_lock = threading.Lock()
+
+
+def _table(description) -> dict[str, ArrayVariable]:
+    """:func:`variables` of a description, made once per FMU content (not to be changed)."""
+    key = getattr(description, "key", None)
+    if key is None:
+        return variables(description)
+    with _tables_lock:
+        table = _tables.get(key)
+    if table is None:
+        table = variables(description)
+        with _tables_lock:
+            if len(_tables) >= _TABLES_KEPT:
+                _tables.pop(next(iter(_tables)))
+            _tables[key] = table
+    return table
+
+
 def parse_value(text):
     """A command-line value: a bracketed list (``[[1,0],[0,1]]``) becomes nested lists, one
     with a unit (``[0, 120, 0] deg``) a :class:`.units.Quantity`; anything else stays text
@@ -122,7 +146,7 @@ def typed_parameters(
                 f"of {', '.join(descriptions)}" + did_you_mean(name, descriptions)
             )
         description = descriptions[name]
-        table = tables.get(name) or tables.setdefault(name, variables(description))
+        table = tables.get(name) or tables.setdefault(name, _table(description))
         value = parse_value(value)
         if variable in description.variables:
             if np.ndim(_number(value)):

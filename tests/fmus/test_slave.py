@@ -236,3 +236,29 @@ def test_the_state_machine_refuses_a_get_before_initialisation_and_a_step_past_t
     assert fmu.do_step(0.0, STEP) and fmu.do_step(STEP, 0.1 - STEP)
     assert fmu.do_step(0.1, STEP) is False
     assert "ends after the stop time 0.1 of fmi2SetupExperiment" in logged(fmu)[-1]
+
+
+def test_an_input_set_again_to_the_value_it_holds_keeps_the_initialized_state():
+    """In initialisation mode a set input makes the model initialise again at the next read
+    (its state may depend on the input); setting the values it holds, bit for bit, changes
+    nothing and initialises nothing again, while another value, -0.0 for 0.0 included,
+    does."""
+    fmu = slave("CmgCluster")
+    inputs = [vr for vr, _ in scalars(fmu.model, "input")]
+    outputs = [vr for vr, _ in scalars(fmu.model, "output")]
+    calls = []
+    initialize = fmu.model.initialize
+    fmu.model.initialize = lambda t0: calls.append(t0) or initialize(t0)
+    held = fmu.model.values[inputs].tolist()
+    first = fmu.get_real(outputs)
+    assert len(calls) == 1
+    fmu.set_real(inputs, held)
+    assert fmu.get_real(outputs) == first and len(calls) == 1
+    other = list(held)
+    other[0] = -other[0] if other[0] != 0.0 else math.copysign(0.0, -math.copysign(1.0, other[0]))
+    fmu.set_real(inputs, other)
+    fmu.get_real(outputs)
+    assert len(calls) == 2
+    assert math.copysign(1.0, fmu.model.values[inputs[0]]) == math.copysign(1.0, other[0])
+    fmu.exit_initialization_mode()
+    assert len(calls) == 2 and logged(fmu) == []
