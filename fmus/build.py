@@ -24,6 +24,7 @@ import functools
 import hashlib
 import io
 import os
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -117,40 +118,39 @@ def fmu_entries(name: str, model, digest: str, sources: dict, entry_module: str,
 
 
 _COMPILE_KERNELS = """
-import importlib, os, pathlib, sys, tempfile, zipfile
+import importlib, os, pathlib, sys
 os.environ["AGILESAT_JIT_AFTER"] = "0"
-fmu, name, package, module, out, compiler = sys.argv[1:]
-with tempfile.TemporaryDirectory() as folder:
-    zipfile.ZipFile(fmu).extractall(folder)
-    sys.path.insert(0, folder + "/resources")
-    model = getattr(importlib.import_module(package + ".components." + module), name)
+folder, name, package, module, out, compiler = sys.argv[1:]
+sys.path.insert(0, folder + "/resources")
+model = getattr(importlib.import_module(package + ".components." + module), name)
+if out:  # first: numba compiles nothing before, so the same sources give the same library
+    native = importlib.import_module(package + ".fmus.native")
+    try:
+        for file, data in native.build_in([model], compiler).items():
+            pathlib.Path(out, file).write_bytes(data)
+    except Exception as exc:
+        print(f"{type(exc).__name__}: {exc}".strip().splitlines()[0], file=sys.stderr)
+if not (out and os.listdir(out)):  # without them, the compile cache serves its runs
     model().start(0.0).advance(0.0, 0.1)
     c_entries = importlib.import_module(package + ".fmus.c_entries")
-    for entry in c_entries.of(model)[:2]:  # the C entries of the FMU's C step path
+    for entry in c_entries.of(model)[:2]:
         if entry is not None:
             entry.address
-    if out:
-        native = importlib.import_module(package + ".fmus.native")
-        try:
-            for file, data in native.build_in([model], compiler).items():
-                pathlib.Path(out, file).write_bytes(data)
-        except Exception as exc:
-            print(f"{type(exc).__name__}: {exc}".strip().splitlines()[0], file=sys.stderr)
 """
 
 
 def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
-    """Fill the compile cache of the FMU's kernels (components/runtime/jit.py): load its code from
-    an extraction, as a host does, in a fresh process of this Python, and run its model at
-    the defaults for one step.  The cache is keyed on content, so any later extraction of
-    this FMU loads the compiled kernels instead of compiling them.  Returns the library of
-    its C entries compiled ahead of time and its manifest (:mod:`.native`), {} without a C
-    compiler."""
+    """The library of the FMU's C entries compiled ahead of time and its manifest
+    (:mod:`.native`): load its code from an extraction, as a host does, in a fresh process
+    of this Python, run its model at the defaults for one step, compile.  Where that cannot
+    be made (no C compiler, another architecture), {} and the compile cache of its kernels
+    filled instead (components/runtime/jit.py: keyed on content, so any later extraction
+    of this FMU loads the compiled kernels instead of compiling them)."""
     compiler = c_compiler()
     with tempfile.TemporaryDirectory() as out:
         result = subprocess.run(
-            [sys.executable, "-c", _COMPILE_KERNELS, str(fmu), name, package, FMUS[name],
-             out if compiler else "", compiler or ""],
+            [sys.executable, "-c", _COMPILE_KERNELS, str(_extraction(fmu, package)), name,
+             package, FMUS[name], out if compiler else "", compiler or ""],
             capture_output=True,
             text=True,
             env={**os.environ, "AGILESAT_NATIVE": "0"},
@@ -165,6 +165,24 @@ def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
                 stacklevel=2,
             )
         return built
+
+
+def _extraction(fmu: Path, package: str) -> Path:
+    """The FMU unpacked where its content names it (the compiled code's error messages
+    name its source files: the same sources make the same library); a private folder
+    where that one cannot be made."""
+    folder = Path(tempfile.gettempdir()) / "agilesat-build" / package
+    if not folder.is_dir():
+        unpacked = Path(tempfile.mkdtemp(prefix=f".{package}.", dir=folder.parent.parent))
+        zipfile.ZipFile(fmu).extractall(unpacked)
+        try:
+            folder.parent.mkdir(exist_ok=True)
+            unpacked.rename(folder)  # in one step: a parallel build sees all of it or none
+        except OSError:  # another build made it first, or no permission
+            if not folder.is_dir():
+                return unpacked
+            shutil.rmtree(unpacked, ignore_errors=True)
+    return folder
 
 
 def description_xml(name: str, digest: str, model, binaries: dict[str, bytes]) -> bytes:

@@ -7,8 +7,10 @@ calls the kernel's compiled function on the two arrays (t: the model's time) and
 its status: 0 when it did everything the
 method does but advance ``t``, anything else to leave the call to the method (which then
 raises or warns with the readable message).  The same machine code as the compiled kernel,
-no second copy of the physics.  An entry exists once its kernel has switched to its
-compiled tier (``address`` is None before, and without numba).  An exception inside (a
+no second copy of the physics.  An FMU built by ``agilesat build`` carries them compiled
+ahead of time (``native.py``): they exist from the first call.  Else an entry exists once
+its kernel has switched to its compiled tier (``address`` is None before, and without
+numba).  An exception inside (a
 ``ZeroDivisionError`` under numba's Python error model) is caught and returns -1, so the
 caller falls back to the Python, which raises it with its message (numba's cfunc wrapper
 would only print it and return an undefined value).  The cfuncs are cached beside the
@@ -66,14 +68,14 @@ def cfunc(kernel: jit.Kernel, role: str, compiled, cache: bool):
     entry = type(template)(code, namespace, name)
     entry.__module__ = py_func.__module__
     compiling = CFunc(entry, signature(numba, role), locals={}, options={})
-    try:
-        if cache:
+    if cache:
+        try:
             compiling._cache = jit.content_cache(entry)
-    except (OSError, RuntimeError, AttributeError) as exc:
-        warnings.warn(
-            f"agilesat: no compile cache for {name} ({exc}): compiling it in every process",
-            stacklevel=2,
-        )
+        except (OSError, RuntimeError, AttributeError) as exc:
+            warnings.warn(
+                f"agilesat: no compile cache for {name} ({exc}): compiling it in every process",
+                stacklevel=2,
+            )
     compiling.compile()
     return compiling
 

@@ -19,7 +19,8 @@ which the loader fills from numba's two runtime extensions (their ``c_helpers``,
 numba hands its JIT; the extensions are loaded as files, numba itself is not imported).
 The Python C API (``Py*``, the error path of a raise) is left to the dynamic linker, as
 for any extension module; the C and math libraries are linked.  The manifest records
-numba's version: with another numba installed, or a library whose SHA-256 does not
+numba's version and the content key of each model's code (the compile cache's): with
+another numba installed, code edited since the build, or a library whose SHA-256 does not
 match, the entries are compiled in the process as before (c_entries.py), with a warning.
 """
 
@@ -47,7 +48,6 @@ LIBRARY, MANIFEST = "agilesat_kernels.so", "agilesat_kernels.json"
 #: the prefixes of the symbols the link table resolves (module docstring), and the Python
 #: C API's, which the dynamic linker resolves
 LINKED, PYTHON = ("NRT_", "numba_"), ("Py", "_Py")
-_LIBM = ctypes.CDLL(ctypes.util.find_library("m"))
 #: a trampoline and the table's accessor per architecture (GNU assembler; ``offset``: the
 #: symbol's slot): x86-64 only so far, elsewhere numba compiles the entries in the process
 _JUMPS = {
@@ -73,19 +73,27 @@ def build(models, folder: Path, compiler: str) -> dict[str, bytes]:
     numba = jit._numba()
     llvm.initialize_native_target()
     llvm.initialize_native_asmprinter()
-    module, names = None, {}
+    module, names, sources = None, {}, {}
     for model in models:
         for entry in c_entries.of(model)[:2]:
             if entry is None:
                 continue
-            # compiled here, without the cache: what a cache loads keeps no IR
+            # compiled here, without the cache (what a cache loads keeps no IR), first in
+            # the process: numba numbers the functions alike in every build
             fresh = numba.njit(entry.kernel.py_func)
             cfunc = c_entries.cfunc(entry.kernel, entry.role, fresh, cache=False)
             part = llvm.parse_assembly(str(cfunc._library._final_module))
+            if not _complete(part, cfunc.native_name):
+                raise RuntimeError(f"numba's module of {cfunc.native_name} is not complete")
             for symbol in (*part.functions, *part.global_variables):
                 if not symbol.is_declaration and symbol.name != cfunc.native_name:
                     symbol.linkage = "internal"
-            names.setdefault(model.__qualname__, {})[entry.role] = cfunc.native_name
+            # named by model and role, not by numba's per-process counters: the same
+            # sources make the same library
+            name = f"agilesat_{model.__qualname__}_{entry.role}"
+            part.get_function(cfunc.native_name).name = name
+            names.setdefault(model.__qualname__, {})[entry.role] = name
+            sources[model.__qualname__] = _source_key(model)
             if module is None:
                 module = part
             else:
@@ -95,10 +103,10 @@ def build(models, folder: Path, compiler: str) -> dict[str, bytes]:
     declared = {s.name for s in (*module.functions, *module.global_variables)
                 if s.is_declaration and not s.name.startswith("llvm.")}  # fmt: skip
     links = sorted(n for n in declared if n.startswith(LINKED))
-    unknown = sorted(n for n in declared - set(links) if not _resolvable(n))
+    unknown = sorted(n for n in declared if not _external(n))
     if unknown:
         raise RuntimeError(f"symbols no library here provides: {', '.join(unknown)}")
-    target = llvm.Target.from_triple(module.triple)
+    target = llvm.Target.from_triple(module.triple)  # cpu "": the architecture's baseline
     machine = target.create_target_machine(opt=3, reloc="pic", codemodel="default")
     (folder / "kernels.o").write_bytes(machine.emit_object(module))
     jump, table = jumps
@@ -112,7 +120,7 @@ def build(models, folder: Path, compiler: str) -> dict[str, bytes]:
     (folder / "links.s").write_text(assembly)
     library = folder / LIBRARY
     subprocess.run(
-        [compiler, "-shared", "-o", str(library), str(folder / "kernels.o"),
+        [compiler, "-shared", "-s", "-o", str(library), str(folder / "kernels.o"),
          str(folder / "links.s"), "-lm", "-Wl,-Bsymbolic"],
         check=True, capture_output=True, text=True,
     )  # fmt: skip
@@ -122,9 +130,17 @@ def build(models, folder: Path, compiler: str) -> dict[str, bytes]:
         "machine": platform.machine(),
         "sha256": hashlib.sha256(data).hexdigest(),
         "models": names,
+        "sources": sources,
         "links": links,
     }
     return {LIBRARY: data, MANIFEST: json.dumps(manifest, indent=1, sort_keys=True).encode()}
+
+
+def _complete(module, entry: str) -> bool:
+    """Does ``module`` define the function ``entry`` and everything it calls but what is
+    found outside the library (:func:`_external`)?"""
+    defined = any(f.name == entry and not f.is_declaration for f in module.functions)
+    return defined and all(_external(f.name) for f in module.functions if f.is_declaration)
 
 
 # -- at load time (no numba import) -------------------------------------------------------
@@ -142,6 +158,8 @@ def entries(model_class) -> dict[str, int]:
     try:
         library, manifest = _load(found[0].parent)
         names = manifest["models"].get(model_class.__qualname__, {})
+        if names and manifest["sources"][model_class.__qualname__] != _source_key(model_class):
+            raise ValueError("the FMU's code is not the code it was built from")
         return {role: ctypes.cast(getattr(library, name), ctypes.c_void_p).value
                 for role, name in names.items()}  # fmt: skip
     except (OSError, ValueError, KeyError, AttributeError, TypeError) as exc:
@@ -151,6 +169,13 @@ def entries(model_class) -> dict[str, int]:
             stacklevel=2,
         )
         return {}
+
+
+def _source_key(model_class) -> str:
+    """The content key of the model's code and everything its kernels may call (the
+    compile cache's, components/runtime/jit.py)."""
+    module = model_class.__module__
+    return jit.content_key(module, sys.modules[module].__file__)
 
 
 @functools.cache
@@ -181,11 +206,16 @@ def _address(name: str) -> int:
     return _numba_extension("_helperlib").c_helpers[name[6:]]  # numba_*
 
 
-def _resolvable(name: str) -> bool:
-    """Does the dynamic linker find ``name`` where the library is loaded: the Python C API
-    (in every process that runs our slave, as for any extension module), the C and math
-    libraries."""
-    return name.startswith(PYTHON) or hasattr(ctypes.CDLL(None), name) or hasattr(_LIBM, name)
+@functools.cache
+def _external(name: str) -> bool:
+    """Is ``name`` found outside the library: an LLVM intrinsic, the link table's (numba's
+    runtime), or the dynamic linker's where the library is loaded (the Python C API, in
+    every process that runs our slave, as for any extension module; the C and math
+    libraries)?"""
+    if name.startswith(("llvm.", *LINKED, *PYTHON)):
+        return True
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    return hasattr(ctypes.CDLL(None), name) or hasattr(libm, name)
 
 
 @functools.cache

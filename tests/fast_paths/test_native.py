@@ -78,21 +78,33 @@ def test_a_run_steps_the_fmus_library_from_its_first_step_bit_for_bit(fmus, syst
     assert any(python_run["calls"][k] > 10 for k in steps)  # the Python did step there
 
 
+def _another_numba(root):
+    manifest = json.loads((root / MANIFEST).read_text())
+    (root / MANIFEST).write_text(json.dumps({**manifest, "numba": "0.0"}))
+
+
+def _damaged_library(root):
+    data = (root / LIBRARY).read_bytes()
+    (root / LIBRARY).write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
+
+
+def _edited_code(root):
+    (source,) = root.glob("resources/agilesat_*/components/cmg_cluster.py")
+    source.write_text(source.read_text() + "\n# edited after the build\n")
+
+
 @pytest.mark.parametrize(
     "damage, said",
     [
-        (lambda m, so: ({**m, "numba": "0.0"}, so), "built with numba 0.0"),
-        (lambda m, so: (m, so[:-1] + bytes([so[-1] ^ 1])), "SHA-256"),
+        (_another_numba, "built with numba 0.0"),
+        (_damaged_library, "SHA-256"),
+        (_edited_code, "not the code it was built from"),
     ],
-    ids=["another-numba", "damaged-library"],
 )
 def test_a_library_that_cannot_be_used_is_said_and_numba_compiles(fmus, tmp_path, damage, said):
     with zipfile.ZipFile(fmus["CmgCluster"]) as fmu:
         fmu.extractall(tmp_path)
-    manifest = json.loads((tmp_path / MANIFEST).read_text())
-    manifest, library = damage(manifest, (tmp_path / LIBRARY).read_bytes())
-    (tmp_path / MANIFEST).write_text(json.dumps(manifest))
-    (tmp_path / LIBRARY).write_bytes(library)
+    damage(tmp_path)
     package = (tmp_path / "resources/slavemodule.txt").read_text().strip().split("_")[-1]
     done = run_python(
         """
@@ -112,3 +124,27 @@ print(entries.native, entries.step.address, "|".join(str(w.message) for w in cau
     used, address, message = done.stdout.strip().split(" ", 2)
     assert used == "False" and address == "None"  # numba's, once a run pays for it
     assert said in message and "CmgCluster's kernels are compiled in this process" in message
+
+
+@pytest.mark.slow
+def test_numba_imported_after_the_libraries_shares_its_runtime_with_them(fmus):
+    """The FMUs' libraries loaded numba's runtime extensions alone; numba imported later in
+    the same process (a metric's kernel) initialises its own runtime again: both then
+    allocate and free through it, and a second run gives the first's rows bit for bit."""
+    done = run_python(
+        """
+import sys
+import numpy as np
+from agilesat.orchestration import simulate
+from agilesat.orchestration.scenarios import get
+ssd = get("video_sar").system_file("sensed")
+first = np.asarray(simulate(ssd, stop=10.0).data)
+assert "numba" not in sys.modules
+import numba
+total = numba.njit(lambda n: (np.arange(n) * 0.5).sum())(1000)
+again = np.asarray(simulate(ssd, stop=10.0).data)
+print(total, np.array_equal(first, again))
+"""
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["249750.0", "True"]

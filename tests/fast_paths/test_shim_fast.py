@@ -1,12 +1,13 @@
 """The shim's fast path (fmus/shim/fast_paths.c, fmus/fast_paths.py, "Fast get/set"): valid
-fmi2GetReal/fmi2SetReal in step mode are served in C from the slave's value array, every
-other call reaches the slave as before.  In-process: the slave's side of the contract (the
-arrays it shares are never replaced, the flags follow the mode and the outputs).  In clean
-processes through FMPy's ctypes bindings: the path is taken (the shim's counters) and off
-with AGILESAT_SHIM_FAST=0, the answers and the results are the same either way, and FMU
-states and fmi2Reset leave no stale pointer or flag in the shim.  The statuses and messages
-of invalid calls are those of tests/fmus/test_faults_fmu.py and
-tests/orchestration/cosim/test_faults_master.py, which run on the same built FMUs, fast path on."""
+fmi2GetReal/fmi2SetReal (and gets and input sets of Integer and Boolean) in step mode are
+served in C from the slave's value array, every other call reaches the slave as before.
+In-process: the slave's side of the contract (the arrays it shares are never replaced, the
+flags follow the mode and the outputs). In clean processes through FMPy's ctypes bindings:
+the path is taken (the shim's counters) and off with AGILESAT_SHIM_FAST=0, the answers and
+the results are the same either way, and FMU states and fmi2Reset leave no stale pointer or
+flag in the shim. The statuses and messages of invalid calls are those of
+tests/fmus/test_faults_fmu.py and tests/orchestration/cosim/test_faults_master.py, which run
+on the same built FMUs, fast path on."""
 
 import json
 
@@ -206,11 +207,11 @@ def test_valid_calls_are_served_by_the_shim_and_give_the_same_answers(fmus):
     on, served, forwarded = zip(*fast["counts"])
     assert set(on) == {1}
     # the set in initialization mode is forwarded.  Then each step the set of h_cmg before
-    # it is served, the first get after it goes to the slave (which evaluates the outputs:
-    # the kernels run their Python in this short run) and the second is served.  From step
-    # 10 on, q_OI, which feeds outputs through, is set between the step and the gets: served
-    assert np.diff(served).tolist() == [2] * 10 + [3] * 10 + [0]
-    assert np.diff(forwarded).tolist() == [1] * 20 + [0] and forwarded[0] == 1
+    # it is served, and both gets (the first evaluates the outputs in C, with the FMU's
+    # compiled output entry: fmus/native.py).  From step 10 on, q_OI, which feeds outputs
+    # through, is set between the step and the gets: served
+    assert np.diff(served).tolist() == [3] * 10 + [4] * 10 + [0]
+    assert np.diff(forwarded).tolist() == [0] * 21 and forwarded[0] == 1
     assert {c[0] for c in slow["counts"]} == {-1} and {c[1] for c in slow["counts"]} == {0}
     assert np.diff([c[2] for c in slow["counts"]]).tolist() == [3] * 10 + [4] * 10 + [0]
 
@@ -282,3 +283,52 @@ def test_fmpy_simulate_fmu_is_bit_identical_with_and_without_the_fast_path(fmus)
         assert result.returncode == 0, result.stderr
         rows.append(json.loads(result.stdout.strip().splitlines()[-1]))
     assert rows[0] == rows[1] and len(rows[0]) == 101
+
+
+WHOLE = (
+    HOST.replace("h_cmg = [", "# h_cmg = [").replace("q_OI = [", "# q_OI = [")
+    + r"""
+name, type_name, values = sys.argv[3], sys.argv[4], json.loads(sys.argv[5])
+vr = next(v.valueReference for v in md.modelVariables if v.name == name)
+setter = {"Integer": "setInteger", "Boolean": "setBoolean"}[type_name]
+reals = [v.valueReference for v in md.modelVariables
+         if v.causality == "output" and v.type == "Real"]
+fmu = instance("a")
+fmu.setupExperiment(startTime=0.0)
+fmu.enterInitializationMode()
+fmu.exitInitializationMode()
+answers, counts = [], []
+for k, value in enumerate(values):
+    fmu.doStep(k * 0.05, 0.05)
+    before = fmu.count()
+    getattr(fmu, setter)([vr], [value])
+    counts.append([a - b for a, b in zip(fmu.count()[1:], before[1:])])
+    answers.append(fmu.getReal(reals))
+fmu.freeInstance()
+print(json.dumps({"counts": counts, "answers": answers}))
+"""
+)
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+@pytest.mark.parametrize(
+    "fmu, name, type_name, values",
+    [
+        ("AttitudeEstimator", "meas_valid", "Boolean", [1, 0, 1, 1, 0]),
+        ("AttitudeController", "mode", "Integer", [0, 3, 7, 1, 0]),
+    ],
+)
+def test_integer_and_boolean_input_sets_are_served_as_the_slave_writes_them(
+    fmus, fmu, name, type_name, values
+):
+    """In step mode a set of Integer or Boolean inputs is written by the shim (one served
+    call, none forwarded), and every output after it is that of the slave's own write
+    (AGILESAT_SHIM_FAST=0), bit for bit."""
+    runs = {}
+    for fast in ("1", "0"):
+        done = run_python(WHOLE, fmus[fmu], fast, name, type_name, json.dumps(values))
+        assert done.returncode == 0, done.stderr
+        runs[fast] = json.loads(done.stdout.strip().splitlines()[-1])
+    assert runs["1"]["answers"] == runs["0"]["answers"]
+    assert runs["1"]["counts"] == [[1, 0]] * len(values)  # (served, forwarded)

@@ -1,8 +1,11 @@
-"""A video_sar campaign at verification scale, from cold workers: prints a report (not a
-test; timings on a shared machine vary, compare the ratios within one run).
+"""A campaign at verification scale, from cold workers: prints a report (not a test;
+timings on a shared machine vary, compare the ratios within one run).
 
-    python tests/tools/benchmark_campaign_scale.py [--runs 1109] [--workers 2] \
-        [--basilisk-python PATH]
+    python tests/tools/benchmark_campaign_scale.py [--target video_sar] [--runs 1109] \
+        [--workers 2] [--basilisk-python PATH]
+
+The target is video_sar unless ``--target`` names another scenario or variant
+(``video_sar:sensed``, issue 38's 29,956-run verification).
 
 - bare: simulate() of video_sar's system file (read once; its shipped dispersions' nominal
   run), compiled (AGILESAT_JIT_AFTER=0), after a worker's warm-up, ``--bare-runs`` runs in
@@ -14,9 +17,10 @@ test; timings on a shared machine vary, compare the ratios within one run).
   varies by ~1.4x between the best and the median on this machine, and a process's mean
   by up to ~1.1x from another's, so a mean against a best would measure the spread;
 - a worker's one-time load, in a fresh process as a worker makes it (AGILESAT_JIT_RUNS =
-  its share), each part timed in turn: the worker's module, the runner, numba, scipy.special,
-  numba's target context, the FMUs' loads, then the worker's warm-up (the compiled kernels'
-  and loop's loads, the metrics'); then its first 10 run_one, CPU of the thread;
+  its share), each part timed in turn: the worker's module, the runner, scipy.special,
+  the FMUs' loads (their C entries compiled ahead of time, fmus/native.py), then the
+  worker's warm-up (the compiled loop's load, the metrics'); then its first 10 run_one,
+  CPU of the thread;
 - the campaign, as a user starts it: ``agilesat campaign video_sar --runs N`` on local
   workers (its shipped dispersions), timed from the command's start to its end (cluster
   start-up, every FMU load, the report); from its journal each worker's warm-up, and the
@@ -55,14 +59,15 @@ os.environ["AGILESAT_JIT_RUNS"] = sys.argv[1]
 from agilesat.orchestration import RunOptions, run, simulate
 from agilesat.orchestration.campaign import worker
 from agilesat.orchestration.mission.targets import resolve
-system = resolve("video_sar").system_file(build=False)
+target = sys.argv[3]
+system = resolve(target).system_file(build=False)
 points = int(round((system.stop_time - system.start_time) / system.step_size)) + 1
 options = RunOptions(step=system.step_size, stop=system.stop_time, figures=False, build=False)
-worker.warm_up("video_sar", options, points, int(sys.argv[1]))
+worker.warm_up(target, options, points, int(sys.argv[1]))
 out = {}
 for name, once in (
     ("simulate", lambda: simulate(system)),  # the system file read once
-    ("run", lambda: run("video_sar", figures=False, build=False)),
+    ("run", lambda: run(target, figures=False, build=False)),
 ):
     times = []
     for _ in range(int(sys.argv[2])):
@@ -82,31 +87,29 @@ def timed(once):
 out = {"distributed": timed(lambda: __import__("distributed"))}  # a Dask worker's own
 out["worker module"] = timed(lambda: __import__("agilesat.orchestration.campaign.worker"))
 out["runner"] = timed(lambda: __import__("agilesat.orchestration.runner"))
-out["numba"] = timed(lambda: __import__("numba"))
 out["scipy.special"] = timed(lambda: __import__("scipy.special"))
-from numba.core.registry import cpu_target
 from agilesat.orchestration import RunOptions
 from agilesat.orchestration.campaign import worker
 from agilesat.orchestration.cosim.fmu import Instance, Log
 from agilesat.orchestration.mission.targets import resolve
-out["scenario"] = timed(lambda: out.update(system=resolve("video_sar").system_file(build=False)))
+target = sys.argv[2]
+out["scenario"] = timed(lambda: out.update(system=resolve(target).system_file(build=False)))
 system = out.pop("system")
 step, stop = system.step_size, system.stop_time
 options = RunOptions(step=step, stop=stop, figures=False, build=False)
 points = int(round((stop - system.start_time) / step)) + 1
-out["numba context"] = timed(lambda: cpu_target.target_context.refresh())
 def load():
     for ref in system.components:
         Instance(ref.name, ref.source, Log()).instantiate()
 out["FMU loads"] = timed(load)
 warm = {}
 out["warm-up"] = timed(lambda: warm.update(r=worker.warm_up(
-    "video_sar", options, points, int(sys.argv[1]))))
+    target, options, points, int(sys.argv[1]))))
 out["warm-up error"] = warm["r"][2]
 out["warm-up steps"] = worker.warm_up_steps(points - 1, int(sys.argv[1]))
 out["runs"] = [
     (r["seconds"], r["cpu_seconds"])
-    for r in (worker.run_one(k, "video_sar", options, [], 0) for k in range(10))
+    for r in (worker.run_one(k, target, options, [], 0) for k in range(10))
 ]
 print(json.dumps(out))
 """
@@ -126,12 +129,12 @@ class Bare:
         self.wall = statistics.fmean(wall for times in loops for wall, _ in times)
 
 
-def bare(share: int, runs: int, processes: int) -> list[dict]:
+def bare(target: str, share: int, runs: int, processes: int) -> list[dict]:
     """The bare loops of ``processes`` fresh processes at once, as the campaign's workers
     run at once (the cores, caches and memory shared alike)."""
     started = [
         subprocess.Popen(
-            [sys.executable, "-c", BARE, str(share), str(runs)],
+            [sys.executable, "-c", BARE, str(share), str(runs), target],
             env={**os.environ, "AGILESAT_JIT_AFTER": "0"},
             stdout=subprocess.PIPE,
             text=True,
@@ -144,9 +147,12 @@ def bare(share: int, runs: int, processes: int) -> list[dict]:
     return [json.loads(out.splitlines()[-1]) for out in outs]
 
 
-def first_run(share: int) -> dict:
+def first_run(target: str, share: int) -> dict:
     out = subprocess.run(
-        [sys.executable, "-c", FIRST, str(share)], check=True, capture_output=True, text=True
+        [sys.executable, "-c", FIRST, str(share), target],
+        check=True,
+        capture_output=True,
+        text=True,
     ).stdout
     return json.loads(out.splitlines()[-1])
 
@@ -156,14 +162,14 @@ def children_cpu() -> float:
     return used.ru_utime + used.ru_stime
 
 
-def campaign(runs: int, workers: int, out: Path) -> tuple[float, float, list[dict]]:
+def campaign(target: str, runs: int, workers: int, out: Path) -> tuple[float, float, list[dict]]:
     """(wall, CPU of all its processes: client, scheduler, nannies, workers, records).
     Exit status 4 (a requirement undecided: fewer runs than would settle it, as a short
     ``--runs`` makes) is a finished campaign; any other but 0 stops the benchmark."""
     cpu = children_cpu()
     began = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, "-m", "agilesat.orchestration", "campaign", "video_sar"]
+        [sys.executable, "-m", "agilesat.orchestration", "campaign", target]
         + ["--runs", str(runs), "--workers", str(workers), "--out", str(out), "--no-progress"],
         capture_output=True,
     )
@@ -210,7 +216,7 @@ def in_order(records: list[dict]) -> list[list[dict]]:
 def one_round(args, share: int):
     """The bare loops, then the campaign; prints their ratios: (the bare loops, their
     statistics, the campaign's wall, CPU and records, the worst ratio)."""
-    loops = bare(share, args.bare_runs, args.workers)
+    loops = bare(args.target, share, args.bare_runs, args.workers)
     for k, loop in enumerate(loops):
         for name, times in loop.items():
             s = Bare(times)
@@ -228,7 +234,7 @@ def one_round(args, share: int):
         "campaign's runs are compared with the processes' pooled statistics below"
     )
     with tempfile.TemporaryDirectory() as tmp:
-        wall, cpu, records = campaign(args.runs, args.workers, Path(tmp) / "c")
+        wall, cpu, records = campaign(args.target, args.runs, args.workers, Path(tmp) / "c")
     statuses: dict[str, int] = {}
     for r in records:
         statuses[r["status"]] = statuses.get(r["status"], 0) + 1
@@ -280,6 +286,7 @@ def one_round(args, share: int):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--target", default="video_sar", help="a scenario or its variant")
     parser.add_argument("--runs", type=int, default=1109)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--basilisk-python", help="a python with bsk installed")
@@ -329,10 +336,10 @@ def main() -> None:
     )
     bare_cpu = b["simulate"].mean  # the last round's, as below
     core = wall * args.workers / args.runs
-    f = first_run(share)
+    f = first_run(args.target, share)
     print(
         "a worker's one-time load, fresh process as a worker makes it (wall, CPU; imports "
-        "of distributed, the worker's module, the runner, numba, scipy.special, the "
+        "of distributed, the worker's module, the runner, scipy.special, the "
         "scenario's system): "
         + "; ".join(
             f"{name} {f[name][0]:.3f} s, {f[name][1]:.3f} s"
@@ -340,10 +347,8 @@ def main() -> None:
                 "distributed",
                 "worker module",
                 "runner",
-                "numba",
                 "scipy.special",
                 "scenario",
-                "numba context",
             )
         )
         + f"; FMU loads (instantiated) {f['FMU loads'][0]:.3f} s, {f['FMU loads'][1]:.3f} s; "

@@ -619,10 +619,12 @@ def mode_rules():
 
 def state_machine_gaps():
     """fmi2GetReal of an instance only instantiated; fmi2DoStep past the stop time of
-    fmi2SetupExperiment (stopTimeDefined), with the Python kernels and, in a second child,
-    the compiled ones (AGILESAT_JIT_AFTER=0: the shim's C step path serves the steps)."""
-    if "AGILESAT_JIT_AFTER" not in os.environ:
-        compiled, _ = _child("state_machine_gaps", env={"AGILESAT_JIT_AFTER": "0"})
+    fmi2SetupExperiment (stopTimeDefined), with the Python kernels (AGILESAT_NATIVE=0: a run
+    this short keeps them) and, in a second child, the FMU's compiled C entries (the shim's
+    C step path serves the steps)."""
+    if "AGILESAT_NATIVE" not in os.environ:
+        os.environ["AGILESAT_NATIVE"] = "0"
+        compiled, _ = _child("state_machine_gaps", env={"AGILESAT_NATIVE": "1"})
         compiled = compiled or {"get_before": [None], "steps": [None], "c_path": [None]}
     fmi_host = _host()
     fresh = fmi_host.Fmu(_path(OTHER), "fresh")
@@ -644,7 +646,7 @@ def state_machine_gaps():
         "messages": len(_errors(fresh, 0)) + len(_errors(a, 0)),
         "texts": _errors(fresh, 0) + _errors(a, 0),
     }
-    if "AGILESAT_JIT_AFTER" in os.environ:
+    if os.environ["AGILESAT_NATIVE"] == "1":
         return mine
     both = {k: mine[k] + compiled.get(k, 0) for k in mine if k != "texts"}
     return both | {"texts": mine["texts"]}
@@ -746,13 +748,15 @@ def derivative_state():
 
 def after_fatal():
     """SIGALRM every 0.3 ms raises KeyboardInterrupt wherever Python runs; one landing in
-    the FMU's Python code is an exception pythonfmu turns into fmi2Fatal.  One interrupt is
+    the FMU's Python code (the outputs evaluated there, not by the FMU's compiled C entries)
+    is an exception pythonfmu turns into fmi2Fatal.  One interrupt is
     in flight at a time (the handler disarms itself; the host re-arms it when the interrupt
     landed in its own code): a second one raised while pythonfmu 0.7.0 formats the first
     crashes inside pythonfmu (PySlaveInstance::handle_py_exception passes the NULL of a
     failed PyObject_Str to PyUnicode_AsEncodedString), which no code of ours runs in."""
     import signal
 
+    os.environ["AGILESAT_NATIVE"] = "0"  # the outputs in the kernels' Python: every get
     armed = [True]
 
     def interrupt(*_):
