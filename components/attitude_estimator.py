@@ -316,6 +316,14 @@ class AttitudeEstimator(Model):
         return ""
 
     @property
+    def scratch(self) -> int:
+        """Where the advanced section starts: from there on the state array is rewritten
+        by advance() before it is read, or reused by the step while its stamp says it is
+        what advance() would write (components/sensing.py), so an FMU's C step path need
+        not save it before a step or an output (fmus/fast_paths.py)."""
+        return SECTIONS + int(self.state[S.section])
+
+    @property
     def records(self) -> list:
         """The committed records (t, gyro reading of the interval ending at t, q̂, b̂, P;
         None for the three before initialisation), for analysis."""
