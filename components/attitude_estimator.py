@@ -63,7 +63,9 @@ relations of SatelliteDynamics' q_BO and w_BO_B applied to the estimate::
 
 ``step`` and ``output`` are each one kernel (components/runtime/jit.py) on the value array
 and the state array: the filter's history is a table of records there (``RECORD``), each
-with its q̂, b̂ and P; S is inverted by its cofactors.
+with its q̂, b̂ and P; S is inverted by its cofactors.  The step commits the section the
+output advanced when it was made at the same time from the same inputs, bit for bit
+(components/sensing.py, reusing the advanced section).
 
 Defaults: the sensors' own defaults (components/gyro.py, components/star_tracker.py):
 σ_v = the gyro's ARW; σ_u = √(rrw² + 2 σ_β²/T_c), the random walk that covers the

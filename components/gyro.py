@@ -13,7 +13,9 @@ A host that interpolates inputs (FMI 2.0 input derivatives, components/model.py)
 rate's slope ẇ at the step's start: between communication points the true rate is then the
 parabola through w(t_c) with that slope and w(t_c + h), w_c + ẇ s + (w(t_c + h) − w_c − ẇ h)
 s²/h², whose average is exact for a rate quadratic over the step (per axis; the line where
-no slope was set).
+no slope was set).  The step commits the samples the output took when it took them at the
+same time from the same inputs (and slopes), bit for bit (components/sensing.py, reusing
+the advanced section).
 
 Error model (IEEE Std 952-1997, Annex C; [Farrenkopf 1978]; [Markley 2014] ch. 4).  For
 axis i, with the true average rate ω̄ over the interval::

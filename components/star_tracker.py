@@ -6,7 +6,9 @@ q_SI = q_BI ⊗ q_SB (DESIGN.md §2).  Sample k is taken at t_k = t0 + k / rate
 sample with t_k + latency ≤ t, held until the next, and ``t_meas`` = t_k is its time of
 validity (what an estimator needs to use it).  The true attitude at t_k is the input's:
 between communication points the rotation from one to the next at a constant rate
-(slerp), before t0 the attitude turning at the rate w_BI_B of t0.
+(slerp), before t0 the attitude turning at the rate w_BI_B of t0.  The step commits the
+samples the output took when it took them at the same time from the same inputs, bit for
+bit (components/sensing.py, reusing the advanced section).
 
 Error of sample k, a small rotation of S given in S axes ([Markley 2014] ch. 4: the
 star-tracker attitude error as three independent small angles; terms of ECSS-E-ST-60-20C)::
