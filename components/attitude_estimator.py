@@ -63,7 +63,9 @@ relations of SatelliteDynamics' q_BO and w_BO_B applied to the estimate::
 
 ``step`` and ``output`` are each one kernel (components/runtime/jit.py) on the value array
 and the state array: the filter's history is a table of records there (``RECORD``), each
-with its q̂, b̂ and P; S is inverted by its cofactors.
+with its q̂, b̂ and P; S is inverted by its cofactors.  The step commits the section the
+output advanced when it was made at the same time from the same inputs, bit for bit
+(components/sensing.py, reusing the advanced section).
 
 Defaults: the sensors' own defaults (components/gyro.py, components/star_tracker.py):
 σ_v = the gyro's ARW; σ_u = √(rrw² + 2 σ_β²/T_c), the random walk that covers the
@@ -88,9 +90,13 @@ from .sensing import (
     conj,
     normalized,
     quat_exp,
+    reused,
     rotation_vector,
+    stamp,
+    stamp_size,
     tick,
     tick_time,
+    unstamp,
 )
 from .star_tracker import RIGEL_NEA_BORESIGHT, RIGEL_NEA_CROSS
 from .variables import input_, output, parameter
@@ -271,7 +277,7 @@ class AttitudeEstimator(Model):
                 "tracker's latency"
             )
         section = FILTER.size + capacity * RECORD.size
-        self.state = np.zeros(SECTIONS + 2 * section)
+        self.state = np.zeros(SECTIONS + 2 * section + STAMP_SIZE)
         self.state[:SECTIONS] = (t0, capacity, section, *R.reshape(-1))
         self.t = t0
 
@@ -310,6 +316,14 @@ class AttitudeEstimator(Model):
             if not (n == int(n) and 0 <= n <= constants[S.capacity] - 2):
                 return f"count of records {n!r} is not a whole number in [0, capacity - 2]"
         return ""
+
+    @property
+    def scratch(self) -> int:
+        """Where the advanced section starts: from there on the state array is rewritten
+        by advance() before it is read, or reused by the step while its stamp says it is
+        what advance() would write (components/sensing.py), so an FMU's C step path need
+        not save it before a step or an output (fmus/fast_paths.py)."""
+        return SECTIONS + int(self.state[S.section])
 
     @property
     def records(self) -> list:
@@ -360,18 +374,26 @@ LATE, FULL, NOT_UNIT = 1, 2, 3
 _FULL = "internal error: more records than the history holds"
 #: the most cycles the filter's history holds (each record 48 values, twice: ~8 MB)
 MAX_RECORDS = 10_000
+#: the inputs :func:`advance` reads (w_meas_B, q_BI_meas, meas_valid, t_meas), which the
+#: stamp after the two sections keeps (components/sensing.py, reusing the advanced section)
+INPUTS = ((U.w_meas_B, U.t_meas + 1),)
+STAMP_SIZE = stamp_size(INPUTS)
 
 
 @step_kernel(AttitudeEstimator)
 def estimator_step(values, state, t, dt):
-    """Every cycle up to the model's time t run and committed; LATE when a measurement
-    older than ``history`` was ignored for the first time."""
-    status = advance(values, state, t)
+    """Every cycle up to the model's time t run and committed (the advanced section as the
+    output left it if it is that, components/sensing.py); LATE when a measurement older
+    than ``history`` was ignored for the first time."""
+    size = int(state[S.section])
+    status = reused(values, state, SECTIONS + 2 * size, INPUTS, t)
+    if status < 0:
+        status = advance(values, state, t)
     if status == FULL:
         return FULL
-    size = int(state[S.section])
     for i in range(size):
         state[SECTIONS + i] = state[SECTIONS + size + i]
+    unstamp(state, SECTIONS + 2 * size)
     return status
 
 
@@ -427,10 +449,12 @@ def advance(values, state, now: float) -> int:
     """The committed section with every cycle up to ``now`` run (the last call's inputs
     held for cycles before ``now``, the current ones at ``now``), into the advanced one;
     LATE when a late measurement was ignored for the first time (its times in ``note``),
-    FULL when a cycle's records would not fit (a state the model was never in), else 0."""
+    FULL when a cycle's records would not fit (a state the model was never in), else 0;
+    stamped (components/sensing.py)."""
     v = floats(values)
     c, a = SECTIONS, SECTIONS + int(state[S.section])
     size = int(state[S.section])
+    unstamp(state, a + size)
     for i in range(size):
         state[a + i] = state[c + i]
     t0, rate = state[S.t0], v[P.rate]
@@ -458,7 +482,9 @@ def advance(values, state, now: float) -> int:
     state[a + FILTER.called] = 1.0
     for i in range(9):
         state[a + FILTER.last_inputs + i] = inputs[i]
-    return LATE if late else 0
+    status = LATE if late else 0
+    stamp(values, state, a + size, INPUTS, now, status)
+    return status
 
 
 @jitable

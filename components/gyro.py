@@ -13,7 +13,9 @@ A host that interpolates inputs (FMI 2.0 input derivatives, components/model.py)
 rate's slope ẇ at the step's start: between communication points the true rate is then the
 parabola through w(t_c) with that slope and w(t_c + h), w_c + ẇ s + (w(t_c + h) − w_c − ẇ h)
 s²/h², whose average is exact for a rate quadratic over the step (per axis; the line where
-no slope was set).
+no slope was set).  The step commits the samples the output took when it took them at the
+same time from the same inputs (and slopes), bit for bit (components/sensing.py, reusing
+the advanced section).
 
 Error model (IEEE Std 952-1997, Annex C; [Farrenkopf 1978]; [Markley 2014] ch. 4).  For
 axis i, with the true average rate ω̄ over the interval::
@@ -75,7 +77,7 @@ from .model import Model, ModelError
 from .noise import joined_key, key_halves, normal, stream_key
 from .runtime.flat import state_table
 from .runtime.jit import floats, jitable, output_kernel, step_kernel
-from .sensing import tick, tick_time
+from .sensing import reused, stamp, stamp_size, tick, tick_time, unstamp
 from .variables import input_, output, parameter
 
 DEG_PER_HOUR = math.pi / 180.0 / 3600.0  # rad/s
@@ -257,13 +259,17 @@ SAMPLED = state_table(
     "Gyro sample state", k=1, seen=1, t_last=1, w_last=3, slope=3, sloped=3, integral=3,
     b_rw=3, b_gm=3, residual=3, saturated=3, w_meas=3,
 )  # fmt: skip
+#: the inputs :func:`advance` reads: w_BI_B and the derivative a host set for it
+INPUTS = ((U.w_BI_B, U.w_BI_B + 3), (DU.w_BI_B, DU.w_BI_B + 3), (GIVEN.w_BI_B, GIVEN.w_BI_B + 3))
 #: the state array: t0, the rate and period, the error matrix I + diag(scale_factor) + M
 #: (row-major), the white-noise sigmas (of a sample, of sample 0), the random walk's step,
 #: the Gauss-Markov sigma, φ and drive, the 9 stream keys (key_halves), then the committed
-#: sample state and the one advanced to the output's time (SAMPLED each)
+#: sample state and the one advanced to the output's time (SAMPLED each), and the stamp of
+#: the advanced one (components/sensing.py, reusing the advanced section)
 S = state_table(
     "Gyro state", t0=1, rate=1, period=1, matrix=9, white=1, white0=1, walk=1, sigma_gm=1,
     phi=1, drive=1, keys=18, committed=SAMPLED.size, advanced=SAMPLED.size,
+    stamp=stamp_size(INPUTS),
 )  # fmt: skip
 #: the rows of the committed and of the advanced sample state
 COMMITTED, ADVANCED = SAMPLED.at(S.committed), SAMPLED.at(S.advanced)
@@ -273,12 +279,16 @@ SATURATED = 1
 
 @step_kernel(Gyro)
 def gyro_step(values, state, t, dt):
-    """Every sample up to the model's time t taken and committed (:func:`advance`);
+    """Every sample up to the model's time t taken and committed (:func:`advance`; the
+    advanced state as the output left it if it is that, components/sensing.py);
     SATURATED (nothing committed) when an axis becomes saturated."""
-    notes = [(0, 0)]
-    notes.pop()
-    advance(values, state, t, notes)
-    if len(notes) > 0:
+    status = reused(values, state, S.stamp, INPUTS, t)
+    if status < 0:
+        notes = [(0, 0)]
+        notes.pop()
+        advance(values, state, t, notes)
+        status = SATURATED if len(notes) > 0 else 0
+    if status == SATURATED:
         return SATURATED
     commit(state)
     return 0
@@ -306,6 +316,7 @@ def commit(state) -> None:
     """The advanced sample state becomes the committed one."""
     for i in range(SAMPLED.size):
         state[S.committed + i] = state[S.advanced + i]
+    unstamp(state, S.stamp)
 
 
 @jitable
@@ -314,7 +325,9 @@ def advance(values, state, now: float, notes) -> None:
     advanced one: every sample up to ``now`` taken, the true rate linear (or the parabola
     with the slope set, :func:`_add_rate`) between the last communication point and now
     (constant before t0); (sample, axis) of each axis becoming saturated appended to
-    ``notes``."""
+    ``notes``; stamped (components/sensing.py), SATURATED when it appended any."""
+    unstamp(state, S.stamp)
+    noted = len(notes)
     s, v = floats(state), floats(values)
     t0, rate, T = s[S.t0], s[S.rate], s[S.period]
     w_now = (v[U.w_BI_B], v[U.w_BI_B + 1], v[U.w_BI_B + 2])
@@ -349,6 +362,7 @@ def advance(values, state, now: float, notes) -> None:
         given = v[GIVEN.w_BI_B + i] != 0.0  # the slope set for the step from now
         state[ADVANCED.slope + i] = v[DU.w_BI_B + i] if given else 0.0
         state[ADVANCED.sloped + i] = 1.0 if given else 0.0
+    stamp(values, state, S.stamp, INPUTS, now, SATURATED if len(notes) > noted else 0)
 
 
 @jitable

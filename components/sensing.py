@@ -14,6 +14,23 @@ shortest rotation between the two (:func:`slerp`), which is exact for a constant
 
 The Earth's radius and rotation rate are orbit_environment.py's (a test checks they agree).
 
+Reusing the advanced section
+----------------------------
+A sampled model's state holds a committed section (the model at its time) and an advanced
+one: the committed section brought to a time ``now`` with the inputs of ``now`` (its
+``advance``), which the output shows.  A step from ``now`` advances the committed section to
+``now`` again and commits the result: when the output was evaluated at ``now`` with the same
+inputs, that result is already there.  A stamp at the end of the state says when:
+``advance`` clears it as it starts and writes it as it ends (:func:`stamp`: ``now``, the
+status, a copy of the inputs it read, spans of the value array); a commit clears it (the
+advanced section then no longer comes from the committed one).  :func:`reused` gives the
+status of the advanced section when the stamp is set and its time and every input are
+those of the call bit for bit (:func:`same`: −0.0 is not 0.0, a NaN never the same), and
+the step commits the section as it is.  The bits are those of advancing again: ``advance``
+is a function of the committed section, the constants, the parameters (fixed after
+initialisation, which zeroes the state), the inputs it reads and ``now``; an FMU state
+saves and restores the stamp with the sections.
+
 Rotations
 ---------
 ``quat_exp(v)`` is the quaternion of the rotation vector v (angle |v| about v/|v|)::
@@ -30,6 +47,7 @@ from __future__ import annotations
 import math
 
 from .rotations import qmul
+from .runtime.flat import state_table
 from .runtime.jit import jitable
 from .vectors import cross, dot, norm, quat_norm
 
@@ -104,3 +122,52 @@ def slerp(qa, qb, s: float) -> tuple:
 def angle_between(a, b) -> float:
     """Angle between two non-zero vectors, accurate at every angle (atan2 form)."""
     return math.atan2(norm(cross(a, b)), dot(a, b))
+
+
+#: a stamp (module docstring): 1 when set, the time and status of the advanced section, then
+#: the inputs it was made with
+STAMP = state_table("stamp of the advanced section", made=1, now=1, status=1)
+
+
+def stamp_size(spans) -> int:
+    """The length of a stamp of the inputs values[start:stop] for (start, stop) in spans."""
+    return STAMP.size + sum(stop - start for start, stop in spans)
+
+
+@jitable
+def same(a: float, b: float) -> bool:
+    """a and b the same double, bit for bit (a NaN never is)."""
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+@jitable
+def stamp(values, state, at: int, spans, now: float, status: int) -> None:
+    """The advanced section made at ``now``, with status ``status``, from the inputs
+    values[start:stop] of ``spans`` (the stamp at state[at:])."""
+    state[at + STAMP.made], state[at + STAMP.now], state[at + STAMP.status] = 1.0, now, status
+    k = at + STAMP.size
+    for start, stop in spans:
+        for i in range(start, stop):
+            state[k] = values[i]
+            k += 1
+
+
+@jitable
+def unstamp(state, at: int) -> None:
+    """The advanced section no longer known to come from the committed one."""
+    state[at + STAMP.made] = 0.0
+
+
+@jitable
+def reused(values, state, at: int, spans, now: float) -> int:
+    """The status of the advanced section if it was made at ``now`` from the committed one
+    with the inputs the value array holds, bit for bit; else −1 (advance it again)."""
+    if state[at + STAMP.made] == 0.0 or not same(state[at + STAMP.now], now):
+        return -1
+    k = at + STAMP.size
+    for start, stop in spans:
+        for i in range(start, stop):
+            if not same(values[i], state[k]):
+                return -1
+            k += 1
+    return int(state[at + STAMP.status])

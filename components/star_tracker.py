@@ -6,7 +6,9 @@ q_SI = q_BI ⊗ q_SB (DESIGN.md §2).  Sample k is taken at t_k = t0 + k / rate
 sample with t_k + latency ≤ t, held until the next, and ``t_meas`` = t_k is its time of
 validity (what an estimator needs to use it).  The true attitude at t_k is the input's:
 between communication points the rotation from one to the next at a constant rate
-(slerp), before t0 the attitude turning at the rate w_BI_B of t0.
+(slerp), before t0 the attitude turning at the rate w_BI_B of t0.  The step commits the
+samples the output took when it took them at the same time from the same inputs, bit for
+bit (components/sensing.py, reusing the advanced section).
 
 Error of sample k, a small rotation of S given in S axes ([Markley 2014] ch. 4: the
 star-tracker attitude error as three independent small angles; terms of ECSS-E-ST-60-20C)::
@@ -59,9 +61,13 @@ from .sensing import (
     lerp,
     normalized,
     quat_exp,
+    reused,
     slerp,
+    stamp,
+    stamp_size,
     tick,
     tick_time,
+    unstamp,
 )
 from .variables import input_, output, parameter
 from .vectors import norm, quat_norm, rotate_back
@@ -213,7 +219,7 @@ class StarTracker(Model):
             )
         rows = dcm(normalized(p.q_SB.tolist()))
         section = WAITING.size + capacity * SAMPLE.size
-        self.state = state = np.zeros(SECTIONS + 2 * section)
+        self.state = state = np.zeros(SECTIONS + 2 * section + STAMP_SIZE)
         state[S.t0], state[S.capacity], state[S.section] = t0, capacity, section
         state[S.C_SB : S.C_SB + 9] = (*rows[0], *rows[1], *rows[2])
         state[S.keys : S.keys + 6], state[S.phase : S.phase + 3] = keys, phase
@@ -261,16 +267,24 @@ WAITING = state_table("StarTracker section", seen=1, t_last=1, inputs=13, k=1, n
 SAMPLE = state_table("StarTracker sample", j=1, t=1, q=4, error=3, valid=1)
 #: the statuses: more samples wait than the pipeline holds (an internal error)
 FULL = 1
+#: the inputs :func:`advance` reads (all of them), which the stamp after the two sections
+#: keeps (components/sensing.py, reusing the advanced section)
+INPUTS = ((U.q_BI, U.r_I + 3),)
+STAMP_SIZE = stamp_size(INPUTS)
 
 
 @step_kernel(StarTracker)
 def tracker_step(values, state, t, dt):
-    """Every sample up to the model's time t taken, those released kept: committed."""
-    status = advance(values, state, t)
+    """Every sample up to the model's time t taken, those released kept: committed (the
+    advanced section as the output left it if it is that, components/sensing.py)."""
+    size = int(state[S.section])
+    status = reused(values, state, SECTIONS + 2 * size, INPUTS, t)
+    if status < 0:
+        status = advance(values, state, t)
     if status == 0:
-        size = int(state[S.section])
         for i in range(size):
             state[SECTIONS + i] = state[SECTIONS + size + i]
+        unstamp(state, SECTIONS + 2 * size)
     return status
 
 
@@ -293,7 +307,8 @@ def advance(values, state, now: float) -> int:
     """The committed section brought to ``now`` (the inputs of ``now``) into the advanced
     one: the samples up to ``now`` taken, those released at ``now`` or later kept.  Between
     communication points the truth is interpolated (slerp, lerp), before the first the
-    attitude turned at its rate."""
+    attitude turned at its rate; stamped (components/sensing.py)."""
+    unstamp(state, SECTIONS + 2 * int(state[S.section]))
     v, s = floats(values), floats(state)
     c, a = SECTIONS, SECTIONS + int(s[S.section])
     t0, rate = s[S.t0], v[P.rate]
@@ -347,6 +362,7 @@ def advance(values, state, now: float) -> int:
     inputs = (*q_now, *w_now, *sun_now, *r_now)
     for i in range(13):
         state[a + WAITING.inputs + i] = inputs[i]
+    stamp(values, state, SECTIONS + 2 * int(s[S.section]), INPUTS, now, 0)
     return 0
 
 

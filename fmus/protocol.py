@@ -27,7 +27,7 @@ import uuid
 
 DERIVATIVE_BASE, ORDER_SHIFT, MAX_ORDER = 1 << 30, 24, 63
 
-FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 7.0
+FAST_PATH_VR, FAST_PATH_N, FAST_PATH_VERSION = 0xFFFFFFFF, 6, 8.0
 
 #: per scalar: a String (or anything the shim leaves alone), a Real parameter, output,
 #: input, input some output depends on directly (feedthrough), an Integer, a Boolean (not
@@ -51,10 +51,11 @@ C_STEP_PYTHON, C_STEP_ENTRY, C_STEP_TIME = range(3)
 #: snapshot buffer (address, length: values then state), the outputs values[start:stop],
 #: the rows that bring the inputs to a step's end (address, count: components/variables.py
 #: Layout.step_end, six offsets a row, as float64), the stop time of fmi2SetupExperiment
-#: (inf when not defined: no step may end after it)
+#: (inf when not defined: no step may end after it), the length of the part of the state
+#: array a snapshot keeps (the rest is the model's scratch: fmus/fast_paths.py)
 B_TIME, B_STEP, B_OUTPUT, B_STATE, B_N_STATE, B_SAVED, B_N_SAVED = range(7)
-B_OUTPUTS_START, B_OUTPUTS_STOP, B_STEP_END, B_N_STEP_END, B_STOP = 7, 8, 9, 10, 11
-N_BLOCK = 12
+B_OUTPUTS_START, B_OUTPUTS_STOP, B_STEP_END, B_N_STEP_END, B_STOP, B_N_KEPT = range(7, 13)
+N_BLOCK = 13
 
 TIME_REL_TOL, TIME_ABS_TOL = 1e-9, 1e-12
 
@@ -78,7 +79,7 @@ SECTIONS = (
         "block[] (float64)",
         ("B_TIME", "B_STEP", "B_OUTPUT", "B_STATE", "B_N_STATE", "B_SAVED", "B_N_SAVED")
         + ("B_OUTPUTS_START", "B_OUTPUTS_STOP", "B_STEP_END", "B_N_STEP_END", "B_STOP")
-        + ("N_BLOCK",),
+        + ("B_N_KEPT", "N_BLOCK"),
     ),
     ("time continuity (math.isclose)", ("TIME_REL_TOL", "TIME_ABS_TOL")),
 )

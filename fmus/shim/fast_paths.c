@@ -28,7 +28,9 @@
  * whose derivative was set: inputs_to_step_end), the step's end, the outputs invalid.  A
  * get with the outputs invalid evaluates them with the output entry.  An entry returning
  * anything but 0, or non-finite outputs: the arrays are put back from the snapshot and the
- * call forwarded.
+ * call forwarded.  The snapshot holds the values and the state's first B_N_KEPT values:
+ * the rest is the model's scratch, which whatever an entry left there does not change
+ * (fmus/fast_paths.py).
  * C_DIRTY tells the slave, at its next call, to take over what was done here. */
 #include <math.h>
 #include <stdlib.h>
@@ -89,7 +91,7 @@ typedef struct {
     StepEntry step;
     OutputEntry output;
     double *state, *saved;
-    size_t n_state, start, stop;   /* outputs: values[start:stop] */
+    size_t n_state, n_kept, start, stop;   /* outputs: values[start:stop] */
 } Armed;
 
 /* The block's addresses and sizes, checked; 0 when they do not fit together. */
@@ -100,23 +102,25 @@ static int armed(const FastPaths *f, Armed *a) {
     a->state = address(b[B_STATE]);
     a->saved = address(b[B_SAVED]);
     if (!a->state || !a->saved || !(b[B_N_STATE] >= 0 && b[B_N_STATE] < (double)MAX_VALUES) ||
+        !(b[B_N_KEPT] >= 0 && b[B_N_KEPT] <= b[B_N_STATE]) ||
         !(b[B_OUTPUTS_START] >= 0 && b[B_OUTPUTS_START] <= b[B_OUTPUTS_STOP] &&
           b[B_OUTPUTS_STOP] <= (double)f->n_values))
         return 0;
     a->n_state = (size_t)b[B_N_STATE];
+    a->n_kept = (size_t)b[B_N_KEPT];
     a->start = (size_t)b[B_OUTPUTS_START];
     a->stop = (size_t)b[B_OUTPUTS_STOP];
-    return b[B_N_SAVED] >= (double)(f->n_values + a->n_state);
+    return b[B_N_SAVED] >= (double)(f->n_values + a->n_kept);
 }
 
 static void snapshot(const FastPaths *f, const Armed *a) {
     memcpy(a->saved, f->values, f->n_values * sizeof(double));
-    memcpy(a->saved + f->n_values, a->state, a->n_state * sizeof(double));
+    memcpy(a->saved + f->n_values, a->state, a->n_kept * sizeof(double));
 }
 
 static void restore(const FastPaths *f, const Armed *a) {
     memcpy(f->values, a->saved, f->n_values * sizeof(double));
-    memcpy(a->state, a->saved + f->n_values, a->n_state * sizeof(double));
+    memcpy(a->state, a->saved + f->n_values, a->n_kept * sizeof(double));
 }
 
 /* model.output() by the output entry; 0 (everything put back) if it leaves it to the Python

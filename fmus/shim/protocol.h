@@ -10,7 +10,7 @@
 /* the handshake */
 #define FAST_PATH_VR 4294967295u
 #define FAST_PATH_N 6
-#define FAST_PATH_VERSION 7.0
+#define FAST_PATH_VERSION 8.0
 
 /* kind[]: per scalar */
 #define KIND_OTHER 0
@@ -51,7 +51,8 @@
 #define B_STEP_END 9
 #define B_N_STEP_END 10
 #define B_STOP 11
-#define N_BLOCK 12
+#define B_N_KEPT 12
+#define N_BLOCK 13
 
 /* time continuity (math.isclose) */
 #define TIME_REL_TOL 1e-09

@@ -144,7 +144,7 @@ def test_an_estimator_whose_records_would_overflow_raises_instead_of_writing_pas
     """Records crowded after the horizon (never made by the model; the counts still in
     range) would grow past the capacity: the kernel stops with an error, nothing written."""
     model = model_class("AttitudeEstimator")().start(0.0)
-    model.advance(0.0, 0.1)
+    model.step(0.0, 0.1)  # no output after it: the next step advances the tampered section
     state, c = model.state, ae.SECTIONS
     capacity = int(state[ae.S.capacity])
     state[c + ae.FILTER.n_records] = capacity - 1  # one over what the state check lets through
