@@ -25,9 +25,9 @@ process, see best()):
   timed), its us per step and the co-simulation's per-step time against it.
 Each model alone (compiled kernels and their Python), and Basilisk
 (tests/tools/benchmark_basilisk.py) as an anchor where bsk is installed.
-Targets: every scenario >= 1,500x real time at its own step, compiled (issue 29); scan_pitch
-<= 1.5x the monolithic reference (issue 10); the co-simulation within 3x of the compiled
-monolith at each step (issue 38).
+Targets: every scenario >= 1,500x real time at its own step, compiled (issue 29), the
+sensed variants >= 5,000x (issue 38); scan_pitch <= 1.5x the monolithic reference (issue
+10); the co-simulation within 3x of the compiled monolith at each step (issue 38).
 """
 
 from __future__ import annotations
@@ -57,6 +57,7 @@ STEPS = (0.01, 0.05, 0.1)
 STOP = 150.0
 OTHERS = ("payload_sweep", "video_sar", "scan_pitch:sensed", "video_sar:sensed")
 TARGET_RTF = 1500.0
+TARGET_SENSED = 5000.0  # issue 38: the sensed loop as fast as the bare one
 TARGET_MONOLITH = 3.0
 
 
@@ -360,9 +361,10 @@ def main() -> None:
             f"{'met' if ratio <= TARGET_MONOLITH else 'NOT met'})"
         )
     for name, speed in speeds.items():
+        target = TARGET_SENSED if "sensed" in name else TARGET_RTF
         print(
-            f"target >= {TARGET_RTF:,.0f}x real time at its step: {name} {speed:,.0f}x "
-            f"({'met' if speed >= TARGET_RTF else 'NOT met'})"
+            f"target >= {target:,.0f}x real time at its step: {name} {speed:,.0f}x "
+            f"({'met' if speed >= target else 'NOT met'})"
         )
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory {peak:.0f} MiB")
