@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import io
+import json
 import os
 import shutil
 import subprocess
@@ -37,8 +38,9 @@ from importlib import metadata
 from pathlib import Path
 
 from ..components.runtime import jit
+from ..components.runtime.cache import cache_root
 from ..components.runtime.toolchain import c_compiler, replacing
-from . import FMUS, model_class, protocol
+from . import FMUS, model_class, native, protocol
 from .model_description import model_description
 from .source_facts import facts
 
@@ -146,6 +148,10 @@ def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
     be made (no C compiler, another architecture), {} and the compile cache of its kernels
     filled instead (components/runtime/jit.py: keyed on content, so any later extraction
     of this FMU loads the compiled kernels instead of compiling them)."""
+    kept = cache_root() / "native" / package  # the package's name: its content's hash
+    built = _kept(kept)
+    if built:
+        return built
     compiler = c_compiler()
     with tempfile.TemporaryDirectory() as out:
         result = subprocess.run(
@@ -158,6 +164,8 @@ def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
         if result.returncode != 0:
             raise BuildError(f"compiling the kernels of {fmu} failed:\n{result.stderr}")
         built = {path.name: path.read_bytes() for path in sorted(Path(out).iterdir())}
+        if built:
+            _keep(kept, Path(out))
         if compiler and not built:
             warnings.warn(
                 f"agilesat build: {fmu.name} has no ahead-of-time C entries "
@@ -165,6 +173,35 @@ def compile_kernels(fmu: Path, name: str, package: str) -> dict[str, bytes]:
                 stacklevel=2,
             )
         return built
+
+
+def _kept(folder: Path) -> dict[str, bytes]:
+    """The library and manifest an earlier build of the same content made (the same
+    bytes: the build is deterministic), if whole: {} if absent, damaged or unreadable."""
+    try:
+        files = {path.name: path.read_bytes() for path in sorted(folder.iterdir())}
+        manifest = json.loads(files[native.MANIFEST])
+        whole = hashlib.sha256(files[native.LIBRARY]).hexdigest() == manifest["sha256"]
+    except (OSError, KeyError, ValueError, TypeError):
+        return {}
+    return files if whole and len(files) == 2 else {}
+
+
+def _keep(folder: Path, made: Path) -> None:
+    """Keep a build's library and manifest for the next build of the same content (in one
+    step; an unwritable cache keeps nothing)."""
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        staged = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    except OSError:
+        return
+    try:
+        for path in made.iterdir():
+            shutil.copyfile(path, staged / path.name)
+        shutil.rmtree(folder, ignore_errors=True)  # a damaged one
+        staged.rename(folder)
+    except OSError:  # another build kept it first
+        shutil.rmtree(staged, ignore_errors=True)
 
 
 def _extraction(fmu: Path, package: str) -> Path:
