@@ -3,6 +3,7 @@ whose model declares kernels carries them; a run steps them from its first step 
 importing numba, bit for bit as the kernels' Python; a library that cannot be used here
 (another numba, a damaged file) is said and left for numba's in-process compile."""
 
+import hashlib
 import json
 import zipfile
 
@@ -148,3 +149,23 @@ print(total, np.array_equal(first, again))
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["249750.0", "True"]
+
+
+@pytest.mark.slow
+def test_a_rebuild_takes_the_kept_library_and_a_damaged_one_is_compiled_again(
+    fmus, tmp_path, monkeypatch
+):
+    """A build keeps an FMU's library in the cache by its content's hash; a rebuild of the
+    same content gives the same FMU, from the kept library while it is whole, compiled
+    again (and kept anew) once it is damaged."""
+    from agilesat.fmus.build import build_fmu
+
+    monkeypatch.setenv("AGILESAT_CACHE_DIR", str(tmp_path / "cache"))
+    first = build_fmu("CmgCluster", tmp_path / "a", force=True).read_bytes()
+    (kept,) = (tmp_path / "cache" / "native").iterdir()
+    library = kept / native.LIBRARY
+    assert build_fmu("CmgCluster", tmp_path / "b", force=True).read_bytes() == first
+    library.write_bytes(b"damaged")
+    assert build_fmu("CmgCluster", tmp_path / "c", force=True).read_bytes() == first
+    manifest = json.loads((kept / native.MANIFEST).read_text())
+    assert hashlib.sha256(library.read_bytes()).hexdigest() == manifest["sha256"]
