@@ -28,6 +28,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from .model import Model, ModelError
 from .runtime.flat import hypot, state_table
 from .runtime.jit import floats, jitable, output_kernel
@@ -84,6 +86,24 @@ class PitchProfile:
             self.theta0, self.theta_f, self.times, self.accel, self.rate_max, self.scan_rate, t
         )
 
+    def references(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Planned (θ, θ̇) at each of the times ``t``: :meth:`reference` of each, the same
+        operations on arrays."""
+        t = np.asarray(t, dtype=float)
+        theta, pitch, rate = (
+            np.full(t.shape, self.theta0),
+            np.full(t.shape, self.theta_f),
+            np.zeros(t.shape),
+        )
+        ended = np.zeros(t.shape, bool)  # a piece already gave (θ, θ̇)
+        for start, end, rate0, acc in pieces(self.times, self.accel, self.rate_max, self.scan_rate):
+            s = np.minimum(np.maximum(t - start, 0.0), end - start)
+            theta = theta + (rate0 * s + 0.5 * acc * s * s)
+            here = ~ended & (t < end)
+            pitch[here], rate[here] = theta[here], (rate0 + acc * s)[here]
+            ended |= here
+        return pitch, rate
+
 
 @jitable
 def phase_at(times, t: float) -> int:
@@ -100,19 +120,24 @@ def phase_at(times, t: float) -> int:
 
 
 @jitable
-def reference_at(theta0, theta_f, times, accel, rate_max, scan_rate, t) -> tuple[float, float]:
-    """Planned (θ, θ̇) at time t: piecewise parabolic, θf after t5."""
+def pieces(times, accel, rate_max, scan_rate):
+    """The maneuver's five pieces, (start, end, rate at the start, acceleration) each."""
     t1, t2, t3, t4, t5 = times
     a, r, r0 = accel, rate_max, scan_rate
-    theta = theta0
-    pieces = (
+    return (
         (0.0, t1, 0.0, a),
         (t1, t2, r, 0.0),
         (t2, t3, r, -a),
         (t3, t4, r0, 0.0),
         (t4, t5, r0, -a),
     )
-    for start, end, rate, acc in pieces:
+
+
+@jitable
+def reference_at(theta0, theta_f, times, accel, rate_max, scan_rate, t) -> tuple[float, float]:
+    """Planned (θ, θ̇) at time t: piecewise parabolic, θf after t5."""
+    theta = theta0
+    for start, end, rate, acc in pieces(times, accel, rate_max, scan_rate):
         s = min(max(t - start, 0.0), end - start)
         theta += rate * s + 0.5 * acc * s * s
         if t < end:

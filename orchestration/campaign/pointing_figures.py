@@ -42,14 +42,22 @@ def values(requirement, verdict: dict, t: np.ndarray, m: np.ndarray) -> tuple[np
 
 
 def campaign_figures(
-    requirements, signals, names: list[str], t: np.ndarray, ensemble: dict, out: Path
+    requirements,
+    signals,
+    names: list[str],
+    t: np.ndarray,
+    ensemble: dict,
+    out: Path,
+    magnitudes: dict | None = None,
 ) -> list[Path]:
     """The figure of each pointing requirement of ``requirements`` (those judged over the
     campaign) on the runs of ``signals`` (runs, ``names``, points) that reached the end;
     ``ensemble``: the campaign's verdicts (campaign.json's,
     :func:`..campaign.ensemble_entry`), whose value and estimate each draws and whose text
     titles it.  None where the verdict has neither (no run reached the end, too short a
-    history: the verdict says why)."""
+    history: the verdict says why).  ``magnitudes``: {name: (t, m)} the verdicts judged
+    (``evaluate_campaign``'s ``keep``), drawn as they are; a requirement not in it has
+    them computed again from ``signals``."""
     from ..mission.requirements import Pointing
 
     paths = []
@@ -58,10 +66,13 @@ def campaign_figures(
         verdict = entry.get("details") or {}
         if not isinstance(r, Pointing) or verdict.get("estimate") is None:
             continue
-        kept = np.asarray(signals[:, [names.index(c) for c in r.signals]])
-        kept = kept[reached_the_end(kept)]
-        error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
-        times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
+        if r.name in (magnitudes or {}):
+            times, m = magnitudes[r.name]  # type: ignore[index]
+        else:
+            kept = np.asarray(signals[:, [names.index(c) for c in r.signals]])
+            kept = kept[reached_the_end(kept)]
+            error = r.error({c: kept[:, i] for i, c in enumerate(r.signals)}, t)
+            times, m = r.requirement.magnitudes(error)  # type: ignore[attr-defined]
         title = figure_title(r.requirement, verdict)
         x, what = values(r.requirement, verdict, times, m)
         paths.append(

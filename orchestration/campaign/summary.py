@@ -46,6 +46,7 @@ def finish(
     ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`);
     ``interruption``: what stopped the campaign, other than a signal."""
     table = report.table(plan, records, metrics)
+    ensemble, magnitudes = _ensemble(plan, out, len(records))
     files = report.write_table(table, out)
     counts = {s: int(np.sum(table["status"] == s)) for s in report.STATUSES}
     previous = {}
@@ -82,7 +83,7 @@ def finish(
             for name, r in metrics.get("requirements", {}).items()
             if "not_judged" in r
         },
-        "ensemble": _ensemble(plan, out, len(records)),
+        "ensemble": ensemble,
         "grid_pass_rates": report.grid_pass_rates(plan, table, metrics),
         "failures": [
             {
@@ -119,7 +120,7 @@ def finish(
         bounds = _bounds(plan)
         figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
         figures += campaign_figures(
-            plan.ensemble, signals, plan.signals, time_axis(plan), summary["ensemble"], out
+            plan.ensemble, signals, plan.signals, time_axis(plan), ensemble, out, magnitudes
         )
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
@@ -136,18 +137,24 @@ def _bounds(plan: Plan) -> list:
     return [b for b in plan.scenario.bounds_for(plan.variant) if b.parameter not in changed]
 
 
-def _ensemble(plan: Plan, out: Path, made: int) -> dict:
+def _ensemble(plan: Plan, out: Path, made: int) -> tuple[dict, dict]:
     """The verdict of each requirement judged over the whole campaign (an ensemble or
-    mixed statistic of every run, :mod:`..mission.requirements`)."""
+    mixed statistic of every run, :mod:`..mission.requirements`), and of each that
+    judged an index's magnitudes, those (t, m[run, time]), which its figure draws."""
     if not plan.ensemble or not made or not (out / "signals.npy").exists():
-        return {}
+        return {}, {}
     signals = np.load(out / "signals.npy", mmap_mode="r")
-    result = {}
+    result, magnitudes = {}, {}
     for requirement in plan.ensemble:
         index = [plan.signals.index(c) for c in requirement.signals]
-        verdict = requirement.evaluate_campaign(np.asarray(signals[:, index]), time_axis(plan))
+        keep: dict = {}
+        verdict = requirement.evaluate_campaign(
+            np.asarray(signals[:, index]), time_axis(plan), keep=keep
+        )
         result[requirement.name] = ensemble_entry(requirement, verdict)
-    return result
+        if "magnitudes" in keep:
+            magnitudes[requirement.name] = keep["magnitudes"]
+    return result, magnitudes
 
 
 def ensemble_entry(requirement, verdict) -> dict:

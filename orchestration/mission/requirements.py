@@ -261,14 +261,14 @@ class Pointing(Requirement):
             columns, t, self.attitude, self.reference, self.kind, self.start, self.stop
         )
 
-    def _verdict(self, columns, t, requirement=None) -> Verdict:
+    def _verdict(self, columns, t, requirement=None, keep: dict | None = None) -> Verdict:
         from ..pointing import NotEvaluable
 
         try:
             error = self.error(columns, t)
         except NotEvaluable as reason:
             return Verdict(NOT_EVALUATED, None, str(reason))
-        result = (requirement or self.requirement).evaluate(error)  # type: ignore[attr-defined]
+        result = (requirement or self.requirement).evaluate(error, keep=keep)  # type: ignore[attr-defined]
         status = result.status if result.status in (MET, NOT_MET, UNDECIDED) else NOT_EVALUATED
         value = result.value if result.value is not None else result.estimate
         return Verdict(status, value, result.reason or "", result.line(), result.to_dict())
@@ -288,14 +288,19 @@ class Pointing(Requirement):
         text = f"{self.statement()}: {OVER_CAMPAIGN} ({seen})"
         return Verdict(OVER_CAMPAIGN, shown.value, OVER_CAMPAIGN_REASON, text)
 
-    def evaluate_campaign(self, signals: np.ndarray, t: np.ndarray) -> Verdict:
+    def evaluate_campaign(
+        self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None
+    ) -> Verdict:
         """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds
-        :attr:`signals` (NaN where a run stopped early: those runs are left out, and said)."""
+        :attr:`signals` (NaN where a run stopped early: those runs are left out, and said).
+        ``keep``: given, it receives the index's magnitudes judged, ``keep["magnitudes"]``
+        = (t, m[run, time]) of the runs that reached the end (none if not evaluated)."""
         complete = reached_the_end(signals)
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
         kept = signals[complete]
-        verdict = self._verdict({c: kept[:, i] for i, c in enumerate(self.signals)}, t)
+        columns = {c: kept[:, i] for i, c in enumerate(self.signals)}
+        verdict = self._verdict(columns, t, keep=keep)
         left = int((~complete).sum())
         if left:
             note = f"{left} run(s) that stopped early left out"

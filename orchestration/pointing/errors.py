@@ -52,19 +52,59 @@ def by_blocks(function, shape: tuple, *arrays: np.ndarray) -> np.ndarray:
 
 def quaternion_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` of arrays of quaternions (scalar first, last axis)."""
-    p0, pv = p[..., :1], p[..., 1:]
-    q0, qv = q[..., :1], q[..., 1:]
-    scalar = p0 * q0 - np.sum(pv * qv, axis=-1, keepdims=True)
-    return np.concatenate((scalar, p0 * qv + q0 * pv + np.cross(pv, qv)), axis=-1)
+    p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+    return _joined(_product(_split(p), _split(q)), np.broadcast_shapes(p.shape, q.shape))
 
 
 def rotation_vector(q: np.ndarray) -> np.ndarray:
     """Rotation vector ``θ n`` of unit quaternions ``(cos θ/2, sin θ/2 n)``, θ ∈ [0, π]."""
-    q = np.where(q[..., :1] < 0.0, -q, q)  # ±q: the same attitude; the shorter rotation
-    sine = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sine, q[..., :1])
+    q = np.asarray(q, dtype=float)
+    return _joined(_rotation_vector(_split(q)), q.shape[:-1] + (3,))
+
+
+# Component by component: each a (runs, samples) array, the operations NumPy's vector
+# functions make (norms and dot products summed in the components' order, np.cross's
+# products), without their temporaries of the whole (..., 3) and (..., 4) arrays.
+def _split(a: np.ndarray) -> tuple:
+    return tuple(a[..., i] for i in range(a.shape[-1]))
+
+
+def _joined(components, shape: tuple) -> np.ndarray:
+    out = np.empty(shape)
+    for i, c in enumerate(components):
+        out[..., i] = c
+    return out
+
+
+def _norm(components) -> np.ndarray:
+    """As np.linalg.norm along the components."""
+    total = components[0] * components[0]
+    for c in components[1:]:
+        total += c * c
+    return np.sqrt(total)
+
+
+def _cross(a, b) -> tuple:
+    """As np.cross."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _product(p, q) -> tuple:
+    """``p ⊗ q``: (p0 q0 − p_v·q_v, p0 q_v + q0 p_v + p_v × q_v)."""
+    dot = p[1] * q[1] + p[2] * q[2] + p[3] * q[3]
+    cross = _cross(p[1:], q[1:])
+    return (p[0] * q[0] - dot, *(p[0] * q[k] + q[0] * p[k] + cross[k - 1] for k in (1, 2, 3)))
+
+
+def _rotation_vector(q) -> tuple:
+    """±q: the same attitude; the shorter rotation (q0 ≥ 0): ``2 atan2(|q_v|, |q0|) q_v/|q_v|``
+    (2 q_v where q_v = 0)."""
+    negative = q[0] < 0.0
+    sine = _norm(q[1:])
+    angle = 2.0 * np.arctan2(sine, np.where(negative, -q[0], q[0]))
     scale = np.divide(angle, sine, out=np.full_like(sine, 2.0), where=sine > 0.0)
-    return scale * q[..., 1:]
+    np.negative(scale, out=scale, where=negative)
+    return tuple(scale * c for c in q[1:])
 
 
 def rotation_quaternion(phi: np.ndarray) -> np.ndarray:
@@ -81,21 +121,35 @@ def _unit_quaternions(q, name: str) -> np.ndarray:
         q = q[None]
     if q.ndim != 3 or q.shape[-1] != 4:
         raise ValueError(f"{name}: expected (samples, 4) or (runs, samples, 4), got {q.shape}")
-    norm = np.sqrt(np.einsum("...i,...i->...", q, q))
+    _check_unit(name, _norm(_split(q)))
+    return q
+
+
+def _check_unit(name: str, norm: np.ndarray, first_run: int = 0) -> None:
+    """``norm`` (runs, samples) of quaternions ``name``, the first of them run ``first_run``:
+    each 1 within :data:`UNIT_NORM_TOLERANCE`, else an error naming the run and sample."""
     bad = ~(np.abs(norm - 1.0) <= UNIT_NORM_TOLERANCE)  # NaN is bad too
     if bad.any():
         run, sample = np.argwhere(bad)[0]
         raise ValueError(
-            f"{name} is not a unit quaternion at run {run}, sample {sample}: "
+            f"{name} is not a unit quaternion at run {first_run + run}, sample {sample}: "
             f"|q| = {norm[run, sample]} (expected 1 within {UNIT_NORM_TOLERANCE})"
         )
-    return q
 
 
 def _error_rotation(q_x: np.ndarray, q_y: np.ndarray) -> np.ndarray:
-    q_x = q_x / np.linalg.norm(q_x, axis=-1, keepdims=True)
-    conjugate = q_y * (np.array([1.0, -1.0, -1.0, -1.0]) / np.linalg.norm(q_y, axis=-1)[..., None])
-    return rotation_vector(quaternion_product(conjugate, q_x))
+    """The rotation vector of ``q_y* ⊗ q_x``, each normalised: (runs, samples, 3)."""
+    x, y = _split(q_x), _split(q_y)
+    return _joined(_error_components(x, y, _norm(x), _norm(y)), q_x.shape[:-1] + (3,))
+
+
+def _error_components(x, y, norm_x, norm_y) -> tuple:
+    """The components of the rotation vector of ``y* ⊗ x`` (quaternions by component, of
+    norms ``norm_x`` and ``norm_y``), each normalised."""
+    inverse_y = 1.0 / norm_y
+    x = tuple(c / norm_x for c in x)
+    conjugate = (y[0] * inverse_y, *(c * -inverse_y for c in y[1:]))
+    return _rotation_vector(_product(conjugate, x))
 
 
 def attitude_error(q_XI, q_YI, t, kind: str) -> ErrorHistory:
@@ -218,22 +272,27 @@ class ErrorHistory:
 
 
 def _line_of_sight(phi: np.ndarray, b: np.ndarray) -> np.ndarray:
-    angle = np.linalg.norm(phi, axis=-1, keepdims=True)
-    n = np.divide(phi, angle, out=np.zeros_like(phi), where=angle > 0.0)
-    turned = (  # Rodrigues: b rotated by φ
-        b * np.cos(angle)
-        + np.cross(n, b) * np.sin(angle)
-        + n * (n @ b)[..., None] * (1 - np.cos(angle))
+    """``ε`` of the rotation vectors ``phi`` (runs, samples, 3) for the boresight ``b``."""
+    components = _split(phi)
+    angle = _norm(components)
+    n = np.divide(phi, angle[..., None], out=np.zeros_like(phi), where=angle[..., None] > 0.0)
+    cosine_angle, sine_angle = np.cos(angle), np.sin(angle)
+    along, versine = n @ b, 1 - cosine_angle
+    across = _cross(_split(n), b)
+    turned = _joined(  # Rodrigues: b rotated by φ
+        (
+            b[k] * cosine_angle + across[k] * sine_angle + n[..., k] * along * versine
+            for k in range(3)
+        ),
+        phi.shape,
     )
-    normal = np.cross(b, turned)
-    sine = np.linalg.norm(normal, axis=-1, keepdims=True)
+    normal = _cross(b, _split(turned))
+    sine = _norm(normal)
     cosine = turned @ b
-    if np.any((sine[..., 0] == 0.0) & (cosine < 0.0)):
+    if np.any((sine == 0.0) & (cosine < 0.0)):
         raise ValueError("the line of sight is reversed (a 180° error): no half-cone axis")
-    scale = np.divide(
-        np.arctan2(sine, cosine[..., None]), sine, out=np.ones_like(sine), where=sine > 0.0
-    )
-    return scale * normal
+    scale = np.divide(np.arctan2(sine, cosine), sine, out=np.ones_like(sine), where=sine > 0.0)
+    return _joined((scale * c for c in normal), phi.shape)
 
 
 def quaternion_columns(name: str) -> tuple[str, ...]:
@@ -268,14 +327,47 @@ def recorded_error(
         rows &= t <= stop + 1e-12
     if rows.sum() < 2:
         raise NotEvaluable(f"fewer than 2 samples in [{start}, {stop}] s")
-    q_x = np.stack([columns[c] for c in quaternion_columns(attitude)], axis=-1)
-    if callable(reference):
-        q_y = np.asarray(reference(columns))
+    window = slice(int(np.argmax(rows)), len(rows) - int(np.argmax(rows[::-1])))
+    runs = np.shape(columns[quaternion_columns(attitude)[0]])
+    if len(runs) == 1:  # one run
+        values = _recorded_block(columns, attitude, reference, window, 0)[0]
     else:
-        q_y = np.stack([columns[c] for c in quaternion_columns(reference)], axis=-1)
-    return (performance_error if kind == "performance" else knowledge_error)(
-        q_x[..., rows, :], q_y[..., rows, :], t[rows]
-    )
+        values = np.empty((runs[0], window.stop - window.start, 3))
+        for first in range(0, runs[0], BLOCK):
+            block = _Runs(columns, slice(first, first + BLOCK))
+            values[first : first + BLOCK] = _recorded_block(
+                block, attitude, reference, window, first
+            )
+    return ErrorHistory(values, t[window], kind)
+
+
+class _Runs:
+    """``columns[name]`` of the runs ``runs`` (a slice) only."""
+
+    def __init__(self, columns, runs: slice):
+        self.columns, self.runs = columns, runs
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return np.asarray(self.columns[name])[self.runs]
+
+
+def _recorded_block(columns, attitude: str, reference, window: slice, first: int):
+    """The error rotation vectors (runs, samples, 3) of :func:`recorded_error` over the
+    samples ``window`` of ``columns`` (runs from ``first``), component by component."""
+    x = tuple(np.atleast_2d(columns[c])[:, window] for c in quaternion_columns(attitude))
+    if callable(reference):
+        q_y = np.asarray(reference(columns), dtype=float)
+        y = tuple(np.atleast_2d(q_y[..., i])[:, window] for i in range(4))
+    else:
+        y = tuple(np.atleast_2d(columns[c])[:, window] for c in quaternion_columns(reference))
+    if x[0].shape != y[0].shape:
+        raise ValueError(
+            f"quaternion histories differ in shape: {x[0].shape + (4,)} and {y[0].shape + (4,)}"
+        )
+    norm_x, norm_y = _norm(x), _norm(y)
+    _check_unit("q_XI", norm_x, first)
+    _check_unit("q_YI", norm_y, first)
+    return _joined(_error_components(x, y, norm_x, norm_y), x[0].shape + (3,))
 
 
 def not_covered(t: np.ndarray, start=None, stop=None, what: str = "the window") -> str:

@@ -162,10 +162,11 @@ class PointingRequirement:
             parts.append(magnitude(series))
         return series.t, np.concatenate(parts)
 
-    def evaluate(self, error: ErrorHistory, seed=None) -> PointingResult:
+    def evaluate(self, error: ErrorHistory, seed=None, keep: dict | None = None) -> PointingResult:
         """The verdict on ``error`` (a temporal requirement with t random in Δt: run by
         run, in blocks that hold at most :data:`MIXTURE_LIMIT` values).  ``seed``: no
-        longer used."""
+        longer used.  ``keep``: given, it receives the (t, m) judged (:meth:`magnitudes`)
+        as ``keep["magnitudes"]``, for a figure of them."""
         _no_seed(seed)
         try:
             if self.t_in_window == "random" and self.interpretation == "temporal":
@@ -174,6 +175,8 @@ class PointingRequirement:
         except NotEvaluable as reason:
             needed = self.runs_needed()
             return PointingResult(self, NOT_EVALUATED, error.runs, needed, reason=str(reason))
+        if keep is not None:
+            keep["magnitudes"] = (t, m)
         return self.judge(t, m)
 
     def _temporal_in_blocks(self, error: ErrorHistory) -> PointingResult:

@@ -473,7 +473,7 @@ def required_momentum(results) -> tuple[float, np.ndarray]:
     total momentum.
     """
     t = results.time
-    pitch, rate = np.array([PROFILE.reference(x) for x in t]).T
+    pitch, rate = PROFILE.references(t)
     zero = np.zeros_like(pitch)
     q_BO = (np.cos(pitch / 2), zero, np.sin(pitch / 2), zero)  # pitch about y
     C_BI = dcm(qmul(tuple(results.vector("OrbitEnvironment.q_OI").T), q_BO))
@@ -511,7 +511,7 @@ def figures(results, out_dir) -> list:
     deg = 180 / math.pi
     pitch = results["SatelliteDynamics.euler_BO[2]"] * deg
     rate = results["SatelliteDynamics.w_BO_B[2]"] * deg  # Euler rates spike at the lock
-    reference = np.array([PROFILE.reference(x) for x in t]) * deg
+    reference = np.column_stack(PROFILE.references(t)) * deg
     delta_dot = results.vector("CmgCluster.delta_dot")
     accel = np.diff(delta_dot, axis=0) / (t[1] - t[0])  # as max_gimbal_accel
     t3, t4 = PROFILE.times[2], PROFILE.times[3]

@@ -54,6 +54,14 @@ def test_reference_rate_is_the_derivative_of_the_reference_angle():
     assert np.allclose(numeric, [PAPER.reference(x)[1] for x in t], atol=1e-7)
 
 
+def test_references_on_arrays_are_the_reference_at_each_time():
+    """At every time, the phase times themselves, just past them, before the start and
+    after the end: the same (θ, θ̇) as the scalar reference, bit for bit."""
+    t = np.concatenate([np.arange(-1.0, 120.0, 0.05), PAPER.times, np.nextafter(PAPER.times, 1e9)])
+    pitch, rate = PAPER.references(t)
+    assert np.array_equal(np.column_stack((pitch, rate)), [PAPER.reference(x) for x in t])
+
+
 def controller_at(t, q_BO, w_BO_B=(0.0, 0.0, 0.0)):
     c = PitchManeuverController()
     c.set("q_BO", q_BO)

@@ -213,3 +213,23 @@ def test_a_campaign_no_run_of_which_reached_the_end_draws_nothing(campaign, tmp_
     r = requirement("ape", 1e-4, 0.9, "ensemble")
     none = np.full_like(signals, np.nan)
     assert campaign_figures([r], none, NAMES, T, judged(r, none), tmp_path) == []
+
+
+def test_a_campaign_figure_draws_the_magnitudes_its_verdict_judged(campaign, tmp_path, monkeypatch):
+    """evaluate_campaign hands the magnitudes it judged (the 30 complete runs' |angle|, the
+    stopped one left out); the figure draws those without computing them again from the
+    signals (here all NaN: computed again, there would be no run)."""
+    signals, magnitude = campaign
+    r = requirement("ape", 3e-5, 0.9, "ensemble")
+    keep: dict = {}
+    verdicts = {r.name: ensemble_entry(r, r.evaluate_campaign(signals, T, keep=keep))}
+    t, m = keep["magnitudes"]
+    np.testing.assert_array_equal(t, T)
+    np.testing.assert_allclose(m, magnitude, rtol=1e-9)
+    saved = saved_axes(report, monkeypatch)
+    unusable = np.full_like(signals, np.nan)
+    [path] = campaign_figures([r], unusable, NAMES, T, verdicts, tmp_path, {r.name: (t, m)})
+    [(_, ax, _)] = saved
+    worst = int(np.argmax(np.sort(magnitude, axis=0)[26]))
+    curve = ax.lines[0]
+    np.testing.assert_allclose(curve.get_xdata(), np.degrees(np.sort(magnitude[:, worst])))

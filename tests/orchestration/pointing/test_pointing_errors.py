@@ -97,3 +97,34 @@ def test_bad_histories_are_named():
         ErrorHistory(np.zeros((3, 2)), [0.0, 0.1, 0.2])
     with pytest.raises(ValueError, match="error kind"):
         ErrorHistory(np.zeros(3), [0.0, 0.1, 0.2], kind="estimate")
+
+
+def test_a_campaigns_recorded_error_is_each_runs_own_across_blocks():
+    """A campaign's columns (runs, points) give, run for run, the error of that run's own
+    columns, over the window asked; runs past the first block (errors.BLOCK) included, and
+    a quaternion that is not a unit one named by its run across blocks."""
+    from agilesat.orchestration.pointing.errors import BLOCK, quaternion_columns, recorded_error
+
+    rng = np.random.default_rng(4)
+    runs, t = BLOCK + 7, np.arange(40) * 0.5
+    q_x = random_quaternions(rng, runs * t.size).reshape(runs, t.size, 4)
+    q_y = random_quaternions(rng, runs * t.size).reshape(runs, t.size, 4)
+    columns = {}
+    for name, q in (("A.q", q_x), ("B.q", q_y)):
+        for i, column in enumerate(quaternion_columns(name)):
+            columns[column] = q[..., i]
+    error = recorded_error(columns, t, "A.q", "B.q", start=2.0, stop=15.0)
+    window = (t >= 2.0) & (t <= 15.0)
+    np.testing.assert_array_equal(error.t, t[window])
+    for run in (0, BLOCK - 1, BLOCK, runs - 1):
+        one = performance_error(q_x[run, window], q_y[run, window], t[window])
+        np.testing.assert_array_equal(error.values[run], one.values[0])
+    reference = lambda c: np.stack([c[k] for k in quaternion_columns("B.q")], axis=-1)
+    by_function = recorded_error(columns, t, "A.q", reference, start=2.0, stop=15.0)
+    np.testing.assert_array_equal(by_function.values, error.values)
+    columns["A.q[2]"] = columns["A.q[2]"].copy()
+    columns["A.q[2]"][BLOCK + 3, 9] += 0.1
+    with pytest.raises(
+        ValueError, match=rf"q_XI is not a unit quaternion at run {BLOCK + 3}, sample 5"
+    ):
+        recorded_error(columns, t, "A.q", "B.q", start=2.0, stop=15.0)
