@@ -1,6 +1,8 @@
 """A run the campaign process makes itself (the nominal run the histograms mark), made in a
 process of its own: an FMU that crashes (a segfault in a model's native code) kills that
-process, not the campaign, which says so and keeps every run it made.
+process, not the campaign, which says so and keeps every run it made.  :func:`start` starts
+it and returns at once (the campaign writes its summary meanwhile); :meth:`Started.result`
+waits for its answer.
 
 The child is ``python -c`` :data:`CHILD` given :func:`..runner.run`'s target and
 :class:`..cosim.options.RunOptions` (pickled on its stdin, by this process) and answering
@@ -14,6 +16,7 @@ import pickle
 import signal
 import subprocess
 import sys
+import threading
 
 from ..cosim.master import Interrupted
 
@@ -38,26 +41,63 @@ class RunFailed(RuntimeError):
 
 
 def run(target: str, options) -> dict:
-    """:func:`..runner.run` ``(target, options)`` in a fresh process: its summary;
-    RunFailed when it failed or its process died (naming the signal that killed it),
-    Interrupted when a signal stopped it."""
-    child = subprocess.run(
-        [sys.executable, "-c", CHILD],
-        input=pickle.dumps((target, options)),
-        capture_output=True,
-    )
-    lines = child.stdout.decode(errors="replace").splitlines()
-    try:
-        answer = json.loads(lines[-1])
-    except (IndexError, ValueError):
-        said = child.stderr.decode(errors="replace").strip().splitlines()
-        if child.returncode < 0:
-            why = f"its process was killed by {signal.Signals(-child.returncode).name}"
-        else:
-            why = f"its process ended with exit status {child.returncode}"
-        raise RunFailed(why + (f" ({said[-1][:300]})" if said else "")) from None
-    if "signal" in answer:
-        raise Interrupted(answer["reason"], None, answer["signal"])
-    if "reason" in answer:
-        raise RunFailed(answer["reason"])
-    return answer["summary"]
+    """:func:`..runner.run` ``(target, options)`` in a fresh process: its summary (see
+    :meth:`Started.result`)."""
+    return start(target, options).result()
+
+
+def start(target: str, options) -> Started:
+    """:func:`..runner.run` ``(target, options)`` started in a fresh process."""
+    return Started(target, options)
+
+
+class Started:
+    """A run going on in a process of its own; a thread hands it its target and options and
+    collects what it says (no pipe fills while this process does other work)."""
+
+    def __init__(self, target: str, options):
+        self.child = subprocess.Popen(
+            [sys.executable, "-c", CHILD],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        self.said: tuple = (b"", b"")
+        payload = pickle.dumps((target, options))
+        self.thread = threading.Thread(target=self._talk, args=(payload,), daemon=True)
+        self.thread.start()
+
+    def _talk(self, payload: bytes) -> None:
+        self.said = self.child.communicate(payload)
+
+    def result(self) -> dict:
+        """Its summary, once it ends; RunFailed when it failed or its process died (naming
+        the signal that killed it), Interrupted when a signal stopped it.  An exception
+        while waiting (KeyboardInterrupt) kills the process."""
+        try:
+            self.thread.join()
+        except BaseException:
+            self.cancel()
+            raise
+        stdout, stderr = self.said
+        lines = stdout.decode(errors="replace").splitlines()
+        try:
+            answer = json.loads(lines[-1])
+        except (IndexError, ValueError):
+            said = stderr.decode(errors="replace").strip().splitlines()
+            code = self.child.returncode
+            if code < 0:
+                why = f"its process was killed by {signal.Signals(-code).name}"
+            else:
+                why = f"its process ended with exit status {code}"
+            raise RunFailed(why + (f" ({said[-1][:300]})" if said else "")) from None
+        if "signal" in answer:
+            raise Interrupted(answer["reason"], None, answer["signal"])
+        if "reason" in answer:
+            raise RunFailed(answer["reason"])
+        return answer["summary"]
+
+    def cancel(self) -> None:
+        """Kill the process if it still runs (its answer is no longer wanted)."""
+        if self.child.poll() is None:
+            self.child.kill()

@@ -1,5 +1,5 @@
 """A campaign's nominal run: every random dispersion at the system's value, whose metrics
-the histograms mark (:func:`nominal_run`)."""
+the histograms mark (:func:`start`, then :meth:`Nominal.result`)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,47 @@ from .plan import Plan
 from .replay import run_arguments, versions
 
 
-def nominal_run(plan: Plan, before: dict | None = None) -> dict:
+class Nominal:
+    """The nominal run, kept or started (:func:`start`)."""
+
+    def __init__(self, command: str, record: dict | None = None, started=None):
+        self.command, self.record, self.started = command, record, started
+
+    def result(self) -> dict:
+        """{"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
+        the reason it has none (said on stderr too); waits for the run if it goes on."""
+        from ..cosim.master import Interrupted
+
+        if self.record is not None:
+            return self.record
+        try:
+            summary = self.started.result()
+        except (Exception, KeyboardInterrupt) as failure:  # the runs are made: not worth failing
+            if isinstance(failure, Interrupted):
+                engine.INTERRUPTS.signals.append(failure.signal)
+            elif isinstance(failure, KeyboardInterrupt) and not engine.INTERRUPTS.signals:
+                raise  # not a signal the campaign's handler took
+            return self._none(f"{type(failure).__name__}: {failure}")
+        values = {k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None}
+        self.record = {"command": self.command, "metrics": values}
+        return self.record
+
+    def cancel(self) -> None:
+        """Stop the run if it goes on (its result is no longer wanted)."""
+        if self.started is not None and self.record is None:
+            self.started.cancel()
+
+    def _none(self, reason: str) -> dict:
+        print(f"campaign: no nominal run ({reason})", file=sys.stderr)
+        self.record = {"command": self.command, "reason": reason}
+        return self.record
+
+
+def start(plan: Plan, before: dict | None = None) -> Nominal:
     """The run at the nominal values (every random dispersion at the system's value, the
     spec's ``--set`` and the grid point's values applied), whose metrics the histograms
-    mark: {"command": the ``agilesat run`` that makes it, "metrics": {name: SI value}}, or
-    the reason it has none (said on stderr too).  It runs in a process of its own
-    (:mod:`.isolated`).  A signal during it is recorded for the command's exit status
+    mark, started in a process of its own (:mod:`.isolated`): the campaign's summary is
+    written meanwhile.  A signal during it is recorded for the command's exit status
     (130/143) as one while the cluster closes.
 
     ``before``: campaign.json as the campaign found it (a resumed one's).  Its nominal run
@@ -25,8 +60,6 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
     ``versions``: the run would be the same one (a resume has the same spec and system
     content, :func:`.engine.open_directory`); otherwise it is made again, and stderr says
     why."""
-    from ..cosim.master import Interrupted
-
     spec = plan.spec
     grid = {
         name: value
@@ -44,21 +77,15 @@ def nominal_run(plan: Plan, before: dict | None = None) -> dict:
                 "campaign.json has it, made with the same command and versions)",
                 file=sys.stderr,
             )
-            return {"command": command, "metrics": held["metrics"]}
+            return Nominal(command, {"command": command, "metrics": held["metrics"]})
         print(f"campaign: the nominal run in campaign.json {differs}: made again", file=sys.stderr)
     print(f"campaign: the nominal run, for the histograms: {command}", file=sys.stderr)
     try:  # in a process of its own: an FMU crashing there does not end the campaign
-        summary = isolated.run(spec.target, plan.run_options(grid))
-    except (Exception, KeyboardInterrupt) as failure:  # the runs are made: not worth failing
-        if isinstance(failure, Interrupted):
-            engine.INTERRUPTS.signals.append(failure.signal)
-        elif isinstance(failure, KeyboardInterrupt) and not engine.INTERRUPTS.signals:
-            raise  # not a signal the campaign's handler took
-        reason = f"{type(failure).__name__}: {failure}"
-        print(f"campaign: no nominal run ({reason})", file=sys.stderr)
-        return {"command": command, "reason": reason}
-    values = {k: m["value"] for k, m in summary["metrics"].items() if m["value"] is not None}
-    return {"command": command, "metrics": values}
+        return Nominal(command, started=isolated.start(spec.target, plan.run_options(grid)))
+    except OSError as failure:  # no process to run it in
+        nominal = Nominal(command)
+        nominal._none(f"{type(failure).__name__}: {failure}")
+        return nominal
 
 
 def _not_this_nominal_run(held, command: str, made_with) -> str | None:

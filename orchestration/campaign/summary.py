@@ -13,7 +13,7 @@ import numpy as np
 from ..output.recorder import write_text
 from . import report
 from .files import read_object
-from .nominal import nominal_run
+from .nominal import start as start_nominal
 from .plan import Plan, time_axis
 from .replay import replay_arguments, replay_template, versions
 
@@ -44,14 +44,32 @@ def finish(
 ) -> Campaign:
     """runs.csv (+ Parquet), campaign.json and the figures, from the records so far.
     ``metrics``: {"metrics": ..., "requirements": ...} (:func:`.engine.catalog`);
-    ``interruption``: what stopped the campaign, other than a signal."""
+    ``interruption``: what stopped the campaign, other than a signal.  The nominal run the
+    histograms mark goes on in its own process meanwhile (:mod:`.nominal`)."""
+    previous = {}
+    if (out / "campaign.json").exists():
+        previous = read_object(out / "campaign.json", "a campaign's summary")
+    histograms = plan.spec.runs > 1
+    nominal = None
+    if histograms and len(plan.grid) == 1 and status == "complete":
+        nominal = start_nominal(plan, previous)
+    try:
+        return _finish(
+            plan, out, records, metrics, lost, status, environment, interruption, previous, nominal
+        )
+    finally:
+        if nominal is not None:
+            nominal.cancel()
+
+
+def _finish(
+    plan, out, records, metrics, lost, status, environment, interruption, previous, nominal
+):
+    """:func:`finish` once the nominal run is started (None: no such run)."""
     table = report.table(plan, records, metrics)
     ensemble, magnitudes = _ensemble(plan, out, len(records))
     files = report.write_table(table, out)
     counts = {s: int(np.sum(table["status"] == s)) for s in report.STATUSES}
-    previous = {}
-    if (out / "campaign.json").exists():
-        previous = read_object(out / "campaign.json", "a campaign's summary")
     summary = {
         "status": status,
         **({"interruption": interruption} if interruption else {}),
@@ -105,23 +123,25 @@ def finish(
         else None,
         "files": [p.name for p in files],
     }
-    histograms = plan.spec.runs > 1
-    if histograms and len(plan.grid) == 1 and status == "complete":
-        summary["nominal"] = nominal_run(plan, previous)
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
-    nominal = summary.get("nominal", {}).get("metrics", {})
-    figures = report.histograms(table, metrics, out, nominal) if histograms else []
-    figures += report.sweeps(plan, table, metrics, out)
+    drawn = []  # the figures that do not mark the nominal run: while it goes on
     if (out / "signals.npy").exists():  # none if no run was made
         from .pointing_figures import campaign_figures
 
         signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]
         kept = signals[:, : len(plan.kept)]
         bounds = _bounds(plan)
-        figures += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
-        figures += campaign_figures(
+        drawn += report.envelopes(kept, plan.kept, plan.units, time_axis(plan), out, bounds)
+        drawn += campaign_figures(
             plan.ensemble, signals, plan.signals, time_axis(plan), ensemble, out, magnitudes
         )
+    histograms = plan.spec.runs > 1
+    if nominal is not None:
+        summary["nominal"] = nominal.result()
+        write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
+    marks = summary.get("nominal", {}).get("metrics", {})
+    figures = report.histograms(table, metrics, out, marks) if histograms else []
+    figures += report.sweeps(plan, table, metrics, out) + drawn
     summary["figures"] = [p.name for p in figures]
     write_text(out / "campaign.json", json.dumps(summary, indent=2) + "\n")
     return Campaign(table, summary, out)

@@ -214,8 +214,8 @@ def test_a_resumed_complete_campaign_makes_its_nominal_run_only_if_it_differs(
         del summary["nominal"]
     (out / "campaign.json").write_text(json.dumps(summary, indent=2) + "\n")
     made = []
-    real = isolated.run
-    monkeypatch.setattr(isolated, "run", lambda *a: made.append(a[0]) or real(*a))
+    real = isolated.start
+    monkeypatch.setattr(isolated, "start", lambda *a: made.append(a[0]) or real(*a))
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}  # it sets its own
     try:
         code = cli.main([*COMMAND, "--runs", "3", "--workers", "2", "--out", str(out), "--resume"])

@@ -3,6 +3,7 @@ named with their line, the system's content hash, kept signals never shrunk.  Wh
 campaigns on damaged files: ``tests/tools/fault_cases_campaign.py``."""
 
 import json
+import signal
 
 import numpy as np
 import pytest
@@ -208,6 +209,34 @@ def test_a_crash_of_the_process_of_an_isolated_run_is_said(monkeypatch):
     )
     with pytest.raises(isolated.RunFailed, match="its process was killed by SIGSEGV"):
         isolated.run("scan_pitch", None)
+
+
+def test_an_isolated_run_goes_on_while_the_campaign_works_and_is_killed_if_not_wanted(
+    monkeypatch, tmp_path
+):
+    """start() returns while the run's process waits (here for a file this test writes
+    only afterwards: had start() waited for it, the test would hang); result() then has
+    its summary.  cancel() kills a process whose answer is no longer wanted."""
+    from agilesat.orchestration.campaign import isolated
+
+    go = tmp_path / "go"
+    monkeypatch.setattr(
+        isolated,
+        "CHILD",
+        "import json, os, pickle, sys, time\n"
+        "target, options = pickle.load(sys.stdin.buffer)\n"
+        f"while not os.path.exists({str(go)!r}): time.sleep(0.01)\n"
+        "print(json.dumps({'summary': {'target': target, 'options': options}}))\n",
+    )
+    started = isolated.start("scan_pitch", {"stop": 3})
+    assert started.child.poll() is None  # still waiting
+    go.write_text("")
+    assert started.result() == {"target": "scan_pitch", "options": {"stop": 3}}
+    go.unlink()
+    waiting = isolated.start("scan_pitch", None)
+    waiting.cancel()
+    waiting.thread.join()
+    assert waiting.child.returncode == -signal.SIGKILL
 
 
 def test_a_campaign_until_decided_holds_its_directory_between_its_looks(fmus, tmp_path):
