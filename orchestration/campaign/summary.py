@@ -167,10 +167,12 @@ def _ensemble(plan: Plan, out: Path, made: int) -> tuple[dict, dict]:
     result, magnitudes = {}, {}
     for requirement in plan.ensemble:
         index = [plan.signals.index(c) for c in requirement.signals]
+        if index == list(range(index[0], index[0] + len(index))):
+            columns = signals[:, index[0] : index[0] + len(index)]  # read block by block
+        else:
+            columns = np.asarray(signals[:, index])
         keep: dict = {}
-        verdict = requirement.evaluate_campaign(
-            np.asarray(signals[:, index]), time_axis(plan), keep=keep
-        )
+        verdict = requirement.evaluate_campaign(columns, time_axis(plan), keep=keep)
         result[requirement.name] = ensemble_entry(requirement, verdict)
         if "magnitudes" in keep:
             magnitudes[requirement.name] = keep["magnitudes"]

@@ -298,7 +298,7 @@ class Pointing(Requirement):
         complete = reached_the_end(signals)
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
-        kept = signals[complete]
+        kept = signals if complete.all() else signals[complete]  # all: no copy of a memory map
         columns = {c: kept[:, i] for i, c in enumerate(self.signals)}
         verdict = self._verdict(columns, t, keep=keep)
         left = int((~complete).sum())
