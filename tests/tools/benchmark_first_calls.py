@@ -9,7 +9,10 @@ calling simulate() of the system's file ``--calls`` times: the wall time of each
 its real-time factor (median over the processes), and whether numba was imported (an FMU's
 C entries compiled in the process, fmus/native.py: no).  Targets (issue 38): the second
 call within 20 % of the steady state (the least of the later calls), the first at most
-0.5 s for the systems without sensing and 1 s for the sensed ones.
+0.5 s for the systems without sensing and 1 s for the sensed ones.  The second call's ratio
+is given in wall time and in the CPU time of the calling thread, which other processes on a
+shared machine do not inflate (a compile or a tier switch inside the call would: it is
+work of that thread).
 """
 
 from __future__ import annotations
@@ -29,12 +32,13 @@ from agilesat.orchestration.scenarios import get
 base, _, variant = sys.argv[1].partition(":")
 scenario = get(base)
 ssd, stop = scenario.system_file(variant or None), scenario.system_for(variant or None).stop
-times = []
+times, cpu = [], []
 for _ in range(int(sys.argv[2])):
-    began = time.perf_counter()
+    began, began_cpu = time.perf_counter(), time.thread_time()
     simulate(ssd)
     times.append(time.perf_counter() - began)
-print(json.dumps({"times": times, "stop": stop, "numba": "numba" in sys.modules}))
+    cpu.append(time.thread_time() - began_cpu)
+print(json.dumps({"times": times, "cpu": cpu, "stop": stop, "numba": "numba" in sys.modules}))
 """
 
 
@@ -60,11 +64,15 @@ def main() -> None:
         cells = " | ".join(f"{t:6.3f} s {stop / t:7,.0f}x" for t in times)
         numba = "numba imported" if any(r["numba"] for r in runs) else "numba not imported"
         print(f"{system:>18} | {cells}  ({numba})")
+        cpu = [statistics.median(r["cpu"][k] for r in runs) for k in range(args.calls)]
         steady, limit = min(times[2:] or times[1:]), 1.0 if "sensed" in system else 0.5
+        steady_cpu = min(cpu[2:] or cpu[1:])
         verdicts.append(
-            f"{system}: second call {times[1] / steady:.2f}x the steady state (target <= 1.2: "
-            f"{'met' if times[1] <= 1.2 * steady else 'NOT met'}); first {times[0]:.2f} s "
-            f"(target <= {limit:g} s: {'met' if times[0] <= limit else 'NOT met'})"
+            f"{system}: second call {times[1] / steady:.2f}x the steady state in wall time, "
+            f"{cpu[1] / steady_cpu:.2f}x in CPU time (target <= 1.2: "
+            f"{'met' if times[1] <= 1.2 * steady else 'NOT met'} in wall time, "
+            f"{'met' if cpu[1] <= 1.2 * steady_cpu else 'NOT met'} in CPU time); first "
+            f"{times[0]:.2f} s (target <= {limit:g} s: {'met' if times[0] <= limit else 'NOT met'})"
         )
     print("\n".join(verdicts))
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
