@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..output.results import ColumnError
+from ..output.results import ColumnError, Results
 from ..output.summary import format_value, relative_drift
 from ..pointing.errors import not_covered, performance_error
 from ..pointing.indices import NotEvaluable
@@ -289,6 +289,13 @@ def _quaternions(results, q) -> np.ndarray:
     return np.broadcast_to(np.asarray(q, dtype=float), (len(results), 4))
 
 
+def _hashable(value):
+    """A name or None as it is; numbers (a constant quaternion, a boresight) as a tuple."""
+    if value is None or isinstance(value, str):
+        return value
+    return tuple(np.asarray(value, dtype=float).ravel().tolist())
+
+
 def pointing_angle(
     attitude: str = "SatelliteDynamics.q_BI", reference="StaringGuidance.q_ref", *, boresight=None
 ) -> Callable:
@@ -297,13 +304,20 @@ def pointing_angle(
     with ``boresight`` (body axes) the half-cone angle between where it points and where it
     should, else the 3-axis rotation angle."""
 
-    def angle(results) -> np.ndarray:
+    def computed(results) -> np.ndarray:
         error = performance_error(
             results.vector(attitude), _quaternions(results, reference), results.time
         )
         if boresight is not None:
             error = error.line_of_sight(boresight)
         return np.linalg.norm(error.values[0], axis=1)
+
+    key = ("pointing_angle", attitude, _hashable(reference), _hashable(boresight))
+
+    def angle(results) -> np.ndarray:  # once per results: every metric of it reads it
+        if not isinstance(results, Results):
+            return computed(results)
+        return results.derived(key, lambda: computed(results))
 
     angle.__name__ = f"angle of {attitude} from {_label(reference)}"
     angle.unit = "rad"  # type: ignore[attr-defined]

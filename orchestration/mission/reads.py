@@ -88,6 +88,10 @@ class Probe(Results):
         self.asked.append(name)
         return None
 
+    def derived(self, key, compute):
+        """Computed again each time: every reader asks its own names."""
+        return compute()
+
 
 def _number(text) -> float:
     try:

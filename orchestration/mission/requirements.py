@@ -37,6 +37,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..output.kept_signals import reached_the_end
+from ..output.results import Results
 from ..output.summary import requirement_text
 from ..pointing.errors import quaternion_columns, recorded_error
 from ..system.units import CONVERSIONS, quantity, to_si
@@ -268,6 +269,24 @@ class Pointing(Requirement):
             error = self.error(columns, t)
         except NotEvaluable as reason:
             return Verdict(NOT_EVALUATED, None, str(reason))
+        return self._judged(error, requirement, keep)
+
+    def _run_verdict(self, results, requirement=None) -> Verdict:
+        """The verdict on a run's ``results``: its error history computed once per results
+        (the run's other pointing requirements on the same error read it too)."""
+        from ..pointing import NotEvaluable
+
+        key = ("recorded_error", self.attitude, self.reference, self.kind, self.start, self.stop)
+        try:
+            if isinstance(results, Results):
+                error = results.derived(key, lambda: self.error(results, results.time))
+            else:
+                error = self.error(results, results.time)
+        except NotEvaluable as reason:
+            return Verdict(NOT_EVALUATED, None, str(reason))
+        return self._judged(error, requirement)
+
+    def _judged(self, error, requirement=None, keep: dict | None = None) -> Verdict:
         result = (requirement or self.requirement).evaluate(error, keep=keep)  # type: ignore[attr-defined]
         status = result.status if result.status in (MET, NOT_MET, UNDECIDED) else NOT_EVALUATED
         value = result.value if result.value is not None else result.estimate
@@ -275,9 +294,9 @@ class Pointing(Requirement):
 
     def evaluate(self, results, metrics: dict) -> Verdict:
         if not self.over_campaign:
-            return self._verdict(results, results.time)
+            return self._run_verdict(results)
         # what the run shows, for people: its estimate (no confidence: one run)
-        shown = self._verdict(results, results.time, replace(self.requirement, confidence=None))  # type: ignore[type-var]
+        shown = self._run_verdict(results, replace(self.requirement, confidence=None))  # type: ignore[type-var]
         from ..pointing import format_angle
 
         seen = (

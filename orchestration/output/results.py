@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import functools
 import json
 import re
 from pathlib import Path
@@ -44,6 +45,7 @@ class Results:
     ({column: unit}), ``r.unit(name)``, ``r.select(*names, start=, stop=)`` (a new Results
     with those variables over a time window), ``r.to_pandas()``, ``to_csv``/``to_npz``/
     ``to_mat`` and ``from_csv``/``from_npz``.  ``meta`` holds the settings and FMU log.
+    :meth:`derived` keeps what is computed from the records (:func:`per_results`).
     """
 
     def __init__(self, names: list[str], data: np.ndarray, meta: dict | None = None):
@@ -54,6 +56,7 @@ class Results:
         self.meta = dict(meta or {})
         self._index = {n: i for i, n in enumerate(self.names)}
         self._bases: dict[str, list[int]] = {}
+        self._derived: dict = {}
         for i, n in enumerate(self.names):
             match = _ELEMENT.match(n)
             if match:
@@ -103,6 +106,20 @@ class Results:
         if name not in self._bases:
             raise self._missing(name, "array variable")
         return self.data[:, self._bases[name]]
+
+    def derived(self, key, compute):
+        """``compute()``, computed once for ``key`` (hashable) on these results and kept
+        with them (it goes when they go: no other Results sees it).  Arrays in what it
+        returns are made read-only: every caller gets the same ones.  It assumes the
+        records are not changed in place after (``data`` is a run's)."""
+        kept = self.__dict__.setdefault("_derived", {})
+        if key not in kept:
+            kept[key] = _read_only(compute())
+        return kept[key]
+
+    def __getstate__(self) -> dict:
+        """Pickled (a copy, another process) without what was derived: computed again."""
+        return {k: v for k, v in self.__dict__.items() if k != "_derived"}
 
     def get(self, name: str, deg: bool = False) -> np.ndarray:
         """A column or a whole array variable; with ``deg``, angles (rad, rad/s, rad/s2)
@@ -250,6 +267,38 @@ class Results:
         if problem:
             raise ResultsFileError(f"{path}: {problem}")
         return results
+
+
+def per_results(function):
+    """Decorator: ``function(results, *args)`` computed once per :class:`Results` and
+    ``args`` (hashable), kept by the results (:meth:`Results.derived`); anything else
+    given as ``results`` (a campaign's columns) is computed each call."""
+
+    @functools.wraps(function)
+    def once(results, *args):
+        if not isinstance(results, Results):
+            return function(results, *args)
+        return results.derived((once, *args), lambda: function(results, *args))
+
+    return once
+
+
+def _read_only(value):
+    """``value`` with its arrays (itself, in a tuple or list, or an object's array
+    attributes) made read-only."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, (tuple, list)):
+        for item in value:
+            _read_only(item)
+    elif isinstance(value, dict):
+        for item in value.values():
+            _read_only(item)
+    elif hasattr(value, "__dict__"):
+        for item in vars(value).values():
+            if isinstance(item, np.ndarray):
+                item.flags.writeable = False
+    return value
 
 
 class ResultsFileError(ValueError):

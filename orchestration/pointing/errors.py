@@ -252,6 +252,9 @@ class ErrorHistory:
     def about(self, axis) -> ErrorHistory:
         """The error about ``axis`` (body axes): the component ``φ·a`` of the rotation vector."""
         a = direction(axis, "axis")
+        return self._kept(("about", *a.tolist()), lambda: self._about(a))
+
+    def _about(self, a: np.ndarray) -> ErrorHistory:
         values = self._rotation_vectors("an error about an axis") @ a
         signal = f"about axis {describe(a)}"
         return ErrorHistory(values[..., None], self.t, self.kind, signal)
@@ -261,14 +264,27 @@ class ErrorHistory:
         angle between the target direction ``b`` and the actual one ``b' = Rot(φ) b``,
         ``ε = ∠(b, b') (b × b')/|b × b'|``."""
         b = direction(boresight, "boresight")
+        return self._kept(("line of sight", *b.tolist()), lambda: self._line_of_sight(b))
+
+    def _line_of_sight(self, b: np.ndarray) -> ErrorHistory:
         phi = self._rotation_vectors("a line-of-sight error")
         epsilon = by_blocks(lambda block: _line_of_sight(block, b), phi.shape, phi)
         signal = f"line of sight of {describe(b)}, half-cone"
         return ErrorHistory(epsilon, self.t, self.kind, signal)
 
     def runs_between(self, start: int, stop: int) -> ErrorHistory:
-        """The runs ``start`` to ``stop − 1``."""
+        """The runs ``start`` to ``stop − 1`` (itself, if those are all of its runs)."""
+        if start == 0 and stop >= self.runs:
+            return self
         return ErrorHistory(self.values[start:stop], self.t, self.kind, self.signal)
+
+    def _kept(self, key: tuple, compute) -> ErrorHistory:
+        """``compute()`` once per history and ``key``: a run's requirements on the same
+        error and signal (an APE and an RPE of one line of sight) compute it once."""
+        kept = self.__dict__.setdefault("_signals", {})
+        if key not in kept:
+            kept[key] = compute()
+        return kept[key]
 
 
 def _line_of_sight(phi: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ import numpy as np
 
 from agilesat.orchestration.mission import NotEvaluable, System
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.output.results import per_results
 from agilesat.orchestration.pointing import PointingRequirement, knowledge_error
 from agilesat.orchestration.scenarios.constants import KNOWLEDGE_START, POINTING_LEVEL
 
@@ -112,6 +113,24 @@ def close_the_loop(
 AFTER_START_UP = f"from t = {KNOWLEDGE_START:g} s, after the estimator's start-up"
 
 
+@per_results
+def valid_knowledge_error(results):
+    """The knowledge error (estimate against truth) over the valid estimates from
+    :data:`KNOWLEDGE_START` on, computed once per results (the knowledge indices read it);
+    :class:`NotEvaluable` with fewer than 2 of them."""
+    valid = (results["AttitudeEstimator.valid"] > 0) & (results.time >= KNOWLEDGE_START)
+    if valid.sum() < 2:
+        raise NotEvaluable(
+            f"fewer than 2 valid estimates from t = {KNOWLEDGE_START:g} s on (the run "
+            f"covers {results.time[0]:g} … {results.time[-1]:g} s)"
+        )
+    return knowledge_error(
+        results.vector("AttitudeEstimator.q_BI_est")[valid],
+        results.vector("SatelliteDynamics.q_BI")[valid],
+        results.time[valid],
+    )
+
+
 def knowledge_index(index: str, window: float | None = None) -> m.Metric:
     """The ECSS knowledge index (AKE, RKE, ...) of the 3-axis knowledge error at 99.73 %
     of the run's time (temporal interpretation; docs/pointing.md), over the valid
@@ -119,18 +138,7 @@ def knowledge_index(index: str, window: float | None = None) -> m.Metric:
     requirement = PointingRequirement(index, None, POINTING_LEVEL, "temporal", window=window)
 
     def compute(results):
-        valid = (results["AttitudeEstimator.valid"] > 0) & (results.time >= KNOWLEDGE_START)
-        if valid.sum() < 2:
-            raise NotEvaluable(
-                f"fewer than 2 valid estimates from t = {KNOWLEDGE_START:g} s on (the run "
-                f"covers {results.time[0]:g} … {results.time[-1]:g} s)"
-            )
-        error = knowledge_error(
-            results.vector("AttitudeEstimator.q_BI_est")[valid],
-            results.vector("SatelliteDynamics.q_BI")[valid],
-            results.time[valid],
-        )
-        result = requirement.evaluate(error)
+        result = requirement.evaluate(valid_knowledge_error(results))
         if result.value is None:
             raise NotEvaluable(result.reason)
         return result.value

@@ -44,6 +44,7 @@ import numpy as np
 from agilesat.components.cmg_cluster import N_GYROS, PYRAMID_AZIMUTHS
 from agilesat.components.satellite_dynamics import N_MODES
 from agilesat.orchestration.mission import Metric, NotEvaluable, Variant, panels
+from agilesat.orchestration.output.results import per_results
 from agilesat.orchestration.pointing import ErrorHistory, index_series, magnitude
 
 DEG = math.pi / 180
@@ -142,13 +143,20 @@ def stability(error, start: float, stop: float) -> dict:
     }
 
 
+@per_results
+def imaging_stability(results, error, start: float, stop: float) -> dict:
+    """:func:`stability` of ``error(results)``, computed once per results (both indices'
+    metrics read it)."""
+    return stability(error(results), start, stop)
+
+
 def stability_metrics(error, start: float, stop: float, what: str) -> list[Metric]:
     """imaging_rpe and imaging_pde: the largest over [start, stop] (module docstring)."""
     return [
         Metric(
             f"imaging_{index.lower()}",
             lambda results, index=index: float(
-                stability(error(results), start, stop)[index][1].max()
+                imaging_stability(results, error, start, stop)[index][1].max()
             ),
             "rad",
             "arcsec",

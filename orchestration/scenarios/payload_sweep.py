@@ -39,6 +39,7 @@ from agilesat.orchestration.mission import (
     panels,
 )
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.output.results import per_results
 from agilesat.orchestration.pointing import PointingRequirement, performance_error
 from agilesat.orchestration.scenarios.closed_loop import (
     KNOWLEDGE_METRICS,
@@ -54,6 +55,7 @@ from agilesat.orchestration.scenarios.constants import (
     POINTING_CONFIDENCE,
     POINTING_LEVEL,
 )
+from agilesat.orchestration.scenarios.spectrum import strongest_bin
 
 DEG = math.pi / 180
 ALTITUDE, INCLINATION = 500e3, 97.40 * DEG
@@ -117,6 +119,7 @@ def sensed(system: System) -> None:
     )
 
 
+@per_results  # a metric and the sensed figure
 def attitude_error(results) -> np.ndarray:
     """Rotation vector (rad) of the body from the orbit frame, in B (N, 3): the truth's
     error, as the controller computes its own from what it reads."""
@@ -313,6 +316,7 @@ def diagnose(results, metrics) -> list[str]:
     ]
 
 
+@per_results
 def yaw_periods(results) -> tuple[float, float]:
     """(envelope, ripple) periods of the payloads' yaw momentum h_z.
 
@@ -320,7 +324,8 @@ def yaw_periods(results) -> tuple[float, float]:
     roll stroke (φ̇ = ±r) modulated by the slow pitch sweep (sin 2θ).  Its spectrum shows
     sidebands, not the two periods, so h_z is demodulated with the stroke direction: the
     ripple period is that of the stroke, the envelope period the strongest Fourier period of
-    h_z · sign(φ̇) (zero-padded).
+    h_z · sign(φ̇) (zero-padded: its strongest slow bin, :func:`.spectrum.strongest_bin`).
+    Computed once per results (both metrics read it).
     """
     t = results.time
     carrier = np.sign(results["SweepPlanner.roll_rate_cmd[1]"])
@@ -329,12 +334,11 @@ def yaw_periods(results) -> tuple[float, float]:
     envelope = results["PayloadGimbals.h[3]"] * carrier
     x = envelope - envelope.mean()
     n = 32 * len(x)
-    spectrum = np.abs(np.fft.rfft(x, n))
     frequency = np.fft.rfftfreq(n, t[1] - t[0])
-    slow = (frequency > 1 / (t[-1] - t[0])) & (frequency < 1 / 60)
-    if not slow.any():  # a run shorter than a minute
+    slow = np.flatnonzero((frequency > 1 / (t[-1] - t[0])) & (frequency < 1 / 60))
+    if not len(slow):  # a run shorter than a minute
         return float("nan"), ripple
-    return 1 / float(frequency[slow][np.argmax(spectrum[slow])]), ripple
+    return 1 / float(frequency[slow[strongest_bin(x, n, slow)]]), ripple
 
 
 def roll_reversals(results) -> np.ndarray:

@@ -14,7 +14,6 @@ zenith over the whole 120° maneuver, never near the Earth's limb.
 
 from __future__ import annotations
 
-import functools
 import math
 from pathlib import Path
 
@@ -39,6 +38,7 @@ from agilesat.orchestration.mission import (
     within,
 )
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.output.results import per_results
 from agilesat.orchestration.pointing import (
     PointingRequirement,
     performance_error,
@@ -152,6 +152,7 @@ PLAN_SIGNALS = (
 )
 
 
+@per_results  # a run's metrics and requirements read it: computed once per results
 def planned_attitude(columns) -> np.ndarray:
     """q_RI (..., N, 4) of the planned attitude R: the planned pitch about the orbit's y
     axis, roll and yaw zero (q_RI = q_OI ⊗ q_RO); ``columns[name]``: the recorded
@@ -163,12 +164,19 @@ def planned_attitude(columns) -> np.ndarray:
     return quaternion_product(q_OI, q_RO)
 
 
-def attitude_error(results) -> np.ndarray:
-    """The angle (rad) of the body from the planned attitude (3-axis), per sample."""
-    error = performance_error(
+@per_results
+def planned_error(results):
+    """The performance error of the body from the planned attitude (3-axis), computed once
+    per results."""
+    return performance_error(
         results.vector("SatelliteDynamics.q_BI"), planned_attitude(results), results.time
     )
-    return np.linalg.norm(error.values[0], axis=1)
+
+
+@per_results
+def attitude_error(results) -> np.ndarray:
+    """The angle (rad) of the body from the planned attitude (3-axis), per sample."""
+    return np.linalg.norm(planned_error(results).values[0], axis=1)
 
 
 def _over_imaging(name: str, index: str, bound: float, **window) -> Pointing:
@@ -240,9 +248,7 @@ def sensed_figure(results, out_dir):
 def imaging_error(results):
     """The performance error of the body from the planned attitude about the pitch axis,
     the scan's (the requirements' axis)."""
-    return performance_error(
-        results.vector("SatelliteDynamics.q_BI"), planned_attitude(results), results.time
-    ).about((0.0, 1.0, 0.0))
+    return planned_error(results).about((0.0, 1.0, 0.0))
 
 
 IMAGING = PROFILE.times[2], PROFILE.times[3]
@@ -464,7 +470,7 @@ def roll_yaw_error(results) -> np.ndarray:
     return np.arccos(np.clip(cos_angle, -1.0, 1.0))
 
 
-@functools.lru_cache(maxsize=2)  # three metrics and the diagnosis ask for it
+@per_results  # three metrics and the diagnosis ask for it
 def required_momentum(results) -> tuple[float, np.ndarray]:
     """When and what the cluster momentum must be to fly the planned maneuver (largest |h|).
 

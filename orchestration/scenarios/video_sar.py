@@ -32,7 +32,6 @@ Other passes, of a real satellite: ``agilesat stare`` (:mod:`..studies.stare`).
 
 from __future__ import annotations
 
-import functools
 import math
 from pathlib import Path
 
@@ -55,6 +54,7 @@ from agilesat.orchestration.mission import (
     panels,
 )
 from agilesat.orchestration.mission import metrics as m
+from agilesat.orchestration.output.results import per_results
 from agilesat.orchestration.pointing import PointingRequirement, performance_error
 from agilesat.orchestration.scenarios import flexible
 from agilesat.orchestration.scenarios.closed_loop import (
@@ -236,6 +236,7 @@ def sensed_figure(results, out_dir):
     )
 
 
+@per_results
 def beam_error(results):
     """The performance error of the radar's line of sight from the guidance's (half cone)."""
     error = performance_error(
@@ -278,7 +279,7 @@ def boresight_B(results) -> np.ndarray:
     return dcm_from_quat(results.vector("StaringGuidance.q_ref")[0]) @ (los / np.linalg.norm(los))
 
 
-@functools.lru_cache(maxsize=2)  # metrics, figures
+@per_results  # metrics, figures
 def boresight_error(results) -> np.ndarray:
     """Angle (rad) between the body boresight and the line of sight to the target."""
     C_BI = dcm(tuple(results.vector("SatelliteDynamics.q_BI").T))
@@ -287,7 +288,7 @@ def boresight_error(results) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(beam, los), axis=1), np.einsum("ij,ij->i", beam, los))
 
 
-@functools.lru_cache(maxsize=2)
+@per_results
 def footprint_rotation(results) -> np.ndarray:
     """Turn (rad) of the achieved footprint on the ground since t = 0 (the definition of
     StaringGuidance.footprint_rotation applied to SatelliteDynamics.q_BI)."""
@@ -305,7 +306,7 @@ def _geometry(results, k):
     )
 
 
-@functools.lru_cache(maxsize=2)
+@per_results
 def zero_doppler(results):
     """(index of the communication point nearest zero Doppler, its look geometry)."""
     rel = results.vector("OrbitEnvironment.r_T_I") - results.vector("OrbitEnvironment.r_I")

@@ -128,3 +128,20 @@ def test_a_campaigns_recorded_error_is_each_runs_own_across_blocks():
         ValueError, match=rf"q_XI is not a unit quaternion at run {BLOCK + 3}, sample 5"
     ):
         recorded_error(columns, t, "A.q", "B.q", start=2.0, stop=15.0)
+
+
+def test_a_signal_of_a_history_is_computed_once_and_the_same_values():
+    """A run's requirements on one error and line of sight (an APE and an RPE) share it:
+    the second asks the history, the whole of its runs, and gets the first's."""
+    rng = np.random.default_rng(3)
+    phi = 1e-3 * rng.normal(size=(2, 5, 3))
+    error = ErrorHistory(phi, T)
+    assert error.runs_between(0, 64) is error
+    assert error.runs_between(1, 64).runs == 1
+    los = error.line_of_sight((0, 0, 2))
+    assert error.runs_between(0, 2).line_of_sight((0, 0, 1)) is los
+    again = ErrorHistory(phi.copy(), T).line_of_sight((0, 0, 1))
+    assert los is not again and np.array_equal(los.values, again.values)
+    about = error.about((1, 0, 0))
+    assert error.about((1, 0, 0)) is about and about is not error.about((0, 1, 0))
+    assert np.array_equal(about.values[..., 0], phi[..., 0])
