@@ -226,7 +226,7 @@ def test_a_campaign_histogram_marks_the_nominal_run_with_its_legend_off_the_bars
 
 @pytest.mark.slow
 def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
-    from agilesat.orchestration.campaign.nominal import nominal_run
+    from agilesat.orchestration.campaign.nominal import start
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.runner import run
 
@@ -237,7 +237,7 @@ def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
         set={"SatelliteDynamics.gravity_gradient": "false"},
         stop=40.0,
     )
-    nominal = nominal_run(Plan(spec))
+    nominal = start(Plan(spec)).result()
     assert nominal["command"] == (
         "agilesat run scan_pitch --stop 40.0 --set SatelliteDynamics.gravity_gradient=false"
     )
@@ -249,18 +249,35 @@ def test_the_nominal_run_is_the_campaigns_target_without_its_dispersions(fmus):
     }
 
 
+class Answering:
+    """A started isolated run (isolated.Started) that answers ``answer`` (raised if an
+    exception)."""
+
+    def __init__(self, answer):
+        self.answer = answer
+
+    def result(self):
+        if isinstance(self.answer, BaseException):
+            raise self.answer
+        return self.answer
+
+    def cancel(self):
+        pass
+
+
 def test_the_nominal_run_of_a_one_point_grid_is_at_that_point(monkeypatch, capsys):
     """A grid of one value is the campaign's setting, not a dispersion: the nominal run
     sets it too (it ran at the system's value), and says so on stderr."""
     from agilesat.orchestration.campaign import isolated
-    from agilesat.orchestration.campaign.nominal import nominal_run
+    from agilesat.orchestration.campaign.nominal import start
     from agilesat.orchestration.campaign.plan import Plan, Spec
 
     given = []
     summary = {"metrics": {"m": {"value": 1.0}}}
-    monkeypatch.setattr(isolated, "run", lambda target, options: given.append(options) or summary)
+    answer = lambda target, options: given.append(options) or Answering(summary)
+    monkeypatch.setattr(isolated, "start", answer)
     vary = ["CmgCluster.rate_limit=values(0.3)", "CmgCluster.h_rotor=*normal(1, 0.005)"]
-    nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, vary=vary, stop=40.0)))
+    nominal = start(Plan(Spec("scan_pitch", runs=3, vary=vary, stop=40.0))).result()
     assert given[0].parameters == {"CmgCluster.rate_limit": 0.3}
     assert nominal == {
         "command": "agilesat run scan_pitch --stop 40.0 --set CmgCluster.rate_limit=0.3",
@@ -275,27 +292,23 @@ def test_a_signal_during_the_nominal_run_is_kept_for_the_exit_status(monkeypatch
     import signal
 
     from agilesat.orchestration.campaign import engine, isolated
-    from agilesat.orchestration.campaign.nominal import nominal_run
+    from agilesat.orchestration.campaign.nominal import start
     from agilesat.orchestration.campaign.plan import Plan, Spec
     from agilesat.orchestration.cosim.master import Interrupted
 
-    def stopped(target, options):
-        raise Interrupted("interrupted by SIGTERM at t = 3 s", None, signal.SIGTERM)
-
-    monkeypatch.setattr(isolated, "run", stopped)
+    stopped = Interrupted("interrupted by SIGTERM at t = 3 s", None, signal.SIGTERM)
+    monkeypatch.setattr(isolated, "start", lambda target, options: Answering(stopped))
     monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
-    nominal = nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))
+    nominal = start(Plan(Spec("scan_pitch", runs=3, stop=40.0))).result()
     assert nominal["reason"] == "Interrupted: interrupted by SIGTERM at t = 3 s"
     assert engine.INTERRUPTS.signals == [signal.SIGTERM]
     assert "no nominal run (Interrupted: interrupted by SIGTERM" in capsys.readouterr().err
 
-    def typo(target, options):
-        raise KeyboardInterrupt  # not a signal the campaign's handler recorded: not hidden
-
-    monkeypatch.setattr(isolated, "run", typo)
+    # a KeyboardInterrupt that is no signal the campaign's handler recorded: not hidden
+    monkeypatch.setattr(isolated, "start", lambda target, options: Answering(KeyboardInterrupt()))
     monkeypatch.setattr(engine.INTERRUPTS, "signals", [])
     with pytest.raises(KeyboardInterrupt):
-        nominal_run(Plan(Spec("scan_pitch", runs=3, stop=40.0)))
+        start(Plan(Spec("scan_pitch", runs=3, stop=40.0))).result()
 
 
 @pytest.mark.parametrize(
