@@ -345,15 +345,47 @@ typedef struct Shim {
     struct Shim *next;
 } Shim;
 
+/* The live instances: a list changed and searched under the lock, and the first N_SEEN of
+ * them also in seen[], which every FMI call searches without it (an uncontended lock and
+ * unlock cost more than the rest of a fast get).  A slot is written under the lock, with
+ * a release store once the instance is complete (linked) and cleared before it is
+ * unlinked and freed; read with an acquire load, a slot holding c says c was live at that
+ * moment, all a lookup under the lock said either (FMI 2.0 leaves one instance's calls to
+ * one thread at a time).  A call on anything not found there searches the list. */
+#define N_SEEN 64
 static pthread_mutex_t registry_lock = PTHREAD_MUTEX_INITIALIZER;
 static Shim *instances;
+static Shim *seen[N_SEEN];
+static size_t n_seen;  /* slots ever used: seen[n_seen..] are all NULL */
+
+static void register_instance(Shim *s) {
+    pthread_mutex_lock(&registry_lock);
+    s->next = instances;
+    instances = s;
+    for (size_t i = 0; i < N_SEEN; i++) {
+        if (seen[i]) continue;
+        __atomic_store_n(&seen[i], s, __ATOMIC_RELEASE);
+        if (i >= n_seen) __atomic_store_n(&n_seen, i + 1, __ATOMIC_RELEASE);
+        break;
+    }
+    pthread_mutex_unlock(&registry_lock);
+}
 
 static Shim *find_instance(fmi2Component c, int unlink) {
+    if (c && !unlink) {
+        size_t n = __atomic_load_n(&n_seen, __ATOMIC_ACQUIRE);
+        for (size_t i = 0; i < n; i++)
+            if (__atomic_load_n(&seen[i], __ATOMIC_ACQUIRE) == c) return c;
+    }
     pthread_mutex_lock(&registry_lock);
     Shim **at = &instances;
     while (*at && *at != c) at = &(*at)->next;
     Shim *s = *at;
-    if (s && unlink) *at = s->next;
+    if (s && unlink) {
+        for (size_t i = 0; i < N_SEEN; i++)
+            if (seen[i] == s) __atomic_store_n(&seen[i], NULL, __ATOMIC_RELEASE);
+        *at = s->next;
+    }
     pthread_mutex_unlock(&registry_lock);
     return s;
 }
@@ -606,10 +638,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String 
         return NULL;
     }
     fast_paths_connect(&s->fast, ask_slave, s);
-    pthread_mutex_lock(&registry_lock);
-    s->next = instances;
-    instances = s;
-    pthread_mutex_unlock(&registry_lock);
+    register_instance(s);
     return s;
 }
 

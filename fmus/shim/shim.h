@@ -31,6 +31,21 @@ __asm__(".symver memcpy,memcpy@GLIBC_2.2.5");
 /* Largest array a call may pass (pythonfmu indexes with int and builds Python lists). */
 #define MAX_VALUES ((size_t)1 << 24)
 
+/* The C step path's entries (fmus/c_entries.py): the step entry gets the model's time and
+ * the step size, the output entry the time. */
+typedef int32_t (*StepEntry)(double *values, int64_t n_values, double *state, int64_t n_state,
+                             double t, double dt);
+typedef int32_t (*OutputEntry)(double *values, int64_t n_values, double *state,
+                               int64_t n_state, double t);
+
+/* What the block arms (fast_paths.c armed()): the entries, the state and snapshot arrays. */
+typedef struct {
+    StepEntry step;
+    OutputEntry output;
+    double *state, *saved;
+    size_t n_state, n_kept, start, stop;   /* outputs: values[start:stop] */
+} Armed;
+
 /* An instance's fast paths: the slave's arrays (NULL values when off) and the counts. */
 typedef struct {
     double *values;              /* the slave's model.values */
@@ -41,6 +56,9 @@ typedef struct {
     int step_path;               /* the C step path is on (AGILESAT_SHIM_STEP) */
     const double *checked_rows;  /* the step-end rows found inside the value array ... */
     size_t checked_n_rows;       /* ... and how many (checked once, not at every step) */
+    int armed_known, armed_ok;   /* armed(): the last answer, ... */
+    Armed armed;
+    double armed_fields[B_OUTPUTS_STOP - B_STEP + 1], armed_kept;  /* ... from these fields */
     unsigned long long served, forwarded;           /* fmi2GetReal/fmi2SetReal calls */
     unsigned long long c_steps, c_outputs, c_fallbacks;  /* the C step path's */
 } FastPaths;

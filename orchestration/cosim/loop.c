@@ -46,7 +46,7 @@ extern void PyMem_Free(void *pointer);
 
 enum { SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP,
        GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS };
-enum { AT_STEP = 1, AT_READ = 2 };
+enum { AT_STEP = 1, AT_READ = 2, AT_START = 4 };
 
 typedef int (*real_call)(void *, const unsigned int *, size_t, double *);
 typedef int (*integer_call)(void *, const unsigned int *, size_t, int *);
@@ -74,6 +74,7 @@ static double seconds(void) {
 }
 
 static int due(const struct operation *op, int64_t n) {
+    if (op->when == AT_START) return n == 0;
     if (op->every == 1) return 1;
     return ((op->when & AT_STEP) && n % op->every == 0) ||
            ((op->when & AT_READ) && (n + 1) % op->every == 0);

@@ -53,6 +53,7 @@ BUDGET = 0.005  # seconds of one chunk: Ctrl-C, progress and the CSV stay this c
 SET_REAL, GET_REAL, SET_INTEGER, GET_INTEGER, DO_STEP = 0, 1, 2, 3, 4
 GET_DERIVATIVES, SET_DERIVATIVES, SET_PREVIOUS, KEEP_PREVIOUS = 5, 6, 7, 8
 AT_STEP, AT_READ = 1, 2
+AT_START = 4  # only at the run's first step (:func:`_drop_repeated_sets`)
 _KINDS = {"SetReal": SET_REAL, "GetReal": GET_REAL, "SetInteger": SET_INTEGER}
 _KINDS.update(GetInteger=GET_INTEGER)
 _KINDS.update(SetBoolean=SET_INTEGER, GetBoolean=GET_INTEGER)  # an fmi2Boolean is an int
@@ -207,6 +208,8 @@ class Op:
 
     def due(self, n: int) -> bool:
         """Whether it runs at step n (``loop.c``'s ``due``)."""
+        if self.when == AT_START:
+            return n == 0
         if self.every == 1:
             return True
         stepping = bool(self.when & AT_STEP) and n % self.every == 0
@@ -365,6 +368,7 @@ class Program:
                 if feeds:
                     ports(node, node.inputs, AT_READ)
                 ports(node, chosen, AT_READ)
+            _drop_repeated_sets(steps)
         else:  # gauss-seidel: a node steps at its first block
             for node, chosen, first in sequence:
                 when = (AT_STEP | AT_READ) if first else AT_READ
@@ -380,7 +384,9 @@ class Program:
     def _python(self) -> list:
         """(the operation in Python, due at every step?, the operation) of each (made when
         the Python loop first runs the program)."""
-        return [(step.python(), step.every == 1, step) for step in self.steps]
+        return [
+            (step.python(), step.every == 1 and step.when != AT_START, step) for step in self.steps
+        ]
 
     def python(self, values: np.ndarray, n: int, t: float) -> tuple[int, int]:
         """Run step n (at t) in Python: (-1, 0), or at the first call that returns more
@@ -416,6 +422,43 @@ class Program:
         op = self.steps[k]
         assert op.instance is not None  # only KEEP_PREVIOUS has none, and it cannot fail
         op.instance.check(status, op.call)
+
+
+def _drop_repeated_sets(steps: list[Op]) -> None:
+    """Jacobi sets a feedthrough FMU's inputs after the steps (to read its outputs at
+    t_{n+1}) and again before its next step, from the same places of the value vector.
+    Where nothing in between writes one of those places (a get after the first set, or
+    before the second: its inputs' sources are all read before it) or does anything else
+    to those inputs (its step, which may move an input, input derivatives), the second set
+    would give the FMU the values it already has: it is made due at the run's first step
+    only (AT_START; the first set has not run then).  Only sets due at every step."""
+    for at, op in enumerate(steps):
+        if op.kind not in (SET_REAL, SET_INTEGER) or op.every != 1 or op.when != AT_STEP:
+            continue
+        same = [
+            k
+            for k, other in enumerate(steps)
+            if k > at
+            and other.kind == op.kind
+            and other.every == 1
+            and other.instance is op.instance
+            and other.vrs is op.vrs
+            and np.array_equal(other.index, op.index)
+        ]
+        if same and not any(_touches(other, op) for other in steps[same[-1] + 1 :] + steps[:at]):
+            op.when = AT_START
+
+
+def _touches(other: Op, op: Op) -> bool:
+    """Could ``other``, run between two sets ``op``, change what the second one sets or
+    what the FMU holds of it?"""
+    if other.kind in (GET_REAL, GET_INTEGER):  # writes the value vector
+        return bool(set(op.index.tolist()) & set(other.index.tolist()))
+    if other.instance is not op.instance:
+        return False
+    if other.kind in (SET_REAL, SET_INTEGER):  # its other ports
+        return bool(set(op.vrs) & set(other.vrs))
+    return True  # its step or its input derivatives
 
 
 def _port(port, every: int, when: int) -> Op:

@@ -16,7 +16,9 @@ Run (:func:`simulate`, or :func:`execute` of a :class:`.plan.RunPlan`):
    has all its inputs set from the outputs of t_n and steps, then the blocks are read (an
    input was last set at its FMU's block, before the FMUs of later blocks had their t_n
    outputs: setting them again before the step keeps it from lagging a step; after the
-   steps only blocks whose outputs depend on inputs directly have them set).  Either way
+   steps only blocks whose outputs depend on inputs directly have them set; those whose
+   sources were all read before them hold their values at the next step and are not set
+   again: :func:`.loop._drop_repeated_sets`).  Either way
    the recorded outputs at t_{n+1} are consistent with each other (feedthrough outputs see
    the inputs of t_{n+1}).  A component with its own step m H (:mod:`.multirate`) steps
    over m H at every m-th communication point and holds its outputs in between.

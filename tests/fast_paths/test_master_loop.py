@@ -257,8 +257,50 @@ def test_the_operations_are_numbered_as_in_loop_c():
     ]
     kinds, whens = enums
     assert [getattr(loop, name) for name in kinds] == list(range(len(kinds)))
-    assert re.search(r"AT_STEP = 1, AT_READ = 2", source)
-    assert (loop.AT_STEP, loop.AT_READ) == (1, 2) and whens == ["AT_STEP", "AT_READ"]
+    assert re.search(r"AT_STEP = 1, AT_READ = 2, AT_START = 4", source)
+    assert (loop.AT_STEP, loop.AT_READ, loop.AT_START) == (1, 2, 4)
+    assert whens == ["AT_STEP", "AT_READ", "AT_START"]
+
+
+class _Instance:
+    """What a program's operation holds of an FMU instance, without one."""
+
+    def __init__(self, name):
+        self.name, self.component, self.fmi2DoStep = name, None, None
+
+
+def _jacobi(sources_of_b: list[int]):
+    """A Jacobi program of FMUs a (output at place 0) and b (feedthrough: input from
+    ``sources_of_b``, output at place 1), b read after a: b's step-phase set."""
+    a, b = _Instance("a"), _Instance("b")
+    vrs = (ctypes.c_uint * len(sources_of_b))(*range(len(sources_of_b)))
+    a_out, b_out = (ctypes.c_uint * 1)(0), (ctypes.c_uint * 1)(0)
+
+    class Node:
+        def __init__(self, instance, inputs, outputs):
+            self.instance, self.inputs, self.outputs, self.every = instance, inputs, outputs, 1
+
+    def p(instance, call, vrs, index):  # a port (master._Port) of the operations' fields
+        fields = dict(instance=instance, call=call, function=None, vrs=vrs, buffer=None)
+        return type("Port", (), {**fields, "index": np.array(index)})()
+
+    node_a = Node(a, [], [p(a, "fmi2GetReal", a_out, [0])])
+    node_b = Node(b, [p(b, "fmi2SetReal", vrs, sources_of_b)], [p(b, "fmi2GetReal", b_out, [1])])
+    reads = [(node_a, node_a.outputs, False), (node_b, node_b.outputs, True)]
+    program = loop.Program.macro_step("jacobi", {"a": node_a, "b": node_b}, [], reads, 0.1)
+    return [op for op in program.steps if op.instance is b and op.kind == loop.SET_REAL]
+
+
+def test_jacobi_sets_a_feedthrough_fmus_inputs_again_only_where_they_may_have_changed():
+    """b's inputs set for its read at t_{n+1} are still the newest at its next step when
+    its sources are read before it (a): that set runs at the first step only; fed by its
+    own output (read after the set), it runs at every step."""
+    before, after = _jacobi([0])
+    assert (before.when, after.when) == (loop.AT_START, loop.AT_READ)
+    assert [before.due(n) for n in range(3)] == [True, False, False]
+    before, after = _jacobi([0, 1])
+    assert (before.when, after.when) == (loop.AT_STEP, loop.AT_READ)
+    assert [before.due(n) for n in range(3)] == [True, True, True]
 
 
 # -- building the loop ------------------------------------------------------------------
