@@ -367,22 +367,16 @@ def _described(meta: dict) -> str:
 
 def _save(fig, ax, path: Path) -> Path:
     """A campaign figure written (grid, layout, the run figures' resolution; its title also
-    in the PNG's "Title", for tools and tests that read files) and closed."""
+    in the PNG's "Title", for tools and tests that read files) and closed: laid out and
+    drawn once (:mod:`.figure_save`)."""
     from ..output.plots import DPI, plt
+    from .figure_save import save
 
     ax.grid(True, alpha=0.3)
-    fig.tight_layout()
     try:
-        with atomically(path) as temporary:  # an error naming the file, no half PNG
-            fig.savefig(
-                temporary,
-                dpi=DPI,
-                format=Path(path).suffix[1:],
-                metadata={"Title": ax.get_title()},
-            )
+        return save(fig, ax, path, DPI)
     finally:
         plt.close(fig)
-    return path
 
 
 def _shown(value) -> str:

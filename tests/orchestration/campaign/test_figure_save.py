@@ -1,0 +1,61 @@
+"""A campaign figure is laid out without the tight layout and drawn once: its title, its
+legend beside the axes and its labels lie inside the PNG, which holds the title as its
+"Title"; a legend too wide for the fixed margins falls back to the tight layout."""
+
+import numpy as np
+from matplotlib.figure import Figure
+from PIL import Image
+
+from agilesat.orchestration.campaign import report
+from agilesat.orchestration.output import plots
+
+
+def counted_draws(monkeypatch) -> list:
+    """The (figure, renderer) of each drawing from now on."""
+    drawn = []
+    original = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda fig, r: drawn.append((fig, r)) or original(fig, r))
+    return drawn
+
+
+def inside(drawn, ax) -> bool:
+    """The title, axis labels and legend of ``ax`` inside its figure as last drawn."""
+    fig, renderer = drawn[-1]
+    fig.set_dpi(renderer.dpi)  # as drawn (pyplot's close gives it back its own)
+    edge = fig.bbox.padded(1.0)
+    texts = [ax.title, ax.xaxis.label, ax.yaxis.label, ax.get_legend()]
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    return all(
+        edge.x0 <= b.x0 and b.x1 <= edge.x1 and edge.y0 <= b.y0 and b.y1 <= edge.y1 for b in boxes
+    )
+
+
+def histogram(label: str):
+    from agilesat.orchestration.output.plots import plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    ax.hist(np.random.default_rng(0).normal(size=500), bins=20)
+    ax.axvline(1.0, color="tab:red", linestyle="--", label=label)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set_xlabel("m [°]")
+    ax.set_ylabel("runs")
+    ax.set_title("A metric's description\nover two lines\n500 runs", fontsize=10)
+    return fig, ax
+
+
+def test_a_histogram_with_its_legend_beside_is_drawn_once_and_fits(tmp_path, monkeypatch):
+    drawn = counted_draws(monkeypatch)
+    fig, ax = histogram("requirement (upper)")
+    path = report._save(fig, ax, tmp_path / "hist_m.png")
+    assert len(drawn) == 1 and inside(drawn, ax)
+    image = Image.open(path)
+    assert image.text["Title"] == "A metric's description\nover two lines\n500 runs"
+    assert image.size == (1500, 720)
+
+
+def test_a_legend_too_wide_for_the_margins_is_laid_out_tight(tmp_path, monkeypatch):
+    monkeypatch.setattr(plots, "DPI", 50)  # a smaller PNG: the layout is in inches
+    drawn = counted_draws(monkeypatch)
+    fig, ax = histogram("a requirement with a long label " * 2)
+    report._save(fig, ax, tmp_path / "hist_m.png")
+    assert len(drawn) == 2 and inside(drawn, ax)
