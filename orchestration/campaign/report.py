@@ -296,6 +296,7 @@ def histograms(
             bins=min(50, max(5, int(np.sqrt(len(values))))),
             color="tab:blue",
             alpha=0.75,
+            histtype="stepfilled",  # the bars' outline as one polygon: as drawn, no seams
         )
         for bound, value in meta.get("requirement", {}).items():
             ax.axvline(

@@ -59,3 +59,19 @@ def test_a_legend_too_wide_for_the_margins_is_laid_out_tight(tmp_path, monkeypat
     fig, ax = histogram("a requirement with a long label " * 2)
     report._save(fig, ax, tmp_path / "hist_m.png")
     assert len(drawn) == 2 and inside(drawn, ax)
+
+
+def test_a_histogram_is_one_outline_of_the_counts(tmp_path, monkeypatch):
+    """The bars drawn as one filled outline (one patch, not a rectangle per bin), whose
+    tops are numpy's counts of the values in the bins."""
+    drawn = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: drawn.append(ax) or path)
+    values = np.random.default_rng(3).normal(size=100)
+    array = np.array([(x,) for x in values], dtype=[("m", float)])
+    report.histograms(array, {"metrics": {"m": {"unit": "1"}}}, tmp_path)
+    [ax] = drawn
+    [outline] = ax.patches
+    counts, edges = np.histogram(values, bins=10)  # √100 bins
+    x, y = outline.get_xy().T
+    for count, low, high in zip(counts, edges, edges[1:]):
+        assert np.any((x == low) & (y == count)) and np.any((x == high) & (y == count))
