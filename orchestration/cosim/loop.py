@@ -443,17 +443,24 @@ def _drop_repeated_sets(steps: list[Op]) -> None:
             and other.every == 1
             and other.instance is op.instance
             and other.vrs is op.vrs
+            and other.index is not None
+            and op.index is not None
             and np.array_equal(other.index, op.index)
         ]
         if same and not any(_touches(other, op) for other in steps[same[-1] + 1 :] + steps[:at]):
             op.when = AT_START
 
 
+def _places(op: Op) -> set:
+    """The places of the value vector ``op`` reads or writes."""
+    return set() if op.index is None else set(op.index.tolist())
+
+
 def _touches(other: Op, op: Op) -> bool:
     """Could ``other``, run between two sets ``op``, change what the second one sets or
     what the FMU holds of it?"""
     if other.kind in (GET_REAL, GET_INTEGER):  # writes the value vector
-        return bool(set(op.index.tolist()) & set(other.index.tolist()))
+        return bool(_places(op) & _places(other))
     if other.instance is not op.instance:
         return False
     if other.kind in (SET_REAL, SET_INTEGER):  # its other ports
