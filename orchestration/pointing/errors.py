@@ -115,13 +115,13 @@ def rotation_quaternion(phi: np.ndarray) -> np.ndarray:
     return np.concatenate((np.cos(angle / 2), np.sin(angle / 2) * axis), axis=-1)
 
 
-def _unit_quaternions(q, name: str) -> np.ndarray:
+def _quaternions(q, name: str) -> np.ndarray:
+    """``q`` as (runs, samples, 4)."""
     q = np.asarray(q, dtype=float)
     if q.ndim == 2:
         q = q[None]
     if q.ndim != 3 or q.shape[-1] != 4:
         raise ValueError(f"{name}: expected (samples, 4) or (runs, samples, 4), got {q.shape}")
-    _check_unit(name, _norm(_split(q)))
     return q
 
 
@@ -137,12 +137,6 @@ def _check_unit(name: str, norm: np.ndarray, first_run: int = 0) -> None:
         )
 
 
-def _error_rotation(q_x: np.ndarray, q_y: np.ndarray) -> np.ndarray:
-    """The rotation vector of ``q_y* ⊗ q_x``, each normalised: (runs, samples, 3)."""
-    x, y = _split(q_x), _split(q_y)
-    return _joined(_error_components(x, y, _norm(x), _norm(y)), q_x.shape[:-1] + (3,))
-
-
 def _error_components(x, y, norm_x, norm_y) -> tuple:
     """The components of the rotation vector of ``y* ⊗ x`` (quaternions by component, of
     norms ``norm_x`` and ``norm_y``), each normalised."""
@@ -154,11 +148,18 @@ def _error_components(x, y, norm_x, norm_y) -> tuple:
 
 def attitude_error(q_XI, q_YI, t, kind: str) -> ErrorHistory:
     """Rotation vector of ``q_XY = q_YI* ⊗ q_XI`` (frame Y to frame X), body axes."""
-    q_x = _unit_quaternions(q_XI, "q_XI")
-    q_y = _unit_quaternions(q_YI, "q_YI")
+    q_x, q_y = _quaternions(q_XI, "q_XI"), _quaternions(q_YI, "q_YI")
+    norm_x, norm_y = _norm(_split(q_x)), _norm(_split(q_y))
+    _check_unit("q_XI", norm_x)
+    _check_unit("q_YI", norm_y)
     if q_x.shape != q_y.shape:
         raise ValueError(f"quaternion histories differ in shape: {q_x.shape} and {q_y.shape}")
-    return ErrorHistory(by_blocks(_error_rotation, q_x.shape[:-1] + (3,), q_x, q_y), t, kind)
+
+    def block(x, y, nx, ny):
+        return _joined(_error_components(_split(x), _split(y), nx, ny), x.shape[:-1] + (3,))
+
+    shape = q_x.shape[:-1] + (3,)
+    return ErrorHistory(by_blocks(block, shape, q_x, q_y, norm_x, norm_y), t, kind)
 
 
 def knowledge_error(q_est, q_true, t) -> ErrorHistory:
