@@ -4,9 +4,12 @@ judged over the campaign (ensemble or mixed: a temporal one is judged run by run
 fraction of them above each value (log scale: the tail a 99.73 % level lives in), with the
 bound, the value compared, the empirical quantile and the level, titled with the verdict.
 The verdict is the campaign's own (campaign.json's ``ensemble``: its value, estimate and
-worst time); the figure computes only the values it draws.  The values (:func:`values`):
+the estimate's time); the figure computes only the values it draws.  The values
+(:func:`values`):
 
-- ensemble: each run's index at the worst time (the statistic's time);
+- ensemble: each run's index at the estimate's time, where the empirical quantile is
+  largest (the value compared, bounded with the confidence, and the time that decides may
+  lie at others: campaign.json's ``worst_time`` is the latter);
 - mixed: every run's index at every time.
 
 The level's quantile, the ⌈P n⌉-th smallest of the n values, is the smallest value with
@@ -66,13 +69,15 @@ def step_points(
 
 def values(requirement, verdict: dict, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, str]:
     """(values, what they are) of ``requirement``'s statistic on magnitudes ``m[run, time]``
-    at times ``t``, the worst time that of the ``verdict`` (its details)."""
+    at times ``t``: ensemble, at the ``verdict``'s estimate time (its details), so that its
+    empirical quantile lies on the curve drawn."""
     index = requirement.index
     if m.ndim == 3:  # t random in Δt: every window position (the ends weigh half in the verdict)
         index += " at every window position"
     if requirement.interpretation == "ensemble":
-        worst = int(np.argmin(np.abs(t - verdict["worst_time"])))
-        return m[:, worst].ravel(), f"each run's {index} at t = {t[worst]:g} s (worst time)"
+        at = int(np.argmin(np.abs(t - verdict["estimate_time"])))
+        what = f"each run's {index} at t = {t[at]:g} s (largest quantile)"
+        return m[:, at].ravel(), what
     if requirement.interpretation == "mixed":
         return m.ravel(), f"{index} of every run at every time"
     raise ValueError(

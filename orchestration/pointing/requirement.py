@@ -211,6 +211,8 @@ class PointingRequirement:
         weights = position_weights(m.shape[2] - 1) if m.ndim == 3 else None
         shown = statistic(m, self.level, self.interpretation, weights=weights)
         common = dict(runs=len(m), runs_needed=self.runs_needed(), estimate=shown.value, t=t)
+        if self.interpretation == "ensemble":
+            common["estimate_at"] = shown.worst
         if self.interpretation == "temporal":
             return self._temporal(shown, common)
         if self.bound is None:
@@ -320,7 +322,8 @@ class PointingResult:
     shares of the window's positions summed for t random in Δt); mixed, the runs' shares
     of their time above it, summed; temporal, the runs above it.  ``runs_needed`` the
     fewest runs the stated confidence takes (none above); ``statistic`` holds the profile
-    (per run or per time ``t``), for figures.  Values that do not exist are None.
+    (per run or per time ``t``), for figures; ensemble, ``estimate_at`` the index in ``t``
+    of the estimate.  Values that do not exist are None.
     """
 
     requirement: PointingRequirement
@@ -335,6 +338,15 @@ class PointingResult:
     reason: str | None = None
     statistic: Statistic | None = None
     t: np.ndarray | None = None
+    estimate_at: int | None = None
+
+    @property
+    def estimate_time(self) -> float | None:
+        """Ensemble: the time of :attr:`estimate`, the largest empirical quantile over
+        time (the value compared and the deciding time may lie at others)."""
+        if self.estimate_at is None or self.t is None:
+            return None
+        return float(self.t[self.estimate_at])
 
     @property
     def met(self) -> bool | None:
@@ -449,7 +461,7 @@ class PointingResult:
         r, stat, decision = self.requirement, self.statistic, self.decision
         worst: dict = {}
         if self.worst_time is not None:
-            worst = {"worst_time": self.worst_time}
+            worst = {"worst_time": self.worst_time, "estimate_time": self.estimate_time}
         elif stat is not None and stat.worst is not None:
             worst = {"worst_run": stat.worst}
         evidence = None

@@ -233,3 +233,37 @@ def test_a_campaign_figure_draws_the_magnitudes_its_verdict_judged(campaign, tmp
     worst = int(np.argmax(np.sort(magnitude, axis=0)[26]))
     curve = ax.lines[0]
     np.testing.assert_allclose(curve.get_xdata(), np.degrees(np.sort(magnitude[:, worst])))
+
+
+def test_a_violation_draws_the_runs_where_its_estimate_lies_not_where_it_is_decided(
+    tmp_path, monkeypatch
+):
+    """At t₁ all 30 runs are at 2 B (the violation is shown there), at t₂ four at 5 B (the
+    27th smallest of 30, the 90 % quantile, is largest there): the figure draws the runs at
+    t₂, so that its empirical-quantile mark, 5 B, lies where the curve reaches 10 %."""
+    bound, first, second = 1e-5, 100, 200
+    angles = np.zeros((30, T.size))
+    angles[:, first] = 2 * bound
+    angles[:4, second] = 5 * bound
+    signals = np.empty((30, len(NAMES), T.size))
+    signals[:, :4] = about_z(angles).transpose(0, 2, 1)
+    signals[:, 4:] = about_z(0 * T).T
+    r = requirement("ape", bound, 0.9, "ensemble", confidence=0.95)
+    verdicts = judged(r, signals)
+    details = verdicts["ape"]["details"]
+    assert details["status"] == "not met"
+    assert details["worst_time"] == pytest.approx(T[first])
+    assert details["estimate_time"] == pytest.approx(T[second])
+    assert details["estimate"] == pytest.approx(5 * bound, rel=1e-9)
+    saved = saved_axes(report, monkeypatch)
+    campaign_figures([r], signals, NAMES, T, verdicts, tmp_path)
+    [(_, ax, _)] = saved
+    curve = ax.lines[0]
+    np.testing.assert_allclose(
+        curve.get_xdata(), np.degrees(np.sort(angles[:, second])), atol=1e-15
+    )
+    marks = {line.get_xdata()[0] for line in ax.lines[2:]}
+    assert math.degrees(details["estimate"]) in marks
+    at = np.searchsorted(curve.get_xdata(), math.degrees(details["estimate"]) * (1 - 1e-9))
+    assert curve.get_ydata()[at] <= 0.1 < curve.get_ydata()[at - 1]
+    assert f"t = {T[second]:g} s" in ax.get_xlabel()
