@@ -17,6 +17,8 @@ Files in the output directory, written as runs finish:
   statement (``{"metrics": ..., "requirements": ...}``, from the first run with them).
 - ``signals.npy`` — the ``--keep`` signals, float64 (runs, signals, points), NaN where a
   run has not been made or stopped early (``np.load(..., mmap_mode="r")``).
+- ``magnitudes/`` — each run's index magnitudes of the pointing requirements judged over
+  the campaign, as its worker computed them (:mod:`.magnitudes`).
 - at the end (and on an interruption): ``runs.csv`` (+ ``runs.parquet`` with pyarrow),
   ``campaign.json`` and the figures (:mod:`.report`).
 """
@@ -48,6 +50,7 @@ from .files import (
     read_object,
     system_content,
 )
+from .magnitudes import Store
 from .plan import Plan, Spec
 from .worker import quiet_closed_connections, run_batch
 
@@ -309,6 +312,7 @@ def execute(
 
     records = dict(done)
     signals = signals_file(plan, out)
+    magnitudes = Store(out, plan.ensemble, plan.total)
     todo = [i for i in range(plan.total) if i not in records][::-1]  # popped from the end
     watcher = WorkerWatch(client)
     futures = {}  # future -> the indices of its runs
@@ -370,6 +374,7 @@ def execute(
                     made = [_failed(i, "error", f"{type(exc).__name__}: {exc}") for i in batch]
                 for record in made:
                     index = record["index"]
+                    magnitudes.put(index, record.pop("magnitudes", {}))  # before the signals
                     signal = record.pop("signals", None)
                     if signals is not None and signal is not None:
                         signals[index] = signal
@@ -413,6 +418,7 @@ def execute(
         status = "interrupted"
         client.cancel(list(futures))
     finally:
+        magnitudes.flush()
         if signals is not None:
             signals.flush()
     return records, watcher.lost, status

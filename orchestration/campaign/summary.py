@@ -4,6 +4,7 @@ summary and the directory as a :class:`Campaign`."""
 
 from __future__ import annotations
 
+import functools
 import json
 import shlex
 from pathlib import Path
@@ -13,6 +14,7 @@ import numpy as np
 from ..output.recorder import write_text
 from . import report
 from .files import read_object
+from .magnitudes import Store
 from .nominal import start as start_nominal
 from .plan import Plan, time_axis
 from .replay import replay_arguments, replay_template, versions
@@ -163,7 +165,8 @@ def _ensemble(plan: Plan, out: Path, made: int) -> tuple[dict, dict]:
     judged an index's magnitudes, those (t, m[run, time]), which its figure draws."""
     if not plan.ensemble or not made or not (out / "signals.npy").exists():
         return {}, {}
-    signals = np.load(out / "signals.npy", mmap_mode="r")
+    signals = np.load(out / "signals.npy", mmap_mode="r")[: plan.total]  # not runs beyond
+    store = Store(out, plan.ensemble, plan.total)
     result, magnitudes = {}, {}
     for requirement in plan.ensemble:
         index = [plan.signals.index(c) for c in requirement.signals]
@@ -172,7 +175,8 @@ def _ensemble(plan: Plan, out: Path, made: int) -> tuple[dict, dict]:
         else:
             columns = np.asarray(signals[:, index])
         keep: dict = {}
-        verdict = requirement.evaluate_campaign(columns, time_axis(plan), keep=keep)
+        stacked = functools.partial(store.stacked, requirement.name)
+        verdict = requirement.evaluate_campaign(columns, time_axis(plan), keep, stacked)
         result[requirement.name] = ensemble_entry(requirement, verdict)
         if "magnitudes" in keep:
             magnitudes[requirement.name] = keep["magnitudes"]

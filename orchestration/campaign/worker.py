@@ -96,9 +96,10 @@ def _made(index: int, planned, signals: list[str], points: int) -> dict:
         "worker": _worker(),
         "pid": os.getpid(),
     }
-    results = None
+    results = made = None
     try:
-        results, summary = planned().run(began)
+        made = planned()
+        results, summary = made.run(began)
         record["metrics"] = summary.get("metrics", {})
         record["requirements"] = summary.get("requirements", {})
         if summary.get("status") == "error":  # a metric or requirement raised
@@ -112,6 +113,8 @@ def _made(index: int, planned, signals: list[str], points: int) -> dict:
     except Exception as exc:  # a bad value for one run is that run's outcome
         record.update(status="error", message=f"{type(exc).__name__}: {exc}")
     record["signals"] = _signals(results, signals, points)
+    if made is not None and results is not None and len(results) == points:
+        record["magnitudes"] = _magnitudes(made.target, results)
     record["seconds"] = time.perf_counter() - began
     record["cpu_seconds"] = time.thread_time() - cpu
     return record
@@ -229,6 +232,15 @@ def _signals(results, names, points) -> np.ndarray | None:
         for row, name in enumerate(names):
             out[row, :n] = results[name][:n]
     return out
+
+
+def _magnitudes(target, results) -> dict:
+    """{name: m[time]}: the run's index magnitudes of the requirements judged over the
+    campaign (:mod:`.magnitudes`), for the verdict over the campaign."""
+    from .magnitudes import run_rows
+    from .plan import over_campaign
+
+    return run_rows(over_campaign(target.scenario, target.variant), results)
 
 
 def _worker() -> str:

@@ -271,23 +271,36 @@ class Pointing(Requirement):
             return Verdict(NOT_EVALUATED, None, str(reason))
         return self._judged(error, requirement, keep)
 
+    def _run_error(self, results):
+        """A run's error history, computed once per results (the run's other pointing
+        requirements on the same error read it too)."""
+        key = ("recorded_error", self.attitude, self.reference, self.kind, self.start, self.stop)
+        if isinstance(results, Results):
+            return results.derived(key, lambda: self.error(results, results.time))
+        return self.error(results, results.time)
+
     def _run_verdict(self, results, requirement=None) -> Verdict:
-        """The verdict on a run's ``results``: its error history computed once per results
-        (the run's other pointing requirements on the same error read it too)."""
+        """The verdict on a run's ``results``."""
         from ..pointing import NotEvaluable
 
-        key = ("recorded_error", self.attitude, self.reference, self.kind, self.start, self.stop)
         try:
-            if isinstance(results, Results):
-                error = results.derived(key, lambda: self.error(results, results.time))
-            else:
-                error = self.error(results, results.time)
+            error = self._run_error(results)
         except NotEvaluable as reason:
             return Verdict(NOT_EVALUATED, None, str(reason))
         return self._judged(error, requirement)
 
+    def run_magnitudes(self, results) -> tuple[np.ndarray, np.ndarray]:
+        """(t, m[1, time]): the index's magnitudes on a run's ``results`` (the campaign's
+        workers keep them for the verdict over the campaign, :mod:`..campaign.magnitudes`);
+        :class:`..pointing.NotEvaluable` where the run cannot give them."""
+        return self.requirement.magnitudes(self._run_error(results))  # type: ignore[attr-defined]
+
     def _judged(self, error, requirement=None, keep: dict | None = None) -> Verdict:
         result = (requirement or self.requirement).evaluate(error, keep=keep)  # type: ignore[attr-defined]
+        return self._as_verdict(result)
+
+    @staticmethod
+    def _as_verdict(result) -> Verdict:
         status = result.status if result.status in (MET, NOT_MET, UNDECIDED) else NOT_EVALUATED
         value = result.value if result.value is not None else result.estimate
         return Verdict(status, value, result.reason or "", result.line(), result.to_dict())
@@ -308,24 +321,53 @@ class Pointing(Requirement):
         return Verdict(OVER_CAMPAIGN, shown.value, OVER_CAMPAIGN_REASON, text)
 
     def evaluate_campaign(
-        self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None
+        self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None, magnitudes=None
     ) -> Verdict:
         """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds
         :attr:`signals` (NaN where a run stopped early: those runs are left out, and said).
         ``keep``: given, it receives the index's magnitudes judged, ``keep["magnitudes"]``
-        = (t, m[run, time]) of the runs that reached the end (none if not evaluated)."""
+        = (t, m[run, time]) of the runs that reached the end (none if not evaluated).
+        ``magnitudes``: given, a function of the boolean per run "reached the end" that
+        gives those runs' m[run, time] as their workers computed them
+        (:meth:`..campaign.magnitudes.Store.stacked`), or None: judged as they are where
+        the first run's are what its signals give, else computed from ``signals``."""
         complete = reached_the_end(signals)
         if not complete.any():
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
         kept = signals if complete.all() else signals[complete]  # all: no copy of a memory map
         columns = {c: kept[:, i] for i, c in enumerate(self.signals)}
-        verdict = self._verdict(columns, t, keep=keep)
+        stacked = None if magnitudes is None else magnitudes(complete)
+        if stacked is None:
+            verdict = self._verdict(columns, t, keep=keep)
+        else:
+            verdict = self._stacked_verdict(columns, t, stacked, keep)
         left = int((~complete).sum())
         if left:
             note = f"{left} run(s) that stopped early left out"
             reason = "; ".join(filter(None, (verdict.reason, note)))
             return replace(verdict, reason=reason, text=f"{verdict.text} ({note})")
         return verdict
+
+    def _stacked_verdict(self, columns, t, stacked: np.ndarray, keep: dict | None) -> Verdict:
+        """The verdict on the runs' ``stacked`` magnitudes (:meth:`evaluate_campaign`), the
+        times and the first run's row checked against its ``columns`` first."""
+        from ..pointing import NotEvaluable
+
+        try:
+            times, first = self.requirement.magnitudes(self.error(_first(columns), t))  # type: ignore[attr-defined]
+        except NotEvaluable as reason:
+            return Verdict(NOT_EVALUATED, None, str(reason))
+        if first.shape[1:] != stacked.shape[1:] or not np.array_equal(first[0], stacked[0]):
+            return self._verdict(columns, t, keep=keep)
+        if keep is not None:
+            keep["magnitudes"] = (times, stacked)
+        result = self.requirement.judge(times, stacked)  # type: ignore[attr-defined]
+        return self._as_verdict(result)
+
+
+def _first(columns: dict) -> dict:
+    """The first run's of ``columns`` {name: (runs, points)}, as (1, points) arrays."""
+    return {c: np.asarray(v[:1]) for c, v in columns.items()}
 
 
 def judged_over_campaign(requirement) -> bool:
