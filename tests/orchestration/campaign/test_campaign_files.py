@@ -71,6 +71,17 @@ def test_kept_signals_grow_with_the_campaign_and_never_shrink(fmus, tmp_path):
     assert more.shape[0] == 6 and np.array_equal(more[:4], kept) and np.isnan(more[4:]).all()
 
 
+def test_kept_signals_start_as_nan_to_the_last_byte_written_a_block_at_a_time(
+    fmus, tmp_path, monkeypatch
+):
+    """Blocks of 64 bytes (eight values) that do not divide the file: every value NaN."""
+    monkeypatch.setattr(engine, "FILL_CHUNK", 64)
+    spec = Spec("scan_pitch", runs=3, keep=["SatelliteDynamics.w_BO_B[2]"], stop=1.0)
+    memory = engine.signals_file(Plan(spec), tmp_path)
+    assert memory.size % 8 and np.isnan(memory).all()
+    assert np.isnan(np.load(tmp_path / "signals.npy")).all()
+
+
 @pytest.mark.parametrize(
     "held,why",
     [
