@@ -274,10 +274,10 @@ class Pointing(Requirement):
     def _run_error(self, results):
         """A run's error history, computed once per results (the run's other pointing
         requirements on the same error read it too)."""
-        key = ("recorded_error", self.attitude, self.reference, self.kind, self.start, self.stop)
-        if isinstance(results, Results):
-            return results.derived(key, lambda: self.error(results, results.time))
-        return self.error(results, results.time)
+        return _once(results, self._error_key(), lambda: self.error(results, results.time))
+
+    def _error_key(self) -> tuple:
+        return ("recorded_error", self.attitude, self.reference, self.kind, self.start, self.stop)
 
     def _run_verdict(self, results, requirement=None) -> Verdict:
         """The verdict on a run's ``results``."""
@@ -290,10 +290,15 @@ class Pointing(Requirement):
         return self._judged(error, requirement)
 
     def run_magnitudes(self, results) -> tuple[np.ndarray, np.ndarray]:
-        """(t, m[1, time]): the index's magnitudes on a run's ``results`` (the campaign's
-        workers keep them for the verdict over the campaign, :mod:`..campaign.magnitudes`);
-        :class:`..pointing.NotEvaluable` where the run cannot give them."""
-        return self.requirement.magnitudes(self._run_error(results))  # type: ignore[attr-defined]
+        """(t, m[1, time]): the index's magnitudes on a run's ``results``, computed once
+        per results (what the run shows of a requirement judged over the campaign, and
+        what the campaign's workers keep for the verdict over it,
+        :mod:`..campaign.magnitudes`); :class:`..pointing.NotEvaluable` where the run
+        cannot give them."""
+        r = self.requirement
+        index = repr((r.index, r.window, r.separation, r.t_in_window, r.axis, r.boresight))  # type: ignore[attr-defined]
+        key = ("magnitudes", index, *self._error_key())
+        return _once(results, key, lambda: r.magnitudes(self._run_error(results)))  # type: ignore[attr-defined]
 
     def _judged(self, error, requirement=None, keep: dict | None = None) -> Verdict:
         result = (requirement or self.requirement).evaluate(error, keep=keep)  # type: ignore[attr-defined]
@@ -309,16 +314,18 @@ class Pointing(Requirement):
         if not self.over_campaign:
             return self._run_verdict(results)
         # what the run shows, for people: its estimate (no confidence: one run)
-        shown = self._run_verdict(results, replace(self.requirement, confidence=None))  # type: ignore[type-var]
-        from ..pointing import format_angle
+        from ..pointing import NotEvaluable, format_angle
 
-        seen = (
-            f"this run: {format_angle(shown.value)}"
-            if shown.value is not None
-            else f"this run: {shown.reason}"
-        )
-        text = f"{self.statement()}: {OVER_CAMPAIGN} ({seen})"
-        return Verdict(OVER_CAMPAIGN, shown.value, OVER_CAMPAIGN_REASON, text)
+        try:
+            estimate = replace(self.requirement, confidence=None)  # type: ignore[type-var]
+            shown = estimate.judge(*self.run_magnitudes(results))
+            value = shown.value if shown.value is not None else shown.estimate
+            reason = shown.reason
+        except NotEvaluable as exc:
+            value, reason = None, str(exc)
+        seen = format_angle(value) if value is not None else reason
+        text = f"{self.statement()}: {OVER_CAMPAIGN} (this run: {seen})"
+        return Verdict(OVER_CAMPAIGN, value, OVER_CAMPAIGN_REASON, text)
 
     def evaluate_campaign(
         self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None, magnitudes=None
@@ -363,6 +370,11 @@ class Pointing(Requirement):
             keep["magnitudes"] = (times, stacked)
         result = self.requirement.judge(times, stacked)  # type: ignore[attr-defined]
         return self._as_verdict(result)
+
+
+def _once(results, key: tuple, compute):
+    """``compute()``, kept on ``results`` under ``key`` where they are a Results."""
+    return results.derived(key, compute) if isinstance(results, Results) else compute()
 
 
 def _first(columns: dict) -> dict:
