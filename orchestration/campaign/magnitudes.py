@@ -12,11 +12,11 @@ campaign/test_magnitudes.py).  A t random in Δt requirement's (times × window 
 per run) are not kept: judged from ``signals.npy`` as before.
 
 Kept in ``magnitudes/<name>-<key>.npy``, float64 (runs, 1 + times): column 0 is 1 once
-the row is written (a row never written reads 0: a sparse file, nothing filled), the rest
-the run's magnitudes; a row is written before the run's signals, so every run whose
-kept signals reached the end has its row, unless it was made without one (an older
-campaign, a requirement changed: ``key`` hashes the requirement's definition, so a
-changed one has a file of its own).  Where a run that reached the end has no row, or the
+the row is written (a row never written reads 0: its disk blocks are taken when the file
+is made, nothing written), the rest the run's magnitudes; a row is written before the
+run's signals, so every run whose kept signals reached the end has its row, unless it was
+made without one (an older campaign; a requirement changed: ``key`` hashes the
+requirement's definition, so a changed one has a file of its own).  Where a run that reached the end has no row, or the
 first such run's row is not what its signals give, the verdict computes every run's
 magnitudes from ``signals.npy`` instead (:func:`stacked`: None).
 """
@@ -24,6 +24,7 @@ magnitudes from ``signals.npy`` instead (:func:`stacked`: None).
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 
 import numpy as np
@@ -61,16 +62,31 @@ def key(requirement) -> str:
 
 def run_rows(requirements, results) -> dict[str, np.ndarray]:
     """In a worker: {name: m[time]} of the run's ``results`` for each requirement of
-    :func:`kept_for` ``requirements`` it can be evaluated on."""
-    from ..pointing import NotEvaluable
-
+    :func:`kept_for` ``requirements`` it can be evaluated on (one that cannot, or that
+    raises, has none: the verdict over the campaign computes its magnitudes from
+    ``signals.npy``, and says what is wrong there)."""
     rows = {}
     for r in kept_for(requirements):
         try:
             rows[r.name] = r.run_magnitudes(results)[1][0]
-        except NotEvaluable:
+        except Exception:  # noqa: BLE001 - the run's record says it; the verdict computes them
             continue
     return rows
+
+
+def _allocated(path: Path, size: int) -> None:
+    """The disk blocks of ``path``'s ``size`` bytes taken now (they read as zeros): a
+    write through the memory map to a sparse file on a full disk would kill the process
+    (SIGBUS) instead of raising."""
+    from ..output.recorder import file_error
+
+    fd = os.open(path, os.O_RDWR)
+    try:
+        os.posix_fallocate(fd, 0, size)
+    except OSError as exc:
+        raise file_error(path, exc, f" ({size / 2**30:.3g} GiB of magnitudes)") from None
+    finally:
+        os.close(fd)
 
 
 class Store:
@@ -110,6 +126,7 @@ class Store:
             del old
             self.folder.mkdir(exist_ok=True)
             memory = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=shape)
+            _allocated(path, memory.offset + memory.nbytes)
             if kept is not None:
                 memory[: len(kept)] = kept
         self.files[name] = memory

@@ -5,7 +5,9 @@ run that reached the end has its row; a real campaign's verdicts over the campai
 same with them as computed again from signals.npy, without computing any error history;
 a campaign resumed with fewer runs judges those runs only."""
 
+import errno
 import itertools
+import os
 import shutil
 from dataclasses import replace
 
@@ -13,7 +15,7 @@ import numpy as np
 import pytest
 
 from agilesat.orchestration.campaign import summary
-from agilesat.orchestration.campaign.magnitudes import FOLDER, Store, key
+from agilesat.orchestration.campaign.magnitudes import FOLDER, Store, key, run_rows
 from agilesat.orchestration.campaign.plan import Plan, Spec
 from agilesat.orchestration.mission.requirements import Pointing
 from agilesat.orchestration.pointing import PointingRequirement
@@ -70,6 +72,30 @@ def test_the_store_gives_the_rows_only_where_every_complete_run_has_one(tmp_path
     )
     changed = Store(tmp_path, [pointing(axis=(0, 0, 1))], 6)  # a changed definition
     assert changed.stacked("ape", np.array([True, False, False, False, False, False])) is None
+
+
+def test_a_full_disk_is_an_error_naming_the_file_not_a_crash(tmp_path, monkeypatch):
+    """The file's blocks are taken when it is made: no disk, an OSError naming it (a write
+    through the memory map into a sparse file would kill the process with SIGBUS)."""
+
+    def full(fd, offset, size):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "posix_fallocate", full)
+    with pytest.raises(OSError, match=r"magnitudes/ape-\w+\.npy: No space left on device"):
+        Store(tmp_path, [pointing()], 4).put(0, {"ape": np.array([1.0, 2.0])})
+
+
+def test_a_run_whose_magnitudes_raise_keeps_none_and_its_record_is_made():
+    class Raising(Pointing):
+        def run_magnitudes(self, results):
+            raise ValueError("a non-finite error")
+
+    r = pointing()
+    bad = Raising("bad", r.requirement, reference="OrbitEnvironment.q_OI")
+    good = {"ape": (np.arange(3.0), np.ones((1, 3)))}
+    object.__setattr__(r, "run_magnitudes", lambda results: good["ape"])
+    assert list(run_rows([bad, r], results=None)) == ["ape"]
 
 
 def test_the_key_follows_the_definition_and_nothing_else():
