@@ -16,9 +16,10 @@ the row is written (a row never written reads 0: its disk blocks are taken when 
 is made, nothing written), the rest the run's magnitudes; a row is written before the
 run's signals, so every run whose kept signals reached the end has its row, unless it was
 made without one (an older campaign; a requirement changed: ``key`` hashes the
-requirement's definition, so a changed one has a file of its own).  Where a run that reached the end has no row, or the
-first such run's row is not what its signals give, the verdict computes every run's
-magnitudes from ``signals.npy`` instead (:func:`stacked`: None).
+requirement's definition, so a changed one has a file of its own).  Where a run that
+reached the end has no row, or the first such run's row is not what its signals give,
+the verdict computes every run's magnitudes from ``signals.npy`` instead
+(:meth:`Store.stacked`: None).
 """
 
 from __future__ import annotations
@@ -114,9 +115,13 @@ class Store:
         return self.folder / f"{name}-{self.keys[name]}.npy"
 
     def _file(self, name: str, size: int):
+        """The memory map of ``name``'s file for rows of ``size`` magnitudes."""
         memory = self.files.get(name)
-        if memory is not None and memory.shape == (self.total, size + 1):
-            return memory
+        if memory is None or memory.shape[1] != size + 1:
+            memory = self.files[name] = self._opened(name, size)
+        return memory
+
+    def _opened(self, name: str, size: int):
         path, shape = self._path(name), (self.total, size + 1)
         old = np.load(path, mmap_mode="r") if path.exists() else None
         if old is not None and old.shape[0] >= shape[0] and old.shape[1] == shape[1]:
@@ -129,7 +134,6 @@ class Store:
             _allocated(path, memory.offset + memory.nbytes)
             if kept is not None:
                 memory[: len(kept)] = kept
-        self.files[name] = memory
         return memory
 
     def stacked(self, name: str, complete: np.ndarray) -> np.ndarray | None:
