@@ -229,9 +229,9 @@ FILL_CHUNK = 2**26
 
 def filled(path: Path, offset: int, size: int) -> None:
     """``size`` bytes of float64 NaN written into ``path`` from ``offset``, by plain
-    writes of a block at a time: ~5× faster than through a memory map of the file (whose
-    every page is first faulted in and zeroed; 2 GiB: 9.0 s → 1.8 s, 2026-12-07), and not
-    in this process's resident memory."""
+    writes of a block at a time: faster than through a memory map of the file, whose every
+    page is first faulted in and zeroed (docs/performance-log.md), and not in this
+    process's resident memory."""
     block = np.full(FILL_CHUNK // 8, np.nan).tobytes()
     view = memoryview(block)
     with path.open("r+b") as stream:

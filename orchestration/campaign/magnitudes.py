@@ -1,8 +1,8 @@
 """Each run's index magnitudes of the pointing requirements judged over a campaign, made
 in the worker that made the run, so that the verdict over the campaign judges them
 (:meth:`..pointing.PointingRequirement.judge`) instead of computing every run's error
-history and magnitudes again, one process after the runs (at 29,956 runs the most of the
-summary's time and memory).
+history and magnitudes again, in one process after the runs (at verification scale the
+most of the summary's time and memory).
 
 A requirement's magnitudes ``m[time]`` of a run are those its own verdict on the run
 computed (its error history is kept on the run's Results, :meth:`..mission.requirements.

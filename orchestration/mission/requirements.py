@@ -328,13 +328,13 @@ class Pointing(Requirement):
         return Verdict(OVER_CAMPAIGN, value, OVER_CAMPAIGN_REASON, text)
 
     def evaluate_campaign(
-        self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None, magnitudes=None
+        self, signals: np.ndarray, t: np.ndarray, keep: dict | None = None, stored=None
     ) -> Verdict:
         """Over every run: ``signals`` (runs, len(:attr:`signals`), points) holds
         :attr:`signals` (NaN where a run stopped early: those runs are left out, and said).
         ``keep``: given, it receives the index's magnitudes judged, ``keep["magnitudes"]``
         = (t, m[run, time]) of the runs that reached the end (none if not evaluated).
-        ``magnitudes``: given, a function of the boolean per run "reached the end" that
+        ``stored``: given, a function of the boolean per run "reached the end" that
         gives those runs' m[run, time] as their workers computed them
         (:meth:`..campaign.magnitudes.Store.stacked`), or None: judged as they are where
         the first run's are what its signals give, else computed from ``signals``."""
@@ -343,7 +343,7 @@ class Pointing(Requirement):
             return Verdict(NOT_EVALUATED, None, "no run reached the end")
         kept = signals if complete.all() else signals[complete]  # all: no copy of a memory map
         columns = {c: kept[:, i] for i, c in enumerate(self.signals)}
-        stacked = None if magnitudes is None else magnitudes(complete)
+        stacked = None if stored is None else stored(complete)
         if stacked is None:
             verdict = self._verdict(columns, t, keep=keep)
         else:
